@@ -1,0 +1,179 @@
+//! Forward kinematics: from DOF values to every joint's global (REF) transform.
+
+use crate::skeleton::{DofKind, Skeleton};
+use crate::transform::Transform;
+use glam::{DQuat, DVec3};
+
+/// The local transform contributed by one DOF at `value`.
+#[inline]
+fn dof_transform(kind: DofKind, axis: DVec3, value: f64) -> Transform {
+    match kind {
+        DofKind::Rotation => {
+            let (s, c) = (value * 0.5).sin_cos();
+            let v = axis * s;
+            Transform::new(DQuat::from_xyzw(v.x, v.y, v.z, c), DVec3::ZERO)
+        }
+        DofKind::Translation => Transform::from_translation(axis * value),
+    }
+}
+
+/// Computes the global transform of every joint for posture `q` into `globals`
+/// (`globals.len()` must equal the joint count, `q.len()` the DOF count).
+///
+/// A joint's frame is its parent's frame, translated by the joint's offset, then moved by
+/// its DOFs in order: `G_j = G_parent · T(offset) · D_1(q_1) · D_2(q_2) · …`.
+pub fn forward_kinematics(skeleton: &Skeleton, q: &[f64], globals: &mut [Transform]) {
+    debug_assert_eq!(globals.len(), skeleton.joints().len());
+    debug_assert_eq!(q.len(), skeleton.dof_count());
+    let dofs = skeleton.dofs();
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        let mut frame = match joint.parent {
+            Some(p) => {
+                let parent = globals[p];
+                Transform::new(
+                    parent.rotation,
+                    parent.translation + parent.rotation * joint.offset,
+                )
+            }
+            None => Transform::from_translation(joint.offset),
+        };
+        for d in joint.dofs.clone() {
+            let dof = &dofs[d];
+            frame = frame.mul(&dof_transform(dof.kind, dof.axis, q[d]));
+        }
+        globals[j] = frame;
+    }
+}
+
+/// The local transform of joint `j` relative to its parent for posture `q`.
+pub fn local_transform(skeleton: &Skeleton, j: usize, q: &[f64]) -> Transform {
+    let joint = &skeleton.joints()[j];
+    let mut frame = Transform::from_translation(joint.offset);
+    for d in joint.dofs.clone() {
+        let dof = &skeleton.dofs()[d];
+        frame = frame.mul(&dof_transform(dof.kind, dof.axis, q[d]));
+    }
+    frame
+}
+
+/// The world position of the whole body's centre of mass for the given joint globals.
+pub fn center_of_mass(skeleton: &Skeleton, globals: &[Transform]) -> DVec3 {
+    let mut sum = DVec3::ZERO;
+    let mut mass = 0.0;
+    for (j, solid) in skeleton.solids() {
+        sum += globals[*j].transform_point(solid.center_of_mass) * solid.mass;
+        mass += solid.mass;
+    }
+    if mass > 0.0 {
+        sum / mass
+    } else {
+        DVec3::ZERO
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::template::{template, TemplateParams};
+    use std::f64::consts::FRAC_PI_2;
+
+    fn adult(height: f64) -> Skeleton {
+        template("adult")
+            .unwrap()
+            .instantiate(TemplateParams { height, mass: 70.0 })
+            .unwrap()
+    }
+
+    fn fk(s: &Skeleton, q: &[f64]) -> Vec<Transform> {
+        let mut g = vec![Transform::IDENTITY; s.joints().len()];
+        forward_kinematics(s, q, &mut g);
+        g
+    }
+
+    fn pos(s: &Skeleton, g: &[Transform], joint: &str) -> DVec3 {
+        g[s.joint(joint).unwrap()].translation
+    }
+
+    fn assert_close(a: DVec3, b: DVec3) {
+        assert!((a - b).length() < 1e-9, "{a} != {b}");
+    }
+
+    #[test]
+    fn rest_pose_matches_the_proportions() {
+        let s = adult(1.75);
+        let g = fk(&s, &vec![0.0; s.dof_count()]);
+        assert!((pos(&s, &g, "l_knee").y - 0.285 * 1.75).abs() < 1e-12);
+        assert!(pos(&s, &g, "l_hip").x > 0.0, "left is +X");
+        assert_close(
+            pos(&s, &g, "r_hip"),
+            pos(&s, &g, "l_hip") * DVec3::new(-1.0, 1.0, 1.0),
+        );
+        let upper_arm = (pos(&s, &g, "l_shoulder") - pos(&s, &g, "l_elbow")).length();
+        assert!((upper_arm - 0.186 * 1.75).abs() < 1e-12);
+    }
+
+    #[test]
+    fn elbow_flexion_by_a_right_angle_points_the_forearm_forward() {
+        let s = adult(1.75);
+        let mut q = vec![0.0; s.dof_count()];
+        for side in ["l", "r"] {
+            q[s.dof(&format!("{side}_elbow_flexion")).unwrap()] = FRAC_PI_2;
+        }
+        let g = fk(&s, &q);
+        let forearm = 0.146 * 1.75;
+        for side in ["l", "r"] {
+            let elbow = pos(&s, &g, &format!("{side}_elbow"));
+            let wrist = pos(&s, &g, &format!("{side}_wrist"));
+            assert_close(wrist, elbow + DVec3::new(0.0, 0.0, forearm));
+        }
+    }
+
+    #[test]
+    fn root_places_and_turns_the_actor() {
+        let s = adult(1.75);
+        let mut q = vec![0.0; s.dof_count()];
+        q[s.dof("root_x").unwrap()] = 2.0;
+        q[s.dof("root_z").unwrap()] = -1.0;
+        q[s.dof("root_yaw").unwrap()] = FRAC_PI_2; // face +X
+        let rest = fk(&s, &vec![0.0; s.dof_count()]);
+        let g = fk(&s, &q);
+        // A quarter turn about Y maps the rest-pose left hip (+X) to -Z.
+        let l_hip = pos(&s, &rest, "l_hip");
+        let expected = DVec3::new(2.0, l_hip.y, -1.0 - l_hip.x);
+        assert_close(pos(&s, &g, "l_hip"), expected);
+        // Knee flexion with the hip flexed 90°: the shank hangs straight down again.
+        q[s.dof("l_hip_flexion").unwrap()] = FRAC_PI_2;
+        q[s.dof("l_knee_flexion").unwrap()] = FRAC_PI_2;
+        let g = fk(&s, &q);
+        let knee = pos(&s, &g, "l_knee");
+        let ankle = pos(&s, &g, "l_ankle");
+        assert_close(ankle - knee, DVec3::new(0.0, -(0.285 - 0.039) * 1.75, 0.0));
+    }
+
+    #[test]
+    fn scaling_scales_segment_lengths() {
+        let (a, b) = (adult(1.5), adult(1.8));
+        let ga = fk(&a, &vec![0.0; a.dof_count()]);
+        let gb = fk(&b, &vec![0.0; b.dof_count()]);
+        for (from, to) in [
+            ("l_hip", "l_knee"),
+            ("r_shoulder", "r_wrist"),
+            ("vl5", "skullbase"),
+            ("r_index1", "r_index3"),
+        ] {
+            let la = (pos(&a, &ga, from) - pos(&a, &ga, to)).length();
+            let lb = (pos(&b, &gb, from) - pos(&b, &gb, to)).length();
+            assert!((lb / la - 1.8 / 1.5).abs() < 1e-12, "{from}-{to}");
+        }
+    }
+
+    #[test]
+    fn standing_center_of_mass_is_between_the_feet() {
+        let s = adult(1.75);
+        let g = fk(&s, &vec![0.0; s.dof_count()]);
+        let com = center_of_mass(&s, &g);
+        assert!(com.x.abs() < 1e-9);
+        // Humans stand with the COM at about 55 % of their height.
+        assert!((0.50..0.62).contains(&(com.y / 1.75)), "{}", com.y / 1.75);
+    }
+}

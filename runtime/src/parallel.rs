@@ -1,0 +1,84 @@
+//! The worker pool that steps actors in parallel.
+//!
+//! Work is cut into small chunks that workers claim from a shared counter, so a slow actor
+//! does not hold up a whole thread's share. Which thread steps which actor never changes
+//! the result: every actor's tick reads only the previous tick's world.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// Actors per claimed chunk.
+const CHUNK: usize = 16;
+
+/// Runs per-item work on up to `threads` threads (crossbeam scoped workers).
+#[derive(Clone, Copy, Debug)]
+pub struct WorkerPool {
+    threads: usize,
+}
+
+impl WorkerPool {
+    /// A pool of `threads` workers (the calling thread is one of them).
+    pub fn new(threads: usize) -> Self {
+        WorkerPool {
+            threads: threads.max(1),
+        }
+    }
+
+    /// The number of workers.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+
+    /// Calls `f(index, item)` once for every item.
+    pub fn for_each<T: Send>(&self, items: &mut [T], f: impl Fn(usize, &mut T) + Sync) {
+        let workers = self.threads.min(items.len().div_ceil(CHUNK));
+        if workers <= 1 {
+            for (i, item) in items.iter_mut().enumerate() {
+                f(i, item);
+            }
+            return;
+        }
+        let chunks: Vec<Mutex<Option<&mut [T]>>> = items
+            .chunks_mut(CHUNK)
+            .map(|c| Mutex::new(Some(c)))
+            .collect();
+        let next = AtomicUsize::new(0);
+        let run = || loop {
+            let c = next.fetch_add(1, Ordering::Relaxed);
+            let Some(slot) = chunks.get(c) else { break };
+            let chunk = slot
+                .lock()
+                .unwrap_or_else(|poisoned| poisoned.into_inner())
+                .take();
+            if let Some(chunk) = chunk {
+                for (k, item) in chunk.iter_mut().enumerate() {
+                    f(c * CHUNK + k, item);
+                }
+            }
+        };
+        crossbeam::thread::scope(|s| {
+            for _ in 1..workers {
+                s.spawn(|_| run());
+            }
+            run();
+        })
+        .unwrap_or_else(|panic| std::panic::resume_unwind(panic));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_item_once_with_its_index() {
+        for threads in [1, 2, 4] {
+            let mut items: Vec<(usize, u32)> = (0..1000).map(|i| (i, 0)).collect();
+            WorkerPool::new(threads).for_each(&mut items, |i, item| {
+                assert_eq!(i, item.0);
+                item.1 += 1;
+            });
+            assert!(items.iter().all(|(_, n)| *n == 1));
+        }
+    }
+}

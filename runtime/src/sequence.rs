@@ -1,0 +1,340 @@
+//! Motion sequences (thesis 5.7 and 6.4.5): per-DOF tracks of Hermite keys on a common
+//! time base.
+
+use crate::error::{Error, Result};
+use std::collections::BTreeMap;
+
+/// One key of a track: a value at a time, with an optional slope (value per second).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Key {
+    /// Time in seconds.
+    pub time: f64,
+    /// DOF value (radians or metres).
+    pub value: f64,
+    /// First derivative at the key; `None` takes the default of thesis 5.7.
+    pub slope: Option<f64>,
+}
+
+impl Key {
+    /// A key with the default slope.
+    pub fn new(time: f64, value: f64) -> Self {
+        Key {
+            time,
+            value,
+            slope: None,
+        }
+    }
+
+    /// A key with an explicit slope.
+    pub fn with_slope(time: f64, value: f64, slope: f64) -> Self {
+        Key {
+            time,
+            value,
+            slope: Some(slope),
+        }
+    }
+}
+
+/// The keys of one DOF, interpolated by a cubic Hermite spline.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Track {
+    dof: String,
+    keys: Vec<Key>,
+    slopes: Vec<f64>,
+}
+
+impl Track {
+    /// Builds a track; times must be finite and strictly increasing, values and slopes
+    /// finite, and there must be at least one key.
+    pub fn new(dof: impl Into<String>, keys: Vec<Key>) -> Result<Track> {
+        let dof = dof.into();
+        if keys.is_empty() {
+            return Err(Error::Invalid(format!("track `{dof}` has no keys")));
+        }
+        for (i, k) in keys.iter().enumerate() {
+            if !k.time.is_finite()
+                || !k.value.is_finite()
+                || k.slope.is_some_and(|s| !s.is_finite())
+            {
+                return Err(Error::Invalid(format!(
+                    "track `{dof}` key {}: time, value and slope must be finite numbers",
+                    i + 1
+                )));
+            }
+            if i > 0 && k.time <= keys[i - 1].time {
+                return Err(Error::Invalid(format!(
+                    "track `{dof}` key {}: time {} does not follow {}",
+                    i + 1,
+                    k.time,
+                    keys[i - 1].time
+                )));
+            }
+        }
+        let slopes = default_slopes(&keys);
+        Ok(Track { dof, keys, slopes })
+    }
+
+    /// The DOF name the track drives.
+    pub fn dof(&self) -> &str {
+        &self.dof
+    }
+    /// The keys as given.
+    pub fn keys(&self) -> &[Key] {
+        &self.keys
+    }
+    /// The slope used at each key (given, or the default).
+    pub fn slopes(&self) -> &[f64] {
+        &self.slopes
+    }
+    /// Time of the first key.
+    pub fn start(&self) -> f64 {
+        self.keys[0].time
+    }
+    /// Time of the last key.
+    pub fn end(&self) -> f64 {
+        self.keys[self.keys.len() - 1].time
+    }
+
+    /// The value at `t`; before the first key and after the last the end values hold.
+    pub fn value(&self, t: f64) -> f64 {
+        let mut cursor = 0;
+        self.value_at(t, &mut cursor)
+    }
+
+    /// The value at `t`, using and updating `cursor` (a key index) so that evaluating at
+    /// increasing times costs O(1) per call.
+    pub fn value_at(&self, t: f64, cursor: &mut usize) -> f64 {
+        match self.segment(t, cursor) {
+            Segment::Before => self.keys[0].value,
+            Segment::After => self.keys[self.keys.len() - 1].value,
+            Segment::Inside(i, s, h) => {
+                let (k0, k1) = (&self.keys[i], &self.keys[i + 1]);
+                let (s2, s3) = (s * s, s * s * s);
+                let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+                let h10 = s3 - 2.0 * s2 + s;
+                let h01 = -2.0 * s3 + 3.0 * s2;
+                let h11 = s3 - s2;
+                h00 * k0.value
+                    + h10 * h * self.slopes[i]
+                    + h01 * k1.value
+                    + h11 * h * self.slopes[i + 1]
+            }
+        }
+    }
+
+    /// The first derivative at `t` (zero outside the keyed range).
+    pub fn velocity(&self, t: f64) -> f64 {
+        let n = self.keys.len();
+        if n > 1 && t == self.keys[0].time {
+            return self.slopes[0];
+        }
+        if n > 1 && t == self.keys[n - 1].time {
+            return self.slopes[n - 1];
+        }
+        let mut cursor = 0;
+        match self.segment(t, &mut cursor) {
+            Segment::Before | Segment::After => 0.0,
+            Segment::Inside(i, s, h) => {
+                let (k0, k1) = (&self.keys[i], &self.keys[i + 1]);
+                let s2 = s * s;
+                let d00 = 6.0 * s2 - 6.0 * s;
+                let d10 = 3.0 * s2 - 4.0 * s + 1.0;
+                let d01 = -6.0 * s2 + 6.0 * s;
+                let d11 = 3.0 * s2 - 2.0 * s;
+                (d00 * k0.value + d01 * k1.value) / h
+                    + d10 * self.slopes[i]
+                    + d11 * self.slopes[i + 1]
+            }
+        }
+    }
+
+    fn segment(&self, t: f64, cursor: &mut usize) -> Segment {
+        let keys = &self.keys;
+        let n = keys.len();
+        if n == 1 || t <= keys[0].time {
+            return Segment::Before;
+        }
+        if t >= keys[n - 1].time {
+            return Segment::After;
+        }
+        let mut i = (*cursor).min(n - 2);
+        if keys[i].time > t || keys[i + 1].time <= t {
+            // Not in the cached segment: look at the next one, else search.
+            if i + 2 < n && keys[i + 1].time <= t && keys[i + 2].time > t {
+                i += 1;
+            } else {
+                i = keys.partition_point(|k| k.time <= t) - 1;
+            }
+        }
+        *cursor = i;
+        let h = keys[i + 1].time - keys[i].time;
+        Segment::Inside(i, (t - keys[i].time) / h, h)
+    }
+}
+
+enum Segment {
+    Before,
+    After,
+    Inside(usize, f64, f64),
+}
+
+/// Default slopes (thesis 5.7): zero at the ends ("start slowly / end slowly"); inside,
+/// the slope of the chord between the two neighbouring keys.
+fn default_slopes(keys: &[Key]) -> Vec<f64> {
+    let n = keys.len();
+    (0..n)
+        .map(|i| {
+            keys[i].slope.unwrap_or_else(|| {
+                if i == 0 || i == n - 1 {
+                    0.0
+                } else {
+                    (keys[i + 1].value - keys[i - 1].value) / (keys[i + 1].time - keys[i - 1].time)
+                }
+            })
+        })
+        .collect()
+}
+
+/// A multiple-track sequence: tracks for several DOFs on one time base, with metadata.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct Sequence {
+    /// A name for listings (often the file stem).
+    pub name: String,
+    /// Whether players loop it by default.
+    pub looping: bool,
+    /// Free-form metadata (`rate`, `source`, …), kept through read and write.
+    pub meta: BTreeMap<String, String>,
+    tracks: Vec<Track>,
+}
+
+impl Sequence {
+    /// An empty sequence.
+    pub fn new(name: impl Into<String>) -> Self {
+        Sequence {
+            name: name.into(),
+            ..Default::default()
+        }
+    }
+
+    /// Adds a track; a DOF may have only one track.
+    pub fn add_track(&mut self, track: Track) -> Result<()> {
+        if self.tracks.iter().any(|t| t.dof == track.dof) {
+            return Err(Error::Duplicate {
+                what: "track for DOF",
+                name: track.dof,
+            });
+        }
+        self.tracks.push(track);
+        Ok(())
+    }
+
+    /// The tracks in insertion order.
+    pub fn tracks(&self) -> &[Track] {
+        &self.tracks
+    }
+
+    /// The track of DOF `dof`.
+    pub fn track(&self, dof: &str) -> Option<&Track> {
+        self.tracks.iter().find(|t| t.dof == dof)
+    }
+
+    /// The earliest key time (0 for an empty sequence).
+    pub fn start(&self) -> f64 {
+        finite_or_zero(
+            self.tracks
+                .iter()
+                .map(Track::start)
+                .fold(f64::INFINITY, f64::min),
+        )
+    }
+
+    /// The latest key time (0 for an empty sequence).
+    pub fn end(&self) -> f64 {
+        finite_or_zero(
+            self.tracks
+                .iter()
+                .map(Track::end)
+                .fold(f64::NEG_INFINITY, f64::max),
+        )
+    }
+
+    /// `end − start`.
+    pub fn duration(&self) -> f64 {
+        self.end() - self.start()
+    }
+}
+
+/// The fold of an empty track list is infinite; such a sequence spans [0, 0].
+fn finite_or_zero(x: f64) -> f64 {
+    if x.is_finite() {
+        x
+    } else {
+        0.0
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interpolates_keys_and_default_slopes() {
+        let t = Track::new(
+            "x",
+            vec![Key::new(0.0, 0.0), Key::new(1.0, 2.0), Key::new(2.0, 0.0)],
+        )
+        .unwrap();
+        assert_eq!(t.slopes(), &[0.0, 0.0, 0.0]);
+        assert_eq!(t.value(1.0), 2.0);
+        assert_eq!(t.value(0.5), 1.0);
+        assert_eq!(t.value(-1.0), 0.0);
+        assert_eq!(t.value(3.0), 0.0);
+        let ramp = Track::new(
+            "y",
+            vec![Key::new(0.0, 0.0), Key::new(1.0, 1.0), Key::new(2.0, 2.0)],
+        )
+        .unwrap();
+        assert_eq!(ramp.slopes()[1], 1.0);
+        // Zero end slopes: starts slowly.
+        assert!(ramp.value(0.1) < 0.1);
+    }
+
+    #[test]
+    fn explicit_slopes_make_a_straight_line_exact() {
+        let t = Track::new(
+            "x",
+            vec![
+                Key::with_slope(0.0, 1.0, 2.0),
+                Key::with_slope(3.0, 7.0, 2.0),
+            ],
+        )
+        .unwrap();
+        for i in 0..=30 {
+            let x = i as f64 / 10.0;
+            assert!((t.value(x) - (1.0 + 2.0 * x)).abs() < 1e-12);
+            assert!((t.velocity(x) - 2.0).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn cursor_evaluation_matches_search() {
+        let keys: Vec<Key> = (0..50)
+            .map(|i| Key::new(i as f64 * 0.1, (i as f64).sin()))
+            .collect();
+        let t = Track::new("x", keys).unwrap();
+        let mut cursor = 0;
+        for i in 0..600 {
+            let x = i as f64 * 0.009 - 0.2;
+            assert_eq!(t.value_at(x, &mut cursor), t.value(x));
+        }
+        // Going backwards also works.
+        assert_eq!(t.value_at(0.05, &mut cursor), t.value(0.05));
+    }
+
+    #[test]
+    fn bad_keys_are_errors() {
+        assert!(Track::new("x", vec![]).is_err());
+        assert!(Track::new("x", vec![Key::new(1.0, 0.0), Key::new(1.0, 1.0)]).is_err());
+        assert!(Track::new("x", vec![Key::new(f64::NAN, 0.0)]).is_err());
+    }
+}

@@ -1,0 +1,56 @@
+//! The read-only view of a scene that generators see: every actor and object as they were
+//! at the end of the previous tick.
+
+use crate::skeleton::Skeleton;
+use crate::solid::Shape;
+use crate::state::ActorState;
+use crate::template::TemplateParams;
+use glam::{DQuat, DVec3};
+use std::sync::Arc;
+
+/// What does not change about an actor during a run.
+#[derive(Clone, Debug)]
+pub struct ActorInfo {
+    /// Unique name in the scene.
+    pub name: String,
+    /// Template name.
+    pub template: String,
+    /// Template parameters.
+    pub params: TemplateParams,
+    /// The shared skeleton.
+    pub skeleton: Arc<Skeleton>,
+}
+
+/// A rigid object of the scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Object {
+    /// Unique name in the scene.
+    pub name: String,
+    /// Its shape (canonical frame centred on the position).
+    pub shape: Shape,
+    /// World position of the shape's centre.
+    pub position: DVec3,
+    /// World orientation.
+    pub rotation: DQuat,
+    /// Mass in kilograms.
+    pub mass: f64,
+}
+
+/// The scene at the end of the previous tick.
+pub struct World<'a> {
+    /// Scene time of that tick.
+    pub time: f64,
+    /// Every actor's fixed description, by actor index.
+    pub actors: &'a [ActorInfo],
+    /// Every actor's state, by actor index.
+    pub states: &'a [ActorState],
+    /// Every object, by object index.
+    pub objects: &'a [Object],
+}
+
+impl World<'_> {
+    /// The index of the actor called `name`.
+    pub fn actor_index(&self, name: &str) -> Option<usize> {
+        self.actors.iter().position(|a| a.name == name)
+    }
+}
