@@ -2,5 +2,7 @@
 //! generator writes only the DOFs of its action's scope.
 
 pub mod keyframe;
+pub mod kinds;
 
 pub use keyframe::Keyframe;
+pub use kinds::action_kinds;

@@ -1,0 +1,71 @@
+-- troupe's Lua prelude: the waiting functions, written over coroutine.yield. The Rust
+-- director reads what a behavior yields and resumes it when the condition holds.
+local yield, isyieldable = coroutine.yield, coroutine.isyieldable
+local type, error, select = type, error, select
+
+local function must_yield(name)
+  if not isyieldable() then
+    error(name .. "() can only be called inside a behavior or a test", 3)
+  end
+end
+
+function wait(seconds)
+  must_yield("wait")
+  seconds = seconds or 0
+  if type(seconds) ~= "number" or seconds < 0 or seconds ~= seconds then
+    error("wait: seconds must be a number >= 0, got " .. tostring(seconds), 2)
+  end
+  return yield("time", seconds)
+end
+
+function wait_until(fn, timeout)
+  must_yield("wait_until")
+  if type(fn) ~= "function" then
+    error("wait_until: the first argument must be a function, got " .. type(fn), 2)
+  end
+  if timeout ~= nil and (type(timeout) ~= "number" or timeout < 0) then
+    error("wait_until: timeout must be a number >= 0 or nil, got " .. tostring(timeout), 2)
+  end
+  return yield("until", fn, timeout)
+end
+
+local function handles(name, ...)
+  local list = { ... }
+  if #list == 1 and type(list[1]) == "table" then list = list[1] end
+  if #list == 0 then error(name .. ": give at least one action", 3) end
+  return list
+end
+
+function wait_all(...)
+  must_yield("wait_all")
+  return yield("all", handles("wait_all", ...))
+end
+
+function wait_any(...)
+  must_yield("wait_any")
+  return yield("any", handles("wait_any", ...))
+end
+
+-- Scenario tests: run() and run_until() advance the simulation from inside a test.
+function run(seconds)
+  must_yield("run")
+  return wait(seconds)
+end
+
+function run_until(fn, timeout)
+  must_yield("run_until")
+  return wait_until(fn, timeout)
+end
+
+function expect(cond, message)
+  if not cond then
+    error("expectation failed: " .. (message or "(no message)"), 2)
+  end
+  return cond
+end
+
+-- The method `action:wait()`; the director returns the action's final status.
+__troupe_action_wait = function(self)
+  must_yield("wait")
+  return yield("action", self)
+end

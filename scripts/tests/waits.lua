@@ -1,0 +1,89 @@
+-- Waiting, cancelling and events.
+local function hold(value, dof, length)
+  return troupe.sequence{ [dof or "r_elbow_flexion"] = { {0, value}, {length or 0.5, value} } }
+end
+
+test("wait advances simulated time", function()
+  local t0 = troupe.time()
+  run(0.5)
+  expect(math.abs(troupe.time() - t0 - 0.5) < 1e-9, "half a second later")
+end)
+
+test("action:wait returns the final status", function()
+  local ann = troupe.actor{ name = "ann" }
+  local results = {}
+  ann:behave(function(self)
+    local a = self:play(hold(1.0), { duration = 0.3 })
+    results.status = a:wait()
+    results.time = troupe.time()
+  end)
+  run(1)
+  expect(results.status == "completed", "completed, got " .. tostring(results.status))
+  expect(results.time >= 0.3, "after the duration")
+  expect(ann:behavior_status() == "done", "the behavior returned")
+end)
+
+test("wait_all and wait_any", function()
+  local ann = troupe.actor{ name = "ann" }
+  local short = ann:play(hold(1.0, "r_elbow_flexion", 0.2))
+  local long = ann:play(hold(1.0, "l_elbow_flexion", 0.6))
+  local first = nil
+  ann:behave(function()
+    first = wait_any(short, long)
+    wait_all(short, long)
+  end)
+  run_until(function() return ann:behavior_status() == "done" end, 2)
+  expect(first == short, "the short one ends first")
+  expect(long.status == "completed", "wait_all waited for the long one")
+end)
+
+test("wait_until returns false at its timeout", function()
+  local got = nil
+  local ann = troupe.actor{ name = "ann" }
+  ann:behave(function() got = wait_until(function() return false end, 0.25) end)
+  run(0.5)
+  expect(got == false, "timed out")
+end)
+
+test("cancel a pending and a running action", function()
+  local ann = troupe.actor{ name = "ann" }
+  local later = ann:play(hold(1.0), { delay = 5 })
+  local now = ann:play(hold(1.0, "l_elbow_flexion", 10), { ease_out = 0.2 })
+  run(0.1)
+  later:cancel()
+  now:cancel()
+  run(0.05)
+  expect(later.status == "cancelled", "pending one cancelled at once")
+  expect(now.status == "terminating", "running one eases out, got " .. now.status)
+  expect(now:wait() == "cancelled", "then ends cancelled")
+end)
+
+test("events reach handlers on the next tick", function()
+  local ann = troupe.actor{ name = "ann" }
+  local seen = {}
+  ann:on("action_started", function(a) seen[#seen + 1] = "started " .. a.kind end)
+  ann:on("action_completed", function(a) seen[#seen + 1] = "completed " .. a.id end)
+  ann:on("action_cancelled", function(a) seen[#seen + 1] = "cancelled" end)
+  local a = ann:play(hold(1.0), { duration = 0.1 })
+  a:wait()
+  run(0.02)
+  expect(seen[1] == "started keyframe", tostring(seen[1]))
+  expect(seen[2] == "completed " .. a.id, tostring(seen[2]))
+  expect(#seen == 2, "exactly two events, got " .. #seen)
+end)
+
+test("queries", function()
+  local ann = troupe.actor{ name = "ann", at = {1, 0, 2}, height = 1.7 }
+  run(0.01)
+  local p = ann:position()
+  expect(p[1] == 1 and p[3] == 2, "position")
+  local hand = ann:joint_position("r_wrist")
+  expect(hand[2] > 0.5 and hand[2] < 1.0, "wrist at hip height")
+  local arm = ann:dofs("right_arm")
+  expect(#arm == 9 and arm[1] == "r_sternoclavicular_elevation", "dofs of a scope in order")
+  ann:pose{ r_elbow_flexion = 1.0 }
+  expect(ann:dof("r_elbow_flexion") == 1.0, "pose sets a DOF")
+  local a = ann:play(troupe.sequence{ r_knee_flexion = { {0, 0.2}, {1, 0.2} } })
+  run(0.01)
+  expect(#ann:actions() == 1 and ann:actions()[1] == a, "actions() lists the running one")
+end)

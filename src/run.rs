@@ -1,0 +1,193 @@
+//! `troupe run`: load a Lua scene and run it headless, recording what was asked.
+
+use anyhow::{bail, Context, Result};
+use clap::Args;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+use troupe_runtime::lua::{Director, ScriptLimits};
+use troupe_runtime::pacing::Pacer;
+use troupe_runtime::record::PostureRecorder;
+use troupe_runtime::timeline::TimelineRecorder;
+use troupe_runtime::{SceneConfig, Status};
+
+/// Options of `troupe run`.
+#[derive(Args)]
+pub struct RunArgs {
+    /// The scene file (Lua).
+    pub scene: PathBuf,
+    /// Run this many ticks.
+    #[arg(long, conflicts_with_all = ["seconds", "until_idle"])]
+    pub ticks: Option<u64>,
+    /// Run this many seconds of simulated time.
+    #[arg(long, conflicts_with = "until_idle")]
+    pub seconds: Option<f64>,
+    /// Run until every behavior has returned and no action is active (the default),
+    /// at most --max-seconds.
+    #[arg(long)]
+    pub until_idle: bool,
+    /// Upper bound on simulated time for --until-idle.
+    #[arg(long, default_value_t = 600.0)]
+    pub max_seconds: f64,
+    /// Ticks per second.
+    #[arg(long, default_value_t = 100.0)]
+    pub rate: f64,
+    /// Pace ticks in real time instead of as fast as possible.
+    #[arg(long)]
+    pub realtime: bool,
+    /// Worker threads for stepping actors.
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+    /// Seed for the scene's random numbers.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Write every actor's postures as a sequence set to this `.trk` file.
+    #[arg(long)]
+    pub record: Option<PathBuf>,
+    /// Write the action timeline as Chrome trace-event JSON.
+    #[arg(long)]
+    pub trace: Option<PathBuf>,
+    /// VM instructions one script resume may execute.
+    #[arg(long, default_value_t = ScriptLimits::default().instructions)]
+    pub instruction_budget: u64,
+    /// Bytes one script resume may add to the Lua heap.
+    #[arg(long, default_value_t = ScriptLimits::default().memory)]
+    pub memory_limit: usize,
+}
+
+/// Runs the scene and prints the summary.
+pub fn run(args: RunArgs) -> Result<ExitCode> {
+    let config = SceneConfig {
+        rate: args.rate,
+        threads: args.threads,
+        seed: args.seed,
+    };
+    let limits = ScriptLimits {
+        instructions: args.instruction_budget,
+        memory: args.memory_limit,
+    };
+    let mut director = Director::new(config, troupe_actions::action_kinds(), limits)?;
+    director
+        .load_file(&args.scene)
+        .with_context(|| format!("loading {}", args.scene.display()))?;
+    let dt = 1.0 / args.rate;
+    let max_ticks = match (args.ticks, args.seconds) {
+        (Some(t), _) => t,
+        (None, Some(s)) => {
+            if !(s.is_finite() && s >= 0.0) {
+                bail!("--seconds must be a number ≥ 0");
+            }
+            (s / dt).round() as u64
+        }
+        (None, None) => (args.max_seconds / dt).ceil() as u64,
+    };
+    let until_idle = args.until_idle || (args.ticks.is_none() && args.seconds.is_none());
+
+    let mut recorder = args.record.as_ref().map(|_| PostureRecorder::new());
+    let mut timeline = args.trace.as_ref().map(|_| TimelineRecorder::new());
+    if let Some(r) = recorder.as_mut() {
+        r.sample(&director.scene());
+    }
+    let mut pacer = args
+        .realtime
+        .then(|| Pacer::new(Duration::from_secs_f64(dt)));
+    let mut counts = vec![[0usize; 3]; director.scene().actors().len()];
+    let started = Instant::now();
+    let mut ticks = 0;
+    while ticks < max_ticks {
+        if until_idle && ticks > 0 && director.is_idle() {
+            break;
+        }
+        let events = director.tick();
+        ticks += 1;
+        let scene = director.scene();
+        if counts.len() < scene.actors().len() {
+            counts.resize(scene.actors().len(), [0; 3]);
+        }
+        for e in &events {
+            match e.status {
+                Status::Completed => counts[e.actor][0] += 1,
+                Status::Cancelled => counts[e.actor][1] += 1,
+                Status::Failed => counts[e.actor][2] += 1,
+                _ => {}
+            }
+        }
+        if let Some(r) = recorder.as_mut() {
+            r.sample(&scene);
+        }
+        if let Some(t) = timeline.as_mut() {
+            t.record(&scene, &events);
+        }
+        drop(scene);
+        if let Some(p) = pacer.as_mut() {
+            p.wait();
+        }
+    }
+    let wall = started.elapsed();
+    let scene = director.scene();
+    println!(
+        "ran {} for {ticks} ticks: {:.2} s simulated in {:.3} s wall ({} actors, {} thread{})",
+        args.scene.display(),
+        scene.time(),
+        wall.as_secs_f64(),
+        scene.actors().len(),
+        args.threads,
+        if args.threads == 1 { "" } else { "s" }
+    );
+    if let Some(p) = &pacer {
+        println!(
+            "real time: {} overruns (worst {:.1} ms late)",
+            p.overruns(),
+            p.worst_lateness().as_secs_f64() * 1e3
+        );
+    }
+    for (i, actor) in scene.actors().iter().enumerate() {
+        let [done, cancelled, failed] = counts[i];
+        println!(
+            "  {:<12} actions: {done} completed, {cancelled} cancelled, {failed} failed",
+            actor.name
+        );
+    }
+    drop(scene);
+    let reports = director.behaviors();
+    let mut failed = 0;
+    for r in &reports {
+        if let Some(err) = &r.error {
+            failed += 1;
+            println!(
+                "  behavior of {} failed: {}",
+                r.actor,
+                err.lines().next().unwrap_or("")
+            );
+            for line in err.lines().skip(1) {
+                println!("      {line}");
+            }
+        }
+    }
+    let still = reports.iter().filter(|r| r.status == "running").count();
+    if until_idle && still > 0 {
+        println!("  stopped at --max-seconds with {still} behavior(s) still running");
+    }
+    let scene = director.scene();
+    if let (Some(path), Some(r)) = (&args.record, &recorder) {
+        troupe_runtime::trk::write_trk(path, &r.sequences(&scene))?;
+        println!(
+            "recorded {} ticks of postures to {}",
+            r.len(),
+            path.display()
+        );
+    }
+    if let (Some(path), Some(t)) = (&args.trace, timeline.as_mut()) {
+        let json = serde_json::to_string(&t.to_json(&scene))?;
+        std::fs::write(path, json).with_context(|| format!("writing {}", path.display()))?;
+        println!(
+            "wrote the action timeline to {} (open in Perfetto or chrome://tracing)",
+            path.display()
+        );
+    }
+    Ok(if failed > 0 {
+        ExitCode::FAILURE
+    } else {
+        ExitCode::SUCCESS
+    })
+}

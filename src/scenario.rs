@@ -1,0 +1,117 @@
+//! `troupe test`: Lua scenario tests, each in a fresh scene.
+
+use anyhow::{Context, Result};
+use clap::Args;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use troupe_runtime::lua::{Director, ScriptLimits};
+use troupe_runtime::SceneConfig;
+
+/// Options of `troupe test`.
+#[derive(Args)]
+pub struct TestArgs {
+    /// Test files or folders (default `scripts/tests/`).
+    pub paths: Vec<PathBuf>,
+    /// Longest a test may run, in simulated seconds.
+    #[arg(long, default_value_t = 120.0)]
+    pub timeout: f64,
+    /// Worker threads for stepping actors.
+    #[arg(long, default_value_t = 1)]
+    pub threads: usize,
+}
+
+fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let defaults = [PathBuf::from("scripts/tests")];
+    let paths = if paths.is_empty() {
+        &defaults[..]
+    } else {
+        paths
+    };
+    let mut files = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let mut found: Vec<PathBuf> = std::fs::read_dir(p)
+                .with_context(|| format!("reading {}", p.display()))?
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| f.extension().is_some_and(|x| x == "lua"))
+                .collect();
+            found.sort();
+            files.extend(found);
+        } else if p.is_file() {
+            files.push(p.clone());
+        } else {
+            anyhow::bail!("{}: no such file or folder", p.display());
+        }
+    }
+    Ok(files)
+}
+
+fn director(file: &Path, threads: usize) -> Result<Director> {
+    let config = SceneConfig {
+        threads,
+        ..SceneConfig::default()
+    };
+    let mut d = Director::new(
+        config,
+        troupe_actions::action_kinds(),
+        ScriptLimits::default(),
+    )?;
+    d.load_file(file)?;
+    Ok(d)
+}
+
+/// Runs every test and prints one line each, then `N passed, N failed`.
+pub fn run(args: TestArgs) -> Result<ExitCode> {
+    let (mut passed, mut failed) = (0, 0);
+    for file in collect(&args.paths)? {
+        let names = match director(&file, args.threads) {
+            Ok(d) => d.test_names(),
+            Err(e) => {
+                println!("FAIL {}: {e:#}", file.display());
+                failed += 1;
+                continue;
+            }
+        };
+        for (index, name) in names.iter().enumerate() {
+            match run_one(&file, index, args.timeout, args.threads) {
+                Ok(seconds) => {
+                    passed += 1;
+                    println!(
+                        "ok   {} › {name} ({seconds:.2} s simulated)",
+                        file.display()
+                    );
+                }
+                Err(msg) => {
+                    failed += 1;
+                    println!("FAIL {} › {name}", file.display());
+                    for line in msg.lines() {
+                        println!("       {line}");
+                    }
+                }
+            }
+        }
+    }
+    println!("{passed} passed, {failed} failed");
+    Ok(if failed == 0 {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+fn run_one(file: &Path, index: usize, timeout: f64, threads: usize) -> Result<f64, String> {
+    let mut d = director(file, threads).map_err(|e| format!("{e:#}"))?;
+    d.start_test(index).map_err(|e| e.to_string())?;
+    let rate = d.scene().config().rate;
+    let max_ticks = (timeout * rate).ceil() as u64;
+    for _ in 0..=max_ticks {
+        d.tick();
+        let test = d.behaviors().into_iter().find(|b| b.actor == "test");
+        match test {
+            Some(b) if b.status == "failed" => return Err(b.error.unwrap_or_default()),
+            Some(b) if b.status == "done" => return Ok(d.scene().time()),
+            _ => {}
+        }
+    }
+    Err(format!("timed out after {timeout} simulated seconds"))
+}
