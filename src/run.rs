@@ -66,6 +66,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         instructions: args.instruction_budget,
         memory: args.memory_limit,
     };
+    for path in [&args.record, &args.trace].into_iter().flatten() {
+        if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+        }
+    }
     let mut director = Director::new(config, troupe_actions::action_kinds(), limits)?;
     director
         .load_file(&args.scene)

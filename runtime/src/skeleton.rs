@@ -287,7 +287,10 @@ impl SkeletonBuilder {
                 s.name
             )));
         }
-        if !(min <= max) || axis.length_squared() < 1e-12 || !axis.is_finite() {
+        if min.partial_cmp(&max).is_none_or(|o| o.is_gt())
+            || axis.length_squared() < 1e-12
+            || !axis.is_finite()
+        {
             return Err(Error::Invalid(format!(
                 "DOF `{name}`: needs a non-zero axis and min ≤ max"
             )));

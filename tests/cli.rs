@@ -1,0 +1,162 @@
+//! End-to-end checks of the `troupe` command line.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn troupe() -> Command {
+    let mut c = Command::new(env!("CARGO_BIN_EXE_troupe"));
+    c.current_dir(env!("CARGO_MANIFEST_DIR"));
+    c
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("troupe-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn version_help_and_templates() {
+    let out = troupe().arg("--version").output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("troupe "));
+    let out = troupe().arg("--help").output().unwrap();
+    assert!(String::from_utf8_lossy(&out.stdout).contains("templates"));
+    let out = troupe().args(["templates", "--dofs"]).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    for needle in [
+        "adult",
+        "child",
+        "107 DOFs",
+        "right_hand",
+        "r_elbow_flexion",
+    ] {
+        assert!(text.contains(needle), "missing {needle}");
+    }
+}
+
+#[test]
+fn run_records_byte_identical_postures_with_one_and_two_threads() {
+    let mut files = Vec::new();
+    for threads in ["1", "2"] {
+        let path = temp(&format!("crowd-{threads}.trk"));
+        let out = troupe()
+            .args([
+                "run",
+                "scripts/examples/crowd.lua",
+                "--seconds",
+                "6",
+                "--seed",
+                "3",
+                "--threads",
+                threads,
+                "--record",
+            ])
+            .arg(&path)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        files.push(std::fs::read(&path).unwrap());
+    }
+    assert!(files[0].len() > 10_000);
+    assert!(
+        files[0] == files[1],
+        "recordings differ between 1 and 2 threads"
+    );
+    // A different seed gives a different scene.
+    let path = temp("crowd-seed.trk");
+    troupe()
+        .args([
+            "run",
+            "scripts/examples/crowd.lua",
+            "--seconds",
+            "6",
+            "--seed",
+            "4",
+            "--record",
+        ])
+        .arg(&path)
+        .output()
+        .unwrap();
+    assert!(std::fs::read(&path).unwrap() != files[0]);
+}
+
+#[test]
+fn the_recording_and_trace_are_readable() {
+    let trk = temp("greeting.trk");
+    let json = temp("greeting.json");
+    let out = troupe()
+        .args(["run", "scripts/examples/greeting.lua", "--record"])
+        .arg(&trk)
+        .arg("--trace")
+        .arg(&json)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let set = troupe_runtime::trk::read_trk_set(&trk).unwrap();
+    assert_eq!(
+        set.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
+        ["ann", "bob"]
+    );
+    let trace: serde_json::Value = serde_json::from_slice(&std::fs::read(&json).unwrap()).unwrap();
+    let spans = trace["traceEvents"].as_array().unwrap();
+    assert!(spans
+        .iter()
+        .any(|e| e["name"] == "keyframe active" && e["tid"] == 0));
+    assert!(spans.iter().any(|e| e["args"]["name"] == "bob"));
+}
+
+#[test]
+fn a_failing_behavior_makes_run_fail_and_is_reported() {
+    let scene = temp("failing.lua");
+    std::fs::write(
+        &scene,
+        "local a = troupe.actor{ name = 'a' }\nlocal b = troupe.actor{ name = 'b', at = {2,0,0} }\n\
+         a:behave(function() wait(0.1); error('boom') end)\n\
+         b:behave(function() wait(0.5) end)\n",
+    )
+    .unwrap();
+    let out = troupe().arg("run").arg(&scene).output().unwrap();
+    assert!(!out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("behavior of a failed"), "{text}");
+    assert!(text.contains("failing.lua:3: boom"), "{text}");
+}
+
+#[test]
+fn bad_scene_files_give_clear_errors() {
+    let out = troupe()
+        .args(["run", "no/such/scene.lua"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("no/such/scene.lua"));
+    let scene = temp("syntax.lua");
+    std::fs::write(&scene, "troupe.actor{ name = 'a' \n").unwrap();
+    let out = troupe().arg("run").arg(&scene).output().unwrap();
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("syntax.lua:"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn scenario_tests_pass_and_report_counts() {
+    let out = troupe().arg("test").output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{text}");
+    assert!(text.lines().last().unwrap().ends_with(" passed, 0 failed"));
+    let failing = temp("failing_test.lua");
+    std::fs::write(&failing, "test('fails', function() run(0.1); expect(false, 'nope') end)\ntest('passes', function() end)\n").unwrap();
+    let out = troupe().arg("test").arg(&failing).output().unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(!out.status.success());
+    assert!(text.contains("expectation failed: nope"), "{text}");
+    assert!(text.contains("1 passed, 1 failed"), "{text}");
+}
