@@ -29,6 +29,7 @@ fn keyframe_scene(threads: usize) -> Scene {
         ..SceneConfig::default()
     })
     .unwrap();
+    let mut clip = None;
     for i in 0..ACTORS {
         let desc = ActorDesc {
             at: DVec3::new(i as f64, 0.0, 0.0),
@@ -36,7 +37,9 @@ fn keyframe_scene(threads: usize) -> Scene {
         };
         let a = scene.add_actor(&desc).unwrap();
         let skel = scene.actors()[a].skeleton.clone();
-        let gen = Keyframe::new(&skel, &full_body_sequence(&skel), None, Some(true)).unwrap();
+        // The crowd plays one shared clip, as scripts do with troupe.sequence().
+        let clip = clip.get_or_insert_with(|| std::sync::Arc::new(full_body_sequence(&skel)));
+        let gen = Keyframe::shared(&skel, clip.clone(), None, Some(true)).unwrap();
         let spec = ActionSpec::new("keyframe", gen.scope());
         scene.start_action(a, spec, Box::new(gen)).unwrap();
     }

@@ -1,12 +1,16 @@
 //! The keyframe generator: plays a [`Sequence`] of Hermite tracks on a scope.
 
+use std::sync::Arc;
 use troupe_runtime::{
-    DofWriter, Error, Generator, GeneratorContext, Result, Scope, Sequence, Skeleton, Step, Track,
+    DofWriter, Error, Generator, GeneratorContext, Result, Scope, Sequence, Skeleton, Step,
 };
 
 /// Plays a sequence's tracks on the DOFs they name, from the sequence's first key time.
+/// Actors playing the same sequence share its keys.
 pub struct Keyframe {
-    tracks: Vec<(usize, Track, usize)>,
+    sequence: Arc<Sequence>,
+    /// (DOF index, track index in the sequence, evaluation cursor)
+    tracks: Vec<(usize, usize, usize)>,
     start: f64,
     length: f64,
     looping: bool,
@@ -21,11 +25,21 @@ impl Keyframe {
         scope: Option<Scope>,
         looping: Option<bool>,
     ) -> Result<Keyframe> {
+        Keyframe::shared(skeleton, Arc::new(sequence.clone()), scope, looping)
+    }
+
+    /// Like [`Keyframe::new`], sharing the sequence instead of copying it.
+    pub fn shared(
+        skeleton: &Skeleton,
+        sequence: Arc<Sequence>,
+        scope: Option<Scope>,
+        looping: Option<bool>,
+    ) -> Result<Keyframe> {
         let mut tracks = Vec::new();
-        for track in sequence.tracks() {
+        for (i, track) in sequence.tracks().iter().enumerate() {
             let dof = skeleton.dof(track.dof())?;
             if scope.is_none_or(|s| s.contains(dof)) {
-                tracks.push((dof, track.clone(), 0));
+                tracks.push((dof, i, 0));
             }
         }
         if tracks.is_empty() {
@@ -39,6 +53,7 @@ impl Keyframe {
             start: sequence.start(),
             length: sequence.duration(),
             looping: looping.unwrap_or(sequence.looping),
+            sequence,
         })
     }
 
@@ -61,8 +76,9 @@ impl Generator for Keyframe {
             t = t.rem_euclid(self.length);
         }
         let t = self.start + t.min(self.length);
+        let tracks = self.sequence.tracks();
         for (dof, track, cursor) in self.tracks.iter_mut() {
-            out.set(*dof, track.value_at(t, cursor));
+            out.set(*dof, tracks[*track].value_at(t, cursor));
         }
         if finished {
             Step::Finished

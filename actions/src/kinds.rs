@@ -54,7 +54,7 @@ fn build_play(
         Some(t) => opt_bool(t, "play", "loop")?,
         None => None,
     };
-    let generator = Keyframe::new(&ctx.skeleton, &sequence, common.scope, looping)
+    let generator = Keyframe::shared(&ctx.skeleton, sequence, common.scope, looping)
         .map_err(|e| lua_err_message(format!("play: {e}")))?;
     let spec = common.spec("keyframe", generator.scope());
     Ok((Box::new(generator), spec))

@@ -377,6 +377,23 @@ impl Scene {
             .unwrap_or_default()
     }
 
+    /// Forgets the records of actions that ended before `before` (scene time) unless
+    /// `keep(id)` says someone still refers to them; returns how many were forgotten.
+    /// Long runs start many actions: this keeps memory bounded.
+    pub fn forget_ended_actions(&mut self, before: f64, keep: impl Fn(ActionId) -> bool) -> usize {
+        let old: Vec<ActionId> = self
+            .ended
+            .iter()
+            .filter(|(id, info)| info.ended_at.is_some_and(|t| t < before) && !keep(**id))
+            .map(|(id, _)| *id)
+            .collect();
+        for id in &old {
+            self.ended.remove(id);
+            self.action_owner.remove(id);
+        }
+        old.len()
+    }
+
     /// Whether any action of any actor has not ended.
     pub fn has_unfinished_actions(&self) -> bool {
         self.work.iter().any(|w| !w.runtime.actions.is_empty())

@@ -559,3 +559,26 @@ fn bad_input_gives_clear_errors() {
         })
         .is_err());
 }
+
+#[test]
+fn ended_actions_are_forgotten_unless_kept() {
+    let (mut s, a) = scene();
+    let spec = ActionSpec {
+        duration: Some(0.05),
+        ..spec(&s, "r_knee", Mode::Weighted)
+    };
+    let kept = s.start_action(a, spec.clone(), constant(0.1)).unwrap();
+    let dropped = s.start_action(a, spec, constant(0.2)).unwrap();
+    for _ in 0..20 {
+        s.step();
+    }
+    assert_eq!(status(&s, kept), Status::Completed);
+    assert_eq!(
+        s.forget_ended_actions(0.0, |_| false),
+        0,
+        "nothing ended before t = 0"
+    );
+    assert_eq!(s.forget_ended_actions(s.time(), |id| id == kept), 1);
+    assert!(s.action(dropped).is_none());
+    assert_eq!(status(&s, kept), Status::Completed);
+}

@@ -23,9 +23,55 @@ pub struct ActorRef(pub usize);
 /// A Lua handle on an object.
 #[derive(Clone, Copy, Debug)]
 pub struct ObjectRef(pub usize);
-/// A Lua handle on an action.
-#[derive(Clone, Copy, Debug)]
-pub struct ActionRef(pub ActionId);
+/// A Lua handle on an action. While a handle is alive, the scene keeps the action's
+/// final record (see [`Pins`]).
+#[derive(Debug)]
+pub struct ActionRef(pub ActionId, Arc<Pins>);
+
+/// Counts the live Lua handles of each action, so that the records of ended actions no
+/// script can see any more can be forgotten.
+#[derive(Debug, Default)]
+pub struct Pins(std::sync::Mutex<std::collections::HashMap<ActionId, u32>>);
+
+impl Pins {
+    fn add(&self, id: ActionId) {
+        *self.lock().entry(id).or_insert(0) += 1;
+    }
+    fn release(&self, id: ActionId) {
+        let mut map = self.lock();
+        if let Some(n) = map.get_mut(&id) {
+            *n -= 1;
+            if *n == 0 {
+                map.remove(&id);
+            }
+        }
+    }
+    /// Whether a live handle refers to `id`.
+    pub fn is_pinned(&self, id: ActionId) -> bool {
+        self.lock().contains_key(&id)
+    }
+    fn lock(&self) -> std::sync::MutexGuard<'_, std::collections::HashMap<ActionId, u32>> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl ActionRef {
+    /// A new handle on `id` (pinning its record).
+    pub fn new(lua: &Lua, id: ActionId) -> mlua::Result<ActionRef> {
+        let pins = lua
+            .app_data_ref::<Arc<Pins>>()
+            .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?
+            .clone();
+        pins.add(id);
+        Ok(ActionRef(id, pins))
+    }
+}
+
+impl Drop for ActionRef {
+    fn drop(&mut self) {
+        self.1.release(self.0);
+    }
+}
 /// A loaded sequence.
 #[derive(Clone, Debug)]
 pub struct SequenceRef(pub Arc<Sequence>);
@@ -150,7 +196,11 @@ impl UserData for ActorRef {
                 .iter()
                 .map(|a| a.id)
                 .collect();
-            lua.create_sequence_from(ids.into_iter().map(ActionRef))
+            let handles = ids
+                .into_iter()
+                .map(|id| ActionRef::new(lua, id))
+                .collect::<mlua::Result<Vec<_>>>()?;
+            lua.create_sequence_from(handles)
         });
         methods.add_method("pose", |lua, this, values: Table| {
             let mut st = stage(lua)?;
@@ -260,7 +310,7 @@ fn start_kind(
         .scene
         .start_action(actor, spec, generator)
         .map_err(|e| lua_err(format!("{}: {e}", kind.method)))?;
-    Ok(ActionRef(id))
+    ActionRef::new(lua, id)
 }
 
 impl UserData for ObjectRef {

@@ -123,6 +123,10 @@ pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua
 }
 
 const SCRIPT_LIB: &str = "scripts/lib";
+/// Ended actions no handle refers to are forgotten this long after they ended.
+const ENDED_RETENTION_SECONDS: f64 = 10.0;
+/// How often (in ticks) forgotten actions are pruned.
+const PRUNE_EVERY_TICKS: u64 = 100;
 
 impl Director {
     /// A director with an empty scene, the sandboxed standard library, the troupe API and
@@ -147,6 +151,7 @@ impl Director {
     fn setup(&self, scene: Scene, kinds: ActionKinds) -> mlua::Result<()> {
         let lua = &self.lua;
         let seed = scene.config().seed;
+        lua.set_app_data(Arc::new(api::Pins::default()));
         lua.set_app_data(Stage {
             scene,
             kinds,
@@ -331,10 +336,19 @@ impl Director {
     /// One tick: event handlers, due behaviors, then the scene's step. Returns the
     /// scene's events of this tick.
     pub fn tick(&mut self) -> Vec<Event> {
-        self.run_handlers();
-        self.run_behaviors();
+        {
+            let _span = tracing::trace_span!("scripts").entered();
+            self.run_handlers();
+            self.run_behaviors();
+        }
         let mut st = self.stage_mut();
         let events = st.scene.step().to_vec();
+        if st.scene.tick() % PRUNE_EVERY_TICKS == 0 {
+            let pins = self.lua.app_data_ref::<Arc<api::Pins>>().map(|p| p.clone());
+            let before = st.scene.time() - ENDED_RETENTION_SECONDS;
+            st.scene
+                .forget_ended_actions(before, |id| pins.as_ref().is_some_and(|p| p.is_pinned(id)));
+        }
         st.pending_events.extend(events.iter().cloned());
         events
     }
@@ -363,7 +377,8 @@ impl Director {
                     continue;
                 }
                 self.stage_mut().current_actor = Some(*actor);
-                let result = self.guarded(|| f.call::<()>(ActionRef(event.action)));
+                let result =
+                    self.guarded(|| f.call::<()>(ActionRef::new(&self.lua, event.action)?));
                 if let Err(e) = result {
                     let msg = describe(&e, self.limits);
                     tracing::error!(actor = %self.scene().actors()[*actor].name, "event handler failed: {msg}");
@@ -468,7 +483,10 @@ impl Director {
                 .then(|| Resume::With(MultiValue::new())),
             Wait::Any(ids) => {
                 let id = ids.iter().copied().find(|id| ended(*id).is_some())?;
-                let u = self.lua.create_userdata(ActionRef(id)).ok()?;
+                let u = self
+                    .lua
+                    .create_userdata(ActionRef::new(&self.lua, id).ok()?)
+                    .ok()?;
                 Some(Resume::With(MultiValue::from_vec(vec![Value::UserData(u)])))
             }
             Wait::Until(pred, deadline) => {
