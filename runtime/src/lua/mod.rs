@@ -343,7 +343,7 @@ impl Director {
         }
         let mut st = self.stage_mut();
         let events = st.scene.step().to_vec();
-        if st.scene.tick() % PRUNE_EVERY_TICKS == 0 {
+        if st.scene.tick().is_multiple_of(PRUNE_EVERY_TICKS) {
             let pins = self.lua.app_data_ref::<Arc<api::Pins>>().map(|p| p.clone());
             let before = st.scene.time() - ENDED_RETENTION_SECONDS;
             st.scene
