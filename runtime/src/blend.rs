@@ -69,6 +69,7 @@ impl Accumulator {
     }
 
     /// Applies the blend rule: writes `q` and updates `held`; `clamp(d, v)` applies limits.
+    #[inline]
     pub fn resolve(&self, held: &mut [f64], q: &mut [f64], clamp: impl Fn(usize, f64) -> f64) {
         for d in 0..q.len() {
             let w = self.weight[d];

@@ -38,8 +38,11 @@ pub fn forward_kinematics(skeleton: &Skeleton, q: &[f64], globals: &mut [Transfo
             None => Transform::from_translation(joint.offset),
         };
         for d in joint.dofs.clone() {
-            let dof = &dofs[d];
-            frame = frame.mul(&dof_transform(dof.kind, dof.axis, q[d]));
+            // Many DOFs (fingers, eyes) sit at zero: their transform is the identity.
+            if q[d] != 0.0 {
+                let dof = &dofs[d];
+                frame = frame.mul(&dof_transform(dof.kind, dof.axis, q[d]));
+            }
         }
         globals[j] = frame;
     }

@@ -216,9 +216,12 @@ impl ActorRuntime {
         }
 
         next.held.copy_from_slice(&previous.held);
-        let dofs = skeleton.dofs();
+        let limits = skeleton.limits();
         self.accumulator
-            .resolve(&mut next.held, &mut next.q, |d, v| dofs[d].clamp(v));
+            .resolve(&mut next.held, &mut next.q, |d, v| {
+                let (min, max) = limits[d];
+                v.clamp(min, max)
+            });
         for d in 0..n {
             next.qd[d] = (next.q[d] - previous.q[d]) / clock.dt;
         }

@@ -103,6 +103,7 @@ impl Track {
 
     /// The value at `t`, using and updating `cursor` (a key index) so that evaluating at
     /// increasing times costs O(1) per call.
+    #[inline]
     pub fn value_at(&self, t: f64, cursor: &mut usize) -> f64 {
         match self.segment(t, cursor) {
             Segment::Before => self.keys[0].value,
@@ -148,6 +149,7 @@ impl Track {
         }
     }
 
+    #[inline]
     fn segment(&self, t: f64, cursor: &mut usize) -> Segment {
         let keys = &self.keys;
         let n = keys.len();

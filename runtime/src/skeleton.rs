@@ -62,6 +62,7 @@ pub struct Skeleton {
     name: String,
     joints: Vec<Joint>,
     dofs: Vec<Dof>,
+    limits: Vec<(f64, f64)>,
     solids: Vec<(usize, Solid)>,
     scopes: BTreeMap<String, Scope>,
     joint_index: HashMap<String, usize>,
@@ -81,6 +82,10 @@ impl Skeleton {
     /// All DOFs, grouped by joint in joint order.
     pub fn dofs(&self) -> &[Dof] {
         &self.dofs
+    }
+    /// The (min, max) limits of every DOF, packed for the blend loop.
+    pub fn limits(&self) -> &[(f64, f64)] {
+        &self.limits
     }
     /// Number of DOFs.
     pub fn dof_count(&self) -> usize {
@@ -218,6 +223,7 @@ impl SkeletonBuilder {
                 name: name.into(),
                 joints: Vec::new(),
                 dofs: Vec::new(),
+                limits: Vec::new(),
                 solids: Vec::new(),
                 scopes: BTreeMap::new(),
                 joint_index: HashMap::new(),
@@ -304,6 +310,7 @@ impl SkeletonBuilder {
             min,
             max,
         });
+        s.limits.push((min, max));
         s.joints[joint].dofs.end = index + 1;
         s.dof_index.insert(name.to_string(), index);
         Ok(index)

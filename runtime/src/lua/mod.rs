@@ -333,14 +333,23 @@ impl Director {
             .collect()
     }
 
-    /// One tick: event handlers, due behaviors, then the scene's step. Returns the
+    /// One tick: [`Director::run_scripts`] then [`Director::step_scene`]. Returns the
     /// scene's events of this tick.
     pub fn tick(&mut self) -> Vec<Event> {
-        {
-            let _span = tracing::trace_span!("scripts").entered();
-            self.run_handlers();
-            self.run_behaviors();
-        }
+        self.run_scripts();
+        self.step_scene()
+    }
+
+    /// The script phase of a tick: event handlers for the previous tick's events, then
+    /// every behavior whose wait condition holds, in creation order.
+    pub fn run_scripts(&mut self) {
+        let _span = tracing::trace_span!("scripts").entered();
+        self.run_handlers();
+        self.run_behaviors();
+    }
+
+    /// The scene phase of a tick: the scheduler steps every actor. Returns its events.
+    pub fn step_scene(&mut self) -> Vec<Event> {
         let mut st = self.stage_mut();
         let events = st.scene.step().to_vec();
         if st.scene.tick().is_multiple_of(PRUNE_EVERY_TICKS) {
