@@ -582,3 +582,35 @@ fn ended_actions_are_forgotten_unless_kept() {
     assert!(s.action(dropped).is_none());
     assert_eq!(status(&s, kept), Status::Completed);
 }
+
+#[test]
+fn the_worked_example_of_docs_scheduling_md() {
+    let (mut s, a) = scene();
+    let mut at = |s: &mut Scene, tick: u64| {
+        while s.tick() < tick {
+            s.step();
+        }
+        q(s, "r_elbow_flexion")
+    };
+    at(&mut s, 99); // created at t = 0.99 s, admitted on the tick at t = 1 s
+    let wave = ActionSpec {
+        weight: 0.6,
+        ease_in: 0.5,
+        ease_out: 0.5,
+        ..spec(&s, "right_arm", Mode::Weighted)
+    };
+    let wave = s.start_action(a, wave, constant(1.2)).unwrap();
+    assert!((at(&mut s, 125) - 0.36).abs() < 1e-9);
+    assert!((at(&mut s, 150) - 0.72).abs() < 1e-9);
+    at(&mut s, 199);
+    let excl = ActionSpec {
+        ease_in: 0.5,
+        ..spec(&s, "right_arm", Mode::Exclusive)
+    };
+    s.start_action(a, excl, constant(0.4)).unwrap();
+    assert!((at(&mut s, 225) - 0.56).abs() < 1e-9);
+    assert!((at(&mut s, 250) - 0.4).abs() < 1e-9);
+    let info = s.action(wave).unwrap();
+    assert_eq!(info.status, Status::Cancelled);
+    assert_eq!(info.reason.as_deref(), Some("pre-empted by action #2"));
+}
