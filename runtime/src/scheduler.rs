@@ -269,8 +269,7 @@ fn admit(
             Mode::Exclusive | Mode::Clearing => {
                 let clearing = actions[i].spec.mode == Mode::Clearing;
                 let id = actions[i].id;
-                for j in 0..actions.len() {
-                    let other = &mut actions[j];
+                for (j, other) in actions.iter_mut().enumerate() {
                     if j == i || other.status.is_final() {
                         continue;
                     }
