@@ -230,7 +230,7 @@ impl Bvh {
         if joints.is_empty() {
             return Err(Error::Invalid("BVH without joints".into()));
         }
-        if count == 0 && !data.is_empty() || count > 0 && data.len() % count != 0 {
+        if count == 0 && !data.is_empty() || count > 0 && !data.len().is_multiple_of(count) {
             return Err(Error::Invalid(format!(
                 "BVH data of {} values is not a whole number of {count}-channel frames",
                 data.len()

@@ -7,13 +7,16 @@
 pub mod action;
 pub mod blend;
 pub mod bvh;
+pub mod compress;
 pub mod error;
 pub mod kinematics;
 pub mod pacing;
 pub mod parallel;
+pub mod pyramid;
 pub mod scene;
 pub mod scheduler;
 pub mod scope;
+pub mod seqblend;
 pub mod sequence;
 pub mod skeleton;
 pub mod solid;
@@ -21,6 +24,7 @@ pub mod state;
 pub mod template;
 pub mod transform;
 pub mod trk;
+pub mod warp;
 pub mod world;
 
 pub use action::{
