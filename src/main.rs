@@ -1,5 +1,6 @@
 //! The `troupe` command line.
 
+mod seq;
 mod templates;
 
 use clap::{Parser, Subcommand};
@@ -20,6 +21,8 @@ struct Cli {
 enum Command {
     /// List the body templates with their DOF counts and scopes.
     Templates(templates::TemplatesArgs),
+    /// Inspect, convert and edit motion sequences (.trk, BVH, glTF out); plot curves.
+    Seq(seq::SeqArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +35,7 @@ fn main() -> ExitCode {
         .init();
     let result = match cli.command {
         Command::Templates(args) => templates::run(args),
+        Command::Seq(args) => seq::run(args),
     };
     match result {
         Ok(code) => code,

@@ -287,7 +287,12 @@ impl SkeletonBuilder {
                 s.name
             )));
         }
-        if min.is_nan() || max.is_nan() || min > max || axis.length_squared() < 1e-12 || !axis.is_finite() {
+        if min.is_nan()
+            || max.is_nan()
+            || min > max
+            || axis.length_squared() < 1e-12
+            || !axis.is_finite()
+        {
             return Err(Error::Invalid(format!(
                 "DOF `{name}`: needs a non-zero axis and min ≤ max"
             )));
