@@ -13,6 +13,7 @@ pub mod kinematics;
 pub mod pacing;
 pub mod parallel;
 pub mod pyramid;
+pub mod retarget;
 pub mod scene;
 pub mod scheduler;
 pub mod scope;
