@@ -13,7 +13,9 @@ use std::process::ExitCode;
 use std::time::Instant;
 use troupe_runtime::bvh::{read_bvh, write_bvh, Bvh, RotationOrder};
 use troupe_runtime::compress::{compress_pyramid, compress_spline, SplineOptions};
+use troupe_runtime::gltf::{write_gltf, Rig};
 use troupe_runtime::pyramid::{self, Grid};
+use troupe_runtime::retarget::{retarget, RetargetMap};
 use troupe_runtime::trk::{read_trk_set, write_trk};
 use troupe_runtime::warp::{warp_sequence, TimeWarp};
 use troupe_runtime::{seqblend, Sequence};
@@ -53,6 +55,14 @@ enum SeqCommand {
         /// Rotation order written to a BVH output (e.g. ZXY); default: as read.
         #[arg(long)]
         rotation_order: Option<String>,
+        /// Retarget a BVH onto this body template (e.g. `adult`), or play a .trk on it for
+        /// glTF output.
+        #[arg(long)]
+        template: Option<String>,
+        /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: detect
+        /// CMU or Mixamo names.
+        #[arg(long)]
+        map: Option<PathBuf>,
     },
     /// Blends B into A: B starts at --at, the weight eases over --over seconds (eq. 5-8),
     /// or the multiresolution blend of table 5-5 with --pyramid LEVELS.
@@ -226,25 +236,9 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             input,
             output,
             rotation_order,
-        } => {
-            let order = rotation_order
-                .map(|o| o.parse::<RotationOrder>())
-                .transpose()?;
-            if is_ext(&input, "bvh") && is_ext(&output, "bvh") {
-                let mut b = read_bvh(&input)?;
-                if let Some(o) = order {
-                    b = b.with_rotation_order(o);
-                }
-                write_bvh(&output, &b)?;
-            } else {
-                if order.is_some() {
-                    bail!("--rotation-order applies to BVH → BVH conversion");
-                }
-                let l = load(&input, scale)?;
-                save(&output, &l.seq, l.bvh.as_ref(), scale)?;
-            }
-            println!("wrote {}", output.display());
-        }
+            template,
+            map,
+        } => convert(&input, &output, rotation_order, template, map, scale)?,
         SeqCommand::Blend {
             a,
             b,
@@ -345,6 +339,67 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
         }
     }
     Ok(ExitCode::SUCCESS)
+}
+
+fn convert(
+    input: &Path,
+    output: &Path,
+    rotation_order: Option<String>,
+    template: Option<String>,
+    map: Option<PathBuf>,
+    scale: f64,
+) -> Result<()> {
+    let order = rotation_order
+        .map(|o| o.parse::<RotationOrder>())
+        .transpose()?;
+    let name = input
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let gltf_out = is_ext(output, "gltf");
+    if let Some(t) = template {
+        let t = troupe_runtime::template(&t)?;
+        let skeleton = t.instantiate(t.default_params())?;
+        let seq = if is_ext(input, "bvh") {
+            let bvh = read_bvh(input)?;
+            let map = match map {
+                Some(m) => RetargetMap::read(m)?,
+                None => RetargetMap::detect(&bvh),
+            };
+            println!("retargeting with the `{}` map", map.name);
+            retarget(&skeleton, &bvh, &map, &name)?
+        } else {
+            load(input, scale)?.seq
+        };
+        if gltf_out {
+            write_gltf(output, &Rig::from_sequence(&skeleton, &seq)?, &name)?;
+        } else if is_ext(output, "bvh") {
+            bail!("BVH output of a retargeted sequence is not supported; write .trk or .gltf");
+        } else {
+            write_trk(output, std::slice::from_ref(&seq))?;
+        }
+    } else if is_ext(input, "bvh") && (is_ext(output, "bvh") || gltf_out) {
+        let mut b = read_bvh(input)?;
+        if let Some(o) = order {
+            b = b.with_rotation_order(o);
+        }
+        if gltf_out {
+            write_gltf(output, &Rig::from_bvh(&b, scale), &name)?;
+        } else {
+            write_bvh(output, &b)?;
+        }
+    } else {
+        if order.is_some() {
+            bail!("--rotation-order applies to BVH → BVH conversion");
+        }
+        if gltf_out {
+            bail!("glTF output of a .trk needs --template (the body to play it on)");
+        }
+        let l = load(input, scale)?;
+        save(output, &l.seq, l.bvh.as_ref(), scale)?;
+    }
+    println!("wrote {}", output.display());
+    Ok(())
 }
 
 fn info(file: &Path, frame: usize, positions: bool, as_json: bool, scale: f64) -> Result<()> {

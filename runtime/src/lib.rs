@@ -9,6 +9,7 @@ pub mod blend;
 pub mod bvh;
 pub mod compress;
 pub mod error;
+pub mod gltf;
 pub mod kinematics;
 pub mod pacing;
 pub mod parallel;
