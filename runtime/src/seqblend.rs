@@ -200,10 +200,26 @@ pub fn blend(a: &Sequence, b: &Sequence, at: f64, over: f64, dt: Option<f64>) ->
     out.name = format!("{}+{}", a.name, b.name);
     out.meta.insert("rate".into(), format!("{}", 1.0 / dt));
     for dof in pair.dofs() {
+        let (ta, tb) = pair.tracks(&dof);
+        let (mut ca, mut cb) = (0, 0);
         let keys = (0..n)
             .map(|i| {
                 let t = (t0 + i as f64 * dt).min(t1);
-                crate::sequence::Key::with_slope(t, pair.value(&dof, t), pair.velocity(&dof, t))
+                let tbt = t + pair.b_shift;
+                let (w, dw) = (pair.transition.weight(t), pair.transition.weight_slope(t));
+                let (value, slope) = match (ta, tb) {
+                    (Some(a), Some(b)) => {
+                        let (qa, qb) = (a.value_at(t, &mut ca), b.value_at(tbt, &mut cb));
+                        (
+                            w * qa + (1.0 - w) * qb,
+                            dw * (qa - qb) + w * a.velocity(t) + (1.0 - w) * b.velocity(tbt),
+                        )
+                    }
+                    (Some(a), None) => (a.value_at(t, &mut ca), a.velocity(t)),
+                    (None, Some(b)) => (b.value_at(tbt, &mut cb), b.velocity(tbt)),
+                    (None, None) => (0.0, 0.0),
+                };
+                crate::sequence::Key::with_slope(t, value, slope)
             })
             .collect();
         out.add_track(Track::new(dof, keys)?)?;
