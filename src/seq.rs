@@ -17,7 +17,7 @@ use troupe_runtime::gltf::{write_gltf, Rig};
 use troupe_runtime::pyramid::{self, Grid};
 use troupe_runtime::retarget::{retarget, RetargetMap};
 use troupe_runtime::trk::{read_trk_set, write_trk};
-use troupe_runtime::warp::{warp_sequence, TimeWarp};
+use troupe_runtime::warp::{squeeze_stretch, warp_sequence, TimeWarp};
 use troupe_runtime::{seqblend, Sequence};
 
 /// Options of `troupe seq`.
@@ -96,15 +96,19 @@ enum SeqCommand {
         #[arg(long, value_enum, default_value_t = Method::Spline)]
         method: Method,
     },
-    /// Time warping from original:new time pairs, e.g. --map 0:0,1:1.5,2:2.2.
+    /// Time warping from original:new time pairs, e.g. --map 0:0,1:1.5,2:2.2, or
+    /// squeeze/stretch around one key time with --squeeze TL:T:TR:NEW (thesis 5.6).
     Warp {
         /// Input file.
         input: PathBuf,
         /// Output file.
         output: PathBuf,
         /// Comma-separated `t:t'` pairs, increasing in both.
-        #[arg(long)]
-        map: String,
+        #[arg(long, required_unless_present = "squeeze")]
+        map: Option<String>,
+        /// Move key time T to NEW inside [TL, TR], keeping the ratios on both sides.
+        #[arg(long, conflicts_with = "map")]
+        squeeze: Option<String>,
     },
     /// Band editing (eq. 5-9): weights w0 (finest band) … wN-1, then the top level.
     Bands {
@@ -289,18 +293,35 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
                 took.as_secs_f64() * 1e3
             );
         }
-        SeqCommand::Warp { input, output, map } => {
-            let pairs = map
-                .split(',')
-                .map(|p| {
-                    let (a, b) = p
-                        .split_once(':')
-                        .with_context(|| format!("`{p}` is not t:t'"))?;
-                    Ok((parse_list(a)?[0], parse_list(b)?[0]))
-                })
-                .collect::<Result<Vec<_>>>()?;
+        SeqCommand::Warp {
+            input,
+            output,
+            map,
+            squeeze,
+        } => {
             let l = load(&input, scale)?;
-            let s = warp_sequence(&l.seq, &TimeWarp::new(&pairs)?)?;
+            let s = if let Some(sq) = squeeze {
+                let v: Vec<f64> = sq
+                    .split(':')
+                    .map(|x| parse_list(x).map(|v| v[0]))
+                    .collect::<Result<_>>()?;
+                let [tl, t, tr, new] = v[..] else {
+                    bail!("--squeeze needs TL:T:TR:NEW");
+                };
+                squeeze_stretch(&l.seq, tl, t, tr, new)?
+            } else {
+                let pairs = map
+                    .unwrap_or_default()
+                    .split(',')
+                    .map(|p| {
+                        let (a, b) = p
+                            .split_once(':')
+                            .with_context(|| format!("`{p}` is not t:t'"))?;
+                        Ok((parse_list(a)?[0], parse_list(b)?[0]))
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                warp_sequence(&l.seq, &TimeWarp::new(&pairs)?)?
+            };
             save(&output, &s, l.bvh.as_ref(), scale)?;
             println!(
                 "warped [{:.3}, {:.3}] s to [{:.3}, {:.3}] s -> {}",
