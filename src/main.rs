@@ -2,6 +2,7 @@
 
 mod run;
 mod scenario;
+mod seq;
 mod templates;
 
 use clap::{Parser, Subcommand};
@@ -26,6 +27,8 @@ enum Command {
     Run(run::RunArgs),
     /// Run Lua scenario tests (default scripts/tests/).
     Test(scenario::TestArgs),
+    /// Inspect, convert and edit motion sequences (.trk, BVH, glTF out); plot curves.
+    Seq(seq::SeqArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +46,7 @@ fn main() -> ExitCode {
         Command::Templates(args) => templates::run(args),
         Command::Run(args) => run::run(args),
         Command::Test(args) => scenario::run(args),
+        Command::Seq(args) => seq::run(args),
     };
     match result {
         Ok(code) => code,

@@ -6,15 +6,21 @@
 
 pub mod action;
 pub mod blend;
+pub mod bvh;
+pub mod compress;
 pub mod error;
+pub mod gltf;
 pub mod kinematics;
 pub mod lua;
 pub mod pacing;
 pub mod parallel;
+pub mod pyramid;
 pub mod record;
+pub mod retarget;
 pub mod scene;
 pub mod scheduler;
 pub mod scope;
+pub mod seqblend;
 pub mod sequence;
 pub mod skeleton;
 pub mod solid;
@@ -23,6 +29,7 @@ pub mod template;
 pub mod timeline;
 pub mod transform;
 pub mod trk;
+pub mod warp;
 pub mod world;
 
 pub use action::{

@@ -149,6 +149,36 @@ impl Track {
         }
     }
 
+    /// The values at `n` evenly spaced times `t0, t0 + dt, …`.
+    pub fn sample(&self, t0: f64, dt: f64, n: usize) -> Vec<f64> {
+        let mut cursor = 0;
+        (0..n)
+            .map(|i| self.value_at(t0 + i as f64 * dt, &mut cursor))
+            .collect()
+    }
+
+    /// A track of keys at `t0, t0 + dt, …` through `values`, with explicit slopes: central
+    /// differences inside, one-sided differences at the ends (so a sampled straight line
+    /// stays straight).
+    pub fn from_samples(dof: impl Into<String>, t0: f64, dt: f64, values: &[f64]) -> Result<Track> {
+        let slopes = sample_slopes(values, dt);
+        let keys = values
+            .iter()
+            .zip(slopes)
+            .enumerate()
+            .map(|(i, (&v, s))| Key::with_slope(t0 + i as f64 * dt, v, s))
+            .collect();
+        Track::new(dof, keys)
+    }
+
+    /// The same keys under another DOF name.
+    pub fn renamed(&self, dof: impl Into<String>) -> Track {
+        Track {
+            dof: dof.into(),
+            ..self.clone()
+        }
+    }
+
     #[inline]
     fn segment(&self, t: f64, cursor: &mut usize) -> Segment {
         let keys = &self.keys;
@@ -193,6 +223,24 @@ fn default_slopes(keys: &[Key]) -> Vec<f64> {
                     (keys[i + 1].value - keys[i - 1].value) / (keys[i + 1].time - keys[i - 1].time)
                 }
             })
+        })
+        .collect()
+}
+
+/// Slopes of evenly spaced samples: central differences inside, one-sided at the ends.
+pub fn sample_slopes(values: &[f64], dt: f64) -> Vec<f64> {
+    let n = values.len();
+    (0..n)
+        .map(|i| {
+            if n < 2 {
+                0.0
+            } else if i == 0 {
+                (values[1] - values[0]) / dt
+            } else if i == n - 1 {
+                (values[n - 1] - values[n - 2]) / dt
+            } else {
+                (values[i + 1] - values[i - 1]) / (2.0 * dt)
+            }
         })
         .collect()
 }
@@ -263,6 +311,36 @@ impl Sequence {
     /// `end − start`.
     pub fn duration(&self) -> f64 {
         self.end() - self.start()
+    }
+
+    /// The sequence's sampling period: `1 / meta rate` when that is a positive number,
+    /// else the smallest key spacing of any track, else 1/100 s.
+    pub fn frame_time(&self) -> f64 {
+        if let Some(rate) = self.meta.get("rate").and_then(|r| r.parse::<f64>().ok()) {
+            if rate.is_finite() && rate > 0.0 {
+                return 1.0 / rate;
+            }
+        }
+        let min = self
+            .tracks
+            .iter()
+            .flat_map(|t| t.keys.windows(2).map(|w| w[1].time - w[0].time))
+            .fold(f64::INFINITY, f64::min);
+        if min.is_finite() && min > 0.0 {
+            min
+        } else {
+            0.01
+        }
+    }
+
+    /// A sequence with the same name, looping flag and metadata, and no tracks.
+    pub fn empty_like(&self) -> Sequence {
+        Sequence {
+            name: self.name.clone(),
+            looping: self.looping,
+            meta: self.meta.clone(),
+            tracks: Vec::new(),
+        }
     }
 }
 

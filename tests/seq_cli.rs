@@ -1,0 +1,103 @@
+//! End-to-end: the `troupe seq` commands on the shared BVH files.
+
+use std::path::PathBuf;
+use std::process::Command;
+use troupe_runtime::bvh::read_bvh;
+
+fn shared(name: &str) -> PathBuf {
+    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/bvh")).join(name)
+}
+
+fn troupe(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_troupe"))
+        .args(args)
+        .output()
+        .expect("run troupe");
+    assert!(
+        out.status.success(),
+        "troupe {args:?}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+fn temp(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("troupe-seq-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+#[test]
+fn convert_to_another_order_and_back_keeps_every_position() {
+    for (file, there, back) in [
+        ("pybvhrepo_cmu_12_01_walk.bvh", "XYZ", "ZYX"),
+        ("pymo_AV_8Walk_Meredith_HVHA_Rep1.bvh", "ZXY", "XYZ"),
+        ("pybvhrepo_rotation_first_root.bvh", "YZX", "ZXY"),
+    ] {
+        let input = shared(file);
+        let a = temp(&format!("{there}-{file}"));
+        let b = temp(&format!("{back}-{file}"));
+        let s = |p: &PathBuf| p.display().to_string();
+        troupe(&[
+            "seq",
+            "convert",
+            &s(&input),
+            &s(&a),
+            "--rotation-order",
+            there,
+        ]);
+        troupe(&["seq", "convert", &s(&a), &s(&b), "--rotation-order", back]);
+        let (orig, round) = (read_bvh(&input).unwrap(), read_bvh(&b).unwrap());
+        assert_eq!(orig.frame_count(), round.frame_count());
+        let mut worst: f64 = 0.0;
+        for k in 0..orig.frame_count() {
+            for (p, q) in orig.joint_positions(k).iter().zip(round.joint_positions(k)) {
+                worst = worst.max((*p - q).length());
+            }
+        }
+        assert!(worst < 1e-6, "{file}: {worst}");
+    }
+}
+
+#[test]
+fn compress_reports_and_respects_the_tolerance() {
+    let out = temp("walk_c.trk");
+    let text = troupe(&[
+        "seq",
+        "compress",
+        &shared("pybvhrepo_cmu_12_01_walk.bvh").display().to_string(),
+        &out.display().to_string(),
+        "--tolerance",
+        "0.01",
+    ]);
+    assert!(text.contains("keys before: 50304"), "{text}");
+    let err: f64 = text
+        .lines()
+        .find_map(|l| l.strip_prefix("max error:"))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|x| x.parse().ok())
+        .unwrap();
+    assert!(err <= 0.01, "{text}");
+    let info = troupe(&["seq", "info", &out.display().to_string(), "--json"]);
+    let v: serde_json::Value = serde_json::from_str(&info).unwrap();
+    assert_eq!(v["sequences"][0]["tracks"].as_array().unwrap().len(), 96);
+}
+
+#[test]
+fn info_prints_positions_as_json() {
+    let text = troupe(&[
+        "seq",
+        "info",
+        &shared("pybvhrepo_rotation_first_root.bvh")
+            .display()
+            .to_string(),
+        "--frame",
+        "2",
+        "--positions",
+        "--json",
+    ]);
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    assert_eq!(v["frames"], 4);
+    assert_eq!(v["positions"].as_array().unwrap().len(), 4);
+    assert_eq!(v["positions"][0]["position"][0], 12.0);
+}
