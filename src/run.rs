@@ -41,7 +41,8 @@ pub struct RunArgs {
     /// Seed for the scene's random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
-    /// Write every actor's postures as a sequence set to this `.trk` file.
+    /// Write every actor's postures: a sequence set to a `.trk` file, or one `.bvh` /
+    /// `.gltf` (+ `.bin`) per actor (`NAME.ACTOR.bvh` when there are several).
     #[arg(long)]
     pub record: Option<PathBuf>,
     /// Write the action timeline as Chrome trace-event JSON.
@@ -175,11 +176,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     }
     let scene = director.scene();
     if let (Some(path), Some(r)) = (&args.record, &recorder) {
-        troupe_runtime::trk::write_trk(path, &r.sequences(&scene))?;
+        let written = write_recording(path, &r.sequences(&scene), &scene)?;
+        let list: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
         println!(
             "recorded {} ticks of postures to {}",
             r.len(),
-            path.display()
+            list.join(", ")
         );
     }
     if let (Some(path), Some(t)) = (&args.trace, timeline.as_mut()) {
@@ -195,4 +197,46 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     } else {
         ExitCode::SUCCESS
     })
+}
+
+/// Writes a recording by the file's extension: `.trk` holds every actor; `.bvh` and
+/// `.gltf` hold one actor each, so a scene of several actors writes `NAME.ACTOR.EXT`.
+fn write_recording(
+    path: &std::path::Path,
+    sequences: &[troupe_runtime::Sequence],
+    scene: &troupe_runtime::Scene,
+) -> Result<Vec<PathBuf>> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if ext == "trk" {
+        troupe_runtime::trk::write_trk(path, sequences)?;
+        return Ok(vec![path.to_path_buf()]);
+    }
+    if ext != "bvh" && ext != "gltf" {
+        bail!(
+            "--record {}: use a .trk, .bvh or .gltf file",
+            path.display()
+        );
+    }
+    let mut written = Vec::new();
+    for (seq, actor) in sequences.iter().zip(scene.actors()) {
+        let out = if sequences.len() == 1 {
+            path.to_path_buf()
+        } else {
+            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+            path.with_file_name(format!("{stem}.{}.{ext}", actor.name))
+        };
+        let rig = troupe_runtime::gltf::Rig::from_sequence(&actor.skeleton, seq)?;
+        if ext == "bvh" {
+            let order = "ZXY".parse()?;
+            let bvh = troupe_runtime::bvh::from_rig(&rig, seq.frame_time(), order, 100.0)?;
+            troupe_runtime::bvh::write_bvh(&out, &bvh)?;
+        } else {
+            troupe_runtime::gltf::write_gltf(&out, &rig, &actor.name)?;
+        }
+        written.push(out);
+    }
+    Ok(written)
 }

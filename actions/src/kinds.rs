@@ -23,7 +23,7 @@ fn build_play(
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
     let mut args = args.into_iter();
     let sequence = match args.next() {
-        Some(Value::String(path)) => load_sequence(ctx.lua, &path.to_str()?)?,
+        Some(Value::String(path)) => load_sequence(ctx.lua, &path.to_str()?, Some(&ctx.skeleton))?,
         Some(Value::UserData(u)) => match u.borrow::<SequenceRef>() {
             Ok(s) => s.0.clone(),
             Err(_) => {

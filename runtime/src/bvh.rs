@@ -783,6 +783,51 @@ pub fn parse_bvh(text: &str, file: &str) -> Result<Bvh> {
     Bvh::new(joints, frame_time, data).map_err(|e| err(motion + 1, e.to_string()))
 }
 
+/// Writes a rig's motion (e.g. a troupe recording, via [`crate::gltf::Rig::from_sequence`])
+/// as BVH: every joint gets three rotation channels in `order` (the root also three
+/// position channels), offsets and positions are in file units of `units_per_metre`
+/// (100 for centimetres), frames every `frame_time` seconds.
+pub fn from_rig(
+    rig: &crate::gltf::Rig,
+    frame_time: f64,
+    order: RotationOrder,
+    units_per_metre: f64,
+) -> Result<Bvh> {
+    let root_moves = rig.moving.first() == Some(&0);
+    let joints: Vec<BvhJoint> = (0..rig.names.len())
+        .map(|j| {
+            let mut channels = Vec::new();
+            if j == 0 {
+                channels.extend([Axis::X, Axis::Y, Axis::Z].map(Channel::Position));
+            }
+            channels.extend(order.0.map(Channel::Rotation));
+            let leaf = !rig.parents.iter().any(|p| *p == Some(j));
+            BvhJoint {
+                name: rig.names[j].clone(),
+                parent: rig.parents[j],
+                offset: rig.rest[j].translation * units_per_metre,
+                channels,
+                first_channel: 0,
+                // BVH leaves end in an End Site; a zero one keeps the hierarchy valid.
+                end_sites: if leaf { vec![DVec3::ZERO] } else { Vec::new() },
+            }
+        })
+        .collect();
+    let mut data = Vec::with_capacity(rig.rotations.len() * (rig.names.len() * 3 + 3));
+    for (k, rotations) in rig.rotations.iter().enumerate() {
+        let root = if root_moves {
+            rig.translations[k][0]
+        } else {
+            rig.rest[0].translation
+        };
+        data.extend((root * units_per_metre).to_array());
+        for q in rotations {
+            data.extend(order.decompose(*q).map(f64::to_degrees));
+        }
+    }
+    Bvh::new(joints, frame_time, data)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -967,5 +1012,47 @@ mod tests {
         // A wrong `Frames:` count is a warning; the rows are used.
         let more = ok.replace("Frames: 2", "Frames: 99999999999");
         assert_eq!(parse_bvh(&more, "f").unwrap().frame_count(), 2);
+    }
+
+    #[test]
+    fn a_troupe_motion_exported_as_bvh_keeps_every_joint_position() {
+        use crate::gltf::{fk_positions, Rig};
+        let t = crate::template::template("adult").unwrap();
+        let skel = t.instantiate(t.default_params()).unwrap();
+        let mut seq = Sequence::new("motion");
+        seq.meta.insert("rate".into(), "50".into());
+        for (d, dof) in skel.dofs().iter().enumerate() {
+            let keys = (0..5)
+                .map(|k| {
+                    let v = ((d * 7 + k * 3) as f64).sin() * 0.4;
+                    Key::new(k as f64 * 0.2, v.clamp(dof.min, dof.max))
+                })
+                .collect();
+            seq.add_track(Track::new(dof.name.clone(), keys).unwrap())
+                .unwrap();
+        }
+        let rig = Rig::from_sequence(&skel, &seq).unwrap();
+        let order: RotationOrder = "ZXY".parse().unwrap();
+        let bvh = from_rig(&rig, seq.frame_time(), order, 100.0).unwrap();
+        let text = bvh.to_bvh_string();
+        let back = parse_bvh(&text, "export.bvh").unwrap();
+        for k in [0, 13, 40] {
+            let time = k as f64 * seq.frame_time();
+            let q: Vec<f64> = skel
+                .dofs()
+                .iter()
+                .map(|d| seq.track(&d.name).unwrap().value(time))
+                .collect();
+            let expected = fk_positions(&skel, &q);
+            let got = back.joint_positions(k);
+            for (j, (e, g)) in expected.iter().zip(&got).enumerate() {
+                assert!(
+                    (*e - *g / 100.0).length() < 1e-6,
+                    "frame {k} joint {}: {e} vs {}",
+                    skel.joints()[j].name,
+                    *g / 100.0
+                );
+            }
+        }
     }
 }

@@ -7,6 +7,7 @@ use crate::error::Error;
 use crate::lua::kinds::BuildContext;
 use crate::scene::ActorDesc;
 use crate::sequence::{Key, Sequence, Track};
+use crate::skeleton::Skeleton;
 use crate::solid::Shape;
 use crate::world::Object;
 use glam::{DQuat, DVec3};
@@ -401,15 +402,41 @@ pub fn resolve_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
     }
 }
 
-/// Loads a sequence file (`.trk`) once per path.
-pub fn load_sequence(lua: &Lua, path: &str) -> mlua::Result<Arc<Sequence>> {
-    let mut st = stage(lua)?;
-    let full = resolve_path(&st.base_dir, path);
-    if let Some(s) = st.sequences.get(&full) {
+/// Loads a sequence file once per path (and per skeleton for BVH): a `.trk` as it is, a
+/// `.bvh` retargeted onto `skeleton` (the default adult when `None`) by
+/// [`crate::retarget::load_sequence_for`].
+pub fn load_sequence(
+    lua: &Lua,
+    path: &str,
+    skeleton: Option<&Arc<Skeleton>>,
+) -> mlua::Result<Arc<Sequence>> {
+    let full = resolve_path(&stage(lua)?.base_dir, path);
+    let is_bvh = full
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
+    let skeleton = match (is_bvh, skeleton) {
+        (false, _) => None,
+        (true, Some(s)) => Some(s.clone()),
+        (true, None) => {
+            let t = crate::template::template("adult").map_err(lua_err)?;
+            Some(Arc::new(
+                t.instantiate(t.default_params()).map_err(lua_err)?,
+            ))
+        }
+    };
+    let key = (
+        full.clone(),
+        skeleton.as_ref().map(|s| Arc::as_ptr(s) as usize),
+    );
+    if let Some(s) = stage(lua)?.sequences.get(&key) {
         return Ok(s.clone());
     }
-    let seq = Arc::new(crate::trk::read_trk(&full).map_err(lua_err)?);
-    st.sequences.insert(full, seq.clone());
+    let seq = match &skeleton {
+        Some(skel) => crate::retarget::load_sequence_for(skel, &full),
+        None => crate::trk::read_trk(&full),
+    };
+    let seq = Arc::new(seq.map_err(lua_err)?);
+    stage(lua)?.sequences.insert(key, seq.clone());
     Ok(seq)
 }
 
@@ -616,7 +643,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     troupe.set(
         "sequence",
         lua.create_function(|lua, v: Value| match v {
-            Value::String(s) => Ok(SequenceRef(load_sequence(lua, &s.to_str()?)?)),
+            Value::String(s) => Ok(SequenceRef(load_sequence(lua, &s.to_str()?, None)?)),
             Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(&t)?))),
             other => Err(lua_err(format!(
                 "sequence: expects a file path or a table of tracks, got {}",

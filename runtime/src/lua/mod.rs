@@ -84,7 +84,8 @@ pub(crate) struct Stage {
     pub pending_events: Vec<Event>,
     pub base_dir: PathBuf,
     pub current_actor: Option<usize>,
-    pub sequences: HashMap<PathBuf, Arc<Sequence>>,
+    /// Loaded sequences by path (and skeleton, for retargeted BVH).
+    pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
     pub tests: Vec<(String, Function)>,
     pub handler_failures: Vec<(usize, String)>,
 }
