@@ -801,7 +801,7 @@ pub fn from_rig(
                 channels.extend([Axis::X, Axis::Y, Axis::Z].map(Channel::Position));
             }
             channels.extend(order.0.map(Channel::Rotation));
-            let leaf = !rig.parents.iter().any(|p| *p == Some(j));
+            let leaf = !rig.parents.contains(&Some(j));
             BvhJoint {
                 name: rig.names[j].clone(),
                 parent: rig.parents[j],
