@@ -1,6 +1,7 @@
 //! The `troupe` command line.
 
 mod templates;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -10,7 +11,7 @@ use std::process::ExitCode;
 #[command(name = "troupe", version, about, long_about = None)]
 struct Cli {
     /// Log filter (tracing env-filter syntax), e.g. `info` or `troupe=debug`.
-    #[arg(long, global = true, default_value = "warn")]
+    #[arg(long, global = true, default_value = "warn,wgpu_hal::gles::egl=off")]
     log: String,
     #[command(subcommand)]
     command: Command,
@@ -20,6 +21,8 @@ struct Cli {
 enum Command {
     /// List the body templates with their DOF counts and scopes.
     Templates(templates::TemplatesArgs),
+    View(view::ViewArgs),
+    Snapshot(view::SnapshotArgs),
 }
 
 fn main() -> ExitCode {
@@ -32,6 +35,8 @@ fn main() -> ExitCode {
         .init();
     let result = match cli.command {
         Command::Templates(args) => templates::run(args),
+        Command::View(args) => view::run(args),
+        Command::Snapshot(args) => view::snapshot(args),
     };
     match result {
         Ok(code) => code,
