@@ -20,7 +20,7 @@ use troupe_viewer::{
     long_about = "Play a recording (.trk) on an actor. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
-        actor, 0 frames all, b bones, g grid, o overlays, Esc quits. With --frames, or without \
+        actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
@@ -46,6 +46,9 @@ pub struct ViewArgs {
     /// Draw the actor as bones instead of solids.
     #[arg(long)]
     bones: bool,
+    /// Do not draw names and action labels above the heads.
+    #[arg(long)]
+    no_labels: bool,
     /// Seconds to play headless (default: the recording's length).
     #[arg(long)]
     seconds: Option<f64>,
@@ -83,6 +86,9 @@ pub struct SnapshotArgs {
     /// Draw actors as bones instead of solids.
     #[arg(long)]
     bones: bool,
+    /// Do not draw names above the heads.
+    #[arg(long)]
+    no_labels: bool,
     /// Metres between actors placed in a row.
     #[arg(long, default_value_t = 1.0)]
     spacing: f64,
@@ -110,8 +116,9 @@ fn has_display() -> bool {
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
 }
 
-fn render_options(bones: bool) -> RenderOptions {
+fn render_options(bones: bool, labels: bool) -> RenderOptions {
     RenderOptions {
+        labels,
         style: if bones {
             BodyStyle::Bones
         } else {
@@ -150,15 +157,14 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     };
     if let Some(dir) = headless_dir {
         let seconds = args.seconds.unwrap_or(length).max(0.0);
-        return write_frames(
-            &mut scene, &dir, size, camera, args.every, args.bones, seconds,
-        );
+        let options = render_options(args.bones, !args.no_labels);
+        return write_frames(&mut scene, &dir, size, camera, args.every, options, seconds);
     }
     let options = WindowOptions {
         title: format!("troupe view {}", args.file.display()),
         size,
         camera: camera.clone(),
-        render: render_options(args.bones),
+        render: render_options(args.bones, !args.no_labels),
         tick_seconds: scene.dt(),
         close_after_frames: None,
     };
@@ -182,11 +188,11 @@ fn write_frames(
     size: (u32, u32),
     camera: Camera,
     every: u64,
-    bones: bool,
+    options: RenderOptions,
     seconds: f64,
 ) -> Result<ExitCode> {
     let mut writer = FrameWriter::new(dir, size, camera, every)?;
-    writer.renderer_mut().set_options(render_options(bones));
+    writer.renderer_mut().set_options(options);
     let ticks = (seconds * scene.config().rate).ceil() as u64;
     writer.tick(scene)?;
     for _ in 0..ticks {
@@ -302,7 +308,7 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         }
     }
     let mut renderer = OffscreenRenderer::new(size.0, size.1)?;
-    renderer.set_options(render_options(args.bones));
+    renderer.set_options(render_options(args.bones, !args.no_labels));
     renderer.save_png(&frame, &camera, &args.out)?;
     println!(
         "wrote {} ({}x{}, {} actor{}) on {}",

@@ -70,8 +70,8 @@ pub struct ActorFrame {
     pub globals: Vec<Transform>,
     /// Grasp state of the left and right hands.
     pub hands: [HandState; 2],
-    /// Text labels (e.g. running actions). Not drawn into the picture; the window shows
-    /// the followed actor's labels in its title bar.
+    /// Text labels (e.g. running actions), drawn under the name above the head (printable
+    /// ASCII; other characters show as `?`).
     pub labels: Vec<String>,
 }
 

@@ -12,14 +12,15 @@
 //! - [`run_window`] opens a winit window with an orbit camera and playback controls; the
 //!   caller's simulation runs on its own thread and hands frames over latest-wins.
 //!
-//! Labels are not drawn into pictures (there is no font renderer); the window shows the
-//! followed actor's labels in its title bar.
+//! Actor names and labels are drawn above the heads with a built-in 5×7 pixel font
+//! (printable ASCII); the window also shows the followed actor's labels in its title bar.
 
 mod camera;
 mod frame;
 mod mesh;
 mod offscreen;
 mod render;
+mod text;
 mod window;
 
 pub use camera::{Camera, Focus};

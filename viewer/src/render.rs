@@ -4,6 +4,7 @@
 use crate::camera::Camera;
 use crate::frame::{ActorFrame, Frame, HandState, IK_TARGET, SENSOR_IDLE, SENSOR_TOUCHING, SKIN};
 use crate::mesh::{self, MeshKey, Vertex};
+use crate::text;
 use crate::ViewerError;
 use bytemuck::{Pod, Zeroable};
 use glam::{Mat4, Quat, Vec3};
@@ -30,6 +31,8 @@ pub struct RenderOptions {
     pub grid: bool,
     /// Draw overlays: sphere sensors, IK targets and hand grasp-state tints.
     pub overlays: bool,
+    /// Draw each actor's name and labels above its head (built-in 5×7 pixel font).
+    pub labels: bool,
     /// Background colour (sRGB).
     pub background: [f32; 3],
 }
@@ -40,6 +43,7 @@ impl Default for RenderOptions {
             style: BodyStyle::Solids,
             grid: true,
             overlays: true,
+            labels: true,
             background: BACKGROUND,
         }
     }
@@ -252,6 +256,14 @@ impl Instance {
     }
 }
 
+/// A screen rectangle in pixels (x, y, width, height) and its linear colour with alpha.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Pod, Zeroable)]
+struct RectInstance {
+    rect: [f32; 4],
+    color: [f32; 4],
+}
+
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Pod, Zeroable)]
 struct Globals {
@@ -261,6 +273,7 @@ struct Globals {
     background: [f32; 4],
     floor_color: [f32; 4],
     grid_color: [f32; 4],
+    viewport: [f32; 4],
 }
 
 struct GpuMesh {
@@ -274,6 +287,10 @@ pub(crate) struct SceneRenderer {
     pub options: RenderOptions,
     mesh_pipeline: wgpu::RenderPipeline,
     floor_pipeline: wgpu::RenderPipeline,
+    rect_pipeline: wgpu::RenderPipeline,
+    rects: Vec<RectInstance>,
+    rect_buffer: wgpu::Buffer,
+    rect_capacity: usize,
     globals: wgpu::Buffer,
     bind_group: wgpu::BindGroup,
     meshes: HashMap<MeshKey, GpuMesh>,
@@ -398,8 +415,49 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
+        let rect_attrs = wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4];
+        let rect_targets = [Some(wgpu::ColorTargetState {
+            format,
+            blend: Some(wgpu::BlendState::ALPHA_BLENDING),
+            write_mask: wgpu::ColorWrites::ALL,
+        })];
+        let rect_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("labels"),
+            layout: Some(&pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_rect"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<RectInstance>() as u64,
+                    step_mode: wgpu::VertexStepMode::Instance,
+                    attributes: &rect_attrs,
+                })],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: Some(wgpu::DepthStencilState {
+                format: DEPTH_FORMAT,
+                depth_write_enabled: Some(false),
+                depth_compare: Some(wgpu::CompareFunction::Always),
+                stencil: wgpu::StencilState::default(),
+                bias: wgpu::DepthBiasState::default(),
+            }),
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_rect"),
+                compilation_options: Default::default(),
+                targets: &rect_targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
         let capacity = 1024;
         SceneRenderer {
+            rect_pipeline,
+            rects: Vec::new(),
+            rect_buffer: Self::rect_buffer(device, capacity),
+            rect_capacity: capacity,
             options: RenderOptions::default(),
             mesh_pipeline,
             floor_pipeline,
@@ -411,6 +469,62 @@ impl SceneRenderer {
             scratch: Vec::new(),
             batches: Vec::new(),
             samples,
+        }
+    }
+
+    fn rect_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
+        device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("label rectangles"),
+            size: (capacity * std::mem::size_of::<RectInstance>()) as u64,
+            usage: wgpu::BufferUsages::VERTEX | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        })
+    }
+
+    /// Lays out every actor's name and labels above its head.
+    fn build_labels(&mut self, frame: &Frame, view_proj: Mat4, width: u32, height: u32) {
+        self.rects.clear();
+        if !self.options.labels {
+            return;
+        }
+        let scale = if height >= 400 { 2.0 } else { 1.0 };
+        let line_height = text::CELL.1 as f32 * scale;
+        let pad = 2.0 * scale;
+        let panel = [0.02, 0.02, 0.03, 0.55];
+        let ink = [1.0, 1.0, 1.0, 1.0];
+        let mut glyphs = Vec::new();
+        for actor in &frame.actors {
+            let Some(top) = actor.points().reduce(|a, b| if b.y > a.y { b } else { a }) else {
+                continue;
+            };
+            let anchor = top + Vec3::Y * 0.12;
+            let c = view_proj * anchor.extend(1.0);
+            if c.w <= 1e-4 {
+                continue;
+            }
+            let (sx, sy) = (
+                (c.x / c.w * 0.5 + 0.5) * width as f32,
+                (0.5 - c.y / c.w * 0.5) * height as f32,
+            );
+            let lines: Vec<&str> = std::iter::once(actor.name.as_str())
+                .chain(actor.labels.iter().map(String::as_str))
+                .collect();
+            // The last line sits just above the anchor; earlier lines stack upwards.
+            let mut y = sy - lines.len() as f32 * line_height;
+            for line in lines {
+                let (w, h) = text::size(line, scale);
+                let x = (sx - w * 0.5).round();
+                let yy = y.round();
+                self.rects.push(RectInstance {
+                    rect: [x - pad, yy - pad, w + 2.0 * pad, h + 2.0 * pad],
+                    color: panel,
+                });
+                glyphs.clear();
+                text::layout(line, x, yy, scale, &mut glyphs);
+                self.rects
+                    .extend(glyphs.iter().map(|&rect| RectInstance { rect, color: ink }));
+                y += line_height;
+            }
         }
     }
 
@@ -446,11 +560,21 @@ impl SceneRenderer {
             background: bg,
             floor_color: linear_rgba(FLOOR),
             grid_color: linear_rgba(GRID),
+            viewport: [targets.width as f32, targets.height as f32, 0.0, 0.0],
         };
         gpu.queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
         self.build_instances(frame);
         self.upload(gpu);
+        self.build_labels(frame, view_proj, targets.width, targets.height);
+        if self.rects.len() > self.rect_capacity {
+            self.rect_capacity = self.rects.len().next_power_of_two();
+            self.rect_buffer = Self::rect_buffer(&gpu.device, self.rect_capacity);
+        }
+        if !self.rects.is_empty() {
+            gpu.queue
+                .write_buffer(&self.rect_buffer, 0, bytemuck::cast_slice(&self.rects));
+        }
 
         let (attachment, resolve) = match &targets.msaa {
             Some(msaa) => (msaa, Some(view)),
@@ -496,6 +620,11 @@ impl SceneRenderer {
             pass.set_vertex_buffer(0, mesh.vertices.slice(..));
             pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..mesh.count, 0, range.clone());
+        }
+        if !self.rects.is_empty() {
+            pass.set_pipeline(&self.rect_pipeline);
+            pass.set_vertex_buffer(0, self.rect_buffer.slice(..));
+            pass.draw(0..6, 0..self.rects.len() as u32);
         }
     }
 

@@ -9,6 +9,8 @@ struct Globals {
     background: vec4<f32>,
     floor_color: vec4<f32>,
     grid_color: vec4<f32>,
+    // xy: target size in pixels.
+    viewport: vec4<f32>,
 };
 
 @group(0) @binding(0) var<uniform> globals: Globals;
@@ -93,4 +95,33 @@ fn fs_floor(in: FloorOut) -> @location(0) vec4<f32> {
     let fade = smoothstep(12.0, 60.0, dist);
     color = mix(color, globals.background.rgb, fade);
     return vec4<f32>(color, 1.0);
+}
+
+// Screen-space rectangles (label text and panels), in pixels from the top-left corner.
+struct RectOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) color: vec4<f32>,
+};
+
+@vertex
+fn vs_rect(
+    @builtin(vertex_index) i: u32,
+    @location(0) rect: vec4<f32>,
+    @location(1) color: vec4<f32>,
+) -> RectOut {
+    var corners = array<vec2<f32>, 6>(
+        vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 0.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(0.0, 0.0), vec2<f32>(1.0, 1.0), vec2<f32>(0.0, 1.0),
+    );
+    let p = rect.xy + corners[i] * rect.zw;
+    let ndc = vec2<f32>(p.x / globals.viewport.x * 2.0 - 1.0, 1.0 - p.y / globals.viewport.y * 2.0);
+    var out: RectOut;
+    out.clip = vec4<f32>(ndc, 0.0, 1.0);
+    out.color = color;
+    return out;
+}
+
+@fragment
+fn fs_rect(in: RectOut) -> @location(0) vec4<f32> {
+    return in.color;
 }

@@ -5,7 +5,7 @@
 //! Controls: left drag orbits, right or middle drag pans, the wheel zooms; Space pauses,
 //! `.` steps one tick while paused, `s` toggles slow motion (¼ speed), Tab follows the next
 //! actor, `1`–`9` follow actor N, `0` or `f` frames all actors, `b` toggles solids/bones,
-//! `g` the grid, `o` the overlays, Escape or `q` quits.
+//! `g` the grid, `o` the overlays, `l` the labels, Escape or `q` quits.
 
 use crate::camera::{Camera, Focus};
 use crate::frame::Frame;
@@ -484,6 +484,7 @@ impl App {
                 }
                 "g" | "G" => self.render.grid = !self.render.grid,
                 "o" | "O" => self.render.overlays = !self.render.overlays,
+                "l" | "L" => self.render.labels = !self.render.labels,
                 "q" | "Q" => event_loop.exit(),
                 d => {
                     if let Some(n) = d.parse::<usize>().ok().filter(|n| (1..=9).contains(n)) {

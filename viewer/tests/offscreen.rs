@@ -270,6 +270,51 @@ fn fit_camera_frames_every_actor() {
 }
 
 #[test]
+fn names_and_labels_are_drawn_above_the_head() {
+    let mut r = renderer();
+    let camera = front();
+    let mut frame = posed(&[]);
+    frame
+        .actor_mut("ann")
+        .unwrap()
+        .labels
+        .push("keyframe (active)".into());
+    let with = r.render(&frame, &camera).unwrap();
+    r.set_options(RenderOptions {
+        labels: false,
+        ..RenderOptions::default()
+    });
+    let without = r.render(&frame, &camera).unwrap();
+    let ann = frame.actor("ann").unwrap();
+    let top = ann
+        .points()
+        .reduce(|a, b| if b.y > a.y { b } else { a })
+        .unwrap();
+    let anchor = camera.project(&frame, W, H, top + Vec3::Y * 0.12).unwrap();
+    // Two lines of 9 pixels (scale 1 below 400 pixels high) end at the anchor.
+    let (ax, ay) = (anchor.x as u32, anchor.y as u32);
+    let (mut changed, mut white) = (0, 0);
+    for y in ay - 18..ay {
+        for x in ax - 50..ax + 50 {
+            let (a, b) = (with.get_pixel(x, y), without.get_pixel(x, y));
+            changed += (a != b) as u32;
+            white += a.0[..3].iter().all(|&c| c > 240) as u32;
+        }
+    }
+    assert!(
+        changed > 300,
+        "label panel drawn ({changed} pixels changed)"
+    );
+    assert!(white > 60, "white glyphs drawn ({white} pixels)");
+    // Labels never cover the body.
+    let head = ann.solid_center("head_neck").unwrap();
+    assert_eq!(
+        pixel_at(&with, &frame, &camera, head),
+        pixel_at(&without, &frame, &camera, head)
+    );
+}
+
+#[test]
 fn png_files_round_trip() {
     let dir = std::env::temp_dir().join(format!("troupe-viewer-test-{}", std::process::id()));
     let path = dir.join("sub/ann.png");
