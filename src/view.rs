@@ -49,6 +49,9 @@ pub struct ViewArgs {
     /// Do not draw names and action labels above the heads.
     #[arg(long)]
     no_labels: bool,
+    /// Headless: no multisampling (about 3× faster on CPU adapters, jagged edges).
+    #[arg(long)]
+    no_msaa: bool,
     /// Seconds to play headless (default: the recording's length).
     #[arg(long)]
     seconds: Option<f64>,
@@ -158,7 +161,10 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     if let Some(dir) = headless_dir {
         let seconds = args.seconds.unwrap_or(length).max(0.0);
         let options = render_options(args.bones, !args.no_labels);
-        return write_frames(&mut scene, &dir, size, camera, args.every, options, seconds);
+        let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
+        writer.renderer_mut().set_options(options);
+        writer.renderer_mut().set_multisampling(!args.no_msaa);
+        return write_frames(&mut scene, &dir, writer, seconds);
     }
     let options = WindowOptions {
         title: format!("troupe view {}", args.file.display()),
@@ -185,14 +191,9 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
 fn write_frames(
     scene: &mut Scene,
     dir: &Path,
-    size: (u32, u32),
-    camera: Camera,
-    every: u64,
-    options: RenderOptions,
+    mut writer: FrameWriter,
     seconds: f64,
 ) -> Result<ExitCode> {
-    let mut writer = FrameWriter::new(dir, size, camera, every)?;
-    writer.renderer_mut().set_options(options);
     let ticks = (seconds * scene.config().rate).ceil() as u64;
     writer.tick(scene)?;
     for _ in 0..ticks {
@@ -200,7 +201,7 @@ fn write_frames(
         writer.tick(scene)?;
     }
     println!(
-        "wrote {} frames ({} s, every {every} ticks) to {} on {}",
+        "wrote {} frames ({} s) to {} on {}",
         writer.written(),
         seconds,
         dir.display(),

@@ -2,7 +2,7 @@
 //!
 //! ```text
 //! cargo run -p troupe-viewer --release --example fps -- [--size 1280x720] [--frames 60]
-//!     [--actors 1,10,50] [--save DIR]
+//!     [--actors 1,10,50] [--save DIR] [--no-msaa] [--no-grid] [--no-labels]
 //! ```
 //!
 //! Each frame is a full `OffscreenRenderer::render`: instance upload, draw, multisample
@@ -12,13 +12,14 @@
 use std::time::Instant;
 use troupe_runtime::glam::DVec3;
 use troupe_runtime::{ActorDesc, Scene, SceneConfig};
-use troupe_viewer::{parse_size, Camera, Frame, OffscreenRenderer};
+use troupe_viewer::{parse_size, Camera, Frame, OffscreenRenderer, RenderOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut size = (1280, 720);
     let mut frames = 60u32;
     let mut counts = vec![1usize, 10, 50];
     let mut save = None;
+    let (mut msaa, mut grid, mut labels) = (true, true, true);
     let mut args = std::env::args().skip(1);
     while let Some(a) = args.next() {
         let mut value = || args.next().ok_or(format!("{a} needs a value"));
@@ -32,10 +33,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                     .collect::<Result<_, _>>()?
             }
             "--save" => save = Some(std::path::PathBuf::from(value()?)),
+            "--no-msaa" => msaa = false,
+            "--no-grid" => grid = false,
+            "--no-labels" => labels = false,
             _ => return Err(format!("unknown argument {a}").into()),
         }
     }
     let mut renderer = OffscreenRenderer::new(size.0, size.1)?;
+    renderer.set_multisampling(msaa);
+    renderer.set_options(RenderOptions {
+        grid,
+        labels,
+        ..RenderOptions::default()
+    });
     println!(
         "adapter: {}; {}x{}, {} frames per run",
         renderer.adapter(),

@@ -60,7 +60,7 @@ pub(crate) fn shape_mesh(shape: &Shape) -> (MeshKey, Vec3) {
 pub(crate) fn build(key: MeshKey) -> (Vec<Vertex>, Vec<u32>) {
     match key {
         MeshKey::Cube => cube(),
-        MeshKey::Sphere => sphere(14, 24),
+        MeshKey::Sphere => sphere(12, 20),
         MeshKey::SphereLow => sphere(5, 8),
         MeshKey::CylinderLow => frustum(1.0, 1.0, 8),
         MeshKey::Frustum(b, t) => frustum(b as f32 / 1000.0, t as f32 / 1000.0, 24),

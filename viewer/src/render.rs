@@ -564,7 +564,10 @@ impl SceneRenderer {
         };
         gpu.queue
             .write_buffer(&self.globals, 0, bytemuck::bytes_of(&g));
-        self.build_instances(frame);
+        // Screen pixels covered by one metre at one metre from the eye.
+        let pixels_per_metre =
+            targets.height as f32 / (2.0 * (camera.fov_y_degrees.to_radians() * 0.5).tan());
+        self.build_instances(frame, eye, pixels_per_metre);
         self.upload(gpu);
         self.build_labels(frame, view_proj, targets.width, targets.height);
         if self.rects.len() > self.rect_capacity {
@@ -669,7 +672,9 @@ impl SceneRenderer {
         }
     }
 
-    fn build_instances(&mut self, frame: &Frame) {
+    /// Fills the instance list; fingers of actors too far away to show them (under about
+    /// 6 pixels long) are left out to spare CPU adapters.
+    fn build_instances(&mut self, frame: &Frame, eye: Vec3, pixels_per_metre: f32) {
         self.scratch.clear();
         let overlays = self.options.overlays;
         for (i, actor) in frame.actors.iter().enumerate() {
@@ -677,7 +682,14 @@ impl SceneRenderer {
             match self.options.style {
                 BodyStyle::Solids => {
                     self.solids(actor, &colors);
-                    self.bones(actor, &colors, true);
+                    let root = actor
+                        .globals
+                        .first()
+                        .map_or(Vec3::ZERO, |t| t.translation.as_vec3());
+                    let distance = (root - eye).length().max(0.05);
+                    if 0.08 * pixels_per_metre / distance >= 6.0 {
+                        self.bones(actor, &colors, true);
+                    }
                 }
                 BodyStyle::Bones => self.bones(actor, &colors, false),
             }
@@ -735,7 +747,7 @@ impl SceneRenderer {
     }
 
     /// Draws bones as cylinders and joints as spheres; with `hands_only`, only the bones
-    /// inside the hands (fingers), which have no solids.
+    /// inside the hands (fingers, which have no solids), without joint spheres.
     fn bones(&mut self, actor: &ActorFrame, colors: &ActorColors, hands_only: bool) {
         let sk = &actor.skeleton;
         let mut segment = |a: Vec3, b: Vec3, radius: f32, color: [f32; 4]| {
@@ -754,10 +766,14 @@ impl SceneRenderer {
                     color,
                 ),
             ));
-            self.scratch.push((
-                MeshKey::SphereLow,
-                Instance::new(Quat::IDENTITY, b, Vec3::splat(radius * 1.25), color),
-            ));
+            // Joint balls; fingers next to the body solids do without (they are a few
+            // pixels wide and would triple the triangle count of an actor).
+            if !hands_only {
+                self.scratch.push((
+                    MeshKey::SphereLow,
+                    Instance::new(Quat::IDENTITY, b, Vec3::splat(radius * 1.25), color),
+                ));
+            }
         };
         let pos = |j: usize| actor.globals[j].translation.as_vec3();
         for (j, joint) in sk.joints().iter().enumerate() {

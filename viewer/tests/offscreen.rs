@@ -350,3 +350,26 @@ fn bad_sizes_are_refused() {
     assert!(troupe_viewer::parse_size("1280").is_err());
     assert!(troupe_viewer::parse_size("0x5").is_err());
 }
+
+#[test]
+fn multisampling_can_be_turned_off_and_on() {
+    let mut r = renderer();
+    let camera = front();
+    let frame = posed(&[]);
+    let torso = frame
+        .actor("ann")
+        .unwrap()
+        .solid_center("down_torso")
+        .unwrap();
+    r.set_multisampling(false);
+    assert_eq!(r.adapter().samples, 1);
+    let img = r.render(&frame, &camera).unwrap();
+    let empty = r.render(&Frame::default(), &camera).unwrap();
+    assert!(!close(
+        pixel_at(&img, &frame, &camera, torso),
+        pixel_at(&empty, &frame, &camera, torso),
+        6
+    ));
+    r.set_multisampling(true);
+    assert!(r.render(&frame, &camera).is_ok());
+}
