@@ -104,6 +104,17 @@ impl ActorFrame {
         joints.chain(ends)
     }
 
+    /// Where the name and labels are anchored: 12 cm above the top of the head (the end
+    /// site of the `skullbase` joint), or above the highest point without one.
+    pub fn label_anchor(&self) -> Option<Vec3> {
+        let head = self.skeleton.joint("skullbase").ok().and_then(|j| {
+            let (_, off) = self.skeleton.end_sites().iter().find(|(e, _)| *e == j)?;
+            Some(self.globals.get(j)?.transform_point(*off).as_vec3())
+        });
+        let top = head.or_else(|| self.points().reduce(|a, b| if b.y > a.y { b } else { a }))?;
+        Some(top + Vec3::Y * 0.12)
+    }
+
     /// Sets the grasp state of one hand.
     pub fn set_hand(&mut self, hand: Hand, state: HandState) {
         self.hands[hand as usize] = state;

@@ -494,10 +494,9 @@ impl SceneRenderer {
         let ink = [1.0, 1.0, 1.0, 1.0];
         let mut glyphs = Vec::new();
         for actor in &frame.actors {
-            let Some(top) = actor.points().reduce(|a, b| if b.y > a.y { b } else { a }) else {
+            let Some(anchor) = actor.label_anchor() else {
                 continue;
             };
-            let anchor = top + Vec3::Y * 0.12;
             let c = view_proj * anchor.extend(1.0);
             if c.w <= 1e-4 {
                 continue;

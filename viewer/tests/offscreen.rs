@@ -273,7 +273,7 @@ fn fit_camera_frames_every_actor() {
 fn names_and_labels_are_drawn_above_the_head() {
     let mut r = renderer();
     let camera = front();
-    let mut frame = posed(&[]);
+    let mut frame = posed(&[("r_shoulder_abduction", 170.0)]);
     frame
         .actor_mut("ann")
         .unwrap()
@@ -286,11 +286,9 @@ fn names_and_labels_are_drawn_above_the_head() {
     });
     let without = r.render(&frame, &camera).unwrap();
     let ann = frame.actor("ann").unwrap();
-    let top = ann
-        .points()
-        .reduce(|a, b| if b.y > a.y { b } else { a })
-        .unwrap();
-    let anchor = camera.project(&frame, W, H, top + Vec3::Y * 0.12).unwrap();
+    let top = ann.label_anchor().unwrap();
+    assert!(top.y > ann.joint_position("skullbase").unwrap().y + 0.12);
+    let anchor = camera.project(&frame, W, H, top).unwrap();
     // Two lines of 9 pixels (scale 1 below 400 pixels high) end at the anchor.
     let (ax, ay) = (anchor.x as u32, anchor.y as u32);
     let (mut changed, mut white) = (0, 0);
