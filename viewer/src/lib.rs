@@ -15,6 +15,8 @@
 //! Actor names and labels are drawn above the heads with a built-in 5×7 pixel font
 //! (printable ASCII); the window also shows the followed actor's labels in its title bar.
 
+#![warn(missing_docs)]
+
 mod camera;
 mod frame;
 mod mesh;
