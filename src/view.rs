@@ -40,8 +40,9 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 4, value_name = "N")]
     every: u64,
     /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ; fit and follow take
-    /// @YAW,PITCH[,DISTANCE].
-    #[arg(long, default_value = "fit")]
+    /// @YAW,PITCH[,DISTANCE]. The default follows the actor (named `actor`) at a steady
+    /// distance.
+    #[arg(long, default_value = "follow:actor")]
     camera: String,
     /// Draw the actor as bones instead of solids.
     #[arg(long)]
