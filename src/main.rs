@@ -4,6 +4,7 @@ mod run;
 mod scenario;
 mod seq;
 mod templates;
+mod view;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -13,7 +14,7 @@ use std::process::ExitCode;
 #[command(name = "troupe", version, about, long_about = None)]
 struct Cli {
     /// Log filter (tracing env-filter syntax), e.g. `info` or `troupe=debug`.
-    #[arg(long, global = true, default_value = "warn,lua=info")]
+    #[arg(long, global = true, default_value = "warn,lua=info,wgpu_hal::gles::egl=off")]
     log: String,
     #[command(subcommand)]
     command: Command,
@@ -29,6 +30,10 @@ enum Command {
     Test(scenario::TestArgs),
     /// Inspect, convert and edit motion sequences (.trk, BVH, glTF out); plot curves.
     Seq(seq::SeqArgs),
+    /// Play a recording (.trk, .bvh) on actors, in a window or headless to PNG frames.
+    View(view::ViewArgs),
+    /// Render actors in given poses to one PNG.
+    Snapshot(view::SnapshotArgs),
 }
 
 fn main() -> ExitCode {
@@ -53,6 +58,8 @@ fn main() -> ExitCode {
         Command::Run(args) => run::run(args),
         Command::Test(args) => scenario::run(args),
         Command::Seq(args) => seq::run(args),
+        Command::View(args) => view::run(args),
+        Command::Snapshot(args) => view::snapshot(args),
     };
     match result {
         Ok(code) => code,
