@@ -14,7 +14,11 @@ use std::process::ExitCode;
 #[command(name = "troupe", version, about, long_about = None)]
 struct Cli {
     /// Log filter (tracing env-filter syntax), e.g. `info` or `troupe=debug`.
-    #[arg(long, global = true, default_value = "warn,lua=info,wgpu_hal::gles::egl=off")]
+    #[arg(
+        long,
+        global = true,
+        default_value = "warn,lua=info,wgpu_hal::gles::egl=off"
+    )]
     log: String,
     #[command(subcommand)]
     command: Command,
@@ -26,6 +30,8 @@ enum Command {
     Templates(templates::TemplatesArgs),
     /// Run a Lua scene headless (record postures, write the action timeline).
     Run(run::RunArgs),
+    /// Render a Lua scene at a given time to one PNG (headless).
+    Render(run::RenderArgs),
     /// Run Lua scenario tests (default scripts/tests/).
     Test(scenario::TestArgs),
     /// Inspect, convert and edit motion sequences (.trk, BVH, glTF out); plot curves.
@@ -56,6 +62,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Templates(args) => templates::run(args),
         Command::Run(args) => run::run(args),
+        Command::Render(args) => run::render(args),
         Command::Test(args) => scenario::run(args),
         Command::Seq(args) => seq::run(args),
         Command::View(args) => view::run(args),

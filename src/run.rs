@@ -48,6 +48,22 @@ pub struct RunArgs {
     /// Write the action timeline as Chrome trace-event JSON.
     #[arg(long)]
     pub trace: Option<PathBuf>,
+    /// Write PNG frames of the run into DIR (headless, CPU rendering).
+    #[arg(long, value_name = "DIR")]
+    pub frames: Option<PathBuf>,
+    /// With --frames: write every N-th tick.
+    #[arg(long, default_value_t = 4, value_name = "N")]
+    pub every: u64,
+    /// Picture or window size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ (fit and follow take
+    /// @YAW,PITCH[,DISTANCE]).
+    #[arg(long, default_value = "fit")]
+    pub camera: String,
+    /// Show the run in a window (needs a display) instead of running headless.
+    #[arg(long, conflicts_with_all = ["frames", "record", "trace", "realtime"])]
+    pub view: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
     pub instruction_budget: u64,
@@ -89,6 +105,21 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     };
     let until_idle = args.until_idle || (args.ticks.is_none() && args.seconds.is_none());
 
+    if args.view {
+        return view_run(director, &args);
+    }
+    let mut frames = match &args.frames {
+        Some(dir) => Some(troupe_viewer::FrameWriter::new(
+            dir,
+            troupe_viewer::parse_size(&args.size)?,
+            args.camera.parse()?,
+            args.every,
+        )?),
+        None => None,
+    };
+    if let Some(f) = frames.as_mut() {
+        f.tick(&director.scene())?;
+    }
     let mut recorder = args.record.as_ref().map(|_| PostureRecorder::new());
     let mut timeline = args.trace.as_ref().map(|_| TimelineRecorder::new());
     if let Some(r) = recorder.as_mut() {
@@ -123,6 +154,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         if let Some(t) = timeline.as_mut() {
             t.record(&scene, &events);
+        }
+        if let Some(f) = frames.as_mut() {
+            f.tick(&scene)?;
         }
         drop(scene);
         if let Some(p) = pacer.as_mut() {
@@ -184,6 +218,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             list.join(", ")
         );
     }
+    if let (Some(dir), Some(f)) = (&args.frames, frames.as_mut()) {
+        println!(
+            "wrote {} frames to {} (rendered on {})",
+            f.written(),
+            dir.display(),
+            f.renderer_mut().adapter()
+        );
+    }
     if let (Some(path), Some(t)) = (&args.trace, timeline.as_mut()) {
         let json = serde_json::to_string(&t.to_json(&scene))?;
         std::fs::write(path, json).with_context(|| format!("writing {}", path.display()))?;
@@ -239,4 +281,84 @@ fn write_recording(
         written.push(out);
     }
     Ok(written)
+}
+
+/// `--view`: the scene runs on the window's simulation thread until the window closes.
+fn view_run(mut director: Director, args: &RunArgs) -> Result<ExitCode> {
+    if !crate::view::has_display() {
+        bail!("--view needs a display (DISPLAY or WAYLAND_DISPLAY); run headless with --frames DIR instead");
+    }
+    let options = troupe_viewer::WindowOptions {
+        title: format!("troupe run {}", args.scene.display()),
+        size: troupe_viewer::parse_size(&args.size)?,
+        camera: args.camera.parse()?,
+        tick_seconds: 1.0 / args.rate,
+        ..Default::default()
+    };
+    troupe_viewer::run_window(options, move || {
+        director.tick();
+        troupe_viewer::Frame::from_scene(&director.scene())
+    })?;
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Options of `troupe render`.
+#[derive(Args)]
+pub struct RenderArgs {
+    /// The scene file (Lua).
+    pub scene: PathBuf,
+    /// The PNG file to write.
+    pub out: PathBuf,
+    /// Simulated time of the picture, in seconds.
+    #[arg(long, default_value_t = 0.0)]
+    pub at: f64,
+    /// Picture size, WIDTHxHEIGHT.
+    #[arg(long, default_value = "1280x720")]
+    pub size: String,
+    /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ.
+    #[arg(long, default_value = "fit")]
+    pub camera: String,
+    /// Ticks per second.
+    #[arg(long, default_value_t = 100.0)]
+    pub rate: f64,
+    /// Seed for the scene's random numbers.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+}
+
+/// `troupe render`: runs a scene headless up to `--at` and writes one picture.
+pub fn render(args: RenderArgs) -> Result<ExitCode> {
+    if !(args.at.is_finite() && args.at >= 0.0) {
+        bail!("--at must be a number of seconds ≥ 0");
+    }
+    let size = troupe_viewer::parse_size(&args.size)?;
+    let camera: troupe_viewer::Camera = args.camera.parse()?;
+    let config = SceneConfig {
+        rate: args.rate,
+        threads: 1,
+        seed: args.seed,
+    };
+    let mut director = Director::new(
+        config,
+        troupe_actions::action_kinds(),
+        ScriptLimits::default(),
+    )?;
+    director
+        .load_file(&args.scene)
+        .with_context(|| format!("loading {}", args.scene.display()))?;
+    let ticks = (args.at * args.rate).round() as u64;
+    for _ in 0..ticks {
+        director.tick();
+    }
+    if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
+    troupe_viewer::render_scene_png(&director.scene(), &camera, size, &args.out)?;
+    println!(
+        "rendered {} at t = {:.2} s to {}",
+        args.scene.display(),
+        director.scene().time(),
+        args.out.display()
+    );
+    Ok(ExitCode::SUCCESS)
 }

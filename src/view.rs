@@ -16,17 +16,17 @@ use troupe_viewer::{
 /// Options of `troupe view`.
 #[derive(Args)]
 #[command(
-    about = "Play a recording (.trk) on an actor: in a window, or headless into PNG frames",
-    long_about = "Play a recording (.trk) on an actor. With a display (DISPLAY or \
+    about = "Play a recording (.trk, .bvh) on actors: in a window, or headless into PNG frames",
+    long_about = "Play a recording (.trk, .bvh) on actors. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
         actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
-    /// The recording to play (.trk).
+    /// The recording to play (.trk, possibly several actors; or .bvh).
     file: PathBuf,
-    /// Body template of the actor.
+    /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
     actor_template: String,
     /// Picture or window size, WIDTHxHEIGHT.
@@ -40,10 +40,10 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 4, value_name = "N")]
     every: u64,
     /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ; fit and follow take
-    /// @YAW,PITCH[,DISTANCE]. The default follows the actor (named `actor`) at a steady
-    /// distance.
-    #[arg(long, default_value = "follow:actor")]
-    camera: String,
+    /// @YAW,PITCH[,DISTANCE]. The default follows a lone actor at a steady distance and
+    /// fits several.
+    #[arg(long)]
+    camera: Option<String>,
     /// Draw the actor as bones instead of solids.
     #[arg(long)]
     bones: bool,
@@ -100,21 +100,60 @@ pub struct SnapshotArgs {
 
 /// Loads a recording to play on one actor. Every supported format is dispatched here, by
 /// file extension: add new loaders (BVH, glTF) as further arms.
-fn load_recording(path: &Path) -> Result<Sequence> {
+/// One actor of a recording: its sequence and the body it was recorded on.
+struct Performer {
+    name: String,
+    sequence: Sequence,
+    template: String,
+    height: Option<f64>,
+}
+
+/// Reads a recording by its extension: a `.trk` set plays one actor per sequence (on the
+/// template and height stored in its metadata, else `template`); a `.bvh` is retargeted
+/// onto `template`.
+fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     match ext.as_str() {
-        "trk" => Ok(trk::read_trk(path)?),
+        "trk" => Ok(trk::read_trk_set(path)?
+            .into_iter()
+            .enumerate()
+            .map(|(i, sequence)| Performer {
+                name: if sequence.name.is_empty() {
+                    format!("actor{i}")
+                } else {
+                    sequence.name.clone()
+                },
+                template: sequence
+                    .meta
+                    .get("template")
+                    .cloned()
+                    .unwrap_or_else(|| template.to_string()),
+                height: sequence.meta.get("height").and_then(|h| h.parse().ok()),
+                sequence,
+            })
+            .collect()),
+        "bvh" => {
+            let t = troupe_runtime::template(template)?;
+            let skeleton = t.instantiate(t.default_params())?;
+            let sequence = troupe_runtime::retarget::load_sequence_for(&skeleton, path)?;
+            Ok(vec![Performer {
+                name: sequence.name.clone(),
+                sequence,
+                template: template.to_string(),
+                height: None,
+            }])
+        }
         _ => bail!(
-            "{}: cannot play `.{ext}` files; supported recordings: .trk",
+            "{}: cannot play `.{ext}` files; supported recordings: .trk, .bvh",
             path.display()
         ),
     }
 }
 
-fn has_display() -> bool {
+pub(crate) fn has_display() -> bool {
     ["DISPLAY", "WAYLAND_DISPLAY"]
         .iter()
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
@@ -135,21 +174,38 @@ fn render_options(bones: bool, labels: bool) -> RenderOptions {
 /// Runs `troupe view`.
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
     let size = parse_size(&args.size)?;
-    let camera: Camera = args.camera.parse()?;
-    let sequence = load_recording(&args.file)?;
+    let performers = load_recording(&args.file, &args.actor_template)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,
         ..SceneConfig::default()
     })?;
-    let mut desc = ActorDesc::new("actor");
-    desc.template = args.actor_template.clone();
-    let actor = scene.add_actor(&desc)?;
-    let skeleton = scene.actors()[actor].skeleton.clone();
-    let keyframe = Keyframe::new(&skeleton, &sequence, None, Some(true))
-        .with_context(|| format!("{} on template {}", args.file.display(), desc.template))?;
-    let length = keyframe.length();
-    let spec = ActionSpec::new("keyframe", keyframe.scope());
-    scene.start_action(actor, spec, Box::new(keyframe))?;
+    let mut length: f64 = 0.0;
+    for p in &performers {
+        let desc = ActorDesc {
+            template: p.template.clone(),
+            height: p.height,
+            ..ActorDesc::new(p.name.clone())
+        };
+        let actor = scene.add_actor(&desc)?;
+        let skeleton = scene.actors()[actor].skeleton.clone();
+        let keyframe =
+            Keyframe::new(&skeleton, &p.sequence, None, Some(true)).with_context(|| {
+                format!(
+                    "{}: `{}` on template {}",
+                    args.file.display(),
+                    p.name,
+                    p.template
+                )
+            })?;
+        length = length.max(keyframe.length());
+        let spec = ActionSpec::new("keyframe", keyframe.scope());
+        scene.start_action(actor, spec, Box::new(keyframe))?;
+    }
+    let camera: Camera = match &args.camera {
+        Some(c) => c.parse()?,
+        None if performers.len() == 1 => format!("follow:{}", performers[0].name).parse()?,
+        None => Camera::fit(),
+    };
 
     let headless_dir = match (&args.frames, has_display()) {
         (Some(dir), _) => Some(dir.clone()),

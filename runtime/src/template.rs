@@ -66,7 +66,7 @@ const ADULT: Proportions = Proportions {
     hand: 0.108,
     foot: 0.152,
     head_radii: DVec3::new(0.046, 0.066, 0.056),
-    trunk_radius: 0.070,
+    trunk_radius: 0.085,
 };
 
 const CHILD: Proportions = Proportions {
@@ -82,7 +82,7 @@ const CHILD: Proportions = Proportions {
     hand: 0.105,
     foot: 0.155,
     head_radii: DVec3::new(0.062, 0.083, 0.074),
-    trunk_radius: 0.075,
+    trunk_radius: 0.090,
 };
 
 /// The templates troupe knows.
