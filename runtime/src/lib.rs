@@ -6,6 +6,7 @@
 
 pub mod action;
 pub mod blend;
+pub mod dynamics;
 pub mod error;
 pub mod kinematics;
 pub mod lua;
