@@ -586,7 +586,7 @@ fn ended_actions_are_forgotten_unless_kept() {
 #[test]
 fn the_worked_example_of_docs_scheduling_md() {
     let (mut s, a) = scene();
-    let mut at = |s: &mut Scene, tick: u64| {
+    let at = |s: &mut Scene, tick: u64| {
         while s.tick() < tick {
             s.step();
         }
