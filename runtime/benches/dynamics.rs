@@ -6,7 +6,9 @@ use troupe_runtime::dynamics::{Control, Dynamics, ExternalForces, SimParams, Sim
 use troupe_runtime::template;
 
 fn state(n: usize, seed: f64) -> Vec<f64> {
-    (0..n).map(|i| ((i as f64 + seed) * 0.37).sin() * 0.4).collect()
+    (0..n)
+        .map(|i| ((i as f64 + seed) * 0.37).sin() * 0.4)
+        .collect()
 }
 
 fn per_call(c: &mut Criterion) {
