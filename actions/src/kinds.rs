@@ -13,6 +13,8 @@ pub fn action_kinds() -> ActionKinds {
         method: "play",
         build: build_play,
     });
+    // Dynamics: simulate, servo, track.
+    crate::dynamics::register(&mut kinds);
     kinds
 }
 

@@ -1,8 +1,10 @@
 //! troupe's motion generators. Each module is one kind of ACTION's generator; each
 //! generator writes only the DOFs of its action's scope.
 
+pub mod dynamics;
 pub mod keyframe;
 pub mod kinds;
 
+pub use dynamics::DynamicsGenerator;
 pub use keyframe::Keyframe;
 pub use kinds::action_kinds;

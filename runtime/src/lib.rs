@@ -8,6 +8,7 @@ pub mod action;
 pub mod blend;
 pub mod bvh;
 pub mod compress;
+pub mod dynamics;
 pub mod error;
 pub mod gltf;
 pub mod kinematics;

@@ -154,6 +154,7 @@ impl UserData for ActorRef {
     }
 
     fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        super::dynamics::add_actor_methods(methods);
         methods.add_method("behave", |lua, this, f: Function| {
             super::add_behavior(lua, Some(this.0), f)
         });

@@ -8,6 +8,7 @@
 //! memory allowance; a behavior that errors or exceeds them fails alone.
 
 pub mod api;
+mod dynamics;
 pub mod kinds;
 
 use crate::action::{ActionId, Event, Status};

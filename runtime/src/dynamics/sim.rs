@@ -1,0 +1,689 @@
+//! The closed-loop simulator (thesis 3.5, fig. 3-4): forward dynamics integrated with a
+//! semi-implicit (symplectic) Euler step of `small_time_step`, control torques refreshed
+//! every `time_step`, PD servos (eq. 4-1), joint limits as stiff one-sided springs and
+//! floor contact.
+//!
+//! DOFs are either *dynamic* (integrated from forces) or *prescribed* (moved
+//! kinematically: their value advances at their set velocity, zero acceleration, and the
+//! dynamics reacts to that motion). When every root DOF of a humanoid root is dynamic the
+//! root is integrated as a floating base (quaternion orientation, spatial velocity), so a
+//! tumbling body never meets the Euler angles' singularity; its Euler DOFs are written
+//! back for output. Each step keeps the total spatial momentum exactly what the forces
+//! made it: after the position update the base velocity is corrected so that the
+//! momentum equals its value at the step's start plus the impulse of the external forces
+//! and gravity over the step (a projection that removes the integrator's momentum drift).
+
+use super::contact::{ContactParams, Floor};
+use super::model::{self, Data, FloatingBase, Model};
+use super::rnea::rnea;
+use super::spatial::{Force, Inertia, Motion};
+use super::{aba::aba, ExternalForces, GRAVITY};
+use crate::error::{Error, Result};
+use crate::skeleton::Skeleton;
+use glam::{DMat3, DQuat, DVec3, EulerRot};
+
+/// PD gains per unit of inertia: the torque on DOF `k` is
+/// `M_kk · (kp · (q_d − q) + kd · (q̇_d − q̇))`, where `M_kk` (kg·m², or kg for a
+/// translation) is the inertia the DOF moves (the diagonal of the mass matrix, armature
+/// included): the gains scale with the segments' masses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Gains {
+    /// Stiffness per unit inertia (1/s²): the square of the servo's natural frequency.
+    pub kp: f64,
+    /// Damping per unit inertia (1/s): `2·sqrt(kp)` is critical damping.
+    pub kd: f64,
+}
+
+impl Default for Gains {
+    fn default() -> Self {
+        Gains {
+            kp: 400.0,
+            kd: 40.0,
+        }
+    }
+}
+
+impl Gains {
+    /// Checks both gains are finite and ≥ 0.
+    pub fn validate(&self) -> Result<()> {
+        for (what, v) in [("kp", self.kp), ("kd", self.kd)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::invalid_value(what, v, "a finite gain ≥ 0"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// What drives the dynamic DOFs during [`Simulation::advance`].
+#[derive(Clone, Copy, Debug)]
+pub enum Control<'a> {
+    /// No actuation: the body moves under gravity, contact, limits and damping.
+    Passive,
+    /// PD servos toward `q` (moving at `qd`), eq. 4-1, refreshed every sub-step; with
+    /// `gravity_compensation` the gravity and velocity torques predicted by inverse
+    /// dynamics are added (refreshed every `time_step`).
+    Servo {
+        /// Desired values, one per DOF.
+        q: &'a [f64],
+        /// Desired velocities.
+        qd: &'a [f64],
+        /// Gains.
+        gains: Gains,
+        /// Add the inverse-dynamics gravity and velocity torques.
+        gravity_compensation: bool,
+    },
+    /// Closed-loop tracking (fig. 3-4): every `time_step`, inverse dynamics of the desired
+    /// acceleration corrected by the errors, `q̈_d + kp (q_d − q) + kd (q̇_d − q̇)`, gives
+    /// the torques held until the next refresh.
+    Track {
+        /// Desired values.
+        q: &'a [f64],
+        /// Desired velocities.
+        qd: &'a [f64],
+        /// Desired accelerations.
+        qdd: &'a [f64],
+        /// Gains.
+        gains: Gains,
+    },
+}
+
+/// Simulation parameters.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SimParams {
+    /// Integration step (s).
+    pub small_time_step: f64,
+    /// Control period (s): inverse dynamics is evaluated this often.
+    pub time_step: f64,
+    /// Gravity (m/s²).
+    pub gravity: DVec3,
+    /// The floor, if any.
+    pub floor: Option<ContactParams>,
+    /// Whether the joint limits push back.
+    pub joint_limits: bool,
+    /// Natural frequency (rad/s) of the limit springs, per unit inertia.
+    pub limit_frequency: f64,
+    /// Passive joint damping per unit inertia (1/s) on every dynamic non-root DOF.
+    pub damping: f64,
+    /// A DOF or base speed above this (rad/s or m/s) means the simulation diverged.
+    pub max_speed: f64,
+}
+
+impl Default for SimParams {
+    fn default() -> Self {
+        SimParams {
+            small_time_step: 1e-3,
+            time_step: 1e-2,
+            gravity: GRAVITY,
+            floor: Some(ContactParams::default()),
+            joint_limits: true,
+            limit_frequency: 60.0,
+            damping: 0.0,
+            max_speed: 200.0,
+        }
+    }
+}
+
+impl SimParams {
+    /// Checks every field.
+    pub fn validate(&self) -> Result<()> {
+        let positive = |what: &str, v: f64| {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(Error::invalid_value(what, v, "a finite number > 0"))
+            }
+        };
+        positive("small_time_step", self.small_time_step)?;
+        positive("time_step", self.time_step)?;
+        positive("limit_frequency", self.limit_frequency)?;
+        positive("max_speed", self.max_speed)?;
+        if !(self.damping.is_finite() && self.damping >= 0.0) {
+            return Err(Error::invalid_value("damping", self.damping, "≥ 0"));
+        }
+        if !self.gravity.is_finite() {
+            return Err(Error::Invalid("gravity must be finite".into()));
+        }
+        if let Some(f) = &self.floor {
+            f.validate()?;
+        }
+        Ok(())
+    }
+}
+
+/// A push: a force at the whole body's centre of mass and a torque, for a while (the
+/// thesis's supporting force, fig. 3-5).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Push {
+    force: DVec3,
+    torque: DVec3,
+    until: f64,
+}
+
+/// One actor's body simulated by forward dynamics (see the module docs).
+#[derive(Clone, Debug)]
+pub struct Simulation {
+    model: Model,
+    data: Data,
+    params: SimParams,
+    floor: Option<Floor>,
+    names: Vec<String>,
+    limits: Vec<(f64, f64)>,
+    q: Vec<f64>,
+    qd: Vec<f64>,
+    qdd: Vec<f64>,
+    tau: Vec<f64>,
+    implicit: Vec<f64>,
+    held: Vec<f64>,
+    prescribed: Vec<bool>,
+    base: Option<FloatingBase>,
+    ext: ExternalForces,
+    push: Option<Push>,
+    push_link: usize,
+    time: f64,
+    since_control: f64,
+    control_due: bool,
+    deepest: f64,
+}
+
+impl Simulation {
+    /// A simulation of `skeleton` from state (`q`, `qd`) in which the DOFs with
+    /// `dynamic[k]` are integrated and the others prescribed. The root is a floating base
+    /// when all its DOFs are dynamic and it is the humanoid root; a root that is only
+    /// partly dynamic is prescribed whole.
+    pub fn new(
+        skeleton: &Skeleton,
+        q: &[f64],
+        qd: &[f64],
+        dynamic: &[bool],
+        params: SimParams,
+    ) -> Result<Simulation> {
+        params.validate()?;
+        super::check_state(skeleton, "q", q)?;
+        super::check_state(skeleton, "qd", qd)?;
+        let model = Model::new(skeleton)?;
+        if dynamic.len() != model.n {
+            return Err(Error::Invalid(
+                "dynamics: dynamic mask has the wrong size".into(),
+            ));
+        }
+        let floor = match params.floor {
+            Some(p) => Some(Floor::new(&model, skeleton, p)?),
+            None => None,
+        };
+        let mut prescribed: Vec<bool> = dynamic.iter().map(|d| !d).collect();
+        let root = model.root.clone();
+        let root_dynamic = root.clone().all(|k| dynamic[k]);
+        if !root_dynamic {
+            prescribed[root.clone()].iter_mut().for_each(|p| *p = true);
+        }
+        let floating = root_dynamic && model.floating;
+        let push_link = model
+            .bodies
+            .iter()
+            .max_by(|a, b| a.mass.total_cmp(&b.mass))
+            .map_or(0, |b| b.link);
+        let mut sim = Simulation {
+            data: Data::new(&model),
+            params,
+            floor,
+            names: skeleton.dofs().iter().map(|d| d.name.clone()).collect(),
+            limits: skeleton.limits().to_vec(),
+            q: q.to_vec(),
+            qd: qd.to_vec(),
+            qdd: vec![0.0; model.n],
+            tau: vec![0.0; model.n],
+            implicit: vec![0.0; model.n],
+            held: vec![0.0; model.n],
+            prescribed,
+            base: None,
+            ext: ExternalForces::new(skeleton),
+            push: None,
+            push_link,
+            time: 0.0,
+            since_control: 0.0,
+            control_due: true,
+            deepest: 0.0,
+            model,
+        };
+        if floating {
+            model::kinematics(&sim.model, &mut sim.data, &sim.q, None);
+            let b = root.end - 1;
+            let mut velocity = Motion::ZERO;
+            for k in root {
+                velocity += sim.data.s[k] * sim.qd[k];
+            }
+            sim.base = Some(FloatingBase {
+                position: sim.data.pos[b],
+                rotation: sim.data.rot[b],
+                velocity,
+            });
+        }
+        Ok(sim)
+    }
+
+    /// The model simulated.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// DOF values (root Euler DOFs included).
+    pub fn q(&self) -> &[f64] {
+        &self.q
+    }
+
+    /// DOF velocities (root Euler rates included; zero at the Euler singularity).
+    pub fn qd(&self) -> &[f64] {
+        &self.qd
+    }
+
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    /// Whether the root is integrated as a floating base.
+    pub fn floating(&self) -> bool {
+        self.base.is_some()
+    }
+
+    /// Whether DOF `k` is prescribed (moved kinematically).
+    pub fn is_prescribed(&self, k: usize) -> bool {
+        self.prescribed[k]
+    }
+
+    /// Sets a prescribed DOF's value and velocity (ignored for dynamic DOFs).
+    pub fn set_prescribed(&mut self, k: usize, q: f64, qd: f64) {
+        if self.prescribed[k] && q.is_finite() && qd.is_finite() {
+            self.q[k] = q;
+            self.qd[k] = qd;
+        }
+    }
+
+    /// Persistent external forces (cleared only by the caller).
+    pub fn external_forces_mut(&mut self) -> &mut ExternalForces {
+        &mut self.ext
+    }
+
+    /// Applies `force` at the whole body's centre of mass and `torque` to it for
+    /// `duration` seconds from now.
+    pub fn push(&mut self, force: DVec3, torque: DVec3, duration: f64) {
+        self.push = Some(Push {
+            force,
+            torque,
+            until: self.time + duration,
+        });
+    }
+
+    /// The deepest floor penetration seen at the last step (m).
+    pub fn penetration(&self) -> f64 {
+        self.deepest
+    }
+
+    /// The control torques applied at the last step (N·m or N per DOF).
+    pub fn torques(&self) -> &[f64] {
+        &self.tau
+    }
+
+    fn prepare(&mut self) {
+        let base = self.base;
+        model::kinematics(&self.model, &mut self.data, &self.q, base.as_ref());
+        model::velocities(&self.model, &mut self.data, &self.qd, base.as_ref());
+    }
+
+    /// Kinetic and potential energy (J) of the current state.
+    pub fn energy(&mut self) -> (f64, f64) {
+        self.prepare();
+        (
+            model::kinetic_energy(&self.model, &self.data, &self.qd_for_energy()),
+            model::potential_energy(&self.model, &self.data, self.params.gravity),
+        )
+    }
+
+    fn qd_for_energy(&self) -> Vec<f64> {
+        let mut qd = self.qd.clone();
+        if self.base.is_some() {
+            for k in self.model.root.clone() {
+                qd[k] = 0.0; // the root's armature is zero anyway
+            }
+        }
+        qd
+    }
+
+    /// Linear momentum and angular momentum about the world origin of the current state.
+    pub fn momentum(&mut self) -> (DVec3, DVec3) {
+        self.prepare();
+        let h = model::momentum(&self.model, &self.data);
+        (h.f, h.n)
+    }
+
+    /// The whole body's centre of mass.
+    pub fn center_of_mass(&mut self) -> DVec3 {
+        self.prepare();
+        model::center_of_mass(&self.model, &self.data)
+    }
+
+    /// Advances by `duration` seconds in sub-steps of at most `small_time_step` under
+    /// `control`. Fails (leaving the state as it was at the failing step's start) when the
+    /// simulation diverges or the control's vectors are malformed.
+    pub fn advance(&mut self, duration: f64, control: &Control) -> Result<()> {
+        if !(duration.is_finite() && duration >= 0.0) {
+            return Err(Error::invalid_value("duration", duration, "≥ 0"));
+        }
+        self.check_control(control)?;
+        let steps = (duration / self.params.small_time_step).ceil().max(1.0) as usize;
+        let h = duration / steps as f64;
+        if h == 0.0 {
+            return Ok(());
+        }
+        let start_time = self.time;
+        for i in 0..steps {
+            let elapsed = i as f64 * h;
+            self.step(h, control, elapsed)?;
+        }
+        self.time = start_time + duration;
+        Ok(())
+    }
+
+    fn check_control(&self, control: &Control) -> Result<()> {
+        let (vectors, gains): (Vec<(&str, &[f64])>, Option<Gains>) = match control {
+            Control::Passive => (vec![], None),
+            Control::Servo { q, qd, gains, .. } => (vec![("q", q), ("qd", qd)], Some(*gains)),
+            Control::Track { q, qd, qdd, gains } => {
+                (vec![("q", q), ("qd", qd), ("qdd", qdd)], Some(*gains))
+            }
+        };
+        for (what, v) in vectors {
+            if v.len() != self.model.n {
+                return Err(Error::Invalid(format!(
+                    "dynamics: desired {what} has the wrong size"
+                )));
+            }
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(Error::invalid_value(
+                    format!("desired {what}[{}]", self.names[k]),
+                    v[k],
+                    "a finite number",
+                ));
+            }
+        }
+        if let Some(g) = gains {
+            g.validate()?;
+        }
+        Ok(())
+    }
+
+    /// One semi-implicit Euler step of `h` seconds; `elapsed` is the time since the
+    /// desired values were sampled (desired values advance at the desired velocities).
+    fn step(&mut self, h: f64, control: &Control, elapsed: f64) -> Result<()> {
+        let n = self.model.n;
+        let root = self.model.root.clone();
+        let base = self.base;
+        self.prepare();
+        // Control refresh every time_step: mass diagonal and inverse-dynamics torques.
+        if self.control_due {
+            model::mass_diagonal(&self.model, &mut self.data, base.as_ref());
+            match control {
+                Control::Passive => self.held.iter_mut().for_each(|t| *t = 0.0),
+                Control::Servo {
+                    gravity_compensation,
+                    ..
+                } => {
+                    if *gravity_compensation {
+                        self.data.ext.iter_mut().for_each(|f| *f = Force::ZERO);
+                        let zero = std::mem::take(&mut self.qdd);
+                        let mut zero = zero;
+                        zero.iter_mut().for_each(|a| *a = 0.0);
+                        let a_base = Motion::ZERO;
+                        rnea(
+                            &self.model,
+                            &mut self.data,
+                            &zero,
+                            self.params.gravity,
+                            base.as_ref().map(|b| (b, a_base)),
+                            &mut self.held,
+                        );
+                        self.qdd = zero;
+                    } else {
+                        self.held.iter_mut().for_each(|t| *t = 0.0);
+                    }
+                }
+                Control::Track { q, qd, qdd, gains } => {
+                    self.load_external(true);
+                    let mut reference = std::mem::take(&mut self.qdd);
+                    for k in 0..n {
+                        reference[k] = if self.prescribed[k] {
+                            0.0
+                        } else {
+                            qdd[k] + gains.kp * (q[k] - self.q[k]) + gains.kd * (qd[k] - self.qd[k])
+                        };
+                    }
+                    rnea(
+                        &self.model,
+                        &mut self.data,
+                        &reference,
+                        self.params.gravity,
+                        base.as_ref().map(|b| (b, Motion::ZERO)),
+                        &mut self.held,
+                    );
+                    self.qdd = reference;
+                }
+            }
+            // rnea overwrote the accelerations' workspace only; velocities are intact.
+            self.control_due = false;
+        }
+        self.since_control += h;
+        if self.since_control >= self.params.time_step - 1e-12 {
+            self.since_control = 0.0;
+            self.control_due = true;
+        }
+        // External forces, contact.
+        self.load_external(false);
+        // Generalized forces. Servo, damping and limit springs act per DOF: their
+        // stiffness k and damping c are integrated implicitly (h·c + h²·k is added to the
+        // DOF's inertia in the forward dynamics), so stiff gains stay stable.
+        let diag = &self.data.diag;
+        for k in 0..n {
+            self.implicit[k] = 0.0;
+            if self.prescribed[k] || (base.is_some() && root.contains(&k)) {
+                self.tau[k] = 0.0;
+                continue;
+            }
+            let (mut t, mut stiff, mut damp) = (self.held[k], 0.0, 0.0);
+            if let Control::Servo { q, qd, gains, .. } = control {
+                let target = q[k] + qd[k] * elapsed;
+                t += diag[k] * (gains.kp * (target - self.q[k]) + gains.kd * (qd[k] - self.qd[k]));
+                stiff += diag[k] * gains.kp;
+                damp += diag[k] * gains.kd;
+            }
+            if !root.contains(&k) {
+                t -= self.params.damping * diag[k] * self.qd[k];
+                damp += self.params.damping * diag[k];
+                if self.params.joint_limits {
+                    let (lt, ls, ld) = self.limit_torque(k, diag[k]);
+                    t += lt;
+                    stiff += ls;
+                    damp += ld;
+                }
+            }
+            self.tau[k] = t;
+            self.implicit[k] = h * damp + h * h * stiff;
+        }
+        // Forward dynamics.
+        for k in 0..n {
+            if self.prescribed[k] {
+                self.qdd[k] = 0.0;
+            }
+        }
+        let Some(a_base) = aba(
+            &self.model,
+            &mut self.data,
+            &self.tau,
+            self.params.gravity,
+            Some(&self.prescribed),
+            Some(&self.implicit),
+            base.as_ref(),
+            &mut self.qdd,
+        ) else {
+            return Err(self.diverged("a DOF lost all its inertia (singular configuration)"));
+        };
+        // Semi-implicit Euler: velocities first, then positions with the new velocities.
+        let momentum_now = if base.is_some() {
+            model::momentum(&self.model, &self.data)
+        } else {
+            Force::ZERO
+        };
+        let (q0, qd0, base0) = (self.q.clone(), self.qd.clone(), self.base);
+        let first = if base.is_some() { root.end } else { 0 };
+        for k in first..n {
+            if !self.prescribed[k] {
+                self.qd[k] += h * self.qdd[k];
+            }
+        }
+        let mut target = Force::ZERO;
+        if let Some(b) = &mut self.base {
+            b.velocity += a_base * h;
+            // The momentum the external forces leave after this step: the current one plus
+            // the impulse of gravity, contact and applied forces.
+            let mut wrench = Force::ZERO;
+            for f in &self.data.ext {
+                wrench += *f;
+            }
+            for body in &self.model.bodies {
+                let com = self.data.pos[body.link] + self.data.rot[body.link] * body.com;
+                wrench += Force::at_point(com, self.params.gravity * body.mass, DVec3::ZERO);
+            }
+            target = momentum_now + wrench * h;
+        }
+        for k in first..n {
+            self.q[k] += h * self.qd[k];
+        }
+        if let Some(b) = &mut self.base {
+            let w = b.velocity.w;
+            let vp = b.velocity.v + w.cross(b.position);
+            b.position += vp * h;
+            let angle = w.length() * h;
+            if angle > 0.0 {
+                b.rotation =
+                    (DQuat::from_axis_angle(w.normalize(), angle) * b.rotation).normalize();
+            }
+            // Momentum projection: keep the spatial momentum the forces produced.
+            let mut bb = *b;
+            bb.velocity = Motion::ZERO;
+            model::kinematics(&self.model, &mut self.data, &self.q, Some(&bb));
+            model::velocities(&self.model, &mut self.data, &self.qd, Some(&bb));
+            let relative = model::momentum(&self.model, &self.data);
+            let mut total = Inertia::ZERO;
+            for body in &self.model.bodies {
+                total += self.data.inertia[body.link];
+            }
+            b.velocity = total.solve(&(target - relative));
+            self.sync_root();
+        }
+        if let Err(e) = self.check() {
+            self.q = q0;
+            self.qd = qd0;
+            self.base = base0;
+            return Err(e);
+        }
+        Ok(())
+    }
+
+    /// Loads the persistent forces, the push and (unless `without_contact`) the floor's
+    /// forces into the workspace (after `prepare`).
+    fn load_external(&mut self, without_contact: bool) {
+        self.ext.load(&self.model, &mut self.data);
+        if let Some(p) = self.push {
+            if self.time < p.until {
+                let com = model::center_of_mass(&self.model, &self.data);
+                self.data.ext[self.push_link] += Force::at_point(com, p.force, p.torque);
+            } else {
+                self.push = None;
+            }
+        }
+        if without_contact {
+            return;
+        }
+        self.deepest = match &self.floor {
+            Some(f) => f.apply(&mut self.data),
+            None => 0.0,
+        };
+    }
+
+    /// The limit spring's torque on DOF `k`, with the stiffness and damping in effect.
+    fn limit_torque(&self, k: usize, inertia: f64) -> (f64, f64, f64) {
+        let (lo, hi) = self.limits[k];
+        let w = self.params.limit_frequency;
+        let (stiff, damp) = (w * w * inertia, 2.0 * w * inertia);
+        let (q, qd) = (self.q[k], self.qd[k]);
+        if q < lo && stiff * (lo - q) - damp * qd > 0.0 {
+            (stiff * (lo - q) - damp * qd, stiff, damp)
+        } else if q > hi && -stiff * (q - hi) - damp * qd < 0.0 {
+            (-stiff * (q - hi) - damp * qd, stiff, damp)
+        } else {
+            (0.0, 0.0, 0.0)
+        }
+    }
+
+    /// Writes the floating base's pose and velocity back into the root's Euler DOFs.
+    fn sync_root(&mut self) {
+        let Some(b) = self.base else { return };
+        let root = self.model.root.clone();
+        let offset = self.model.pre[root.start].map_or(DVec3::ZERO, |t| t.translation);
+        let t = b.position - offset;
+        let (mut yaw, pitch, roll) = b.rotation.to_euler(EulerRot::YXZ);
+        let prev = self.q[root.start + 3];
+        yaw += (2.0 * std::f64::consts::PI) * ((prev - yaw) / (2.0 * std::f64::consts::PI)).round();
+        let r = root.start;
+        self.q[r..r + 6].copy_from_slice(&[t.x, t.y, t.z, yaw, pitch, roll]);
+        // Euler rates: ω = a_yaw ẏ + a_pitch ṗ + a_roll ṙ.
+        let w = b.velocity.w;
+        let vp = b.velocity.v + w.cross(b.position);
+        let a_yaw = DVec3::Y;
+        let a_pitch = DQuat::from_rotation_y(yaw) * DVec3::X;
+        let a_roll = b.rotation * DVec3::Z;
+        let m = DMat3::from_cols(a_yaw, a_pitch, a_roll);
+        let rates = if m.determinant().abs() > 1e-9 {
+            m.inverse() * w
+        } else {
+            DVec3::ZERO
+        };
+        self.qd[r..r + 6].copy_from_slice(&[vp.x, vp.y, vp.z, rates.x, rates.y, rates.z]);
+    }
+
+    fn check(&self) -> Result<()> {
+        let limit = self.params.max_speed;
+        for k in 0..self.model.n {
+            // A floating root's Euler rates may be large near pitch ±90° while its
+            // angular velocity is modest: the base is checked below instead.
+            let euler = self.base.is_some() && self.model.root.contains(&k);
+            if !self.q[k].is_finite()
+                || !self.qd[k].is_finite()
+                || (!euler && self.qd[k].abs() > limit)
+            {
+                return Err(self.diverged(&format!(
+                    "DOF `{}` reached q = {}, q̇ = {} (limit {limit})",
+                    self.names[k], self.q[k], self.qd[k]
+                )));
+            }
+        }
+        if let Some(b) = &self.base {
+            let v = b.velocity.v + b.velocity.w.cross(b.position);
+            if !b.position.is_finite()
+                || !b.rotation.is_finite()
+                || v.length() > limit
+                || b.velocity.w.length() > limit
+            {
+                return Err(self.diverged("the root's speed exploded"));
+            }
+        }
+        Ok(())
+    }
+
+    fn diverged(&self, what: &str) -> Error {
+        Error::Invalid(format!(
+            "dynamics: the simulation diverged at t = {:.3} s: {what}",
+            self.time
+        ))
+    }
+}
