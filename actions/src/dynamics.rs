@@ -476,7 +476,7 @@ fn build_track(
         .as_ref()
         .ok_or_else(|| lua_err_message("track: `sequence` is required"))?;
     let sequence = match t.get::<Value>("sequence")? {
-        Value::String(path) => load_sequence(ctx.lua, &path.to_str()?)?,
+        Value::String(path) => load_sequence(ctx.lua, &path.to_str()?, Some(&ctx.skeleton))?,
         Value::UserData(u) => u
             .borrow::<SequenceRef>()
             .map_err(|_| lua_err_message("track: `sequence` must be a sequence or a file path"))?
