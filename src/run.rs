@@ -324,6 +324,12 @@ pub struct RenderArgs {
     /// Seed for the scene's random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
+    /// Do not draw names and action labels above the heads.
+    #[arg(long)]
+    pub no_labels: bool,
+    /// Draw actors as bones instead of solids.
+    #[arg(long)]
+    pub bones: bool,
 }
 
 /// `troupe render`: runs a scene headless up to `--at` and writes one picture.
@@ -353,7 +359,18 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    troupe_viewer::render_scene_png(&director.scene(), &camera, size, &args.out)?;
+    let mut renderer = troupe_viewer::OffscreenRenderer::new(size.0, size.1)?;
+    renderer.set_options(troupe_viewer::RenderOptions {
+        labels: !args.no_labels,
+        style: if args.bones {
+            troupe_viewer::BodyStyle::Bones
+        } else {
+            troupe_viewer::BodyStyle::Solids
+        },
+        ..Default::default()
+    });
+    let frame = troupe_viewer::Frame::from_scene(&director.scene());
+    renderer.save_png(&frame, &camera, &args.out)?;
     println!(
         "rendered {} at t = {:.2} s to {}",
         args.scene.display(),

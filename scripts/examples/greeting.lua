@@ -1,5 +1,6 @@
 -- Two actors meet: Ann waves at Bob while she turns her head to him, Bob nods back,
 -- then both bow together. Run: troupe run scripts/examples/greeting.lua
+local gestures = require("gestures")
 local ann = troupe.actor{ name = "ann", template = "adult", height = 1.65, at = {-0.8, 0, 0}, facing = 90 }
 local bob = troupe.actor{ name = "bob", template = "adult", height = 1.82, at = { 0.8, 0, 0}, facing = -90 }
 troupe.object{ name = "table", shape = "box", size = {1.2, 0.75, 0.6}, at = {0, 0.375, 1.2}, mass = 20 }
@@ -11,9 +12,9 @@ local bow = troupe.sequence{
 }
 
 ann:behave(function(self)
-  -- Look toward Bob (a weighted head turn that eases in and out around the wave).
-  local look = self:play(troupe.sequence{ skullbase_torsion = { {0, 0.0}, {1, 0.0} } },
-                         { mode = "weighted", weight = 0.5, ease_in = 0.4, ease_out = 0.4, duration = 3 })
+  -- Look toward Bob's head (a weighted turn that eases in and out around the wave).
+  local look = self:play(gestures.look_toward(self, bob:joint_position("skullbase"), 3),
+                         { mode = "weighted", weight = 0.8, ease_in = 0.4, ease_out = 0.4 })
   local wave = self:play("wave.trk", { scope = "right_arm", ease_in = 0.3, ease_out = 0.3 })
   print("waving at " .. bob.name)
   wait_all(wave, look)
