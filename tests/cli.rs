@@ -160,3 +160,56 @@ fn scenario_tests_pass_and_report_counts() {
     assert!(text.contains("expectation failed: nope"), "{text}");
     assert!(text.contains("1 passed, 1 failed"), "{text}");
 }
+
+#[test]
+fn render_and_frames_draw_example_scenes() {
+    let png = temp("tableau.png");
+    let out = troupe()
+        .args(["render", "scripts/examples/tableau.lua"])
+        .arg(&png)
+        .args(["--at", "1.2", "--size", "320x180", "--no-labels"])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(&bytes[1..4], b"PNG");
+    let dir = temp("frames");
+    let out = troupe()
+        .args([
+            "run",
+            "scripts/examples/greeting.lua",
+            "--seconds",
+            "1",
+            "--every",
+            "50",
+            "--size",
+            "160x90",
+            "--frames",
+        ])
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    // Ticks 0, 50 and 100 of one second at 100 Hz.
+    assert!(dir.join("frame_000002.png").is_file());
+    assert!(!dir.join("frame_000003.png").exists());
+    let out = troupe()
+        .args([
+            "render",
+            "scripts/examples/tableau.lua",
+            "x.png",
+            "--at",
+            "-1",
+        ])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+}
