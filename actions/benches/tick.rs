@@ -94,6 +94,34 @@ fn lua_tick(c: &mut Criterion) {
         });
     }
     group.finish();
+
+    // The script phase alone (handlers and behavior resumes), per actor-tick.
+    let mut group = c.benchmark_group("scripts phase/1000 Lua behaviors");
+    group.throughput(Throughput::Elements(ACTORS as u64));
+    group.sample_size(20);
+    let mut d = Director::new(
+        SceneConfig::default(),
+        action_kinds(),
+        ScriptLimits::default(),
+    )
+    .unwrap();
+    d.load_str(BEHAVIOR, "bench.lua").unwrap();
+    for _ in 0..100 {
+        d.tick();
+    }
+    group.bench_function("1 thread", |b| {
+        b.iter_custom(|iters| {
+            let mut scripts = std::time::Duration::ZERO;
+            for _ in 0..iters {
+                let start = std::time::Instant::now();
+                d.run_scripts();
+                scripts += start.elapsed();
+                d.step_scene();
+            }
+            scripts
+        })
+    });
+    group.finish();
 }
 
 criterion_group!(benches, keyframe_tick, lua_tick);
