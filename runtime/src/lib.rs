@@ -7,7 +7,10 @@
 pub mod action;
 pub mod blend;
 pub mod error;
+pub mod ik;
+pub mod jacobian;
 pub mod kinematics;
+pub mod linalg;
 pub mod lua;
 pub mod pacing;
 pub mod parallel;
