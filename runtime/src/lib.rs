@@ -18,6 +18,7 @@ pub mod record;
 pub mod scene;
 pub mod scheduler;
 pub mod scope;
+pub mod self_collision;
 pub mod sequence;
 pub mod skeleton;
 pub mod solid;
