@@ -9,6 +9,7 @@
 
 pub mod api;
 pub mod kinds;
+pub mod settings;
 
 use crate::action::{ActionId, Event, Status};
 use crate::error::{Error, Result};
