@@ -1,5 +1,6 @@
 //! The `troupe` command line.
 
+mod export;
 mod run;
 mod scenario;
 mod templates;
@@ -26,6 +27,8 @@ enum Command {
     Run(run::RunArgs),
     /// Run Lua scenario tests (default scripts/tests/).
     Test(scenario::TestArgs),
+    /// Export a body template to another format (URDF).
+    Export(export::ExportArgs),
 }
 
 fn main() -> ExitCode {
@@ -43,6 +46,7 @@ fn main() -> ExitCode {
         Command::Templates(args) => templates::run(args),
         Command::Run(args) => run::run(args),
         Command::Test(args) => scenario::run(args),
+        Command::Export(args) => export::run(args),
     };
     match result {
         Ok(code) => code,
