@@ -63,7 +63,8 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
                 mass: a.mass.unwrap_or(d.mass),
             })?;
             let text = urdf(&skeleton, a.fixed_root);
-            std::fs::write(&a.out, &text).with_context(|| format!("writing {}", a.out.display()))?;
+            std::fs::write(&a.out, &text)
+                .with_context(|| format!("writing {}", a.out.display()))?;
             eprintln!(
                 "wrote {} ({} joints, {} links)",
                 a.out.display(),
