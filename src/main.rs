@@ -1,5 +1,6 @@
 //! The `troupe` command line.
 
+mod export;
 mod run;
 mod scenario;
 mod seq;
@@ -40,6 +41,8 @@ enum Command {
     View(view::ViewArgs),
     /// Render actors in given poses to one PNG.
     Snapshot(view::SnapshotArgs),
+    /// Export a body template to another format (URDF).
+    Export(export::ExportArgs),
 }
 
 fn main() -> ExitCode {
@@ -67,6 +70,7 @@ fn main() -> ExitCode {
         Command::Seq(args) => seq::run(args),
         Command::View(args) => view::run(args),
         Command::Snapshot(args) => view::snapshot(args),
+        Command::Export(args) => export::run(args),
     };
     match result {
         Ok(code) => code,

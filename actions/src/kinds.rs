@@ -1,10 +1,18 @@
 //! The action kinds this crate adds to Lua: one registration per kind.
 
 use crate::keyframe::Keyframe;
-use mlua::{MultiValue, Value};
-use troupe_runtime::lua::api::{load_sequence, lua_err_message, SequenceRef};
-use troupe_runtime::lua::kinds::{opt_bool, ActionKind, ActionKinds, BuildContext, CommonOptions};
-use troupe_runtime::{ActionSpec, Generator};
+use crate::look_at::LookAt;
+use crate::reach::{Reach, ReachSpec, Target};
+use mlua::{MultiValue, Table, Value};
+use troupe_runtime::glam::{DQuat, DVec3, EulerRot};
+use troupe_runtime::jacobian::{ancestor_dofs, scope_dofs_moving, Effector};
+use troupe_runtime::lua::api::{
+    load_sequence, lua_err_message, vec3, ActorRef, ObjectRef, SequenceRef,
+};
+use troupe_runtime::lua::kinds::{
+    opt_bool, opt_string, ActionKind, ActionKinds, BuildContext, CommonOptions,
+};
+use troupe_runtime::{ActionSpec, Generator, Scope};
 
 /// Every action kind implemented here, ready for a [`troupe_runtime::lua::Director`].
 pub fn action_kinds() -> ActionKinds {
@@ -15,6 +23,18 @@ pub fn action_kinds() -> ActionKinds {
     });
     // Dynamics: simulate, servo, track.
     crate::dynamics::register(&mut kinds);
+    kinds.register(ActionKind {
+        method: "reach",
+        build: build_reach,
+    });
+    kinds.register(ActionKind {
+        method: "ik",
+        build: build_ik,
+    });
+    kinds.register(ActionKind {
+        method: "look_at",
+        build: build_look_at,
+    });
     kinds
 }
 
@@ -60,4 +80,273 @@ fn build_play(
         .map_err(|e| lua_err_message(format!("play: {e}")))?;
     let spec = common.spec("keyframe", generator.scope());
     Ok((Box::new(generator), spec))
+}
+
+/// The single table argument of `reach`, `ik` and `look_at`.
+fn options_table(method: &str, args: MultiValue) -> mlua::Result<Table> {
+    let mut args = args.into_iter();
+    match (args.next(), args.next()) {
+        (Some(Value::Table(t)), None) => Ok(t),
+        (first, _) => Err(lua_err_message(format!(
+            "{method}: expects one table of options, got {}",
+            first.map(|v| v.type_name()).unwrap_or("nothing")
+        ))),
+    }
+}
+
+/// Reads a target: an object, an actor (its root), `{actor = A, joint = NAME[, offset =
+/// {x, y, z}]}` or a point `{x, y, z}`.
+fn parse_target(ctx: &BuildContext, method: &str, value: Value) -> mlua::Result<Target> {
+    match value {
+        Value::Nil => Err(lua_err_message(format!("{method}: `target` is required"))),
+        Value::UserData(u) => {
+            if let Ok(o) = u.borrow::<ObjectRef>() {
+                let i = o.0;
+                return Ok(Target::Object(
+                    ctx.with_scene(|s| s.objects()[i].name.clone())?,
+                ));
+            }
+            if let Ok(a) = u.borrow::<ActorRef>() {
+                let i = a.0;
+                return Ok(Target::Joint {
+                    actor: ctx.with_scene(|s| s.actors()[i].name.clone())?,
+                    joint: "HumanoidRoot".into(),
+                    offset: DVec3::ZERO,
+                });
+            }
+            Err(lua_err_message(format!(
+                "{method}: `target` must be an object, an actor, {{actor=…, joint=…}} or {{x, y, z}}"
+            )))
+        }
+        Value::Table(t) => {
+            let actor: Value = t.get("actor")?;
+            if actor.is_nil() {
+                return Ok(Target::Point(vec3(
+                    &Value::Table(t),
+                    &format!("{method}: target"),
+                )?));
+            }
+            let index = match actor {
+                Value::UserData(u) => u
+                    .borrow::<ActorRef>()
+                    .map(|a| a.0)
+                    .map_err(|_| lua_err_message(format!("{method}: target.actor must be an actor")))?,
+                Value::String(name) => {
+                    let name = name.to_str()?.to_string();
+                    ctx.with_scene(|s| s.actor_index(&name))?
+                        .map_err(|e| lua_err_message(format!("{method}: target: {e}")))?
+                }
+                other => {
+                    return Err(lua_err_message(format!(
+                        "{method}: target.actor must be an actor or a name, got {}",
+                        other.type_name()
+                    )))
+                }
+            };
+            let joint = opt_string(&t, method, "joint")?
+                .ok_or_else(|| lua_err_message(format!("{method}: target.joint is required")))?;
+            let (actor, known) = ctx.with_scene(|s| {
+                let a = &s.actors()[index];
+                (a.name.clone(), a.skeleton.joint(&joint).map(|_| ()))
+            })?;
+            known.map_err(|e| lua_err_message(format!("{method}: target: {e}")))?;
+            let offset: Value = t.get("offset")?;
+            let offset = if offset.is_nil() {
+                DVec3::ZERO
+            } else {
+                vec3(&offset, &format!("{method}: target.offset"))?
+            };
+            Ok(Target::Joint {
+                actor,
+                joint,
+                offset,
+            })
+        }
+        other => Err(lua_err_message(format!(
+            "{method}: `target` must be an object, an actor, {{actor=…, joint=…}} or {{x, y, z}}, got {}",
+            other.type_name()
+        ))),
+    }
+}
+
+/// Reads `orientation = {x, y, z}` (Euler degrees, applied Y, X, Z, as object rotations).
+fn parse_orientation(method: &str, t: &Table) -> mlua::Result<Option<DQuat>> {
+    let v: Value = t.get("orientation")?;
+    if v.is_nil() {
+        return Ok(None);
+    }
+    let r = vec3(
+        &v,
+        &format!("{method}: orientation (degrees about x, y, z)"),
+    )?;
+    Ok(Some(DQuat::from_euler(
+        EulerRot::YXZ,
+        r.y.to_radians(),
+        r.x.to_radians(),
+        r.z.to_radians(),
+    )))
+}
+
+/// Reads `via = {{x, y, z}, …}`.
+fn parse_via(method: &str, t: &Table) -> mlua::Result<Vec<DVec3>> {
+    match t.get::<Value>("via")? {
+        Value::Nil => Ok(Vec::new()),
+        Value::Table(list) => list
+            .sequence_values::<Value>()
+            .enumerate()
+            .map(|(i, v)| vec3(&v?, &format!("{method}: via[{}]", i + 1)))
+            .collect(),
+        other => Err(lua_err_message(format!(
+            "{method}: `via` must be a list of points, got {}",
+            other.type_name()
+        ))),
+    }
+}
+
+/// The shared part of `reach` and `ik`.
+fn build_reaching(
+    ctx: &BuildContext,
+    method: &str,
+    t: &Table,
+    common: CommonOptions,
+    effector: Effector,
+    natural: Scope,
+    collision_default: bool,
+) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
+    let target = parse_target(ctx, method, t.get("target")?)?;
+    let self_collision = opt_bool(t, method, "self_collision")?
+        .or_else(|| troupe_runtime::lua::settings::self_collision(ctx.lua, ctx.actor))
+        .unwrap_or(collision_default);
+    let scope = common.scope.unwrap_or(natural);
+    let dofs = scope_dofs_moving(&ctx.skeleton, &scope, effector.joint);
+    if dofs.is_empty() {
+        return Err(lua_err_message(format!(
+            "{method}: the scope has no DOF that moves the effector"
+        )));
+    }
+    let spec = ReachSpec {
+        effector,
+        target,
+        orientation: parse_orientation(method, t)?,
+        duration: common.duration.unwrap_or(1.0),
+        via: parse_via(method, t)?,
+        self_collision,
+        dofs,
+    };
+    let generator =
+        Reach::new(&ctx.skeleton, spec).map_err(|e| lua_err_message(format!("{method}: {e}")))?;
+    let natural_scope: Scope = generator.dofs().iter().copied().collect();
+    let mut action = common.spec("reach", natural_scope);
+    action.kind = method.to_string();
+    // The generator decides when it is done (and whether it failed).
+    action.duration = None;
+    Ok((Box::new(generator), action))
+}
+
+/// `actor:reach{ hand = "right"|"left", target = …, orientation = {x, y, z}, via = {…},
+/// self_collision = bool, <common options> }`.
+fn build_reach(
+    ctx: &BuildContext,
+    args: MultiValue,
+) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
+    let t = options_table("reach", args)?;
+    let common = CommonOptions::parse(
+        ctx,
+        "reach",
+        Some(&t),
+        &["hand", "target", "orientation", "via", "self_collision"],
+    )?;
+    let side = match opt_string(&t, "reach", "hand")?.as_deref() {
+        None | Some("right") => "r",
+        Some("left") => "l",
+        Some(other) => {
+            return Err(lua_err_message(format!(
+                "reach: `hand` must be \"right\" or \"left\", got \"{other}\""
+            )))
+        }
+    };
+    let skeleton = &ctx.skeleton;
+    let err = |e: troupe_runtime::Error| lua_err_message(format!("reach: {e}"));
+    let wrist = skeleton.joint(&format!("{side}_wrist")).map_err(err)?;
+    let hand_name = format!("{side}_hand");
+    let point = skeleton
+        .solids()
+        .iter()
+        .find(|(_, s)| s.name == hand_name)
+        .map(|(_, s)| s.center)
+        .unwrap_or(DVec3::ZERO);
+    let natural = skeleton
+        .scope(if side == "r" { "right_arm" } else { "left_arm" })
+        .map_err(err)?;
+    build_reaching(
+        ctx,
+        "reach",
+        &t,
+        common,
+        Effector {
+            joint: wrist,
+            point,
+        },
+        natural,
+        true,
+    )
+}
+
+/// `actor:ik{ effector = JOINT, point = {x, y, z}, target = …, orientation = …, via = …,
+/// self_collision = bool, <common options> }`.
+fn build_ik(
+    ctx: &BuildContext,
+    args: MultiValue,
+) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
+    let t = options_table("ik", args)?;
+    let common = CommonOptions::parse(
+        ctx,
+        "ik",
+        Some(&t),
+        &[
+            "effector",
+            "point",
+            "target",
+            "orientation",
+            "via",
+            "self_collision",
+        ],
+    )?;
+    let name = opt_string(&t, "ik", "effector")?
+        .ok_or_else(|| lua_err_message("ik: `effector` (a joint name) is required"))?;
+    let skeleton = &ctx.skeleton;
+    let joint = skeleton
+        .joint(&name)
+        .map_err(|e| lua_err_message(format!("ik: {e}")))?;
+    let point: Value = t.get("point")?;
+    let point = if point.is_nil() {
+        DVec3::ZERO
+    } else {
+        vec3(&point, "ik: point")?
+    };
+    let global = skeleton.scope("global").unwrap_or(Scope::EMPTY);
+    let natural = ancestor_dofs(skeleton, joint).difference(&global);
+    build_reaching(
+        ctx,
+        "ik",
+        &t,
+        common,
+        Effector { joint, point },
+        natural,
+        false,
+    )
+}
+
+/// `actor:look_at{ target = …, <common options> }`.
+fn build_look_at(
+    ctx: &BuildContext,
+    args: MultiValue,
+) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
+    let t = options_table("look_at", args)?;
+    let common = CommonOptions::parse(ctx, "look_at", Some(&t), &["target"])?;
+    let target = parse_target(ctx, "look_at", t.get("target")?)?;
+    let generator =
+        LookAt::new(&ctx.skeleton, target).map_err(|e| lua_err_message(format!("look_at: {e}")))?;
+    let natural: Scope = generator.scope_dofs().into_iter().collect();
+    Ok((Box::new(generator), common.spec("look_at", natural)))
 }

@@ -216,6 +216,9 @@ impl UserData for ActorRef {
             set.sort_by_key(|(d, _)| *d);
             st.scene.set_dofs(this.0, &set).map_err(lua_err)
         });
+        methods.add_method("set", |lua, this, t: Table| {
+            super::settings::set(lua, this.0, &t)
+        });
         methods.add_method("on", |lua, this, (event, f): (String, Function)| {
             const EVENTS: [&str; 4] = [
                 "action_started",

@@ -10,6 +10,7 @@
 pub mod api;
 mod dynamics;
 pub mod kinds;
+pub mod settings;
 
 use crate::action::{ActionId, Event, Status};
 use crate::error::{Error, Result};

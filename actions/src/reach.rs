@@ -1,0 +1,307 @@
+//! The reach generator (thesis 4.3.3, 4.6): an end effector follows a smooth path to a goal
+//! by inverse kinematics, through optional temporary goals (`via`, 4.6.3), with
+//! self-collision correction (4.6.2) as the IK secondary task.
+//!
+//! The path from the effector's start to the goal is a polyline through the via points;
+//! each segment is travelled with the quintic `s(τ) = 10τ³ − 15τ⁴ + 6τ⁵` (zero velocity
+//! and acceleration at both ends), its share of the duration proportional to its length.
+//! The goal is read from the world every tick, so a moving object or joint is followed.
+//! At the end, the action completes when the effector is within [`POSITION_TOLERANCE`] (and
+//! [`ORIENTATION_TOLERANCE`] when an orientation is asked) and fails otherwise, with the
+//! residual distance in the reason.
+
+use std::sync::Arc;
+use troupe_runtime::glam::{DQuat, DVec3};
+use troupe_runtime::ik::{Goal, IkOptions, IkSolver, IkTask};
+use troupe_runtime::jacobian::Effector;
+use troupe_runtime::self_collision::{BodySensors, CollisionAvoidance};
+use troupe_runtime::{DofWriter, Generator, GeneratorContext, Skeleton, Step, World};
+
+/// A reach completes when the effector ends this close to its goal (metres).
+pub const POSITION_TOLERANCE: f64 = 1e-3;
+/// … and, with an orientation goal, within this angle (radians, 1°).
+pub const ORIENTATION_TOLERANCE: f64 = std::f64::consts::PI / 180.0;
+/// Self-collision correction keeps sensors this far from the body (metres).
+pub const COLLISION_MARGIN: f64 = 0.01;
+
+/// Where a target is: read from the world each tick.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Target {
+    /// A fixed world point.
+    Point(DVec3),
+    /// The centre of the object called so.
+    Object(String),
+    /// A joint (plus an offset in its frame) of the actor called so.
+    Joint {
+        /// The actor's name.
+        actor: String,
+        /// The joint's name.
+        joint: String,
+        /// Offset in the joint's frame.
+        offset: DVec3,
+    },
+}
+
+impl Target {
+    /// The target's world position now, or why it cannot be found.
+    pub fn position(&self, world: &World) -> Result<DVec3, String> {
+        let p = match self {
+            Target::Point(p) => *p,
+            Target::Object(name) => world
+                .objects
+                .iter()
+                .find(|o| &o.name == name)
+                .map(|o| o.position)
+                .ok_or_else(|| format!("target object `{name}` is gone"))?,
+            Target::Joint {
+                actor,
+                joint,
+                offset,
+            } => {
+                let a = world
+                    .actor_index(actor)
+                    .filter(|&a| a < world.states.len())
+                    .ok_or_else(|| format!("target actor `{actor}` is gone"))?;
+                let j = world.actors[a]
+                    .skeleton
+                    .joint(joint)
+                    .map_err(|e| e.to_string())?;
+                world.states[a]
+                    .globals
+                    .get(j)
+                    .ok_or_else(|| format!("target actor `{actor}` has no joint `{joint}`"))?
+                    .transform_point(*offset)
+            }
+        };
+        if p.is_finite() {
+            Ok(p)
+        } else {
+            Err("the target position is not finite".into())
+        }
+    }
+}
+
+/// What a reach is asked to do.
+#[derive(Clone, Debug)]
+pub struct ReachSpec {
+    /// The point that reaches.
+    pub effector: Effector,
+    /// The goal.
+    pub target: Target,
+    /// Goal orientation of the effector's joint frame (world).
+    pub orientation: Option<DQuat>,
+    /// Seconds to reach the goal.
+    pub duration: f64,
+    /// Temporary goals on the way (world points).
+    pub via: Vec<DVec3>,
+    /// Whether self-collision correction is on.
+    pub self_collision: bool,
+    /// The DOFs IK moves (all must move the effector).
+    pub dofs: Vec<usize>,
+}
+
+/// The reach generator.
+pub struct Reach {
+    spec: ReachSpec,
+    solver: IkSolver,
+    sensors: Option<Arc<BodySensors>>,
+    effector_sensor: Option<usize>,
+    q: Vec<f64>,
+    started: bool,
+    start: DVec3,
+    start_rotation: DQuat,
+    lengths: Vec<f64>,
+}
+
+/// The quintic ease `10τ³ − 15τ⁴ + 6τ⁵` on [0, 1].
+pub fn quintic(t: f64) -> f64 {
+    let t = t.clamp(0.0, 1.0);
+    t * t * t * (10.0 + t * (-15.0 + 6.0 * t))
+}
+
+impl Reach {
+    /// A reach on `skeleton`. Fails when the DOF list is empty or invalid, the duration is
+    /// not positive, or a via point is not finite.
+    pub fn new(skeleton: &Skeleton, spec: ReachSpec) -> Result<Reach, String> {
+        if !(spec.duration.is_finite() && spec.duration > 0.0) {
+            return Err(format!(
+                "duration must be a finite number of seconds > 0, got {}",
+                spec.duration
+            ));
+        }
+        if spec.via.iter().any(|v| !v.is_finite()) {
+            return Err("via points must be finite".into());
+        }
+        if let Target::Point(p) = &spec.target {
+            if !p.is_finite() {
+                return Err("the target position is not finite".into());
+            }
+        }
+        let options = IkOptions {
+            max_iterations: 30,
+            ..IkOptions::default()
+        };
+        let solver =
+            IkSolver::new(skeleton, spec.dofs.clone(), options).map_err(|e| e.to_string())?;
+        let (sensors, effector_sensor) = if spec.self_collision {
+            let s = BodySensors::new(skeleton).map_err(|e| e.to_string())?;
+            // The sensor riding on the effector's joint (the hand) follows the main task.
+            let own = s
+                .sensors()
+                .iter()
+                .position(|x| x.joint == spec.effector.joint);
+            (Some(Arc::new(s)), own)
+        } else {
+            (None, None)
+        };
+        Ok(Reach {
+            spec,
+            solver,
+            sensors,
+            effector_sensor,
+            q: Vec::new(),
+            started: false,
+            start: DVec3::ZERO,
+            start_rotation: DQuat::IDENTITY,
+            lengths: Vec::new(),
+        })
+    }
+
+    /// The DOFs the reach moves.
+    pub fn dofs(&self) -> &[usize] {
+        self.solver.dofs()
+    }
+
+    /// The point on the path at `t` seconds for the goal now at `goal`.
+    fn path(&self, t: f64, goal: DVec3) -> DVec3 {
+        let mut points = Vec::with_capacity(self.spec.via.len() + 2);
+        points.push(self.start);
+        points.extend_from_slice(&self.spec.via);
+        points.push(goal);
+        let total: f64 = self.lengths.iter().sum();
+        let tau = (t / self.spec.duration).clamp(0.0, 1.0);
+        if total <= 1e-12 || points.len() == 2 {
+            return self.start.lerp(goal, quintic(tau));
+        }
+        let mut begin = 0.0;
+        for (i, len) in self.lengths.iter().enumerate() {
+            let share = len / total;
+            if tau <= begin + share || i + 1 == self.lengths.len() {
+                let local = if share > 0.0 {
+                    (tau - begin) / share
+                } else {
+                    1.0
+                };
+                return points[i].lerp(points[i + 1], quintic(local));
+            }
+            begin += share;
+        }
+        goal
+    }
+}
+
+impl Generator for Reach {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        let goal = self.spec.target.position(ctx.world)?;
+        self.q = ctx.posture.q.clone();
+        self.start = self.spec.effector.position(&ctx.posture.globals);
+        self.start_rotation = self.spec.effector.rotation(&ctx.posture.globals);
+        let mut prev = self.start;
+        self.lengths.clear();
+        for p in self.spec.via.iter().chain(std::iter::once(&goal)) {
+            self.lengths.push((*p - prev).length());
+            prev = *p;
+        }
+        self.started = true;
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        if !self.started {
+            if let Err(e) = self.start(ctx) {
+                return Step::Failed(e);
+            }
+        }
+        let goal = match self.spec.target.position(ctx.world) {
+            Ok(g) => g,
+            Err(e) => return Step::Failed(e),
+        };
+        // The body as it is, with this action's own DOFs as it last solved them.
+        let dofs = self.solver.dofs().to_vec();
+        let saved: Vec<f64> = dofs.iter().map(|&d| self.q[d]).collect();
+        self.q.copy_from_slice(&ctx.posture.q);
+        for (&d, v) in dofs.iter().zip(saved) {
+            self.q[d] = v;
+        }
+        let t = ctx.local_time;
+        let finishing = t + 0.5 * ctx.dt >= self.spec.duration;
+        let mut point = self.path(t, goal);
+        if let (Some(sensors), Some(own)) = (&self.sensors, self.effector_sensor) {
+            // 4.6.3: a path point inside the body becomes a temporary goal outside it.
+            point = sensors.push_out(
+                ctx.skeleton,
+                &ctx.posture.globals,
+                own,
+                point
+                    + (sensors.center(own, &ctx.posture.globals)
+                        - self.spec.effector.position(&ctx.posture.globals)),
+                COLLISION_MARGIN,
+            ) - (sensors.center(own, &ctx.posture.globals)
+                - self.spec.effector.position(&ctx.posture.globals));
+        }
+        let orientation = self.spec.orientation.map(|r| {
+            let s = quintic(t / self.spec.duration);
+            self.start_rotation.slerp(r, s)
+        });
+        let task = IkTask {
+            effector: self.spec.effector,
+            goal: Goal {
+                position: point,
+                orientation,
+            },
+            priority: 0,
+        };
+        let mut options = *self.solver.options();
+        options.max_iterations = if finishing { 200 } else { 30 };
+        if self.solver.set_options(options).is_err() {
+            return Step::Failed("invalid IK options".into());
+        }
+        let skip: Vec<usize> = self.effector_sensor.into_iter().collect();
+        let report = match &self.sensors {
+            Some(sensors) => {
+                let mut avoid = CollisionAvoidance::new(sensors, COLLISION_MARGIN, skip);
+                self.solver
+                    .solve(ctx.skeleton, &mut self.q, &[task], None, Some(&mut avoid))
+            }
+            None => self
+                .solver
+                .solve(ctx.skeleton, &mut self.q, &[task], None, None),
+        };
+        if let Err(e) = report {
+            return Step::Failed(e.to_string());
+        }
+        for &d in &dofs {
+            out.set(d, self.q[d]);
+        }
+        if !finishing {
+            return Step::Running;
+        }
+        let g = self.solver.globals();
+        let distance = (self.spec.effector.position(g) - goal).length();
+        let angle = self.spec.orientation.map_or(0.0, |r| {
+            troupe_runtime::jacobian::rotation_error(self.spec.effector.rotation(g), r).length()
+        });
+        if distance <= POSITION_TOLERANCE && angle <= ORIENTATION_TOLERANCE {
+            Step::Finished
+        } else if distance > POSITION_TOLERANCE {
+            Step::Failed(format!(
+                "target unreachable: the effector stopped {distance:.4} m from it (tolerance {POSITION_TOLERANCE} m)"
+            ))
+        } else {
+            Step::Failed(format!(
+                "orientation unreachable: {:.2}° off (tolerance 1°)",
+                angle.to_degrees()
+            ))
+        }
+    }
+}

@@ -1,0 +1,83 @@
+-- Reaching, inverse kinematics and looking.
+
+local function dist(a, b)
+  return math.sqrt((a[1] - b[1])^2 + (a[2] - b[2])^2 + (a[3] - b[3])^2)
+end
+
+test("reach a cup: the hand ends on it and the action completes", function()
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {-0.25, 1.1, 0.4} }
+  local ann = troupe.actor{ name = "ann" }
+  local r
+  ann:behave(function(self)
+    r = self:reach{ hand = "right", target = cup, duration = 1 }
+    r:wait()
+  end)
+  expect(run_until(function() return r ~= nil and r.status == "completed" end, 3), "completed: " .. tostring(r and r.error))
+  expect(r.kind == "reach", "kind is reach")
+end)
+
+test("reach with via points and an orientation", function()
+  local ann = troupe.actor{ name = "ann" }
+  local r = ann:reach{ hand = "left", target = {0.25, 1.2, 0.35}, via = {{0.4, 1.0, 0.2}},
+                       orientation = {-90, 0, 0}, duration = 1.2 }
+  expect(run_until(function() return r.status == "completed" end, 3), "completed: " .. tostring(r.error))
+end)
+
+test("an unreachable target fails with the distance in error", function()
+  local ann = troupe.actor{ name = "ann" }
+  local r = ann:reach{ target = {0, 1.2, 3}, duration = 0.5 }
+  expect(run_until(function() return r.status == "failed" end, 2), "failed")
+  expect(r.error:find("m from it") ~= nil, r.error)
+end)
+
+test("ik moves any joint: the left index tip to a point", function()
+  local ann = troupe.actor{ name = "ann" }
+  local goal = {0.2, 1.3, 0.3}
+  local a = ann:ik{ effector = "l_index3", target = goal, scope = "left_arm+spine", duration = 0.8 }
+  expect(run_until(function() return a.status == "completed" end, 2), "completed: " .. tostring(a.error))
+  expect(dist(ann:joint_position("l_index3"), goal) < 0.001, "within a millimetre")
+end)
+
+test("reach another actor's hand", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.7}, facing = 180 }
+  bob:pose{ l_shoulder_flexion = 1.2 }
+  local r = ann:reach{ target = { actor = bob, joint = "l_wrist" }, duration = 1 }
+  expect(run_until(function() return r.status == "completed" end, 3), "completed: " .. tostring(r.error))
+end)
+
+test("look_at turns the head toward a point and keeps running", function()
+  local ann = troupe.actor{ name = "ann" }
+  local l = ann:look_at{ target = {1, 1.6, 1} }
+  run(1.5)
+  expect(l.status == "active", "still active")
+  expect(ann:dof("skullbase_torsion") > 0.1, "head turned left")
+  l:cancel()
+  expect(run_until(function() return l.status == "cancelled" end, 1), "cancelled")
+end)
+
+test("self-collision is a per-actor setting", function()
+  local ann = troupe.actor{ name = "ann" }
+  ann:set{ self_collision = false }
+  local ok, err = pcall(function() ann:set{ self_colision = true } end)
+  expect(not ok and tostring(err):find("unknown setting `self_colision`") ~= nil, tostring(err))
+  ok, err = pcall(function() ann:set{ self_collision = "yes" } end)
+  expect(not ok and tostring(err):find("boolean") ~= nil, tostring(err))
+end)
+
+test("bad targets are errors, not crashes", function()
+  local ann = troupe.actor{ name = "ann" }
+  local function fails(f, needle)
+    local ok, err = pcall(f)
+    expect(not ok, "should fail: " .. needle)
+    expect(tostring(err):find(needle, 1, true) ~= nil, "error mentions `" .. needle .. "`: " .. tostring(err))
+  end
+  fails(function() ann:reach{ target = {0/0, 1, 0} } end, "finite")
+  fails(function() ann:reach{ } end, "`target` is required")
+  fails(function() ann:reach{ hand = "middle", target = {0, 1, 0} } end, "hand")
+  fails(function() ann:ik{ effector = "tail", target = {0, 1, 0} } end, "unknown joint `tail`")
+  fails(function() ann:look_at{ target = { actor = "nobody", joint = "skullbase" } } end, "nobody")
+  fails(function() ann:look_at{ target = { actor = ann, joint = "antenna" } } end, "antenna")
+  fails(function() ann:reach{ target = {0, 1, 0}, via = {{1, 2}} } end, "via[1]")
+end)
