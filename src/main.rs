@@ -37,7 +37,7 @@ enum Command {
     Test(scenario::TestArgs),
     /// Inspect, convert and edit motion sequences (.trk, BVH, glTF out); plot curves.
     Seq(seq::SeqArgs),
-    /// Play a recording (.trk, .bvh) on actors, in a window or headless to PNG frames.
+    /// Play a recording (.trk, .bvh, .gltf) on actors, in a window or headless to PNG frames.
     View(view::ViewArgs),
     /// Render actors in given poses to one PNG.
     Snapshot(view::SnapshotArgs),

@@ -16,15 +16,15 @@ use troupe_viewer::{
 /// Options of `troupe view`.
 #[derive(Args)]
 #[command(
-    about = "Play a recording (.trk, .bvh) on actors: in a window, or headless into PNG frames",
-    long_about = "Play a recording (.trk, .bvh) on actors. With a display (DISPLAY or \
+    about = "Play a recording (.trk, .bvh, .gltf) on actors: in a window, or headless into PNG frames",
+    long_about = "Play a recording (.trk, .bvh, .gltf) on actors. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
         actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
-    /// The recording to play (.trk, possibly several actors; or .bvh).
+    /// The recording to play (.trk, possibly several actors; .bvh; or .gltf written by troupe).
     file: PathBuf,
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
@@ -110,7 +110,7 @@ struct Performer {
 
 /// Reads a recording by its extension: a `.trk` set plays one actor per sequence (on the
 /// template and height stored in its metadata, else `template`); a `.bvh` is retargeted
-/// onto `template`.
+/// onto `template`; a `.gltf` written by troupe is read back onto `template`.
 fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
     let ext = path
         .extension()
@@ -135,10 +135,14 @@ fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
                 sequence,
             })
             .collect()),
-        "bvh" => {
+        "bvh" | "gltf" => {
             let t = troupe_runtime::template(template)?;
             let skeleton = t.instantiate(t.default_params())?;
-            let sequence = troupe_runtime::retarget::load_sequence_for(&skeleton, path)?;
+            let sequence = if ext == "bvh" {
+                troupe_runtime::retarget::load_sequence_for(&skeleton, path)?
+            } else {
+                troupe_runtime::gltf_import::read_gltf_motion(path, &skeleton)?
+            };
             Ok(vec![Performer {
                 name: sequence.name.clone(),
                 sequence,
@@ -147,7 +151,7 @@ fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
             }])
         }
         _ => bail!(
-            "{}: cannot play `.{ext}` files; supported recordings: .trk, .bvh",
+            "{}: cannot play `.{ext}` files; supported recordings: .trk, .bvh, .gltf",
             path.display()
         ),
     }
@@ -258,7 +262,7 @@ fn write_frames(
         writer.tick(scene)?;
     }
     println!(
-        "wrote {} frames ({} s) to {} on {}",
+        "wrote {} frames ({:.2} s) to {} on {}",
         writer.written(),
         seconds,
         dir.display(),

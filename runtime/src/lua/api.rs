@@ -406,19 +406,22 @@ pub fn resolve_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
     }
 }
 
-/// Loads a sequence file once per path (and per skeleton for BVH): a `.trk` as it is, a
-/// `.bvh` retargeted onto `skeleton` (the default adult when `None`) by
-/// [`crate::retarget::load_sequence_for`].
+/// Loads a sequence file once per path (and per skeleton for BVH and glTF): a `.trk` as
+/// it is, a `.bvh` retargeted onto `skeleton` (the default adult when `None`) by
+/// [`crate::retarget::load_sequence_for`], a troupe `.gltf` read back onto `skeleton`.
 pub fn load_sequence(
     lua: &Lua,
     path: &str,
     skeleton: Option<&Arc<Skeleton>>,
 ) -> mlua::Result<Arc<Sequence>> {
     let full = resolve_path(&stage(lua)?.base_dir, path);
-    let is_bvh = full
+    let ext = full
         .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("bvh"));
-    let skeleton = match (is_bvh, skeleton) {
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names.
+    let bound_to_body = ext == "bvh" || ext == "gltf";
+    let skeleton = match (bound_to_body, skeleton) {
         (false, _) => None,
         (true, Some(s)) => Some(s.clone()),
         (true, None) => {
@@ -436,6 +439,7 @@ pub fn load_sequence(
         return Ok(s.clone());
     }
     let seq = match &skeleton {
+        Some(skel) if ext == "gltf" => crate::gltf_import::read_gltf_motion(&full, skel),
         Some(skel) => crate::retarget::load_sequence_for(skel, &full),
         None => crate::trk::read_trk(&full),
     };
