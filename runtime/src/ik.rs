@@ -654,17 +654,10 @@ impl IkSolver {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::template::{template, TemplateParams};
     use std::time::Instant;
 
     fn adult() -> Skeleton {
-        template("adult")
-            .unwrap()
-            .instantiate(TemplateParams {
-                height: 1.75,
-                mass: 70.0,
-            })
-            .unwrap()
+        crate::template::default_skeleton("adult").unwrap()
     }
 
     struct Rng(u64);

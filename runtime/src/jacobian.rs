@@ -7,7 +7,7 @@
 //! columns.
 
 use crate::error::{Error, Result};
-use crate::kinematics::forward_kinematics;
+use crate::kinematics::{dof_transform, forward_kinematics};
 use crate::linalg::Mat;
 use crate::scope::Scope;
 use crate::skeleton::{DofKind, Skeleton};
@@ -54,19 +54,6 @@ pub struct DofAxis {
     pub axis: DVec3,
     /// Rotation or translation.
     pub kind: DofKind,
-}
-
-/// The local transform of one DOF at `value` (the same formula as forward kinematics).
-#[inline]
-fn dof_transform(kind: DofKind, axis: DVec3, value: f64) -> Transform {
-    match kind {
-        DofKind::Rotation => {
-            let (s, c) = (value * 0.5).sin_cos();
-            let v = axis * s;
-            Transform::new(DQuat::from_xyzw(v.x, v.y, v.z, c), DVec3::ZERO)
-        }
-        DofKind::Translation => Transform::from_translation(axis * value),
-    }
 }
 
 /// Computes the world axis of every DOF in `dofs` into `out` (cleared first), for posture
@@ -258,16 +245,9 @@ pub fn rotation_error(from: DQuat, to: DQuat) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::template::{template, TemplateParams};
 
     fn adult() -> Skeleton {
-        template("adult")
-            .unwrap()
-            .instantiate(TemplateParams {
-                height: 1.75,
-                mass: 70.0,
-            })
-            .unwrap()
+        crate::template::default_skeleton("adult").unwrap()
     }
 
     fn random_posture(s: &Skeleton, seed: &mut u64) -> Vec<f64> {

@@ -6,7 +6,7 @@ use glam::{DQuat, DVec3};
 
 /// The local transform contributed by one DOF at `value`.
 #[inline]
-fn dof_transform(kind: DofKind, axis: DVec3, value: f64) -> Transform {
+pub fn dof_transform(kind: DofKind, axis: DVec3, value: f64) -> Transform {
     match kind {
         DofKind::Rotation => {
             let (s, c) = (value * 0.5).sin_cos();

@@ -105,6 +105,12 @@ pub fn templates() -> Vec<Template> {
     ]
 }
 
+/// Instantiates template `name` with its default parameters.
+pub fn default_skeleton(name: &str) -> Result<Skeleton> {
+    let t = template(name)?;
+    t.instantiate(t.default_params())
+}
+
 /// Looks up a template by name.
 pub fn template(name: &str) -> Result<Template> {
     templates()
@@ -645,13 +651,7 @@ mod tests {
     use super::*;
 
     fn adult() -> Skeleton {
-        template("adult")
-            .unwrap()
-            .instantiate(TemplateParams {
-                height: 1.75,
-                mass: 70.0,
-            })
-            .unwrap()
+        crate::template::default_skeleton("adult").unwrap()
     }
 
     #[test]

@@ -2,16 +2,9 @@
 
 use super::contact::ContactParams;
 use super::*;
-use crate::template::{template, TemplateParams};
 
 fn adult() -> Skeleton {
-    template("adult")
-        .unwrap()
-        .instantiate(TemplateParams {
-            height: 1.75,
-            mass: 70.0,
-        })
-        .unwrap()
+    crate::template::default_skeleton("adult").unwrap()
 }
 
 /// A small deterministic generator (xorshift64*), uniform in [-1, 1].
