@@ -108,8 +108,15 @@ fn view_plays_a_recording_headless_into_frames() {
 
 #[test]
 fn view_refuses_unknown_formats() {
-    let out = troupe().args(["view", "walk.gltf"]).output().unwrap();
+    let out = troupe().args(["view", "walk.fbx"]).output().unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("supported recordings: .trk"), "{err}");
+    assert!(
+        err.contains("supported recordings: .trk, .bvh, .gltf"),
+        "{err}"
+    );
+    // A known format that is missing names the file.
+    let out = troupe().args(["view", "walk.gltf"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("walk.gltf"));
 }
