@@ -15,12 +15,10 @@ use std::process::ExitCode;
 #[command(name = "troupe", version, about, long_about = None)]
 struct Cli {
     /// Log filter (tracing env-filter syntax), e.g. `info` or `troupe=debug`.
-    #[arg(
-        long,
-        global = true,
-        default_value = "warn,lua=info,wgpu_hal::gles::egl=off"
-    )]
-    log: String,
+    /// Default: warnings, and what scripts print; `troupe test` leaves out the log lines
+    /// of behaviors that fail, since each test's report says what failed.
+    #[arg(long, global = true)]
+    log: Option<String>,
     #[command(subcommand)]
     command: Command,
 }
@@ -29,7 +27,7 @@ struct Cli {
 enum Command {
     /// List the body templates with their DOF counts and scopes.
     Templates(templates::TemplatesArgs),
-    /// Run a Lua scene headless (record postures, write the action timeline).
+    /// Run a Lua scene: headless by default (record, trace, PNG frames), or --view in a window.
     Run(run::RunArgs),
     /// Render a Lua scene at a given time to one PNG (headless).
     Render(run::RenderArgs),
@@ -53,7 +51,11 @@ fn main() -> ExitCode {
         libc::signal(libc::SIGPIPE, libc::SIG_DFL);
     }
     let cli = Cli::parse();
-    let filter = tracing_subscriber::EnvFilter::try_new(&cli.log)
+    let default_log = match cli.command {
+        Command::Test(_) => "warn,lua=info,troupe_runtime::lua=off,wgpu_hal::gles::egl=off",
+        _ => "warn,lua=info,wgpu_hal::gles::egl=off",
+    };
+    let filter = tracing_subscriber::EnvFilter::try_new(cli.log.as_deref().unwrap_or(default_log))
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn"));
     use std::io::IsTerminal;
     tracing_subscriber::fmt()
