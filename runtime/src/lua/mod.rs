@@ -624,11 +624,18 @@ fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
         .app_data_ref::<Stage>()
         .map(|st| st.base_dir.clone())
         .unwrap_or_default();
-    let candidates = [
-        base.join(&rel),
-        base.join("../lib").join(&rel),
-        Path::new(SCRIPT_LIB).join(&rel),
-    ];
+    // The scene's own folder, then the `scripts/lib/` of the project the scene belongs to
+    // (the nearest enclosing `scripts` folder), then `scripts/lib/` of the working folder.
+    let mut candidates = vec![base.join(&rel)];
+    if let Ok(abs) = base.canonicalize() {
+        if let Some(scripts) = abs
+            .ancestors()
+            .find(|a| a.file_name().is_some_and(|n| n == "scripts"))
+        {
+            candidates.push(scripts.join("lib").join(&rel));
+        }
+    }
+    candidates.push(Path::new(SCRIPT_LIB).join(&rel));
     let path = candidates.iter().find(|p| p.is_file()).ok_or_else(|| {
         lua_err(format!(
             "require: module `{name}` not found in the scene's folder or {SCRIPT_LIB}/"
