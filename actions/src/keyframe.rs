@@ -14,6 +14,9 @@ pub struct Keyframe {
     start: f64,
     length: f64,
     looping: bool,
+    /// Whether every bound track has the same key times (sampled motion such as BVH):
+    /// then the segment is found once per tick for all of them.
+    shared_times: bool,
 }
 
 impl Keyframe {
@@ -48,7 +51,14 @@ impl Keyframe {
                 sequence.name
             )));
         }
+        let first = tracks.first().map(|&(_, i, _)| &sequence.tracks()[i]);
+        let shared_times = first.is_some_and(|f| {
+            tracks
+                .iter()
+                .all(|&(_, i, _)| sequence.tracks()[i].same_times(f))
+        });
         Ok(Keyframe {
+            shared_times,
             tracks,
             start: sequence.start(),
             length: sequence.duration(),
@@ -77,13 +87,85 @@ impl Generator for Keyframe {
         }
         let t = self.start + t.min(self.length);
         let tracks = self.sequence.tracks();
-        for (dof, track, cursor) in self.tracks.iter_mut() {
-            out.set(*dof, tracks[*track].value_at(t, cursor));
+        if self.shared_times {
+            let (_, first, cursor) = &mut self.tracks[0];
+            let segment = tracks[*first].locate(t, cursor);
+            for (dof, track, _) in self.tracks.iter() {
+                out.set(*dof, tracks[*track].value_in(segment));
+            }
+        } else {
+            for (dof, track, cursor) in self.tracks.iter_mut() {
+                out.set(*dof, tracks[*track].value_at(t, cursor));
+            }
         }
         if finished {
             Step::Finished
         } else {
             Step::Running
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_runtime::{ActionSpec, ActorDesc, Key, Scene, SceneConfig, Track};
+
+    /// Plays `seq` and checks every tick against direct evaluation of its tracks.
+    fn plays_exactly(seq: Sequence, shared: bool) {
+        let mut scene = Scene::new(SceneConfig::default()).unwrap();
+        let a = scene.add_actor(&ActorDesc::new("ann")).unwrap();
+        let skel = scene.actors()[a].skeleton.clone();
+        let gen = Keyframe::new(&skel, &seq, None, Some(false)).unwrap();
+        assert_eq!(gen.shared_times, shared);
+        scene
+            .start_action(a, ActionSpec::new("keyframe", gen.scope()), Box::new(gen))
+            .unwrap();
+        for tick in 1..=130 {
+            scene.step();
+            let local = (tick - 1) as f64 * scene.dt();
+            for track in seq.tracks() {
+                let d = skel.dof(track.dof()).unwrap();
+                let expected = track.value(local.min(seq.end()));
+                let got = scene.states()[a].q[d];
+                // Scene time and local time may differ in the last bit, and so the values.
+                assert!(
+                    (got - expected).abs() < 1e-12,
+                    "{} at {local}: {got} vs {expected}",
+                    track.dof()
+                );
+            }
+        }
+    }
+
+    fn track(dof: &str, times: &[f64], scale: f64) -> Track {
+        let keys = times
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| Key::new(t, ((i as f64) * 0.7).sin() * scale))
+            .collect();
+        Track::new(dof, keys).unwrap()
+    }
+
+    #[test]
+    fn tracks_on_one_time_base_share_the_segment_search() {
+        let times = [0.0, 0.3, 0.55, 0.9, 1.2];
+        let mut seq = Sequence::new("shared");
+        seq.add_track(track("r_elbow_flexion", &times, 0.5))
+            .unwrap();
+        seq.add_track(track("r_shoulder_flexion", &times, 0.4))
+            .unwrap();
+        seq.add_track(track("vl5_flexion", &times, 0.2)).unwrap();
+        plays_exactly(seq, true);
+    }
+
+    #[test]
+    fn tracks_on_different_times_are_searched_one_by_one() {
+        let mut seq = Sequence::new("mixed");
+        seq.add_track(track("r_elbow_flexion", &[0.0, 0.4, 1.0], 0.5))
+            .unwrap();
+        seq.add_track(track("vl5_flexion", &[0.0, 0.3, 0.6, 1.2], 0.2))
+            .unwrap();
+        plays_exactly(seq, false);
     }
 }

@@ -40,8 +40,19 @@ pub fn forward_kinematics(skeleton: &Skeleton, q: &[f64], globals: &mut [Transfo
         for d in joint.dofs.clone() {
             // Many DOFs (fingers, eyes) sit at zero: their transform is the identity.
             if q[d] != 0.0 {
+                // Compose in place: a rotation DOF only turns the frame, a translation
+                // only moves it (cheaper than a full transform product).
                 let dof = &dofs[d];
-                frame = frame.mul(&dof_transform(dof.kind, dof.axis, q[d]));
+                match dof.kind {
+                    DofKind::Rotation => {
+                        let (s, c) = (q[d] * 0.5).sin_cos();
+                        let v = dof.axis * s;
+                        frame.rotation *= DQuat::from_xyzw(v.x, v.y, v.z, c);
+                    }
+                    DofKind::Translation => {
+                        frame.translation += frame.rotation * (dof.axis * q[d]);
+                    }
+                }
             }
         }
         globals[j] = frame;

@@ -105,7 +105,31 @@ impl Track {
     /// increasing times costs O(1) per call.
     #[inline]
     pub fn value_at(&self, t: f64, cursor: &mut usize) -> f64 {
-        match self.segment(t, cursor) {
+        let segment = self.segment(t, cursor);
+        self.value_in(segment)
+    }
+
+    /// Where `t` falls among the keys (updating `cursor` as [`Track::value_at`] does).
+    /// Tracks with the same key times share it: see [`Track::same_times`].
+    #[inline]
+    pub fn locate(&self, t: f64, cursor: &mut usize) -> Segment {
+        self.segment(t, cursor)
+    }
+
+    /// Whether both tracks have keys at exactly the same times.
+    pub fn same_times(&self, other: &Track) -> bool {
+        self.keys.len() == other.keys.len()
+            && self
+                .keys
+                .iter()
+                .zip(&other.keys)
+                .all(|(a, b)| a.time == b.time)
+    }
+
+    /// The value in a segment found by [`Track::locate`] on a track with the same key times.
+    #[inline]
+    pub fn value_in(&self, segment: Segment) -> f64 {
+        match segment {
             Segment::Before => self.keys[0].value,
             Segment::After => self.keys[self.keys.len() - 1].value,
             Segment::Inside(i, s, h) => {
@@ -204,9 +228,14 @@ impl Track {
     }
 }
 
-enum Segment {
+/// Where a time falls among a track's keys.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Segment {
+    /// Before (or at) the first key.
     Before,
+    /// At or after the last key.
     After,
+    /// Between key `i` and `i + 1`: (i, fraction in [0, 1), segment length in seconds).
     Inside(usize, f64, f64),
 }
 
