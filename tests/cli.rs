@@ -213,3 +213,46 @@ fn render_and_frames_draw_example_scenes() {
         .unwrap();
     assert!(!out.status.success());
 }
+
+#[test]
+fn recordings_play_back_in_view_whatever_their_format() {
+    for ext in ["trk", "gltf", "bvh"] {
+        let rec = temp(&format!("replay.{ext}"));
+        let out = troupe()
+            .args([
+                "run",
+                "scripts/examples/greeting.lua",
+                "--seconds",
+                "0.5",
+                "--record",
+            ])
+            .arg(&rec)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // Two actors: a .trk holds both, .gltf and .bvh write one file per actor.
+        let file = if ext == "trk" {
+            rec.clone()
+        } else {
+            rec.with_file_name(format!("replay.ann.{ext}"))
+        };
+        let frames = temp(&format!("replay-frames-{ext}"));
+        let out = troupe()
+            .arg("view")
+            .arg(&file)
+            .args(["--size", "96x64", "--every", "25", "--no-msaa", "--frames"])
+            .arg(&frames)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{ext}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(frames.join("frame_000001.png").is_file(), "{ext}");
+    }
+}

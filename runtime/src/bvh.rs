@@ -1036,6 +1036,9 @@ mod tests {
         let bvh = from_rig(&rig, seq.frame_time(), order, 100.0).unwrap();
         let text = bvh.to_bvh_string();
         let back = parse_bvh(&text, "export.bvh").unwrap();
+        // Read back onto the same body, the motion gives the same postures.
+        assert!(crate::retarget::is_troupe_rig(&skel, &back));
+        let replay = crate::retarget::troupe_named_motion(&skel, &back, "replay").unwrap();
         for k in [0, 13, 40] {
             let time = k as f64 * seq.frame_time();
             let q: Vec<f64> = skel
@@ -1044,6 +1047,17 @@ mod tests {
                 .map(|d| seq.track(&d.name).unwrap().value(time))
                 .collect();
             let expected = fk_positions(&skel, &q);
+            let q2: Vec<f64> = skel
+                .dofs()
+                .iter()
+                .map(|d| replay.track(&d.name).unwrap().value(time))
+                .collect();
+            for (e, r) in expected.iter().zip(fk_positions(&skel, &q2)) {
+                assert!(
+                    (*e - r).length() < 1e-6,
+                    "replayed posture at frame {k}: {e} vs {r}"
+                );
+            }
             let got = back.joint_positions(k);
             for (j, (e, g)) in expected.iter().zip(&got).enumerate() {
                 assert!(

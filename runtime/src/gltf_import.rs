@@ -9,6 +9,7 @@
 //! with a message saying so.
 
 use crate::error::{Error, Result};
+use crate::kinematics::solve_joint_angles;
 use crate::sequence::{Key, Sequence, Track};
 use crate::skeleton::{DofKind, Skeleton};
 use glam::{DQuat, DVec3};
@@ -240,117 +241,11 @@ fn sample_vec3(input: &[f32], output: &[f32], t: f64) -> DVec3 {
     get(a).lerp(get(b), f)
 }
 
-/// Sets the rotation DOFs of `joint` in `q` so that their product comes closest to
-/// `target` (Gauss–Newton on the rotation error, from the current values).
-pub fn solve_joint_angles(skeleton: &Skeleton, joint: usize, target: DQuat, q: &mut [f64]) {
-    let dofs: Vec<usize> = skeleton.joints()[joint]
-        .dofs
-        .clone()
-        .filter(|&d| skeleton.dofs()[d].kind == DofKind::Rotation)
-        .collect();
-    if dofs.is_empty() {
-        return;
-    }
-    for _ in 0..30 {
-        // Rotation so far and the axis of each DOF in the joint's parent-side frame.
-        let mut r = DQuat::IDENTITY;
-        let mut axes = Vec::with_capacity(dofs.len());
-        for &d in &dofs {
-            let dof = &skeleton.dofs()[d];
-            axes.push(r * dof.axis);
-            r *= DQuat::from_axis_angle(dof.axis, q[d]);
-        }
-        let mut err_q = target * r.inverse();
-        if err_q.w < 0.0 {
-            err_q = -err_q;
-        }
-        // 2·atan2(|v|, w) keeps full precision for small angles (acos(w) does not).
-        let v = DVec3::new(err_q.x, err_q.y, err_q.z);
-        let sin_half = v.length();
-        let e = if sin_half > 0.0 {
-            v * (2.0 * sin_half.atan2(err_q.w) / sin_half)
-        } else {
-            DVec3::ZERO
-        };
-        if e.length() < 1e-12 {
-            break;
-        }
-        // Normal equations (JᵀJ + λI) δ = Jᵀe; at most 3 unknowns.
-        let k = axes.len();
-        let mut m = [[0.0f64; 4]; 3];
-        for i in 0..k {
-            for j in 0..k {
-                m[i][j] = axes[i].dot(axes[j]) + if i == j { 1e-9 } else { 0.0 };
-            }
-            m[i][3] = axes[i].dot(e);
-        }
-        let delta = solve_small(&mut m, k);
-        for (i, &d) in dofs.iter().enumerate() {
-            q[d] += delta[i];
-        }
-    }
-}
-
-/// Gaussian elimination with partial pivoting on a k×k system (k ≤ 3) stored as rows
-/// `[a0, a1, a2, b]`.
-fn solve_small(m: &mut [[f64; 4]; 3], k: usize) -> [f64; 3] {
-    for col in 0..k {
-        let pivot = (col..k)
-            .max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))
-            .unwrap_or(col);
-        m.swap(col, pivot);
-        let p = m[col][col];
-        if p.abs() < 1e-15 {
-            continue;
-        }
-        let pivot_row = m[col];
-        for (row, r) in m.iter_mut().enumerate().take(k) {
-            if row != col {
-                let f = r[col] / p;
-                for (x, y) in r.iter_mut().zip(pivot_row.iter()).skip(col) {
-                    *x -= f * y;
-                }
-            }
-        }
-    }
-    let mut x = [0.0; 3];
-    for i in 0..k {
-        if m[i][i].abs() >= 1e-15 {
-            x[i] = m[i][3] / m[i][i];
-        }
-    }
-    x
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::gltf::{fk_positions, write_gltf, Rig};
     use crate::template::template;
-
-    #[test]
-    fn joint_angles_are_recovered_from_rotations() {
-        let t = template("adult").unwrap();
-        let skel = t.instantiate(t.default_params()).unwrap();
-        for joint in ["r_shoulder", "l_hip", "vt12", "r_thumb1", "r_elbow"] {
-            let j = skel.joint(joint).unwrap();
-            let mut q = vec![0.0; skel.dof_count()];
-            for (i, d) in skel.joints()[j].dofs.clone().enumerate() {
-                q[d] = 0.3 - 0.25 * i as f64;
-            }
-            let target = crate::kinematics::local_transform(&skel, j, &q).rotation;
-            let mut solved = vec![0.0; skel.dof_count()];
-            solve_joint_angles(&skel, j, target, &mut solved);
-            for d in skel.joints()[j].dofs.clone() {
-                assert!(
-                    (solved[d] - q[d]).abs() < 1e-9,
-                    "{joint}: {} vs {}",
-                    solved[d],
-                    q[d]
-                );
-            }
-        }
-    }
 
     #[test]
     fn a_troupe_gltf_reads_back_to_the_same_positions() {

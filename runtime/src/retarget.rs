@@ -17,7 +17,7 @@
 
 use crate::bvh::{read_bvh, Axis, Bvh, RotationOrder};
 use crate::error::{Error, Result};
-use crate::kinematics::forward_kinematics;
+use crate::kinematics::{forward_kinematics, solve_joint_angles};
 use crate::sequence::{Key, Sequence, Track};
 use crate::skeleton::{DofKind, Skeleton};
 use crate::transform::Transform;
@@ -396,9 +396,76 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
     Ok(seq)
 }
 
+/// Whether every joint of `bvh` is a joint of `skeleton` by name, root included (a BVH
+/// that troupe wrote from one of its own bodies).
+pub fn is_troupe_rig(skeleton: &Skeleton, bvh: &Bvh) -> bool {
+    bvh.joints()
+        .first()
+        .is_some_and(|j| j.name == skeleton.joints()[0].name)
+        && bvh.joints().iter().all(|j| skeleton.joint(&j.name).is_ok())
+}
+
+/// Reads a BVH on troupe's own hierarchy (as `troupe run --record OUT.bvh` writes it, in
+/// centimetres) back without retargeting: each joint's rotation becomes its DOF angles,
+/// the root's position its translation DOFs.
+pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result<Sequence> {
+    const METRES_PER_UNIT: f64 = 0.01;
+    let n = skeleton.dof_count();
+    let joints: Vec<usize> = bvh
+        .joints()
+        .iter()
+        .map(|j| skeleton.joint(&j.name))
+        .collect::<Result<_>>()?;
+    let mut q = vec![0.0; n];
+    let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(bvh.frame_count()); n];
+    for k in 0..bvh.frame_count() {
+        let frame = bvh.frame(k);
+        for (b, &j) in joints.iter().enumerate() {
+            let local = bvh.local_transform(b, frame);
+            solve_joint_angles(skeleton, j, local.rotation, &mut q);
+            if j == 0 {
+                let t = local.translation * METRES_PER_UNIT - skeleton.joints()[0].offset;
+                for d in skeleton.joints()[0].dofs.clone() {
+                    let dof = &skeleton.dofs()[d];
+                    if dof.kind == DofKind::Translation {
+                        q[d] = t.dot(dof.axis);
+                    }
+                }
+            }
+        }
+        for (d, v) in q.iter().enumerate() {
+            values[d].push(*v);
+        }
+    }
+    let mut seq = Sequence::new(name);
+    seq.meta.insert(
+        "rate".into(),
+        format!("{}", (1.0 / bvh.frame_time()).round()),
+    );
+    seq.meta.insert("source".into(), "bvh".into());
+    seq.meta
+        .insert("bvh_scale".into(), METRES_PER_UNIT.to_string());
+    let driven: Vec<usize> = joints
+        .iter()
+        .flat_map(|&j| skeleton.joints()[j].dofs.clone())
+        .collect();
+    for d in driven {
+        let track = Track::from_samples(
+            skeleton.dofs()[d].name.clone(),
+            0.0,
+            bvh.frame_time(),
+            &values[d],
+        )?;
+        seq.add_track(track)?;
+    }
+    Ok(seq)
+}
+
 /// Loads a sequence to play on `skeleton`: a `.trk` file is read as it is (its first
-/// sequence); a `.bvh` file is retargeted with the map in `<file>.map` beside it if that
-/// exists, else the built-in map (CMU or Mixamo) that matches its joint names best.
+/// sequence); a `.bvh` on troupe's own hierarchy is read back exactly
+/// ([`troupe_named_motion`]); any other `.bvh` is retargeted with the map in `<file>.map`
+/// beside it if that exists, else the built-in map (CMU or Mixamo) that matches its joint
+/// names best.
 pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
     let name = path
         .file_stem()
@@ -412,6 +479,9 @@ pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
         return Ok(set.remove(0));
     }
     let bvh = read_bvh(path)?;
+    if is_troupe_rig(skeleton, &bvh) {
+        return troupe_named_motion(skeleton, &bvh, &name);
+    }
     let user = path.with_extension("map");
     let map = if user.is_file() {
         RetargetMap::read(&user)?
