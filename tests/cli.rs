@@ -9,6 +9,17 @@ fn troupe() -> Command {
     c
 }
 
+/// Runs the command and checks that it succeeded, showing its stderr if not.
+fn succeeds(command: &mut Command) -> std::process::Output {
+    let out = command.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
 fn temp(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("troupe-cli-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -40,25 +51,20 @@ fn run_records_byte_identical_postures_with_one_and_two_threads() {
     let mut files = Vec::new();
     for threads in ["1", "2"] {
         let path = temp(&format!("crowd-{threads}.trk"));
-        let out = troupe()
-            .args([
-                "run",
-                "scripts/examples/crowd.lua",
-                "--seconds",
-                "6",
-                "--seed",
-                "3",
-                "--threads",
-                threads,
-                "--record",
-            ])
-            .arg(&path)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        succeeds(
+            troupe()
+                .args([
+                    "run",
+                    "scripts/examples/crowd.lua",
+                    "--seconds",
+                    "6",
+                    "--seed",
+                    "3",
+                    "--threads",
+                    threads,
+                    "--record",
+                ])
+                .arg(&path),
         );
         files.push(std::fs::read(&path).unwrap());
     }
@@ -164,39 +170,29 @@ fn scenario_tests_pass_and_report_counts() {
 #[test]
 fn render_and_frames_draw_example_scenes() {
     let png = temp("tableau.png");
-    let out = troupe()
-        .args(["render", "scripts/examples/tableau.lua"])
-        .arg(&png)
-        .args(["--at", "1.2", "--size", "320x180", "--no-labels"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeds(
+        troupe()
+            .args(["render", "scripts/examples/tableau.lua"])
+            .arg(&png)
+            .args(["--at", "1.2", "--size", "320x180", "--no-labels"]),
     );
     let bytes = std::fs::read(&png).unwrap();
     assert_eq!(&bytes[1..4], b"PNG");
     let dir = temp("frames");
-    let out = troupe()
-        .args([
-            "run",
-            "scripts/examples/greeting.lua",
-            "--seconds",
-            "1",
-            "--every",
-            "50",
-            "--size",
-            "160x90",
-            "--frames",
-        ])
-        .arg(&dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeds(
+        troupe()
+            .args([
+                "run",
+                "scripts/examples/greeting.lua",
+                "--seconds",
+                "1",
+                "--every",
+                "50",
+                "--size",
+                "160x90",
+                "--frames",
+            ])
+            .arg(&dir),
     );
     // Ticks 0, 50 and 100 of one second at 100 Hz.
     assert!(dir.join("frame_000002.png").is_file());
@@ -218,21 +214,16 @@ fn render_and_frames_draw_example_scenes() {
 fn recordings_play_back_in_view_whatever_their_format() {
     for ext in ["trk", "gltf", "bvh"] {
         let rec = temp(&format!("replay.{ext}"));
-        let out = troupe()
-            .args([
-                "run",
-                "scripts/examples/greeting.lua",
-                "--seconds",
-                "0.5",
-                "--record",
-            ])
-            .arg(&rec)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
+        succeeds(
+            troupe()
+                .args([
+                    "run",
+                    "scripts/examples/greeting.lua",
+                    "--seconds",
+                    "0.5",
+                    "--record",
+                ])
+                .arg(&rec),
         );
         // Two actors: a .trk holds both, .gltf and .bvh write one file per actor.
         let file = if ext == "trk" {

@@ -33,62 +33,53 @@ pub struct RetargetMap {
     pub pairs: Vec<(String, String)>,
 }
 
-const CMU: &[(&str, &str)] = &[
+/// Limb joints: CMU and Mixamo rigs name them alike.
+const LIMBS: &[(&str, &str)] = &[
+    ("LeftUpLeg", "l_hip"),
+    ("LeftLeg", "l_knee"),
+    ("LeftFoot", "l_ankle"),
+    ("LeftToeBase", "l_metatarsal"),
+    ("RightUpLeg", "r_hip"),
+    ("RightLeg", "r_knee"),
+    ("RightFoot", "r_ankle"),
+    ("RightToeBase", "r_metatarsal"),
+    ("LeftShoulder", "l_sternoclavicular"),
+    ("LeftArm", "l_shoulder"),
+    ("LeftForeArm", "l_elbow"),
+    ("LeftHand", "l_wrist"),
+    ("RightShoulder", "r_sternoclavicular"),
+    ("RightArm", "r_shoulder"),
+    ("RightForeArm", "r_elbow"),
+    ("RightHand", "r_wrist"),
+];
+
+/// The CMU spine (the limbs follow in [`LIMBS`]).
+const CMU_SPINE: &[(&str, &str)] = &[
     ("Hips", "HumanoidRoot"),
     ("LowerBack", "vl5"),
     ("Spine", "vt12"),
     ("Spine1", "vt1"),
     ("Neck", "vc4"),
     ("Head", "skullbase"),
-    ("LeftUpLeg", "l_hip"),
-    ("LeftLeg", "l_knee"),
-    ("LeftFoot", "l_ankle"),
-    ("LeftToeBase", "l_metatarsal"),
-    ("RightUpLeg", "r_hip"),
-    ("RightLeg", "r_knee"),
-    ("RightFoot", "r_ankle"),
-    ("RightToeBase", "r_metatarsal"),
-    ("LeftShoulder", "l_sternoclavicular"),
-    ("LeftArm", "l_shoulder"),
-    ("LeftForeArm", "l_elbow"),
-    ("LeftHand", "l_wrist"),
-    ("RightShoulder", "r_sternoclavicular"),
-    ("RightArm", "r_shoulder"),
-    ("RightForeArm", "r_elbow"),
-    ("RightHand", "r_wrist"),
 ];
 
-const MIXAMO: &[(&str, &str)] = &[
+/// The Mixamo spine (the limbs follow in [`LIMBS`]).
+const MIXAMO_SPINE: &[(&str, &str)] = &[
     ("Hips", "HumanoidRoot"),
     ("Spine", "vl5"),
     ("Spine1", "vt12"),
     ("Spine2", "vt1"),
     ("Neck", "vc4"),
     ("Head", "skullbase"),
-    ("LeftUpLeg", "l_hip"),
-    ("LeftLeg", "l_knee"),
-    ("LeftFoot", "l_ankle"),
-    ("LeftToeBase", "l_metatarsal"),
-    ("RightUpLeg", "r_hip"),
-    ("RightLeg", "r_knee"),
-    ("RightFoot", "r_ankle"),
-    ("RightToeBase", "r_metatarsal"),
-    ("LeftShoulder", "l_sternoclavicular"),
-    ("LeftArm", "l_shoulder"),
-    ("LeftForeArm", "l_elbow"),
-    ("LeftHand", "l_wrist"),
-    ("RightShoulder", "r_sternoclavicular"),
-    ("RightArm", "r_shoulder"),
-    ("RightForeArm", "r_elbow"),
-    ("RightHand", "r_wrist"),
 ];
 
 impl RetargetMap {
-    fn builtin(name: &str, pairs: &[(&str, &str)]) -> RetargetMap {
+    fn builtin(name: &str, spine: &[(&str, &str)]) -> RetargetMap {
         RetargetMap {
             name: name.into(),
-            pairs: pairs
+            pairs: spine
                 .iter()
+                .chain(LIMBS)
                 .map(|(a, b)| (a.to_string(), b.to_string()))
                 .collect(),
         }
@@ -96,13 +87,13 @@ impl RetargetMap {
 
     /// The map for CMU motion-capture BVH files (`LowerBack`, `LeftUpLeg`, …).
     pub fn cmu() -> RetargetMap {
-        Self::builtin("cmu", CMU)
+        Self::builtin("cmu", CMU_SPINE)
     }
 
     /// The map for Mixamo rigs (`Spine`, `Spine1`, `Spine2`, …; a `mixamorig:` prefix on
     /// the BVH names is ignored when matching).
     pub fn mixamo() -> RetargetMap {
-        Self::builtin("mixamo", MIXAMO)
+        Self::builtin("mixamo", MIXAMO_SPINE)
     }
 
     /// The built-in map that matches most of the BVH's joint names.
