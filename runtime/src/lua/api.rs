@@ -419,25 +419,25 @@ pub fn load_sequence(
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
-    // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names.
+    // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
+    // cache key names the body (none: a .trk, or the default adult).
     let bound_to_body = ext == "bvh" || ext == "gltf";
-    let skeleton = match (bound_to_body, skeleton) {
-        (false, _) => None,
-        (true, Some(s)) => Some(s.clone()),
-        (true, None) => {
-            let t = crate::template::template("adult").map_err(lua_err)?;
-            Some(Arc::new(
-                t.instantiate(t.default_params()).map_err(lua_err)?,
-            ))
-        }
-    };
     let key = (
         full.clone(),
-        skeleton.as_ref().map(|s| Arc::as_ptr(s) as usize),
+        skeleton
+            .filter(|_| bound_to_body)
+            .map(|s| Arc::as_ptr(s) as usize),
     );
     if let Some(s) = stage(lua)?.sequences.get(&key) {
         return Ok(s.clone());
     }
+    let skeleton = match (bound_to_body, skeleton) {
+        (false, _) => None,
+        (true, Some(s)) => Some(s.clone()),
+        (true, None) => Some(Arc::new(
+            crate::template::default_skeleton("adult").map_err(lua_err)?,
+        )),
+    };
     let seq = match &skeleton {
         Some(skel) if ext == "gltf" => crate::gltf_import::read_gltf_motion(&full, skel),
         Some(skel) => crate::retarget::load_sequence_for(skel, &full),
