@@ -1,5 +1,6 @@
 //! The `troupe` command line.
 
+mod bench;
 mod export;
 mod run;
 mod scenario;
@@ -39,6 +40,8 @@ enum Command {
     View(view::ViewArgs),
     /// Render actors in given poses to one PNG.
     Snapshot(view::SnapshotArgs),
+    /// Measure the runtime: the standard crowd scene at several sizes and thread counts.
+    Bench(bench::BenchArgs),
     /// Export a body template to another format (URDF).
     Export(export::ExportArgs),
 }
@@ -73,6 +76,7 @@ fn main() -> ExitCode {
         Command::View(args) => view::run(args),
         Command::Snapshot(args) => view::snapshot(args),
         Command::Export(args) => export::run(args),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(code) => code,

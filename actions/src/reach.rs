@@ -21,6 +21,16 @@ use troupe_runtime::{DofWriter, Generator, GeneratorContext, Skeleton, Step, Wor
 pub const POSITION_TOLERANCE: f64 = 1e-3;
 /// … and, with an orientation goal, within this angle (radians, 1°).
 pub const ORIENTATION_TOLERANCE: f64 = std::f64::consts::PI / 180.0;
+
+/// Position error accepted on the ticks before the last (metres).
+const TRACKING_POSITION_TOLERANCE: f64 = 2e-4;
+/// Orientation error accepted on the ticks before the last (radians, about 0.1°).
+const TRACKING_ORIENTATION_TOLERANCE: f64 = 2e-3;
+/// Most IK iterations on the ticks before the last.
+const TRACKING_ITERATIONS: usize = 10;
+/// Most iterations of self-collision correction per tick once the goal is met; the
+/// correction goes on next tick.
+const TRACKING_SETTLE_ITERATIONS: usize = 2;
 /// Self-collision correction keeps sensors this far from the body (metres).
 pub const COLLISION_MARGIN: f64 = 0.01;
 
@@ -261,8 +271,21 @@ impl Generator for Reach {
             },
             priority: 0,
         };
+        // While the path runs, the goal moves a few millimetres per tick and the next tick
+        // corrects what is left, so a tracking tolerance and a few iterations suffice; the
+        // last tick solves to the full tolerance to decide completion.
         let mut options = *self.solver.options();
-        options.max_iterations = if finishing { 200 } else { 30 };
+        if finishing {
+            options.max_iterations = 200;
+            options.position_tolerance = IkOptions::default().position_tolerance;
+            options.orientation_tolerance = IkOptions::default().orientation_tolerance;
+            options.settle_iterations = usize::MAX;
+        } else {
+            options.max_iterations = TRACKING_ITERATIONS;
+            options.position_tolerance = TRACKING_POSITION_TOLERANCE;
+            options.orientation_tolerance = TRACKING_ORIENTATION_TOLERANCE;
+            options.settle_iterations = TRACKING_SETTLE_ITERATIONS;
+        }
         if self.solver.set_options(options).is_err() {
             return Step::Failed("invalid IK options".into());
         }

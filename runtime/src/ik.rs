@@ -63,6 +63,10 @@ pub struct IkOptions {
     pub limit_avoidance: f64,
     /// Gain pulling toward the reference posture, when one is given (0 disables it).
     pub posture_gain: f64,
+    /// Most iterations spent on a still-active null-space task (self-collision) once the
+    /// goals are met; `usize::MAX` runs it until it is inactive or `max_iterations`. A
+    /// tracking caller that solves again next tick needs only a few.
+    pub settle_iterations: usize,
 }
 
 impl Default for IkOptions {
@@ -79,6 +83,7 @@ impl Default for IkOptions {
             singular_threshold: 0.03,
             limit_avoidance: 0.02,
             posture_gain: 0.0,
+            settle_iterations: usize::MAX,
         }
     }
 }
@@ -333,6 +338,7 @@ impl IkSolver {
         self.best.clear();
         self.best.resize(tasks.len(), f64::INFINITY);
         let mut stalled = 0;
+        let mut settling = 0;
         loop {
             forward_kinematics(skeleton, q, &mut self.globals);
             let (pe, oe) = self.errors(tasks);
@@ -352,6 +358,13 @@ impl IkSolver {
             if met && !active {
                 report.converged = true;
                 break;
+            }
+            if met {
+                if settling >= self.options.settle_iterations {
+                    report.converged = true;
+                    break;
+                }
+                settling += 1;
             }
             // Progress check: some task's error (1 rad counted as 0.1 m) still shrinks.
             let mut progress = false;
@@ -757,6 +770,49 @@ mod tests {
         let (times, its, failures) = reach_many(true);
         summary("position+orientation", times, its);
         assert_eq!(failures, 0);
+    }
+
+    /// A null-space task that never finishes, counting its calls.
+    struct Restless(usize);
+
+    impl NullSpaceTask for Restless {
+        fn add_step(&mut self, _ctx: &NullSpaceContext, dz: &mut [f64]) -> bool {
+            self.0 += 1;
+            dz.iter_mut().for_each(|z| *z += 0.01);
+            true
+        }
+    }
+
+    #[test]
+    fn settle_iterations_bound_the_work_on_an_active_null_space_task() {
+        let s = adult();
+        let dofs: Vec<usize> = s.scope("right_arm").unwrap().iter().collect();
+        let e = hand(&s);
+        let goal = DVec3::new(-0.25, 1.2, 0.35);
+        let task = IkTask::position(e, goal);
+        let run = |settle: usize| {
+            let options = IkOptions {
+                settle_iterations: settle,
+                ..IkOptions::default()
+            };
+            let mut solver = IkSolver::new(&s, dofs.clone(), options).unwrap();
+            let mut q = vec![0.0; s.dof_count()];
+            let mut task_calls = Restless(0);
+            let r = solver
+                .solve(&s, &mut q, &[task], None, Some(&mut task_calls))
+                .unwrap();
+            (r, task_calls.0)
+        };
+        let (unbounded, _) = run(usize::MAX);
+        assert_eq!(unbounded.iterations, IkOptions::default().max_iterations);
+        assert!(!unbounded.converged || unbounded.position_error <= 1e-5);
+        let (bounded, calls) = run(2);
+        assert!(bounded.converged, "{bounded:?}");
+        assert!(bounded.position_error <= 1e-5);
+        assert!(bounded.iterations < unbounded.iterations, "{bounded:?}");
+        // The goal was met at some iteration k; two more steps followed, then the check.
+        let met_at = bounded.iterations - 2;
+        assert_eq!(calls, met_at + 3, "{bounded:?}");
     }
 
     #[test]

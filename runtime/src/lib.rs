@@ -19,6 +19,7 @@ pub mod linalg;
 pub mod lua;
 pub mod pacing;
 pub mod parallel;
+pub mod profile;
 pub mod pyramid;
 pub mod record;
 pub mod retarget;

@@ -3,6 +3,7 @@
 use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
 use crate::error::{Error, Result};
 use crate::parallel::WorkerPool;
+use crate::profile::StepProfile;
 use crate::scheduler::{Action, ActorRuntime, TickClock};
 use crate::skeleton::Skeleton;
 use crate::solid::Shape;
@@ -12,6 +13,7 @@ use crate::world::{ActorInfo, Object, World};
 use glam::{DQuat, DVec3};
 use std::collections::HashMap;
 use std::sync::Arc;
+use std::time::Instant;
 
 /// How a scene runs.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -84,6 +86,8 @@ pub struct Scene {
     ended: HashMap<ActionId, ActionInfo>,
     events: Vec<Event>,
     pool: WorkerPool,
+    profiling: bool,
+    profile: StepProfile,
     skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
 }
 
@@ -116,6 +120,8 @@ impl Scene {
             ended: HashMap::new(),
             events: Vec::new(),
             pool: WorkerPool::new(config.threads),
+            profiling: false,
+            profile: StepProfile::default(),
             skeleton_cache: Vec::new(),
         })
     }
@@ -399,6 +405,16 @@ impl Scene {
         self.work.iter().any(|w| !w.runtime.actions.is_empty())
     }
 
+    /// Switches per-phase timing of [`Scene::step`] on or off (off by default).
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profiling = on;
+    }
+
+    /// The phase timings gathered since the last call, which resets them.
+    pub fn take_profile(&mut self) -> StepProfile {
+        std::mem::take(&mut self.profile)
+    }
+
     /// Generator writes refused so far because they fell outside their action's scope.
     pub fn refused_writes(&self) -> u64 {
         self.work.iter().map(|w| w.runtime.refused_writes).sum()
@@ -412,7 +428,9 @@ impl Scene {
             tick: self.tick,
             time: self.time(),
             dt: self.dt(),
+            profile: self.profiling,
         };
+        let started = self.profiling.then(Instant::now);
         {
             let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
             let world = World {
@@ -429,6 +447,7 @@ impl Scene {
                     .tick(i, skeleton, &world, &states[i], &mut w.next, clock);
             });
         }
+        let joined = self.profiling.then(Instant::now);
         let _span = tracing::trace_span!("publish", tick = self.tick).entered();
         self.events.clear();
         for (i, w) in self.work.iter_mut().enumerate() {
@@ -437,6 +456,15 @@ impl Scene {
             for info in w.runtime.ended.drain(..) {
                 self.ended.insert(info.id, info);
             }
+            if self.profiling {
+                self.profile
+                    .actors
+                    .add(&std::mem::take(&mut w.runtime.phases));
+            }
+        }
+        if let (Some(started), Some(joined)) = (started, joined) {
+            self.profile.step_wall += joined - started;
+            self.profile.publish_wall += joined.elapsed();
         }
         &self.events
     }

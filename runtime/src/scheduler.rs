@@ -31,6 +31,7 @@ use crate::action::{
     Step,
 };
 use crate::blend::{ease_factor, Accumulator};
+use crate::profile::{ActorPhases, PhaseClock};
 use crate::skeleton::Skeleton;
 use crate::state::ActorState;
 use crate::world::World;
@@ -78,6 +79,8 @@ pub struct ActorRuntime {
     pub(crate) events: Vec<Event>,
     /// Generator writes refused because they fell outside the action's scope.
     pub(crate) refused_writes: u64,
+    /// Time spent per phase since the scene last collected it (when profiling).
+    pub(crate) phases: ActorPhases,
     scratch: Vec<f64>,
     accumulator: Accumulator,
 }
@@ -88,6 +91,8 @@ pub(crate) struct TickClock {
     pub tick: u64,
     pub time: f64,
     pub dt: f64,
+    /// Whether to time the phases.
+    pub profile: bool,
 }
 
 struct Transitions<'a> {
@@ -152,6 +157,7 @@ impl ActorRuntime {
         next: &mut ActorState,
         clock: TickClock,
     ) {
+        let mut stopwatch = PhaseClock::start(clock.profile);
         self.events.clear();
         self.ended.clear();
         let mut tr = Transitions {
@@ -161,6 +167,7 @@ impl ActorRuntime {
         };
         admit(&mut self.actions, &mut tr, actor, skeleton, world, previous);
         advance(&mut self.actions, &mut tr);
+        stopwatch.lap(&mut self.phases.scheduling);
 
         // Generators and blend.
         let n = skeleton.dof_count();
@@ -215,6 +222,7 @@ impl ActorRuntime {
             }
         }
 
+        stopwatch.lap(&mut self.phases.generators);
         next.held.copy_from_slice(&previous.held);
         let limits = skeleton.limits();
         self.accumulator
@@ -226,6 +234,7 @@ impl ActorRuntime {
             next.qd[d] = (next.q[d] - previous.q[d]) / clock.dt;
         }
         next.update_kinematics(skeleton);
+        stopwatch.lap(&mut self.phases.blend_fk);
 
         // Retire ended actions, keeping their final record.
         let mut i = 0;
@@ -237,6 +246,7 @@ impl ActorRuntime {
                 i += 1;
             }
         }
+        stopwatch.lap(&mut self.phases.scheduling);
     }
 }
 

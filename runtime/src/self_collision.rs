@@ -357,6 +357,9 @@ pub struct CollisionAvoidance<'a> {
     sensors: &'a BodySensors,
     margin: f64,
     skip: Vec<usize>,
+    /// Per sensor, whether the solved DOFs move it; found on the first step, since the
+    /// DOFs do not change during a solve.
+    movable: Vec<bool>,
     contacts: Vec<Contact>,
     j: Mat,
     svd: Svd,
@@ -371,6 +374,7 @@ impl<'a> CollisionAvoidance<'a> {
             sensors,
             margin,
             skip,
+            movable: Vec::new(),
             contacts: Vec::new(),
             j: Mat::zeros(3, 1),
             svd: Svd::default(),
@@ -381,20 +385,25 @@ impl<'a> CollisionAvoidance<'a> {
 impl NullSpaceTask for CollisionAvoidance<'_> {
     fn add_step(&mut self, ctx: &NullSpaceContext, dz: &mut [f64]) -> bool {
         self.contacts.clear();
-        let moved: crate::Scope = ctx.dofs.iter().copied().collect();
         let sensors = self.sensors;
-        let skip = &self.skip;
-        // Only sensors the solved DOFs can move.
+        if self.movable.is_empty() {
+            // Only sensors the solved DOFs can move take part.
+            let moved: crate::Scope = ctx.dofs.iter().copied().collect();
+            self.movable = (0..sensors.sensors().len())
+                .map(|i| {
+                    !self.skip.contains(&i)
+                        && !crate::jacobian::ancestor_dofs(ctx.skeleton, sensors.sensors()[i].joint)
+                            .intersection(&moved)
+                            .is_empty()
+                })
+                .collect();
+        }
+        let movable = &self.movable;
         sensors.contacts(
             ctx.skeleton,
             ctx.globals,
             self.margin,
-            |i| {
-                !skip.contains(&i)
-                    && !crate::jacobian::ancestor_dofs(ctx.skeleton, sensors.sensors()[i].joint)
-                        .intersection(&moved)
-                        .is_empty()
-            },
+            |i| movable[i],
             &mut self.contacts,
         );
         let mut penetrating = false;

@@ -268,6 +268,11 @@ impl Director {
         )
     }
 
+    /// Runs `f` on the scene itself, between ticks (to configure it, e.g. profiling).
+    pub fn with_scene_mut<R>(&mut self, f: impl FnOnce(&mut Scene) -> R) -> R {
+        f(&mut self.stage_mut().scene)
+    }
+
     fn stage_mut(&self) -> mlua::AppDataRefMut<'_, Stage> {
         self.lua
             .app_data_mut::<Stage>()

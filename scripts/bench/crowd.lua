@@ -1,0 +1,54 @@
+-- The standard crowd scene of `troupe bench` (docs/PERFORMANCE.md).
+-- Every actor loops: walk to a random parcel while waving (a weighted keyframe wave on
+-- the right arm over the walk's arm swing), stop, reach for the parcel, look at a
+-- neighbour, and go again. The number of actors comes from `BENCH.actors` when
+-- `troupe bench` runs it; run alone it has 24:
+--   troupe run scripts/bench/crowd.lua --seconds 20 --threads 2
+local count = (BENCH and BENCH.actors) or 24
+
+-- Parcels on pillars, one per four actors, on a square field that grows with the crowd
+-- so the density stays the same (about 4 m² per actor).
+local side = math.max(4, math.sqrt(count * 4))
+local parcels = {}
+for p = 1, math.max(2, count // 4) do
+  local x, z = (math.random() - 0.5) * side, (math.random() - 0.5) * side
+  troupe.object{ name = "pillar" .. p, shape = "box", size = {0.3, 0.95, 0.3}, at = {x, 0.475, z}, mass = 50 }
+  parcels[p] = troupe.object{ name = "parcel" .. p, shape = "box", size = {0.2, 0.1, 0.2}, at = {x, 1.0, z} }
+end
+
+local wave = troupe.sequence{
+  name = "crowd wave", loop = true,
+  r_shoulder_abduction = { {0, 1.4}, {0.6, 1.6}, {1.2, 1.4} },
+  r_elbow_flexion = { {0, 0.8}, {0.3, 1.4}, {0.6, 0.8}, {0.9, 1.4}, {1.2, 0.8} },
+}
+
+local actors = {}
+for i = 1, count do
+  actors[i] = troupe.actor{
+    name = "a" .. i,
+    at = { (math.random() - 0.5) * side, 0, (math.random() - 0.5) * side },
+    facing = math.random(0, 359),
+  }
+end
+
+for i, actor in ipairs(actors) do
+  local neighbour = actors[i % count + 1]
+  actor:behave(function(self)
+    wait(math.random() * 0.5)
+    while true do
+      -- Walk to a spot in front of a random parcel, waving on the way.
+      local parcel = parcels[math.random(#parcels)]
+      local p = parcel:position()
+      local here = self:position()
+      local dx, dz = here[1] - p[1], here[3] - p[3]
+      local d = math.max(math.sqrt(dx * dx + dz * dz), 1e-6)
+      local goal = { p[1] + dx / d * 0.45, 0, p[3] + dz / d * 0.45 }
+      local waving = self:play(wave, { scope = "right_arm", mode = "weighted", weight = 0.6, ease_in = 0.4, ease_out = 0.3 })
+      self:walk{ to = goal, speed = 1.0 + 0.6 * math.random() }:wait()
+      waving:cancel()
+      -- Reach for the parcel, then look at the neighbour for a moment.
+      self:reach{ hand = "right", target = parcel, duration = 0.8 }:wait()
+      self:look_at{ target = neighbour, duration = 1.0, ease_in = 0.2, ease_out = 0.2 }:wait()
+    end
+  end)
+end
