@@ -1,7 +1,10 @@
-//! Micro-benchmarks of the runtime's kernels: forward kinematics and Hermite evaluation.
+//! Micro-benchmarks of the runtime's kernels: forward kinematics, Hermite evaluation, BVH
+//! parsing and the pyramid blend (the last two on the CMU walk in `../shared/data`).
 
-use criterion::{black_box, criterion_group, criterion_main, Criterion};
+use criterion::{black_box, criterion_group, criterion_main, Criterion, Throughput};
+use troupe_runtime::bvh::parse_bvh;
 use troupe_runtime::kinematics::forward_kinematics;
+use troupe_runtime::pyramid::pyramid_blend;
 use troupe_runtime::{template, Key, Track, Transform};
 
 fn fk(c: &mut Criterion) {
@@ -31,5 +34,54 @@ fn hermite(c: &mut Criterion) {
     });
 }
 
-criterion_group!(benches, fk, hermite);
+/// The CMU walk of the shared test data, if it is beside the repository.
+fn cmu_walk() -> Option<(String, String)> {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../shared/data/bvh/pybvhrepo_cmu_12_01_walk.bvh"
+    );
+    match std::fs::read_to_string(path) {
+        Ok(text) => Some((path.to_string(), text)),
+        Err(e) => {
+            eprintln!("skipping the BVH benchmarks: {path}: {e}");
+            None
+        }
+    }
+}
+
+fn bvh(c: &mut Criterion) {
+    let Some((path, text)) = cmu_walk() else {
+        return;
+    };
+    let frames = parse_bvh(&text, &path).unwrap().frame_count();
+    let mut group = c.benchmark_group("bvh");
+    group.throughput(Throughput::Bytes(text.len() as u64));
+    group.bench_function(
+        format!("parse CMU 12_01 walk ({} KB, {frames} frames)", text.len() / 1000),
+        |b| b.iter(|| parse_bvh(black_box(&text), &path).unwrap()),
+    );
+    group.finish();
+}
+
+fn pyramid(c: &mut Criterion) {
+    let Some((path, text)) = cmu_walk() else {
+        return;
+    };
+    let walk = parse_bvh(&text, &path)
+        .unwrap()
+        .to_channel_sequence("walk", 1.0)
+        .unwrap();
+    let (start, end) = (walk.start(), walk.end());
+    let tracks = walk.tracks().len();
+    c.bench_function(
+        &format!("pyramid_blend/CMU walk with itself ({tracks} tracks, 1 s transition, 5 levels)"),
+        |b| {
+            b.iter(|| {
+                pyramid_blend(&walk, &walk, black_box(0.5 * (start + end)), 1.0, 5, 0.4).unwrap()
+            })
+        },
+    );
+}
+
+criterion_group!(benches, fk, hermite, bvh, pyramid);
 criterion_main!(benches);
