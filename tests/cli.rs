@@ -225,3 +225,43 @@ fn recordings_play_back_in_view_whatever_their_format() {
         assert!(frames.join("frame_000001.png").is_file(), "{ext}");
     }
 }
+
+#[test]
+fn bench_runs_the_crowd_and_writes_one_json_object_per_run() {
+    let json = temp("bench.json");
+    let out = succeeds(
+        troupe()
+            .args(["bench", "--actors", "3,6", "--threads", "1,2"])
+            .args(["--seconds", "0.5", "--warmup", "0.2", "--json"])
+            .arg(&json),
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("actor-ticks/s"), "{table}");
+    let runs: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let runs = runs.as_array().unwrap();
+    assert_eq!(runs.len(), 4);
+    let mut seen = Vec::new();
+    for run in runs {
+        for field in [
+            "actor_ticks_per_second",
+            "tick_mean_us",
+            "tick_p99_us",
+            "peak_rss_bytes",
+        ] {
+            let v = run[field].as_f64().unwrap_or_else(|| panic!("{field} in {run}"));
+            assert!(v > 0.0, "{field} = {v}");
+        }
+        assert_eq!(run["ticks"], 50);
+        let shares = run["phase_shares"].as_object().unwrap();
+        let total: f64 = shares.values().map(|s| s.as_f64().unwrap()).sum();
+        assert!((total - 1.0).abs() < 1e-6, "phase shares sum to {total}");
+        seen.push((run["actors"].as_u64().unwrap(), run["threads"].as_u64().unwrap()));
+    }
+    assert_eq!(seen, [(3, 1), (3, 2), (6, 1), (6, 2)]);
+
+    // Bad sizes are refused before anything runs.
+    let out = troupe().args(["bench", "--actors", "0"]).output().unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--actors"));
+}
