@@ -307,11 +307,11 @@ impl Rig {
         // Hip twist turns the foot toward its heading (the ankle has no yaw): start from
         // the heading difference, then correct by the yaw the foot still misses (the hip's
         // flexion and abduction couple into yaw), a few Newton-like passes.
-        let mut gamma = super::route::wrap(yaw - pelvis_yaw).clamp(-0.6, 0.6);
+        let mut gamma = super::route::wrap(yaw - pelvis_yaw).clamp(-0.75, 0.75);
         let foot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(-pitch);
         let want = foot * DVec3::Z;
         let (mut alpha, mut beta, mut delta, mut eps) = (0.0, 0.0, 0.0, 0.0);
-        for _ in 0..4 {
+        for pass in 0..6 {
             let v = DVec3::new(0.0, -l1 - l2 * kappa.cos(), -l2 * kappa.sin());
             let w = DQuat::from_rotation_y(gamma) * v;
             // Abduction about +Z: bring w's x onto d's x.
@@ -336,10 +336,11 @@ impl Rig {
             // Where the foot really points with these angles, against where it should.
             let got = shank * DQuat::from_rotation_x(delta) * DQuat::from_rotation_z(eps) * DVec3::Z;
             let err = super::route::wrap(want.x.atan2(want.z) - got.x.atan2(got.z));
-            if err.abs() < 1e-7 {
+            // The last pass keeps the twist its angles were solved with.
+            if err.abs() < 1e-9 || pass == 5 {
                 break;
             }
-            gamma = (gamma + err).clamp(-0.6, 0.6);
+            gamma = (gamma + err).clamp(-0.75, 0.75);
         }
         let s = l.signs;
         (
@@ -370,16 +371,16 @@ mod tests {
         let mut g = vec![Transform::IDENTITY; skeleton.joints().len()];
         let heading = 0.4;
         let pelvis_angles = [0.05, -0.04, 0.08];
-        q[rig.root[1]] = -0.05;
+        q[rig.root[1]] = -0.08;
         q[rig.root[3]] = heading;
         for i in 0..3 {
             q[rig.pelvis[i]] = pelvis_angles[i];
         }
         let pelvis = rig.pelvis_rotation(heading, pelvis_angles);
-        let root = rig.root_rest + DVec3::new(0.0, -0.05, 0.0);
+        let root = rig.root_rest + DVec3::new(0.0, -0.08, 0.0);
         for (leg, side) in [(0usize, 1.0), (1, -1.0)] {
             let hip = rig.hip_position(leg, root, heading, pelvis);
-            let plant = DVec2::new(0.1 * side + 0.2, 0.25);
+            let plant = DVec2::new(0.1 * side + 0.05, 0.15);
             for pitch in [0.2, 0.0, -0.4] {
                 let yaw = heading + 0.1;
                 let target = rig.ankle_from_plant(leg, plant, yaw, pitch);

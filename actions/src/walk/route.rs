@@ -288,8 +288,18 @@ impl Polyline {
         let (a, b) = (self.points[i - 1], self.points[i]);
         let seg = self.length[i] - self.length[i - 1];
         let u = if seg > 0.0 { (s - self.length[i - 1]) / seg } else { 0.0 };
-        let tangent = (b - a).normalize_or(DVec2::Y);
-        (a + (b - a) * u, tangent)
+        let dir = |k: usize| (self.points[k] - self.points[k - 1]).normalize_or(DVec2::Y);
+        // The tangent turns linearly from one segment's middle to the next one's, so the
+        // heading has no jump at the vertices.
+        let here = dir(i);
+        let tangent = if u < 0.5 && i > 1 {
+            dir(i - 1).lerp(here, 0.5 + u)
+        } else if u >= 0.5 && i + 1 < n {
+            here.lerp(dir(i + 1), u - 0.5)
+        } else {
+            here
+        };
+        (a + (b - a) * u, tangent.normalize_or(here))
     }
 }
 

@@ -235,9 +235,6 @@ fn skating(r: &Run) -> (f64, f64) {
             }
             if !contact(&w[1], leg, 1e-3) {
                 for p in 0..n {
-                    if slide[p] > worst && std::env::var("WALK_DEBUG").is_ok() {
-                        println!("slide {} at {} leg {leg} point {p}", slide[p], w[1].t);
-                    }
                     worst = worst.max(slide[p]);
                     slide[p] = 0.0;
                 }
@@ -402,56 +399,3 @@ fn the_walk_leaves_head_and_hands_free() {
     assert!(!no_arms.scope().overlaps(&s.scope("arms").unwrap()));
 }
 
-#[test]
-#[ignore]
-fn debug_dump() {
-    let mut seq = Sequence::new("global_motion");
-    seq.add_track(Track::new("root_x", vec![Key::new(0.0, 0.0), Key::new(3.0, 1.0), Key::new(6.0, 3.0)]).unwrap())
-        .unwrap();
-    seq.add_track(Track::new("root_z", vec![Key::new(0.0, 0.0), Key::new(3.0, 3.0), Key::new(6.0, 4.0)]).unwrap())
-        .unwrap();
-    let seq = Arc::new(seq);
-    let r = run(100.0, ActorDesc::new("a"), 12.0, |s| Walk::follow(s, seq.clone(), WalkOptions::default()).unwrap());
-    for f in r.frames.iter().step_by(5) {
-        let p = root_floor(&r, f);
-        let s0 = &f.soles[0];
-        let s1 = &f.soles[1];
-        println!("{:.2} root ({:.3},{:.3}) y {:.3} L heel ({:.3},{:.3},{:.3}) toe ({:.3},{:.3},{:.3}) R heel ({:.3},{:.3},{:.3}) knee {:.2} {:.2}",
-            f.t, p.x, p.y, f.q[r.rig.root[1]], s0[0].x, s0[0].y, s0[0].z, s0[2].x, s0[2].y, s0[2].z, s1[0].x, s1[0].y, s1[0].z,
-            f.q[r.rig.legs[0].dofs[3]], f.q[r.rig.legs[1].dofs[3]]);
-    }
-}
-
-#[test]
-#[ignore]
-fn debug_toe_off() {
-    let r = run(1000.0, ActorDesc::new("a"), 8.0, |s| {
-        let ht = Rig::new(s).unwrap().thigh_height;
-        Walk::velocity(s, Speed::Constant(0.5 * ht), None, WalkOptions::default()).unwrap()
-    });
-    let (_, offs) = contact_edges(&r, 0);
-    let off = offs.into_iter().find(|t| *t > 5.0).unwrap();
-    let l = &r.rig.legs[1];
-    let skel = troupe_runtime::template::default_skeleton("adult").unwrap();
-    for f in r.frames.iter().filter(|f| f.t > off - 0.06 && f.t < off + 0.03).step_by(3) {
-        println!("{:.3} heel {:.4} ball {:.4} toe {:.4} ankle {:.3} (lim {:.3}) mt {:.3} knee {:.3}", f.t, f.soles[0][0].y, f.soles[0][1].y, f.soles[0][2].y,
-          f.q[l.dofs[4]], skel.dofs()[l.dofs[4]].min, f.q[l.dofs[6]], f.q[l.dofs[3]]);
-    }
-}
-
-#[test]
-#[ignore]
-fn debug_slide() {
-    let rv = 2.0;
-    let r = run(200.0, ActorDesc::new("a"), 8.0, |s| {
-        let ht = Rig::new(s).unwrap().thigh_height;
-        Walk::velocity(s, Speed::Constant(rv * ht), Some(7.0), WalkOptions::default()).unwrap()
-    });
-    let l = &r.rig.legs[1];
-    println!("{:?}", skating(&r));
-    for f in r.frames.iter().filter(|f| f.t > 5.6 && f.t < 6.1).step_by(2) {
-        let s = &f.soles[1];
-        println!("hip {:.3} rootz {:.3} | {:.3} rooty {:.3} heel ({:.3} {:.4} {:.3}) ball ({:.3} {:.4} {:.3}) toe ({:.3} {:.4} {:.3}) knee {:.2} ankle {:.2} mt {:.2}", f.q[l.dofs[0]], f.q[r.rig.root[2]], f.t, f.q[r.rig.root[1]],
-            s[0].x, s[0].y, s[0].z, s[1].x, s[1].y, s[1].z, s[2].x, s[2].y, s[2].z, f.q[l.dofs[3]], f.q[l.dofs[4]], f.q[l.dofs[6]]);
-    }
-}
