@@ -35,6 +35,8 @@ pub fn action_kinds() -> ActionKinds {
         method: "look_at",
         build: build_look_at,
     });
+    // Walking: the procedural walking motor (thesis 2.6, 6.4.2).
+    crate::walk::register(&mut kinds);
     kinds
 }
 

@@ -6,9 +6,11 @@ pub mod keyframe;
 pub mod kinds;
 pub mod look_at;
 pub mod reach;
+pub mod walk;
 
 pub use dynamics::DynamicsGenerator;
 pub use keyframe::Keyframe;
 pub use kinds::action_kinds;
 pub use look_at::LookAt;
 pub use reach::{Reach, ReachSpec, Target};
+pub use walk::{Walk, WalkOptions};

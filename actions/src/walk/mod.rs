@@ -1,0 +1,713 @@
+//! The walking motor (thesis 2.6 and 6.4.2, after Boulic et al. 90): a procedural walk
+//! whose rhythm comes from the normalized cycle of eq. 2-5 / 2-6, driven by a root plan
+//! (a target, a path, a speed over time, or a keyframed `Global_motion` sequence), with
+//! the personification parameters of fig. 6-11.
+//!
+//! Each tick:
+//! 1. the plan gives the body's floor position, heading and speed;
+//! 2. the phase advances by dt / Dc, Dc from the relative velocity RV = V / Ht (eq. 2-5);
+//!    each foot is in support while its phase is below Ds / Dc (eq. 2-6), in balance
+//!    (swing) after it — so the two double supports last Dds each;
+//! 3. a foot in support stays planted where it landed: it rolls about the heel after the
+//!    strike and about the ball before the toe-off, and never slides; a swinging foot
+//!    travels from where it left the floor to a landing chosen when it lifted: where the
+//!    body will be when the foot is [`PLACEMENT`] of the way through its next support;
+//! 4. the pelvis (translation: sway, bounce, drop; rotation: list, rotation, tilt), the
+//!    spine and the arms oscillate with the cycle, scaled by the personification;
+//! 5. the legs come from the feet by closed-form IK ([`rig`]); the pelvis is lowered
+//!    (smoothly) where a leg could not otherwise reach its planted foot, so the feet
+//!    really stay put.
+//!
+//! Arrival: the plan slows to a stop at the goal; the feet take their last steps to stand
+//! side by side under the hips, the oscillations fade with the speed, and the action
+//! finishes once the body stands.
+
+pub mod cycle;
+mod lua;
+pub mod rig;
+pub mod route;
+
+pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
+pub use rig::Rig;
+pub use route::{Plan, RootSample, Route, Speed};
+
+use route::{smoothstep, wrap};
+use std::f64::consts::TAU;
+use std::sync::Arc;
+use troupe_runtime::glam::{DVec2, DVec3};
+use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Sequence, Skeleton, Step};
+
+/// Fraction of its support at which a foot is under the body: where it lands is where the
+/// body will be at that point of the support.
+pub const PLACEMENT: f64 = 0.4;
+/// Fraction of the support spent rolling from the heel onto the flat foot.
+pub const HEEL_ROCKER: f64 = 0.15;
+/// Foot pitch (radians, heel up) at the toe-off of a full-length step: the foot rolls
+/// over the ball so that the ankle rises and comes forward, as it must for the leg to
+/// stay within its hip extension at the end of a long support (the toes stay flat, within
+/// the metatarsal's 60° limit).
+pub const MAX_ROLL: f64 = 1.0;
+/// Fraction of the support at which the heel starts to rise.
+pub const HEEL_OFF: f64 = 0.55;
+/// Seconds to stand still, both feet down, before the walk reports it has finished.
+pub const SETTLE_TIME: f64 = 0.3;
+/// Seconds over which the spine, arms and pelvis go from the posture the actor had to the
+/// walk's.
+pub const BLEND_IN_TIME: f64 = 0.4;
+/// Seconds ahead at which a rising planned speed already sets the cadence.
+pub const CADENCE_LOOKAHEAD: f64 = 0.3;
+/// Seconds back over which a falling planned speed still sets the cadence.
+pub const CADENCE_LOOKBACK: f64 = 0.6;
+
+/// The personification and speed options of a walk (fig. 6-11); 1 is the thesis' walk
+/// for every scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WalkOptions {
+    /// Cruising speed in m/s for `to` and `path` walks.
+    pub speed: f64,
+    /// Heading to face on arrival (radians about +Y, 0 faces +Z); `None` faces the
+    /// direction of travel.
+    pub heading: Option<f64>,
+    /// Step (and cycle) length scale at a given speed: longer, slower steps above 1.
+    pub step_length: f64,
+    /// Scale of the lateral distance between the feet.
+    pub step_width: f64,
+    /// Scale of the pelvis' rotation, list and sway ("the movement of the pelvis").
+    pub pelvis: f64,
+    /// Scale of the arm swing.
+    pub arm_swing: f64,
+    /// Scale of the vertical bounce of the pelvis.
+    pub bounce: f64,
+    /// 0 for a walk, up to 1 for a run-like gait: bent knees, forward lean, flexed
+    /// elbows, larger bounce and foot lift (fig. 6-11 a, b).
+    pub run: f64,
+    /// Whether the walk swings the arms (false leaves the arm DOFs to other actions).
+    pub arms: bool,
+}
+
+impl Default for WalkOptions {
+    fn default() -> Self {
+        WalkOptions {
+            speed: 1.3,
+            heading: None,
+            step_length: 1.0,
+            step_width: 1.0,
+            pelvis: 1.0,
+            arm_swing: 1.0,
+            bounce: 1.0,
+            run: 0.0,
+            arms: true,
+        }
+    }
+}
+
+impl WalkOptions {
+    /// Checks every option; the error names the offending one and its valid range.
+    pub fn check(&self) -> Result<(), String> {
+        for (name, v, lo, hi) in [
+            ("step_length", self.step_length, 0.5, 1.5),
+            ("step_width", self.step_width, 0.0, 3.0),
+            ("pelvis", self.pelvis, 0.0, 3.0),
+            ("arm_swing", self.arm_swing, 0.0, 3.0),
+            ("bounce", self.bounce, 0.0, 3.0),
+            ("run", self.run, 0.0, 1.0),
+        ] {
+            if !(v.is_finite() && (lo..=hi).contains(&v)) {
+                return Err(format!("`{name}` must be a number in [{lo}, {hi}], got {v}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Where a swinging foot will land.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Landing {
+    plant: DVec2,
+    yaw: f64,
+    /// Toes-up pitch at the heel strike.
+    strike: f64,
+    /// Heel-off pitch (toes down, positive) for the support that follows.
+    roll: f64,
+}
+
+/// One foot's state.
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Foot {
+    Stance {
+        /// Floor point under the ankle when the foot is flat.
+        plant: DVec2,
+        yaw: f64,
+        /// Heel-strike pitch this support started with (0: no heel rocker).
+        rocker: f64,
+        /// Heel-off pitch; `None` until decided at heel-off.
+        roll: Option<f64>,
+        /// The next landing, decided at heel-off.
+        next: Option<Landing>,
+        /// Whether the foot stays down instead of swinging (it is already where it should
+        /// be: the end of the walk).
+        stays: bool,
+    },
+    Swing {
+        from: DVec3,
+        from_pitch: f64,
+        from_yaw: f64,
+        from_toes: f64,
+        to: Landing,
+        lift: f64,
+        /// Initial horizontal progress rate (per unit of swing).
+        start_rate: f64,
+    },
+}
+
+/// The pose of one foot this tick.
+#[derive(Clone, Copy, Debug, Default)]
+struct FootPose {
+    ankle: DVec3,
+    yaw: f64,
+    pitch: f64,
+    toes: f64,
+}
+
+/// The walking motor: a [`Generator`] on the root, pelvis, legs, lower spine and arms.
+pub struct Walk {
+    rig: Rig,
+    options: WalkOptions,
+    route: Route,
+    dofs: Vec<usize>,
+    // Run state (set at start).
+    plan: Option<Plan>,
+    t: f64,
+    phase: f64,
+    feet: [Foot; 2],
+    lambda: [f64; 2],
+    poses: [FootPose; 2],
+    yaw: f64,
+    heading: f64,
+    start_q: Vec<f64>,
+    settle_since: Option<f64>,
+    last_miss: f64,
+}
+
+/// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
+type UpperValues = ([f64; 6], [f64; 3], [f64; 4], [[f64; 3]; 2]);
+
+impl Walk {
+    /// A walk of `route` by a body built from a humanoid template.
+    pub fn new(skeleton: &Skeleton, route: Route, options: WalkOptions) -> Result<Walk, String> {
+        let rig = Rig::new(skeleton)?;
+        options.check()?;
+        route.check(rig.thigh_height)?;
+        let dofs = rig.dofs(options.arms);
+        let flat = Foot::Stance {
+            plant: DVec2::ZERO,
+            yaw: 0.0,
+            rocker: 0.0,
+            roll: Some(0.0),
+            next: None,
+            stays: false,
+        };
+        Ok(Walk {
+            rig,
+            options,
+            route,
+            dofs,
+            plan: None,
+            t: 0.0,
+            phase: 0.0,
+            feet: [flat; 2],
+            lambda: [0.0, 0.5],
+            poses: [FootPose::default(); 2],
+            yaw: 0.0,
+            heading: 0.0,
+            start_q: Vec::new(),
+            settle_since: None,
+            last_miss: 0.0,
+        })
+    }
+
+    /// A walk to floor point `goal` (its y must be the floor, 0) at `options.speed`.
+    pub fn to(skeleton: &Skeleton, goal: DVec3, options: WalkOptions) -> Result<Walk, String> {
+        if !goal.is_finite() {
+            return Err(format!("the target {goal} is not finite"));
+        }
+        if goal.y.abs() > 0.05 {
+            return Err(format!(
+                "the target {goal} is unreachable by walking: it is {:.2} m off the floor (y must be 0)",
+                goal.y
+            ));
+        }
+        Walk::path(skeleton, vec![DVec2::new(goal.x, goal.z)], options)
+    }
+
+    /// A walk through floor points (x, z), ending at the last one.
+    pub fn path(skeleton: &Skeleton, points: Vec<DVec2>, options: WalkOptions) -> Result<Walk, String> {
+        let route = Route::Path {
+            points,
+            heading: options.heading,
+            speed: options.speed,
+        };
+        Walk::new(skeleton, route, options)
+    }
+
+    /// A walk straight ahead at `speed`, for `duration` seconds or until cancelled.
+    pub fn velocity(
+        skeleton: &Skeleton,
+        speed: Speed,
+        duration: Option<f64>,
+        options: WalkOptions,
+    ) -> Result<Walk, String> {
+        Walk::new(skeleton, Route::Velocity { speed, duration }, options)
+    }
+
+    /// A walk along the keyframed root path of `sequence` (`Global_motion`, 6.4.2).
+    pub fn follow(skeleton: &Skeleton, sequence: Arc<Sequence>, options: WalkOptions) -> Result<Walk, String> {
+        Walk::new(skeleton, Route::Follow(sequence), options)
+    }
+
+    /// The DOFs the walk drives.
+    pub fn dofs(&self) -> &[usize] {
+        &self.dofs
+    }
+
+    /// The DOFs the walk drives, as a scope.
+    pub fn scope(&self) -> Scope {
+        self.dofs.iter().copied().collect()
+    }
+
+    /// The body model the walk uses (thigh height, DOFs, foot geometry).
+    pub fn rig(&self) -> &Rig {
+        &self.rig
+    }
+
+    /// The gait phase in cycles since the start (its fractional part is φ).
+    pub fn phase(&self) -> f64 {
+        self.phase
+    }
+
+    /// How far (m) an ankle stayed from its planted target on the last tick: 0 unless the
+    /// leg could not reach (the pelvis is lowered so that this stays 0).
+    pub fn reach_miss(&self) -> f64 {
+        self.last_miss
+    }
+
+    /// The gait's activity: 0 standing, → 1 at walking speeds (scales the oscillations so
+    /// that they fade in and out with the speed).
+    fn activity(&self, speed: f64) -> f64 {
+        (speed / (0.5 * self.rig.thigh_height)).tanh()
+    }
+
+    fn cycle(&self, speed: f64) -> CycleTimes {
+        cycle_at(speed, self.rig.thigh_height, self.options.step_length)
+    }
+
+    /// The speed that sets the cadence at `t`: the highest of the plan's speed now,
+    /// [`CADENCE_LOOKAHEAD`] later and [`CADENCE_LOOKBACK`] earlier. A start quickens the
+    /// steps as the body speeds up rather than after, and a stop keeps the rhythm until
+    /// the feet have caught up with the body, so that no support lasts longer than the
+    /// legs can reach. At constant speed it is the speed, as eq. 2-5 wants.
+    fn cadence_speed(&self, plan: &Plan, t: f64) -> f64 {
+        let now = plan.sample(t, self.heading).speed;
+        let ahead = plan.sample(t + CADENCE_LOOKAHEAD, self.heading).speed;
+        let behind = plan.sample((t - CADENCE_LOOKBACK).max(0.0), self.heading).speed;
+        now.max(ahead).max(behind)
+    }
+
+    /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
+    /// half-width.
+    fn spot(&self, leg: usize, sample: &RootSample, width: f64) -> DVec2 {
+        let left = DVec2::new(sample.heading.cos(), -sample.heading.sin());
+        let side = if leg == 0 { 1.0 } else { -1.0 };
+        sample.position + left * (side * self.rig.hip_half_width * width)
+    }
+
+    /// The time at which the total phase reaches `target`, simulated forward from now with
+    /// the plan's speeds (so that a landing is planned where the body will really be).
+    fn time_of_phase(&self, plan: &Plan, target: f64) -> f64 {
+        let h = 0.02;
+        let (mut t, mut p) = (self.t, self.phase);
+        for _ in 0..2000 {
+            if p >= target {
+                break;
+            }
+            let rate = 1.0 / self.cycle(self.cadence_speed(plan, t)).cycle;
+            let dp = rate * h;
+            if p + dp >= target {
+                return t + (target - p) / rate;
+            }
+            p += dp;
+            t += h;
+        }
+        t
+    }
+
+    /// Plans the next landing of foot `leg` (whose local phase is now `lambda`).
+    fn plan_landing(&self, plan: &Plan, leg: usize, lambda: f64, from: DVec2) -> Landing {
+        let sigma = self.cycle(self.cadence_speed(plan, self.t)).support_fraction();
+        let to_strike = 1.0 - lambda;
+        let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
+        let end = plan.end_time;
+        let (sample, width) = if t_mid >= end {
+            (plan.sample(end, self.heading), 1.0)
+        } else {
+            (plan.sample(t_mid, self.heading), self.options.step_width)
+        };
+        let plant = self.spot(leg, &sample, width);
+        let step = (plant - from).length();
+        let q = (step / (0.8 * self.rig.thigh_height)).min(1.0);
+        Landing {
+            plant,
+            yaw: sample.heading,
+            strike: 0.26 * q,
+            roll: MAX_ROLL * q,
+        }
+    }
+
+    /// Advances foot `leg` to local phase `lambda` (support fraction `sigma`) and returns
+    /// its pose.
+    fn step_foot(&mut self, plan: &Plan, leg: usize, lambda: f64, sigma: f64) -> FootPose {
+        let wrapped = lambda < self.lambda[leg];
+        self.lambda[leg] = lambda;
+        let rig = &self.rig;
+        // Transitions first.
+        match self.feet[leg] {
+            Foot::Swing { to, .. } if wrapped => {
+                self.feet[leg] = Foot::Stance {
+                    plant: to.plant,
+                    yaw: to.yaw,
+                    rocker: to.strike,
+                    roll: None,
+                    next: None,
+                    stays: false,
+                };
+            }
+            Foot::Stance { plant, yaw, .. } if wrapped => {
+                // A foot that stayed down through its swing starts a new support in place.
+                self.feet[leg] = Foot::Stance {
+                    plant,
+                    yaw,
+                    rocker: 0.0,
+                    roll: None,
+                    next: None,
+                    stays: false,
+                };
+            }
+            _ => {}
+        }
+        if let Foot::Stance {
+            plant,
+            yaw,
+            rocker,
+            roll,
+            next,
+            stays,
+        } = self.feet[leg]
+        {
+            if roll.is_none() && lambda >= HEEL_OFF * sigma {
+                let landing = self.plan_landing(plan, leg, lambda, plant);
+                let still =
+                    (landing.plant - plant).length() < 0.01 && wrap(landing.yaw - yaw).abs() < 0.05;
+                self.feet[leg] = Foot::Stance {
+                    plant,
+                    yaw,
+                    rocker,
+                    roll: Some(if still { 0.0 } else { landing.roll }),
+                    next: Some(landing),
+                    stays: still,
+                };
+            } else if lambda >= sigma && !stays {
+                let pose = self.poses[leg];
+                let to = match next {
+                    Some(n) => n,
+                    None => self.plan_landing(plan, leg, lambda, plant),
+                };
+                let from_plant = DVec2::new(pose.ankle.x, pose.ankle.z);
+                let step = (to.plant - from_plant).length();
+                let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height) * (1.0 + self.options.run);
+                let swing_time = (1.0 - sigma) * self.cycle(self.cadence_speed(plan, self.t)).cycle;
+                let body = plan.sample(self.t, self.heading).speed;
+                let start_rate = if step > 1e-6 {
+                    (body * swing_time / step).clamp(0.0, 1.5)
+                } else {
+                    0.0
+                };
+                self.feet[leg] = Foot::Swing {
+                    from: pose.ankle,
+                    from_pitch: pose.pitch,
+                    from_yaw: pose.yaw,
+                    from_toes: pose.toes,
+                    to,
+                    lift,
+                    start_rate,
+                };
+            }
+        }
+        let rig = &self.rig;
+        match self.feet[leg] {
+            Foot::Stance {
+                plant,
+                yaw,
+                rocker,
+                roll,
+                ..
+            } => {
+                let u = (lambda / sigma).clamp(0.0, 1.0);
+                let mut pitch = 0.0;
+                if rocker > 0.0 && u < HEEL_ROCKER {
+                    pitch = rocker * (1.0 - smoothstep(u / HEEL_ROCKER));
+                }
+                let roll = roll.unwrap_or(0.0);
+                if roll > 0.0 && u > HEEL_OFF {
+                    pitch = -roll * smoothstep((u - HEEL_OFF) / (1.0 - HEEL_OFF));
+                }
+                FootPose {
+                    ankle: rig.ankle_from_plant(leg, plant, yaw, pitch),
+                    yaw,
+                    pitch,
+                    toes: pitch.min(0.0),
+                }
+            }
+            Foot::Swing {
+                from,
+                from_pitch,
+                from_yaw,
+                from_toes,
+                to,
+                lift,
+                start_rate,
+            } => {
+                let w = ((lambda - sigma) / (1.0 - sigma)).clamp(0.0, 1.0);
+                // Horizontal progress: a cubic that leaves at `start_rate` (the foot keeps
+                // up with the body, so the hip need not extend further) and arrives at rest.
+                let s = (w * w * w - 2.0 * w * w + w) * start_rate + (3.0 - 2.0 * w) * w * w;
+                let ease = smoothstep(w);
+                let target = rig.ankle_from_plant(leg, to.plant, to.yaw, to.strike);
+                let pitch = from_pitch + (to.strike - from_pitch) * ease;
+                let toes = from_toes * (1.0 - smoothstep(w / 0.5));
+                // The foot's lowest point rises and falls on a parabola (zero at lift-off
+                // and at the strike), so the sole never goes below the floor and leaves
+                // and meets it exactly at the phase boundaries.
+                let clearance = lift * 4.0 * w * (1.0 - w);
+                let mut ankle = from + (target - from) * s;
+                ankle.y = clearance - rig.lowest_offset(leg, pitch, toes);
+                FootPose {
+                    ankle,
+                    yaw: from_yaw + wrap(to.yaw - from_yaw) * ease,
+                    pitch,
+                    toes,
+                }
+            }
+        }
+    }
+
+    /// Pelvis, spine and arm values for phase `phi` (in cycles) at activity `a` and
+    /// relative velocity `rv`; plus the root's lateral sway and vertical offset.
+    fn oscillations(&self, phi: f64, a: f64, rv: f64, sigma: f64) -> (f64, f64, [f64; 3], [f64; 4], [[f64; 3]; 2]) {
+        let o = &self.options;
+        let ht = self.rig.thigh_height;
+        let c1 = (TAU * phi).cos();
+        let s1 = (TAU * phi).sin();
+        let rv = rv.min(2.5);
+        // Pelvis (thesis 2.6, after Inman: rotation, list, lateral and vertical motion).
+        let rot = -(0.03 + 0.03 * rv) * a * o.pelvis * c1;
+        let list = -(0.035 + 0.01 * rv) * a * o.pelvis * s1;
+        let tilt = 0.02 * a * o.pelvis * (2.0 * TAU * phi).cos();
+        let sway = 0.022 * ht * a * o.pelvis * s1 / (1.0 + 0.5 * rv);
+        let bounce = (0.012 + 0.006 * rv) * ht * (1.0 + 1.5 * o.run) * o.bounce
+            * (2.0 * TAU * (phi - 0.5 * sigma)).cos();
+        let drop = (0.015 + 0.01 * rv + 0.10 * o.run) * ht;
+        let vertical = a * (bounce - drop);
+        // Spine: the thorax turns against the pelvis; lean grows with speed and running.
+        let lean = (0.03 + 0.03 * rv + 0.25 * o.run) * a;
+        let counter = (0.03 + 0.03 * rv) * a * c1;
+        let spine = [lean, 0.5 * counter, 0.5 * counter, -0.3 * list];
+        // Arms swing against the legs: the right arm forward with the left foot.
+        let swing = (0.12 + 0.10 * rv) * a * o.arm_swing;
+        let elbow0 = (0.2 + 0.08 * rv) * a + 1.2 * o.run * a;
+        let mut arms = [[0.0; 3]; 2];
+        for (i, sign) in [(0usize, -1.0), (1, 1.0)] {
+            let flex = sign * swing * c1 + 0.03 * a;
+            arms[i] = [flex, 0.06 * a, elbow0 + 0.6 * flex.max(0.0)];
+        }
+        (sway, vertical, [tilt, list, rot], spine, arms)
+    }
+
+    /// Computes the whole pose for this tick and writes it.
+    fn pose(&mut self, plan: &Plan, out: &mut DofWriter) -> UpperValues {
+        let sample = plan.sample(self.t, self.heading);
+        self.heading = sample.heading;
+        let v = sample.speed;
+        let a = self.activity(v);
+        let cycle = self.cycle(self.cadence_speed(plan, self.t));
+        let sigma = cycle.support_fraction();
+        let phi = self.phase.rem_euclid(1.0);
+        for leg in 0..2 {
+            let lambda = (self.phase - 0.5 * leg as f64).rem_euclid(1.0);
+            self.poses[leg] = self.step_foot(plan, leg, lambda, sigma);
+        }
+        let rv = v / self.rig.thigh_height;
+        let (sway, vertical, mut pelvis, spine, arms) = self.oscillations(phi, a, rv, sigma);
+        // The pelvis blends in from the posture the actor had before the legs are solved
+        // for it (the legs must reach the feet from where the pelvis really is).
+        let k = smoothstep(self.t / BLEND_IN_TIME);
+        if k < 1.0 {
+            for (i, p) in pelvis.iter_mut().enumerate() {
+                let s = self.start_q[self.rig.pelvis[i]];
+                *p = s + (*p - s) * k;
+            }
+        }
+        let heading = sample.heading;
+        self.yaw += wrap(heading - self.yaw);
+        let left = DVec2::new(heading.cos(), -heading.sin());
+        let floor = sample.position + left * sway;
+        let rig = &self.rig;
+        let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
+        // Highest root drop that lets both legs reach their feet: a smooth minimum, so the
+        // pelvis height stays continuous in value and velocity.
+        let root0 = rig.root_rest + DVec3::new(floor.x, 0.0, floor.y);
+        let mut highest = [vertical; 3];
+        for leg in 0..2 {
+            let hip = rig.hip_position(leg, root0, heading, pelvis_rot);
+            let ankle = self.poses[leg].ankle;
+            let l = (rig.legs[leg].thigh + rig.legs[leg].shank) * 0.99999;
+            let horizontal = DVec2::new(hip.x - ankle.x, hip.z - ankle.z).length();
+            highest[leg + 1] = ankle.y + (l * l - horizontal * horizontal).max(0.0).sqrt() - hip.y;
+        }
+        let root_y = soft_min(highest, 0.006 * a);
+        let root = root0 + DVec3::Y * root_y;
+        let root_vals = [floor.x - rig.root_rest.x, root_y, floor.y - rig.root_rest.z, self.yaw, 0.0, 0.0];
+        let pelvis_yaw = heading + pelvis[2];
+        let mut miss: f64 = 0.0;
+        for leg in 0..2 {
+            let hip = rig.hip_position(leg, root, heading, pelvis_rot);
+            let p = self.poses[leg];
+            let (vals, m) = rig.solve_leg(leg, pelvis_rot, pelvis_yaw, hip, p.ankle, (p.yaw, p.pitch, p.toes));
+            miss = miss.max(m);
+            for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
+                out.set(d, vals[i]);
+            }
+        }
+        self.last_miss = miss;
+        (root_vals, pelvis, spine, arms)
+    }
+}
+
+/// A smooth minimum of three values (log-sum-exp with temperature `k`); the plain minimum
+/// when `k` is 0. Never above the plain minimum.
+fn soft_min(x: [f64; 3], k: f64) -> f64 {
+    let m = x[0].min(x[1]).min(x[2]);
+    if k < 1e-9 {
+        return m;
+    }
+    let s: f64 = x.iter().map(|&v| (-(v - m) / k).exp()).sum();
+    m - k * s.ln()
+}
+
+impl Generator for Walk {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        let q = &ctx.posture.q;
+        let rig = &self.rig;
+        let start = DVec2::new(
+            rig.root_rest.x + q[rig.root[0]],
+            rig.root_rest.z + q[rig.root[2]],
+        );
+        let heading = q[rig.root[3]];
+        self.yaw = heading;
+        self.heading = heading;
+        let plan = Plan::new(&self.route, start, heading);
+        // Both feet start planted where they are, flat.
+        for leg in 0..2 {
+            let g = ctx.posture.globals[rig.legs[leg].joints[0]];
+            let fwd = g.rotation * DVec3::Z;
+            let yaw = fwd.x.atan2(fwd.z);
+            self.feet[leg] = Foot::Stance {
+                plant: DVec2::new(g.translation.x, g.translation.z),
+                yaw,
+                rocker: 0.0,
+                // The right foot starts late in its support: it lifts without rolling.
+                roll: if leg == 0 { None } else { Some(0.0) },
+                next: None,
+                stays: false,
+            };
+        }
+        self.phase = 0.0;
+        self.lambda = [0.0, 0.5];
+        self.t = 0.0;
+        self.start_q = q.clone();
+        self.settle_since = None;
+        self.plan = Some(plan);
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        let Some(plan) = self.plan.take() else {
+            return Step::Failed("walk: stepped before it started".into());
+        };
+        let (root, pelvis, spine, arms) = self.pose(&plan, out);
+        let rig = &self.rig;
+        for i in 0..6 {
+            out.set(rig.root[i], root[i]);
+        }
+        for i in 0..3 {
+            out.set(rig.pelvis[i], pelvis[i]);
+        }
+        // The upper body blends in from the posture the actor had.
+        let k = smoothstep(self.t / BLEND_IN_TIME);
+        let start_q = &self.start_q;
+        let mut put = |dof: usize, v: f64| {
+            let v = if k < 1.0 {
+                let s = start_q[dof];
+                s + (v - s) * k
+            } else {
+                v
+            };
+            out.set(dof, v);
+        };
+        for i in 0..4 {
+            put(rig.spine[i], spine[i]);
+        }
+        if self.options.arms {
+            for side in 0..2 {
+                for i in 0..3 {
+                    put(rig.arms[side][i], arms[side][i]);
+                }
+            }
+        }
+        // Finished once the plan has ended and both feet stand at their final spots.
+        let mut done = false;
+        if self.t >= plan.end_time {
+            let end = plan.sample(plan.end_time, self.heading);
+            let settled = (0..2).all(|leg| match self.feet[leg] {
+                Foot::Stance { plant, .. } => {
+                    (plant - self.spot(leg, &end, 1.0)).length() < 0.01 && self.poses[leg].pitch == 0.0
+                }
+                Foot::Swing { .. } => false,
+            });
+            if settled {
+                let since = *self.settle_since.get_or_insert(self.t);
+                done = self.t - since >= SETTLE_TIME;
+            } else {
+                self.settle_since = None;
+            }
+        }
+        // Advance the clock and the phase (dφ = dt / Dc, eq. 2-5).
+        let v = self.cadence_speed(&plan, self.t);
+        self.phase += ctx.dt / self.cycle(v).cycle;
+        self.t += ctx.dt;
+        self.plan = Some(plan);
+        if done {
+            Step::Finished
+        } else {
+            Step::Running
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests;
+
+
+/// Registers the Lua `walk` action kind.
+pub fn register(kinds: &mut troupe_runtime::lua::kinds::ActionKinds) {
+    lua::register(kinds);
+}

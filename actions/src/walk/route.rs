@@ -1,0 +1,645 @@
+//! Where the body goes: the route of a walk turned into a root plan, a function of time
+//! giving the pelvis' floor position, heading and speed (thesis 6.4.2: "the walking
+//! function is driven by continuously providing the new position vector of the
+//! skeleton").
+//!
+//! The plan is known in advance for every kind of route, so the foot placement can ask
+//! where the body will be when a foot that is about to swing reaches mid-stance.
+
+use std::sync::Arc;
+use troupe_runtime::glam::DVec2;
+use troupe_runtime::{Sequence, Track};
+
+/// Seconds to speed up from standing to the cruising speed, and to slow down to a stop
+/// (the start and stop transitions).
+pub const RAMP_TIME: f64 = 1.0;
+/// Seconds over which the body turns from its initial heading onto the route.
+pub const TURN_TIME: f64 = 0.8;
+/// Corner-cutting passes applied to a polyline path (Chaikin); three passes round a
+/// corner over about a quarter of the shorter adjacent segment.
+const SMOOTHING_PASSES: usize = 3;
+/// Sampling period of a speed profile given as samples.
+pub const PROFILE_DT: f64 = 0.01;
+/// Time constant of the critically damped filter that makes a requested speed change
+/// continuous in speed and acceleration (seconds).
+pub const SPEED_FILTER_TIME: f64 = 0.25;
+
+/// What a walk was asked to do (validated by [`Route::check`]).
+#[derive(Clone, Debug)]
+pub enum Route {
+    /// Walk through these floor points (x, z), ending at the last one; optionally face
+    /// `heading` (radians about +Y, 0 faces +Z) on arrival.
+    Path {
+        /// Points to pass through, in order.
+        points: Vec<DVec2>,
+        /// Heading to face on arrival.
+        heading: Option<f64>,
+        /// Cruising speed in m/s.
+        speed: f64,
+    },
+    /// Walk straight ahead at a speed given over time.
+    Velocity {
+        /// The speed.
+        speed: Speed,
+        /// Seconds of walking (ramps included); `None` walks until cancelled.
+        duration: Option<f64>,
+    },
+    /// Follow the keyframed root position (`root_x`, `root_z`, optionally `root_yaw`) of a
+    /// sequence: the `Global_motion` of 6.4.2. The path is translated (and turned by the
+    /// yaw difference) so that it starts where the actor stands.
+    Follow(Arc<Sequence>),
+}
+
+/// A requested walking speed over time.
+#[derive(Clone, Debug)]
+pub enum Speed {
+    /// A constant speed in m/s.
+    Constant(f64),
+    /// Samples every [`PROFILE_DT`] seconds from t = 0, in m/s.
+    Samples(Vec<f64>),
+}
+
+impl Route {
+    /// Checks every number of the route; the error names what is wrong and where.
+    pub fn check(&self, ht: f64) -> Result<(), String> {
+        let max_speed = super::cycle::MAX_RV * ht;
+        let speed_ok = |v: f64, what: &str| -> Result<(), String> {
+            if !v.is_finite() || v <= 0.0 {
+                return Err(format!("{what} must be a finite number > 0 m/s, got {v}"));
+            }
+            if v > max_speed {
+                return Err(format!(
+                    "{what} {v} m/s is beyond the walking model (relative velocity {:.2} > {} for a thigh height of {ht:.3} m, i.e. at most {max_speed:.2} m/s)",
+                    v / ht,
+                    super::cycle::MAX_RV
+                ));
+            }
+            Ok(())
+        };
+        match self {
+            Route::Path {
+                points,
+                heading,
+                speed,
+            } => {
+                speed_ok(*speed, "`speed`")?;
+                if points.is_empty() {
+                    return Err("the path is empty: give at least one point".into());
+                }
+                for (i, p) in points.iter().enumerate() {
+                    if !p.is_finite() {
+                        return Err(format!("path point {} is not finite ({p})", i + 1));
+                    }
+                    if p.length() > 10_000.0 {
+                        return Err(format!(
+                            "path point {} ({p}) is more than 10 km away: unreachable",
+                            i + 1
+                        ));
+                    }
+                }
+                if let Some(h) = heading {
+                    if !h.is_finite() {
+                        return Err(format!("`heading` must be finite, got {h}"));
+                    }
+                }
+            }
+            Route::Velocity { speed, duration } => {
+                if let Some(d) = duration {
+                    if !d.is_finite() || *d <= 0.0 {
+                        return Err(format!("`duration` must be a finite number > 0 s, got {d}"));
+                    }
+                }
+                match speed {
+                    Speed::Constant(v) => speed_ok(*v, "`velocity`")?,
+                    Speed::Samples(s) => {
+                        if s.is_empty() {
+                            return Err("`velocity` gave no samples".into());
+                        }
+                        for (i, &v) in s.iter().enumerate() {
+                            let t = i as f64 * PROFILE_DT;
+                            if !v.is_finite() || v < 0.0 {
+                                return Err(format!(
+                                    "`velocity` returned {v} at t = {t:.2} s: expected a finite speed ≥ 0 m/s"
+                                ));
+                            }
+                            if v > max_speed {
+                                speed_ok(v, &format!("`velocity` at t = {t:.2} s"))?;
+                            }
+                        }
+                    }
+                }
+            }
+            Route::Follow(seq) => {
+                for dof in ["root_x", "root_z"] {
+                    if seq.track(dof).is_none() {
+                        return Err(format!(
+                            "the followed sequence `{}` has no `{dof}` track (it needs root_x and root_z, and optionally root_yaw)",
+                            seq.name
+                        ));
+                    }
+                }
+                if !(seq.duration() > 0.0) {
+                    return Err(format!("the followed sequence `{}` is empty", seq.name));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The body's floor position, heading and speed at one time.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RootSample {
+    /// Floor position (x, z).
+    pub position: DVec2,
+    /// Heading in radians about +Y (0 faces +Z).
+    pub heading: f64,
+    /// Speed along the route in m/s.
+    pub speed: f64,
+}
+
+/// The unit floor direction of heading `h`.
+pub fn direction(h: f64) -> DVec2 {
+    DVec2::new(h.sin(), h.cos())
+}
+
+/// The heading of floor direction `d`.
+pub fn heading_of(d: DVec2) -> f64 {
+    d.x.atan2(d.y)
+}
+
+/// `a` wrapped to (−π, π].
+pub fn wrap(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    let mut x = a % t;
+    if x > std::f64::consts::PI {
+        x -= t;
+    } else if x <= -std::f64::consts::PI {
+        x += t;
+    }
+    x
+}
+
+/// 3u² − 2u³ on [0, 1], clamped outside.
+pub fn smoothstep(u: f64) -> f64 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * (3.0 - 2.0 * u)
+}
+
+/// ∫₀ᵘ smoothstep, for u in [0, 1] (u³ − u⁴/2).
+fn smoothstep_integral(u: f64) -> f64 {
+    let u = u.clamp(0.0, 1.0);
+    u * u * u - 0.5 * u * u * u * u
+}
+
+/// Progress along a route over time: distance s(t) and speed v(t).
+#[derive(Clone, Debug)]
+enum Profile {
+    /// Smooth ramp up over `ramp` seconds, cruise at `v`, smooth ramp down ending at `end`
+    /// (no ramp down when `end` is infinite).
+    Trapezoid { v: f64, ramp: f64, end: f64 },
+    /// Samples of s and v every [`PROFILE_DT`] seconds; s is cubic-Hermite between them.
+    Samples { s: Vec<f64>, v: Vec<f64> },
+}
+
+impl Profile {
+    fn at(&self, t: f64) -> (f64, f64) {
+        match self {
+            Profile::Trapezoid { v, ramp, end } => {
+                let t = t.max(0.0);
+                let (v, r, end) = (*v, *ramp, *end);
+                // Distance covered by the ramp up: v·r/2.
+                let up = |t: f64| v * r * smoothstep_integral(t / r);
+                if t >= end {
+                    let total = up(r) + v * (end - 2.0 * r) + v * r * 0.5;
+                    return (total, 0.0);
+                }
+                let mut s = up(t.min(r)) + v * (t - r).max(0.0);
+                let mut speed = v * smoothstep(t / r);
+                if end.is_finite() && t > end - r {
+                    // Mirror of the ramp up: the speed is v·(1 − smoothstep(x)), so
+                    // remove v·∫smoothstep from what a cruise would have covered.
+                    let x = (t - (end - r)) / r;
+                    s -= v * r * smoothstep_integral(x);
+                    speed = v * smoothstep((end - t) / r);
+                }
+                (s, speed)
+            }
+            Profile::Samples { s, v } => {
+                let n = s.len();
+                let x = (t.max(0.0) / PROFILE_DT).min((n - 1) as f64);
+                let i = (x.floor() as usize).min(n.saturating_sub(2));
+                if n < 2 {
+                    return (s[0], v[0]);
+                }
+                let u = x - i as f64;
+                let h = PROFILE_DT;
+                let (p0, p1, m0, m1) = (s[i], s[i + 1], v[i] * h, v[i + 1] * h);
+                let u2 = u * u;
+                let u3 = u2 * u;
+                let pos = (2.0 * u3 - 3.0 * u2 + 1.0) * p0
+                    + (u3 - 2.0 * u2 + u) * m0
+                    + (-2.0 * u3 + 3.0 * u2) * p1
+                    + (u3 - u2) * m1;
+                let vel = ((6.0 * u2 - 6.0 * u) * p0
+                    + (3.0 * u2 - 4.0 * u + 1.0) * m0
+                    + (-6.0 * u2 + 6.0 * u) * p1
+                    + (3.0 * u2 - 2.0 * u) * m1)
+                    / h;
+                (pos, vel.max(0.0))
+            }
+        }
+    }
+}
+
+/// A floor polyline with its cumulative arc length.
+#[derive(Clone, Debug)]
+struct Polyline {
+    points: Vec<DVec2>,
+    length: Vec<f64>,
+}
+
+impl Polyline {
+    fn new(points: Vec<DVec2>) -> Polyline {
+        let mut length = Vec::with_capacity(points.len());
+        let mut total = 0.0;
+        for (i, p) in points.iter().enumerate() {
+            if i > 0 {
+                total += (*p - points[i - 1]).length();
+            }
+            length.push(total);
+        }
+        Polyline { points, length }
+    }
+
+    fn total(&self) -> f64 {
+        *self.length.last().unwrap_or(&0.0)
+    }
+
+    /// Position and unit tangent at arc length `s` (clamped to the ends).
+    fn at(&self, s: f64) -> (DVec2, DVec2) {
+        let n = self.points.len();
+        if n < 2 {
+            return (self.points[0], DVec2::Y);
+        }
+        let s = s.clamp(0.0, self.total());
+        // First index whose cumulative length exceeds s.
+        let i = self.length.partition_point(|&l| l <= s).clamp(1, n - 1);
+        let (a, b) = (self.points[i - 1], self.points[i]);
+        let seg = self.length[i] - self.length[i - 1];
+        let u = if seg > 0.0 { (s - self.length[i - 1]) / seg } else { 0.0 };
+        let dir = |k: usize| (self.points[k] - self.points[k - 1]).normalize_or(DVec2::Y);
+        // The tangent turns linearly from one segment's middle to the next one's, so the
+        // heading has no jump at the vertices.
+        let here = dir(i);
+        let tangent = if u < 0.5 && i > 1 {
+            dir(i - 1).lerp(here, 0.5 + u)
+        } else if u >= 0.5 && i + 1 < n {
+            here.lerp(dir(i + 1), u - 0.5)
+        } else {
+            here
+        };
+        (a + (b - a) * u, tangent.normalize_or(here))
+    }
+}
+
+/// Chaikin corner cutting, keeping both ends (and so the first and last directions).
+fn chaikin(points: &[DVec2], passes: usize) -> Vec<DVec2> {
+    let mut pts = points.to_vec();
+    for _ in 0..passes {
+        if pts.len() < 3 {
+            break;
+        }
+        let mut next = Vec::with_capacity(pts.len() * 2);
+        next.push(pts[0]);
+        for w in pts.windows(2) {
+            let (a, b) = (w[0], w[1]);
+            next.push(a * 0.75 + b * 0.25);
+            next.push(a * 0.25 + b * 0.75);
+        }
+        next.push(*pts.last().expect("at least 3 points"));
+        // The first and last cut points sit on the end segments, so the route still
+        // leaves the start and reaches the goal along them.
+        pts = next;
+    }
+    pts
+}
+
+/// A route made concrete from the actor's starting pose: a function of time.
+#[derive(Clone, Debug)]
+pub struct Plan {
+    kind: PlanKind,
+    start_heading: f64,
+    /// When the body stops (infinite for an open-ended walk).
+    pub end_time: f64,
+}
+
+#[derive(Clone, Debug)]
+enum PlanKind {
+    Along {
+        line: Polyline,
+        profile: Profile,
+        end_heading: Option<f64>,
+    },
+    Follow {
+        seq: Arc<Sequence>,
+        offset: DVec2,
+        turn: f64,
+        yaw0: f64,
+    },
+}
+
+/// A track's value at `t`, clamped to its time range.
+fn track_at(track: &Track, t: f64) -> f64 {
+    track.value(t.clamp(track.start(), track.end()))
+}
+
+impl Plan {
+    /// The plan of `route` for a body standing at `start` with heading `heading`.
+    pub fn new(route: &Route, start: DVec2, heading: f64) -> Plan {
+        match route {
+            Route::Path {
+                points,
+                heading: end_heading,
+                speed,
+            } => {
+                let mut pts = vec![start];
+                let goal = *points.last().expect("checked: the path is not empty");
+                for p in &points[..points.len() - 1] {
+                    if (*p - *pts.last().expect("non-empty")).length() > 1e-3 {
+                        pts.push(*p);
+                    }
+                }
+                if let Some(h) = end_heading {
+                    // Arrive along the requested heading: the last leg is straight and
+                    // points that way, so the body faces it when it stops.
+                    let prev = *pts.last().expect("non-empty");
+                    let d = ((goal - prev).length() * 0.4).min(0.8);
+                    let approach = goal - direction(*h) * d;
+                    if d > 1e-3 && (approach - prev).length() > 1e-3 {
+                        pts.push(approach);
+                    }
+                }
+                if (goal - *pts.last().expect("non-empty")).length() > 1e-4 || pts.len() == 1 {
+                    pts.push(goal);
+                }
+                let line = Polyline::new(chaikin(&pts, SMOOTHING_PASSES));
+                let total = line.total();
+                let (v, ramp) = (*speed, RAMP_TIME);
+                // A short walk cannot reach the cruising speed: lower the peak so that the
+                // two ramps cover exactly the distance.
+                let v = v.min(total / ramp);
+                let end = if v > 0.0 {
+                    2.0 * ramp + (total - v * ramp) / v
+                } else {
+                    0.0
+                };
+                Plan {
+                    kind: PlanKind::Along {
+                        line,
+                        profile: Profile::Trapezoid { v, ramp, end },
+                        end_heading: *end_heading,
+                    },
+                    start_heading: heading,
+                    end_time: end,
+                }
+            }
+            Route::Velocity { speed, duration } => {
+                let far = start + direction(heading) * 1.0e5;
+                let line = Polyline::new(vec![start, far]);
+                let (profile, end) = match (speed, duration) {
+                    (Speed::Constant(v), None) => (
+                        Profile::Trapezoid {
+                            v: *v,
+                            ramp: RAMP_TIME,
+                            end: f64::INFINITY,
+                        },
+                        f64::INFINITY,
+                    ),
+                    (Speed::Constant(v), Some(d)) => {
+                        let ramp = RAMP_TIME.min(d / 2.0);
+                        (
+                            Profile::Trapezoid {
+                                v: *v,
+                                ramp,
+                                end: *d,
+                            },
+                            *d,
+                        )
+                    }
+                    (Speed::Samples(samples), d) => {
+                        let d = d.unwrap_or((samples.len() - 1) as f64 * PROFILE_DT);
+                        let profile = filtered_profile(samples, d);
+                        (profile, d)
+                    }
+                };
+                Plan {
+                    kind: PlanKind::Along {
+                        line,
+                        profile,
+                        end_heading: None,
+                    },
+                    start_heading: heading,
+                    end_time: end,
+                }
+            }
+            Route::Follow(seq) => {
+                let t0 = seq.start();
+                let x = seq.track("root_x").expect("checked");
+                let z = seq.track("root_z").expect("checked");
+                let p0 = DVec2::new(track_at(x, t0), track_at(z, t0));
+                let yaw0 = seq.track("root_yaw").map(|y| track_at(y, t0));
+                // Turn the keyframed path so that its start heading is the actor's.
+                let turn = match yaw0 {
+                    Some(y) => wrap(heading - y),
+                    None => 0.0,
+                };
+                Plan {
+                    kind: PlanKind::Follow {
+                        seq: seq.clone(),
+                        offset: start - rotate(p0, turn),
+                        turn,
+                        yaw0: yaw0.unwrap_or(heading),
+                    },
+                    start_heading: heading,
+                    end_time: seq.duration(),
+                }
+            }
+        }
+    }
+
+    /// The body's position, heading and speed `t` seconds after the start; `fallback` is
+    /// the heading to keep where the route gives none (a followed path at rest).
+    pub fn sample(&self, t: f64, fallback: f64) -> RootSample {
+        match &self.kind {
+            PlanKind::Along {
+                line,
+                profile,
+                end_heading,
+            } => {
+                let (s, speed) = profile.at(t);
+                let (position, tangent) = line.at(s);
+                let mut path_heading = heading_of(tangent);
+                if line.total() < 1e-6 {
+                    path_heading = end_heading.unwrap_or(self.start_heading);
+                }
+                let k = smoothstep(t / TURN_TIME);
+                let heading = self.start_heading + wrap(path_heading - self.start_heading) * k;
+                RootSample {
+                    position,
+                    heading,
+                    speed,
+                }
+            }
+            PlanKind::Follow {
+                seq,
+                offset,
+                turn,
+                yaw0,
+            } => {
+                let t = (seq.start() + t).min(seq.end());
+                let x = seq.track("root_x").expect("checked");
+                let z = seq.track("root_z").expect("checked");
+                let p = DVec2::new(track_at(x, t), track_at(z, t));
+                let inside = t > seq.start() && t < seq.end();
+                let vel = if inside {
+                    DVec2::new(x.velocity(t), z.velocity(t))
+                } else {
+                    DVec2::ZERO
+                };
+                let vel = rotate(vel, *turn);
+                let heading = match seq.track("root_yaw") {
+                    Some(y) => self.start_heading + (track_at(y, t) - yaw0),
+                    None if vel.length() > 0.05 => heading_of(vel),
+                    None => fallback,
+                };
+                RootSample {
+                    position: offset + rotate(p, *turn),
+                    heading,
+                    speed: vel.length(),
+                }
+            }
+        }
+    }
+}
+
+/// `p` turned by `a` radians about +Y (the floor's x, z).
+fn rotate(p: DVec2, a: f64) -> DVec2 {
+    let (s, c) = a.sin_cos();
+    // A heading h maps +Z to (sin h, cos h): x' = x cos a + z sin a, z' = −x sin a + z cos a.
+    DVec2::new(p.x * c + p.y * s, -p.x * s + p.y * c)
+}
+
+/// Samples of a requested speed, passed through a critically damped filter (so a step
+/// change becomes continuous in speed and acceleration) and ramped to zero at both ends,
+/// then integrated into distance.
+fn filtered_profile(samples: &[f64], duration: f64) -> Profile {
+    let n = ((duration / PROFILE_DT).round() as usize).max(1) + 1;
+    let w = 1.0 / SPEED_FILTER_TIME;
+    let (mut x, mut xd) = (0.0f64, 0.0f64);
+    let mut v = Vec::with_capacity(n);
+    for i in 0..n {
+        let t = i as f64 * PROFILE_DT;
+        let target = samples[i.min(samples.len() - 1)];
+        // Semi-implicit Euler of x'' = w²(target − x) − 2w x', sub-stepped for accuracy.
+        for _ in 0..10 {
+            let h = PROFILE_DT / 10.0;
+            xd += (w * w * (target - x) - 2.0 * w * xd) * h;
+            x += xd * h;
+        }
+        let ramp = smoothstep((duration - t) / RAMP_TIME.min(duration / 2.0));
+        v.push(x.max(0.0) * ramp);
+    }
+    let mut s = Vec::with_capacity(n);
+    let mut total = 0.0;
+    for i in 0..n {
+        if i > 0 {
+            total += 0.5 * (v[i] + v[i - 1]) * PROFILE_DT;
+        }
+        s.push(total);
+    }
+    Profile::Samples { s, v }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn trapezoid_ends_at_the_goal_with_zero_speed() {
+        let route = Route::Path {
+            points: vec![DVec2::new(3.0, 4.0)],
+            heading: None,
+            speed: 1.2,
+        };
+        let plan = Plan::new(&route, DVec2::ZERO, 0.0);
+        let end = plan.sample(plan.end_time, 0.0);
+        assert!((end.position - DVec2::new(3.0, 4.0)).length() < 1e-9);
+        assert!(end.speed.abs() < 1e-12);
+        // Mid-route it cruises at the requested speed.
+        let mid = plan.sample(plan.end_time / 2.0, 0.0);
+        assert!((mid.speed - 1.2).abs() < 1e-9, "{}", mid.speed);
+        // The distance is continuous at the ramp boundaries and at the end, and the
+        // reported speed is its derivative everywhere.
+        for t in [RAMP_TIME, plan.end_time - RAMP_TIME, plan.end_time] {
+            let a = plan.sample(t - 1e-7, 0.0).position;
+            let b = plan.sample(t + 1e-7, 0.0).position;
+            assert!((a - b).length() < 1e-6, "jump at {t}");
+        }
+        let mut t = 0.0;
+        while t < plan.end_time {
+            let h = 1e-6;
+            let d = (plan.sample(t + h, 0.0).position - plan.sample(t - h, 0.0).position).length() / (2.0 * h);
+            assert!((d - plan.sample(t, 0.0).speed).abs() < 1e-4, "speed at {t}: {d}");
+            t += 0.05;
+        }
+    }
+
+    #[test]
+    fn arrival_heading_is_the_requested_one() {
+        let route = Route::Path {
+            points: vec![DVec2::new(2.0, 2.0)],
+            heading: Some(std::f64::consts::FRAC_PI_2),
+            speed: 1.0,
+        };
+        let plan = Plan::new(&route, DVec2::ZERO, 0.0);
+        let end = plan.sample(plan.end_time, 0.0);
+        assert!(wrap(end.heading - std::f64::consts::FRAC_PI_2).abs() < 1e-6);
+    }
+
+    #[test]
+    fn filtered_speed_is_continuous_across_a_step() {
+        let samples: Vec<f64> = (0..600).map(|i| if i < 300 { 1.0 } else { 1.6 }).collect();
+        let profile = filtered_profile(&samples, 6.0);
+        let mut prev = profile.at(0.0).1;
+        for k in 1..6000 {
+            let v = profile.at(k as f64 * 0.001).1;
+            assert!((v - prev).abs() < 0.01, "jump at {k}: {prev} → {v}");
+            prev = v;
+        }
+    }
+
+    #[test]
+    fn bad_routes_are_named() {
+        let ht = 0.93;
+        let empty = Route::Path {
+            points: vec![],
+            heading: None,
+            speed: 1.0,
+        };
+        assert!(empty.check(ht).unwrap_err().contains("empty"));
+        let nan = Route::Path {
+            points: vec![DVec2::new(1.0, 1.0), DVec2::new(f64::NAN, 0.0)],
+            heading: None,
+            speed: 1.0,
+        };
+        assert!(nan.check(ht).unwrap_err().contains("path point 2"));
+        for v in [0.0, -1.0, f64::NAN, 50.0] {
+            let r = Route::Velocity {
+                speed: Speed::Constant(v),
+                duration: None,
+            };
+            assert!(r.check(ht).unwrap_err().contains("velocity"), "{v}");
+        }
+    }
+}

@@ -1,0 +1,401 @@
+//! The walking motor's measurable claims, run through a real scene (scheduler, blending,
+//! forward kinematics) and measured on the resulting joint positions.
+
+use super::*;
+use troupe_runtime::action::Status;
+use troupe_runtime::kinematics::forward_kinematics;
+use troupe_runtime::{ActionSpec, ActorDesc, Key, Scene, SceneConfig, Track, Transform};
+
+/// Points of one foot's sole: (joint, position in that joint's frame).
+struct Sole {
+    points: Vec<(usize, DVec3)>,
+}
+
+/// The heel, the sole under the ball joint and the toe tip of each foot, fixed to their
+/// segments (found from the rest pose, where every joint frame is unrotated).
+fn soles(skeleton: &Skeleton, rig: &Rig) -> [Sole; 2] {
+    let mut rest = vec![Transform::IDENTITY; skeleton.joints().len()];
+    forward_kinematics(skeleton, &vec![0.0; skeleton.dof_count()], &mut rest);
+    let make = |leg: usize| {
+        let l = &rig.legs[leg];
+        let (ankle, mt) = (l.joints[0], l.joints[1]);
+        let a = rest[ankle].translation;
+        let m = rest[mt].translation;
+        let under = DVec3::new(a.x, 0.0, a.z);
+        // The heel and the ball's sole belong to the foot (the subtalar joint's segment).
+        let subtalar = skeleton.joints()[mt].parent.expect("metatarsal has a parent");
+        let s = rest[subtalar].translation;
+        Sole {
+            points: vec![
+                (subtalar, under + l.heel - s),
+                (subtalar, DVec3::new(m.x, 0.0, m.z) - s),
+                (mt, l.toe_sole),
+            ],
+        }
+    };
+    [make(0), make(1)]
+}
+
+/// One tick of a walking actor, as measured.
+struct Frame {
+    t: f64,
+    q: Vec<f64>,
+    /// Sole points per foot, world.
+    soles: [Vec<DVec3>; 2],
+}
+
+struct Run {
+    frames: Vec<Frame>,
+    status: Status,
+    ht: f64,
+    rig: Rig,
+}
+
+fn adult_scene(rate: f64, threads: usize) -> Scene {
+    Scene::new(SceneConfig {
+        rate,
+        threads,
+        ..SceneConfig::default()
+    })
+    .unwrap()
+}
+
+/// Runs one actor's walk made by `make` until it ends or `max_t` seconds pass.
+fn run(rate: f64, desc: ActorDesc, max_t: f64, make: impl FnOnce(&Skeleton) -> Walk) -> Run {
+    let mut scene = adult_scene(rate, 1);
+    let a = scene.add_actor(&desc).unwrap();
+    let skeleton = scene.actors()[a].skeleton.clone();
+    let walk = make(&skeleton);
+    let rig = walk.rig().clone();
+    let feet = soles(&skeleton, &rig);
+    let id = scene
+        .start_action(a, ActionSpec::new("walk", walk.scope()), Box::new(walk))
+        .unwrap();
+    let mut frames = Vec::new();
+    let mut status = Status::Pending;
+    while scene.time() < max_t {
+        scene.step();
+        let st = &scene.states()[a];
+        let world = |s: &Sole| {
+            s.points
+                .iter()
+                .map(|(j, p)| st.globals[*j].transform_point(*p))
+                .collect::<Vec<_>>()
+        };
+        frames.push(Frame {
+            t: scene.time(),
+            q: st.q.clone(),
+            soles: [world(&feet[0]), world(&feet[1])],
+        });
+        status = scene.action(id).unwrap().status;
+        if status.is_final() {
+            break;
+        }
+    }
+    Run {
+        frames,
+        status,
+        ht: rig.thigh_height,
+        rig,
+    }
+}
+
+fn root_floor(run: &Run, f: &Frame) -> DVec2 {
+    DVec2::new(
+        run.rig.root_rest.x + f.q[run.rig.root[0]],
+        run.rig.root_rest.z + f.q[run.rig.root[2]],
+    )
+}
+
+#[test]
+fn arrives_within_5_cm_facing_the_travel_direction() {
+    let goal = DVec3::new(3.0, 0.0, 4.0);
+    let r = run(100.0, ActorDesc::new("a"), 20.0, |s| {
+        Walk::to(s, goal, WalkOptions::default()).unwrap()
+    });
+    assert_eq!(r.status, Status::Completed);
+    let last = r.frames.last().unwrap();
+    let at = root_floor(&r, last);
+    let miss = (at - DVec2::new(goal.x, goal.z)).length();
+    assert!(miss < 0.05, "stopped {miss} m from the goal");
+    let yaw = last.q[r.rig.root[3]];
+    let travel = 3.0f64.atan2(4.0);
+    assert!(wrap(yaw - travel).abs() < 0.05, "heading {yaw} vs {travel}");
+    // It stands: legs straight, feet side by side under the hips.
+    for leg in &r.rig.legs {
+        assert!(last.q[leg.dofs[3]].abs() < 0.02, "knee {}", last.q[leg.dofs[3]]);
+    }
+}
+
+#[test]
+fn arrives_facing_a_requested_heading() {
+    let heading = 100f64.to_radians();
+    let r = run(100.0, ActorDesc::new("a"), 20.0, |s| {
+        Walk::to(
+            s,
+            DVec3::new(-1.5, 0.0, 2.5),
+            WalkOptions {
+                heading: Some(heading),
+                ..WalkOptions::default()
+            },
+        )
+        .unwrap()
+    });
+    assert_eq!(r.status, Status::Completed);
+    let last = r.frames.last().unwrap();
+    assert!((root_floor(&r, last) - DVec2::new(-1.5, 2.5)).length() < 0.05);
+    assert!(wrap(last.q[r.rig.root[3]] - heading).abs() < 0.05);
+}
+
+/// Contact of a foot: a sole point within `eps` of the floor.
+fn contact(f: &Frame, leg: usize, eps: f64) -> bool {
+    f.soles[leg].iter().any(|p| p.y < eps)
+}
+
+/// Rising and falling edges of a foot's contact: (strikes, toe-offs) times.
+fn contact_edges(r: &Run, leg: usize) -> (Vec<f64>, Vec<f64>) {
+    let (mut strikes, mut offs) = (Vec::new(), Vec::new());
+    for w in r.frames.windows(2) {
+        let (a, b) = (contact(&w[0], leg, 2e-4), contact(&w[1], leg, 2e-4));
+        if !a && b {
+            strikes.push(w[1].t);
+        }
+        if a && !b {
+            offs.push(w[1].t);
+        }
+    }
+    (strikes, offs)
+}
+
+#[test]
+fn cycle_and_phase_durations_match_eq_2_5_and_2_6() {
+    for rv in [0.5, 1.0, 1.5, 2.0] {
+        let mut ht = 0.0;
+        let r = run(1000.0, ActorDesc::new("a"), 14.0, |s| {
+            let w = Walk::velocity(s, Speed::Constant(1.0), Some(1.0), WalkOptions::default()).unwrap();
+            ht = w.rig().thigh_height;
+            Walk::velocity(s, Speed::Constant(rv * ht), None, WalkOptions::default()).unwrap()
+        });
+        let v = rv * r.ht;
+        let steady = |t: f64| t > 5.0 && t < 13.5;
+        let (ls, lo) = contact_edges(&r, 0);
+        let (rs, _) = contact_edges(&r, 1);
+        let ls: Vec<f64> = ls.into_iter().filter(|t| steady(*t)).collect();
+        assert!(ls.len() >= 3, "rv {rv}: too few strikes {ls:?}");
+        let dc = (ls[ls.len() - 1] - ls[0]) / (ls.len() - 1) as f64;
+        // Cycle length: distance the body travels in one cycle, normalized by Ht.
+        let rlc = v * dc / r.ht;
+        let want = 1.346 * rv.sqrt();
+        assert!((rlc / want - 1.0).abs() < 0.05, "rv {rv}: RLc {rlc} vs {want}");
+        let model = CycleTimes::from_cycle(dc);
+        // Support: from a left strike to the next left toe-off.
+        let mut ds = Vec::new();
+        let mut dds = Vec::new();
+        for &s in &ls {
+            if let Some(&off) = lo.iter().find(|&&o| o > s) {
+                ds.push(off - s);
+                // Double support after the right strike: until the left toe-off.
+                if let Some(&rstrike) = rs.iter().find(|&&x| x > s && x < off) {
+                    dds.push(off - rstrike);
+                }
+            }
+        }
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        assert!(!ds.is_empty() && !dds.is_empty(), "rv {rv}");
+        let (ds, dds) = (mean(&ds), mean(&dds));
+        println!("rv {rv}: Dc {dc:.4} RLc {rlc:.4} (eq. 2-5 {want:.4}) Ds {ds:.4} (eq. 2-6 {:.4}) Dds {dds:.4} (eq. 2-6 {:.4})", model.support, model.double_support);
+        assert!(
+            (ds / model.support - 1.0).abs() < 0.05,
+            "rv {rv}: support {ds} vs eq. 2-6 {}",
+            model.support
+        );
+        assert!(
+            (dds / model.double_support - 1.0).abs() < 0.05,
+            "rv {rv}: double support {dds} vs eq. 2-6 {}",
+            model.double_support
+        );
+    }
+}
+
+/// Per step (contact period) and foot, the longest horizontal path a sole point travels
+/// while touching the floor (within 1 mm); and the lowest any sole point goes.
+fn skating(r: &Run) -> (f64, f64) {
+    let mut worst: f64 = 0.0;
+    let mut lowest = f64::INFINITY;
+    for leg in 0..2 {
+        let n = r.frames[0].soles[leg].len();
+        let mut slide = vec![0.0; n];
+        for w in r.frames.windows(2) {
+            for p in 0..n {
+                let (a, b) = (w[0].soles[leg][p], w[1].soles[leg][p]);
+                lowest = lowest.min(b.y);
+                if a.y < 1e-3 && b.y < 1e-3 {
+                    slide[p] += DVec2::new(b.x - a.x, b.z - a.z).length();
+                }
+            }
+            if !contact(&w[1], leg, 1e-3) {
+                for p in 0..n {
+                    worst = worst.max(slide[p]);
+                    slide[p] = 0.0;
+                }
+            }
+        }
+        worst = worst.max(slide.iter().cloned().fold(0.0, f64::max));
+    }
+    (worst, lowest)
+}
+
+#[test]
+fn planted_feet_do_not_skate_nor_go_below_the_floor() {
+    // Straight walks over the speed range, and a path with turns.
+    for rv in [0.5, 1.0, 1.5, 2.0] {
+        let r = run(200.0, ActorDesc::new("a"), 8.0, |s| {
+            let ht = Rig::new(s).unwrap().thigh_height;
+            Walk::velocity(s, Speed::Constant(rv * ht), Some(7.0), WalkOptions::default()).unwrap()
+        });
+        let (slide, lowest) = skating(&r);
+        assert!(slide <= 0.01, "rv {rv}: a planted foot slid {slide} m");
+        assert!(lowest >= -1e-3, "rv {rv}: a foot went {lowest} m below the floor");
+    }
+    let r = run(200.0, ActorDesc::new("a"), 30.0, |s| {
+        let pts = vec![DVec2::new(0.0, 2.0), DVec2::new(2.0, 3.0), DVec2::new(2.5, 0.5), DVec2::new(0.0, 0.0)];
+        Walk::path(s, pts, WalkOptions::default()).unwrap()
+    });
+    assert_eq!(r.status, Status::Completed);
+    let (slide, lowest) = skating(&r);
+    assert!(slide <= 0.01, "path: a planted foot slid {slide} m");
+    assert!(lowest >= -1e-3, "path: a foot went {lowest} m below the floor");
+}
+
+#[test]
+fn a_speed_change_keeps_joint_values_and_velocities_continuous() {
+    let change = 4.0;
+    let r = run(100.0, ActorDesc::new("a"), 10.0, |s| {
+        let samples: Vec<f64> = (0..900).map(|i| if (i as f64) * 0.01 < change { 1.0 } else { 1.7 }).collect();
+        Walk::velocity(s, Speed::Samples(samples), Some(9.0), WalkOptions::default()).unwrap()
+    });
+    let dofs = {
+        let skel = troupe_runtime::template::default_skeleton("adult").unwrap();
+        Walk::to(&skel, DVec3::new(1.0, 0.0, 0.0), WalkOptions::default()).unwrap().dofs().to_vec()
+    };
+    // Per DOF: largest change of value (≈ velocity) and of velocity (≈ acceleration) per
+    // tick inside a window.
+    let measure = |from: f64, to: f64| {
+        let mut dq: f64 = 0.0;
+        let mut ddq: f64 = 0.0;
+        for w in r.frames.windows(3) {
+            if w[1].t < from || w[1].t > to {
+                continue;
+            }
+            for &d in &dofs {
+                let v1 = w[1].q[d] - w[0].q[d];
+                let v2 = w[2].q[d] - w[1].q[d];
+                dq = dq.max(v2.abs());
+                ddq = ddq.max((v2 - v1).abs());
+            }
+        }
+        (dq, ddq)
+    };
+    let (dq_change, ddq_change) = measure(change - 0.3, change + 1.0);
+    let (dq_steady, ddq_steady) = measure(change + 1.5, 8.0);
+    assert!(dq_change <= 1.2 * dq_steady, "values jump at the change: {dq_change} vs {dq_steady}");
+    assert!(ddq_change <= 1.2 * ddq_steady, "velocities jump at the change: {ddq_change} vs {ddq_steady}");
+    // The body's speed follows without a jump.
+    let speed: Vec<f64> = r
+        .frames
+        .windows(2)
+        .map(|w| (root_floor(&r, &w[1]) - root_floor(&r, &w[0])).length() / 0.01)
+        .collect();
+    for w in speed.windows(2) {
+        assert!((w[1] - w[0]).abs() < 0.05, "speed jumps {} → {}", w[0], w[1]);
+    }
+}
+
+#[test]
+fn bad_input_is_a_clear_error() {
+    let s = troupe_runtime::template::default_skeleton("adult").unwrap();
+    let o = WalkOptions::default();
+    let err = |r: Result<Walk, String>| r.err().expect("an error");
+    assert!(err(Walk::to(&s, DVec3::new(f64::NAN, 0.0, 1.0), o)).contains("not finite"));
+    assert!(err(Walk::to(&s, DVec3::new(1.0, 1.5, 1.0), o)).contains("unreachable"));
+    assert!(err(Walk::to(&s, DVec3::new(1e6, 0.0, 1.0), o)).contains("unreachable"));
+    for speed in [0.0, -1.0, f64::NAN] {
+        let e = err(Walk::to(&s, DVec3::new(1.0, 0.0, 1.0), WalkOptions { speed, ..o }));
+        assert!(e.contains("`speed`") && e.contains("> 0"), "{e}");
+    }
+    assert!(err(Walk::to(&s, DVec3::new(1.0, 0.0, 1.0), WalkOptions { speed: 9.0, ..o })).contains("beyond"));
+    assert!(err(Walk::path(&s, vec![], o)).contains("empty"));
+    assert!(err(Walk::path(&s, vec![DVec2::ONE, DVec2::new(0.0, f64::INFINITY)], o)).contains("path point 2"));
+    assert!(err(Walk::to(&s, DVec3::ONE.with_y(0.0), WalkOptions { run: 2.0, ..o })).contains("`run`"));
+    let seq = Arc::new(Sequence::new("nothing"));
+    assert!(err(Walk::follow(&s, seq, o)).contains("root_x"));
+    let samples = vec![1.0, 1.0, f64::NAN];
+    assert!(err(Walk::velocity(&s, Speed::Samples(samples), Some(1.0), o)).contains("t = 0.02"));
+}
+
+#[test]
+fn follows_a_keyframed_global_motion() {
+    let mut seq = Sequence::new("global_motion");
+    seq.add_track(Track::new("root_x", vec![Key::new(0.0, 0.0), Key::new(3.0, 1.0), Key::new(6.0, 3.0)]).unwrap())
+        .unwrap();
+    seq.add_track(Track::new("root_z", vec![Key::new(0.0, 0.0), Key::new(3.0, 3.0), Key::new(6.0, 4.0)]).unwrap())
+        .unwrap();
+    let seq = Arc::new(seq);
+    let desc = ActorDesc {
+        at: DVec3::new(1.0, 0.0, -1.0),
+        ..ActorDesc::new("a")
+    };
+    let r = run(100.0, desc, 12.0, |s| Walk::follow(s, seq.clone(), WalkOptions::default()).unwrap());
+    assert_eq!(r.status, Status::Completed);
+    // The keyframed path, translated to start where the actor stood.
+    let at = root_floor(&r, r.frames.last().unwrap());
+    assert!((at - DVec2::new(4.0, 3.0)).length() < 0.05, "{at}");
+    // Mid-way it is on the keyframed curve.
+    let mid = r.frames.iter().find(|f| (f.t - 3.0).abs() < 1e-6).unwrap();
+    assert!((root_floor(&r, mid) - DVec2::new(2.0, 2.0)).length() < 0.08);
+    let (slide, _) = skating(&r);
+    assert!(slide <= 0.01, "{slide}");
+}
+
+#[test]
+fn same_result_with_one_and_two_threads() {
+    let finals: Vec<Vec<Vec<f64>>> = [1usize, 2]
+        .iter()
+        .map(|&threads| {
+            let mut scene = adult_scene(100.0, threads);
+            for (i, (from, to)) in [((0.0, 0.0), (3.0, 3.0)), ((3.0, 0.0), (0.0, 3.0)), ((1.5, -1.0), (1.5, 4.0))]
+                .iter()
+                .enumerate()
+            {
+                let a = scene
+                    .add_actor(&ActorDesc {
+                        at: DVec3::new(from.0, 0.0, from.1),
+                        ..ActorDesc::new(format!("a{i}"))
+                    })
+                    .unwrap();
+                let s = scene.actors()[a].skeleton.clone();
+                let w = Walk::to(&s, DVec3::new(to.0, 0.0, to.1), WalkOptions::default()).unwrap();
+                scene.start_action(a, ActionSpec::new("walk", w.scope()), Box::new(w)).unwrap();
+            }
+            for _ in 0..500 {
+                scene.step();
+            }
+            scene.states().iter().map(|s| s.q.clone()).collect()
+        })
+        .collect();
+    assert_eq!(finals[0], finals[1]);
+}
+
+#[test]
+fn the_walk_leaves_head_and_hands_free() {
+    let s = troupe_runtime::template::default_skeleton("adult").unwrap();
+    let w = Walk::to(&s, DVec3::new(1.0, 0.0, 1.0), WalkOptions::default()).unwrap();
+    let scope = w.scope();
+    for free in ["head", "right_hand", "left_hand"] {
+        assert!(!scope.overlaps(&s.scope(free).unwrap()), "{free}");
+    }
+    assert!(scope.contains_all(&s.scope("legs-l_ankle-r_ankle").unwrap().intersection(&scope)));
+    let no_arms = Walk::to(&s, DVec3::new(1.0, 0.0, 1.0), WalkOptions { arms: false, ..WalkOptions::default() }).unwrap();
+    assert!(!no_arms.scope().overlaps(&s.scope("arms").unwrap()));
+}
+

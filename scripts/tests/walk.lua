@@ -1,0 +1,116 @@
+-- Walking: the procedural walking motor (thesis 2.6, 6.4.2).
+
+local function flat_dist(p, x, z)
+  return math.sqrt((p[1] - x)^2 + (p[3] - z)^2)
+end
+
+local function angle_diff(a, b)
+  local d = (a - b) % (2 * math.pi)
+  if d > math.pi then d = d - 2 * math.pi end
+  return math.abs(d)
+end
+
+test("walk to a point: arrives within 5 cm, facing the way it walked", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {2, 0, 3}, speed = 1.3 }
+  expect(w.kind == "walk", "kind is walk")
+  expect(run_until(function() return w.status == "completed" end, 15), "completed: " .. tostring(w.error))
+  local p = ann:position()
+  expect(flat_dist(p, 2, 3) < 0.05, string.format("stopped %.3f m away", flat_dist(p, 2, 3)))
+  expect(angle_diff(ann:dof("root_yaw"), math.atan(2, 3)) < 0.05, "faces the travel direction")
+  expect(math.abs(ann:dof("l_knee_flexion")) < 0.02, "stands with straight legs")
+end)
+
+test("walk to a point with a requested heading", function()
+  local ann = troupe.actor{ name = "ann", at = {1, 0, 1}, facing = 180 }
+  local w = ann:walk{ to = {-1, 0, 2}, heading = 90 }
+  expect(run_until(function() return w.status == "completed" end, 15), "completed: " .. tostring(w.error))
+  expect(flat_dist(ann:position(), -1, 2) < 0.05, "arrived")
+  expect(angle_diff(ann:dof("root_yaw"), math.rad(90)) < 0.05, "faces +X")
+end)
+
+test("walk a path of floor points; feet stay on or above the floor", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ path = {{0, 2}, {1.5, 3}, {2, 1}}, speed = 1.1 }
+  local lowest = 1
+  local ok = run_until(function()
+    for _, j in ipairs({ "l_metatarsal", "r_metatarsal", "l_ankle", "r_ankle" }) do
+      lowest = math.min(lowest, ann:joint_position(j)[2])
+    end
+    return w.status == "completed"
+  end, 20)
+  expect(ok, "completed: " .. tostring(w.error))
+  expect(flat_dist(ann:position(), 2, 1) < 0.05, "at the last point")
+  expect(lowest > 0, "a foot joint went below the floor: " .. lowest)
+end)
+
+test("velocity walk: a function of time for a duration, then it stops", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = function(t) if t < 2 then return 0.8 else return 1.4 end end, duration = 5 }
+  expect(run_until(function() return w.status == "completed" end, 10), "completed: " .. tostring(w.error))
+  local z = ann:position()[3]
+  -- About 0.8·2 + 1.4·3 m, less the smooth start and stop.
+  expect(z > 3.5 and z < 5.8, "walked " .. z .. " m forward")
+end)
+
+test("follow a keyframed Global_motion path", function()
+  local ann = troupe.actor{ name = "ann" }
+  local path = troupe.sequence{
+    root_x = { {0, 0}, {2, 0.5}, {4, 2} },
+    root_z = { {0, 0}, {2, 2}, {4, 3} },
+  }
+  local w = ann:walk{ follow = path }
+  expect(run_until(function() return w.status == "completed" end, 10), "completed: " .. tostring(w.error))
+  expect(flat_dist(ann:position(), 2, 3) < 0.05, "at the end of the keyframed path")
+end)
+
+test("a weighted wave on the right arm runs while walking; the head stays free", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {0, 0, 4} }
+  local wave = ann:play("../examples/wave.trk", { mode = "weighted", weight = 0.8, scope = "right_arm" })
+  local look = ann:look_at{ target = {2, 1.6, 2}, duration = 2 }
+  run(0.5)
+  expect(wave.status == "active" or wave.status == "initiating", "wave runs alongside: " .. wave.status)
+  expect(look.status == "active", "look_at runs alongside: " .. look.status)
+  expect(w.status == "active", "walk runs: " .. w.status)
+  expect(run_until(function() return w.status == "completed" end, 15), "walk completed")
+end)
+
+test("personification options change the gait", function()
+  local a = troupe.actor{ name = "a" }
+  local b = troupe.actor{ name = "b", at = {2, 0, 0} }
+  a:walk{ velocity = 1.2, duration = 4 }
+  b:walk{ velocity = 1.2, duration = 4, run = 0.8, arm_swing = 2, pelvis = 2 }
+  local knee_a, knee_b, elbow_a, elbow_b = 0, 0, 0, 0
+  run_until(function()
+    knee_a = math.max(knee_a, a:dof("l_knee_flexion"))
+    knee_b = math.max(knee_b, b:dof("l_knee_flexion"))
+    elbow_a = math.max(elbow_a, a:dof("r_elbow_flexion"))
+    elbow_b = math.max(elbow_b, b:dof("r_elbow_flexion"))
+    return troupe.time() > 3
+  end, 5)
+  expect(knee_b > knee_a, "run-like bends the knees more")
+  expect(elbow_b > elbow_a + 0.5, "run-like flexes the elbows")
+end)
+
+test("bad input is a clear error", function()
+  local ann = troupe.actor{ name = "ann" }
+  local function err(opts)
+    local ok, e = pcall(function() return ann:walk(opts) end)
+    expect(not ok, "expected an error for " .. tostring(opts))
+    return tostring(e)
+  end
+  expect(err{ to = {0/0, 0, 1} }:find("not finite") ~= nil, "NaN target")
+  expect(err{ to = {1, 2, 1} }:find("unreachable") ~= nil, "target off the floor")
+  expect(err{ to = {1, 0, 1}, speed = 0 }:find("speed") ~= nil, "zero speed")
+  expect(err{ to = {1, 0, 1}, speed = -1 }:find("> 0") ~= nil, "negative speed")
+  expect(err{ path = {} }:find("empty") ~= nil, "empty path")
+  expect(err{ path = {{1, 1}, {1, "x"}} }:find("path%[2%]") ~= nil, "bad path point")
+  expect(err{ velocity = 0 }:find("velocity") ~= nil, "zero velocity")
+  expect(err{ velocity = function(t) return 1 end }:find("duration") ~= nil, "function without duration")
+  expect(err{ velocity = function(t) return -1 end, duration = 1 }:find("t = 0.00") ~= nil, "negative velocity at t")
+  expect(err{ to = {1, 0, 1}, path = {{1, 1}} }:find("exactly one") ~= nil, "two routes")
+  expect(err{ to = {1, 0, 1}, run = 3 }:find("run") ~= nil, "run out of range")
+  expect(err{ to = {1, 0, 1}, stride = 2 }:find("unknown option") ~= nil, "unknown option")
+  expect(err{ follow = troupe.sequence{ l_knee_flexion = {{0, 0}, {1, 1}} } }:find("root_x") ~= nil, "follow without root track")
+end)
