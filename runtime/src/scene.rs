@@ -375,6 +375,19 @@ impl Scene {
             .or_else(|| self.ended.get(&id).cloned())
     }
 
+    /// The status of an action, without copying its record (for wait conditions checked
+    /// every tick).
+    pub fn action_status(&self, id: ActionId) -> Option<Status> {
+        let actor = *self.action_owner.get(&id)?;
+        self.work[actor]
+            .runtime
+            .actions
+            .iter()
+            .find(|a| a.id == id)
+            .map(|a| a.status)
+            .or_else(|| self.ended.get(&id).map(|info| info.status))
+    }
+
     /// The actions of `actor` that have not ended, in creation order.
     pub fn actions_of(&self, actor: usize) -> Vec<ActionInfo> {
         self.work

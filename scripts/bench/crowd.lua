@@ -43,8 +43,10 @@ for i, actor in ipairs(actors) do
       local dx, dz = here[1] - p[1], here[3] - p[3]
       local d = math.max(math.sqrt(dx * dx + dz * dz), 1e-6)
       local goal = { p[1] + dx / d * 0.45, 0, p[3] + dz / d * 0.45 }
+      -- The walk first: a default-mode action waits for running actions on its scope.
+      local walking = self:walk{ to = goal, speed = 1.0 + 0.6 * math.random() }
       local waving = self:play(wave, { scope = "right_arm", mode = "weighted", weight = 0.6, ease_in = 0.4, ease_out = 0.3 })
-      self:walk{ to = goal, speed = 1.0 + 0.6 * math.random() }:wait()
+      walking:wait()
       waving:cancel()
       -- Reach for the parcel, then look at the neighbour for a moment.
       self:reach{ hand = "right", target = parcel, duration = 0.8 }:wait()

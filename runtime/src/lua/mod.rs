@@ -481,8 +481,7 @@ impl Director {
         };
         let ended = |id: ActionId| -> Option<Status> {
             self.scene()
-                .action(id)
-                .map(|a| a.status)
+                .action_status(id)
                 .filter(|s| s.is_final())
         };
         match wait {
