@@ -78,6 +78,8 @@ pub struct ActorRuntime {
     pub(crate) events: Vec<Event>,
     /// Generator writes refused because they fell outside the action's scope.
     pub(crate) refused_writes: u64,
+    /// Attach/release requests of the last tick, in emission order (see [`crate::holding`]).
+    pub(crate) hold_requests: Vec<crate::holding::HoldRequest>,
     scratch: Vec<f64>,
     accumulator: Accumulator,
 }
@@ -154,6 +156,7 @@ impl ActorRuntime {
     ) {
         self.events.clear();
         self.ended.clear();
+        self.hold_requests.clear();
         let mut tr = Transitions {
             actor,
             clock,
@@ -185,6 +188,7 @@ impl ActorRuntime {
             let mut out = DofWriter::new(action.spec.scope, &mut self.scratch);
             let step = action.generator.step(&ctx, &mut out);
             let (written, refused) = (out.written(), out.refused());
+            let requests = out.take_requests();
             if refused > 0 {
                 if self.refused_writes == 0 {
                     tracing::warn!(actor, action = %action.id, kind = %action.spec.kind,
@@ -197,6 +201,7 @@ impl ActorRuntime {
                 tr.set(action, Status::Failed);
                 continue;
             }
+            self.hold_requests.extend(requests);
             let w = action.spec.base_weight()
                 * ease_factor(
                     clock.time,
