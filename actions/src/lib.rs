@@ -2,6 +2,7 @@
 //! generator writes only the DOFs of its action's scope.
 
 pub mod dynamics;
+pub mod grasp;
 pub mod keyframe;
 pub mod kinds;
 pub mod look_at;
