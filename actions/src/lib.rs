@@ -3,9 +3,11 @@
 
 pub mod dynamics;
 pub mod grasp;
+pub mod interact;
 pub mod keyframe;
 pub mod kinds;
 pub mod look_at;
+pub mod manipulate;
 pub mod reach;
 
 pub use dynamics::DynamicsGenerator;

@@ -140,6 +140,20 @@ impl Grasp {
     }
 
     fn begin(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        // A hand-over: keep the palm away from the giver's palm.
+        if let (Some(from), Some(h)) = (self.options.from, ctx.world.holder(self.object)) {
+            if h.actor == from {
+                let giver = &ctx.world.actors[from].skeleton;
+                let side = if giver.joints()[h.joint].name.starts_with("l_") {
+                    Side::Left
+                } else {
+                    Side::Right
+                };
+                let model = HandModel::new(giver, side)?;
+                let palm = ctx.world.states[from].globals[h.joint].transform_point(model.sensors.palm);
+                self.options.avoid = Some(palm);
+            }
+        }
         let plan = plan_grasp(
             ctx.skeleton,
             ctx.posture,

@@ -34,6 +34,9 @@ pub const REACH_TOLERANCE: f64 = 0.005;
 /// … and this angle (radians, 3°).
 pub const REACH_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
 
+/// A receiving palm stays this far from the giving palm (metres).
+pub const AVOID_DISTANCE: f64 = 0.08;
+
 /// Which hand(s) a grasp uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum HandChoice {
@@ -69,7 +72,8 @@ pub struct PlanOptions {
     pub hand: HandChoice,
     /// Override the table's grasp type (`pattern = …`).
     pub grasp: Option<GraspType>,
-    /// Keep the palm at least 12 cm from this point (another hand holding the object).
+    /// Keep the palm at least [`AVOID_DISTANCE`] from this point (another hand holding
+    /// the object).
     pub avoid: Option<DVec3>,
     /// The object may be held by this actor (a hand-over).
     pub from: Option<usize>,
@@ -390,7 +394,7 @@ pub fn plan_grasp(
                 continue;
             }
             if let Some(avoid) = options.avoid {
-                if (origin - avoid).length() < 0.12 {
+                if (origin - avoid).length() < AVOID_DISTANCE {
                     continue;
                 }
             }
