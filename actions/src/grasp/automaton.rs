@@ -12,12 +12,17 @@
 //! | `FreeHand` | a finger touches object `o` | `GraspingInProgress(o)` | — |
 //! | `GraspingInProgress(o)` | the thumb and another finger touch `o` | `SecureGrasp(o)` | attach `o` |
 //! | `GraspingInProgress(o)` | nothing touches | `FreeHand` | — |
-//! | `SecureGrasp(o)` | the thumb or every other finger lets go of `o` (the hand opens) | `GraspingInProgress` or `FreeHand` | release `o` |
+//! | `SecureGrasp(o)` | the thumb or every other finger is more than [`RELEASE_DISTANCE`] from `o` (the hand opens) | `GraspingInProgress` or `FreeHand` | release `o` |
 //!
 //! The caller applies the decisions (for a scene: [`troupe_runtime::holding::HoldRequest`]
 //! `Attach`/`Release` through its generator's writer, or [`troupe_runtime::Scene::request_hold`]).
 
 use super::close::{HandModel, CONTACT_DISTANCE};
+
+/// A secure grasp is released only when the thumb, or every other finger, has moved this
+/// far from the object (metres): hysteresis, so fingers sliding on the surface while the
+/// glove keeps closing do not release and re-attach the object.
+pub const RELEASE_DISTANCE: f64 = 0.006;
 use troupe_runtime::glam::DVec3;
 use troupe_runtime::sensors::{object_distance, Side};
 use troupe_runtime::{Object, Scope, Skeleton, Transform};
@@ -209,7 +214,19 @@ impl GraspAutomaton {
                 }
             }
             HandState::SecureGrasp(o) => {
-                if holds(o) {
+                // Per finger: within the release distance of the held object.
+                let mut near = [false; 5];
+                if let Some(obj) = objects.get(o) {
+                    for (i, s) in hs.sensors.iter().enumerate() {
+                        if let Some(f) = s.finger {
+                            let c = hs.center(i, &self.globals);
+                            if object_distance(obj, c) - s.radius <= RELEASE_DISTANCE {
+                                near[f] = true;
+                            }
+                        }
+                    }
+                }
+                if near[0] && near[1..].contains(&true) {
                     HandState::SecureGrasp(o)
                 } else {
                     decision = Some(HandDecision::Release(o));
@@ -226,5 +243,126 @@ impl GraspAutomaton {
             decision,
             touching,
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_runtime::template::default_skeleton;
+    use troupe_runtime::{ActorState, Shape};
+
+    /// A ball in front of the right palm, and the hand's posture.
+    fn setup(radius: f64) -> (Skeleton, ActorState, Object, GraspAutomaton) {
+        let skel = default_skeleton("adult").unwrap();
+        let state = ActorState::new(&skel, vec![0.0; skel.dof_count()]);
+        let a = GraspAutomaton::new(&skel, Side::Right, &state.q).unwrap();
+        let hs = &a.model().sensors;
+        let w = state.globals[hs.wrist];
+        let palm = w.transform_point(hs.palm);
+        let n = w.rotation * hs.palm_normal;
+        let palm_r = hs.sensors.last().unwrap().radius;
+        let ball = troupe_runtime::Scene::object(
+            "ball",
+            Shape::Sphere { radius },
+            // Toward the wrist and the thumb side, where the thumb can oppose the fingers.
+            palm + n * (palm_r + radius + 0.004) - w.rotation * hs.finger_direction * 0.035
+                + w.rotation * DVec3::Z * 0.03,
+            0.2,
+        );
+        (skel, state, ball, a)
+    }
+
+    /// Synthetic glove: every finger DOF of the hand at fraction `k` of its upper limit.
+    fn glove(skel: &Skeleton, a: &GraspAutomaton, k: f64) -> Vec<(usize, f64)> {
+        a.model()
+            .sensors
+            .scope
+            .iter()
+            .map(|d| (d, k * skel.dofs()[d].max))
+            .collect()
+    }
+
+    #[test]
+    fn closing_glove_grasps_securely_without_penetration_and_opening_releases() {
+        let (skel, state, ball, mut a) = setup(0.03);
+        let objects = [ball];
+        let mut seen = vec![a.state()];
+        let mut decisions = Vec::new();
+        for tick in 0..=100 {
+            let k = tick as f64 / 100.0;
+            let out = a
+                .update(&skel, &state.q, &state.globals, &glove(&skel, &a, k), &objects)
+                .unwrap();
+            if *seen.last().unwrap() != out.state {
+                seen.push(out.state);
+            }
+            decisions.extend(out.decision);
+            // No sensor inside the ball by more than 2 mm.
+            let mut q = state.q.clone();
+            for &(d, v) in &out.values {
+                q[d] = v;
+            }
+            let mut g = state.globals.clone();
+            a.model().finger_kinematics(&skel, &q, &mut g);
+            for i in 0..a.model().sensors.sensors.len() {
+                let d = a.model().sensors.distance_to_object(i, &g, &objects[0]);
+                assert!(d >= -0.002, "tick {tick}: sensor {i} penetrates {d}");
+            }
+        }
+        assert_eq!(
+            seen,
+            vec![
+                HandState::FreeHand,
+                HandState::GraspingInProgress(0),
+                HandState::SecureGrasp(0)
+            ]
+        );
+        assert_eq!(decisions, vec![HandDecision::Attach(0)]);
+        // The glove closes to a full fist, but the fingers stopped on the ball.
+        let closed = a.update(&skel, &state.q, &state.globals, &glove(&skel, &a, 1.0), &objects).unwrap();
+        assert!(closed.touching[0] && closed.touching[1..].iter().any(|t| *t));
+        // Opening the glove releases the ball and frees the hand.
+        let mut last = None;
+        for tick in 0..=50 {
+            let k = 1.0 - tick as f64 / 50.0;
+            let out = a
+                .update(&skel, &state.q, &state.globals, &glove(&skel, &a, k), &objects)
+                .unwrap();
+            if let Some(d) = out.decision {
+                assert_eq!(d, HandDecision::Release(0));
+                last = Some(d);
+            }
+        }
+        assert_eq!(last, Some(HandDecision::Release(0)));
+        assert_eq!(a.state(), HandState::FreeHand);
+    }
+
+    #[test]
+    fn glove_far_from_objects_follows_exactly() {
+        let (skel, state, mut ball, mut a) = setup(0.035);
+        ball.position += DVec3::new(0.0, 0.0, 2.0);
+        let want = glove(&skel, &a, 0.7);
+        let out = a.update(&skel, &state.q, &state.globals, &want, &[ball]).unwrap();
+        assert_eq!(out.state, HandState::FreeHand);
+        for (d, v) in want {
+            let got = out.values.iter().find(|x| x.0 == d).unwrap().1;
+            assert!((got - v).abs() < 1e-12);
+        }
+    }
+
+    #[test]
+    fn bad_input_is_an_error() {
+        let (skel, state, ball, mut a) = setup(0.035);
+        let elbow = skel.dof("r_elbow_flexion").unwrap();
+        let e = a
+            .update(&skel, &state.q, &state.globals, &[(elbow, 0.1)], &[ball.clone()])
+            .unwrap_err();
+        assert!(e.contains("not a finger DOF of the right hand"), "{e}");
+        let d = a.model().sensors.scope.iter().next().unwrap();
+        let e = a
+            .update(&skel, &state.q, &state.globals, &[(d, f64::NAN)], &[ball])
+            .unwrap_err();
+        assert!(e.contains("not finite"), "{e}");
     }
 }
