@@ -20,11 +20,13 @@
 use crate::grasp::action::{Signal, CLOSE_SECONDS, OPEN_SECONDS};
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};
-use crate::grasp::plan::{frame_rotation, ArmIk, CLEARANCE, REACH_ANGLE, REACH_TOLERANCE, ROTATION_WEIGHT, SEARCH_STEP};
+use crate::grasp::plan::{
+    frame_rotation, ArmIk, CLEARANCE, REACH_ANGLE, REACH_TOLERANCE, ROTATION_WEIGHT, SEARCH_STEP,
+};
 use crate::grasp::GraspType;
 use crate::reach::quintic;
 use std::sync::Arc;
-use troupe_runtime::glam::DVec3;
+use troupe_runtime::glam::{DQuat, DVec3};
 use troupe_runtime::jacobian::rotation_error;
 use troupe_runtime::sensors::{solid_distance, Side};
 use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Step, Transform, World};
@@ -194,7 +196,11 @@ impl Generator for Give {
                 for d in out.scope().iter() {
                     out.set(d, self.q[d]);
                 }
-                return if s >= 1.0 { Step::Finished } else { Step::Running };
+                return if s >= 1.0 {
+                    Step::Finished
+                } else {
+                    Step::Running
+                };
             }
         }
         for d in out.scope().iter() {
@@ -297,18 +303,25 @@ impl Generator for HoldHand {
         let g = &ctx.posture.globals;
         let wrist_now = g[hs.wrist];
         let local: Vec<(DVec3, f64)> = (0..hs.sensors.len())
-            .map(|i| (wrist_now.inverse().transform_point(hs.center(i, g)), hs.sensors[i].radius))
+            .map(|i| {
+                (
+                    wrist_now.inverse().transform_point(hs.center(i, g)),
+                    hs.sensors[i].radius,
+                )
+            })
             .collect();
         // Palm against their palm or around the back of their hand (4.5: the hand's
         // bounding volumes guide the frame); fingers along or against theirs. The cost
         // (translation + rotation) and reachability choose.
         let mut ranked = Vec::new();
-        let pairs = [
-            (-their_normal, their_fingers),
-            (-their_normal, -their_fingers),
-            (their_normal, their_fingers),
-            (their_normal, -their_fingers),
-        ];
+        let mut pairs = Vec::new();
+        for a in [-their_normal, their_normal] {
+            // Fingers along theirs, turned about the palm normal in 45° steps.
+            for k in 0..8 {
+                let turn = DQuat::from_axis_angle(a, k as f64 * std::f64::consts::FRAC_PI_4);
+                pairs.push((a, (turn * their_fingers).normalize()));
+            }
+        }
         for (a, f) in pairs {
             let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
             let mut origin = their_palm;
@@ -334,7 +347,7 @@ impl Generator for HoldHand {
         ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
         let mut ik = ArmIk::new(ctx.skeleton, self.side, 200)?;
         let mut best = f64::INFINITY;
-        for (_, wrist) in &ranked {
+        for (_, wrist) in ranked.iter().take(12) {
             let mut q = ctx.posture.q.clone();
             let (miss, angle) = ik.solve(ctx.skeleton, &mut q, wrist)?;
             if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
@@ -476,7 +489,13 @@ pub struct FollowHand {
 impl FollowHand {
     /// Follows `active`'s joint `active_wrist` with the hand `side` once `held` is raised,
     /// until `finished` is.
-    pub fn new(active: usize, active_wrist: usize, side: Side, held: Arc<Signal>, finished: Arc<Signal>) -> FollowHand {
+    pub fn new(
+        active: usize,
+        active_wrist: usize,
+        side: Side,
+        held: Arc<Signal>,
+        finished: Arc<Signal>,
+    ) -> FollowHand {
         FollowHand {
             active,
             active_wrist,
@@ -518,9 +537,9 @@ impl Generator for FollowHand {
                 self.q[d] = v;
             }
             let a = ctx.world.states[self.active].globals[self.active_wrist];
-            let rel = *self.relative.get_or_insert_with(|| {
-                a.inverse().mul(&ctx.posture.globals[arm.wrist])
-            });
+            let rel = *self
+                .relative
+                .get_or_insert_with(|| a.inverse().mul(&ctx.posture.globals[arm.wrist]));
             // Extrapolate the active hand one tick: this tick's output lands with it.
             let predicted = match self.last {
                 Some(l) => Transform::new(

@@ -35,6 +35,9 @@ pub fn action_kinds() -> ActionKinds {
         method: "look_at",
         build: build_look_at,
     });
+    // Grasping, manipulation, interaction: grasp, release, place, manipulate, give,
+    // hold_hand, shake_hands and troupe.plan_grasp.
+    crate::grasp::register(&mut kinds);
     kinds
 }
 

@@ -44,7 +44,11 @@ pub fn pose_at(keys: &[ObjectKey], start: &Transform, t: f64) -> Transform {
     };
     if t <= first.time {
         // Before the first key: from the start pose toward it.
-        let u = if first.time > 0.0 { (t / first.time).clamp(0.0, 1.0) } else { 1.0 };
+        let u = if first.time > 0.0 {
+            (t / first.time).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
         return Transform::new(
             start.rotation.slerp(rot(first), u),
             start.translation.lerp(first.position, u),
@@ -64,16 +68,28 @@ pub fn pose_at(keys: &[ObjectKey], start: &Transform, t: f64) -> Transform {
 impl Manipulate {
     /// Moves held `object` along `keys` with the arms `sides`. Keys must be finite, at
     /// times ≥ 0 in increasing order, and at least one.
-    pub fn new(object: usize, keys: Vec<ObjectKey>, sides: Vec<Side>) -> Result<Manipulate, String> {
+    pub fn new(
+        object: usize,
+        keys: Vec<ObjectKey>,
+        sides: Vec<Side>,
+    ) -> Result<Manipulate, String> {
         if keys.is_empty() {
             return Err("`keys` needs at least one key".into());
         }
         for (i, k) in keys.iter().enumerate() {
             if !(k.time.is_finite() && k.time >= 0.0) || !k.position.is_finite() {
-                return Err(format!("key {}: time and position must be finite (time ≥ 0)", i + 1));
+                return Err(format!(
+                    "key {}: time and position must be finite (time ≥ 0)",
+                    i + 1
+                ));
             }
             if i > 0 && k.time <= keys[i - 1].time {
-                return Err(format!("key {}: times must increase (got {} after {})", i + 1, k.time, keys[i - 1].time));
+                return Err(format!(
+                    "key {}: times must increase (got {} after {})",
+                    i + 1,
+                    k.time,
+                    keys[i - 1].time
+                ));
             }
         }
         Ok(Manipulate {
@@ -95,7 +111,11 @@ impl Generator for Manipulate {
             .get(self.object)
             .ok_or_else(|| format!("no object #{}", self.object))?;
         let me = &ctx.world.actors[ctx.actor].name;
-        if ctx.world.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
+        if ctx
+            .world
+            .holder(self.object)
+            .is_none_or(|h| h.actor != ctx.actor)
+        {
             return Err(format!("`{me}` does not hold `{}`", obj.name));
         }
         self.start = Transform::new(obj.rotation, obj.position);

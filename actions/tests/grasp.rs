@@ -107,7 +107,12 @@ fn every_shape_is_grasped_with_contact_and_follows_the_hand() {
     for (name, shape) in shapes() {
         let mut s = scene(1);
         let o = s
-            .add_object(Scene::object(name, shape, DVec3::new(-0.2, 1.05, 0.38), 0.3))
+            .add_object(Scene::object(
+                name,
+                shape,
+                DVec3::new(-0.2, 1.05, 0.38),
+                0.3,
+            ))
             .unwrap();
         let id = start_grasp(&mut s, 0, o, vec![Side::Right]);
         let status = run(&mut s, id, 400);
@@ -122,17 +127,28 @@ fn every_shape_is_grasped_with_contact_and_follows_the_hand() {
                 "{name}: finger {f} neither touches nor is at its limit"
             );
         }
-        assert!(touching.iter().filter(|t| **t).count() >= 2, "{name}: {touching:?}");
+        assert!(
+            touching.iter().filter(|t| **t).count() >= 2,
+            "{name}: {touching:?}"
+        );
         // While held, the object follows the hand: move the arm and compare.
         let skel = s.actors()[0].skeleton.clone();
         let wrist = skel.joint("r_wrist").unwrap();
-        let before = s.states()[0].globals[wrist].inverse().transform_point(s.objects()[o].position);
+        let before = s.states()[0].globals[wrist]
+            .inverse()
+            .transform_point(s.objects()[o].position);
         let elbow = skel.dof("r_elbow_flexion").unwrap();
         let q = s.states()[0].q[elbow];
         s.set_dofs(0, &[(elbow, q + 0.3)]).unwrap();
         s.step();
-        let after = s.states()[0].globals[wrist].inverse().transform_point(s.objects()[o].position);
-        assert!((after - before).length() <= 0.001, "{name}: object drifted {}", (after - before).length());
+        let after = s.states()[0].globals[wrist]
+            .inverse()
+            .transform_point(s.objects()[o].position);
+        assert!(
+            (after - before).length() <= 0.001,
+            "{name}: object drifted {}",
+            (after - before).length()
+        );
     }
 }
 
@@ -177,7 +193,12 @@ fn release_lets_go_and_place_puts_the_object_down() {
         .start_action(0, ActionSpec::new("release", scope), Box::new(r))
         .unwrap();
     assert_eq!(run(&mut s, id, 10), Status::Failed);
-    assert!(s.action(id).unwrap().reason.unwrap().contains("does not hold `cup`"));
+    assert!(s
+        .action(id)
+        .unwrap()
+        .reason
+        .unwrap()
+        .contains("does not hold `cup`"));
 }
 
 #[test]
@@ -200,7 +221,10 @@ fn out_of_reach_and_held_by_another_fail_with_reasons() {
     let id = start_grasp(&mut s, 0, far, vec![Side::Right]);
     assert_eq!(run(&mut s, id, 10), Status::Failed);
     let reason = s.action(id).unwrap().reason.unwrap();
-    assert!(reason.contains("out of reach") && reason.contains("far"), "{reason}");
+    assert!(
+        reason.contains("out of reach") && reason.contains("far"),
+        "{reason}"
+    );
 
     let cup = s
         .add_object(Scene::object(
@@ -225,7 +249,10 @@ fn out_of_reach_and_held_by_another_fail_with_reasons() {
     let id = start_grasp(&mut s, 0, cup, vec![Side::Right]);
     assert_eq!(run(&mut s, id, 10), Status::Failed);
     let reason = s.action(id).unwrap().reason.unwrap();
-    assert!(reason.contains("held by `bob`") && reason.contains("give"), "{reason}");
+    assert!(
+        reason.contains("held by `bob`") && reason.contains("give"),
+        "{reason}"
+    );
 }
 
 #[test]
@@ -239,16 +266,31 @@ fn grasp_is_identical_with_one_and_two_threads() {
         })
         .unwrap();
         let a = s
-            .add_object(Scene::object("a", Shape::Sphere { radius: 0.04 }, DVec3::new(-0.2, 1.05, 0.38), 0.3))
+            .add_object(Scene::object(
+                "a",
+                Shape::Sphere { radius: 0.04 },
+                DVec3::new(-0.2, 1.05, 0.38),
+                0.3,
+            ))
             .unwrap();
         let b = s
-            .add_object(Scene::object("b", Shape::Sphere { radius: 0.04 }, DVec3::new(0.8, 1.05, 0.38), 0.3))
+            .add_object(Scene::object(
+                "b",
+                Shape::Sphere { radius: 0.04 },
+                DVec3::new(0.8, 1.05, 0.38),
+                0.3,
+            ))
             .unwrap();
         let x = start_grasp(&mut s, 0, a, vec![Side::Right]);
         let y = start_grasp(&mut s, 1, b, vec![Side::Right]);
         run(&mut s, x, 400);
         run(&mut s, y, 50);
-        postures.push((s.states()[0].q.clone(), s.states()[1].q.clone(), s.objects()[a].position, s.objects()[b].rotation));
+        postures.push((
+            s.states()[0].q.clone(),
+            s.states()[1].q.clone(),
+            s.objects()[a].position,
+            s.objects()[b].rotation,
+        ));
     }
     assert_eq!(postures[0], postures[1]);
     let _ = DQuat::IDENTITY;

@@ -16,7 +16,10 @@ use troupe_runtime::{
 fn run_all(s: &mut Scene, ids: &[ActionId], max_ticks: usize) {
     for _ in 0..max_ticks {
         s.step();
-        if ids.iter().all(|id| s.action(*id).unwrap().status.is_final()) {
+        if ids
+            .iter()
+            .all(|id| s.action(*id).unwrap().status.is_final())
+        {
             return;
         }
     }
@@ -125,7 +128,11 @@ fn give_is_identical_with_one_and_two_threads() {
     for threads in [1, 2] {
         let (mut s, c, gid, rid) = give_scene(threads);
         run_all(&mut s, &[gid, rid], 1500);
-        out.push((s.states()[0].q.clone(), s.states()[1].q.clone(), s.objects()[c].position));
+        out.push((
+            s.states()[0].q.clone(),
+            s.states()[1].q.clone(),
+            s.objects()[c].position,
+        ));
     }
     assert_eq!(out[0], out[1]);
 }
@@ -144,7 +151,11 @@ fn give_without_holding_fails() {
     let skel = s.actors()[0].skeleton.clone();
     let give = Give::new(c, 1, Side::Right, Arc::new(Signal::default()));
     let id = s
-        .start_action(0, ActionSpec::new("give", grasp_scope(&skel, &[Side::Right]).unwrap()), Box::new(give))
+        .start_action(
+            0,
+            ActionSpec::new("give", grasp_scope(&skel, &[Side::Right]).unwrap()),
+            Box::new(give),
+        )
         .unwrap();
     run_all(&mut s, &[id], 5);
     let a = s.action(id).unwrap();
@@ -163,7 +174,12 @@ struct RootPath {
 impl Generator for RootPath {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         // Keys at 0, 1, 2, 3 s: (0, 0) → (0.06, 0.08) → (-0.04, 0.12) → (0, 0), eased.
-        let keys = [(0.0, 0.0, 0.0), (1.0, 0.06, 0.08), (2.0, -0.04, 0.12), (3.0, 0.0, 0.0)];
+        let keys = [
+            (0.0, 0.0, 0.0),
+            (1.0, 0.06, 0.08),
+            (2.0, -0.04, 0.12),
+            (3.0, 0.0, 0.0),
+        ];
         let t = ctx.local_time.min(3.0);
         let i = (t.floor() as usize).min(2);
         let u = t - i as f64;
@@ -195,14 +211,29 @@ fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, Arc<Signal>) {
     let held = Arc::new(Signal::default());
     let finished = Arc::new(Signal::default());
     let skel = s.actors()[0].skeleton.clone();
-    let active = HoldHand::new(1, Side::Right, Side::Left, shake, held.clone(), finished.clone());
+    let active = HoldHand::new(
+        1,
+        Side::Right,
+        Side::Left,
+        shake,
+        held.clone(),
+        finished.clone(),
+    );
     let aid = s
-        .start_action(0, ActionSpec::new("hold_hand", grasp_scope(&skel, &[Side::Right]).unwrap()), Box::new(active))
+        .start_action(
+            0,
+            ActionSpec::new("hold_hand", grasp_scope(&skel, &[Side::Right]).unwrap()),
+            Box::new(active),
+        )
         .unwrap();
     let wrist = skel.joint("r_wrist").unwrap();
     let follow = FollowHand::new(0, wrist, Side::Left, held.clone(), finished);
     let fid = s
-        .start_action(1, ActionSpec::new("follow_hand", skel.scope("left_arm").unwrap()), Box::new(follow))
+        .start_action(
+            1,
+            ActionSpec::new("follow_hand", skel.scope("left_arm").unwrap()),
+            Box::new(follow),
+        )
         .unwrap();
     (s, aid, fid, held)
 }
@@ -216,15 +247,28 @@ fn holding_hands_the_hands_stay_within_a_centimetre_while_the_active_actor_moves
             break;
         }
     }
-    assert!(held.before(s.tick()), "never held: {:?}", s.action(aid).unwrap().reason);
+    assert!(
+        held.before(s.tick()),
+        "never held: {:?}",
+        s.action(aid).unwrap().reason
+    );
     s.step();
     let gap0 = palm(&s, 0, Side::Right) - palm(&s, 1, Side::Left);
     let skel = s.actors()[0].skeleton.clone();
     let (x, z) = (skel.dof("root_x").unwrap(), skel.dof("root_z").unwrap());
     let q = &s.states()[0].q;
-    let walk = RootPath { x, z, x0: q[x], z0: q[z] };
+    let walk = RootPath {
+        x,
+        z,
+        x0: q[x],
+        z0: q[z],
+    };
     let wid = s
-        .start_action(0, ActionSpec::new("keyframe", skel.scope("global").unwrap()), Box::new(walk))
+        .start_action(
+            0,
+            ActionSpec::new("keyframe", skel.scope("global").unwrap()),
+            Box::new(walk),
+        )
         .unwrap();
     let mut worst: f64 = 0.0;
     let mut moved: f64 = 0.0;
@@ -246,8 +290,18 @@ fn holding_hands_the_hands_stay_within_a_centimetre_while_the_active_actor_moves
 fn shaking_hands_completes_for_both() {
     let (mut s, aid, fid, _) = hold_scene(true);
     run_all(&mut s, &[aid, fid], 800);
-    assert_eq!(s.action(aid).unwrap().status, Status::Completed, "{:?}", s.action(aid).unwrap().reason);
-    assert_eq!(s.action(fid).unwrap().status, Status::Completed, "{:?}", s.action(fid).unwrap().reason);
+    assert_eq!(
+        s.action(aid).unwrap().status,
+        Status::Completed,
+        "{:?}",
+        s.action(aid).unwrap().reason
+    );
+    assert_eq!(
+        s.action(fid).unwrap().status,
+        Status::Completed,
+        "{:?}",
+        s.action(fid).unwrap().reason
+    );
 }
 
 #[test]
@@ -259,16 +313,33 @@ fn manipulate_moves_the_held_object_along_keys() {
     run_all(&mut s, &[id], 400);
     let p0 = s.objects()[c].position;
     let keys = vec![
-        ObjectKey { time: 0.5, position: p0 + DVec3::new(0.0, 0.1, 0.0), rotation: None },
-        ObjectKey { time: 1.0, position: p0 + DVec3::new(0.05, 0.1, -0.05), rotation: None },
+        ObjectKey {
+            time: 0.5,
+            position: p0 + DVec3::new(0.0, 0.1, 0.0),
+            rotation: None,
+        },
+        ObjectKey {
+            time: 1.0,
+            position: p0 + DVec3::new(0.05, 0.1, -0.05),
+            rotation: None,
+        },
     ];
     let skel = s.actors()[0].skeleton.clone();
     let m = Manipulate::new(c, keys.clone(), vec![Side::Right]).unwrap();
     let mid = s
-        .start_action(0, ActionSpec::new("manipulate", skel.scope("right_arm").unwrap()), Box::new(m))
+        .start_action(
+            0,
+            ActionSpec::new("manipulate", skel.scope("right_arm").unwrap()),
+            Box::new(m),
+        )
         .unwrap();
     run_all(&mut s, &[mid], 200);
-    assert_eq!(s.action(mid).unwrap().status, Status::Completed, "{:?}", s.action(mid).unwrap().reason);
+    assert_eq!(
+        s.action(mid).unwrap().status,
+        Status::Completed,
+        "{:?}",
+        s.action(mid).unwrap().reason
+    );
     assert!((s.objects()[c].position - keys[1].position).length() < 0.01);
     assert!(Manipulate::new(c, vec![], vec![Side::Right]).is_err());
 }

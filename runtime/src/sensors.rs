@@ -143,7 +143,10 @@ impl HandSensors {
                 let next = match chain.get(k + 1) {
                     Some(&c) => joints[c].offset,
                     None => end_site(j).ok_or_else(|| {
-                        Error::Invalid(format!("hand sensors: `{}` has no end site", joints[j].name))
+                        Error::Invalid(format!(
+                            "hand sensors: `{}` has no end site",
+                            joints[j].name
+                        ))
                     })?,
                 };
                 let length = next.length();
@@ -275,7 +278,10 @@ mod tests {
         // The tip is moved by every index DOF; the proximal sensor only by the base ones.
         assert!(tip.stops.contains_all(&knuckle.stops));
         assert!(tip.stops.len() > knuckle.stops.len());
-        assert!(h.sensors.iter().all(|x| x.radius >= 0.006 && x.radius <= 0.03));
+        assert!(h
+            .sensors
+            .iter()
+            .all(|x| x.radius >= 0.006 && x.radius <= 0.03));
     }
 
     #[test]

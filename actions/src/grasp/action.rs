@@ -14,9 +14,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use troupe_runtime::holding::HoldRequest;
 use troupe_runtime::sensors::{object_distance, Side};
-use troupe_runtime::{
-    DofWriter, Generator, GeneratorContext, Scope, Skeleton, Step, Transform,
-};
+use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Skeleton, Step, Transform};
 
 /// Seconds the fingers take to close along a pattern.
 pub const CLOSE_SECONDS: f64 = 0.6;
@@ -101,7 +99,12 @@ pub struct Grasp {
 impl Grasp {
     /// A grasp of object `object` by the hands `sides` (which must be the plan's hands),
     /// reaching in `reach_seconds`.
-    pub fn new(object: usize, options: PlanOptions, sides: Vec<Side>, reach_seconds: f64) -> Result<Grasp, String> {
+    pub fn new(
+        object: usize,
+        options: PlanOptions,
+        sides: Vec<Side>,
+        reach_seconds: f64,
+    ) -> Result<Grasp, String> {
         if !(reach_seconds.is_finite() && reach_seconds > 0.0) {
             return Err(format!(
                 "duration must be a finite number of seconds > 0, got {reach_seconds}"
@@ -150,7 +153,8 @@ impl Grasp {
                     Side::Right
                 };
                 let model = HandModel::new(giver, side)?;
-                let palm = ctx.world.states[from].globals[h.joint].transform_point(model.sensors.palm);
+                let palm =
+                    ctx.world.states[from].globals[h.joint].transform_point(model.sensors.palm);
                 self.options.avoid = Some(palm);
             }
         }
@@ -166,13 +170,18 @@ impl Grasp {
         if planned.iter().any(|s| !self.sides.contains(s)) {
             return Err(format!(
                 "the plan needs the {} hand(s), outside this action's scope",
-                planned.iter().map(|s| s.name()).collect::<Vec<_>>().join(" and ")
+                planned
+                    .iter()
+                    .map(|s| s.name())
+                    .collect::<Vec<_>>()
+                    .join(" and ")
             ));
         }
         self.closing.clear();
         for h in &plan.hands {
             let model = HandModel::new(ctx.skeleton, h.side)?;
-            let pattern = HandPattern::builtin(plan.grasp).bind(ctx.skeleton, h.side, &ctx.posture.q)?;
+            let pattern =
+                HandPattern::builtin(plan.grasp).bind(ctx.skeleton, h.side, &ctx.posture.q)?;
             self.closing.push(Closing {
                 model,
                 pattern,
@@ -282,11 +291,9 @@ impl Generator for Grasp {
                 Step::Running
             }
             Phase::Attach => {
-                let Some(plan) = &self.plan else {
+                let Some(first) = self.closing.first() else {
                     return Step::Failed("grasp: no plan".into());
                 };
-                let first = &self.closing[0];
-                let _ = plan;
                 out.request(HoldRequest::Attach {
                     object: self.object,
                     joint: first.model.sensors.wrist,
@@ -311,7 +318,11 @@ impl Generator for Grasp {
                     }
                     Some(h) => Step::Failed(format!(
                         "could not attach the object: `{}` holds it",
-                        ctx.world.actors.get(h.actor).map(|a| a.name.as_str()).unwrap_or("?")
+                        ctx.world
+                            .actors
+                            .get(h.actor)
+                            .map(|a| a.name.as_str())
+                            .unwrap_or("?")
                     )),
                     None => Step::Failed("could not attach the object".into()),
                 }
@@ -343,7 +354,11 @@ pub const PLACE_TOLERANCE: f64 = 0.01;
 impl Release {
     /// Releases `object`, opening the hands `sides`; with `place = (pose, seconds)` the
     /// object is first carried to `pose`.
-    pub fn new(object: usize, sides: Vec<Side>, place: Option<(Transform, f64)>) -> Result<Release, String> {
+    pub fn new(
+        object: usize,
+        sides: Vec<Side>,
+        place: Option<(Transform, f64)>,
+    ) -> Result<Release, String> {
         if let Some((pose, seconds)) = &place {
             if !(seconds.is_finite() && *seconds > 0.0) {
                 return Err(format!(
@@ -380,11 +395,13 @@ impl Generator for Release {
             .map(|o| o.name.clone())
             .ok_or_else(|| format!("no object #{}", self.object))?;
         let me = &ctx.world.actors[ctx.actor].name;
-        let holder = ctx
+        if ctx
             .world
             .holder(self.object)
-            .filter(|h| h.actor == ctx.actor)
-            .ok_or_else(|| format!("`{me}` does not hold `{name}`"))?;
+            .is_none_or(|h| h.actor != ctx.actor)
+        {
+            return Err(format!("`{me}` does not hold `{name}`"));
+        }
         self.q = ctx.posture.q.clone();
         self.start_q = ctx.posture.q.clone();
         self.goal_q = ctx.posture.q.clone();
@@ -410,7 +427,6 @@ impl Generator for Release {
                 }
                 self.arms.push((ik, wrist_goal));
             }
-            let _ = holder;
         } else {
             self.phase = 1;
         }
@@ -439,7 +455,9 @@ impl Generator for Release {
                 }
             }
             if !self.released {
-                if let (Some((goal, _)), Some(obj)) = (self.place, ctx.world.objects.get(self.object)) {
+                if let (Some((goal, _)), Some(obj)) =
+                    (self.place, ctx.world.objects.get(self.object))
+                {
                     let off = (obj.position - goal.translation).length();
                     if off > PLACE_TOLERANCE {
                         return Step::Failed(format!(
@@ -462,7 +480,11 @@ impl Generator for Release {
             for d in out.scope().iter() {
                 out.set(d, self.q[d]);
             }
-            return if s >= 1.0 { Step::Finished } else { Step::Running };
+            return if s >= 1.0 {
+                Step::Finished
+            } else {
+                Step::Running
+            };
         }
         for d in out.scope().iter() {
             out.set(d, self.q[d]);

@@ -203,7 +203,11 @@ impl GraspAutomaton {
                 None => HandState::FreeHand,
             },
             HandState::GraspingInProgress(o) => {
-                let o = if touched.contains(&Some(o)) { Some(o) } else { any };
+                let o = if touched.contains(&Some(o)) {
+                    Some(o)
+                } else {
+                    any
+                };
                 match o {
                     Some(o) if holds(o) => {
                         decision = Some(HandDecision::Attach(o));
@@ -292,7 +296,13 @@ mod tests {
         for tick in 0..=100 {
             let k = tick as f64 / 100.0;
             let out = a
-                .update(&skel, &state.q, &state.globals, &glove(&skel, &a, k), &objects)
+                .update(
+                    &skel,
+                    &state.q,
+                    &state.globals,
+                    &glove(&skel, &a, k),
+                    &objects,
+                )
                 .unwrap();
             if *seen.last().unwrap() != out.state {
                 seen.push(out.state);
@@ -320,14 +330,28 @@ mod tests {
         );
         assert_eq!(decisions, vec![HandDecision::Attach(0)]);
         // The glove closes to a full fist, but the fingers stopped on the ball.
-        let closed = a.update(&skel, &state.q, &state.globals, &glove(&skel, &a, 1.0), &objects).unwrap();
+        let closed = a
+            .update(
+                &skel,
+                &state.q,
+                &state.globals,
+                &glove(&skel, &a, 1.0),
+                &objects,
+            )
+            .unwrap();
         assert!(closed.touching[0] && closed.touching[1..].iter().any(|t| *t));
         // Opening the glove releases the ball and frees the hand.
         let mut last = None;
         for tick in 0..=50 {
             let k = 1.0 - tick as f64 / 50.0;
             let out = a
-                .update(&skel, &state.q, &state.globals, &glove(&skel, &a, k), &objects)
+                .update(
+                    &skel,
+                    &state.q,
+                    &state.globals,
+                    &glove(&skel, &a, k),
+                    &objects,
+                )
                 .unwrap();
             if let Some(d) = out.decision {
                 assert_eq!(d, HandDecision::Release(0));
@@ -343,7 +367,9 @@ mod tests {
         let (skel, state, mut ball, mut a) = setup(0.035);
         ball.position += DVec3::new(0.0, 0.0, 2.0);
         let want = glove(&skel, &a, 0.7);
-        let out = a.update(&skel, &state.q, &state.globals, &want, &[ball]).unwrap();
+        let out = a
+            .update(&skel, &state.q, &state.globals, &want, &[ball])
+            .unwrap();
         assert_eq!(out.state, HandState::FreeHand);
         for (d, v) in want {
             let got = out.values.iter().find(|x| x.0 == d).unwrap().1;
@@ -356,7 +382,13 @@ mod tests {
         let (skel, state, ball, mut a) = setup(0.035);
         let elbow = skel.dof("r_elbow_flexion").unwrap();
         let e = a
-            .update(&skel, &state.q, &state.globals, &[(elbow, 0.1)], &[ball.clone()])
+            .update(
+                &skel,
+                &state.q,
+                &state.globals,
+                &[(elbow, 0.1)],
+                &[ball.clone()],
+            )
             .unwrap_err();
         assert!(e.contains("not a finger DOF of the right hand"), "{e}");
         let d = a.model().sensors.scope.iter().next().unwrap();

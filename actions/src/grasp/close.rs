@@ -39,10 +39,7 @@ impl HandModel {
         let mut inside = vec![false; all.len()];
         let mut joints = Vec::new();
         for (j, joint) in all.iter().enumerate() {
-            if joint
-                .parent
-                .is_some_and(|p| p == wrist || inside[p])
-            {
+            if joint.parent.is_some_and(|p| p == wrist || inside[p]) {
                 inside[j] = true;
                 joints.push(j);
             }

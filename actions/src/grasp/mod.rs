@@ -6,6 +6,7 @@ pub mod action;
 pub mod automaton;
 pub mod close;
 pub mod decision;
+pub mod lua;
 pub mod pattern;
 pub mod plan;
 
@@ -13,5 +14,6 @@ pub use action::{Grasp, Release, Signal};
 pub use automaton::{AutomatonOutput, GraspAutomaton, HandDecision, HandState};
 pub use close::HandModel;
 pub use decision::{decide, Decision, GraspType};
+pub use lua::register;
 pub use pattern::HandPattern;
 pub use plan::{plan_grasp, GraspPlan, HandChoice, HandPlan, PlanOptions};

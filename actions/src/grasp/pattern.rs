@@ -56,12 +56,7 @@ fn t(dof: &'static str, from: f64, to: f64, degrees: f64) -> PatternTrack {
 fn fingers(out: &mut Vec<PatternTrack>, names: &[&'static str], from: f64, to: f64) {
     for &f in names {
         let (f0, f1, f2, f3) = match f {
-            "index" => (
-                None,
-                "index1_flexion",
-                "index2_flexion",
-                "index3_flexion",
-            ),
+            "index" => (None, "index1_flexion", "index2_flexion", "index3_flexion"),
             "middle" => (
                 None,
                 "middle1_flexion",
@@ -93,7 +88,12 @@ fn fingers(out: &mut Vec<PatternTrack>, names: &[&'static str], from: f64, to: f
 
 /// The thumb opposing over `[from, to]` with base abduction `abduction` degrees.
 fn thumb(out: &mut Vec<PatternTrack>, abduction: f64, from: f64, to: f64) {
-    out.push(t("thumb1_abduction", from, from + 0.5 * (to - from), abduction));
+    out.push(t(
+        "thumb1_abduction",
+        from,
+        from + 0.5 * (to - from),
+        abduction,
+    ));
     out.push(t("thumb1_flexion", from, to, FULL));
     out.push(t("thumb2_flexion", from, to, FULL));
     out.push(t("thumb3_flexion", from, to, FULL));

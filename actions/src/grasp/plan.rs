@@ -46,7 +46,8 @@ pub enum HandChoice {
     Left,
     /// Both hands.
     Both,
-    /// Decided by the table (size) and by which shoulder is nearer.
+    /// Decided by the table (size); with one hand, the nearer shoulder's hand is tried
+    /// first and the other one if it cannot reach.
     Auto,
 }
 
@@ -326,10 +327,18 @@ pub fn plan_grasp(
         HandChoice::Auto => {
             let dr = (shoulder(Side::Right)? - obj.position).length();
             let dl = (shoulder(Side::Left)? - obj.position).length();
-            vec![if dl < dr { Side::Left } else { Side::Right }]
+            if dl < dr {
+                vec![Side::Left, Side::Right]
+            } else {
+                vec![Side::Right, Side::Left]
+            }
         }
     };
-    let two = sides.len() == 2;
+    let two = match options.hand {
+        HandChoice::Both => true,
+        HandChoice::Auto => decision.hands == 2,
+        _ => false,
+    };
     let root = g[0];
     let actor_left = (root.rotation * DVec3::X).normalize();
     let head = skeleton
@@ -337,110 +346,127 @@ pub fn plan_grasp(
         .map(|j| g[j].translation)
         .unwrap_or(root.translation + DVec3::Y * 0.6);
     let mut hands = Vec::new();
+    let one_of = options.hand == HandChoice::Auto && !two;
+    let mut first_error = None;
     for side in sides {
-        let model = if side == Side::Right {
-            right.clone()
-        } else {
-            HandModel::new(skeleton, side)?
-        };
-        let hs = &model.sensors;
-        let wrist_now = g[hs.wrist];
-        let palm_now = wrist_now.transform_point(hs.palm);
-        let from_shoulder = obj.position - shoulder(side)?;
-        // Sensor centres in the wrist frame for the current finger posture.
-        let local: Vec<(DVec3, f64)> = (0..hs.sensors.len())
-            .map(|i| {
-                (
-                    wrist_now.inverse().transform_point(hs.center(i, g)),
-                    hs.sensors[i].radius,
-                )
-            })
-            .collect();
-        let outward = match side {
-            Side::Right => -actor_left,
-            Side::Left => actor_left,
-        };
-        let mut ranked: Vec<(f64, Transform, DVec3)> = Vec::new();
-        for (a, f) in candidates(obj, grasp, side, two, from_shoulder, actor_left) {
-            let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
-            // The palm must not face the exterior side of the body.
-            if !two && a.dot(outward) > 0.5 {
-                continue;
-            }
-            // The thumb side stays visible from the eyes.
-            let thumb = rot * DVec3::Z;
-            if thumb.dot((head - obj.position).normalize_or_zero()) < -0.2 {
-                continue;
-            }
-            // Fingers do not point back at the actor.
-            if f.dot(from_shoulder.normalize_or_zero()) < -0.5 {
-                continue;
-            }
-            // Origin search: from the centre toward the border until the hand is free.
-            let mut origin = obj.position;
-            let mut free = false;
-            for _ in 0..400 {
-                let wrist = Transform::new(rot, origin - rot * hs.palm);
-                if local
-                    .iter()
-                    .all(|(p, r)| object_distance(obj, wrist.transform_point(*p)) - r >= CLEARANCE)
-                {
-                    free = true;
-                    break;
-                }
-                origin -= a * SEARCH_STEP;
-            }
-            if !free {
-                continue;
-            }
-            if let Some(avoid) = options.avoid {
-                if (origin - avoid).length() < AVOID_DISTANCE {
+        // With `auto` and one hand, the nearer hand is tried first, then the other.
+        let result = (|| -> Result<HandPlan, String> {
+            let model = if side == Side::Right {
+                right.clone()
+            } else {
+                HandModel::new(skeleton, side)?
+            };
+            let hs = &model.sensors;
+            let wrist_now = g[hs.wrist];
+            let palm_now = wrist_now.transform_point(hs.palm);
+            let from_shoulder = obj.position - shoulder(side)?;
+            // Sensor centres in the wrist frame for the current finger posture.
+            let local: Vec<(DVec3, f64)> = (0..hs.sensors.len())
+                .map(|i| {
+                    (
+                        wrist_now.inverse().transform_point(hs.center(i, g)),
+                        hs.sensors[i].radius,
+                    )
+                })
+                .collect();
+            let outward = match side {
+                Side::Right => -actor_left,
+                Side::Left => actor_left,
+            };
+            let mut ranked: Vec<(f64, Transform, DVec3)> = Vec::new();
+            for (a, f) in candidates(obj, grasp, side, two, from_shoulder, actor_left) {
+                let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
+                // The palm must not face the exterior side of the body.
+                if !two && a.dot(outward) > 0.5 {
                     continue;
                 }
+                // The thumb side stays visible from the eyes.
+                let thumb = rot * DVec3::Z;
+                if thumb.dot((head - obj.position).normalize_or_zero()) < -0.2 {
+                    continue;
+                }
+                // Fingers do not point back at the actor.
+                if f.dot(from_shoulder.normalize_or_zero()) < -0.5 {
+                    continue;
+                }
+                // Origin search: from the centre toward the border until the hand is free.
+                let mut origin = obj.position;
+                let mut free = false;
+                for _ in 0..400 {
+                    let wrist = Transform::new(rot, origin - rot * hs.palm);
+                    if local.iter().all(|(p, r)| {
+                        object_distance(obj, wrist.transform_point(*p)) - r >= CLEARANCE
+                    }) {
+                        free = true;
+                        break;
+                    }
+                    origin -= a * SEARCH_STEP;
+                }
+                if !free {
+                    continue;
+                }
+                if let Some(avoid) = options.avoid {
+                    if (origin - avoid).length() < AVOID_DISTANCE {
+                        continue;
+                    }
+                }
+                let wrist = Transform::new(rot, origin - rot * hs.palm);
+                let angle = rotation_error(wrist_now.rotation, rot).length();
+                let cost = (origin - palm_now).length() + ROTATION_WEIGHT * angle;
+                ranked.push((cost, wrist, origin));
             }
-            let wrist = Transform::new(rot, origin - rot * hs.palm);
-            let angle = rotation_error(wrist_now.rotation, rot).length();
-            let cost = (origin - palm_now).length() + ROTATION_WEIGHT * angle;
-            ranked.push((cost, wrist, origin));
-        }
-        if ranked.is_empty() {
-            return Err(format!(
-                "no grasp frame for `{}` with the {} hand (every candidate hides the thumb, turns the palm outward or is blocked)",
-                obj.name,
-                side.name()
-            ));
-        }
-        ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
-        let mut ik = ArmIk::new(skeleton, side, 200)?;
-        let mut best_miss = f64::INFINITY;
-        let mut found = None;
-        for (cost, wrist, palm) in ranked.iter().take(8) {
-            let mut q = posture.q.clone();
-            let (miss, angle) = ik.solve(skeleton, &mut q, wrist)?;
-            if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
-                let arm = ik.dofs().iter().map(|&d| (d, q[d])).collect();
-                found = Some(HandPlan {
-                    side,
-                    wrist: *wrist,
-                    palm: *palm,
-                    arm,
-                    cost: *cost,
-                });
-                break;
-            }
-            best_miss = best_miss.min(miss + angle * 0.1);
-        }
-        match found {
-            Some(h) => hands.push(h),
-            None => {
+            if ranked.is_empty() {
                 return Err(format!(
+                    "no grasp frame for `{}` with the {} hand (every candidate hides the thumb, turns the palm outward or is blocked)",
+                    obj.name,
+                    side.name()
+                ));
+            }
+            ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut ik = ArmIk::new(skeleton, side, 200)?;
+            let mut best_miss = f64::INFINITY;
+            let mut found = None;
+            for (cost, wrist, palm) in ranked.iter().take(8) {
+                let mut q = posture.q.clone();
+                let (miss, angle) = ik.solve(skeleton, &mut q, wrist)?;
+                if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
+                    let arm = ik.dofs().iter().map(|&d| (d, q[d])).collect();
+                    found = Some(HandPlan {
+                        side,
+                        wrist: *wrist,
+                        palm: *palm,
+                        arm,
+                        cost: *cost,
+                    });
+                    break;
+                }
+                best_miss = best_miss.min(miss + angle * 0.1);
+            }
+            match found {
+                Some(h) => Ok(h),
+                None => Err(format!(
                     "`{}` is out of reach of the {} hand: the best grasp misses by {:.3} m",
                     obj.name,
                     side.name(),
                     best_miss
-                ))
+                )),
             }
+        })();
+        match result {
+            Ok(h) => {
+                hands.push(h);
+                if one_of {
+                    break;
+                }
+            }
+            Err(e) if one_of => {
+                first_error.get_or_insert(e);
+            }
+            Err(e) => return Err(e),
         }
+    }
+    if hands.is_empty() {
+        return Err(first_error.unwrap_or_else(|| "no hand to grasp with".into()));
     }
     Ok(GraspPlan {
         object,
