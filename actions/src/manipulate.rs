@@ -77,7 +77,7 @@ impl Manipulate {
             return Err("`keys` needs at least one key".into());
         }
         for (i, k) in keys.iter().enumerate() {
-            if !(k.time.is_finite() && k.time >= 0.0) || !k.position.is_finite() {
+            if !(k.time.is_finite() && k.time >= 0.0 && k.position.is_finite()) {
                 return Err(format!(
                     "key {}: time and position must be finite (time ≥ 0)",
                     i + 1

@@ -387,7 +387,7 @@ mod tests {
                 &state.q,
                 &state.globals,
                 &[(elbow, 0.1)],
-                &[ball.clone()],
+                std::slice::from_ref(&ball),
             )
             .unwrap_err();
         assert!(e.contains("not a finger DOF of the right hand"), "{e}");
