@@ -70,8 +70,11 @@ end)
 test("bad input fails with a reason", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0.6, 0, 0} }
-  local ok, e = pcall(function() return ann:grasp{ object = "nothing" } end)
-  expect(not ok and tostring(e):find("nothing") ~= nil, "unknown object: " .. tostring(e))
+  local unknown = ann:grasp{ object = "nothing" }
+  expect(run_until(function() return unknown.status == "failed" end, 1), "unknown object fails")
+  expect(unknown.error:find("nothing") ~= nil, unknown.error)
+  local ok, e = pcall(function() return ann:grasp{ object = 42 } end)
+  expect(not ok and tostring(e):find("must be an object") ~= nil, "a number is a script error: " .. tostring(e))
   local far = troupe.object{ name = "far", shape = "box", size = {0.06, 0.06, 0.06}, at = {0, 1, 3} }
   local g = ann:grasp{ object = far }
   expect(run_until(function() return g.status == "failed" end, 1), "out of reach fails")

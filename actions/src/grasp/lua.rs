@@ -19,6 +19,22 @@ use troupe_runtime::{ActionSpec, Generator, Scene, Transform};
 
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
 
+/// An action that fails at its start with a reason (e.g. an unknown object's name).
+struct Refuse(String);
+
+impl Generator for Refuse {
+    fn start(&mut self, _: &troupe_runtime::GeneratorContext) -> Result<(), String> {
+        Err(self.0.clone())
+    }
+    fn step(
+        &mut self,
+        _: &troupe_runtime::GeneratorContext,
+        _: &mut troupe_runtime::DofWriter,
+    ) -> troupe_runtime::Step {
+        troupe_runtime::Step::Failed(self.0.clone())
+    }
+}
+
 /// Registers the hand actions and `troupe.plan_grasp`.
 pub fn register(kinds: &mut ActionKinds) {
     for (method, build) in [
@@ -158,9 +174,25 @@ fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "grasp";
     let t = table(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
-    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let choice = hand_choice(m, &t)?;
     let sides = resolve_hands(choice);
+    let object = match t.get::<Value>("object")? {
+        // An unknown name is bad scene data, not a script error: the action fails with
+        // the reason, like an unreachable or held object.
+        Value::String(name) => {
+            let name = name.to_str()?.to_string();
+            match with_scene(ctx.lua, |s| s.object_index(&name))? {
+                Ok(i) => i,
+                Err(e) => {
+                    let scope = grasp_scope(&ctx.skeleton, &sides).map_err(|e| err(m, e))?;
+                    let mut spec = common.spec("grasp", scope);
+                    spec.duration = None;
+                    return Ok((Box::new(Refuse(e.to_string())), spec));
+                }
+            }
+        }
+        other => object_arg(ctx.lua, m, "object", other)?,
+    };
     let options = PlanOptions {
         hand: choice,
         grasp: pattern(m, &t)?,
