@@ -37,6 +37,9 @@ pub fn action_kinds() -> ActionKinds {
     });
     // Walking: the procedural walking motor (thesis 2.6, 6.4.2).
     crate::walk::register(&mut kinds);
+    // Grasping, manipulation, interaction: grasp, release, place, manipulate, give,
+    // hold_hand, shake_hands and troupe.plan_grasp.
+    crate::grasp::register(&mut kinds);
     kinds
 }
 

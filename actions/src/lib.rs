@@ -2,9 +2,12 @@
 //! generator writes only the DOFs of its action's scope.
 
 pub mod dynamics;
+pub mod grasp;
+pub mod interact;
 pub mod keyframe;
 pub mod kinds;
 pub mod look_at;
+pub mod manipulate;
 pub mod reach;
 pub mod walk;
 

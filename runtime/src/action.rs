@@ -240,6 +240,7 @@ pub struct DofWriter<'a> {
     values: &'a mut [f64],
     written: Scope,
     refused: usize,
+    requests: Vec<crate::holding::HoldRequest>,
 }
 
 impl<'a> DofWriter<'a> {
@@ -250,6 +251,7 @@ impl<'a> DofWriter<'a> {
             values,
             written: Scope::EMPTY,
             refused: 0,
+            requests: Vec::new(),
         }
     }
 
@@ -280,6 +282,17 @@ impl<'a> DofWriter<'a> {
     /// How many writes were refused.
     pub fn refused(&self) -> usize {
         self.refused
+    }
+
+    /// Asks the scene to attach, release or place an object after this tick's kinematics
+    /// (see [`crate::holding`]); ignored when the step fails.
+    pub fn request(&mut self, request: crate::holding::HoldRequest) {
+        self.requests.push(request);
+    }
+
+    /// Takes the requests made so far.
+    pub fn take_requests(&mut self) -> Vec<crate::holding::HoldRequest> {
+        std::mem::take(&mut self.requests)
     }
 }
 

@@ -40,7 +40,8 @@ pub struct StepProfile {
     pub step_wall: Duration,
     /// Wall time of the serial publish after the join (state swap, events, records).
     pub publish_wall: Duration,
-    /// Wall time of the serial sensor and collision phase after the publish.
+    /// Wall time of the serial sensor and attachment phase after the publish (objects
+    /// attached, released and moved with the hands that hold them).
     pub collision_wall: Duration,
     /// CPU time per actor phase, summed over actors.
     pub actors: ActorPhases,

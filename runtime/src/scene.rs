@@ -2,6 +2,7 @@
 
 use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
 use crate::error::{Error, Result};
+use crate::holding::{self, HoldRequest, Holder};
 use crate::parallel::WorkerPool;
 use crate::profile::StepProfile;
 use crate::scheduler::{Action, ActorRuntime, TickClock};
@@ -81,6 +82,7 @@ pub struct Scene {
     states: Vec<ActorState>,
     work: Vec<ActorWork>,
     objects: Vec<Object>,
+    holders: Vec<Option<Holder>>,
     next_action: u64,
     action_owner: HashMap<ActionId, usize>,
     ended: HashMap<ActionId, ActionInfo>,
@@ -115,6 +117,7 @@ impl Scene {
             states: Vec::new(),
             work: Vec::new(),
             objects: Vec::new(),
+            holders: Vec::new(),
             next_action: 1,
             action_owner: HashMap::new(),
             ended: HashMap::new(),
@@ -169,7 +172,34 @@ impl Scene {
             actors: &self.actors,
             states: &self.states,
             objects: &self.objects,
+            holders: &self.holders,
         }
+    }
+
+    /// Who holds object `object`, if anyone.
+    pub fn holder(&self, object: usize) -> Option<Holder> {
+        self.holders.get(object).copied().flatten()
+    }
+
+    /// The objects `actor` holds, in object order.
+    pub fn held_by(&self, actor: usize) -> Vec<usize> {
+        (0..self.holders.len())
+            .filter(|&o| self.holders[o].is_some_and(|h| h.actor == actor))
+            .collect()
+    }
+
+    /// Applies an attach/release/place request as if `actor`'s action had made it, then
+    /// moves held objects; returns whether it took effect (for tools and tests).
+    pub fn request_hold(&mut self, actor: usize, request: HoldRequest) -> bool {
+        let done = holding::apply(
+            actor,
+            request,
+            &mut self.holders,
+            &mut self.objects,
+            &self.states,
+        );
+        holding::follow(&self.holders, &mut self.objects, &self.states);
+        done
     }
 
     /// The index of the actor called `name`.
@@ -269,6 +299,7 @@ impl Scene {
             )));
         }
         self.objects.push(object);
+        self.holders.push(None);
         Ok(self.objects.len() - 1)
     }
 
@@ -451,6 +482,7 @@ impl Scene {
                 actors: &self.actors,
                 states: &self.states,
                 objects: &self.objects,
+                holders: &self.holders,
             };
             let actors = &self.actors;
             let states = &self.states;
@@ -475,9 +507,19 @@ impl Scene {
                     .add(&std::mem::take(&mut w.runtime.phases));
             }
         }
-        if let (Some(started), Some(joined)) = (started, joined) {
+        let published = self.profiling.then(Instant::now);
+        // Tick step 6 (DESIGN.md): attachments, after every actor's forward kinematics,
+        // serially in actor order so the result is independent of the thread count.
+        for (i, w) in self.work.iter_mut().enumerate() {
+            for r in w.runtime.hold_requests.drain(..) {
+                holding::apply(i, r, &mut self.holders, &mut self.objects, &self.states);
+            }
+        }
+        holding::follow(&self.holders, &mut self.objects, &self.states);
+        if let (Some(started), Some(joined), Some(published)) = (started, joined, published) {
             self.profile.step_wall += joined - started;
-            self.profile.publish_wall += joined.elapsed();
+            self.profile.publish_wall += published - joined;
+            self.profile.collision_wall += published.elapsed();
         }
         &self.events
     }

@@ -81,6 +81,8 @@ pub struct ActorRuntime {
     pub(crate) refused_writes: u64,
     /// Time spent per phase since the scene last collected it (when profiling).
     pub(crate) phases: ActorPhases,
+    /// Attach/release requests of the last tick, in emission order (see [`crate::holding`]).
+    pub(crate) hold_requests: Vec<crate::holding::HoldRequest>,
     scratch: Vec<f64>,
     accumulator: Accumulator,
 }
@@ -160,6 +162,7 @@ impl ActorRuntime {
         let mut stopwatch = PhaseClock::start(clock.profile);
         self.events.clear();
         self.ended.clear();
+        self.hold_requests.clear();
         let mut tr = Transitions {
             actor,
             clock,
@@ -192,6 +195,7 @@ impl ActorRuntime {
             let mut out = DofWriter::new(action.spec.scope, &mut self.scratch);
             let step = action.generator.step(&ctx, &mut out);
             let (written, refused) = (out.written(), out.refused());
+            let requests = out.take_requests();
             if refused > 0 {
                 if self.refused_writes == 0 {
                     tracing::warn!(actor, action = %action.id, kind = %action.spec.kind,
@@ -204,6 +208,7 @@ impl ActorRuntime {
                 tr.set(action, Status::Failed);
                 continue;
             }
+            self.hold_requests.extend(requests);
             let w = action.spec.base_weight()
                 * ease_factor(
                     clock.time,

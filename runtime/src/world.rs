@@ -46,11 +46,23 @@ pub struct World<'a> {
     pub states: &'a [ActorState],
     /// Every object, by object index.
     pub objects: &'a [Object],
+    /// Who holds each object, by object index (see [`crate::holding`]).
+    pub holders: &'a [Option<crate::holding::Holder>],
 }
 
 impl World<'_> {
     /// The index of the actor called `name`.
     pub fn actor_index(&self, name: &str) -> Option<usize> {
         self.actors.iter().position(|a| a.name == name)
+    }
+
+    /// The index of the object called `name`.
+    pub fn object_index(&self, name: &str) -> Option<usize> {
+        self.objects.iter().position(|o| o.name == name)
+    }
+
+    /// Who holds object `object`, if anyone.
+    pub fn holder(&self, object: usize) -> Option<crate::holding::Holder> {
+        self.holders.get(object).copied().flatten()
     }
 }

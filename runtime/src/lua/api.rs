@@ -191,6 +191,10 @@ impl UserData for ActorRef {
             };
             lua.create_sequence_from(names)
         });
+        methods.add_method("holding", |lua, this, ()| {
+            let held = stage(lua)?.scene.held_by(this.0);
+            lua.create_sequence_from(held.into_iter().map(ObjectRef))
+        });
         methods.add_method("actions", |lua, this, ()| {
             let ids: Vec<ActionId> = stage(lua)?
                 .scene
@@ -328,6 +332,9 @@ impl UserData for ObjectRef {
         });
         fields.add_field_method_get("mass", |lua, this| {
             Ok(stage(lua)?.scene.objects()[this.0].mass)
+        });
+        fields.add_field_method_get("holder", |lua, this| {
+            Ok(stage(lua)?.scene.holder(this.0).map(|h| ActorRef(h.actor)))
         });
     }
     fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {

@@ -33,7 +33,33 @@ impl BuildContext<'_> {
             .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
         Ok(f(&stage.scene))
     }
+
+    /// Changes the scene (e.g. to start a partner's action for an interaction). Do not
+    /// call Lua from inside `f`.
+    pub fn with_scene_mut<R>(&self, f: impl FnOnce(&mut Scene) -> R) -> mlua::Result<R> {
+        with_scene_mut(self.lua, f)
+    }
 }
+
+/// Reads the scene of the Lua state `lua` (for functions registered with
+/// [`ActionKinds::register_function`]). Do not call Lua from inside `f`.
+pub fn with_scene<R>(lua: &Lua, f: impl FnOnce(&Scene) -> R) -> mlua::Result<R> {
+    let stage = lua
+        .app_data_ref::<super::Stage>()
+        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
+    Ok(f(&stage.scene))
+}
+
+/// Changes the scene of the Lua state `lua`. Do not call Lua from inside `f`.
+pub fn with_scene_mut<R>(lua: &Lua, f: impl FnOnce(&mut Scene) -> R) -> mlua::Result<R> {
+    let mut stage = lua
+        .app_data_mut::<super::Stage>()
+        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
+    Ok(f(&mut stage.scene))
+}
+
+/// Makes a function for the `troupe` table (e.g. `troupe.plan_grasp`).
+pub type MakeFunction = fn(&Lua) -> mlua::Result<mlua::Function>;
 
 /// Turns a Lua call's arguments (after `self`) into a generator and its spec.
 pub type BuildFn = fn(&BuildContext, MultiValue) -> mlua::Result<(Box<dyn Generator>, ActionSpec)>;
@@ -51,6 +77,7 @@ pub struct ActionKind {
 #[derive(Clone, Default)]
 pub struct ActionKinds {
     kinds: Vec<ActionKind>,
+    functions: Vec<(&'static str, MakeFunction)>,
 }
 
 impl ActionKinds {
@@ -68,6 +95,18 @@ impl ActionKinds {
     /// Every registered kind.
     pub fn all(&self) -> &[ActionKind] {
         &self.kinds
+    }
+
+    /// Adds (or replaces) a function `troupe.<name>` made by `make` when the Lua state
+    /// is set up: queries that live outside the runtime crate (`troupe.plan_grasp`).
+    pub fn register_function(&mut self, name: &'static str, make: MakeFunction) {
+        self.functions.retain(|(n, _)| *n != name);
+        self.functions.push((name, make));
+    }
+
+    /// Every registered `troupe` function.
+    pub fn functions(&self) -> &[(&'static str, MakeFunction)] {
+        &self.functions
     }
 }
 

@@ -153,6 +153,7 @@ impl Director {
 
     fn setup(&self, scene: Scene, kinds: ActionKinds) -> mlua::Result<()> {
         let lua = &self.lua;
+        let functions = kinds.functions().to_vec();
         let seed = scene.config().seed;
         lua.set_app_data(Arc::new(api::Pins::default()));
         lua.set_app_data(Stage {
@@ -204,6 +205,10 @@ impl Director {
             })?,
         )?;
         api::install(lua)?;
+        let troupe: mlua::Table = globals.get("troupe")?;
+        for (name, make) in functions {
+            troupe.set(name, make(lua)?)?;
+        }
         lua.load(include_str!("prelude.lua"))
             .set_name("=prelude")
             .exec()?;

@@ -1,0 +1,494 @@
+//! The grasp, release and place generators (thesis 4.3.3–4.3.4, 4.4).
+//!
+//! A grasp plans at its start ([`super::plan::plan_grasp`]), moves the arm(s) from the
+//! current posture to the planned one with the quintic ease (4.3.3: interpolation of the
+//! arm DOFs toward the IK solution), then closes the fingers along the hand motion
+//! pattern until every finger DOF has stopped (4.3.4), asks the scene to attach the
+//! object to the first hand, and completes once the snapshot shows it holding it.
+
+use super::close::HandModel;
+use super::pattern::{BoundPattern, HandPattern};
+use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
+use crate::reach::quintic;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use troupe_runtime::holding::HoldRequest;
+use troupe_runtime::sensors::{object_distance, Side};
+use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Skeleton, Step, Transform};
+
+/// Seconds the fingers take to close along a pattern.
+pub const CLOSE_SECONDS: f64 = 0.6;
+/// Seconds the fingers take to open.
+pub const OPEN_SECONDS: f64 = 0.4;
+/// A tick stamp that has not happened yet.
+const NEVER: u64 = u64::MAX;
+
+/// A one-way signal between two actors' generators (give, hold hands) that stays
+/// deterministic: the writer stamps the tick it happened, and a reader only believes a
+/// stamp from an earlier tick, so what it sees never depends on which thread ran first.
+#[derive(Debug)]
+pub struct Signal(AtomicU64);
+
+impl Default for Signal {
+    fn default() -> Self {
+        Signal(AtomicU64::new(NEVER))
+    }
+}
+
+impl Signal {
+    /// Records that the event happened at `tick` (the first stamp wins).
+    pub fn raise(&self, tick: u64) {
+        let _ = self
+            .0
+            .compare_exchange(NEVER, tick, Ordering::SeqCst, Ordering::SeqCst);
+    }
+    /// Whether the event happened before `tick`.
+    pub fn before(&self, tick: u64) -> bool {
+        self.0.load(Ordering::SeqCst) < tick
+    }
+}
+
+/// The DOFs a grasp with these hands drives: arms and hands.
+pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope, String> {
+    let mut scope = Scope::EMPTY;
+    for s in sides {
+        let e = skeleton
+            .scope(&format!("{0}_arm+{0}_hand", s.name()))
+            .map_err(|e| e.to_string())?;
+        scope = scope.union(&e);
+    }
+    Ok(scope)
+}
+
+/// One hand's closing state.
+struct Closing {
+    model: HandModel,
+    pattern: BoundPattern,
+    blocked: Scope,
+}
+
+enum Phase {
+    Waiting,
+    Reach,
+    Close,
+    Attach,
+    Verify,
+}
+
+/// The grasp generator.
+pub struct Grasp {
+    object: usize,
+    options: PlanOptions,
+    sides: Vec<Side>,
+    reach_seconds: f64,
+    plan: Option<GraspPlan>,
+    start_q: Vec<f64>,
+    phase: Phase,
+    phase_start: f64,
+    closing: Vec<Closing>,
+    s: f64,
+    q: Vec<f64>,
+    globals: Vec<Transform>,
+    samples: Vec<(usize, f64)>,
+    /// Wait for this signal before planning (a receiver waits for the giver).
+    gate: Option<Arc<Signal>>,
+    /// Raised when the object is held.
+    done: Option<Arc<Signal>>,
+}
+
+impl Grasp {
+    /// A grasp of object `object` by the hands `sides` (which must be the plan's hands),
+    /// reaching in `reach_seconds`.
+    pub fn new(
+        object: usize,
+        options: PlanOptions,
+        sides: Vec<Side>,
+        reach_seconds: f64,
+    ) -> Result<Grasp, String> {
+        if !(reach_seconds.is_finite() && reach_seconds > 0.0) {
+            return Err(format!(
+                "duration must be a finite number of seconds > 0, got {reach_seconds}"
+            ));
+        }
+        Ok(Grasp {
+            object,
+            options,
+            sides,
+            reach_seconds,
+            plan: None,
+            start_q: Vec::new(),
+            phase: Phase::Reach,
+            phase_start: 0.0,
+            closing: Vec::new(),
+            s: 0.0,
+            q: Vec::new(),
+            globals: Vec::new(),
+            samples: Vec::new(),
+            gate: None,
+            done: None,
+        })
+    }
+
+    /// Waits for `gate` before planning.
+    pub fn gated(mut self, gate: Arc<Signal>) -> Self {
+        self.gate = Some(gate);
+        self.phase = Phase::Waiting;
+        self
+    }
+
+    /// Raises `done` once the object is held.
+    pub fn signalling(mut self, done: Arc<Signal>) -> Self {
+        self.done = Some(done);
+        self
+    }
+
+    fn begin(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        // A hand-over: keep the palm away from the giver's palm.
+        if let (Some(from), Some(h)) = (self.options.from, ctx.world.holder(self.object)) {
+            if h.actor == from {
+                let giver = &ctx.world.actors[from].skeleton;
+                let side = if giver.joints()[h.joint].name.starts_with("l_") {
+                    Side::Left
+                } else {
+                    Side::Right
+                };
+                let model = HandModel::new(giver, side)?;
+                let palm =
+                    ctx.world.states[from].globals[h.joint].transform_point(model.sensors.palm);
+                self.options.avoid = Some(palm);
+            }
+        }
+        let plan = plan_grasp(
+            ctx.skeleton,
+            ctx.posture,
+            ctx.actor,
+            ctx.world,
+            self.object,
+            &self.options,
+        )?;
+        let planned: Vec<Side> = plan.hands.iter().map(|h| h.side).collect();
+        if planned.iter().any(|s| !self.sides.contains(s)) {
+            return Err(format!(
+                "the plan needs the {} hand(s), outside this action's scope",
+                planned
+                    .iter()
+                    .map(|s| s.name())
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            ));
+        }
+        self.closing.clear();
+        for h in &plan.hands {
+            let model = HandModel::new(ctx.skeleton, h.side)?;
+            let pattern =
+                HandPattern::builtin(plan.grasp).bind(ctx.skeleton, h.side, &ctx.posture.q)?;
+            self.closing.push(Closing {
+                model,
+                pattern,
+                blocked: Scope::EMPTY,
+            });
+        }
+        self.start_q = ctx.posture.q.clone();
+        self.plan = Some(plan);
+        self.phase = Phase::Reach;
+        self.phase_start = ctx.local_time;
+        Ok(())
+    }
+
+    fn write(&self, out: &mut DofWriter, q: &[f64]) {
+        for d in out.scope().iter() {
+            out.set(d, q[d]);
+        }
+    }
+}
+
+impl Generator for Grasp {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        if ctx.world.objects.get(self.object).is_none() {
+            return Err(format!("no object #{}", self.object));
+        }
+        self.q = ctx.posture.q.clone();
+        if self.gate.is_none() {
+            self.begin(ctx)?;
+        }
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        match self.phase {
+            Phase::Waiting => {
+                self.q.copy_from_slice(&ctx.posture.q);
+                let open = self.gate.as_ref().is_some_and(|g| g.before(ctx.tick));
+                if open {
+                    if let Err(e) = self.begin(ctx) {
+                        return Step::Failed(e);
+                    }
+                } else {
+                    let q = self.q.clone();
+                    self.write(out, &q);
+                    return Step::Running;
+                }
+                self.step(ctx, out)
+            }
+            Phase::Reach => {
+                let Some(plan) = &self.plan else {
+                    return Step::Failed("grasp: no plan".into());
+                };
+                let u = quintic((ctx.local_time - self.phase_start) / self.reach_seconds);
+                self.q.copy_from_slice(&ctx.posture.q);
+                for h in &plan.hands {
+                    for &(d, v) in &h.arm {
+                        self.q[d] = self.start_q[d] + (v - self.start_q[d]) * u;
+                    }
+                }
+                let q = std::mem::take(&mut self.q);
+                self.write(out, &q);
+                self.q = q;
+                if u >= 1.0 - 1e-12 {
+                    self.phase = Phase::Close;
+                    self.s = 0.0;
+                    for c in &mut self.closing {
+                        c.pattern.restart_from(&ctx.posture.q);
+                    }
+                }
+                Step::Running
+            }
+            Phase::Close => {
+                let Some(plan) = &self.plan else {
+                    return Step::Failed("grasp: no plan".into());
+                };
+                let Some(obj) = ctx.world.objects.get(self.object) else {
+                    return Step::Failed("the object is gone".into());
+                };
+                self.q.copy_from_slice(&ctx.posture.q);
+                for h in &plan.hands {
+                    for &(d, v) in &h.arm {
+                        self.q[d] = v;
+                    }
+                }
+                self.globals.clear();
+                self.globals.extend_from_slice(&ctx.posture.globals);
+                self.s = (self.s + ctx.dt / CLOSE_SECONDS).min(1.0);
+                let field = |p| object_distance(obj, p);
+                for c in &mut self.closing {
+                    // Finger DOFs: this action's own last values (the posture has them).
+                    c.pattern.sample(self.s, &mut self.samples);
+                    c.model.advance(
+                        ctx.skeleton,
+                        &mut self.q,
+                        &mut self.globals,
+                        &self.samples,
+                        &mut c.blocked,
+                        &field,
+                    );
+                }
+                let q = std::mem::take(&mut self.q);
+                self.write(out, &q);
+                self.q = q;
+                if self.s >= 1.0 {
+                    self.phase = Phase::Attach;
+                }
+                Step::Running
+            }
+            Phase::Attach => {
+                let Some(first) = self.closing.first() else {
+                    return Step::Failed("grasp: no plan".into());
+                };
+                out.request(HoldRequest::Attach {
+                    object: self.object,
+                    joint: first.model.sensors.wrist,
+                    from: self.options.from,
+                });
+                let q = std::mem::take(&mut self.q);
+                self.write(out, &q);
+                self.q = q;
+                self.phase = Phase::Verify;
+                Step::Running
+            }
+            Phase::Verify => {
+                let q = std::mem::take(&mut self.q);
+                self.write(out, &q);
+                self.q = q;
+                match ctx.world.holder(self.object) {
+                    Some(h) if h.actor == ctx.actor => {
+                        if let Some(d) = &self.done {
+                            d.raise(ctx.tick);
+                        }
+                        Step::Finished
+                    }
+                    Some(h) => Step::Failed(format!(
+                        "could not attach the object: `{}` holds it",
+                        ctx.world
+                            .actors
+                            .get(h.actor)
+                            .map(|a| a.name.as_str())
+                            .unwrap_or("?")
+                    )),
+                    None => Step::Failed("could not attach the object".into()),
+                }
+            }
+        }
+    }
+}
+
+/// Opens a hand (or both) and lets go of an object (`actor:release`), optionally after
+/// moving it to a place (`actor:place`).
+pub struct Release {
+    object: usize,
+    place: Option<(Transform, f64)>,
+    sides: Vec<Side>,
+    arms: Vec<(ArmIk, Transform)>,
+    start_q: Vec<f64>,
+    goal_q: Vec<f64>,
+    patterns: Vec<BoundPattern>,
+    phase: u8,
+    phase_start: f64,
+    released: bool,
+    q: Vec<f64>,
+    samples: Vec<(usize, f64)>,
+}
+
+/// A placed object must end this close to where it was asked to go (metres).
+pub const PLACE_TOLERANCE: f64 = 0.01;
+
+impl Release {
+    /// Releases `object`, opening the hands `sides`; with `place = (pose, seconds)` the
+    /// object is first carried to `pose`.
+    pub fn new(
+        object: usize,
+        sides: Vec<Side>,
+        place: Option<(Transform, f64)>,
+    ) -> Result<Release, String> {
+        if let Some((pose, seconds)) = &place {
+            if !(seconds.is_finite() && *seconds > 0.0) {
+                return Err(format!(
+                    "duration must be a finite number of seconds > 0, got {seconds}"
+                ));
+            }
+            if !pose.translation.is_finite() {
+                return Err("place: `at` must be finite".into());
+            }
+        }
+        Ok(Release {
+            object,
+            place,
+            sides,
+            arms: Vec::new(),
+            start_q: Vec::new(),
+            goal_q: Vec::new(),
+            patterns: Vec::new(),
+            phase: 0,
+            phase_start: 0.0,
+            released: false,
+            q: Vec::new(),
+            samples: Vec::new(),
+        })
+    }
+}
+
+impl Generator for Release {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        let name = ctx
+            .world
+            .objects
+            .get(self.object)
+            .map(|o| o.name.clone())
+            .ok_or_else(|| format!("no object #{}", self.object))?;
+        let me = &ctx.world.actors[ctx.actor].name;
+        if ctx
+            .world
+            .holder(self.object)
+            .is_none_or(|h| h.actor != ctx.actor)
+        {
+            return Err(format!("`{me}` does not hold `{name}`"));
+        }
+        self.q = ctx.posture.q.clone();
+        self.start_q = ctx.posture.q.clone();
+        self.goal_q = ctx.posture.q.clone();
+        for &s in &self.sides {
+            self.patterns.push(HandPattern::open(ctx.skeleton, s)?);
+            let p = self.patterns.last_mut().expect("just pushed");
+            p.restart_from(&ctx.posture.q);
+        }
+        if let Some((goal, _)) = self.place {
+            // Every holding arm moves by the object's displacement (thesis 4.4).
+            let obj = &ctx.world.objects[self.object];
+            let now = Transform::new(obj.rotation, obj.position);
+            let delta = goal.mul(&now.inverse());
+            for &s in &self.sides {
+                let mut ik = ArmIk::new(ctx.skeleton, s, 200)?;
+                let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
+                let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
+                if miss > super::plan::REACH_TOLERANCE || angle > super::plan::REACH_ANGLE {
+                    return Err(format!(
+                        "the place for `{name}` is out of reach of the {} hand (misses by {miss:.3} m)",
+                        s.name()
+                    ));
+                }
+                self.arms.push((ik, wrist_goal));
+            }
+        } else {
+            self.phase = 1;
+        }
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        self.q.copy_from_slice(&ctx.posture.q);
+        let t = ctx.local_time - self.phase_start;
+        if self.phase == 0 {
+            let seconds = self.place.map(|p| p.1).unwrap_or(1.0);
+            let u = quintic(t / seconds);
+            for (ik, _) in &self.arms {
+                for &d in ik.dofs() {
+                    self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
+                }
+            }
+            if u >= 1.0 - 1e-12 {
+                self.phase = 1;
+                self.phase_start = ctx.local_time;
+            }
+        } else {
+            for (ik, _) in &self.arms {
+                for &d in ik.dofs() {
+                    self.q[d] = self.goal_q[d];
+                }
+            }
+            if !self.released {
+                if let (Some((goal, _)), Some(obj)) =
+                    (self.place, ctx.world.objects.get(self.object))
+                {
+                    let off = (obj.position - goal.translation).length();
+                    if off > PLACE_TOLERANCE {
+                        return Step::Failed(format!(
+                            "the object ended {off:.3} m from where it was to be placed"
+                        ));
+                    }
+                }
+                out.request(HoldRequest::Release {
+                    object: self.object,
+                });
+                self.released = true;
+            }
+            let s = (t / OPEN_SECONDS).min(1.0);
+            for p in &self.patterns {
+                p.sample(s, &mut self.samples);
+                for &(d, v) in &self.samples {
+                    self.q[d] = v;
+                }
+            }
+            for d in out.scope().iter() {
+                out.set(d, self.q[d]);
+            }
+            return if s >= 1.0 {
+                Step::Finished
+            } else {
+                Step::Running
+            };
+        }
+        for d in out.scope().iter() {
+            out.set(d, self.q[d]);
+        }
+        Step::Running
+    }
+}

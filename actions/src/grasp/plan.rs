@@ -1,0 +1,477 @@
+//! Grasp planning (thesis 4.3.2): decide the grasp type and hands, then find each hand's
+//! grasp frame and check it is reachable.
+//!
+//! The frame procedure, for every shape:
+//! 1. candidate hand orientations are built from the object's frame: the palm normal
+//!    points into the object along a face normal (box, ellipsoid), a horizontal or
+//!    downward direction (sphere), around the axis (cylinder, frustum) or onto the top
+//!    (disk); the fingers lie along another object axis;
+//! 2. a candidate is rejected when the palm would face the exterior side of the body or
+//!    the thumb side would be hidden from the eyes ("the thumb always remains on a
+//!    visible surface");
+//! 3. the origin search: the palm centre starts at the object's centre and moves toward
+//!    the border along the approach axis until no hand sensor of the current (open) hand
+//!    collides with the object;
+//! 4. candidates are ranked by a weighted sum of the translation and rotation from the
+//!    current hand pose, and the first one inverse kinematics can reach is kept.
+
+use super::close::HandModel;
+use super::decision::{decide, Decision, GraspType};
+use troupe_runtime::glam::{DMat3, DQuat, DVec3};
+use troupe_runtime::ik::{Goal, IkOptions, IkSolver, IkTask};
+use troupe_runtime::jacobian::{rotation_error, scope_dofs_moving, Effector};
+use troupe_runtime::sensors::{object_distance, Side};
+use troupe_runtime::{ActorState, Object, Shape, Skeleton, Transform, World};
+
+/// Weight of rotation (per radian) against translation (per metre) in the frame cost.
+pub const ROTATION_WEIGHT: f64 = 0.15;
+/// The origin search stops once every sensor is this far from the object (metres).
+pub const CLEARANCE: f64 = 0.003;
+/// Step of the origin search toward the border (metres).
+pub const SEARCH_STEP: f64 = 0.002;
+/// A planned hand pose must be reachable within this distance (metres)…
+pub const REACH_TOLERANCE: f64 = 0.005;
+/// … and this angle (radians, 3°).
+pub const REACH_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
+
+/// A receiving palm stays this far from the giving palm (metres).
+pub const AVOID_DISTANCE: f64 = 0.08;
+
+/// Which hand(s) a grasp uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HandChoice {
+    /// The right hand.
+    Right,
+    /// The left hand.
+    Left,
+    /// Both hands.
+    Both,
+    /// Decided by the table (size); with one hand, the nearer shoulder's hand is tried
+    /// first and the other one if it cannot reach.
+    Auto,
+}
+
+impl HandChoice {
+    /// Parses `right`, `left`, `both` or `auto`.
+    pub fn parse(name: &str) -> Result<HandChoice, String> {
+        match name {
+            "right" => Ok(HandChoice::Right),
+            "left" => Ok(HandChoice::Left),
+            "both" => Ok(HandChoice::Both),
+            "auto" => Ok(HandChoice::Auto),
+            other => Err(format!(
+                "unknown hand `{other}` (expected \"right\", \"left\", \"both\" or \"auto\")"
+            )),
+        }
+    }
+}
+
+/// What a plan may be told beyond the object.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PlanOptions {
+    /// Which hand(s).
+    pub hand: HandChoice,
+    /// Override the table's grasp type (`pattern = …`).
+    pub grasp: Option<GraspType>,
+    /// Keep the palm at least [`AVOID_DISTANCE`] from this point (another hand holding
+    /// the object).
+    pub avoid: Option<DVec3>,
+    /// The object may be held by this actor (a hand-over).
+    pub from: Option<usize>,
+}
+
+impl Default for PlanOptions {
+    fn default() -> Self {
+        PlanOptions {
+            hand: HandChoice::Auto,
+            grasp: None,
+            avoid: None,
+            from: None,
+        }
+    }
+}
+
+/// One hand's part of a plan.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HandPlan {
+    /// Which hand.
+    pub side: Side,
+    /// Goal pose of the wrist joint (world).
+    pub wrist: Transform,
+    /// Goal of the palm centre (world).
+    pub palm: DVec3,
+    /// The arm posture that reaches it: (DOF, value).
+    pub arm: Vec<(usize, f64)>,
+    /// The frame's cost (translation + weighted rotation from the current hand pose).
+    pub cost: f64,
+}
+
+/// A grasp plan: type, hands and frames.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GraspPlan {
+    /// Object index.
+    pub object: usize,
+    /// What the table decided (before any override).
+    pub decision: Decision,
+    /// The grasp type used.
+    pub grasp: GraspType,
+    /// One or two hands; the first one holds the object.
+    pub hands: Vec<HandPlan>,
+}
+
+/// Inverse kinematics of one arm toward a wrist pose, from a posture.
+pub struct ArmIk {
+    /// Which arm.
+    pub side: Side,
+    /// The wrist joint.
+    pub wrist: usize,
+    solver: IkSolver,
+}
+
+impl ArmIk {
+    /// The arm of `side` (sternoclavicular to wrist DOFs).
+    pub fn new(skeleton: &Skeleton, side: Side, iterations: usize) -> Result<ArmIk, String> {
+        let wrist = skeleton
+            .joint(&format!("{}wrist", side.prefix()))
+            .map_err(|e| e.to_string())?;
+        let scope = skeleton
+            .scope(&format!("{}_arm", side.name()))
+            .map_err(|e| e.to_string())?;
+        let dofs = scope_dofs_moving(skeleton, &scope, wrist);
+        let options = IkOptions {
+            max_iterations: iterations,
+            ..IkOptions::default()
+        };
+        let solver = IkSolver::new(skeleton, dofs, options).map_err(|e| e.to_string())?;
+        Ok(ArmIk {
+            side,
+            wrist,
+            solver,
+        })
+    }
+
+    /// The arm's DOFs.
+    pub fn dofs(&self) -> &[usize] {
+        self.solver.dofs()
+    }
+
+    /// Moves the arm DOFs of `q` toward the wrist pose `goal`; returns the remaining
+    /// (distance, angle).
+    pub fn solve(
+        &mut self,
+        skeleton: &Skeleton,
+        q: &mut [f64],
+        goal: &Transform,
+    ) -> Result<(f64, f64), String> {
+        let task = IkTask {
+            effector: Effector::at_joint(self.wrist),
+            goal: Goal {
+                position: goal.translation,
+                orientation: Some(goal.rotation),
+            },
+            priority: 0,
+        };
+        self.solver
+            .solve(skeleton, q, &[task], None, None)
+            .map_err(|e| e.to_string())?;
+        let g = self.solver.globals()[self.wrist];
+        Ok((
+            (g.translation - goal.translation).length(),
+            rotation_error(g.rotation, goal.rotation).length(),
+        ))
+    }
+}
+
+/// The rotation taking local axes (`n_l`, `f_l`) onto world axes (`n_w`, `f_w`); both
+/// pairs must be orthonormal.
+pub fn frame_rotation(n_l: DVec3, f_l: DVec3, n_w: DVec3, f_w: DVec3) -> DQuat {
+    let local = DMat3::from_cols(n_l, f_l, n_l.cross(f_l));
+    let world = DMat3::from_cols(n_w, f_w, n_w.cross(f_w));
+    DQuat::from_mat3(&(world * local.transpose())).normalize()
+}
+
+/// The hand length of `skeleton`'s right hand (for the decision table).
+pub fn hand_length(skeleton: &Skeleton) -> Result<f64, String> {
+    Ok(HandModel::new(skeleton, Side::Right)?.length)
+}
+
+fn perpendicular_axes(axes: &[DVec3; 3], a: DVec3) -> Vec<DVec3> {
+    let mut out = Vec::new();
+    for &e in axes {
+        if e.dot(a).abs() < 0.5 {
+            out.push(e);
+            out.push(-e);
+        }
+    }
+    out
+}
+
+/// Candidate (palm normal into the object, finger direction) pairs, world frame.
+fn candidates(
+    object: &Object,
+    grasp: GraspType,
+    side: Side,
+    two_hands: bool,
+    toward: DVec3,
+    actor_left: DVec3,
+) -> Vec<(DVec3, DVec3)> {
+    let r = object.rotation;
+    let axes = [r * DVec3::X, r * DVec3::Y, r * DVec3::Z];
+    let mut horizontal = DVec3::new(toward.x, 0.0, toward.z);
+    if horizontal.length() < 1e-9 {
+        horizontal = actor_left.cross(DVec3::Y);
+    }
+    let h = horizontal.normalize();
+    let mut out = Vec::new();
+    if two_hands {
+        // Both palms press the object from the sides: the right hand pushes toward the
+        // actor's left, the left hand toward its right.
+        let a = match side {
+            Side::Right => actor_left,
+            Side::Left => -actor_left,
+        };
+        for f in [h, -DVec3::Y] {
+            out.push((a, f));
+        }
+        return out;
+    }
+    match object.shape {
+        Shape::Box { .. } | Shape::Ellipsoid { .. } => {
+            for &e in &axes {
+                for a in [e, -e] {
+                    for f in perpendicular_axes(&axes, a) {
+                        out.push((a, f));
+                    }
+                }
+            }
+        }
+        Shape::Sphere { .. } => {
+            let side_dir = h.cross(DVec3::Y);
+            for f in [DVec3::Y, -DVec3::Y, side_dir, -side_dir] {
+                out.push((h, f));
+            }
+            for f in [h, -h, side_dir, -side_dir] {
+                out.push((-DVec3::Y, f));
+            }
+        }
+        Shape::Cylinder { .. } | Shape::Frustum { .. } => {
+            let ay = axes[1];
+            if grasp == GraspType::Disk {
+                let a = if ay.y >= 0.0 { -ay } else { ay };
+                for f in perpendicular_axes(&axes, a) {
+                    out.push((a, f));
+                }
+            } else {
+                let mut a0 = h - ay * h.dot(ay);
+                if a0.length() < 1e-6 {
+                    a0 = axes[0];
+                }
+                let a0 = a0.normalize();
+                // Side approaches around the axis every 30°, fingers wrapping around it.
+                for k in -3..=3 {
+                    let a = DQuat::from_axis_angle(ay, k as f64 * std::f64::consts::PI / 6.0) * a0;
+                    let f = a.cross(ay).normalize();
+                    out.push((a, f));
+                    out.push((a, -f));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Plans a grasp of `object` by `actor` (posture `posture`) in `world`.
+pub fn plan_grasp(
+    skeleton: &Skeleton,
+    posture: &ActorState,
+    actor: usize,
+    world: &World,
+    object: usize,
+    options: &PlanOptions,
+) -> Result<GraspPlan, String> {
+    let obj = world
+        .objects
+        .get(object)
+        .ok_or_else(|| format!("no object #{object}"))?;
+    if let Some(h) = world.holder(object) {
+        if h.actor == actor {
+            return Err(format!("`{}` is already held by this actor", obj.name));
+        }
+        if options.from != Some(h.actor) {
+            let who = world
+                .actors
+                .get(h.actor)
+                .map(|a| a.name.as_str())
+                .unwrap_or("another actor");
+            return Err(format!(
+                "`{}` is held by `{who}`: it must be handed over with {who}:give{{object=…, to=…}}",
+                obj.name
+            ));
+        }
+    }
+    let right = HandModel::new(skeleton, Side::Right)?;
+    let decision = decide(&obj.shape, right.length);
+    let grasp = options.grasp.unwrap_or(decision.grasp);
+    let g = &posture.globals;
+    let shoulder = |side: Side| -> Result<DVec3, String> {
+        let j = skeleton
+            .joint(&format!("{}shoulder", side.prefix()))
+            .map_err(|e| e.to_string())?;
+        Ok(g[j].translation)
+    };
+    let sides: Vec<Side> = match options.hand {
+        HandChoice::Right => vec![Side::Right],
+        HandChoice::Left => vec![Side::Left],
+        HandChoice::Both => vec![Side::Right, Side::Left],
+        HandChoice::Auto if decision.hands == 2 => vec![Side::Right, Side::Left],
+        HandChoice::Auto => {
+            let dr = (shoulder(Side::Right)? - obj.position).length();
+            let dl = (shoulder(Side::Left)? - obj.position).length();
+            if dl < dr {
+                vec![Side::Left, Side::Right]
+            } else {
+                vec![Side::Right, Side::Left]
+            }
+        }
+    };
+    let two = match options.hand {
+        HandChoice::Both => true,
+        HandChoice::Auto => decision.hands == 2,
+        _ => false,
+    };
+    let root = g[0];
+    let actor_left = (root.rotation * DVec3::X).normalize();
+    let head = skeleton
+        .joint("skullbase")
+        .map(|j| g[j].translation)
+        .unwrap_or(root.translation + DVec3::Y * 0.6);
+    let mut hands = Vec::new();
+    let one_of = options.hand == HandChoice::Auto && !two;
+    let mut first_error = None;
+    for side in sides {
+        // With `auto` and one hand, the nearer hand is tried first, then the other.
+        let result = (|| -> Result<HandPlan, String> {
+            let model = if side == Side::Right {
+                right.clone()
+            } else {
+                HandModel::new(skeleton, side)?
+            };
+            let hs = &model.sensors;
+            let wrist_now = g[hs.wrist];
+            let palm_now = wrist_now.transform_point(hs.palm);
+            let from_shoulder = obj.position - shoulder(side)?;
+            // Sensor centres in the wrist frame for the current finger posture.
+            let local: Vec<(DVec3, f64)> = (0..hs.sensors.len())
+                .map(|i| {
+                    (
+                        wrist_now.inverse().transform_point(hs.center(i, g)),
+                        hs.sensors[i].radius,
+                    )
+                })
+                .collect();
+            let outward = match side {
+                Side::Right => -actor_left,
+                Side::Left => actor_left,
+            };
+            let mut ranked: Vec<(f64, Transform, DVec3)> = Vec::new();
+            for (a, f) in candidates(obj, grasp, side, two, from_shoulder, actor_left) {
+                let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
+                // The palm must not face the exterior side of the body.
+                if !two && a.dot(outward) > 0.5 {
+                    continue;
+                }
+                // The thumb side stays visible from the eyes.
+                let thumb = rot * DVec3::Z;
+                if thumb.dot((head - obj.position).normalize_or_zero()) < -0.2 {
+                    continue;
+                }
+                // Fingers do not point back at the actor.
+                if f.dot(from_shoulder.normalize_or_zero()) < -0.5 {
+                    continue;
+                }
+                // Origin search: from the centre toward the border until the hand is free.
+                let mut origin = obj.position;
+                let mut free = false;
+                for _ in 0..400 {
+                    let wrist = Transform::new(rot, origin - rot * hs.palm);
+                    if local.iter().all(|(p, r)| {
+                        object_distance(obj, wrist.transform_point(*p)) - r >= CLEARANCE
+                    }) {
+                        free = true;
+                        break;
+                    }
+                    origin -= a * SEARCH_STEP;
+                }
+                if !free {
+                    continue;
+                }
+                if let Some(avoid) = options.avoid {
+                    if (origin - avoid).length() < AVOID_DISTANCE {
+                        continue;
+                    }
+                }
+                let wrist = Transform::new(rot, origin - rot * hs.palm);
+                let angle = rotation_error(wrist_now.rotation, rot).length();
+                let cost = (origin - palm_now).length() + ROTATION_WEIGHT * angle;
+                ranked.push((cost, wrist, origin));
+            }
+            if ranked.is_empty() {
+                return Err(format!(
+                    "no grasp frame for `{}` with the {} hand (every candidate hides the thumb, turns the palm outward or is blocked)",
+                    obj.name,
+                    side.name()
+                ));
+            }
+            ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
+            let mut ik = ArmIk::new(skeleton, side, 200)?;
+            let mut best_miss = f64::INFINITY;
+            let mut found = None;
+            for (cost, wrist, palm) in ranked.iter().take(8) {
+                let mut q = posture.q.clone();
+                let (miss, angle) = ik.solve(skeleton, &mut q, wrist)?;
+                if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
+                    let arm = ik.dofs().iter().map(|&d| (d, q[d])).collect();
+                    found = Some(HandPlan {
+                        side,
+                        wrist: *wrist,
+                        palm: *palm,
+                        arm,
+                        cost: *cost,
+                    });
+                    break;
+                }
+                best_miss = best_miss.min(miss + angle * 0.1);
+            }
+            match found {
+                Some(h) => Ok(h),
+                None => Err(format!(
+                    "`{}` is out of reach of the {} hand: the best grasp misses by {:.3} m",
+                    obj.name,
+                    side.name(),
+                    best_miss
+                )),
+            }
+        })();
+        match result {
+            Ok(h) => {
+                hands.push(h);
+                if one_of {
+                    break;
+                }
+            }
+            Err(e) if one_of => {
+                first_error.get_or_insert(e);
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    if hands.is_empty() {
+        return Err(first_error.unwrap_or_else(|| "no hand to grasp with".into()));
+    }
+    Ok(GraspPlan {
+        object,
+        decision,
+        grasp,
+        hands,
+    })
+}

@@ -1,0 +1,562 @@
+//! Actor interaction by hands (thesis 4.5): giving an object, holding hands, shaking
+//! hands.
+//!
+//! Two actors' generators cooperate through [`Signal`]s: one raises a signal with the
+//! tick it happened, the other only believes stamps from earlier ticks, so the outcome
+//! does not depend on which thread stepped which actor first.
+//!
+//! - **give**: the giver carries the held object to a meeting point between the actors
+//!   (the object leads, the arm follows by IK as in 4.4), raises `arrived`; the receiver
+//!   (a gated [`Grasp`] allowed to take the object from the giver) plans its grasp on the
+//!   object there, reaches, closes and attaches; once the snapshot shows the receiver
+//!   holding it, the giver opens its hand and completes.
+//! - **hold hands**: the active actor reaches the other's hand (grasp frame from the other
+//!   hand's palm, origin search against the other's body solids, its bounding volumes),
+//!   closes its fingers around it (sensors against the other's body) and raises `held`;
+//!   the passive actor then keeps its hand at the same pose relative to the active hand
+//!   by IK every tick, extrapolating the active hand one tick ahead.
+//! - **shake hands**: hold hands, then the active hand moves up and down and both follow.
+
+use crate::grasp::action::{Signal, CLOSE_SECONDS, OPEN_SECONDS};
+use crate::grasp::close::HandModel;
+use crate::grasp::pattern::{BoundPattern, HandPattern};
+use crate::grasp::plan::{
+    frame_rotation, ArmIk, CLEARANCE, REACH_ANGLE, REACH_TOLERANCE, ROTATION_WEIGHT, SEARCH_STEP,
+};
+use crate::grasp::GraspType;
+use crate::reach::quintic;
+use std::sync::Arc;
+use troupe_runtime::glam::{DQuat, DVec3};
+use troupe_runtime::jacobian::rotation_error;
+use troupe_runtime::sensors::{solid_distance, Side};
+use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Step, Transform, World};
+
+/// The giver waits this long for the receiver to take the object.
+pub const GIVE_TIMEOUT: f64 = 10.0;
+/// Seconds to carry the object to the meeting point.
+pub const GIVE_REACH_SECONDS: f64 = 1.0;
+/// Amplitude (metres) and frequency (Hz) of a handshake.
+pub const SHAKE: (f64, f64) = (0.03, 2.0);
+/// Seconds of shaking.
+pub const SHAKE_SECONDS: f64 = 1.5;
+
+fn actor_name(world: &World, i: usize) -> String {
+    world
+        .actors
+        .get(i)
+        .map(|a| a.name.clone())
+        .unwrap_or_else(|| format!("#{i}"))
+}
+
+/// The giver's side of `actor:give`.
+pub struct Give {
+    object: usize,
+    receiver: usize,
+    sides: Vec<Side>,
+    arrived: Arc<Signal>,
+    arm: Option<ArmIk>,
+    start_q: Vec<f64>,
+    goal_q: Vec<f64>,
+    open: Option<BoundPattern>,
+    phase: u8,
+    phase_start: f64,
+    q: Vec<f64>,
+    samples: Vec<(usize, f64)>,
+}
+
+impl Give {
+    /// `object` (held by the acting actor's hand `side`) goes to `receiver`; `arrived` is
+    /// raised when it is at the meeting point.
+    pub fn new(object: usize, receiver: usize, side: Side, arrived: Arc<Signal>) -> Give {
+        Give {
+            object,
+            receiver,
+            sides: vec![side],
+            arrived,
+            arm: None,
+            start_q: Vec::new(),
+            goal_q: Vec::new(),
+            open: None,
+            phase: 0,
+            phase_start: 0.0,
+            q: Vec::new(),
+            samples: Vec::new(),
+        }
+    }
+}
+
+/// Where a handed-over object's centre goes: halfway between the two actors, 30 cm
+/// below the giver's shoulders.
+pub fn meeting_point(world: &World, giver: usize, receiver: usize) -> Option<DVec3> {
+    let a = world.states.get(giver)?.globals.first()?.translation;
+    let b = world.states.get(receiver)?.globals.first()?.translation;
+    let shoulder = world.actors[giver]
+        .skeleton
+        .joint("r_shoulder")
+        .ok()
+        .map(|j| world.states[giver].globals[j].translation.y)?;
+    let mid = (a + b) * 0.5;
+    Some(DVec3::new(mid.x, shoulder - 0.3, mid.z))
+}
+
+impl Generator for Give {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        let w = ctx.world;
+        let obj = w
+            .objects
+            .get(self.object)
+            .ok_or_else(|| format!("no object #{}", self.object))?;
+        let me = actor_name(w, ctx.actor);
+        if self.receiver == ctx.actor {
+            return Err(format!("`{me}` cannot give `{}` to itself", obj.name));
+        }
+        if w.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
+            return Err(format!("`{me}` does not hold `{}`", obj.name));
+        }
+        let goal = meeting_point(w, ctx.actor, self.receiver)
+            .ok_or_else(|| format!("no actor #{} to give to", self.receiver))?;
+        let now = Transform::new(obj.rotation, obj.position);
+        let delta = Transform::new(obj.rotation, goal).mul(&now.inverse());
+        let mut ik = ArmIk::new(ctx.skeleton, self.sides[0], 200)?;
+        self.start_q = ctx.posture.q.clone();
+        self.goal_q = ctx.posture.q.clone();
+        let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
+        let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
+        if miss > REACH_TOLERANCE || angle > REACH_ANGLE {
+            return Err(format!(
+                "the meeting point with `{}` is out of reach of `{me}` (misses by {miss:.3} m)",
+                actor_name(w, self.receiver)
+            ));
+        }
+        self.arm = Some(ik);
+        self.q = ctx.posture.q.clone();
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        let Some(arm) = &self.arm else {
+            return Step::Failed("give: not started".into());
+        };
+        self.q.copy_from_slice(&ctx.posture.q);
+        let t = ctx.local_time - self.phase_start;
+        match self.phase {
+            0 => {
+                let u = quintic(t / GIVE_REACH_SECONDS);
+                for &d in arm.dofs() {
+                    self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
+                }
+                if u >= 1.0 - 1e-12 {
+                    self.phase = 1;
+                    self.phase_start = ctx.local_time;
+                }
+            }
+            1 => {
+                for &d in arm.dofs() {
+                    self.q[d] = self.goal_q[d];
+                }
+                // The arm is at the goal since the last tick: the object is there.
+                self.arrived.raise(ctx.tick);
+                match ctx.world.holder(self.object) {
+                    Some(h) if h.actor == self.receiver => {
+                        let mut open = match HandPattern::open(ctx.skeleton, self.sides[0]) {
+                            Ok(p) => p,
+                            Err(e) => return Step::Failed(e),
+                        };
+                        open.restart_from(&ctx.posture.q);
+                        self.open = Some(open);
+                        self.phase = 2;
+                        self.phase_start = ctx.local_time;
+                    }
+                    Some(h) if h.actor == ctx.actor => {
+                        if t > GIVE_TIMEOUT {
+                            return Step::Failed(format!(
+                                "`{}` did not take the object within {GIVE_TIMEOUT} s",
+                                actor_name(ctx.world, self.receiver)
+                            ));
+                        }
+                    }
+                    _ => {
+                        return Step::Failed(
+                            "the object left the giver's hand without reaching the receiver".into(),
+                        )
+                    }
+                }
+            }
+            _ => {
+                for &d in arm.dofs() {
+                    self.q[d] = self.goal_q[d];
+                }
+                let s = (t / OPEN_SECONDS).min(1.0);
+                if let Some(open) = &self.open {
+                    open.sample(s, &mut self.samples);
+                    for &(d, v) in &self.samples {
+                        self.q[d] = v;
+                    }
+                }
+                for d in out.scope().iter() {
+                    out.set(d, self.q[d]);
+                }
+                return if s >= 1.0 {
+                    Step::Finished
+                } else {
+                    Step::Running
+                };
+            }
+        }
+        for d in out.scope().iter() {
+            out.set(d, self.q[d]);
+        }
+        Step::Running
+    }
+}
+
+/// The active side of `actor:hold_hand` / `actor:shake_hands`.
+pub struct HoldHand {
+    other: usize,
+    other_side: Side,
+    side: Side,
+    shake: bool,
+    held: Arc<Signal>,
+    finished: Arc<Signal>,
+    model: Option<HandModel>,
+    arm: Option<ArmIk>,
+    wrist_goal: Transform,
+    start_q: Vec<f64>,
+    goal_q: Vec<f64>,
+    pattern: Option<BoundPattern>,
+    blocked: Scope,
+    s: f64,
+    phase: u8,
+    phase_start: f64,
+    q: Vec<f64>,
+    globals: Vec<Transform>,
+    samples: Vec<(usize, f64)>,
+}
+
+impl HoldHand {
+    /// The acting actor's hand `side` holds `other`'s hand `other_side`; with `shake`, it
+    /// shakes it and lets go. `held` is raised once the fingers are closed, `finished`
+    /// when a handshake is over.
+    pub fn new(
+        other: usize,
+        side: Side,
+        other_side: Side,
+        shake: bool,
+        held: Arc<Signal>,
+        finished: Arc<Signal>,
+    ) -> HoldHand {
+        HoldHand {
+            other,
+            other_side,
+            side,
+            shake,
+            held,
+            finished,
+            model: None,
+            arm: None,
+            wrist_goal: Transform::IDENTITY,
+            start_q: Vec::new(),
+            goal_q: Vec::new(),
+            pattern: None,
+            blocked: Scope::EMPTY,
+            s: 0.0,
+            phase: 0,
+            phase_start: 0.0,
+            q: Vec::new(),
+            globals: Vec::new(),
+            samples: Vec::new(),
+        }
+    }
+
+    fn write(&self, out: &mut DofWriter) {
+        for d in out.scope().iter() {
+            out.set(d, self.q[d]);
+        }
+    }
+}
+
+/// Signed distance from `p` to actor `actor`'s body solids in `world`.
+fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
+    let skel = &world.actors[actor].skeleton;
+    let g = &world.states[actor].globals;
+    skel.solids()
+        .iter()
+        .map(|(j, s)| solid_distance(s, &g[*j], p))
+        .fold(f64::INFINITY, f64::min)
+}
+
+impl Generator for HoldHand {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        let w = ctx.world;
+        let me = actor_name(w, ctx.actor);
+        if self.other == ctx.actor || self.other >= w.actors.len() {
+            return Err(format!("`{me}` needs another actor to hold hands with"));
+        }
+        let other = actor_name(w, self.other);
+        let theirs = HandModel::new(&w.actors[self.other].skeleton, self.other_side)?;
+        let tg = &w.states[self.other].globals[theirs.sensors.wrist];
+        let their_palm = tg.transform_point(theirs.sensors.palm);
+        let their_normal = tg.rotation * theirs.sensors.palm_normal;
+        let their_fingers = tg.rotation * theirs.sensors.finger_direction;
+        let model = HandModel::new(ctx.skeleton, self.side)?;
+        let hs = &model.sensors;
+        let g = &ctx.posture.globals;
+        let wrist_now = g[hs.wrist];
+        let local: Vec<(DVec3, f64)> = (0..hs.sensors.len())
+            .map(|i| {
+                (
+                    wrist_now.inverse().transform_point(hs.center(i, g)),
+                    hs.sensors[i].radius,
+                )
+            })
+            .collect();
+        // Palm against their palm or around the back of their hand (4.5: the hand's
+        // bounding volumes guide the frame); fingers along or against theirs. The cost
+        // (translation + rotation) and reachability choose.
+        let mut ranked = Vec::new();
+        let mut pairs = Vec::new();
+        for a in [-their_normal, their_normal] {
+            // Fingers along theirs, turned about the palm normal in 45° steps.
+            for k in 0..8 {
+                let turn = DQuat::from_axis_angle(a, k as f64 * std::f64::consts::FRAC_PI_4);
+                pairs.push((a, (turn * their_fingers).normalize()));
+            }
+        }
+        for (a, f) in pairs {
+            let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
+            let mut origin = their_palm;
+            let mut free = false;
+            for _ in 0..200 {
+                let wrist = Transform::new(rot, origin - rot * hs.palm);
+                if local.iter().all(|(p, r)| {
+                    body_distance(w, self.other, wrist.transform_point(*p)) - r >= CLEARANCE
+                }) {
+                    free = true;
+                    break;
+                }
+                origin -= a * SEARCH_STEP;
+            }
+            if !free {
+                continue;
+            }
+            let wrist = Transform::new(rot, origin - rot * hs.palm);
+            let cost = (origin - wrist_now.transform_point(hs.palm)).length()
+                + ROTATION_WEIGHT * rotation_error(wrist_now.rotation, rot).length();
+            ranked.push((cost, wrist));
+        }
+        ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
+        let mut ik = ArmIk::new(ctx.skeleton, self.side, 200)?;
+        let mut best = f64::INFINITY;
+        for (_, wrist) in ranked.iter().take(12) {
+            let mut q = ctx.posture.q.clone();
+            let (miss, angle) = ik.solve(ctx.skeleton, &mut q, wrist)?;
+            if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
+                self.goal_q = q;
+                self.wrist_goal = *wrist;
+                self.start_q = ctx.posture.q.clone();
+                self.q = ctx.posture.q.clone();
+                self.pattern = Some(HandPattern::builtin(GraspType::Wrap).bind(
+                    ctx.skeleton,
+                    self.side,
+                    &ctx.posture.q,
+                )?);
+                self.model = Some(model);
+                self.arm = Some(ik);
+                return Ok(());
+            }
+            best = best.min(miss);
+        }
+        Err(format!(
+            "`{other}`'s {} hand is out of reach of `{me}`'s {} hand (misses by {best:.3} m)",
+            self.other_side.name(),
+            self.side.name()
+        ))
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        let (Some(model), Some(arm)) = (&self.model, &mut self.arm) else {
+            return Step::Failed("hold_hand: not started".into());
+        };
+        let t = ctx.local_time - self.phase_start;
+        self.q.copy_from_slice(&ctx.posture.q);
+        match self.phase {
+            0 => {
+                let u = quintic(t / 1.0);
+                for &d in arm.dofs() {
+                    self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
+                }
+                if u >= 1.0 - 1e-12 {
+                    self.phase = 1;
+                    self.phase_start = ctx.local_time;
+                    if let Some(p) = &mut self.pattern {
+                        p.restart_from(&ctx.posture.q);
+                    }
+                }
+            }
+            1 => {
+                for &d in arm.dofs() {
+                    self.q[d] = self.goal_q[d];
+                }
+                self.globals.clear();
+                self.globals.extend_from_slice(&ctx.posture.globals);
+                self.s = (self.s + ctx.dt / CLOSE_SECONDS).min(1.0);
+                if let Some(p) = &self.pattern {
+                    p.sample(self.s, &mut self.samples);
+                }
+                let (w, other) = (ctx.world, self.other);
+                let field = |p: DVec3| body_distance(w, other, p);
+                model.advance(
+                    ctx.skeleton,
+                    &mut self.q,
+                    &mut self.globals,
+                    &self.samples,
+                    &mut self.blocked,
+                    &field,
+                );
+                if self.s >= 1.0 {
+                    self.held.raise(ctx.tick);
+                    self.phase = 2;
+                    self.phase_start = ctx.local_time;
+                }
+            }
+            2 => {
+                if !self.shake {
+                    // Holding: the arm keeps its posture relative to the body; the
+                    // passive actor follows.
+                    for &d in arm.dofs() {
+                        self.q[d] = self.goal_q[d];
+                    }
+                } else {
+                    let (amplitude, hz) = SHAKE;
+                    let dy = amplitude * (std::f64::consts::TAU * hz * (t + ctx.dt)).sin();
+                    let goal = Transform::new(
+                        self.wrist_goal.rotation,
+                        self.wrist_goal.translation + DVec3::Y * dy,
+                    );
+                    if let Err(e) = arm.solve(ctx.skeleton, &mut self.q, &goal) {
+                        return Step::Failed(e);
+                    }
+                    if t + ctx.dt >= SHAKE_SECONDS {
+                        self.phase = 3;
+                        self.phase_start = ctx.local_time;
+                        if let Some(p) = &mut self.pattern {
+                            *p = match HandPattern::open(ctx.skeleton, self.side) {
+                                Ok(p) => p,
+                                Err(e) => return Step::Failed(e),
+                            };
+                            p.restart_from(&ctx.posture.q);
+                        }
+                    }
+                }
+            }
+            _ => {
+                for &d in arm.dofs() {
+                    self.q[d] = self.goal_q[d];
+                }
+                let s = (t / OPEN_SECONDS).min(1.0);
+                if let Some(p) = &self.pattern {
+                    p.sample(s, &mut self.samples);
+                    for &(d, v) in &self.samples {
+                        self.q[d] = v;
+                    }
+                }
+                if s >= 1.0 {
+                    self.finished.raise(ctx.tick);
+                    self.write(out);
+                    return Step::Finished;
+                }
+            }
+        }
+        self.write(out);
+        Step::Running
+    }
+}
+
+/// The passive side of holding hands: keeps its hand where it is relative to the active
+/// actor's hand, by IK every tick.
+pub struct FollowHand {
+    active: usize,
+    active_wrist: usize,
+    side: Side,
+    held: Arc<Signal>,
+    finished: Arc<Signal>,
+    arm: Option<ArmIk>,
+    relative: Option<Transform>,
+    last: Option<Transform>,
+    q: Vec<f64>,
+}
+
+impl FollowHand {
+    /// Follows `active`'s joint `active_wrist` with the hand `side` once `held` is raised,
+    /// until `finished` is.
+    pub fn new(
+        active: usize,
+        active_wrist: usize,
+        side: Side,
+        held: Arc<Signal>,
+        finished: Arc<Signal>,
+    ) -> FollowHand {
+        FollowHand {
+            active,
+            active_wrist,
+            side,
+            held,
+            finished,
+            arm: None,
+            relative: None,
+            last: None,
+            q: Vec::new(),
+        }
+    }
+}
+
+impl Generator for FollowHand {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        if ctx.world.states.get(self.active).is_none() {
+            return Err(format!("no actor #{} to follow", self.active));
+        }
+        self.arm = Some(ArmIk::new(ctx.skeleton, self.side, 40)?);
+        self.q = ctx.posture.q.clone();
+        Ok(())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        let Some(arm) = &mut self.arm else {
+            return Step::Failed("follow: not started".into());
+        };
+        let mine: Vec<(usize, f64)> = out.scope().iter().map(|d| (d, self.q[d])).collect();
+        self.q.copy_from_slice(&ctx.posture.q);
+        if self.finished.before(ctx.tick) {
+            for d in out.scope().iter() {
+                out.set(d, self.q[d]);
+            }
+            return Step::Finished;
+        }
+        if self.held.before(ctx.tick) {
+            for (d, v) in mine {
+                self.q[d] = v;
+            }
+            let a = ctx.world.states[self.active].globals[self.active_wrist];
+            let rel = *self
+                .relative
+                .get_or_insert_with(|| a.inverse().mul(&ctx.posture.globals[arm.wrist]));
+            // Extrapolate the active hand one tick: this tick's output lands with it.
+            let predicted = match self.last {
+                Some(l) => Transform::new(
+                    (a.rotation * l.rotation.inverse()) * a.rotation,
+                    a.translation + (a.translation - l.translation),
+                ),
+                None => a,
+            };
+            self.last = Some(a);
+            let goal = predicted.mul(&rel);
+            if let Err(e) = arm.solve(ctx.skeleton, &mut self.q, &goal) {
+                return Step::Failed(e);
+            }
+        }
+        for d in out.scope().iter() {
+            out.set(d, self.q[d]);
+        }
+        Step::Running
+    }
+}

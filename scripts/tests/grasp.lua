@@ -1,0 +1,137 @@
+-- Grasping, manipulation and interaction by hands (thesis 4.2–4.5).
+
+local function dist(a, b)
+  return math.sqrt((a[1] - b[1])^2 + (a[2] - b[2])^2 + (a[3] - b[3])^2)
+end
+
+local function done(a) return a.status == "completed" end
+
+test("plan_grasp returns the table's type, the hands and frames", function()
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  local plan, why = troupe.plan_grasp(ann, cup)
+  expect(plan ~= nil, tostring(why))
+  expect(plan.type == "wrap" and plan.decided == "wrap", "a cup is wrapped: " .. plan.type)
+  expect(#plan.hands == 1 and plan.hands[1].hand == "right", "with the right hand")
+  expect(#plan.hands[1].palm == 3 and #plan.hands[1].rotation == 3, "palm and rotation")
+  local pinch = troupe.plan_grasp(ann, "cup", { pattern = "pinch", hand = "right" })
+  expect(pinch.type == "pinch" and pinch.decided == "wrap", "the pattern overrides the table")
+  local far = troupe.object{ name = "far", shape = "sphere", radius = 0.04, at = {0, 1, 3} }
+  local none, reason = troupe.plan_grasp(ann, far)
+  expect(none == nil and reason:find("out of reach") ~= nil, tostring(reason))
+end)
+
+test("grasp a cup, it follows the hand, then place it", function()
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  local g = ann:grasp{ object = cup, hand = "right", duration = 0.8 }
+  expect(run_until(function() return done(g) end, 4), "grasp completed: " .. tostring(g.error))
+  expect(cup.holder == ann, "ann holds the cup")
+  local held = ann:holding()
+  expect(#held == 1 and held[1].name == "cup", "holding() lists it")
+  local m = ann:manipulate{ object = cup, keys = { { t = 0.5, at = {-0.2, 1.15, 0.38} },
+                                                   { t = 1.0, at = {-0.15, 1.15, 0.33} } } }
+  expect(run_until(function() return done(m) end, 3), "manipulate completed: " .. tostring(m.error))
+  expect(dist(cup:position(), {-0.15, 1.15, 0.33}) < 0.01, "the cup went along the keys")
+  local p = ann:place{ object = cup, at = {-0.2, 1.05, 0.4}, duration = 0.8 }
+  expect(run_until(function() return done(p) end, 3), "place completed: " .. tostring(p.error))
+  expect(cup.holder == nil and #ann:holding() == 0, "let go")
+  expect(dist(cup:position(), {-0.2, 1.05, 0.4}) < 0.01, "put down where asked")
+end)
+
+test("manipulate with a function of time", function()
+  local ann = troupe.actor{ name = "ann" }
+  local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.04, at = {-0.2, 1.05, 0.38} }
+  local g = ann:grasp{ object = ball }
+  expect(run_until(function() return done(g) end, 4), "grasp: " .. tostring(g.error))
+  local m = ann:manipulate{ object = ball, duration = 1,
+                            keys = function(t) return {-0.2, 1.05 + 0.1 * t, 0.38} end }
+  expect(run_until(function() return done(m) end, 3), "manipulate: " .. tostring(m.error))
+  expect(math.abs(ball:position()[2] - 1.15) < 0.01, "lifted 10 cm")
+end)
+
+test("give a cup: the receiver holds it and both complete", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  local g = ann:grasp{ object = cup, hand = "right" }
+  expect(run_until(function() return done(g) end, 4), "grasp: " .. tostring(g.error))
+  local give = ann:give{ object = cup, to = bob }
+  local receive = bob:actions()[1]
+  expect(receive ~= nil and receive.kind == "receive", "bob got a receive action")
+  expect(run_until(function() return done(give) and done(receive) end, 8),
+         "give " .. give.status .. " " .. tostring(give.error) .. ", receive " .. receive.status .. " " .. tostring(receive.error))
+  expect(cup.holder == bob and #ann:holding() == 0, "bob holds the cup, ann does not")
+end)
+
+test("bad input fails with a reason", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0.6, 0, 0} }
+  local unknown = ann:grasp{ object = "nothing" }
+  expect(run_until(function() return unknown.status == "failed" end, 1), "unknown object fails")
+  expect(unknown.error:find("nothing") ~= nil, unknown.error)
+  local ok, e = pcall(function() return ann:grasp{ object = 42 } end)
+  expect(not ok and tostring(e):find("must be an object") ~= nil, "a number is a script error: " .. tostring(e))
+  local far = troupe.object{ name = "far", shape = "box", size = {0.06, 0.06, 0.06}, at = {0, 1, 3} }
+  local g = ann:grasp{ object = far }
+  expect(run_until(function() return g.status == "failed" end, 1), "out of reach fails")
+  expect(g.error:find("out of reach") ~= nil, g.error)
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {0.4, 1.05, 0.38} }
+  local b = bob:grasp{ object = cup, hand = "right" }
+  expect(run_until(function() return done(b) end, 4), "bob grasps: " .. tostring(b.error))
+  local a = ann:grasp{ object = cup }
+  expect(run_until(function() return a.status == "failed" end, 1), "taking bob's cup fails")
+  expect(a.error:find("held by `bob`") ~= nil, a.error)
+  local r = ann:release{ object = cup }
+  expect(run_until(function() return r.status == "failed" end, 1), "releasing what you do not hold fails")
+  expect(r.error:find("does not hold") ~= nil, r.error)
+  ok, e = pcall(function() return ann:grasp{ object = cup, hand = "middle" } end)
+  expect(not ok and tostring(e):find("unknown hand") ~= nil, tostring(e))
+  ok, e = pcall(function() return ann:grasp{ object = cup, pattern = "fist" } end)
+  expect(not ok and tostring(e):find("unknown grasp pattern") ~= nil, tostring(e))
+end)
+
+test("hold hands: the wrists stay within 1 cm while the active actor moves by keyframes", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
+  local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
+  local follow = bob:actions()[1]
+  expect(follow.kind == "follow_hand", "bob follows")
+  run(2.0)
+  expect(h.status == "active", "holding: " .. h.status .. " " .. tostring(h.error))
+  local function gap()
+    local a, b = ann:joint_position("r_wrist"), bob:joint_position("l_wrist")
+    return {a[1] - b[1], a[2] - b[2], a[3] - b[3]}
+  end
+  local g0 = gap()
+  local x0 = ann:dof("root_x")
+  local path = troupe.sequence{ root_x = { {0, x0}, {1, x0 + 0.06}, {2, x0} },
+                                root_z = { {0, 0}, {1, 0.1}, {2, 0} } }
+  local walk = ann:play(path)
+  local worst = 0
+  while walk.status ~= "completed" do
+    run(0.05)
+    worst = math.max(worst, dist(gap(), g0))
+  end
+  expect(worst < 0.01, "wrists kept within a centimetre: " .. worst)
+  expect(h.status == "active" and follow.status == "active", "still holding")
+  h:cancel()
+  follow:cancel()
+  expect(run_until(function() return h.status == "cancelled" and follow.status == "cancelled" end, 1), "let go")
+end)
+
+test("shake hands facing each other: both complete", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  -- The other hand must be within reach: Bob offers his.
+  local offer = bob:reach{ hand = "right", target = {0.05, 1.05, 0.5}, duration = 0.8 }
+  expect(run_until(function() return done(offer) end, 2), "offered: " .. tostring(offer.error))
+  local s = ann:shake_hands{ other = bob }
+  local f = bob:actions()[#bob:actions()]
+  expect(run_until(function() return done(s) and done(f) end, 6),
+         "shake: " .. s.status .. " " .. tostring(s.error) .. ", follow: " .. f.status)
+end)
