@@ -231,6 +231,20 @@ pub struct HoldHand {
     q: Vec<f64>,
     globals: Vec<Transform>,
     samples: Vec<(usize, f64)>,
+    /// The last tick this generator stepped (0 before its first).
+    last_tick: u64,
+}
+
+impl Drop for HoldHand {
+    /// A hold that ends any other way (cancelled, pre-empted, its duration over) lets the
+    /// follower go too: the scheduler drops the generator on the tick the action ends, one
+    /// after its last step, and the follower sees the signal from the next tick on, on
+    /// every thread count alike.
+    fn drop(&mut self) {
+        if self.last_tick > 0 {
+            self.finished.raise(self.last_tick + 1);
+        }
+    }
 }
 
 impl HoldHand {
@@ -260,6 +274,7 @@ impl HoldHand {
             pattern: None,
             blocked: Scope::EMPTY,
             s: 0.0,
+            last_tick: 0,
             phase: 0,
             phase_start: 0.0,
             q: Vec::new(),
@@ -374,6 +389,7 @@ impl Generator for HoldHand {
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        self.last_tick = ctx.tick;
         let (Some(model), Some(arm)) = (&self.model, &mut self.arm) else {
             return Step::Failed("hold_hand: not started".into());
         };

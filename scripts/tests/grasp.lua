@@ -135,3 +135,33 @@ test("shake hands facing each other: both complete", function()
   expect(run_until(function() return done(s) and done(f) end, 6),
          "shake: " .. s.status .. " " .. tostring(s.error) .. ", follow: " .. f.status)
 end)
+
+test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold frees the follower", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
+  local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
+  local follow = bob:actions()[1]
+  run(2.0)
+  expect(h.status == "active", "holding: " .. h.status .. " " .. tostring(h.error))
+  local function gap()
+    local a, b = ann:joint_position("r_wrist"), bob:joint_position("l_wrist")
+    return {a[1] - b[1], a[2] - b[2], a[3] - b[3]}
+  end
+  local g0 = gap()
+  local a = ann:walk{ path = { {0, 1.5}, {0.5, 3} }, speed = 1.0, arms = false }
+  local b = bob:walk{ path = { {-0.45, 1.5}, {0.05, 3} }, speed = 1.0, arms = false }
+  local worst = 0
+  while a.status ~= "completed" do
+    expect(a.status ~= "failed" and b.status ~= "failed", "walking: " .. tostring(a.error or b.error))
+    run(0.05)
+    -- The pair turns on the way, so the wrist-to-wrist vector turns too: its length
+    -- is what the hold keeps.
+    worst = math.max(worst, math.abs(dist(gap(), {0, 0, 0}) - dist(g0, {0, 0, 0})))
+  end
+  expect(ann:position()[3] > 2.9, "ann arrived: " .. ann:position()[3])
+  expect(worst < 0.01, "wrists kept within a centimetre while walking: " .. worst)
+  -- Cancelling the active side ends the passive side as well.
+  h:cancel()
+  expect(run_until(function() return h.status == "cancelled" and follow.status == "completed" end, 1),
+         "let go: " .. h.status .. ", follow " .. follow.status)
+end)
