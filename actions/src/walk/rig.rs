@@ -320,6 +320,7 @@ impl Rig {
         let foot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(-pitch);
         let want = foot * DVec3::Z;
         let (mut alpha, mut beta, mut delta, mut eps) = (0.0, 0.0, 0.0, 0.0);
+        let mut prev: Option<(f64, f64)> = None;
         for pass in 0..6 {
             let v = DVec3::new(0.0, -l1 - l2 * kappa.cos(), -l2 * kappa.sin());
             let w = DQuat::from_rotation_y(gamma) * v;
@@ -347,10 +348,24 @@ impl Rig {
                 shank * DQuat::from_rotation_x(delta) * DQuat::from_rotation_z(eps) * DVec3::Z;
             let err = super::route::wrap(want.x.atan2(want.z) - got.x.atan2(got.z));
             // The last pass keeps the twist its angles were solved with.
-            if err.abs() < 1e-8 || pass == 5 {
+            if err.abs() < 1e-6 || pass == 5 {
                 break;
             }
-            gamma = (gamma + err).clamp(-0.75, 0.75);
+            // Secant step on err(γ) (its slope is near 1: the twist turns the foot),
+            // so a warm start converges in two or three passes.
+            let slope = match prev {
+                Some((g0, e0)) if (gamma - g0).abs() > 1e-12 => {
+                    let m: f64 = (e0 - err) / (gamma - g0);
+                    if m.abs() > 0.2 {
+                        m
+                    } else {
+                        1.0
+                    }
+                }
+                _ => 1.0,
+            };
+            prev = Some((gamma, err));
+            gamma = (gamma + err / slope).clamp(-0.75, 0.75);
         }
         let s = l.signs;
         (
