@@ -702,11 +702,11 @@ impl Generator for Walk {
         };
         let (root, pelvis, spine, arms) = self.pose(&plan, out);
         let rig = &self.rig;
-        for i in 0..6 {
-            out.set(rig.root[i], root[i]);
+        for (&d, &v) in rig.root.iter().zip(&root) {
+            out.set(d, v);
         }
-        for i in 0..3 {
-            out.set(rig.pelvis[i], pelvis[i]);
+        for (&d, &v) in rig.pelvis.iter().zip(&pelvis) {
+            out.set(d, v);
         }
         // The upper body blends in from the posture the actor had.
         let k = smoothstep(self.t / BLEND_IN_TIME);
@@ -720,13 +720,13 @@ impl Generator for Walk {
             };
             out.set(dof, v);
         };
-        for i in 0..4 {
-            put(rig.spine[i], spine[i]);
+        for (&d, &v) in rig.spine.iter().zip(&spine) {
+            put(d, v);
         }
         if self.options.arms {
-            for side in 0..2 {
-                for i in 0..3 {
-                    put(rig.arms[side][i], arms[side][i]);
+            for (dofs, values) in rig.arms.iter().zip(&arms) {
+                for (&d, &v) in dofs.iter().zip(values) {
+                    put(d, v);
                 }
             }
         }

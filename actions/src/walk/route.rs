@@ -138,7 +138,7 @@ impl Route {
                         ));
                     }
                 }
-                if !(seq.duration() > 0.0) {
+                if seq.duration().is_nan() || seq.duration() <= 0.0 {
                     return Err(format!("the followed sequence `{}` is empty", seq.name));
                 }
             }

@@ -234,20 +234,21 @@ fn skating(r: &Run) -> (f64, f64) {
     let mut worst: f64 = 0.0;
     let mut lowest = f64::INFINITY;
     for leg in 0..2 {
-        let n = r.frames[0].soles[leg].len();
-        let mut slide = vec![0.0; n];
+        let mut slide = vec![0.0; r.frames[0].soles[leg].len()];
         for w in r.frames.windows(2) {
-            for p in 0..n {
-                let (a, b) = (w[0].soles[leg][p], w[1].soles[leg][p]);
+            for (s, (a, b)) in slide
+                .iter_mut()
+                .zip(w[0].soles[leg].iter().zip(&w[1].soles[leg]))
+            {
                 lowest = lowest.min(b.y);
                 if a.y < 1e-3 && b.y < 1e-3 {
-                    slide[p] += DVec2::new(b.x - a.x, b.z - a.z).length();
+                    *s += DVec2::new(b.x - a.x, b.z - a.z).length();
                 }
             }
             if !contact(&w[1], leg, 1e-3) {
-                for p in 0..n {
-                    worst = worst.max(slide[p]);
-                    slide[p] = 0.0;
+                for s in slide.iter_mut() {
+                    worst = worst.max(*s);
+                    *s = 0.0;
                 }
             }
         }
