@@ -9,8 +9,8 @@ use troupe_actions::{Walk, WalkOptions};
 use troupe_runtime::glam::DVec3;
 use troupe_runtime::template::{template, TemplateParams};
 use troupe_runtime::{
-    ActionSpec, ActorDesc, ActorInfo, ActorState, DofWriter, Generator, GeneratorContext,
-    Scene, SceneConfig, World,
+    ActionSpec, ActorDesc, ActorInfo, ActorState, DofWriter, Generator, GeneratorContext, Scene,
+    SceneConfig, World,
 };
 
 const ACTORS: usize = 1000;
@@ -36,7 +36,13 @@ fn generator_step(c: &mut Criterion) {
         states: &states,
         objects: &[],
     };
-    let mut walk = Walk::velocity(&skeleton, Speed::Constant(1.3), None, WalkOptions::default()).unwrap();
+    let mut walk = Walk::velocity(
+        &skeleton,
+        Speed::Constant(1.3),
+        None,
+        WalkOptions::default(),
+    )
+    .unwrap();
     let scope = walk.scope();
     let mut values = vec![0.0; skeleton.dof_count()];
     let mut tick = 0u64;
@@ -86,8 +92,11 @@ fn walking_crowd(threads: usize) -> Scene {
             .unwrap();
         let skel = scene.actors()[a].skeleton.clone();
         let speed = 1.0 + 0.5 * ((i * 7919) % 100) as f64 / 100.0;
-        let w = Walk::velocity(&skel, Speed::Constant(speed), None, WalkOptions::default()).unwrap();
-        scene.start_action(a, ActionSpec::new("walk", w.scope()), Box::new(w)).unwrap();
+        let w =
+            Walk::velocity(&skel, Speed::Constant(speed), None, WalkOptions::default()).unwrap();
+        scene
+            .start_action(a, ActionSpec::new("walk", w.scope()), Box::new(w))
+            .unwrap();
     }
     for _ in 0..150 {
         scene.step();
@@ -101,7 +110,9 @@ fn crowd_tick(c: &mut Criterion) {
     group.sample_size(20);
     for threads in [1, 2] {
         let mut scene = walking_crowd(threads);
-        group.bench_function(format!("{threads} thread(s)"), |b| b.iter(|| scene.step().len()));
+        group.bench_function(format!("{threads} thread(s)"), |b| {
+            b.iter(|| scene.step().len())
+        });
     }
     group.finish();
 }

@@ -93,7 +93,10 @@ mod tests {
             let v = rv * ht;
             let c = cycle_at(v, ht, 1.0);
             let rlc = v * c.cycle / ht;
-            assert!((rlc - 1.346 * f64::sqrt(rv)).abs() < 1e-12, "rv {rv}: {rlc}");
+            assert!(
+                (rlc - 1.346 * f64::sqrt(rv)).abs() < 1e-12,
+                "rv {rv}: {rlc}"
+            );
         }
         // Slower than the cadence floor: the cycle duration stops growing.
         let slow = cycle_at(0.05, ht, 1.0);

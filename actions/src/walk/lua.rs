@@ -52,7 +52,10 @@ fn floor_point(v: &Value, what: &str) -> mlua::Result<DVec2> {
             v.type_name()
         )));
     };
-    let items: Vec<Value> = t.clone().sequence_values::<Value>().collect::<mlua::Result<_>>()?;
+    let items: Vec<Value> = t
+        .clone()
+        .sequence_values::<Value>()
+        .collect::<mlua::Result<_>>()?;
     let nums: Vec<Option<f64>> = items.iter().map(number).collect();
     let (x, y, z) = match nums.as_slice() {
         [Some(x), Some(z)] => (*x, 0.0, *z),
@@ -92,7 +95,10 @@ fn floor_point(v: &Value, what: &str) -> mlua::Result<DVec2> {
 /// `actor:walk{ to = {x, 0, z} | path = {{x, z}, …} | velocity = number_or_function |
 /// follow = SEQUENCE_or_path, speed = m/s, heading = degrees, step_length, step_width,
 /// pelvis, arm_swing, bounce, run, arms = bool, <common options> }`.
-fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
+fn build_walk(
+    ctx: &BuildContext,
+    args: MultiValue,
+) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
     let mut args = args.into_iter();
     let t: Table = match (args.next(), args.next()) {
         (Some(Value::Table(t)), None) => t,
@@ -111,7 +117,9 @@ fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Gen
     }
     if let Some(h) = num("heading")? {
         if !h.is_finite() {
-            return Err(lua_err_message(format!("walk: `heading` must be finite degrees, got {h}")));
+            return Err(lua_err_message(format!(
+                "walk: `heading` must be finite degrees, got {h}"
+            )));
         }
         options.heading = Some(h.to_radians());
     }
@@ -137,7 +145,11 @@ fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Gen
     if given.len() != 1 {
         return Err(lua_err_message(format!(
             "walk: give exactly one of `to`, `path`, `velocity` or `follow` (got {})",
-            if given.is_empty() { "none".to_string() } else { given.join(", ") }
+            if given.is_empty() {
+                "none".to_string()
+            } else {
+                given.join(", ")
+            }
         )));
     }
     let kind = given[0];
@@ -159,7 +171,9 @@ fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Gen
         },
         "path" => {
             let Value::Table(list) = t.get::<Value>("path")? else {
-                return Err(lua_err_message("walk: `path` must be a list of points {{x, z}, …}"));
+                return Err(lua_err_message(
+                    "walk: `path` must be a list of points {{x, z}, …}",
+                ));
             };
             let mut points = Vec::new();
             for (i, v) in list.sequence_values::<Value>().enumerate() {
@@ -190,7 +204,9 @@ fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Gen
                     for i in 0..n {
                         let time = i as f64 * PROFILE_DT;
                         let v: Value = f.call(time).map_err(|e| {
-                            lua_err_message(format!("walk: `velocity` failed at t = {time:.2} s: {e}"))
+                            lua_err_message(format!(
+                                "walk: `velocity` failed at t = {time:.2} s: {e}"
+                            ))
                         })?;
                         let v = number(&v).ok_or_else(|| {
                             lua_err_message(format!(
@@ -218,7 +234,11 @@ fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Gen
             let seq = match t.get::<Value>("follow")? {
                 Value::UserData(u) => match u.borrow::<SequenceRef>() {
                     Ok(s) => s.0.clone(),
-                    Err(_) => return Err(lua_err_message("walk: `follow` must be a sequence or a file path")),
+                    Err(_) => {
+                        return Err(lua_err_message(
+                            "walk: `follow` must be a sequence or a file path",
+                        ))
+                    }
                 },
                 Value::String(p) => load_sequence(ctx.lua, &p.to_str()?, Some(&ctx.skeleton))?,
                 other => {
@@ -231,7 +251,8 @@ fn build_walk(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Gen
             Route::Follow(seq)
         }
     };
-    let walk = Walk::new(&ctx.skeleton, route, options).map_err(|e| lua_err_message(format!("walk: {e}")))?;
+    let walk = Walk::new(&ctx.skeleton, route, options)
+        .map_err(|e| lua_err_message(format!("walk: {e}")))?;
     let mut spec = common.spec("walk", walk.scope());
     // The walk decides when it has arrived (and a velocity walk's duration is its route's).
     spec.duration = None;

@@ -113,7 +113,9 @@ impl WalkOptions {
             ("run", self.run, 0.0, 1.0),
         ] {
             if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(format!("`{name}` must be a number in [{lo}, {hi}], got {v}"));
+                return Err(format!(
+                    "`{name}` must be a number in [{lo}, {hi}], got {v}"
+                ));
             }
         }
         Ok(())
@@ -187,6 +189,10 @@ pub struct Walk {
     start_q: Vec<f64>,
     settle_since: Option<f64>,
     last_miss: f64,
+    /// Each hip's twist on the previous tick (the leg IK's starting guess).
+    twist: [Option<f64>; 2],
+    /// The cadence speed of this tick (see [`Walk::cadence_speed`]).
+    cadence: f64,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -223,6 +229,8 @@ impl Walk {
             start_q: Vec::new(),
             settle_since: None,
             last_miss: 0.0,
+            twist: [None; 2],
+            cadence: 0.0,
         })
     }
 
@@ -241,7 +249,11 @@ impl Walk {
     }
 
     /// A walk through floor points (x, z), ending at the last one.
-    pub fn path(skeleton: &Skeleton, points: Vec<DVec2>, options: WalkOptions) -> Result<Walk, String> {
+    pub fn path(
+        skeleton: &Skeleton,
+        points: Vec<DVec2>,
+        options: WalkOptions,
+    ) -> Result<Walk, String> {
         let route = Route::Path {
             points,
             heading: options.heading,
@@ -261,7 +273,11 @@ impl Walk {
     }
 
     /// A walk along the keyframed root path of `sequence` (`Global_motion`, 6.4.2).
-    pub fn follow(skeleton: &Skeleton, sequence: Arc<Sequence>, options: WalkOptions) -> Result<Walk, String> {
+    pub fn follow(
+        skeleton: &Skeleton,
+        sequence: Arc<Sequence>,
+        options: WalkOptions,
+    ) -> Result<Walk, String> {
         Walk::new(skeleton, Route::Follow(sequence), options)
     }
 
@@ -309,7 +325,9 @@ impl Walk {
     fn cadence_speed(&self, plan: &Plan, t: f64) -> f64 {
         let now = plan.sample(t, self.heading).speed;
         let ahead = plan.sample(t + CADENCE_LOOKAHEAD, self.heading).speed;
-        let behind = plan.sample((t - CADENCE_LOOKBACK).max(0.0), self.heading).speed;
+        let behind = plan
+            .sample((t - CADENCE_LOOKBACK).max(0.0), self.heading)
+            .speed;
         now.max(ahead).max(behind)
     }
 
@@ -343,7 +361,7 @@ impl Walk {
 
     /// Plans the next landing of foot `leg` (whose local phase is now `lambda`).
     fn plan_landing(&self, plan: &Plan, leg: usize, lambda: f64, from: DVec2) -> Landing {
-        let sigma = self.cycle(self.cadence_speed(plan, self.t)).support_fraction();
+        let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
         let end = plan.end_time;
@@ -421,25 +439,37 @@ impl Walk {
                     Some(n) => n,
                     None => self.plan_landing(plan, leg, lambda, plant),
                 };
-                let from_plant = DVec2::new(pose.ankle.x, pose.ankle.z);
-                let step = (to.plant - from_plant).length();
-                let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height) * (1.0 + self.options.run);
-                let swing_time = (1.0 - sigma) * self.cycle(self.cadence_speed(plan, self.t)).cycle;
-                let body = plan.sample(self.t, self.heading).speed;
-                let start_rate = if step > 1e-6 {
-                    (body * swing_time / step).clamp(0.0, 1.5)
+                let in_place = (to.plant - plant).length() < 0.01
+                    && wrap(to.yaw - yaw).abs() < 0.05
+                    && pose.pitch == 0.0;
+                if in_place {
+                    // Already where it should land (a foot that started where the walk
+                    // ends): it stays down rather than stepping in place.
+                    if let Foot::Stance { stays, .. } = &mut self.feet[leg] {
+                        *stays = true;
+                    }
                 } else {
-                    0.0
-                };
-                self.feet[leg] = Foot::Swing {
-                    from: pose.ankle,
-                    from_pitch: pose.pitch,
-                    from_yaw: pose.yaw,
-                    from_toes: pose.toes,
-                    to,
-                    lift,
-                    start_rate,
-                };
+                    let from_plant = DVec2::new(pose.ankle.x, pose.ankle.z);
+                    let step = (to.plant - from_plant).length();
+                    let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height)
+                        * (1.0 + self.options.run);
+                    let swing_time = (1.0 - sigma) * self.cycle(self.cadence).cycle;
+                    let body = plan.sample(self.t, self.heading).speed;
+                    let start_rate = if step > 1e-6 {
+                        (body * swing_time / step).clamp(0.0, 1.5)
+                    } else {
+                        0.0
+                    };
+                    self.feet[leg] = Foot::Swing {
+                        from: pose.ankle,
+                        from_pitch: pose.pitch,
+                        from_yaw: pose.yaw,
+                        from_toes: pose.toes,
+                        to,
+                        lift,
+                        start_rate,
+                    };
+                }
             }
         }
         let rig = &self.rig;
@@ -502,7 +532,13 @@ impl Walk {
 
     /// Pelvis, spine and arm values for phase `phi` (in cycles) at activity `a` and
     /// relative velocity `rv`; plus the root's lateral sway and vertical offset.
-    fn oscillations(&self, phi: f64, a: f64, rv: f64, sigma: f64) -> (f64, f64, [f64; 3], [f64; 4], [[f64; 3]; 2]) {
+    fn oscillations(
+        &self,
+        phi: f64,
+        a: f64,
+        rv: f64,
+        sigma: f64,
+    ) -> (f64, f64, [f64; 3], [f64; 4], [[f64; 3]; 2]) {
         let o = &self.options;
         let ht = self.rig.thigh_height;
         let c1 = (TAU * phi).cos();
@@ -513,7 +549,10 @@ impl Walk {
         let list = -(0.035 + 0.01 * rv) * a * o.pelvis * s1;
         let tilt = 0.02 * a * o.pelvis * (2.0 * TAU * phi).cos();
         let sway = 0.022 * ht * a * o.pelvis * s1 / (1.0 + 0.5 * rv);
-        let bounce = (0.012 + 0.006 * rv) * ht * (1.0 + 1.5 * o.run) * o.bounce
+        let bounce = (0.012 + 0.006 * rv)
+            * ht
+            * (1.0 + 1.5 * o.run)
+            * o.bounce
             * (2.0 * TAU * (phi - 0.5 * sigma)).cos();
         let drop = (0.015 + 0.01 * rv + 0.10 * o.run) * ht;
         let vertical = a * (bounce - drop);
@@ -538,7 +577,8 @@ impl Walk {
         self.heading = sample.heading;
         let v = sample.speed;
         let a = self.activity(v);
-        let cycle = self.cycle(self.cadence_speed(plan, self.t));
+        self.cadence = self.cadence_speed(plan, self.t);
+        let cycle = self.cycle(self.cadence);
         let sigma = cycle.support_fraction();
         let phi = self.phase.rem_euclid(1.0);
         for leg in 0..2 {
@@ -575,14 +615,30 @@ impl Walk {
         }
         let root_y = soft_min(highest, 0.006 * a);
         let root = root0 + DVec3::Y * root_y;
-        let root_vals = [floor.x - rig.root_rest.x, root_y, floor.y - rig.root_rest.z, self.yaw, 0.0, 0.0];
+        let root_vals = [
+            floor.x - rig.root_rest.x,
+            root_y,
+            floor.y - rig.root_rest.z,
+            self.yaw,
+            0.0,
+            0.0,
+        ];
         let pelvis_yaw = heading + pelvis[2];
         let mut miss: f64 = 0.0;
         for leg in 0..2 {
             let hip = rig.hip_position(leg, root, heading, pelvis_rot);
             let p = self.poses[leg];
-            let (vals, m) = rig.solve_leg(leg, pelvis_rot, pelvis_yaw, hip, p.ankle, (p.yaw, p.pitch, p.toes));
+            let (vals, m) = rig.solve_leg(
+                leg,
+                pelvis_rot,
+                pelvis_yaw,
+                self.twist[leg],
+                hip,
+                p.ankle,
+                (p.yaw, p.pitch, p.toes),
+            );
             miss = miss.max(m);
+            self.twist[leg] = Some(vals[2]);
             for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
                 out.set(d, vals[i]);
             }
@@ -635,6 +691,7 @@ impl Generator for Walk {
         self.t = 0.0;
         self.start_q = q.clone();
         self.settle_since = None;
+        self.twist = [None; 2];
         self.plan = Some(plan);
         Ok(())
     }
@@ -645,11 +702,11 @@ impl Generator for Walk {
         };
         let (root, pelvis, spine, arms) = self.pose(&plan, out);
         let rig = &self.rig;
-        for i in 0..6 {
-            out.set(rig.root[i], root[i]);
+        for (&d, &v) in rig.root.iter().zip(&root) {
+            out.set(d, v);
         }
-        for i in 0..3 {
-            out.set(rig.pelvis[i], pelvis[i]);
+        for (&d, &v) in rig.pelvis.iter().zip(&pelvis) {
+            out.set(d, v);
         }
         // The upper body blends in from the posture the actor had.
         let k = smoothstep(self.t / BLEND_IN_TIME);
@@ -663,13 +720,13 @@ impl Generator for Walk {
             };
             out.set(dof, v);
         };
-        for i in 0..4 {
-            put(rig.spine[i], spine[i]);
+        for (&d, &v) in rig.spine.iter().zip(&spine) {
+            put(d, v);
         }
         if self.options.arms {
-            for side in 0..2 {
-                for i in 0..3 {
-                    put(rig.arms[side][i], arms[side][i]);
+            for (dofs, values) in rig.arms.iter().zip(&arms) {
+                for (&d, &v) in dofs.iter().zip(values) {
+                    put(d, v);
                 }
             }
         }
@@ -679,7 +736,8 @@ impl Generator for Walk {
             let end = plan.sample(plan.end_time, self.heading);
             let settled = (0..2).all(|leg| match self.feet[leg] {
                 Foot::Stance { plant, .. } => {
-                    (plant - self.spot(leg, &end, 1.0)).length() < 0.01 && self.poses[leg].pitch == 0.0
+                    (plant - self.spot(leg, &end, 1.0)).length() < 0.01
+                        && self.poses[leg].pitch == 0.0
                 }
                 Foot::Swing { .. } => false,
             });
@@ -691,8 +749,7 @@ impl Generator for Walk {
             }
         }
         // Advance the clock and the phase (dφ = dt / Dc, eq. 2-5).
-        let v = self.cadence_speed(&plan, self.t);
-        self.phase += ctx.dt / self.cycle(v).cycle;
+        self.phase += ctx.dt / self.cycle(self.cadence).cycle;
         self.t += ctx.dt;
         self.plan = Some(plan);
         if done {
@@ -705,7 +762,6 @@ impl Generator for Walk {
 
 #[cfg(test)]
 mod tests;
-
 
 /// Registers the Lua `walk` action kind.
 pub fn register(kinds: &mut troupe_runtime::lua::kinds::ActionKinds) {

@@ -113,7 +113,12 @@ impl Rig {
             for i in 0..7 {
                 signs[i] = sign_along(skeleton, dofs[i], units[i])?;
             }
-            let (hip, knee, ankle, mt) = (j(&n("hip"))?, j(&n("knee"))?, j(&n("ankle"))?, j(&n("metatarsal"))?);
+            let (hip, knee, ankle, mt) = (
+                j(&n("hip"))?,
+                j(&n("knee"))?,
+                j(&n("ankle"))?,
+                j(&n("metatarsal"))?,
+            );
             let thigh_v = joints[knee].offset;
             let shank_v = joints[ankle].offset;
             for (what, v) in [("thigh", thigh_v), ("shank", shank_v)] {
@@ -240,7 +245,8 @@ impl Rig {
     /// World position of a hip joint for the root at `root` (world position of the root
     /// joint) with the pelvis at world rotation `pelvis` (heading included).
     pub fn hip_position(&self, leg: usize, root: DVec3, heading: f64, pelvis: DQuat) -> DVec3 {
-        root + DQuat::from_rotation_y(heading) * self.sacro_offset + pelvis * self.legs[leg].hip_offset
+        root + DQuat::from_rotation_y(heading) * self.sacro_offset
+            + pelvis * self.legs[leg].hip_offset
     }
 
     /// World position of the ankle joint of a foot planted at floor point `plant` (under
@@ -250,11 +256,7 @@ impl Rig {
     pub fn ankle_from_plant(&self, leg: usize, plant: DVec2, yaw: f64, pitch: f64) -> DVec3 {
         let l = &self.legs[leg];
         let ankle = DVec3::new(0.0, self.ankle_height, 0.0);
-        let pivot = if pitch >= 0.0 {
-            l.heel
-        } else {
-            l.ball
-        };
+        let pivot = if pitch >= 0.0 { l.heel } else { l.ball };
         let r = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(-pitch);
         DVec3::new(plant.x, 0.0, plant.y)
             + DQuat::from_rotation_y(yaw) * pivot
@@ -279,12 +281,15 @@ impl Rig {
     /// and pitch `pitch` and the toes at `toes` (rotation about the foot's +X, as the
     /// pitch), given the pelvis world rotation and the hip's world position. Returns the
     /// values (in [`Leg::dofs`] order) and how far the ankle stays from its target (zero
-    /// when it is within reach).
+    /// when it is within reach). `twist_guess`, the hip twist DOF value of the previous
+    /// tick, makes the twist iteration converge in one or two passes.
+    #[allow(clippy::too_many_arguments)]
     pub fn solve_leg(
         &self,
         leg: usize,
         pelvis: DQuat,
         pelvis_yaw: f64,
+        twist_guess: Option<f64>,
         hip: DVec3,
         ankle: DVec3,
         (yaw, pitch, toes): (f64, f64, f64),
@@ -307,10 +312,15 @@ impl Rig {
         // Hip twist turns the foot toward its heading (the ankle has no yaw): start from
         // the heading difference, then correct by the yaw the foot still misses (the hip's
         // flexion and abduction couple into yaw), a few Newton-like passes.
-        let mut gamma = super::route::wrap(yaw - pelvis_yaw).clamp(-0.75, 0.75);
+        let mut gamma = match twist_guess {
+            Some(g) => g * l.signs[2],
+            None => super::route::wrap(yaw - pelvis_yaw),
+        }
+        .clamp(-0.75, 0.75);
         let foot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(-pitch);
         let want = foot * DVec3::Z;
         let (mut alpha, mut beta, mut delta, mut eps) = (0.0, 0.0, 0.0, 0.0);
+        let mut prev: Option<(f64, f64)> = None;
         for pass in 0..6 {
             let v = DVec3::new(0.0, -l1 - l2 * kappa.cos(), -l2 * kappa.sin());
             let w = DQuat::from_rotation_y(gamma) * v;
@@ -334,13 +344,28 @@ impl Rig {
             let u = DQuat::from_rotation_x(-delta) * (rel * DVec3::Y);
             eps = (-u.x).atan2(u.y);
             // Where the foot really points with these angles, against where it should.
-            let got = shank * DQuat::from_rotation_x(delta) * DQuat::from_rotation_z(eps) * DVec3::Z;
+            let got =
+                shank * DQuat::from_rotation_x(delta) * DQuat::from_rotation_z(eps) * DVec3::Z;
             let err = super::route::wrap(want.x.atan2(want.z) - got.x.atan2(got.z));
             // The last pass keeps the twist its angles were solved with.
-            if err.abs() < 1e-9 || pass == 5 {
+            if err.abs() < 1e-6 || pass == 5 {
                 break;
             }
-            gamma = (gamma + err).clamp(-0.75, 0.75);
+            // Secant step on err(γ) (its slope is near 1: the twist turns the foot),
+            // so a warm start converges in two or three passes.
+            let slope = match prev {
+                Some((g0, e0)) if (gamma - g0).abs() > 1e-12 => {
+                    let m: f64 = (e0 - err) / (gamma - g0);
+                    if m.abs() > 0.2 {
+                        m
+                    } else {
+                        1.0
+                    }
+                }
+                _ => 1.0,
+            };
+            prev = Some((gamma, err));
+            gamma = (gamma + err / slope).clamp(-0.75, 0.75);
         }
         let s = l.signs;
         (
@@ -384,19 +409,32 @@ mod tests {
             for pitch in [0.2, 0.0, -0.4] {
                 let yaw = heading + 0.1;
                 let target = rig.ankle_from_plant(leg, plant, yaw, pitch);
-                let (vals, miss) =
-                    rig.solve_leg(leg, pelvis, heading + 0.08, hip, target, (yaw, pitch, 0.0));
+                let (vals, miss) = rig.solve_leg(
+                    leg,
+                    pelvis,
+                    heading + 0.08,
+                    None,
+                    hip,
+                    target,
+                    (yaw, pitch, 0.0),
+                );
                 assert_eq!(miss, 0.0);
                 for (i, &dof) in rig.legs[leg].dofs.iter().enumerate() {
                     q[dof] = vals[i];
                 }
                 forward_kinematics(&skeleton, &q, &mut g);
                 let got = g[rig.legs[leg].joints[0]].translation;
-                assert!((got - target).length() < 1e-9, "leg {leg} pitch {pitch}: {got} vs {target}");
+                assert!(
+                    (got - target).length() < 1e-9,
+                    "leg {leg} pitch {pitch}: {got} vs {target}"
+                );
                 // The foot's forward direction has the wanted pitch.
                 let fwd = g[rig.legs[leg].joints[0]].rotation * DVec3::Z;
                 let got_pitch = fwd.y.atan2(fwd.x.hypot(fwd.z));
-                assert!((got_pitch - pitch).abs() < 0.02, "pitch {got_pitch} vs {pitch}");
+                assert!(
+                    (got_pitch - pitch).abs() < 0.02,
+                    "pitch {got_pitch} vs {pitch}"
+                );
             }
         }
     }
@@ -405,6 +443,10 @@ mod tests {
     fn thigh_height_is_53_percent_of_the_body() {
         let skeleton = default_skeleton("adult").unwrap();
         let rig = Rig::new(&skeleton).unwrap();
-        assert!((rig.thigh_height / 1.75 - 0.53).abs() < 0.005, "{}", rig.thigh_height);
+        assert!(
+            (rig.thigh_height / 1.75 - 0.53).abs() < 0.005,
+            "{}",
+            rig.thigh_height
+        );
     }
 }

@@ -138,7 +138,7 @@ impl Route {
                         ));
                     }
                 }
-                if !(seq.duration() > 0.0) {
+                if seq.duration().is_nan() || seq.duration() <= 0.0 {
                     return Err(format!("the followed sequence `{}` is empty", seq.name));
                 }
             }
@@ -287,7 +287,11 @@ impl Polyline {
         let i = self.length.partition_point(|&l| l <= s).clamp(1, n - 1);
         let (a, b) = (self.points[i - 1], self.points[i]);
         let seg = self.length[i] - self.length[i - 1];
-        let u = if seg > 0.0 { (s - self.length[i - 1]) / seg } else { 0.0 };
+        let u = if seg > 0.0 {
+            (s - self.length[i - 1]) / seg
+        } else {
+            0.0
+        };
         let dir = |k: usize| (self.points[k] - self.points[k - 1]).normalize_or(DVec2::Y);
         // The tangent turns linearly from one segment's middle to the next one's, so the
         // heading has no jump at the vertices.
@@ -589,8 +593,12 @@ mod tests {
         let mut t = 0.0;
         while t < plan.end_time {
             let h = 1e-6;
-            let d = (plan.sample(t + h, 0.0).position - plan.sample(t - h, 0.0).position).length() / (2.0 * h);
-            assert!((d - plan.sample(t, 0.0).speed).abs() < 1e-4, "speed at {t}: {d}");
+            let d = (plan.sample(t + h, 0.0).position - plan.sample(t - h, 0.0).position).length()
+                / (2.0 * h);
+            assert!(
+                (d - plan.sample(t, 0.0).speed).abs() < 1e-4,
+                "speed at {t}: {d}"
+            );
             t += 0.05;
         }
     }
