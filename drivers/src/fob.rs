@@ -4,7 +4,7 @@
 //! Flock of Birds (RS-232)"; the comments quote the fact they rely on. The thesis uses the
 //! Flock to drive a performer's body (sections 2.7 and 6.4.1).
 
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// POINT: the device answers one record (reference: "POINT `B` (one record)").
 pub const CMD_POINT: u8 = b'B';
@@ -40,7 +40,7 @@ pub const STATUS_RUNNING: u8 = 0x40;
 pub const STATUS_RECEIVER: u8 = 0x20;
 
 /// Output format of a bird's records.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum OutputFormat {
     /// Position only (3 words).
@@ -140,7 +140,7 @@ impl OutputFormat {
 }
 
 /// Transmitter hemisphere in which the receivers are assumed to be.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum Hemisphere {
     /// In front of the transmitter (+X), the power-on default.
@@ -202,7 +202,7 @@ impl Hemisphere {
 }
 
 /// Report rate divisor: a record every 1, 2, 8 or 32 measurement cycles.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum ReportRate {
     /// Every cycle (`Q`).
     Every,
@@ -249,7 +249,7 @@ impl ReportRate {
 
 /// Full-scale position range in inches: 36 by default, 72 with the position scaling
 /// parameter set, 144 with the extended range transmitter.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PositionRange {
     /// ±36 inches (914.4 mm), the default.
     Inches36,
@@ -283,7 +283,7 @@ impl PositionRange {
 }
 
 /// How the records of a flock are laid out on the wire.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RecordLayout {
     /// Output format (the same for every bird).
     pub format: OutputFormat,

@@ -7,3 +7,6 @@
 pub mod fob;
 pub mod glove;
 pub mod spacemouse;
+pub mod driver;
+pub mod record;
+pub mod emulator;
