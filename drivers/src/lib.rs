@@ -10,3 +10,5 @@ pub mod spacemouse;
 pub mod driver;
 pub mod record;
 pub mod emulator;
+pub mod gesture;
+pub mod performer;
