@@ -357,13 +357,15 @@ impl GloveCalibration {
         for i in 0..n {
             let (r0, r1) = (f64::from(flat[i]), f64::from(fist[i]));
             let (a0, a1) = (flat_angles[i], fist_angles[i]);
+            if (a1 - a0).abs() < 1e-12 {
+                // Sensor not exercised by these poses (e.g. the wrist between a flat hand
+                // and a fist): nominal gain, zero at the flat reading.
+                let g = std::f64::consts::FRAC_PI_2 / 254.0;
+                gain.push(g);
+                offset.push(r0 - a0 / g);
+                continue;
+            }
             if r0 == r1 {
-                if a0 == a1 {
-                    // Sensor not exercised by these poses (e.g. wrist): keep nominal gain.
-                    gain.push(std::f64::consts::FRAC_PI_2 / 254.0);
-                    offset.push(r0 - a0 / (std::f64::consts::FRAC_PI_2 / 254.0));
-                    continue;
-                }
                 return Err(format!(
                     "sensor {} ({}) reads {} in both calibration poses; is it connected?",
                     i,

@@ -961,3 +961,93 @@ pub fn median_p99(v: &[f64]) -> Option<(f64, f64)> {
     Some((at(0.5), at(0.99)))
 }
 
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_runtime::TemplateParams;
+
+    fn adult() -> Arc<Skeleton> {
+        let t = troupe_runtime::template("adult").unwrap();
+        Arc::new(
+            t.instantiate(TemplateParams {
+                height: t.default_height,
+                mass: t.default_mass,
+            })
+            .unwrap(),
+        )
+    }
+
+    #[test]
+    fn converter_turns_and_moves_segments_with_their_sensors() {
+        let sk = adult();
+        let n = sk.dof_count();
+        let frame = transmitter_to_world();
+        // Transmitter X forward maps to the scene's +Z, Z down to −Y.
+        assert!((frame * DVec3::X - DVec3::Z).length() < 1e-12);
+        assert!((frame * DVec3::Z + DVec3::Y).length() < 1e-12);
+        let map = [("pelvis".to_string(), 1u8), ("skullbase".to_string(), 2u8)];
+        let mut c = AnatomicalConverter::new(sk.clone(), &map, frame).unwrap();
+        let (p1, q1) = (DVec3::new(0.5, 0.1, 0.2), DQuat::from_rotation_z(0.3));
+        let (p2, q2) = (DVec3::new(0.5, 0.1, -0.5), DQuat::from_rotation_x(-0.2));
+        let mut poses = BTreeMap::from([(1, (p1, q1)), (2, (p2, q2))]);
+        let base = vec![0.0; n];
+        c.calibrate(&base, &poses).unwrap();
+        let mut g0 = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(&sk, &base, &mut g0);
+
+        // Unmoved sensors give the calibration posture.
+        let (mut q, mut mask) = (vec![1.0; n], vec![false; n]);
+        c.convert(&poses, &mut q, &mut mask);
+        assert!(q.iter().all(|v| v.abs() < 1e-9), "calibration pose reproduced");
+
+        // The pelvis bird turns 20° about the transmitter's Z (down) and moves 10 cm
+        // forward; the head bird nods 0.15 rad about the transmitter's Y.
+        let turn = DQuat::from_rotation_z(0.35);
+        let nod = DQuat::from_rotation_y(0.15);
+        poses.insert(1, (p1 + DVec3::new(0.1, 0.0, 0.0), turn * q1));
+        poses.insert(2, (p2, nod * q2));
+        c.convert(&poses, &mut q, &mut mask);
+        assert!((q[sk.dof("root_z").unwrap()] - 0.1).abs() < 1e-12);
+        assert!(q[sk.dof("root_x").unwrap()].abs() < 1e-12);
+        let mut g = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(&sk, &q, &mut g);
+        let w = |r: DQuat| frame * r * frame.inverse();
+        let root = sk.joint("HumanoidRoot").unwrap();
+        assert!(g[root].rotation.angle_between(w(turn) * g0[root].rotation) < 1e-6);
+        // A yaw about the transmitter's down axis is a turn about the scene's −Y.
+        assert!((q[sk.dof("root_yaw").unwrap()] + 0.35).abs() < 1e-6);
+        let head = sk.joint("skullbase").unwrap();
+        assert!(g[head].rotation.angle_between(w(nod) * g0[head].rotation) < 1e-4);
+        assert!(mask[sk.dof("root_yaw").unwrap()] && !mask[sk.dof("r_elbow_flexion").unwrap()]);
+    }
+
+    #[test]
+    fn calibration_needs_every_mapped_bird() {
+        let sk = adult();
+        let mut c = AnatomicalConverter::new(sk.clone(), &[("pelvis".into(), 1), ("r_wrist".into(), 2)], DQuat::IDENTITY).unwrap();
+        let poses = BTreeMap::from([(1, (DVec3::ZERO, DQuat::IDENTITY))]);
+        let e = c.calibrate(&vec![0.0; sk.dof_count()], &poses).unwrap_err();
+        assert!(e.contains("bird 2"), "{e}");
+        assert!(AnatomicalConverter::new(sk, &[("tail".into(), 1)], DQuat::IDENTITY).unwrap_err().contains("'tail'"));
+    }
+
+    #[test]
+    fn glove_sensors_map_to_hand_dofs() {
+        let sk = adult();
+        for sensors in [18, 22] {
+            for name in crate::glove::sensor_names(sensors) {
+                let dofs = glove_dof_names(name, "r_");
+                assert!(!dofs.is_empty(), "{name} maps to a DOF");
+                for d in dofs {
+                    assert!(sk.dof(&d).is_ok(), "{name} → {d} exists in the template");
+                }
+            }
+        }
+        let c = nominal_glove_calibration(&sk, 18, "r_");
+        let d = &sk.dofs()[sk.dof("r_index1_flexion").unwrap()];
+        let a = c.angles(&[1, 1, 1, 1, 1, 255]);
+        assert!(a[4].abs() < 1e-12 && (a[5] - sk.dofs()[sk.dof("r_index2_flexion").unwrap()].max).abs() < 1e-12);
+        assert!(d.max > 0.0);
+    }
+}
