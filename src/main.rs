@@ -1,5 +1,6 @@
 //! The `troupe` command line.
 
+mod devices;
 mod export;
 mod run;
 mod scenario;
@@ -41,6 +42,10 @@ enum Command {
     Snapshot(view::SnapshotArgs),
     /// Export a body template to another format (URDF).
     Export(export::ExportArgs),
+    /// List serial ports and HID devices; probe a device; make a glove calibration.
+    Devices(devices::DevicesArgs),
+    /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
+    Emulate(devices::EmulateArgs),
 }
 
 fn main() -> ExitCode {
@@ -73,6 +78,8 @@ fn main() -> ExitCode {
         Command::View(args) => view::run(args),
         Command::Snapshot(args) => view::snapshot(args),
         Command::Export(args) => export::run(args),
+        Command::Devices(args) => devices::run(args),
+        Command::Emulate(args) => devices::emulate(args),
     };
     match result {
         Ok(code) => code,

@@ -70,6 +70,9 @@ pub struct RunArgs {
     /// Bytes one script resume may add to the Lua heap.
     #[arg(long, default_value_t = ScriptLimits::default().memory)]
     pub memory_limit: usize,
+    /// Record every live device stream (timestamps + raw bytes) to FILE.rec.
+    #[arg(long, value_name = "FILE.rec")]
+    pub record_devices: Option<PathBuf>,
 }
 
 /// Runs the scene and prints the summary.
@@ -88,7 +91,8 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
     }
-    let mut director = Director::new(config, troupe_actions::action_kinds(), limits)?;
+    let (mut director, devices) =
+        crate::devices::director(config, limits, args.record_devices.as_deref())?;
     director
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
@@ -136,6 +140,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             break;
         }
         let events = director.tick();
+        devices.end_tick();
         ticks += 1;
         let scene = director.scene();
         if counts.len() < scene.actors().len() {
@@ -189,6 +194,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     drop(scene);
+    devices.finish()?;
     let reports = director.behaviors();
     let mut failed = 0;
     for r in &reports {

@@ -12,3 +12,4 @@ pub mod record;
 pub mod emulator;
 pub mod gesture;
 pub mod performer;
+pub mod hid;
