@@ -23,6 +23,8 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use troupe_runtime::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
+use troupe_runtime::ik::{IkOptions, IkSolver, IkTask};
+use troupe_runtime::jacobian::Effector;
 use troupe_runtime::kinematics::{forward_kinematics, solve_joint_angles};
 use troupe_runtime::lua::api::{lua_err_message, ActorRef};
 use troupe_runtime::lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
@@ -48,17 +50,24 @@ fn joint_alias(name: &str) -> &str {
 
 /// Thesis 6.4.1's anatomical converter: sensor orientations (and the root sensor's
 /// position) to the joint rotations of the template, after a calibration in a known pose.
-#[derive(Clone, Debug)]
 pub struct AnatomicalConverter {
     skeleton: Arc<Skeleton>,
     frame: DQuat,
     /// (joint, bird address), joints in increasing index order (parents first).
     map: Vec<(usize, u8)>,
+    /// Per map entry: an IK solver over the rotation DOFs of the joints without a sensor
+    /// between the entry's joint and its nearest mapped ancestor (e.g. shoulder and elbow
+    /// for a wrist sensor under a chest sensor), or `None` when the parent is mapped.
+    ik: Vec<Option<IkSolver>>,
     calibration: Option<Calibration>,
 }
 
 #[derive(Clone, Debug)]
 struct Calibration {
+    /// Transmitter origin in the scene frame, estimated at calibration.
+    origin: DVec3,
+    /// Per map entry: the joint's origin relative to its sensor, in the sensor's frame.
+    levers: Vec<DVec3>,
     base_q: Vec<f64>,
     /// Bird pose (world frame) at calibration, per map entry.
     sensor0: Vec<(DVec3, DQuat)>,
@@ -80,10 +89,34 @@ impl AnatomicalConverter {
             m.push((j, *addr));
         }
         m.sort_by_key(|&(j, _)| j);
+        let mapped: Vec<usize> = m.iter().map(|&(j, _)| j).collect();
+        let mut ik = Vec::with_capacity(m.len());
+        for &(j, _) in &m {
+            let mut dofs = Vec::new();
+            let mut a = skeleton.joints()[j].parent;
+            while let Some(p) = a {
+                if mapped.contains(&p) {
+                    break;
+                }
+                let joint = &skeleton.joints()[p];
+                if joint.parent.is_none() {
+                    // The root's DOFs move the whole body: never solved for a limb.
+                    break;
+                }
+                dofs.extend(joint.dofs.clone().filter(|&d| skeleton.dofs()[d].kind == DofKind::Rotation));
+                a = joint.parent;
+            }
+            ik.push(if dofs.is_empty() {
+                None
+            } else {
+                Some(IkSolver::new(&skeleton, dofs, IkOptions::default()).map_err(|e| e.to_string())?)
+            });
+        }
         Ok(AnatomicalConverter {
             skeleton,
             frame,
             map: m,
+            ik,
             calibration: None,
         })
     }
@@ -119,7 +152,25 @@ impl AnatomicalConverter {
             offsets.push(q.inverse() * globals[j].rotation);
             sensor0.push((p, q));
         }
+        // Sensors sit close to their joints, so the mean of (joint − sensor) estimates where
+        // the transmitter is in the scene; what remains per sensor is its small lever.
+        let n = self.map.len().max(1) as f64;
+        let origin = self
+            .map
+            .iter()
+            .zip(&sensor0)
+            .map(|(&(j, _), s)| globals[j].translation - s.0)
+            .sum::<DVec3>()
+            / n;
+        let levers = self
+            .map
+            .iter()
+            .zip(&sensor0)
+            .map(|(&(j, _), s)| s.1.inverse() * (globals[j].translation - (s.0 + origin)))
+            .collect();
         self.calibration = Some(Calibration {
+            origin,
+            levers,
             base_q: base_q.to_vec(),
             sensor0,
             offsets,
@@ -130,9 +181,11 @@ impl AnatomicalConverter {
     /// Converts the latest bird poses into DOF values: `q` starts from the calibration
     /// posture; the root joint's translation follows its bird's displacement; each mapped
     /// joint's rotation DOFs are solved (parents first) so that its segment has the sensor's
-    /// orientation times the offset. Joints without a sensor keep their calibration values.
+    /// orientation times the offset. Joints without a sensor between a mapped joint and its
+    /// nearest mapped ancestor are solved by IK so that the mapped joint reaches its sensor's
+    /// position (sensor + lever); other joints keep their calibration values.
     /// Marks the DOFs it set in `mask`. Does nothing before calibration.
-    pub fn convert(&self, poses: &BTreeMap<u8, (DVec3, DQuat)>, q: &mut [f64], mask: &mut [bool]) {
+    pub fn convert(&mut self, poses: &BTreeMap<u8, (DVec3, DQuat)>, q: &mut [f64], mask: &mut [bool]) {
         let Some(cal) = &self.calibration else { return };
         q.copy_from_slice(&cal.base_q);
         let sk = &self.skeleton;
@@ -150,6 +203,16 @@ impl AnatomicalConverter {
                         q[d] = cal.base_q[d] + dof.axis.dot(delta);
                         mask[d] = true;
                     }
+                }
+            }
+            if let Some(solver) = self.ik[k].as_mut() {
+                let goal = p + cal.origin + rot * cal.levers[k];
+                let task = IkTask::position(Effector { joint: j, point: DVec3::ZERO }, goal);
+                if let Err(e) = solver.solve(sk, q, &[task], None, None) {
+                    tracing::debug!("performer IK for {}: {e}", joint.name);
+                }
+                for &d in solver.dofs() {
+                    mask[d] = true;
                 }
             }
             forward_kinematics(sk, q, &mut globals);
@@ -389,7 +452,7 @@ impl Performers {
             let n = p.skeleton.dof_count();
             let mut q = base_posture(scene, p.actor);
             let mut mask = vec![false; n];
-            if let Some(f) = &p.fob {
+            if let Some(f) = &mut p.fob {
                 f.converter.convert(&f.latest, &mut q, &mut mask);
             }
             if let Some(g) = &p.glove {
@@ -504,6 +567,7 @@ fn device_scope(p: &Performer) -> troupe_runtime::Scope {
                 dofs.push(d);
             }
         }
+        dofs.extend(f.converter.ik.iter().flatten().flat_map(|s| s.dofs().iter().copied()));
     }
     if let Some(g) = &p.glove {
         dofs.extend(g.dofs.iter().flatten().copied());
@@ -1023,13 +1087,47 @@ mod tests {
     }
 
     #[test]
+    fn joints_without_a_sensor_follow_by_ik() {
+        let sk = adult();
+        let n = sk.dof_count();
+        let frame = transmitter_to_world();
+        let map = [("pelvis".to_string(), 1u8), ("vl5".to_string(), 2u8), ("r_wrist".to_string(), 3u8)];
+        let mut c = AnatomicalConverter::new(sk.clone(), &map, frame).unwrap();
+        let base = vec![0.0; n];
+        let mut g0 = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(&sk, &base, &mut g0);
+        // Birds placed at their joints (transmitter 1 m behind the scene origin).
+        let to_tx = |p: DVec3| frame.inverse() * (p + DVec3::new(0.0, 0.0, 1.0));
+        let mut poses: BTreeMap<u8, (DVec3, DQuat)> = map
+            .iter()
+            .map(|(name, a)| {
+                let j = sk.joint(joint_alias(name)).unwrap();
+                (*a, (to_tx(g0[j].translation), DQuat::IDENTITY))
+            })
+            .collect();
+        c.calibrate(&base, &poses).unwrap();
+        // The wrist bird rises 15 cm and comes 10 cm forward; nothing else moves.
+        let wrist = sk.joint("r_wrist").unwrap();
+        let goal = g0[wrist].translation + DVec3::new(0.0, 0.15, 0.10);
+        poses.insert(3, (to_tx(goal), DQuat::IDENTITY));
+        let (mut q, mut mask) = (vec![0.0; n], vec![false; n]);
+        c.convert(&poses, &mut q, &mut mask);
+        let mut g = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(&sk, &q, &mut g);
+        assert!((g[wrist].translation - goal).length() < 1e-3, "wrist at {} not {}", g[wrist].translation, goal);
+        let elbow = sk.dof("r_elbow_flexion").unwrap();
+        assert!(mask[elbow] && q[elbow].abs() > 0.05, "the elbow bends (IK)");
+        assert!(q[sk.dof("root_x").unwrap()].abs() < 1e-12, "the root stays");
+    }
+
+    #[test]
     fn calibration_needs_every_mapped_bird() {
         let sk = adult();
         let mut c = AnatomicalConverter::new(sk.clone(), &[("pelvis".into(), 1), ("r_wrist".into(), 2)], DQuat::IDENTITY).unwrap();
         let poses = BTreeMap::from([(1, (DVec3::ZERO, DQuat::IDENTITY))]);
         let e = c.calibrate(&vec![0.0; sk.dof_count()], &poses).unwrap_err();
         assert!(e.contains("bird 2"), "{e}");
-        assert!(AnatomicalConverter::new(sk, &[("tail".into(), 1)], DQuat::IDENTITY).unwrap_err().contains("'tail'"));
+        assert!(AnatomicalConverter::new(sk, &[("tail".into(), 1)], DQuat::IDENTITY).map(|_| ()).unwrap_err().contains("'tail'"));
     }
 
     #[test]
