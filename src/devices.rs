@@ -5,7 +5,9 @@ use clap::{Args, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-use troupe_drivers::driver::{self, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol, Mode, Reading};
+use troupe_drivers::driver::{
+    self, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol, Mode, Reading,
+};
 use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions, Motion};
 use troupe_drivers::fob::{Hemisphere, OutputFormat, PositionRange};
 use troupe_drivers::glove::{GloveCalibration, GloveLayout};
@@ -181,7 +183,10 @@ fn list(json: bool) -> Result<ExitCode> {
                 d.vendor,
                 d.product,
                 d.name,
-                d.spacemouse.as_ref().map(|s| format!("  [SpaceMouse: {s}]")).unwrap_or_default()
+                d.spacemouse
+                    .as_ref()
+                    .map(|s| format!("  [SpaceMouse: {s}]"))
+                    .unwrap_or_default()
             )
         }),
         Err(e) => println!("  unavailable: {e}"),
@@ -194,21 +199,41 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
     let timeout = Duration::from_secs_f64(a.timeout.max(0.1));
     if a.kind == ProbeKind::Spacemouse {
         let json = a.json;
-        let (name, n) = troupe_drivers::hid::read_spacemouse(a.port.as_deref(), a.samples, timeout, |s| {
-            if json {
-                println!("{}", serde_json::to_string(s).unwrap_or_default());
-            } else {
-                println!(
-                    "T {:6} {:6} {:6}  R {:6} {:6} {:6}  buttons {:#x}",
-                    s.translation[0], s.translation[1], s.translation[2], s.rotation[0], s.rotation[1], s.rotation[2], s.buttons
-                );
-            }
-        })
-        .map_err(|e| anyhow!(e))?;
+        let (name, n) =
+            troupe_drivers::hid::read_spacemouse(a.port.as_deref(), a.samples, timeout, |s| {
+                if json {
+                    println!("{}", serde_json::to_string(s).unwrap_or_default());
+                } else {
+                    println!(
+                        "T {:6} {:6} {:6}  R {:6} {:6} {:6}  buttons {:#x}",
+                        s.translation[0],
+                        s.translation[1],
+                        s.translation[2],
+                        s.rotation[0],
+                        s.rotation[1],
+                        s.rotation[2],
+                        s.buttons
+                    );
+                }
+            })
+            .map_err(|e| anyhow!(e))?;
         eprintln!("{name}: {n} reports");
-        return Ok(if n > 0 { ExitCode::SUCCESS } else { ExitCode::FAILURE });
+        return Ok(if n > 0 {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        });
     }
-    let port = a.port.clone().ok_or_else(|| anyhow!("--port is required for {}", if a.kind == ProbeKind::Fob { "fob" } else { "cyberglove" }))?;
+    let port = a.port.clone().ok_or_else(|| {
+        anyhow!(
+            "--port is required for {}",
+            if a.kind == ProbeKind::Fob {
+                "fob"
+            } else {
+                "cyberglove"
+            }
+        )
+    })?;
     let mut o = DriverOptions::new("probe", &port);
     o.baud = a.baud;
     o.max_attempts = Some(3);
@@ -218,7 +243,10 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
     };
     let protocol: Box<dyn driver::Protocol> = match a.kind {
         ProbeKind::Fob => {
-            let mut c = FobConfig::new(a.birds.max(1), OutputFormat::parse(&a.format).map_err(|e| anyhow!(e))?);
+            let mut c = FobConfig::new(
+                a.birds.max(1),
+                OutputFormat::parse(&a.format).map_err(|e| anyhow!(e))?,
+            );
             c.layout.range = PositionRange::parse(&a.range).map_err(|e| anyhow!(e))?;
             c.hemisphere = Hemisphere::parse(&a.hemisphere).map_err(|e| anyhow!(e))?;
             c.mode = mode(&a.mode)?;
@@ -230,11 +258,18 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
             }
             if let Some(c) = &calibration {
                 if c.sensors.len() != a.sensors {
-                    bail!("the calibration has {} sensors, --sensors is {}", c.sensors.len(), a.sensors);
+                    bail!(
+                        "the calibration has {} sensors, --sensors is {}",
+                        c.sensors.len(),
+                        a.sensors
+                    );
                 }
             }
             Box::new(GloveProtocol::new(GloveConfig {
-                layout: GloveLayout { sensors: a.sensors, status_byte: false },
+                layout: GloveLayout {
+                    sensors: a.sensors,
+                    status_byte: false,
+                },
                 mode: mode(&a.mode)?,
             }))
         }
@@ -262,7 +297,10 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
         h.samples,
         h.resyncs,
         h.dropped_bytes,
-        h.last_error.as_ref().map(|e| format!("; last error: {e}")).unwrap_or_default()
+        h.last_error
+            .as_ref()
+            .map(|e| format!("; last error: {e}"))
+            .unwrap_or_default()
     );
     if n < a.samples {
         bail!(
@@ -279,7 +317,11 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
     if json {
         let mut v = serde_json::json!({ "seq": s.seq, "time": s.time, "reading": &s.reading });
         if let (Reading::Glove(g), Some(c)) = (&s.reading, cal) {
-            v["angles_deg"] = serde_json::json!(c.angles(&g.raw).iter().map(|a| a.to_degrees()).collect::<Vec<_>>());
+            v["angles_deg"] = serde_json::json!(c
+                .angles(&g.raw)
+                .iter()
+                .map(|a| a.to_degrees())
+                .collect::<Vec<_>>());
         }
         println!("{v}");
         return;
@@ -291,7 +333,10 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
                 line += &format!("  pos {:8.4} {:8.4} {:8.4} m", p[0], p[1], p[2]);
             }
             if let Some(a) = b.angles {
-                line += &format!("  azim/elev/roll {:8.2} {:8.2} {:8.2} deg", a[0], a[1], a[2]);
+                line += &format!(
+                    "  azim/elev/roll {:8.2} {:8.2} {:8.2} deg",
+                    a[0], a[1], a[2]
+                );
             }
             if let Some(q) = b.quaternion {
                 line += &format!("  quat {:7.4} {:7.4} {:7.4} {:7.4}", q[0], q[1], q[2], q[3]);
@@ -306,14 +351,18 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
             let raw: Vec<String> = g.raw.iter().map(|v| format!("{v:3}")).collect();
             println!("{:8.3}s glove {}", s.time, raw.join(" "));
             if let Some(c) = cal {
-                let a: Vec<String> = c.angles(&g.raw).iter().map(|a| format!("{:5.1}", a.to_degrees())).collect();
+                let a: Vec<String> = c
+                    .angles(&g.raw)
+                    .iter()
+                    .map(|a| format!("{:5.1}", a.to_degrees()))
+                    .collect();
                 println!("          deg   {}", a.join(" "));
             }
         }
     }
 }
 
-fn mean_glove(path: &PathBuf) -> Result<Vec<u8>> {
+fn mean_glove(path: &std::path::Path) -> Result<Vec<u8>> {
     let rec = Recording::read(path).map_err(|e| anyhow!(e))?;
     let s = rec
         .find("cyberglove")
@@ -327,21 +376,32 @@ fn mean_glove(path: &PathBuf) -> Result<Vec<u8>> {
             _ => None,
         })
         .collect();
-    let first = raws.first().ok_or_else(|| anyhow!("{}: no glove record", path.display()))?;
+    let first = raws
+        .first()
+        .ok_or_else(|| anyhow!("{}: no glove record", path.display()))?;
     let mut sum = vec![0.0; first.len()];
     for r in &raws {
         for (s, &v) in sum.iter_mut().zip(r) {
             *s += f64::from(v);
         }
     }
-    Ok(sum.iter().map(|s| (s / raws.len() as f64).round() as u8).collect())
+    Ok(sum
+        .iter()
+        .map(|s| (s / raws.len() as f64).round() as u8)
+        .collect())
 }
 
 fn calibrate(c: CalibrateArgs) -> Result<ExitCode> {
     let flat = mean_glove(&c.flat)?;
     let fist = mean_glove(&c.fist)?;
     if flat.len() != fist.len() {
-        bail!("{} has {} sensors, {} has {}", c.flat.display(), flat.len(), c.fist.display(), fist.len());
+        bail!(
+            "{} has {} sensors, {} has {}",
+            c.flat.display(),
+            flat.len(),
+            c.fist.display(),
+            fist.len()
+        );
     }
     let side = match c.hand.as_str() {
         "right" => "r_",
@@ -351,20 +411,30 @@ fn calibrate(c: CalibrateArgs) -> Result<ExitCode> {
     // Flat hand: every angle 0. Fist: each flexion sensor at its DOF's upper limit; the
     // abduction, arch and wrist sensors are not exercised and keep the flat reading as 0.
     let t = troupe_runtime::template("adult")?;
-    let sk = t.instantiate(troupe_runtime::TemplateParams { height: t.default_height, mass: t.default_mass })?;
+    let sk = t.instantiate(troupe_runtime::TemplateParams {
+        height: t.default_height,
+        mass: t.default_mass,
+    })?;
     let names = troupe_drivers::glove::sensor_names(flat.len());
     let fist_angles: Vec<f64> = names
         .iter()
         .map(|n| {
-            let flexion = n.ends_with("_mpj") || n.ends_with("_pij") || n.ends_with("_dij") || n.ends_with("_ij") || *n == "thumb_rotation";
-            let dof = troupe_drivers::performer::glove_dof_names(n, side).first().and_then(|d| sk.dof(d).ok());
+            let flexion = n.ends_with("_mpj")
+                || n.ends_with("_pij")
+                || n.ends_with("_dij")
+                || n.ends_with("_ij")
+                || *n == "thumb_rotation";
+            let dof = troupe_drivers::performer::glove_dof_names(n, side)
+                .first()
+                .and_then(|d| sk.dof(d).ok());
             match (flexion, dof) {
                 (true, Some(d)) => sk.dofs()[d].max,
                 _ => 0.0,
             }
         })
         .collect();
-    let cal = GloveCalibration::from_poses(&flat, &fist, &vec![0.0; flat.len()], &fist_angles).map_err(|e| anyhow!(e))?;
+    let cal = GloveCalibration::from_poses(&flat, &fist, &vec![0.0; flat.len()], &fist_angles)
+        .map_err(|e| anyhow!(e))?;
     cal.save(&c.out).map_err(|e| anyhow!(e))?;
     println!("wrote {} ({} sensors)", c.out.display(), flat.len());
     Ok(ExitCode::SUCCESS)
@@ -383,7 +453,8 @@ pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
         bail!("--birds must be 1…14");
     }
     let motion = match &a.from {
-        Some(p) => Motion::from_file(p, name, &a.joints, usize::from(a.birds), a.scale).map_err(|e| anyhow!(e))?,
+        Some(p) => Motion::from_file(p, name, &a.joints, usize::from(a.birds), a.scale)
+            .map_err(|e| anyhow!(e))?,
         None => Motion::Synthetic,
     };
     let options = EmulatorOptions {
@@ -393,11 +464,17 @@ pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
         rate_hz: a.rate,
         motion,
     };
-    let emu = emulator::start(kind, options, a.link.as_deref()).map_err(|e| anyhow!(e)).context("starting the emulator")?;
+    let emu = emulator::start(kind, options, a.link.as_deref())
+        .map_err(|e| anyhow!(e))
+        .context("starting the emulator")?;
     println!("{}", emu.path());
     use std::io::Write;
     let _ = std::io::stdout().flush();
-    eprintln!("emulating a {name} on {} (pty {}); stop with Ctrl-C", emu.path(), emu.pty_path());
+    eprintln!(
+        "emulating a {name} on {} (pty {}); stop with Ctrl-C",
+        emu.path(),
+        emu.pty_path()
+    );
     match a.seconds {
         Some(s) => {
             std::thread::sleep(Duration::from_secs_f64(s.max(0.0)));
@@ -431,7 +508,8 @@ pub fn director(
         )),
         None => None,
     };
-    let performers = troupe_drivers::performer::install(&mut d, recorder.clone()).map_err(|e| anyhow!(e))?;
+    let performers =
+        troupe_drivers::performer::install(&mut d, recorder.clone()).map_err(|e| anyhow!(e))?;
     Ok((
         d,
         RunDevices {

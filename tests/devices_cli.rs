@@ -37,13 +37,19 @@ fn emulate(args: &[&str]) -> Emu {
         .spawn()
         .unwrap();
     let mut line = String::new();
-    BufReader::new(child.stdout.take().unwrap()).read_line(&mut line).unwrap();
+    BufReader::new(child.stdout.take().unwrap())
+        .read_line(&mut line)
+        .unwrap();
     Emu(child, line.trim().to_string())
 }
 
 fn ok(c: &mut Command) -> String {
     let out = c.output().unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     String::from_utf8_lossy(&out.stdout).into_owned()
 }
 
@@ -51,30 +57,71 @@ fn ok(c: &mut Command) -> String {
 fn probe_an_emulated_flock_and_glove() {
     let link = temp("fob-link");
     let fob = emulate(&["fob", "--birds", "3", "--link", link.to_str().unwrap()]);
-    assert!(fob.1 == link.display().to_string(), "prints the link: {}", fob.1);
-    let out = ok(troupe().args(["devices", "probe", "fob", "--port", &fob.1, "--birds", "3"]).args([
-        "--format",
-        "position-matrix",
-        "--samples",
-        "6",
-        "--json",
-    ]));
-    let lines: Vec<serde_json::Value> = out.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert!(
+        fob.1 == link.display().to_string(),
+        "prints the link: {}",
+        fob.1
+    );
+    let out = ok(troupe()
+        .args(["devices", "probe", "fob", "--port", &fob.1, "--birds", "3"])
+        .args(["--format", "position-matrix", "--samples", "6", "--json"]));
+    let lines: Vec<serde_json::Value> = out
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
     assert_eq!(lines.len(), 6);
-    let addrs: Vec<u64> = lines.iter().map(|v| v["reading"]["address"].as_u64().unwrap()).collect();
+    let addrs: Vec<u64> = lines
+        .iter()
+        .map(|v| v["reading"]["address"].as_u64().unwrap())
+        .collect();
     assert_eq!(&addrs[..3], &[1, 2, 3]);
     assert_eq!(lines[0]["reading"]["matrix"].as_array().unwrap().len(), 9);
 
     let glove = emulate(&["cyberglove", "--sensors", "22"]);
-    let out = ok(troupe().args(["devices", "probe", "cyberglove", "--port", &glove.1, "--sensors", "22", "--samples", "3"]));
+    let out = ok(troupe().args([
+        "devices",
+        "probe",
+        "cyberglove",
+        "--port",
+        &glove.1,
+        "--sensors",
+        "22",
+        "--samples",
+        "3",
+    ]));
     assert_eq!(out.lines().count(), 3);
-    assert_eq!(out.lines().next().unwrap().split_whitespace().count(), 2 + 22);
+    assert_eq!(
+        out.lines().next().unwrap().split_whitespace().count(),
+        2 + 22
+    );
 
     // Wrong sensor count and a missing port: clear errors, no panic.
-    let out = troupe().args(["devices", "probe", "cyberglove", "--port", &glove.1, "--samples", "1"]).output().unwrap();
+    let out = troupe()
+        .args([
+            "devices",
+            "probe",
+            "cyberglove",
+            "--port",
+            &glove.1,
+            "--samples",
+            "1",
+        ])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("samples 22 sensors, configured for 18"));
-    let out = troupe().args(["devices", "probe", "fob", "--port", "/dev/no-such-port", "--timeout", "1"]).output().unwrap();
+    let out = troupe()
+        .args([
+            "devices",
+            "probe",
+            "fob",
+            "--port",
+            "/dev/no-such-port",
+            "--timeout",
+            "1",
+        ])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("/dev/no-such-port"));
 }
@@ -96,7 +143,11 @@ fn run_records_device_streams_and_replay_is_deterministic() {
     )
     .unwrap();
     let rec = temp("pat.rec");
-    let out = ok(troupe().arg("run").arg(&scene).args(["--ticks", "100", "--realtime", "--record-devices"]).arg(&rec));
+    let out = ok(troupe()
+        .arg("run")
+        .arg(&scene)
+        .args(["--ticks", "100", "--realtime", "--record-devices"])
+        .arg(&rec));
     assert!(out.contains("recorded the device streams"), "{out}");
     assert!(out.contains("sample-to-posture latency"), "{out}");
     assert!(out.contains("device pat.fob: streaming"), "{out}");
@@ -115,9 +166,17 @@ fn run_records_device_streams_and_replay_is_deterministic() {
     .unwrap();
     let (a, b) = (temp("a.trk"), temp("b.trk"));
     for (file, threads) in [(&a, "1"), (&b, "2")] {
-        ok(troupe().arg("run").arg(&replay).args(["--ticks", "100", "--threads", threads, "--record"]).arg(file));
+        ok(troupe()
+            .arg("run")
+            .arg(&replay)
+            .args(["--ticks", "100", "--threads", threads, "--record"])
+            .arg(file));
     }
-    assert_eq!(std::fs::read(&a).unwrap(), std::fs::read(&b).unwrap(), "replays are identical");
+    assert_eq!(
+        std::fs::read(&a).unwrap(),
+        std::fs::read(&b).unwrap(),
+        "replays are identical"
+    );
     // And the replayed performer moves: its root has a key on (nearly) every tick.
     let info = ok(troupe().args(["seq", "info"]).arg(&a));
     let keys: usize = info

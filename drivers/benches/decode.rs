@@ -5,7 +5,9 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::collections::BTreeMap;
 use std::sync::Arc;
 use troupe_drivers::emulator::{pose_words, Motion};
-use troupe_drivers::fob::{encode_record, OutputFormat, PositionRange, RecordDecoder, RecordLayout};
+use troupe_drivers::fob::{
+    encode_record, OutputFormat, PositionRange, RecordDecoder, RecordLayout,
+};
 use troupe_drivers::glove::{GloveDecoder, GloveLayout};
 use troupe_drivers::performer::{transmitter_to_world, AnatomicalConverter};
 
@@ -20,14 +22,23 @@ fn fob_stream(format: OutputFormat, records: usize) -> (RecordLayout, Vec<u8>) {
     for k in 0..records {
         let bird = (k % 6) as u8;
         let (p, q) = Motion::Synthetic.bird(k as f64 * 0.01, usize::from(bird));
-        bytes.extend(encode_record(&layout, &pose_words(format, layout.range, p, q), 0, bird + 1));
+        bytes.extend(encode_record(
+            &layout,
+            &pose_words(format, layout.range, p, q),
+            0,
+            bird + 1,
+        ));
     }
     (layout, bytes)
 }
 
 fn decoders(c: &mut Criterion) {
     let mut g = c.benchmark_group("decode");
-    for format in [OutputFormat::PositionAngles, OutputFormat::PositionQuaternion, OutputFormat::PositionMatrix] {
+    for format in [
+        OutputFormat::PositionAngles,
+        OutputFormat::PositionQuaternion,
+        OutputFormat::PositionMatrix,
+    ] {
         let (layout, bytes) = fob_stream(format, 6000);
         g.throughput(Throughput::Bytes(bytes.len() as u64));
         g.bench_function(format!("fob {} (6000 group records)", format.name()), |b| {
@@ -39,7 +50,10 @@ fn decoders(c: &mut Criterion) {
             })
         });
     }
-    let layout = GloveLayout { sensors: 22, status_byte: true };
+    let layout = GloveLayout {
+        sensors: 22,
+        status_byte: true,
+    };
     let mut bytes = Vec::new();
     for k in 0..6000u32 {
         bytes.push(b'S');
@@ -68,20 +82,33 @@ fn converter(c: &mut Criterion) {
         })
         .unwrap(),
     );
-    let map: Vec<(String, u8)> = ["pelvis", "vl5", "skullbase", "r_shoulder", "l_shoulder", "r_wrist"]
-        .iter()
-        .enumerate()
-        .map(|(i, n)| (n.to_string(), i as u8 + 1))
-        .collect();
+    let map: Vec<(String, u8)> = [
+        "pelvis",
+        "vl5",
+        "skullbase",
+        "r_shoulder",
+        "l_shoulder",
+        "r_wrist",
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, n)| (n.to_string(), i as u8 + 1))
+    .collect();
     let mut conv = AnatomicalConverter::new(sk.clone(), &map, transmitter_to_world()).unwrap();
-    let poses = |t: f64| -> BTreeMap<u8, _> { (0..6).map(|i| (i as u8 + 1, Motion::Synthetic.bird(t, i))).collect() };
-    conv.calibrate(&vec![0.0; sk.dof_count()], &poses(0.0)).unwrap();
+    let poses = |t: f64| -> BTreeMap<u8, _> {
+        (0..6)
+            .map(|i| (i as u8 + 1, Motion::Synthetic.bird(t, i)))
+            .collect()
+    };
+    conv.calibrate(&vec![0.0; sk.dof_count()], &poses(0.0))
+        .unwrap();
     let later = poses(1.3);
     let mut q = vec![0.0; sk.dof_count()];
     let mut mask = vec![false; sk.dof_count()];
-    c.bench_function("anatomical conversion, 6 birds (IK for the arms), adult", |b| {
-        b.iter(|| conv.convert(&later, &mut q, &mut mask))
-    });
+    c.bench_function(
+        "anatomical conversion, 6 birds (IK for the arms), adult",
+        |b| b.iter(|| conv.convert(&later, &mut q, &mut mask)),
+    );
 }
 
 criterion_group!(benches, decoders, converter);

@@ -269,7 +269,9 @@ fn read_exact_timeout(port: &mut dyn Port, n: usize, timeout: Duration) -> Resul
         match port.read(&mut buf[..want]) {
             Ok(0) => return Err("port closed".into()),
             Ok(k) => out.extend_from_slice(&buf[..k]),
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut || e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(e)
+                if e.kind() == std::io::ErrorKind::TimedOut
+                    || e.kind() == std::io::ErrorKind::WouldBlock => {}
             Err(e) => return Err(e.to_string()),
         }
     }
@@ -284,7 +286,9 @@ fn drain(port: &mut dyn Port, quiet: Duration) {
         match port.read(&mut buf) {
             Ok(0) => break,
             Ok(_) => {}
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut || e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(e)
+                if e.kind() == std::io::ErrorKind::TimedOut
+                    || e.kind() == std::io::ErrorKind::WouldBlock => {}
             Err(_) => break,
         }
     }
@@ -325,7 +329,10 @@ impl Protocol for FobProtocol {
             for addr in 1..=c.birds {
                 write_all(port, &[fob::CMD_TO_FBB + addr, c.layout.format.command()])?;
                 let h = c.hemisphere.data();
-                write_all(port, &[fob::CMD_TO_FBB + addr, fob::CMD_HEMISPHERE, h[0], h[1]])?;
+                write_all(
+                    port,
+                    &[fob::CMD_TO_FBB + addr, fob::CMD_HEMISPHERE, h[0], h[1]],
+                )?;
             }
             write_all(port, &fob::group_mode_command(true))?;
         } else {
@@ -406,12 +413,17 @@ pub fn glove_query(port: &mut dyn Port, q: Query) -> Result<Vec<u8>, String> {
             Err(e) => return Err(format!("query ?{}: {e}", q.letter() as char)),
         }
         if start.elapsed() > Duration::from_millis(500) {
-            return Err(format!("query ?{}: no complete reply within 500 ms (got {buf:02x?})", q.letter() as char));
+            return Err(format!(
+                "query ?{}: no complete reply within 500 ms (got {buf:02x?})",
+                q.letter() as char
+            ));
         }
         match port.read(&mut chunk) {
             Ok(0) => return Err("port closed".into()),
             Ok(k) => buf.extend_from_slice(&chunk[..k]),
-            Err(e) if e.kind() == std::io::ErrorKind::TimedOut || e.kind() == std::io::ErrorKind::WouldBlock => {}
+            Err(e)
+                if e.kind() == std::io::ErrorKind::TimedOut
+                    || e.kind() == std::io::ErrorKind::WouldBlock => {}
             Err(e) => return Err(e.to_string()),
         }
     }
@@ -433,7 +445,9 @@ impl Protocol for GloveProtocol {
         let status = glove_query(port, Query::Status)?;
         // `?G` status: bit0 initialized, bit1 glove plugged in.
         if status.first().is_none_or(|s| s & 0x02 == 0) {
-            return Err(format!("glove not plugged into its interface unit (status {status:02x?})"));
+            return Err(format!(
+                "glove not plugged into its interface unit (status {status:02x?})"
+            ));
         }
         let sensors = glove_query(port, Query::SensorsSampled)?;
         let n = usize::from(sensors.first().copied().unwrap_or(0));
@@ -444,7 +458,11 @@ impl Protocol for GloveProtocol {
             ));
         }
         // `u 1` / `u 0`: status byte appended or not (ASCII command, CR-terminated).
-        let u: &[u8] = if self.config.layout.status_byte { b"u 1\r" } else { b"u 0\r" };
+        let u: &[u8] = if self.config.layout.status_byte {
+            b"u 1\r"
+        } else {
+            b"u 0\r"
+        };
         write_all(port, u)?;
         drain(port, Duration::from_millis(30));
         self.decoder = GloveDecoder::new(self.config.layout);
@@ -457,7 +475,9 @@ impl Protocol for GloveProtocol {
 
     fn before_read(&mut self, port: &mut dyn Port) -> std::io::Result<()> {
         // A lost reply must not stall polling forever: re-poll after 100 ms.
-        if self.config.mode == Mode::Point && (self.poll_due || self.last_poll.elapsed() > Duration::from_millis(100)) {
+        if self.config.mode == Mode::Point
+            && (self.poll_due || self.last_poll.elapsed() > Duration::from_millis(100))
+        {
             port.write_all(&[glove::CMD_POLL])?;
             self.poll_due = false;
             self.last_poll = Instant::now();
@@ -563,7 +583,11 @@ impl Drop for DeviceHandle {
 pub type Opener = Box<dyn FnMut(&DriverOptions) -> Result<Box<dyn Port>, String> + Send>;
 
 /// Starts a device thread on a serial port.
-pub fn spawn(options: DriverOptions, protocol: Box<dyn Protocol>, recorder: Option<Arc<Recorder>>) -> DeviceHandle {
+pub fn spawn(
+    options: DriverOptions,
+    protocol: Box<dyn Protocol>,
+    recorder: Option<Arc<Recorder>>,
+) -> DeviceHandle {
     let opener: Opener = Box::new(|o: &DriverOptions| open_serial(&o.path, o.baud));
     spawn_with(options, protocol, recorder, opener)
 }
@@ -626,7 +650,8 @@ fn run(
     // Counters of earlier connections, so totals survive a reconnection.
     let (mut base_resyncs, mut base_dropped) = (0u64, 0u64);
     while !stop.load(Ordering::Acquire) {
-        let connected = opener(&o).and_then(|mut port| protocol.configure(port.as_mut()).map(|_| port));
+        let connected =
+            opener(&o).and_then(|mut port| protocol.configure(port.as_mut()).map(|_| port));
         let mut port = match connected {
             Ok(p) => p,
             Err(e) => {
@@ -682,13 +707,17 @@ fn run(
                     });
                     let (r, d) = protocol.counters();
                     health.resyncs.store(base_resyncs + r, Ordering::Relaxed);
-                    health.dropped_bytes.store(base_dropped + d, Ordering::Relaxed);
+                    health
+                        .dropped_bytes
+                        .store(base_dropped + d, Ordering::Relaxed);
                     if produced {
                         last_sample = Some(now);
                         health.set(HealthState::Streaming);
                     }
                 }
-                Err(e) if e.kind() == std::io::ErrorKind::TimedOut || e.kind() == std::io::ErrorKind::WouldBlock => {}
+                Err(e)
+                    if e.kind() == std::io::ErrorKind::TimedOut
+                        || e.kind() == std::io::ErrorKind::WouldBlock => {}
                 Err(e) => break format!("read: {e}"),
             }
             let silent_since = last_sample.unwrap_or(connected_at);

@@ -45,7 +45,8 @@ impl Pty {
             return Err(format!("openpty: {}", std::io::Error::last_os_error()));
         }
         // SAFETY: openpty returned two fresh descriptors that we now own.
-        let (master, slave) = unsafe { (OwnedFd::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) };
+        let (master, slave) =
+            unsafe { (OwnedFd::from_raw_fd(master), OwnedFd::from_raw_fd(slave)) };
         // SAFETY: `name` was NUL-terminated by openpty.
         let path = unsafe { std::ffi::CStr::from_ptr(name.as_ptr()) }
             .to_string_lossy()
@@ -95,10 +96,13 @@ impl Pty {
     fn write_all(&self, mut bytes: &[u8]) -> std::io::Result<()> {
         while !bytes.is_empty() {
             // SAFETY: bytes is valid for its length.
-            let k = unsafe { libc::write(self.master.as_raw_fd(), bytes.as_ptr().cast(), bytes.len()) };
+            let k =
+                unsafe { libc::write(self.master.as_raw_fd(), bytes.as_ptr().cast(), bytes.len()) };
             if k < 0 {
                 let e = std::io::Error::last_os_error();
-                if e.kind() == std::io::ErrorKind::WouldBlock || e.kind() == std::io::ErrorKind::Interrupted {
+                if e.kind() == std::io::ErrorKind::WouldBlock
+                    || e.kind() == std::io::ErrorKind::Interrupted
+                {
                     std::thread::sleep(Duration::from_millis(1));
                     continue;
                 }
@@ -135,8 +139,18 @@ impl Motion {
     /// Loads a BVH or `.rec` file by extension; `joints` names the BVH joint of each bird
     /// (empty: the first joints of the hierarchy); `kind` picks the recorded stream
     /// (`fob` or `cyberglove`).
-    pub fn from_file(path: &Path, kind: &str, joints: &[String], birds: usize, scale: f64) -> Result<Motion, String> {
-        let ext = path.extension().and_then(|e| e.to_str()).unwrap_or("").to_ascii_lowercase();
+    pub fn from_file(
+        path: &Path,
+        kind: &str,
+        joints: &[String],
+        birds: usize,
+        scale: f64,
+    ) -> Result<Motion, String> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
         match ext.as_str() {
             "bvh" => {
                 let bvh = troupe_runtime::bvh::read_bvh(path).map_err(|e| e.to_string())?;
@@ -146,12 +160,17 @@ impl Motion {
                     joints
                         .iter()
                         .map(|j| {
-                            bvh.joint(j).ok_or_else(|| format!("{}: no joint '{j}'", path.display()))
+                            bvh.joint(j)
+                                .ok_or_else(|| format!("{}: no joint '{j}'", path.display()))
                         })
                         .collect::<Result<_, _>>()?
                 };
                 if idx.len() < birds {
-                    return Err(format!("{}: {} joints for {birds} birds", path.display(), idx.len()));
+                    return Err(format!(
+                        "{}: {} joints for {birds} birds",
+                        path.display(),
+                        idx.len()
+                    ));
                 }
                 Ok(Motion::Bvh {
                     bvh: Box::new(bvh),
@@ -161,12 +180,18 @@ impl Motion {
             }
             "rec" => {
                 let rec = Recording::read(path)?;
-                let s = rec
-                    .find(kind)
-                    .ok_or_else(|| format!("{}: no single '{kind}' stream in the recording", path.display()))?;
+                let s = rec.find(kind).ok_or_else(|| {
+                    format!(
+                        "{}: no single '{kind}' stream in the recording",
+                        path.display()
+                    )
+                })?;
                 let readings = rec.readings(s)?;
                 if readings.is_empty() {
-                    return Err(format!("{}: the '{kind}' stream has no complete record", path.display()));
+                    return Err(format!(
+                        "{}: the '{kind}' stream has no complete record",
+                        path.display()
+                    ));
                 }
                 Ok(Motion::Recorded { readings })
             }
@@ -181,7 +206,8 @@ impl Motion {
             Motion::Bvh { bvh, joints, scale } => {
                 let frames = bvh.frame_count().max(1);
                 let k = ((t / bvh.frame_time().max(1e-6)) as usize) % frames;
-                let mut g = vec![troupe_runtime::transform::Transform::IDENTITY; bvh.joints().len()];
+                let mut g =
+                    vec![troupe_runtime::transform::Transform::IDENTITY; bvh.joints().len()];
                 bvh.global_transforms(k, &mut g);
                 let tr = g[joints[i.min(joints.len() - 1)]];
                 (tr.translation * *scale, tr.rotation)
@@ -190,13 +216,19 @@ impl Motion {
                 let birds: Vec<&fob::BirdRecord> = readings
                     .iter()
                     .filter_map(|(_, r)| match r {
-                        Reading::Bird(b) if usize::from(b.address) == i + 1 || (b.address == 1 && i == 0) => Some(b),
+                        Reading::Bird(b)
+                            if usize::from(b.address) == i + 1 || (b.address == 1 && i == 0) =>
+                        {
+                            Some(b)
+                        }
                         _ => None,
                     })
                     .collect();
                 let times: Vec<f64> = readings
                     .iter()
-                    .filter(|(_, r)| matches!(r, Reading::Bird(b) if usize::from(b.address) == i + 1))
+                    .filter(
+                        |(_, r)| matches!(r, Reading::Bird(b) if usize::from(b.address) == i + 1),
+                    )
                     .map(|(t, _)| *t)
                     .collect();
                 match pick(&times, t) {
@@ -259,7 +291,12 @@ pub fn bird_pose(b: &fob::BirdRecord) -> (DVec3, DQuat) {
 /// Orientation from azimuth (about Z), elevation (about Y), roll (about X), in degrees,
 /// applied in that order as the Flock defines its Euler angles.
 pub fn angles_to_quat(a: [f64; 3]) -> DQuat {
-    DQuat::from_euler(EulerRot::ZYX, a[0].to_radians(), a[1].to_radians(), a[2].to_radians())
+    DQuat::from_euler(
+        EulerRot::ZYX,
+        a[0].to_radians(),
+        a[1].to_radians(),
+        a[2].to_radians(),
+    )
 }
 
 /// Azimuth, elevation, roll (degrees) of an orientation.
@@ -275,7 +312,11 @@ fn synthetic_bird(t: f64, i: usize) -> (DVec3, DQuat) {
         0.2 * (0.7 * t + 0.5 * f).sin(),
         -0.1 + 0.08 * (1.1 * t + f).cos(),
     );
-    let a = [40.0 * (0.5 * t + f).sin(), 25.0 * (0.8 * t).sin(), 15.0 * (0.3 * t + f).cos()];
+    let a = [
+        40.0 * (0.5 * t + f).sin(),
+        25.0 * (0.8 * t).sin(),
+        15.0 * (0.3 * t + f).cos(),
+    ];
     (p, angles_to_quat(a))
 }
 
@@ -283,7 +324,9 @@ fn synthetic_glove(t: f64, sensors: usize) -> Vec<u8> {
     (0..sensors)
         .map(|k| {
             let phase = 0.25 * k as f64;
-            (1.0 + 254.0 * (0.5 - 0.5 * (1.5 * t + phase).cos())).round().clamp(1.0, 255.0) as u8
+            (1.0 + 254.0 * (0.5 - 0.5 * (1.5 * t + phase).cos()))
+                .round()
+                .clamp(1.0, 255.0) as u8
         })
         .collect()
 }
@@ -294,7 +337,10 @@ pub fn pose_words(format: OutputFormat, range: PositionRange, p: DVec3, q: DQuat
     let pos = [p.x, p.y, p.z].map(|v| fob::position_word(v, range));
     let with_pos = matches!(
         format,
-        OutputFormat::Position | OutputFormat::PositionAngles | OutputFormat::PositionMatrix | OutputFormat::PositionQuaternion
+        OutputFormat::Position
+            | OutputFormat::PositionAngles
+            | OutputFormat::PositionMatrix
+            | OutputFormat::PositionQuaternion
     );
     if with_pos {
         w.extend_from_slice(&pos);
@@ -409,12 +455,17 @@ pub enum DeviceKind {
 
 /// Starts an emulator on a new pty; with `link`, a symbolic link at that path points to the
 /// pty (replaced if it exists), so a driver can reopen the same path after a restart.
-pub fn start(kind: DeviceKind, options: EmulatorOptions, link: Option<&Path>) -> Result<Emulator, String> {
+pub fn start(
+    kind: DeviceKind,
+    options: EmulatorOptions,
+    link: Option<&Path>,
+) -> Result<Emulator, String> {
     let pty = Pty::open()?;
     let path = pty.path().to_string();
     if let Some(l) = link {
         let _ = std::fs::remove_file(l);
-        std::os::unix::fs::symlink(&path, l).map_err(|e| format!("linking {} to {path}: {e}", l.display()))?;
+        std::os::unix::fs::symlink(&path, l)
+            .map_err(|e| format!("linking {} to {path}: {e}", l.display()))?;
     }
     let stop = Arc::new(AtomicBool::new(false));
     let s = stop.clone();
@@ -476,7 +527,11 @@ impl FobEmulator {
     /// One report: every bird's record in group mode, else bird 1's.
     pub fn report(&self, t: f64) -> Vec<u8> {
         let layout = self.layout();
-        let birds = if self.group { self.options.birds.max(1) } else { 1 };
+        let birds = if self.group {
+            self.options.birds.max(1)
+        } else {
+            1
+        };
         let mut out = Vec::new();
         for i in 0..birds {
             let (p, q) = self.options.motion.bird(t, usize::from(i));
@@ -626,8 +681,7 @@ impl GloveEmulator {
     pub fn handle(&mut self, bytes: &[u8], t: f64) -> Vec<u8> {
         self.pending.extend_from_slice(bytes);
         let mut reply = Vec::new();
-        loop {
-            let Some(&c) = self.pending.first() else { break };
+        while let Some(&c) = self.pending.first() {
             match c {
                 glove::CMD_POLL => {
                     self.pending.remove(0);
@@ -667,7 +721,9 @@ impl GloveEmulator {
                 }
                 b'a'..=b'z' => {
                     // ASCII command, CR-terminated.
-                    let Some(end) = self.pending.iter().position(|&b| b == b'\r') else { break };
+                    let Some(end) = self.pending.iter().position(|&b| b == b'\r') else {
+                        break;
+                    };
                     let line: Vec<u8> = self.pending.drain(..=end).collect();
                     let text = String::from_utf8_lossy(&line[..line.len() - 1]).to_string();
                     let words: Vec<&str> = text.split_whitespace().collect();
@@ -690,7 +746,9 @@ impl GloveEmulator {
         let mut buf = [0u8; 256];
         let mut next = Instant::now();
         while !stop.load(Ordering::Acquire) {
-            let n = pty.read_timeout(&mut buf, Duration::from_millis(2)).unwrap_or(0);
+            let n = pty
+                .read_timeout(&mut buf, Duration::from_millis(2))
+                .unwrap_or(0);
             let t = self.start.elapsed().as_secs_f64();
             if n > 0 {
                 let reply = self.handle(&buf[..n], t);

@@ -124,7 +124,10 @@ impl OutputFormat {
             .find(|f| f.name() == name)
             .ok_or_else(|| {
                 let names: Vec<_> = OutputFormat::ALL.iter().map(|f| f.name()).collect();
-                format!("unknown Flock of Birds output format '{name}' (expected one of: {})", names.join(", "))
+                format!(
+                    "unknown Flock of Birds output format '{name}' (expected one of: {})",
+                    names.join(", ")
+                )
             })
     }
 
@@ -398,7 +401,12 @@ pub fn decode_record(layout: &RecordLayout, bytes: &[u8], default_address: u8) -
             rec.angles = Some([rest[0] * k, rest[1] * k, rest[2] * k]);
         }
         OutputFormat::Quaternion | OutputFormat::PositionQuaternion => {
-            rec.quaternion = Some([rest[0] * scale, rest[1] * scale, rest[2] * scale, rest[3] * scale]);
+            rec.quaternion = Some([
+                rest[0] * scale,
+                rest[1] * scale,
+                rest[2] * scale,
+                rest[3] * scale,
+            ]);
         }
         OutputFormat::Matrix | OutputFormat::PositionMatrix => {
             let mut m = [0.0; 9];
@@ -600,14 +608,16 @@ mod tests {
     fn quaternion_and_matrix_decode_exactly() {
         // q = (0.5, -0.5, 0.25, 0): 0x4000, 0xC000, 0x2000, 0.
         let q = [0x80, 0x20, 0x00, 0x60, 0x00, 0x10, 0x00, 0x00];
-        let r = &RecordDecoder::new(RecordLayout::single(OutputFormat::Quaternion), 1).feed_collect(&q)[0];
+        let r = &RecordDecoder::new(RecordLayout::single(OutputFormat::Quaternion), 1)
+            .feed_collect(&q)[0];
         assert_eq!(r.quaternion, Some([0.5, -0.5, 0.25, 0.0]));
         assert_eq!(r.position, None);
         // Matrix: 0x7FFC (largest on the wire) and 0x8000 = −1.0, rest zero.
         // 0x7FFC → 0x1FFF → b0 0x7F, b1 0x3F.
         let mut m = vec![0xFF, 0x3F, 0x00, 0x40];
         m.extend(std::iter::repeat_n(0u8, 14));
-        let r = &RecordDecoder::new(RecordLayout::single(OutputFormat::Matrix), 1).feed_collect(&m)[0];
+        let r =
+            &RecordDecoder::new(RecordLayout::single(OutputFormat::Matrix), 1).feed_collect(&m)[0];
         let e = r.matrix.unwrap();
         assert_eq!(e[0], 32764.0 / 32768.0);
         assert_eq!(e[1], -1.0);
@@ -663,7 +673,9 @@ mod tests {
             d.feed(std::slice::from_ref(b), |r| recs.push(r));
         }
         assert_eq!(recs.len(), 2);
-        assert!(recs.iter().all(|r| r.position == Some([18.0 * 0.0254, 0.0, 0.0])));
+        assert!(recs
+            .iter()
+            .all(|r| r.position == Some([18.0 * 0.0254, 0.0, 0.0])));
         let s = d.stats();
         assert_eq!(s.resyncs, 1);
         assert_eq!(s.dropped_bytes, 6);
@@ -690,9 +702,13 @@ mod tests {
         let r = &RecordDecoder::new(layout, 1).feed_collect(&bytes)[0];
         let p = r.position.unwrap();
         let step = 72.0 * 0.0254 / 8192.0;
-        assert!((p[0] - 0.5).abs() <= step && (p[1] + 0.25).abs() <= step && (p[2] - 1.0).abs() <= step);
+        assert!(
+            (p[0] - 0.5).abs() <= step && (p[1] + 0.25).abs() <= step && (p[2] - 1.0).abs() <= step
+        );
         let a = r.angles.unwrap();
-        assert!((a[0] - 30.0).abs() < 0.05 && (a[1] + 60.0).abs() < 0.05 && (a[2] - 179.0).abs() < 0.05);
+        assert!(
+            (a[0] - 30.0).abs() < 0.05 && (a[1] + 60.0).abs() < 0.05 && (a[2] - 179.0).abs() < 0.05
+        );
         assert_eq!(r.address, 4);
     }
 
@@ -704,7 +720,9 @@ mod tests {
         assert_eq!(OutputFormat::PositionQuaternion.command(), 0x5D);
         assert_eq!(Hemisphere::Upper.data(), [0x0C, 0x01]);
         assert_eq!(Hemisphere::from_data([0x06, 0x00]), Some(Hemisphere::Right));
-        assert!(OutputFormat::parse("position-euler").unwrap_err().contains("position-angles"));
+        assert!(OutputFormat::parse("position-euler")
+            .unwrap_err()
+            .contains("position-angles"));
     }
 
     proptest::proptest! {

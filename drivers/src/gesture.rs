@@ -45,7 +45,10 @@ impl GestureSet {
                 return Err(format!("gesture '{name}' has no example"));
             }
             if let Some(bad) = postures.iter().find(|p| p.len() != n) {
-                return Err(format!("gesture '{name}': an example has {} sensors, expected {n}", bad.len()));
+                return Err(format!(
+                    "gesture '{name}': an example has {} sensors, expected {n}",
+                    bad.len()
+                ));
             }
             if names.contains(name) {
                 return Err(format!("gesture '{name}' is given twice"));
@@ -90,11 +93,17 @@ impl GestureSet {
 
     /// Loads a JSON gesture set.
     pub fn load(path: &Path) -> Result<GestureSet, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-        let g: GestureSet =
-            serde_json::from_str(&text).map_err(|e| format!("{}: not a gesture set: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("reading {}: {e}", path.display()))?;
+        let g: GestureSet = serde_json::from_str(&text)
+            .map_err(|e| format!("{}: not a gesture set: {e}", path.display()))?;
         if g.names.len() != g.means.len() {
-            return Err(format!("{}: {} names for {} means", path.display(), g.names.len(), g.means.len()));
+            return Err(format!(
+                "{}: {} names for {} means",
+                path.display(),
+                g.names.len(),
+                g.means.len()
+            ));
         }
         Ok(g)
     }
@@ -179,7 +188,10 @@ mod tests {
         }
         vec![
             ("neutral".into(), vec![p(60), p(70)]),
-            ("fist".into(), vec![fist.clone(), fist.iter().map(|v| v - 5).collect()]),
+            (
+                "fist".into(),
+                vec![fist.clone(), fist.iter().map(|v| v - 5).collect()],
+            ),
             ("point".into(), vec![point]),
             ("thumbs_up".into(), vec![thumbs_up]),
             ("spread".into(), vec![spread]),
@@ -195,12 +207,18 @@ mod tests {
         }
         // Near a trained posture: that gesture; far from everything: unrecognized.
         let near_fist: Vec<u8> = ex[1].1[0].iter().map(|v| v + 3).collect();
-        assert_eq!(set.classify(&near_fist).map(|i| set.names[i].as_str()), Some("fist"));
+        assert_eq!(
+            set.classify(&near_fist).map(|i| set.names[i].as_str()),
+            Some("fist")
+        );
         let mut odd = vec![128u8; 18];
         odd[0] = 1;
         odd[17] = 255;
         assert_eq!(set.classify(&odd), None);
-        assert!(set.classify(&[1, 2, 3]).is_none(), "wrong sensor count is unrecognized");
+        assert!(
+            set.classify(&[1, 2, 3]).is_none(),
+            "wrong sensor count is unrecognized"
+        );
     }
 
     #[test]
@@ -210,13 +228,18 @@ mod tests {
         let mut t = GestureTracker::new(set);
         let neutral = &ex[0].1[0];
         let fist = &ex[1].1[0];
-        let fired: Vec<_> = [neutral, neutral, neutral, neutral, fist, neutral, fist, fist, fist, fist, fist]
-            .iter()
-            .filter_map(|p| t.feed(p))
-            .collect();
+        let fired: Vec<_> = [
+            neutral, neutral, neutral, neutral, fist, neutral, fist, fist, fist, fist, fist,
+        ]
+        .iter()
+        .filter_map(|p| t.feed(p))
+        .collect();
         assert_eq!(
             fired,
-            vec![("neutral".to_string(), None), ("fist".to_string(), Some("neutral".to_string()))]
+            vec![
+                ("neutral".to_string(), None),
+                ("fist".to_string(), Some("neutral".to_string()))
+            ]
         );
         assert_eq!(t.current(), Some("fist"));
     }
@@ -224,9 +247,17 @@ mod tests {
     #[test]
     fn bad_training_sets_are_errors() {
         assert!(GestureSet::train(&[]).is_err());
-        let e = GestureSet::train(&[("a".into(), vec![vec![1; 18]]), ("b".into(), vec![vec![1; 22]])]).unwrap_err();
+        let e = GestureSet::train(&[
+            ("a".into(), vec![vec![1; 18]]),
+            ("b".into(), vec![vec![1; 22]]),
+        ])
+        .unwrap_err();
         assert!(e.contains("'b'") && e.contains("22"), "{e}");
-        let e = GestureSet::train(&[("a".into(), vec![vec![1; 18]]), ("a".into(), vec![vec![2; 18]])]).unwrap_err();
+        let e = GestureSet::train(&[
+            ("a".into(), vec![vec![1; 18]]),
+            ("a".into(), vec![vec![2; 18]]),
+        ])
+        .unwrap_err();
         assert!(e.contains("twice"));
     }
 }

@@ -258,7 +258,10 @@ pub fn error_reply(letter: u8) -> GloveError {
 /// Tries to parse a query reply from the start of `bytes`: returns the reply and the bytes
 /// used, `Ok(None)` when more bytes are needed. Fixed-size payloads are read by length
 /// (a sensor mask byte may be zero); the version is text up to the terminator.
-pub fn parse_query_reply(query: Query, bytes: &[u8]) -> Result<Option<(QueryReply, usize)>, String> {
+pub fn parse_query_reply(
+    query: Query,
+    bytes: &[u8],
+) -> Result<Option<(QueryReply, usize)>, String> {
     if bytes.is_empty() {
         return Ok(None);
     }
@@ -269,9 +272,14 @@ pub fn parse_query_reply(query: Query, bytes: &[u8]) -> Result<Option<(QueryRepl
         };
     }
     if bytes[0] != CMD_QUERY {
-        return Err(format!("query reply starts with 0x{:02x}, expected '?'", bytes[0]));
+        return Err(format!(
+            "query reply starts with 0x{:02x}, expected '?'",
+            bytes[0]
+        ));
     }
-    let Some(&letter) = bytes.get(1) else { return Ok(None) };
+    let Some(&letter) = bytes.get(1) else {
+        return Ok(None);
+    };
     if letter != query.letter() {
         return Err(format!(
             "query reply for '{}' answers '{}'",
@@ -297,7 +305,10 @@ pub fn parse_query_reply(query: Query, bytes: &[u8]) -> Result<Option<(QueryRepl
         },
     };
     if bytes[end] != 0 {
-        return Err(format!("query reply '{}' is not terminated by 0x00", letter as char));
+        return Err(format!(
+            "query reply '{}' is not terminated by 0x00",
+            letter as char
+        ));
     }
     Ok(Some((
         QueryReply {
@@ -327,7 +338,10 @@ impl GloveCalibration {
     /// The identity-like calibration: every sensor linear over 1…255 → 0…π/2.
     pub fn nominal(sensors: usize) -> GloveCalibration {
         GloveCalibration {
-            sensors: sensor_names(sensors).into_iter().map(String::from).collect(),
+            sensors: sensor_names(sensors)
+                .into_iter()
+                .map(String::from)
+                .collect(),
             gain: vec![std::f64::consts::FRAC_PI_2 / 254.0; sensors],
             offset: vec![1.0; sensors],
         }
@@ -400,9 +414,10 @@ impl GloveCalibration {
 
     /// Loads a JSON calibration; checks that the three lists agree.
     pub fn load(path: &Path) -> Result<GloveCalibration, String> {
-        let text = std::fs::read_to_string(path).map_err(|e| format!("reading {}: {e}", path.display()))?;
-        let c: GloveCalibration =
-            serde_json::from_str(&text).map_err(|e| format!("{}: not a glove calibration: {e}", path.display()))?;
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| format!("reading {}: {e}", path.display()))?;
+        let c: GloveCalibration = serde_json::from_str(&text)
+            .map_err(|e| format!("{}: not a glove calibration: {e}", path.display()))?;
         if c.gain.len() != c.sensors.len() || c.offset.len() != c.sensors.len() {
             return Err(format!(
                 "{}: {} sensors but {} gains and {} offsets",
@@ -430,7 +445,10 @@ mod tests {
 
     #[test]
     fn eighteen_sensor_poll_record_is_twenty_bytes() {
-        let layout = GloveLayout { sensors: 18, status_byte: false };
+        let layout = GloveLayout {
+            sensors: 18,
+            status_byte: false,
+        };
         assert_eq!(layout.record_bytes(), 20);
         let sensors: Vec<u8> = (1..=18).map(|i| i * 10).collect();
         // Built by hand: 'G', 18 values, 0x00.
@@ -438,15 +456,28 @@ mod tests {
         bytes.extend_from_slice(&sensors);
         bytes.push(0x00);
         let recs = GloveDecoder::new(layout).feed_collect(&bytes);
-        assert_eq!(recs, vec![GloveRecord { command: b'G', raw: sensors, status: None }]);
+        assert_eq!(
+            recs,
+            vec![GloveRecord {
+                command: b'G',
+                raw: sensors,
+                status: None
+            }]
+        );
         assert_eq!(sensor_names(18).len(), 18);
         assert!(!sensor_names(18).contains(&"index_dij"));
-        assert_eq!(sensor_names(18)[4..7], ["index_mpj", "index_pij", "middle_mpj"]);
+        assert_eq!(
+            sensor_names(18)[4..7],
+            ["index_mpj", "index_pij", "middle_mpj"]
+        );
     }
 
     #[test]
     fn twenty_two_sensors_with_status_stream() {
-        let layout = GloveLayout { sensors: 22, status_byte: true };
+        let layout = GloveLayout {
+            sensors: 22,
+            status_byte: true,
+        };
         let a: Vec<u8> = (0..22).map(|i| 255 - i).collect();
         let b: Vec<u8> = vec![1; 22];
         let mut bytes = record(b'S', &a, Some(0x03));
@@ -465,7 +496,10 @@ mod tests {
 
     #[test]
     fn truncated_record_and_garbage_resync() {
-        let layout = GloveLayout { sensors: 18, status_byte: false };
+        let layout = GloveLayout {
+            sensors: 18,
+            status_byte: false,
+        };
         let good: Vec<u8> = vec![100; 18];
         let mut bytes = vec![0x01, 0x02, 0xFF]; // garbage
         bytes.extend_from_slice(&[b'G', 50, 60, 0]); // truncated record
@@ -480,7 +514,10 @@ mod tests {
 
     #[test]
     fn a_sensor_equal_to_the_letter_does_not_confuse_framing() {
-        let layout = GloveLayout { sensors: 18, status_byte: false };
+        let layout = GloveLayout {
+            sensors: 18,
+            status_byte: false,
+        };
         let mut s = vec![b'G'; 18];
         s[3] = b'S';
         let mut bytes = vec![b'G', 9, 9]; // truncated, followed by a record of 'G' values
@@ -493,18 +530,34 @@ mod tests {
     fn query_replies() {
         assert_eq!(
             parse_query_reply(Query::Status, &[b'?', b'G', 0x03, 0]).unwrap(),
-            Some((QueryReply { letter: b'G', payload: vec![3] }, 4))
+            Some((
+                QueryReply {
+                    letter: b'G',
+                    payload: vec![3]
+                },
+                4
+            ))
         );
         assert_eq!(
-            parse_query_reply(Query::Mask, &[b'?', b'M', 0xFF, 0x00, 0x3F, 0]).unwrap().unwrap().0.payload,
+            parse_query_reply(Query::Mask, &[b'?', b'M', 0xFF, 0x00, 0x3F, 0])
+                .unwrap()
+                .unwrap()
+                .0
+                .payload,
             vec![0xFF, 0x00, 0x3F]
         );
         assert_eq!(parse_query_reply(Query::Version, b"?V1.2").unwrap(), None);
         assert_eq!(
-            parse_query_reply(Query::Version, b"?V1.2\0").unwrap().unwrap().0.payload,
+            parse_query_reply(Query::Version, b"?V1.2\0")
+                .unwrap()
+                .unwrap()
+                .0
+                .payload,
             b"1.2".to_vec()
         );
-        assert!(parse_query_reply(Query::Status, b"eg").unwrap_err().contains("not plugged"));
+        assert!(parse_query_reply(Query::Status, b"eg")
+            .unwrap_err()
+            .contains("not plugged"));
         assert!(parse_query_reply(Query::Status, &[b'?', b'S', 18, 0]).is_err());
     }
 
@@ -515,7 +568,8 @@ mod tests {
         let c = GloveCalibration::from_poses(&flat, &fist, &[0.0, 0.0], &[1.5, 1.0]).unwrap();
         let a = c.angles(&[120, 240]);
         assert!((a[0] - 0.75).abs() < 1e-12 && (a[1] - 1.0).abs() < 1e-12);
-        let err = GloveCalibration::from_poses(&[5, 5], &[5, 9], &[0.0, 0.0], &[1.0, 1.0]).unwrap_err();
+        let err =
+            GloveCalibration::from_poses(&[5, 5], &[5, 9], &[0.0, 0.0], &[1.0, 1.0]).unwrap_err();
         assert!(err.contains("thumb_rotation"), "{err}");
         let dir = std::env::temp_dir().join(format!("troupe-cal-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
@@ -523,7 +577,9 @@ mod tests {
         c.save(&p).unwrap();
         assert_eq!(GloveCalibration::load(&p).unwrap(), c);
         std::fs::write(&p, "{}").unwrap();
-        assert!(GloveCalibration::load(&p).unwrap_err().contains("not a glove calibration"));
+        assert!(GloveCalibration::load(&p)
+            .unwrap_err()
+            .contains("not a glove calibration"));
     }
 
     proptest::proptest! {

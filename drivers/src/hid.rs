@@ -61,7 +61,8 @@ pub fn hid_devices() -> Result<Vec<HidInfo>, String> {
             vendor: d.vendor_id(),
             product: d.product_id(),
             name: d.product_string().unwrap_or("").to_string(),
-            spacemouse: spacemouse::lookup(d.vendor_id(), d.product_id()).map(|(n, _)| n.to_string()),
+            spacemouse: spacemouse::lookup(d.vendor_id(), d.product_id())
+                .map(|(n, _)| n.to_string()),
         })
         .collect())
 }
@@ -86,8 +87,11 @@ pub fn read_spacemouse(
             Some(p) => format!("no HID device at {p} (see `troupe devices`)"),
             None => "no SpaceMouse found (vendors 046d/256f; see `troupe devices`)".to_string(),
         })?;
-    let (name, kind) = spacemouse::lookup(info.vendor_id(), info.product_id()).unwrap_or(("HID device", ReportKind::Wired));
-    let dev = info.open_device(&api).map_err(|e| format!("opening {}: {e}", info.path().to_string_lossy()))?;
+    let (name, kind) = spacemouse::lookup(info.vendor_id(), info.product_id())
+        .unwrap_or(("HID device", ReportKind::Wired));
+    let dev = info
+        .open_device(&api)
+        .map_err(|e| format!("opening {}: {e}", info.path().to_string_lossy()))?;
     let mut state = SpaceMouseState::default();
     let mut buf = [0u8; 64];
     let mut n = 0;

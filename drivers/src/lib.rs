@@ -4,12 +4,12 @@
 //! Protocol facts are those of `shared/reference/devices.md`; thesis sections 2.7, 4.7 and
 //! 6.4.1 describe how the devices drive performer actors.
 
-pub mod fob;
-pub mod glove;
-pub mod spacemouse;
 pub mod driver;
-pub mod record;
 pub mod emulator;
+pub mod fob;
 pub mod gesture;
-pub mod performer;
+pub mod glove;
 pub mod hid;
+pub mod performer;
+pub mod record;
+pub mod spacemouse;

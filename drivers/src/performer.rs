@@ -8,8 +8,8 @@
 //! its arrival: latency is at most one tick.
 
 use crate::driver::{
-    self, DeviceHandle, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol, HealthReport, Mode,
-    Reading,
+    self, DeviceHandle, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol,
+    HealthReport, Mode, Reading,
 };
 use crate::emulator::bird_pose;
 use crate::fob::{Hemisphere, OutputFormat, PositionRange};
@@ -77,7 +77,11 @@ struct Calibration {
 
 impl AnatomicalConverter {
     /// A converter for `map` (joint name → bird address); errors name unknown joints.
-    pub fn new(skeleton: Arc<Skeleton>, map: &[(String, u8)], frame: DQuat) -> Result<AnatomicalConverter, String> {
+    pub fn new(
+        skeleton: Arc<Skeleton>,
+        map: &[(String, u8)],
+        frame: DQuat,
+    ) -> Result<AnatomicalConverter, String> {
         let mut m = Vec::new();
         for (name, addr) in map {
             let j = skeleton
@@ -103,13 +107,21 @@ impl AnatomicalConverter {
                     // The root's DOFs move the whole body: never solved for a limb.
                     break;
                 }
-                dofs.extend(joint.dofs.clone().filter(|&d| skeleton.dofs()[d].kind == DofKind::Rotation));
+                dofs.extend(
+                    joint
+                        .dofs
+                        .clone()
+                        .filter(|&d| skeleton.dofs()[d].kind == DofKind::Rotation),
+                );
                 a = joint.parent;
             }
             ik.push(if dofs.is_empty() {
                 None
             } else {
-                Some(IkSolver::new(&skeleton, dofs, IkOptions::default()).map_err(|e| e.to_string())?)
+                Some(
+                    IkSolver::new(&skeleton, dofs, IkOptions::default())
+                        .map_err(|e| e.to_string())?,
+                )
             });
         }
         Ok(AnatomicalConverter {
@@ -132,14 +144,21 @@ impl AnatomicalConverter {
     }
 
     fn world(&self, pose: (DVec3, DQuat)) -> (DVec3, DQuat) {
-        (self.frame * pose.0, (self.frame * pose.1 * self.frame.inverse()).normalize())
+        (
+            self.frame * pose.0,
+            (self.frame * pose.1 * self.frame.inverse()).normalize(),
+        )
     }
 
     /// Calibrates: the performer stands in the posture `base_q` (the template's reference
     /// pose at the actor's place) while the birds read `poses`. The sensor-to-segment offset
     /// of each mapped segment is the rotation that takes the sensor's orientation to the
     /// segment's (thesis 6.4.1: "a simple calibration").
-    pub fn calibrate(&mut self, base_q: &[f64], poses: &BTreeMap<u8, (DVec3, DQuat)>) -> Result<(), String> {
+    pub fn calibrate(
+        &mut self,
+        base_q: &[f64],
+        poses: &BTreeMap<u8, (DVec3, DQuat)>,
+    ) -> Result<(), String> {
         let mut globals = vec![Transform::IDENTITY; self.skeleton.joints().len()];
         forward_kinematics(&self.skeleton, base_q, &mut globals);
         let mut sensor0 = Vec::new();
@@ -185,13 +204,20 @@ impl AnatomicalConverter {
     /// nearest mapped ancestor are solved by IK so that the mapped joint reaches its sensor's
     /// position (sensor + lever); other joints keep their calibration values.
     /// Marks the DOFs it set in `mask`. Does nothing before calibration.
-    pub fn convert(&mut self, poses: &BTreeMap<u8, (DVec3, DQuat)>, q: &mut [f64], mask: &mut [bool]) {
+    pub fn convert(
+        &mut self,
+        poses: &BTreeMap<u8, (DVec3, DQuat)>,
+        q: &mut [f64],
+        mask: &mut [bool],
+    ) {
         let Some(cal) = &self.calibration else { return };
         q.copy_from_slice(&cal.base_q);
         let sk = &self.skeleton;
         let mut globals = vec![Transform::IDENTITY; sk.joints().len()];
         for (k, &(j, addr)) in self.map.iter().enumerate() {
-            let Some(pose) = poses.get(&addr) else { continue };
+            let Some(pose) = poses.get(&addr) else {
+                continue;
+            };
             let (p, rot) = self.world(*pose);
             let joint = &sk.joints()[j];
             if joint.parent.is_none() {
@@ -207,7 +233,13 @@ impl AnatomicalConverter {
             }
             if let Some(solver) = self.ik[k].as_mut() {
                 let goal = p + cal.origin + rot * cal.levers[k];
-                let task = IkTask::position(Effector { joint: j, point: DVec3::ZERO }, goal);
+                let task = IkTask::position(
+                    Effector {
+                        joint: j,
+                        point: DVec3::ZERO,
+                    },
+                    goal,
+                );
                 if let Err(e) = solver.solve(sk, q, &[task], None, None) {
                     tracing::debug!("performer IK for {}: {e}", joint.name);
                 }
@@ -267,12 +299,23 @@ pub fn glove_dof_names(sensor: &str, s: &str) -> Vec<String> {
 
 /// A nominal glove calibration for a template: each sensor's raw range 1…255 spans its
 /// DOF's range from 0 (or its lower limit when 0 is outside) to its upper limit.
-pub fn nominal_glove_calibration(skeleton: &Skeleton, sensors: usize, side: &str) -> GloveCalibration {
+pub fn nominal_glove_calibration(
+    skeleton: &Skeleton,
+    sensors: usize,
+    side: &str,
+) -> GloveCalibration {
     let mut c = GloveCalibration::nominal(sensors);
     for (i, name) in c.sensors.clone().iter().enumerate() {
-        if let Some(d) = glove_dof_names(name, side).first().and_then(|n| skeleton.dof(n).ok()) {
+        if let Some(d) = glove_dof_names(name, side)
+            .first()
+            .and_then(|n| skeleton.dof(n).ok())
+        {
             let dof = &skeleton.dofs()[d];
-            let lo = if dof.min <= 0.0 && dof.max >= 0.0 { 0.0 } else { dof.min };
+            let lo = if dof.min <= 0.0 && dof.max >= 0.0 {
+                0.0
+            } else {
+                dof.min
+            };
             let g = (dof.max - lo) / 254.0;
             c.gain[i] = g;
             c.offset[i] = 1.0 - lo / g;
@@ -286,18 +329,31 @@ enum Source {
     /// A live driver thread.
     Live(DeviceHandle),
     /// A recording, delivered by scene time (deterministic).
-    Replay { readings: Vec<(f64, Reading)>, next: usize, start: f64 },
+    Replay {
+        readings: Vec<(f64, Reading)>,
+        next: usize,
+        start: f64,
+    },
 }
 
 impl Source {
     /// Readings due now, with the instant they arrived (live only).
     fn take(&mut self, scene_time: f64) -> Vec<(Reading, Option<Instant>)> {
         match self {
-            Source::Live(h) => h.drain().into_iter().map(|s| (s.reading, Some(s.arrived))).collect(),
-            Source::Replay { readings, next, start } => {
+            Source::Live(h) => h
+                .drain()
+                .into_iter()
+                .map(|s| (s.reading, Some(s.arrived)))
+                .collect(),
+            Source::Replay {
+                readings,
+                next,
+                start,
+            } => {
                 let t0 = readings.first().map(|r| r.0).unwrap_or(0.0);
                 let mut out = Vec::new();
-                while *next < readings.len() && readings[*next].0 - t0 <= scene_time - *start + 1e-9 {
+                while *next < readings.len() && readings[*next].0 - t0 <= scene_time - *start + 1e-9
+                {
                     out.push((readings[*next].1.clone(), None));
                     *next += 1;
                 }
@@ -422,7 +478,9 @@ impl Performers {
                     }
                 }
                 let all = f.converter.birds().iter().all(|a| f.latest.contains_key(a));
-                if all && (p.calibrate_requested || (p.auto_calibrate && !f.converter.is_calibrated())) {
+                if all
+                    && (p.calibrate_requested || (p.auto_calibrate && !f.converter.is_calibrated()))
+                {
                     let base = base_posture(scene, p.actor);
                     if let Err(e) = f.converter.calibrate(&base, &f.latest) {
                         tracing::warn!(performer = %p.name, "{e}");
@@ -436,7 +494,12 @@ impl Performers {
                         if let Some(tr) = &mut g.gestures {
                             if let Some((new, old)) = tr.feed(&rec.raw) {
                                 for h in &p.gesture_handlers {
-                                    events.push((h.clone(), p.name.clone(), new.clone(), old.clone()));
+                                    events.push((
+                                        h.clone(),
+                                        p.name.clone(),
+                                        new.clone(),
+                                        old.clone(),
+                                    ));
                                 }
                             }
                         }
@@ -523,7 +586,10 @@ impl Generator for Capture {
 
 /// `actor:capture{ <common options> }` on a performer: follow the devices (runs until
 /// cancelled). Default scope: every DOF the devices drive.
-fn build_capture(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
+fn build_capture(
+    ctx: &BuildContext,
+    args: MultiValue,
+) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
     let t = match args.into_iter().next() {
         Some(Value::Table(t)) => Some(t),
         None | Some(Value::Nil) => None,
@@ -540,12 +606,19 @@ fn build_capture(ctx: &BuildContext, args: MultiValue) -> mlua::Result<(Box<dyn 
         .app_data_ref::<SharedPerformers>()
         .ok_or_else(|| lua_err_message("capture: devices are not enabled in this run"))?
         .clone();
-    let perf = shared.0.lock().map_err(|_| lua_err_message("capture: performer lock poisoned"))?;
+    let perf = shared
+        .0
+        .lock()
+        .map_err(|_| lua_err_message("capture: performer lock poisoned"))?;
     let p = perf
         .list
         .iter()
         .find(|p| p.actor == ctx.actor)
-        .ok_or_else(|| lua_err_message("capture: this actor is not a performer (create it with troupe.performer)"))?;
+        .ok_or_else(|| {
+            lua_err_message(
+                "capture: this actor is not a performer (create it with troupe.performer)",
+            )
+        })?;
     let natural = device_scope(p);
     let target = p.target.clone();
     drop(perf);
@@ -567,7 +640,13 @@ fn device_scope(p: &Performer) -> troupe_runtime::Scope {
                 dofs.push(d);
             }
         }
-        dofs.extend(f.converter.ik.iter().flatten().flat_map(|s| s.dofs().iter().copied()));
+        dofs.extend(
+            f.converter
+                .ik
+                .iter()
+                .flatten()
+                .flat_map(|s| s.dofs().iter().copied()),
+        );
     }
     if let Some(g) = &p.glove {
         dofs.extend(g.dofs.iter().flatten().copied());
@@ -586,7 +665,10 @@ pub fn register(kinds: &mut ActionKinds) {
 
 /// Installs `troupe.performer`, `troupe.devices.*` and the pre-tick step on a director.
 /// `recorder` records every live device stream (`--record-devices`).
-pub fn install(director: &mut Director, recorder: Option<Arc<Recorder>>) -> Result<SharedPerformers, String> {
+pub fn install(
+    director: &mut Director,
+    recorder: Option<Arc<Recorder>>,
+) -> Result<SharedPerformers, String> {
     let shared = SharedPerformers(Arc::new(Mutex::new(Performers {
         recorder,
         ..Performers::default()
@@ -596,7 +678,10 @@ pub fn install(director: &mut Director, recorder: Option<Arc<Recorder>>) -> Resu
     install_lua(lua).map_err(|e| format!("installing the device functions: {e}"))?;
     let s = shared.clone();
     director.add_pre_tick(Box::new(move |lua: &Lua, scene: &Scene| {
-        let events = s.0.lock().map_err(|_| "performer lock poisoned".to_string())?.pre_tick(scene);
+        let events =
+            s.0.lock()
+                .map_err(|_| "performer lock poisoned".to_string())?
+                .pre_tick(scene);
         let _ = lua;
         for (f, name, new, old) in events {
             f.call::<()>((name.clone(), new, old))
@@ -635,7 +720,10 @@ fn check_keys(t: &Table, what: &str, known: &[&str]) -> mlua::Result<()> {
         let (k, _) = pair?;
         let name = k.to_string()?;
         if !known.contains(&name.as_str()) {
-            return Err(err(format!("{what}: unknown option `{name}` (known: {})", known.join(", "))));
+            return Err(err(format!(
+                "{what}: unknown option `{name}` (known: {})",
+                known.join(", ")
+            )));
         }
     }
     Ok(())
@@ -678,7 +766,10 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             let i = performer_index(lua, &who)?;
             let s = shared(lua)?;
             let perf = s.0.lock().map_err(|_| err("performer lock poisoned"))?;
-            Ok(perf.list[i].fob.as_ref().is_none_or(|f| f.converter.is_calibrated()))
+            Ok(perf.list[i]
+                .fob
+                .as_ref()
+                .is_none_or(|f| f.converter.is_calibrated()))
         })?,
     )?;
     devices.set(
@@ -689,7 +780,10 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             let perf = s.0.lock().map_err(|_| err("performer lock poisoned"))?;
             let p = &perf.list[i];
             let out = lua.create_table()?;
-            for (dev, src) in [("fob", p.fob.as_ref().map(|f| &f.source)), ("glove", p.glove.as_ref().map(|g| &g.source))] {
+            for (dev, src) in [
+                ("fob", p.fob.as_ref().map(|f| &f.source)),
+                ("glove", p.glove.as_ref().map(|g| &g.source)),
+            ] {
                 let Some(src) = src else { continue };
                 let t = lua.create_table()?;
                 match src.health() {
@@ -720,7 +814,13 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             let out = lua.create_table()?;
             let Some(g) = &p.glove else { return Ok(out) };
             let t = p.target.lock().map_err(|_| err("target lock poisoned"))?;
-            for d in g.dofs.iter().flatten().copied().chain(g.coupled.iter().map(|c| c.0)) {
+            for d in g
+                .dofs
+                .iter()
+                .flatten()
+                .copied()
+                .chain(g.coupled.iter().map(|c| c.0))
+            {
                 if t.mask.get(d).copied().unwrap_or(false) {
                     out.set(p.skeleton.dofs()[d].name.as_str(), t.q[d])?;
                 }
@@ -797,11 +897,26 @@ fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
 /// `troupe.performer{ name=…, template=…, at=…, facing=…, calibrate="auto"|"manual",
 /// devices = { fob = {…}, glove = {…} } }`.
 fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
-    check_keys(&t, "performer", &["name", "template", "height", "mass", "at", "facing", "devices", "calibrate"])?;
+    check_keys(
+        &t,
+        "performer",
+        &[
+            "name",
+            "template",
+            "height",
+            "mass",
+            "at",
+            "facing",
+            "devices",
+            "calibrate",
+        ],
+    )?;
     let devices: Option<Table> = opt(&t, "devices")?;
     let calibrate: String = opt(&t, "calibrate")?.unwrap_or_else(|| "auto".into());
     if calibrate != "auto" && calibrate != "manual" {
-        return Err(err(format!("performer: `calibrate` must be \"auto\" or \"manual\", got \"{calibrate}\"")));
+        return Err(err(format!(
+            "performer: `calibrate` must be \"auto\" or \"manual\", got \"{calibrate}\""
+        )));
     }
     // The actor itself is made by troupe.actor, with the actor options.
     let actor_opts = lua.create_table()?;
@@ -818,9 +933,15 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
     let name: String = t.get("name")?;
     let skeleton = troupe_runtime::lua::actor_skeletons(lua)
         .ok_or_else(|| err("no scene"))?
-        .get(actor).cloned().ok_or_else(|| err("performer: actor vanished"))?;
+        .get(actor)
+        .cloned()
+        .ok_or_else(|| err("performer: actor vanished"))?;
     let s = shared(lua)?;
-    let recorder = s.0.lock().map_err(|_| err("performer lock poisoned"))?.recorder.clone();
+    let recorder =
+        s.0.lock()
+            .map_err(|_| err("performer lock poisoned"))?
+            .recorder
+            .clone();
     let scene_time = lua
         .globals()
         .get::<Table>("troupe")?
@@ -834,10 +955,24 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
     if let Some(d) = &devices {
         check_keys(d, "performer.devices", &["fob", "glove"])?;
         if let Some(f) = opt::<Table>(d, "fob")? {
-            fob = Some(fob_input(lua, &f, &skeleton, &name, recorder.clone(), scene_time)?);
+            fob = Some(fob_input(
+                lua,
+                &f,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+            )?);
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
-            glove = Some(glove_input(lua, &g, &skeleton, &name, recorder.clone(), scene_time)?);
+            glove = Some(glove_input(
+                lua,
+                &g,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+            )?);
         }
     }
     let n = skeleton.dof_count();
@@ -857,7 +992,10 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
         })),
         gesture_handlers: Vec::new(),
     };
-    s.0.lock().map_err(|_| err("performer lock poisoned"))?.list.push(performer);
+    s.0.lock()
+        .map_err(|_| err("performer lock poisoned"))?
+        .list
+        .push(performer);
     Ok(actor_value)
 }
 
@@ -877,14 +1015,23 @@ fn source(
             let path = resolve(lua, &r);
             let rec = Recording::read(&path).map_err(|e| err(format!("{what}: {e}")))?;
             let stream: Option<String> = opt(t, "stream")?;
-            let s = rec
-                .find(stream.as_deref().unwrap_or(kind))
-                .ok_or_else(|| err(format!("{what}: {} has no single '{kind}' stream (name one with stream=…)", path.display())))?;
+            let s = rec.find(stream.as_deref().unwrap_or(kind)).ok_or_else(|| {
+                err(format!(
+                    "{what}: {} has no single '{kind}' stream (name one with stream=…)",
+                    path.display()
+                ))
+            })?;
             let readings = rec.readings(s).map_err(|e| err(format!("{what}: {e}")))?;
-            Ok(Source::Replay { readings, next: 0, start: scene_time })
+            Ok(Source::Replay {
+                readings,
+                next: 0,
+                start: scene_time,
+            })
         }
         (Some(_), Some(_)) => Err(err(format!("{what}: give `port` or `replay`, not both"))),
-        (None, None) => Err(err(format!("{what}: `port` (a serial port) or `replay` (a .rec file) is required"))),
+        (None, None) => Err(err(format!(
+            "{what}: `port` (a serial port) or `replay` (a .rec file) is required"
+        ))),
     }
 }
 
@@ -896,25 +1043,55 @@ fn fob_input(
     recorder: Option<Arc<Recorder>>,
     scene_time: f64,
 ) -> mlua::Result<FobInput> {
-    check_keys(t, "performer.devices.fob", &["port", "replay", "stream", "birds", "map", "format", "baud", "range", "hemisphere", "mode"])?;
+    check_keys(
+        t,
+        "performer.devices.fob",
+        &[
+            "port",
+            "replay",
+            "stream",
+            "birds",
+            "map",
+            "format",
+            "baud",
+            "range",
+            "hemisphere",
+            "mode",
+        ],
+    )?;
     let birds: u8 = opt(t, "birds")?.unwrap_or(1);
     if birds == 0 || birds > 14 {
-        return Err(err(format!("performer.devices.fob: birds must be 1…14, got {birds}")));
+        return Err(err(format!(
+            "performer.devices.fob: birds must be 1…14, got {birds}"
+        )));
     }
-    let map_t: Table = opt(t, "map")?.ok_or_else(|| err("performer.devices.fob: `map` (joint = bird address) is required"))?;
+    let map_t: Table = opt(t, "map")?
+        .ok_or_else(|| err("performer.devices.fob: `map` (joint = bird address) is required"))?;
     let mut map = Vec::new();
     for pair in map_t.pairs::<String, u8>() {
         let (j, a) = pair?;
         if a == 0 || a > birds {
-            return Err(err(format!("performer.devices.fob: map.{j} = {a} is not a bird address 1…{birds}")));
+            return Err(err(format!(
+                "performer.devices.fob: map.{j} = {a} is not a bird address 1…{birds}"
+            )));
         }
         map.push((j, a));
     }
     let converter = AnatomicalConverter::new(skeleton.clone(), &map, transmitter_to_world())
         .map_err(|e| err(format!("performer.devices.fob: {e}")))?;
-    let format = OutputFormat::parse(&opt::<String>(t, "format")?.unwrap_or_else(|| "position-quaternion".into())).map_err(err)?;
-    if !matches!(format, OutputFormat::PositionAngles | OutputFormat::PositionQuaternion | OutputFormat::PositionMatrix) {
-        return Err(err("performer.devices.fob: a performer needs a position/orientation format"));
+    let format = OutputFormat::parse(
+        &opt::<String>(t, "format")?.unwrap_or_else(|| "position-quaternion".into()),
+    )
+    .map_err(err)?;
+    if !matches!(
+        format,
+        OutputFormat::PositionAngles
+            | OutputFormat::PositionQuaternion
+            | OutputFormat::PositionMatrix
+    ) {
+        return Err(err(
+            "performer.devices.fob: a performer needs a position/orientation format",
+        ));
     }
     let mut config = FobConfig::new(birds, format);
     if let Some(r) = opt::<u32>(t, "range")? {
@@ -930,7 +1107,11 @@ fn fob_input(
     let src = source(lua, t, "performer.devices.fob", "fob", scene_time, |port| {
         let mut o = DriverOptions::new(&format!("{name}.fob"), &port);
         o.baud = baud;
-        Ok(driver::spawn(o, Box::new(FobProtocol::new(config)), recorder))
+        Ok(driver::spawn(
+            o,
+            Box::new(FobProtocol::new(config)),
+            recorder,
+        ))
     })?;
     Ok(FobInput {
         source: src,
@@ -943,7 +1124,9 @@ fn parse_mode(m: &str) -> mlua::Result<Mode> {
     match m {
         "stream" => Ok(Mode::Stream),
         "point" => Ok(Mode::Point),
-        other => Err(err(format!("mode must be \"stream\" or \"point\", got \"{other}\""))),
+        other => Err(err(format!(
+            "mode must be \"stream\" or \"point\", got \"{other}\""
+        ))),
     }
 }
 
@@ -955,21 +1138,44 @@ fn glove_input(
     recorder: Option<Arc<Recorder>>,
     scene_time: f64,
 ) -> mlua::Result<GloveInput> {
-    check_keys(t, "performer.devices.glove", &["port", "replay", "stream", "hand", "sensors", "calibration", "gestures", "baud", "mode"])?;
+    check_keys(
+        t,
+        "performer.devices.glove",
+        &[
+            "port",
+            "replay",
+            "stream",
+            "hand",
+            "sensors",
+            "calibration",
+            "gestures",
+            "baud",
+            "mode",
+        ],
+    )?;
     let side = match opt::<String>(t, "hand")?.as_deref() {
         None | Some("right") => "r_",
         Some("left") => "l_",
-        Some(o) => return Err(err(format!("performer.devices.glove: hand must be \"right\" or \"left\", got \"{o}\""))),
+        Some(o) => {
+            return Err(err(format!(
+                "performer.devices.glove: hand must be \"right\" or \"left\", got \"{o}\""
+            )))
+        }
     };
     let sensors: usize = opt(t, "sensors")?.unwrap_or(18);
     if sensors != 18 && sensors != 22 {
-        return Err(err(format!("performer.devices.glove: sensors must be 18 or 22, got {sensors}")));
+        return Err(err(format!(
+            "performer.devices.glove: sensors must be 18 or 22, got {sensors}"
+        )));
     }
     let calibration = match opt::<String>(t, "calibration")? {
         Some(f) => {
             let c = GloveCalibration::load(&resolve(lua, &f)).map_err(err)?;
             if c.sensors.len() != sensors {
-                return Err(err(format!("{f}: calibration for {} sensors, glove has {sensors}", c.sensors.len())));
+                return Err(err(format!(
+                    "{f}: calibration for {} sensors, glove has {sensors}",
+                    c.sensors.len()
+                )));
             }
             c
         }
@@ -978,7 +1184,12 @@ fn glove_input(
     let names = crate::glove::sensor_names(sensors);
     let dofs: Vec<Vec<usize>> = names
         .iter()
-        .map(|n| glove_dof_names(n, side).iter().filter_map(|d| skeleton.dof(d).ok()).collect())
+        .map(|n| {
+            glove_dof_names(n, side)
+                .iter()
+                .filter_map(|d| skeleton.dof(d).ok())
+                .collect()
+        })
         .collect();
     let mut coupled = Vec::new();
     if sensors == 18 {
@@ -990,20 +1201,36 @@ fn glove_input(
         }
     }
     let gestures = match opt::<String>(t, "gestures")? {
-        Some(f) => Some(GestureTracker::new(GestureSet::load(&resolve(lua, &f)).map_err(err)?)),
+        Some(f) => Some(GestureTracker::new(
+            GestureSet::load(&resolve(lua, &f)).map_err(err)?,
+        )),
         None => None,
     };
     let mode = parse_mode(&opt::<String>(t, "mode")?.unwrap_or_else(|| "stream".into()))?;
     let baud: u32 = opt(t, "baud")?.unwrap_or(115_200);
     let config = GloveConfig {
-        layout: GloveLayout { sensors, status_byte: false },
+        layout: GloveLayout {
+            sensors,
+            status_byte: false,
+        },
         mode,
     };
-    let src = source(lua, t, "performer.devices.glove", "cyberglove", scene_time, |port| {
-        let mut o = DriverOptions::new(&format!("{name}.glove"), &port);
-        o.baud = baud;
-        Ok(driver::spawn(o, Box::new(GloveProtocol::new(config)), recorder))
-    })?;
+    let src = source(
+        lua,
+        t,
+        "performer.devices.glove",
+        "cyberglove",
+        scene_time,
+        |port| {
+            let mut o = DriverOptions::new(&format!("{name}.glove"), &port);
+            o.baud = baud;
+            Ok(driver::spawn(
+                o,
+                Box::new(GloveProtocol::new(config)),
+                recorder,
+            ))
+        },
+    )?;
     Ok(GloveInput {
         source: src,
         calibration,
@@ -1024,7 +1251,6 @@ pub fn median_p99(v: &[f64]) -> Option<(f64, f64)> {
     let at = |p: f64| s[((s.len() - 1) as f64 * p).round() as usize];
     Some((at(0.5), at(0.99)))
 }
-
 
 #[cfg(test)]
 mod tests {
@@ -1063,7 +1289,10 @@ mod tests {
         // Unmoved sensors give the calibration posture.
         let (mut q, mut mask) = (vec![1.0; n], vec![false; n]);
         c.convert(&poses, &mut q, &mut mask);
-        assert!(q.iter().all(|v| v.abs() < 1e-9), "calibration pose reproduced");
+        assert!(
+            q.iter().all(|v| v.abs() < 1e-9),
+            "calibration pose reproduced"
+        );
 
         // The pelvis bird turns 20° about the transmitter's Z (down) and moves 10 cm
         // forward; the head bird nods 0.15 rad about the transmitter's Y.
@@ -1091,7 +1320,11 @@ mod tests {
         let sk = adult();
         let n = sk.dof_count();
         let frame = transmitter_to_world();
-        let map = [("pelvis".to_string(), 1u8), ("vl5".to_string(), 2u8), ("r_wrist".to_string(), 3u8)];
+        let map = [
+            ("pelvis".to_string(), 1u8),
+            ("vl5".to_string(), 2u8),
+            ("r_wrist".to_string(), 3u8),
+        ];
         let mut c = AnatomicalConverter::new(sk.clone(), &map, frame).unwrap();
         let base = vec![0.0; n];
         let mut g0 = vec![Transform::IDENTITY; sk.joints().len()];
@@ -1114,7 +1347,12 @@ mod tests {
         c.convert(&poses, &mut q, &mut mask);
         let mut g = vec![Transform::IDENTITY; sk.joints().len()];
         forward_kinematics(&sk, &q, &mut g);
-        assert!((g[wrist].translation - goal).length() < 1e-3, "wrist at {} not {}", g[wrist].translation, goal);
+        assert!(
+            (g[wrist].translation - goal).length() < 1e-3,
+            "wrist at {} not {}",
+            g[wrist].translation,
+            goal
+        );
         let elbow = sk.dof("r_elbow_flexion").unwrap();
         assert!(mask[elbow] && q[elbow].abs() > 0.05, "the elbow bends (IK)");
         assert!(q[sk.dof("root_x").unwrap()].abs() < 1e-12, "the root stays");
@@ -1123,11 +1361,21 @@ mod tests {
     #[test]
     fn calibration_needs_every_mapped_bird() {
         let sk = adult();
-        let mut c = AnatomicalConverter::new(sk.clone(), &[("pelvis".into(), 1), ("r_wrist".into(), 2)], DQuat::IDENTITY).unwrap();
+        let mut c = AnatomicalConverter::new(
+            sk.clone(),
+            &[("pelvis".into(), 1), ("r_wrist".into(), 2)],
+            DQuat::IDENTITY,
+        )
+        .unwrap();
         let poses = BTreeMap::from([(1, (DVec3::ZERO, DQuat::IDENTITY))]);
         let e = c.calibrate(&vec![0.0; sk.dof_count()], &poses).unwrap_err();
         assert!(e.contains("bird 2"), "{e}");
-        assert!(AnatomicalConverter::new(sk, &[("tail".into(), 1)], DQuat::IDENTITY).map(|_| ()).unwrap_err().contains("'tail'"));
+        assert!(
+            AnatomicalConverter::new(sk, &[("tail".into(), 1)], DQuat::IDENTITY)
+                .map(|_| ())
+                .unwrap_err()
+                .contains("'tail'")
+        );
     }
 
     #[test]
@@ -1145,7 +1393,10 @@ mod tests {
         let c = nominal_glove_calibration(&sk, 18, "r_");
         let d = &sk.dofs()[sk.dof("r_index1_flexion").unwrap()];
         let a = c.angles(&[1, 1, 1, 1, 1, 255]);
-        assert!(a[4].abs() < 1e-12 && (a[5] - sk.dofs()[sk.dof("r_index2_flexion").unwrap()].max).abs() < 1e-12);
+        assert!(
+            a[4].abs() < 1e-12
+                && (a[5] - sk.dofs()[sk.dof("r_index2_flexion").unwrap()].max).abs() < 1e-12
+        );
         assert!(d.max > 0.0);
     }
 }

@@ -13,7 +13,7 @@
 //!                                               `micros` after the recording started
 //! ```
 
-use crate::driver::{FobConfig, GloveConfig, GloveProtocol, FobProtocol, Protocol, Reading};
+use crate::driver::{FobConfig, FobProtocol, GloveConfig, GloveProtocol, Protocol, Reading};
 use serde::{Deserialize, Serialize};
 use std::io::Write;
 use std::path::Path;
@@ -60,9 +60,11 @@ struct RecorderInner {
 impl Recorder {
     /// Creates the file and writes the magic.
     pub fn create(path: &Path) -> Result<Recorder, String> {
-        let file = std::fs::File::create(path).map_err(|e| format!("creating {}: {e}", path.display()))?;
+        let file =
+            std::fs::File::create(path).map_err(|e| format!("creating {}: {e}", path.display()))?;
         let mut out = std::io::BufWriter::new(file);
-        out.write_all(MAGIC).map_err(|e| format!("writing {}: {e}", path.display()))?;
+        out.write_all(MAGIC)
+            .map_err(|e| format!("writing {}: {e}", path.display()))?;
         Ok(Recorder {
             inner: Mutex::new(RecorderInner {
                 out,
@@ -81,7 +83,9 @@ impl Recorder {
             settings,
         };
         let json = serde_json::to_vec(&info).unwrap_or_default();
-        let Ok(mut g) = self.inner.lock() else { return 0 };
+        let Ok(mut g) = self.inner.lock() else {
+            return 0;
+        };
         let index = g.streams;
         g.streams += 1;
         let mut chunk = vec![b'H'];
@@ -112,7 +116,10 @@ impl Recorder {
 
     /// Flushes to disk; returns the first write error, if any.
     pub fn finish(&self) -> Result<(), String> {
-        let mut g = self.inner.lock().map_err(|_| "recorder lock poisoned".to_string())?;
+        let mut g = self
+            .inner
+            .lock()
+            .map_err(|_| "recorder lock poisoned".to_string())?;
         if let Err(e) = g.out.flush() {
             g.error.get_or_insert(e.to_string());
         }
@@ -189,7 +196,9 @@ impl Recording {
             };
             match parsed {
                 None => {
-                    tracing::warn!("device recording truncated at byte {at}; using what precedes it");
+                    tracing::warn!(
+                        "device recording truncated at byte {at}; using what precedes it"
+                    );
                     break;
                 }
                 Some(Err((index, json))) => {
@@ -202,7 +211,10 @@ impl Recording {
                 }
                 Some(Ok(c)) => {
                     if usize::from(c.stream) >= streams.len() {
-                        return Err(format!("data for undeclared stream {} at byte {at}", c.stream));
+                        return Err(format!(
+                            "data for undeclared stream {} at byte {at}",
+                            c.stream
+                        ));
                     }
                     chunks.push(c);
                 }
@@ -213,15 +225,23 @@ impl Recording {
 
     /// The index of the stream named `name`, or of the only stream of a kind.
     pub fn find(&self, name_or_kind: &str) -> Option<usize> {
-        self.streams.iter().position(|s| s.name == name_or_kind).or_else(|| {
-            let of_kind: Vec<_> = (0..self.streams.len()).filter(|&i| self.streams[i].kind == name_or_kind).collect();
-            (of_kind.len() == 1).then(|| of_kind[0])
-        })
+        self.streams
+            .iter()
+            .position(|s| s.name == name_or_kind)
+            .or_else(|| {
+                let of_kind: Vec<_> = (0..self.streams.len())
+                    .filter(|&i| self.streams[i].kind == name_or_kind)
+                    .collect();
+                (of_kind.len() == 1).then(|| of_kind[0])
+            })
     }
 
     /// A decoder for a stream, built from its recorded settings.
     pub fn protocol(&self, stream: usize) -> Result<Box<dyn Protocol>, String> {
-        let info = self.streams.get(stream).ok_or_else(|| format!("no stream {stream} in the recording"))?;
+        let info = self
+            .streams
+            .get(stream)
+            .ok_or_else(|| format!("no stream {stream} in the recording"))?;
         protocol_from_settings(&info.kind, &info.settings)
             .map_err(|e| format!("stream '{}' ({}): {e}", info.name, info.kind))
     }
@@ -231,7 +251,11 @@ impl Recording {
     pub fn readings(&self, stream: usize) -> Result<Vec<(f64, Reading)>, String> {
         let mut p = self.protocol(stream)?;
         let mut out = Vec::new();
-        for c in self.chunks.iter().filter(|c| usize::from(c.stream) == stream) {
+        for c in self
+            .chunks
+            .iter()
+            .filter(|c| usize::from(c.stream) == stream)
+        {
             let t = c.micros as f64 * 1e-6;
             p.decode(&c.bytes, &mut |r| out.push((t, r)));
         }
@@ -240,17 +264,23 @@ impl Recording {
 }
 
 /// Rebuilds a protocol from the settings a driver recorded.
-pub fn protocol_from_settings(kind: &str, settings: &serde_json::Value) -> Result<Box<dyn Protocol>, String> {
+pub fn protocol_from_settings(
+    kind: &str,
+    settings: &serde_json::Value,
+) -> Result<Box<dyn Protocol>, String> {
     match kind {
         "fob" => {
-            let c: FobConfig = serde_json::from_value(settings.clone()).map_err(|e| e.to_string())?;
+            let c: FobConfig =
+                serde_json::from_value(settings.clone()).map_err(|e| e.to_string())?;
             Ok(Box::new(FobProtocol::new(c)))
         }
         "cyberglove" => {
-            let c: GloveConfig = serde_json::from_value(settings.clone()).map_err(|e| e.to_string())?;
+            let c: GloveConfig =
+                serde_json::from_value(settings.clone()).map_err(|e| e.to_string())?;
             Ok(Box::new(GloveProtocol::new(c)))
         }
-        other => Err(format!("unknown device kind '{other}' (expected fob or cyberglove)")),
+        other => Err(format!(
+            "unknown device kind '{other}' (expected fob or cyberglove)"
+        )),
     }
 }
-

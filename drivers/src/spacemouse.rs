@@ -22,7 +22,11 @@ pub const PRODUCTS: [(u16, &str, ReportKind); 14] = [
     (0xC62F, "SpaceMouse Wireless", ReportKind::Wired),
     (0xC631, "SpaceMouse Pro Wireless", ReportKind::Combined),
     (0xC635, "SpaceMouse Compact", ReportKind::Wired),
-    (0xC652, "3Dconnexion Universal Receiver", ReportKind::Combined),
+    (
+        0xC652,
+        "3Dconnexion Universal Receiver",
+        ReportKind::Combined,
+    ),
 ];
 
 /// How a product lays out its motion reports.
@@ -62,12 +66,14 @@ pub const FULL_SCALE: f64 = 350.0;
 impl SpaceMouseState {
     /// Translation normalized to about −1…1 (clamped).
     pub fn translation_unit(&self) -> [f64; 3] {
-        self.translation.map(|v| (f64::from(v) / FULL_SCALE).clamp(-1.0, 1.0))
+        self.translation
+            .map(|v| (f64::from(v) / FULL_SCALE).clamp(-1.0, 1.0))
     }
 
     /// Rotation normalized to about −1…1 (clamped).
     pub fn rotation_unit(&self) -> [f64; 3] {
-        self.rotation.map(|v| (f64::from(v) / FULL_SCALE).clamp(-1.0, 1.0))
+        self.rotation
+            .map(|v| (f64::from(v) / FULL_SCALE).clamp(-1.0, 1.0))
     }
 }
 
@@ -81,13 +87,20 @@ fn i16_at(r: &[u8], i: usize) -> i16 {
 /// Reference: wired devices send 7-byte reports, report ID first: ID 1 = translation X, Y, Z
 /// as int16 little-endian; ID 2 = rotation; ID 3 = buttons, bit n in byte 1 + n/8. Pro
 /// Wireless sends 13-byte reports: ID 1 carries all six axes.
-pub fn apply_report(state: &mut SpaceMouseState, kind: ReportKind, report: &[u8]) -> Result<(), String> {
+pub fn apply_report(
+    state: &mut SpaceMouseState,
+    kind: ReportKind,
+    report: &[u8],
+) -> Result<(), String> {
     let Some(&id) = report.first() else {
         return Err("empty HID report".into());
     };
     let need = |n: usize| {
         if report.len() < n {
-            Err(format!("HID report {id} has {} bytes, expected {n}", report.len()))
+            Err(format!(
+                "HID report {id} has {} bytes, expected {n}",
+                report.len()
+            ))
         } else {
             Ok(())
         }
@@ -125,8 +138,14 @@ mod tests {
 
     #[test]
     fn table_lookup() {
-        assert_eq!(lookup(0x046D, 0xC626), Some(("SpaceNavigator", ReportKind::Wired)));
-        assert_eq!(lookup(0x256F, 0xC631).map(|x| x.1), Some(ReportKind::Combined));
+        assert_eq!(
+            lookup(0x046D, 0xC626),
+            Some(("SpaceNavigator", ReportKind::Wired))
+        );
+        assert_eq!(
+            lookup(0x256F, 0xC631).map(|x| x.1),
+            Some(ReportKind::Combined)
+        );
         assert_eq!(lookup(0x1234, 0xC626), None);
         assert_eq!(lookup(0x046D, 0x0001), None);
     }
@@ -135,12 +154,21 @@ mod tests {
     fn wired_reports_decode_exactly() {
         let mut s = SpaceMouseState::default();
         // ID 1: X = 350 (0x015E), Y = −2 (0xFFFE), Z = 0x0100.
-        apply_report(&mut s, ReportKind::Wired, &[1, 0x5E, 0x01, 0xFE, 0xFF, 0x00, 0x01]).unwrap();
+        apply_report(
+            &mut s,
+            ReportKind::Wired,
+            &[1, 0x5E, 0x01, 0xFE, 0xFF, 0x00, 0x01],
+        )
+        .unwrap();
         assert_eq!(s.translation, [350, -2, 256]);
         // ID 2: Rx = −350 (0xFEA2).
         apply_report(&mut s, ReportKind::Wired, &[2, 0xA2, 0xFE, 0, 0, 1, 0]).unwrap();
         assert_eq!(s.rotation, [-350, 0, 1]);
-        assert_eq!(s.translation, [350, -2, 256], "rotation report keeps translation");
+        assert_eq!(
+            s.translation,
+            [350, -2, 256],
+            "rotation report keeps translation"
+        );
         // ID 3: buttons 0 and 9.
         apply_report(&mut s, ReportKind::Wired, &[3, 0x01, 0x02, 0, 0, 0, 0]).unwrap();
         assert_eq!(s.buttons, 0b10_0000_0001);
@@ -160,8 +188,14 @@ mod tests {
     fn bad_reports_are_errors_not_panics() {
         let mut s = SpaceMouseState::default();
         assert!(apply_report(&mut s, ReportKind::Wired, &[]).is_err());
-        assert!(apply_report(&mut s, ReportKind::Combined, &[1, 0, 0, 0, 0, 0, 0]).unwrap_err().contains("expected 13"));
-        assert!(apply_report(&mut s, ReportKind::Wired, &[9, 0]).unwrap_err().contains("unknown"));
+        assert!(
+            apply_report(&mut s, ReportKind::Combined, &[1, 0, 0, 0, 0, 0, 0])
+                .unwrap_err()
+                .contains("expected 13")
+        );
+        assert!(apply_report(&mut s, ReportKind::Wired, &[9, 0])
+            .unwrap_err()
+            .contains("unknown"));
         assert_eq!(s, SpaceMouseState::default());
     }
 }

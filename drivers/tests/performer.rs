@@ -36,7 +36,15 @@ fn scene(fob: &str, glove: &str) -> String {
 
 #[test]
 fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically() {
-    let fob = emulator::start(DeviceKind::Fob, EmulatorOptions { birds: 3, ..EmulatorOptions::new() }, None).unwrap();
+    let fob = emulator::start(
+        DeviceKind::Fob,
+        EmulatorOptions {
+            birds: 3,
+            ..EmulatorOptions::new()
+        },
+        None,
+    )
+    .unwrap();
     let glove = emulator::start(DeviceKind::CyberGlove, EmulatorOptions::new(), None).unwrap();
     let dir = std::env::temp_dir().join(format!("troupe-perf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -44,7 +52,10 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
     let recorder = Arc::new(Recorder::create(&rec_path).unwrap());
     let (mut d, shared) = director(1, Some(recorder.clone()));
     d.load_str(
-        &scene(&format!("port = {:?}", fob.path()), &format!("port = {:?}", glove.path())),
+        &scene(
+            &format!("port = {:?}", fob.path()),
+            &format!("port = {:?}", glove.path()),
+        ),
         "live",
     )
     .unwrap();
@@ -57,7 +68,10 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
     let mut first_root: Option<f64> = None;
     let start = Instant::now();
     while checked < 50 {
-        assert!(start.elapsed() < Duration::from_secs(20), "performer never followed the devices");
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "performer never followed the devices"
+        );
         d.tick();
         let mut perf = shared.0.lock().unwrap();
         perf.end_tick();
@@ -74,7 +88,13 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
             for (dof, (&want, &set)) in target.q.iter().zip(&target.mask).enumerate() {
                 if set {
                     let want = sk.dofs()[dof].clamp(want);
-                    assert!((q[dof] - want).abs() < 1e-9, "dof {} = {} but the sample says {}", sk.dofs()[dof].name, q[dof], want);
+                    assert!(
+                        (q[dof] - want).abs() < 1e-9,
+                        "dof {} = {} but the sample says {}",
+                        sk.dofs()[dof].name,
+                        q[dof],
+                        want
+                    );
                 }
             }
             let r0 = *first_root.get_or_insert(q[root_x]);
@@ -111,7 +131,10 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
     assert!(a.first() != a.last(), "the replayed performer moves");
 }
 
-fn performer_target(p: &troupe_drivers::performer::Performers, i: usize) -> troupe_drivers::performer::CaptureTarget {
+fn performer_target(
+    p: &troupe_drivers::performer::Performers,
+    i: usize,
+) -> troupe_drivers::performer::CaptureTarget {
     p.target(i).unwrap()
 }
 
@@ -119,12 +142,30 @@ fn performer_target(p: &troupe_drivers::performer::Performers, i: usize) -> trou
 fn bad_performer_options_are_clear_errors() {
     let (mut d, _) = director(1, None);
     for (code, expect) in [
-        (r#"troupe.performer{ name = "a", devices = { fob = { port = "/x", birds = 2, map = { nose = 1 } } } }"#, "no joint 'nose'"),
-        (r#"troupe.performer{ name = "b", devices = { fob = { port = "/x", birds = 2, map = { pelvis = 3 } } } }"#, "not a bird address"),
-        (r#"troupe.performer{ name = "c", devices = { glove = { hand = "middle", port = "/x" } } }"#, "hand must be"),
-        (r#"troupe.performer{ name = "d", devices = { glove = { replay = "nope.rec" } } }"#, "nope.rec"),
-        (r#"troupe.performer{ name = "e", devices = { fob = { map = { pelvis = 1 } } } }"#, "`port`"),
-        (r#"troupe.performer{ name = "f", colour = "red" }"#, "unknown option `colour`"),
+        (
+            r#"troupe.performer{ name = "a", devices = { fob = { port = "/x", birds = 2, map = { nose = 1 } } } }"#,
+            "no joint 'nose'",
+        ),
+        (
+            r#"troupe.performer{ name = "b", devices = { fob = { port = "/x", birds = 2, map = { pelvis = 3 } } } }"#,
+            "not a bird address",
+        ),
+        (
+            r#"troupe.performer{ name = "c", devices = { glove = { hand = "middle", port = "/x" } } }"#,
+            "hand must be",
+        ),
+        (
+            r#"troupe.performer{ name = "d", devices = { glove = { replay = "nope.rec" } } }"#,
+            "nope.rec",
+        ),
+        (
+            r#"troupe.performer{ name = "e", devices = { fob = { map = { pelvis = 1 } } } }"#,
+            "`port`",
+        ),
+        (
+            r#"troupe.performer{ name = "f", colour = "red" }"#,
+            "unknown option `colour`",
+        ),
     ] {
         let e = d.load_str(code, "bad").unwrap_err().to_string();
         assert!(e.contains(expect), "{code}: {e}");

@@ -3,7 +3,8 @@
 
 use std::time::{Duration, Instant};
 use troupe_drivers::driver::{
-    self, DeviceHandle, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol, HealthState, Mode, Reading,
+    self, DeviceHandle, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol,
+    HealthState, Mode, Reading,
 };
 use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions};
 use troupe_drivers::fob::OutputFormat;
@@ -14,7 +15,10 @@ use troupe_drivers::record::{Recorder, Recording};
 fn wait_for(what: &str, mut f: impl FnMut() -> bool) {
     let start = Instant::now();
     while !f() {
-        assert!(start.elapsed() < Duration::from_secs(10), "timed out waiting for {what}");
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "timed out waiting for {what}"
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
 }
@@ -22,12 +26,24 @@ fn wait_for(what: &str, mut f: impl FnMut() -> bool) {
 fn fob_driver(path: &str, birds: u8, format: OutputFormat) -> DeviceHandle {
     let mut o = DriverOptions::new("fob", path);
     o.backoff_max = Duration::from_millis(100);
-    driver::spawn(o, Box::new(FobProtocol::new(FobConfig::new(birds, format))), None)
+    driver::spawn(
+        o,
+        Box::new(FobProtocol::new(FobConfig::new(birds, format))),
+        None,
+    )
 }
 
 #[test]
 fn flock_streams_in_group_mode_through_a_pty() {
-    let emu = emulator::start(DeviceKind::Fob, EmulatorOptions { birds: 3, ..EmulatorOptions::new() }, None).unwrap();
+    let emu = emulator::start(
+        DeviceKind::Fob,
+        EmulatorOptions {
+            birds: 3,
+            ..EmulatorOptions::new()
+        },
+        None,
+    )
+    .unwrap();
     let dev = fob_driver(&emu.path(), 3, OutputFormat::PositionQuaternion);
     let mut got = Vec::new();
     wait_for("30 bird records", || {
@@ -56,19 +72,36 @@ fn flock_streams_in_group_mode_through_a_pty() {
 #[test]
 fn glove_polls_and_streams_through_a_pty() {
     for (mode, status_byte) in [(Mode::Point, false), (Mode::Stream, true)] {
-        let emu = emulator::start(DeviceKind::CyberGlove, EmulatorOptions { sensors: 22, ..EmulatorOptions::new() }, None).unwrap();
+        let emu = emulator::start(
+            DeviceKind::CyberGlove,
+            EmulatorOptions {
+                sensors: 22,
+                ..EmulatorOptions::new()
+            },
+            None,
+        )
+        .unwrap();
         let config = GloveConfig {
-            layout: GloveLayout { sensors: 22, status_byte },
+            layout: GloveLayout {
+                sensors: 22,
+                status_byte,
+            },
             mode,
         };
-        let dev = driver::spawn(DriverOptions::new("glove", &emu.path()), Box::new(GloveProtocol::new(config)), None);
+        let dev = driver::spawn(
+            DriverOptions::new("glove", &emu.path()),
+            Box::new(GloveProtocol::new(config)),
+            None,
+        );
         let mut got = Vec::new();
         wait_for("10 glove records", || {
             got.extend(dev.drain());
             got.len() >= 10
         });
         for s in &got {
-            let Reading::Glove(g) = &s.reading else { panic!("not a glove record") };
+            let Reading::Glove(g) = &s.reading else {
+                panic!("not a glove record")
+            };
             assert_eq!(g.raw.len(), 22);
             assert_eq!(g.command, if mode == Mode::Point { b'G' } else { b'S' });
             assert_eq!(g.status, status_byte.then_some(0x03));
@@ -81,7 +114,10 @@ fn glove_polls_and_streams_through_a_pty() {
 fn a_glove_with_the_wrong_sensor_count_fails_with_a_clear_error() {
     let emu = emulator::start(DeviceKind::CyberGlove, EmulatorOptions::new(), None).unwrap();
     let config = GloveConfig {
-        layout: GloveLayout { sensors: 22, status_byte: false },
+        layout: GloveLayout {
+            sensors: 22,
+            status_byte: false,
+        },
         mode: Mode::Stream,
     };
     let mut o = DriverOptions::new("glove", &emu.path());
@@ -90,7 +126,10 @@ fn a_glove_with_the_wrong_sensor_count_fails_with_a_clear_error() {
     let dev = driver::spawn(o, Box::new(GloveProtocol::new(config)), None);
     wait_for("failed state", || dev.health.state() == HealthState::Failed);
     let err = dev.health.report().last_error.unwrap();
-    assert!(err.contains("samples 18 sensors, configured for 22"), "{err}");
+    assert!(
+        err.contains("samples 18 sensors, configured for 22"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -106,7 +145,9 @@ fn a_silent_device_goes_stale_and_a_missing_port_reconnects() {
     let link = std::env::temp_dir().join(format!("troupe-fob-link-{}", std::process::id()));
     let _ = std::fs::remove_file(&link);
     let dev = fob_driver(link.to_str().unwrap(), 1, OutputFormat::PositionAngles);
-    wait_for("reconnecting", || dev.health.state() == HealthState::Reconnecting);
+    wait_for("reconnecting", || {
+        dev.health.state() == HealthState::Reconnecting
+    });
     let emu = emulator::start(DeviceKind::Fob, EmulatorOptions::new(), Some(&link)).unwrap();
     wait_for("streaming", || {
         dev.drain();
@@ -114,7 +155,9 @@ fn a_silent_device_goes_stale_and_a_missing_port_reconnects() {
     });
     // Unplug: the pty closes; the driver notices and retries.
     emu.stop();
-    wait_for("reconnecting after unplug", || dev.health.state() == HealthState::Reconnecting);
+    wait_for("reconnecting after unplug", || {
+        dev.health.state() == HealthState::Reconnecting
+    });
     let before = dev.health.report().samples;
     // Plug back in (a new pty behind the same link).
     let _emu = emulator::start(DeviceKind::Fob, EmulatorOptions::new(), Some(&link)).unwrap();
@@ -130,8 +173,14 @@ fn a_full_channel_drops_and_counts_instead_of_blocking() {
     let emu = emulator::start(DeviceKind::Fob, EmulatorOptions::new(), None).unwrap();
     let mut o = DriverOptions::new("fob", &emu.path());
     o.capacity = 4;
-    let dev = driver::spawn(o, Box::new(FobProtocol::new(FobConfig::new(1, OutputFormat::Position))), None);
-    wait_for("dropped samples", || dev.health.report().dropped_samples > 0);
+    let dev = driver::spawn(
+        o,
+        Box::new(FobProtocol::new(FobConfig::new(1, OutputFormat::Position))),
+        None,
+    );
+    wait_for("dropped samples", || {
+        dev.health.report().dropped_samples > 0
+    });
     assert_eq!(dev.drain().len(), 4);
 }
 
@@ -141,10 +190,21 @@ fn recorded_streams_replay_identically() {
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("session.rec");
     let rec = std::sync::Arc::new(Recorder::create(&file).unwrap());
-    let emu = emulator::start(DeviceKind::Fob, EmulatorOptions { birds: 2, ..EmulatorOptions::new() }, None).unwrap();
+    let emu = emulator::start(
+        DeviceKind::Fob,
+        EmulatorOptions {
+            birds: 2,
+            ..EmulatorOptions::new()
+        },
+        None,
+    )
+    .unwrap();
     let dev = driver::spawn(
         DriverOptions::new("flock", &emu.path()),
-        Box::new(FobProtocol::new(FobConfig::new(2, OutputFormat::PositionMatrix))),
+        Box::new(FobProtocol::new(FobConfig::new(
+            2,
+            OutputFormat::PositionMatrix,
+        ))),
         Some(rec.clone()),
     );
     let mut live = Vec::new();
@@ -163,7 +223,13 @@ fn recorded_streams_replay_identically() {
     // The replay decodes what the live driver decoded, in the same order.
     let live: Vec<Reading> = live.into_iter().map(|s| s.reading).collect();
     assert!(a.len() >= live.len());
-    assert_eq!(a.iter().take(live.len()).map(|x| x.1.clone()).collect::<Vec<_>>(), live);
+    assert_eq!(
+        a.iter()
+            .take(live.len())
+            .map(|x| x.1.clone())
+            .collect::<Vec<_>>(),
+        live
+    );
     // The recording can itself drive an emulator.
     let motion = emulator::Motion::from_file(&file, "fob", &[], 2, 1.0).unwrap();
     assert!(matches!(motion, emulator::Motion::Recorded { .. }));
@@ -171,12 +237,18 @@ fn recorded_streams_replay_identically() {
     let bad = dir.join("bad.rec");
     std::fs::write(&bad, b"TROUPEREC1\nZ").unwrap();
     let err = Recording::read(&bad).unwrap_err();
-    assert!(err.contains("bad.rec") && err.contains("unknown chunk tag"), "{err}");
+    assert!(
+        err.contains("bad.rec") && err.contains("unknown chunk tag"),
+        "{err}"
+    );
 }
 
 #[test]
 fn emulator_answers_point_requests_with_the_motion_encoded_exactly() {
-    let mut e = emulator::FobEmulator::new(EmulatorOptions { birds: 2, ..EmulatorOptions::new() });
+    let mut e = emulator::FobEmulator::new(EmulatorOptions {
+        birds: 2,
+        ..EmulatorOptions::new()
+    });
     // Group mode, quaternion format, then a POINT request.
     let mut cmds = vec![b'P', 0x32, 2, b'O', 0x24];
     let status = e.handle(&cmds, 0.0);

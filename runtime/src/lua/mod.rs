@@ -601,7 +601,13 @@ impl Director {
 /// performers) and need an actor's body while a script runs. `None` outside a director.
 pub fn actor_skeletons(lua: &Lua) -> Option<Vec<Arc<crate::skeleton::Skeleton>>> {
     let st = lua.app_data_ref::<Stage>()?;
-    Some(st.scene.actors().iter().map(|a| a.skeleton.clone()).collect())
+    Some(
+        st.scene
+            .actors()
+            .iter()
+            .map(|a| a.skeleton.clone())
+            .collect(),
+    )
 }
 
 /// The folder of the scene file being run (relative paths in scripts resolve against it).
