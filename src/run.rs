@@ -73,6 +73,10 @@ pub struct RunArgs {
     /// Record every live device stream (timestamps + raw bytes) to FILE.rec.
     #[arg(long, value_name = "FILE.rec")]
     pub record_devices: Option<PathBuf>,
+    /// Send every actor's joint poses and the action events over OSC (UDP) to HOST:PORT
+    /// each tick (addresses in docs/devices.md).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub osc_out: Option<String>,
 }
 
 /// Runs the scene and prints the summary.
@@ -93,6 +97,10 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     }
     let (mut director, devices) =
         crate::devices::director(config, limits, args.record_devices.as_deref())?;
+    let osc_out = match &args.osc_out {
+        Some(t) => Some(troupe_drivers::osc::OscSender::new(t).map_err(|e| anyhow::anyhow!(e))?),
+        None => None,
+    };
     director
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
@@ -143,6 +151,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         devices.end_tick();
         ticks += 1;
         let scene = director.scene();
+        if let Some(o) = &osc_out {
+            o.send(&scene, &events).map_err(|e| anyhow::anyhow!(e))?;
+        }
         if counts.len() < scene.actors().len() {
             counts.resize(scene.actors().len(), [0; 3]);
         }

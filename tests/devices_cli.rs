@@ -187,3 +187,51 @@ fn run_records_device_streams_and_replay_is_deterministic() {
         .unwrap();
     assert!(keys > 50, "root_x has {keys} keys:\n{info}");
 }
+
+#[test]
+fn run_sends_poses_and_events_over_osc() {
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    sock.set_read_timeout(Some(std::time::Duration::from_secs(10)))
+        .unwrap();
+    let port = sock.local_addr().unwrap().port();
+    let scene = temp("osc.lua");
+    std::fs::write(
+        &scene,
+        r#"local a = troupe.actor{ name = "ann" } a:look_at{ target = {1, 1.6, 1} }"#,
+    )
+    .unwrap();
+    ok(troupe().arg("run").arg(&scene).args([
+        "--ticks",
+        "3",
+        "--osc-out",
+        &format!("127.0.0.1:{port}"),
+    ]));
+    let mut buf = vec![0u8; 65536];
+    let mut addrs = Vec::new();
+    while let Ok(n) = sock.recv(&mut buf) {
+        // A datagram is a bundle of one actor's joints, or an event message.
+        let (_, p) = rosc::decoder::decode_udp(&buf[..n]).unwrap();
+        match p {
+            rosc::OscPacket::Bundle(b) => {
+                for c in b.content {
+                    if let rosc::OscPacket::Message(m) = c {
+                        assert_eq!(m.args.len(), 7);
+                        addrs.push(m.addr);
+                    }
+                }
+            }
+            rosc::OscPacket::Message(m) => addrs.push(m.addr),
+        }
+        // Everything was sent before `run` returned: once data flows, a short wait is enough.
+        sock.set_read_timeout(Some(std::time::Duration::from_millis(500)))
+            .unwrap();
+    }
+    assert!(
+        addrs.iter().any(|a| a == "/troupe/ann/r_elbow"),
+        "{addrs:?}"
+    );
+    assert!(
+        addrs.iter().any(|a| a == "/troupe/event"),
+        "the look_at action's events are sent"
+    );
+}

@@ -127,6 +127,23 @@ impl Health {
         }
     }
 
+    /// A fresh health record in the given state (for sources other than serial drivers).
+    pub fn new_state(state: HealthState) -> Health {
+        let h = Health::new();
+        h.set(state);
+        h
+    }
+
+    /// Sets the state.
+    pub fn set_state(&self, s: HealthState) {
+        self.set(s);
+    }
+
+    /// Records the last error.
+    pub fn set_error(&self, e: String) {
+        self.error(e);
+    }
+
     /// Current state.
     pub fn state(&self) -> HealthState {
         HealthState::from_u8(self.state.load(Ordering::Acquire))

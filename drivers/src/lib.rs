@@ -10,6 +10,7 @@ pub mod fob;
 pub mod gesture;
 pub mod glove;
 pub mod hid;
+pub mod osc;
 pub mod performer;
 pub mod record;
 pub mod spacemouse;

@@ -15,6 +15,7 @@ use crate::emulator::bird_pose;
 use crate::fob::{Hemisphere, OutputFormat, PositionRange};
 use crate::gesture::{GestureSet, GestureTracker};
 use crate::glove::{GloveCalibration, GloveLayout};
+use crate::osc::{OscInput, OscListener};
 use crate::record::{Recorder, Recording};
 use glam::{DMat3, DQuat, DVec3};
 use mlua::{Function, Lua, MultiValue, Table, Value};
@@ -197,6 +198,25 @@ impl AnatomicalConverter {
         Ok(())
     }
 
+    /// Calibrates for sources that already give segment poses in the scene frame (OSC):
+    /// no offset, no lever; the root goes where its pose says.
+    pub fn calibrate_direct(&mut self, base_q: &[f64]) {
+        let mut globals = vec![Transform::IDENTITY; self.skeleton.joints().len()];
+        forward_kinematics(&self.skeleton, base_q, &mut globals);
+        let k = self.map.len();
+        self.calibration = Some(Calibration {
+            origin: DVec3::ZERO,
+            levers: vec![DVec3::ZERO; k],
+            base_q: base_q.to_vec(),
+            sensor0: self
+                .map
+                .iter()
+                .map(|&(j, _)| (globals[j].translation, DQuat::IDENTITY))
+                .collect(),
+            offsets: vec![DQuat::IDENTITY; k],
+        });
+    }
+
     /// Converts the latest bird poses into DOF values: `q` starts from the calibration
     /// posture; the root joint's translation follows its bird's displacement; each mapped
     /// joint's rotation DOFs are solved (parents first) so that its segment has the sensor's
@@ -334,6 +354,8 @@ enum Source {
         next: usize,
         start: f64,
     },
+    /// Fed from elsewhere (a glove whose values come over OSC).
+    External,
 }
 
 impl Source {
@@ -359,13 +381,14 @@ impl Source {
                 }
                 out
             }
+            Source::External => Vec::new(),
         }
     }
 
     fn health(&self) -> Option<HealthReport> {
         match self {
             Source::Live(h) => Some(h.health.report()),
-            Source::Replay { .. } => None,
+            Source::Replay { .. } | Source::External => None,
         }
     }
 }
@@ -373,6 +396,14 @@ impl Source {
 struct FobInput {
     source: Source,
     converter: AnatomicalConverter,
+    latest: BTreeMap<u8, (DVec3, DQuat)>,
+}
+
+struct OscPoses {
+    listener: OscListener,
+    converter: AnatomicalConverter,
+    /// Joint name (as sent) → the converter's pseudo-address.
+    joints: Vec<(String, u8)>,
     latest: BTreeMap<u8, (DVec3, DQuat)>,
 }
 
@@ -408,6 +439,7 @@ pub struct Performer {
     pub actor: usize,
     skeleton: Arc<Skeleton>,
     fob: Option<FobInput>,
+    osc: Option<OscPoses>,
     glove: Option<GloveInput>,
     auto_calibrate: bool,
     calibrate_requested: bool,
@@ -456,6 +488,9 @@ impl Performers {
             if let Some(h) = p.glove.as_ref().and_then(|g| g.source.health()) {
                 v.push((p.name.clone(), "glove", h));
             }
+            if let Some(o) = &p.osc {
+                v.push((p.name.clone(), "osc", o.listener.health.report()));
+            }
         }
         v
     }
@@ -488,8 +523,43 @@ impl Performers {
                     p.calibrate_requested = false;
                 }
             }
+            let mut osc_glove = Vec::new();
+            if let Some(o) = &mut p.osc {
+                for (at, input) in o.listener.inputs.try_iter() {
+                    match input {
+                        OscInput::Pose {
+                            performer,
+                            joint,
+                            position,
+                            rotation,
+                        } if performer == p.name => {
+                            if let Some((_, a)) = o.joints.iter().find(|(n, _)| *n == joint) {
+                                o.latest.insert(*a, (position, rotation));
+                                changed = true;
+                                newest = newest.max(Some(at));
+                            }
+                        }
+                        OscInput::Glove { performer, raw } if performer == p.name => {
+                            osc_glove.push((
+                                Reading::Glove(crate::glove::GloveRecord {
+                                    command: b'S',
+                                    raw,
+                                    status: None,
+                                }),
+                                Some(at),
+                            ));
+                        }
+                        _ => {}
+                    }
+                }
+                if !o.converter.is_calibrated() {
+                    o.converter.calibrate_direct(&base_posture(scene, p.actor));
+                }
+            }
             if let Some(g) = &mut p.glove {
-                for (r, at) in g.source.take(time) {
+                let mut readings = g.source.take(time);
+                readings.extend(osc_glove);
+                for (r, at) in readings {
                     if let Reading::Glove(rec) = r {
                         if let Some(tr) = &mut g.gestures {
                             if let Some((new, old)) = tr.feed(&rec.raw) {
@@ -517,6 +587,9 @@ impl Performers {
             let mut mask = vec![false; n];
             if let Some(f) = &mut p.fob {
                 f.converter.convert(&f.latest, &mut q, &mut mask);
+            }
+            if let Some(o) = &mut p.osc {
+                o.converter.convert(&o.latest, &mut q, &mut mask);
             }
             if let Some(g) = &p.glove {
                 if let Some(raw) = &g.latest {
@@ -630,8 +703,13 @@ fn build_capture(
 fn device_scope(p: &Performer) -> troupe_runtime::Scope {
     let mut dofs: Vec<usize> = Vec::new();
     let sk = &p.skeleton;
-    if let Some(f) = &p.fob {
-        for &(j, _) in &f.converter.map {
+    let converters = p
+        .fob
+        .iter()
+        .map(|f| &f.converter)
+        .chain(p.osc.iter().map(|o| &o.converter));
+    for c in converters {
+        for &(j, _) in &c.map {
             let joint = &sk.joints()[j];
             for d in joint.dofs.clone() {
                 if joint.parent.is_some() && sk.dofs()[d].kind == DofKind::Translation {
@@ -640,13 +718,7 @@ fn device_scope(p: &Performer) -> troupe_runtime::Scope {
                 dofs.push(d);
             }
         }
-        dofs.extend(
-            f.converter
-                .ik
-                .iter()
-                .flatten()
-                .flat_map(|s| s.dofs().iter().copied()),
-        );
+        dofs.extend(c.ik.iter().flatten().flat_map(|s| s.dofs().iter().copied()));
     }
     if let Some(g) = &p.glove {
         dofs.extend(g.dofs.iter().flatten().copied());
@@ -951,9 +1023,10 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
         .transpose()?
         .unwrap_or(0.0);
     let mut fob = None;
+    let mut osc = None;
     let mut glove = None;
     if let Some(d) = &devices {
-        check_keys(d, "performer.devices", &["fob", "glove"])?;
+        check_keys(d, "performer.devices", &["fob", "glove", "osc"])?;
         if let Some(f) = opt::<Table>(d, "fob")? {
             fob = Some(fob_input(
                 lua,
@@ -963,6 +1036,14 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
                 recorder.clone(),
                 scene_time,
             )?);
+        }
+        if let Some(o) = opt::<Table>(d, "osc")? {
+            if fob.is_some() {
+                return Err(err(
+                    "performer.devices: give `fob` or `osc` poses, not both",
+                ));
+            }
+            osc = Some(osc_input(&o, &skeleton)?);
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
@@ -981,6 +1062,7 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
         actor,
         skeleton,
         fob,
+        osc,
         glove,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
@@ -1120,6 +1202,34 @@ fn fob_input(
     })
 }
 
+fn osc_input(t: &Table, skeleton: &Arc<Skeleton>) -> mlua::Result<OscPoses> {
+    check_keys(t, "performer.devices.osc", &["listen", "joints"])?;
+    let listen: String = opt(t, "listen")?
+        .ok_or_else(|| err("performer.devices.osc: `listen` (host:port) is required"))?;
+    let names: Vec<String> = opt::<Vec<String>>(t, "joints")?
+        .ok_or_else(|| err("performer.devices.osc: `joints` (the joint names sent) is required"))?;
+    if names.is_empty() || names.len() > 250 {
+        return Err(err(
+            "performer.devices.osc: `joints` must list 1…250 joints",
+        ));
+    }
+    let joints: Vec<(String, u8)> = names
+        .into_iter()
+        .enumerate()
+        .map(|(i, n)| (n, i as u8 + 1))
+        .collect();
+    let converter = AnatomicalConverter::new(skeleton.clone(), &joints, DQuat::IDENTITY)
+        .map_err(|e| err(format!("performer.devices.osc: {e}")))?;
+    let listener =
+        OscListener::bind(&listen, 4096).map_err(|e| err(format!("performer.devices.osc: {e}")))?;
+    Ok(OscPoses {
+        listener,
+        converter,
+        joints,
+        latest: BTreeMap::new(),
+    })
+}
+
 fn parse_mode(m: &str) -> mlua::Result<Mode> {
     match m {
         "stream" => Ok(Mode::Stream),
@@ -1151,6 +1261,7 @@ fn glove_input(
             "gestures",
             "baud",
             "mode",
+            "osc",
         ],
     )?;
     let side = match opt::<String>(t, "hand")?.as_deref() {
@@ -1215,22 +1326,28 @@ fn glove_input(
         },
         mode,
     };
-    let src = source(
-        lua,
-        t,
-        "performer.devices.glove",
-        "cyberglove",
-        scene_time,
-        |port| {
-            let mut o = DriverOptions::new(&format!("{name}.glove"), &port);
-            o.baud = baud;
-            Ok(driver::spawn(
-                o,
-                Box::new(GloveProtocol::new(config)),
-                recorder,
-            ))
-        },
-    )?;
+    // `osc = true`: the values arrive as /troupe/<performer>/glove over the performer's
+    // OSC listener.
+    let src = if opt::<bool>(t, "osc")?.unwrap_or(false) {
+        Source::External
+    } else {
+        source(
+            lua,
+            t,
+            "performer.devices.glove",
+            "cyberglove",
+            scene_time,
+            |port| {
+                let mut o = DriverOptions::new(&format!("{name}.glove"), &port);
+                o.baud = baud;
+                Ok(driver::spawn(
+                    o,
+                    Box::new(GloveProtocol::new(config)),
+                    recorder,
+                ))
+            },
+        )?
+    };
     Ok(GloveInput {
         source: src,
         calibration,

@@ -171,3 +171,69 @@ fn bad_performer_options_are_clear_errors() {
         assert!(e.contains(expect), "{code}: {e}");
     }
 }
+
+#[test]
+fn osc_poses_and_glove_values_drive_a_performer() {
+    use rosc::{OscMessage, OscPacket, OscType};
+    use troupe_runtime::glam::{DQuat, DVec3};
+    let port = std::net::UdpSocket::bind("127.0.0.1:0")
+        .unwrap()
+        .local_addr()
+        .unwrap()
+        .port();
+    let (mut d, _shared) = director(1, None);
+    d.load_str(
+        &format!(
+            r#"oz = troupe.performer{{ name = "oz", devices = {{
+                 osc = {{ listen = "127.0.0.1:{port}", joints = {{ "pelvis", "r_wrist" }} }},
+                 glove = {{ osc = true, hand = "right" }} }} }}
+               oz:capture{{}}"#
+        ),
+        "osc",
+    )
+    .unwrap();
+    let sock = std::net::UdpSocket::bind("127.0.0.1:0").unwrap();
+    let pose = |joint: &str, p: DVec3, q: DQuat| {
+        let args = [p.x, p.y, p.z, q.w, q.x, q.y, q.z]
+            .iter()
+            .map(|v| OscType::Float(*v as f32))
+            .collect();
+        rosc::encoder::encode(&OscPacket::Message(OscMessage {
+            addr: format!("/troupe/oz/{joint}"),
+            args,
+        }))
+        .unwrap()
+    };
+    let pelvis = DVec3::new(0.25, 1.0, 0.5);
+    let yaw = DQuat::from_rotation_y(0.4);
+    let glove: Vec<OscType> = (0..18).map(|_| OscType::Int(255)).collect();
+    let glove = rosc::encoder::encode(&OscPacket::Message(OscMessage {
+        addr: "/troupe/oz/glove".into(),
+        args: glove,
+    }))
+    .unwrap();
+    let sk = d.scene().actors()[0].skeleton.clone();
+    let index = sk.dof("r_index1_flexion").unwrap();
+    let start = Instant::now();
+    loop {
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "OSC input never reached the performer"
+        );
+        sock.send_to(&pose("pelvis", pelvis, yaw), ("127.0.0.1", port))
+            .unwrap();
+        sock.send_to(&glove, ("127.0.0.1", port)).unwrap();
+        std::thread::sleep(Duration::from_millis(5));
+        d.tick();
+        let st = d.scene().states()[0].clone();
+        if st.q[index] > 0.0 && (st.globals[0].translation - pelvis).length() < 1e-6 {
+            assert!(st.globals[0].rotation.angle_between(yaw) < 1e-6);
+            assert_eq!(
+                st.q[index],
+                sk.dofs()[index].max,
+                "raw 255 = the DOF's upper limit"
+            );
+            break;
+        }
+    }
+}
