@@ -60,6 +60,9 @@ pub struct AnatomicalConverter {
     /// between the entry's joint and its nearest mapped ancestor (e.g. shoulder and elbow
     /// for a wrist sensor under a chest sensor), or `None` when the parent is mapped.
     ik: Vec<Option<IkSolver>>,
+    /// The previous conversion's IK DOF values: each solve starts from them (continuity,
+    /// and a few iterations instead of a solve from rest).
+    warm: Option<Vec<f64>>,
     calibration: Option<Calibration>,
 }
 
@@ -120,7 +123,16 @@ impl AnatomicalConverter {
                 None
             } else {
                 Some(
-                    IkSolver::new(&skeleton, dofs, IkOptions::default())
+                    IkSolver::new(
+                        &skeleton,
+                        dofs,
+                        // Warm-started every frame: a few iterations follow the motion; the
+                        // cap bounds a tick's cost when a sensor is out of reach.
+                        IkOptions {
+                            max_iterations: 30,
+                            ..IkOptions::default()
+                        },
+                    )
                         .map_err(|e| e.to_string())?,
                 )
             });
@@ -130,6 +142,7 @@ impl AnatomicalConverter {
             frame,
             map: m,
             ik,
+            warm: None,
             calibration: None,
         })
     }
@@ -188,6 +201,7 @@ impl AnatomicalConverter {
             .zip(&sensor0)
             .map(|(&(j, _), s)| s.1.inverse() * (globals[j].translation - (s.0 + origin)))
             .collect();
+        self.warm = None;
         self.calibration = Some(Calibration {
             origin,
             levers,
@@ -204,6 +218,7 @@ impl AnatomicalConverter {
         let mut globals = vec![Transform::IDENTITY; self.skeleton.joints().len()];
         forward_kinematics(&self.skeleton, base_q, &mut globals);
         let k = self.map.len();
+        self.warm = None;
         self.calibration = Some(Calibration {
             origin: DVec3::ZERO,
             levers: vec![DVec3::ZERO; k],
@@ -252,6 +267,11 @@ impl AnatomicalConverter {
                 }
             }
             if let Some(solver) = self.ik[k].as_mut() {
+                if let Some(w) = &self.warm {
+                    for &d in solver.dofs() {
+                        q[d] = w[d];
+                    }
+                }
                 let goal = p + cal.origin + rot * cal.levers[k];
                 let task = IkTask::position(
                     Effector {
@@ -286,6 +306,7 @@ impl AnatomicalConverter {
                 }
             }
         }
+        self.warm = Some(q.to_vec());
     }
 }
 
