@@ -82,24 +82,44 @@ fn converter(c: &mut Criterion) {
         })
         .unwrap(),
     );
-    let names = ["pelvis", "vl5", "skullbase", "r_shoulder", "l_shoulder", "r_wrist"];
+    let names = [
+        "pelvis",
+        "vl5",
+        "skullbase",
+        "r_shoulder",
+        "l_shoulder",
+        "r_wrist",
+    ];
     let map: Vec<(String, u8)> = names
         .iter()
         .enumerate()
         .map(|(i, n)| (n.to_string(), i as u8 + 1))
         .collect();
-    let joints: Vec<usize> = ["HumanoidRoot", "vl5", "skullbase", "r_shoulder", "l_shoulder", "r_wrist"]
-        .iter()
-        .map(|n| sk.joint(n).unwrap())
-        .collect();
+    let joints: Vec<usize> = [
+        "HumanoidRoot",
+        "vl5",
+        "skullbase",
+        "r_shoulder",
+        "l_shoulder",
+        "r_wrist",
+    ]
+    .iter()
+    .map(|n| sk.joint(n).unwrap())
+    .collect();
     let frame = transmitter_to_world();
     let mut conv = AnatomicalConverter::new(sk.clone(), &map, frame).unwrap();
     // Bird poses of a body that really moves (arms, spine and head on sines), seen from a
     // transmitter 1 m behind the scene origin: the IK goals are reachable, as in a capture.
-    let moving: Vec<usize> = ["r_shoulder_flexion", "r_elbow_flexion", "l_shoulder_flexion", "vl5_flexion", "skullbase_torsion"]
-        .iter()
-        .filter_map(|n| sk.dof(n).ok())
-        .collect();
+    let moving: Vec<usize> = [
+        "r_shoulder_flexion",
+        "r_elbow_flexion",
+        "l_shoulder_flexion",
+        "vl5_flexion",
+        "skullbase_torsion",
+    ]
+    .iter()
+    .filter_map(|n| sk.dof(n).ok())
+    .collect();
     let poses = |time: f64| -> BTreeMap<u8, _> {
         let mut q = vec![0.0; sk.dof_count()];
         for (k, &d) in moving.iter().enumerate() {
@@ -117,18 +137,22 @@ fn converter(c: &mut Criterion) {
             })
             .collect()
     };
-    conv.calibrate(&vec![0.0; sk.dof_count()], &poses(0.0)).unwrap();
+    conv.calibrate(&vec![0.0; sk.dof_count()], &poses(0.0))
+        .unwrap();
     // Consecutive 100 Hz frames: each conversion starts its IK from the previous one.
     let frames: Vec<_> = (0..100).map(|k| poses(1.3 + 0.01 * k as f64)).collect();
     let mut q = vec![0.0; sk.dof_count()];
     let mut mask = vec![false; sk.dof_count()];
     let mut k = 0;
-    c.bench_function("anatomical conversion, 6 birds (IK for the arms), consecutive frames", |b| {
-        b.iter(|| {
-            conv.convert(&frames[k % frames.len()], &mut q, &mut mask);
-            k += 1;
-        })
-    });
+    c.bench_function(
+        "anatomical conversion, 6 birds (IK for the arms), consecutive frames",
+        |b| {
+            b.iter(|| {
+                conv.convert(&frames[k % frames.len()], &mut q, &mut mask);
+                k += 1;
+            })
+        },
+    );
 }
 
 criterion_group!(benches, decoders, converter);

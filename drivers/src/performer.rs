@@ -133,7 +133,7 @@ impl AnatomicalConverter {
                             ..IkOptions::default()
                         },
                     )
-                        .map_err(|e| e.to_string())?,
+                    .map_err(|e| e.to_string())?,
                 )
             });
         }
