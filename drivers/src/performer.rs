@@ -873,13 +873,18 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             let perf = s.0.lock().map_err(|_| err("performer lock poisoned"))?;
             let p = &perf.list[i];
             let out = lua.create_table()?;
-            for (dev, src) in [
-                ("fob", p.fob.as_ref().map(|f| &f.source)),
-                ("glove", p.glove.as_ref().map(|g| &g.source)),
-            ] {
-                let Some(src) = src else { continue };
+            let reports = [
+                ("fob", p.fob.as_ref().map(|f| f.source.health())),
+                ("glove", p.glove.as_ref().map(|g| g.source.health())),
+                (
+                    "osc",
+                    p.osc.as_ref().map(|o| Some(o.listener.health.report())),
+                ),
+            ];
+            for (dev, report) in reports {
+                let Some(report) = report else { continue };
                 let t = lua.create_table()?;
-                match src.health() {
+                match report {
                     Some(h) => {
                         t.set("state", h.state.name())?;
                         t.set("samples", h.samples)?;
@@ -889,6 +894,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
                         t.set("connections", h.connections)?;
                         t.set("error", h.last_error)?;
                     }
+                    // A replayed device, or a glove fed over OSC.
                     None => t.set("state", "replay")?,
                 }
                 out.set(dev, t)?;

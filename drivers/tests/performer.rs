@@ -237,3 +237,38 @@ fn osc_poses_and_glove_values_drive_a_performer() {
         }
     }
 }
+
+#[test]
+fn health_is_visible_from_lua_and_a_missing_port_keeps_the_scene_ticking() {
+    let (mut d, _s) = director(1, None);
+    d.load_str(
+        r#"ghost = troupe.performer{ name = "ghost",
+             devices = { fob = { port = "/dev/troupe-no-such-port", map = { pelvis = 1 } } } }
+           ghost:capture{}"#,
+        "ghost",
+    )
+    .unwrap();
+    let start = Instant::now();
+    loop {
+        d.tick();
+        let h: mlua::Table = d
+            .lua()
+            .load(r#"return troupe.devices.health("ghost").fob"#)
+            .eval()
+            .unwrap();
+        let state: String = h.get("state").unwrap();
+        // The thread starts out reconnecting; after its first attempt the error says why.
+        let error: Option<String> = h.get("error").unwrap();
+        if let (true, Some(e)) = (state == "reconnecting", error) {
+            assert!(e.contains("/dev/troupe-no-such-port"), "{e}");
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "state stayed {state}"
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    // The scene kept ticking all along.
+    assert!(d.scene().tick() > 0);
+}

@@ -267,3 +267,27 @@ fn emulator_answers_point_requests_with_the_motion_encoded_exactly() {
         assert_eq!(usize::from(r.address), i + 1);
     }
 }
+
+#[test]
+fn flock_point_mode_answers_each_request() {
+    let emu = emulator::start(DeviceKind::Fob, EmulatorOptions::new(), None).unwrap();
+    let mut c = FobConfig::new(1, OutputFormat::Angles);
+    c.mode = Mode::Point;
+    let dev = driver::spawn(
+        DriverOptions::new("fob", &emu.path()),
+        Box::new(FobProtocol::new(c)),
+        None,
+    );
+    let mut got = Vec::new();
+    wait_for("5 polled records", || {
+        got.extend(dev.drain());
+        got.len() >= 5
+    });
+    for s in &got {
+        let Reading::Bird(b) = &s.reading else {
+            panic!("not a bird")
+        };
+        assert!(b.angles.is_some() && b.position.is_none());
+    }
+    assert_eq!(dev.health.report().resyncs, 0);
+}
