@@ -272,3 +272,76 @@ fn health_is_visible_from_lua_and_a_missing_port_keeps_the_scene_ticking() {
     // The scene kept ticking all along.
     assert!(d.scene().tick() > 0);
 }
+
+/// Writes a glove recording: each (value, count) posture held for `count` records at 100 Hz.
+fn glove_rec(path: &std::path::Path, postures: &[(u8, usize)]) {
+    let r = Recorder::create(path).unwrap();
+    let config = troupe_drivers::driver::GloveConfig {
+        layout: troupe_drivers::glove::GloveLayout {
+            sensors: 18,
+            status_byte: false,
+        },
+        mode: troupe_drivers::driver::Mode::Stream,
+    };
+    let s = r.add_stream("g", "cyberglove", serde_json::to_value(&config).unwrap());
+    let mut k = 0u64;
+    for &(value, count) in postures {
+        for _ in 0..count {
+            let mut rec = vec![b'S'];
+            // The fingers take the posture's value; the thumb stays.
+            rec.extend((0..18).map(|i| if i < 4 { 60 } else { value }));
+            rec.push(0);
+            r.data_at(s, k * 10_000, &rec);
+            k += 1;
+        }
+    }
+    r.finish().unwrap();
+}
+
+#[test]
+fn gestures_trained_from_recordings_fire_lua_events_on_change() {
+    let dir = std::env::temp_dir().join(format!("troupe-gest-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (name, v) in [
+        ("neutral", 60u8),
+        ("fist", 230),
+        ("half", 150),
+        ("flat", 5),
+        ("claw", 100),
+    ] {
+        glove_rec(&dir.join(format!("{name}.rec")), &[(v, 10)]);
+    }
+    // The session: neutral, fist, neutral again, each held 20 samples.
+    glove_rec(&dir.join("session.rec"), &[(60, 20), (230, 20), (60, 20)]);
+    let (mut d, _s) = director(1, None);
+    let code = format!(
+        r#"troupe.fired = {{}}
+           g = troupe.performer{{ name = "g", devices = {{ glove = {{ replay = "{0}/session.rec" }} }} }}
+           troupe.devices.train_gestures(g, {{ neutral = "{0}/neutral.rec", fist = "{0}/fist.rec",
+              half = "{0}/half.rec", flat = "{0}/flat.rec", claw = "{0}/claw.rec" }})
+           troupe.devices.on_gesture(g, function(who, gesture, previous)
+             troupe.fired[#troupe.fired + 1] = who .. ":" .. gesture .. "<" .. tostring(previous)
+           end)"#,
+        dir.display()
+    );
+    d.load_str(&code, "gestures").unwrap();
+    for _ in 0..80 {
+        d.tick();
+    }
+    let fired: Vec<String> = d.lua().load("return troupe.fired").eval().unwrap();
+    assert_eq!(
+        fired,
+        vec!["g:neutral<nil", "g:fist<neutral", "g:neutral<fist"]
+    );
+    let e = d
+        .load_str(
+            &format!(
+                r#"troupe.devices.train_gestures(g, {{ x = "{}/missing.rec" }})"#,
+                dir.display()
+            ),
+            "bad",
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("missing.rec"), "{e}");
+}
