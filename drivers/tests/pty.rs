@@ -233,6 +233,25 @@ fn recorded_streams_replay_identically() {
     // The recording can itself drive an emulator.
     let motion = emulator::Motion::from_file(&file, "fob", &[], 2, 1.0).unwrap();
     assert!(matches!(motion, emulator::Motion::Recorded { .. }));
+    // At the recording's start it serves the first recorded pose of each bird.
+    for bird in 1..=2u8 {
+        // The latest record of that bird among those that arrived in the first chunk.
+        let of_bird: Vec<(f64, &troupe_drivers::fob::BirdRecord)> = a
+            .iter()
+            .filter_map(|(t, r)| match r {
+                Reading::Bird(b) if b.address == bird => Some((*t, b)),
+                _ => None,
+            })
+            .collect();
+        let t0 = of_bird[0].0;
+        let first = emulator::bird_pose(of_bird.iter().rev().find(|(t, _)| *t == t0).unwrap().1);
+        let (p, q) = motion.bird(0.0, usize::from(bird - 1));
+        assert!(
+            (p - first.0).length() < 1e-12 && (q - first.1).length() < 1e-12,
+            "bird {bird}: {p} {q} vs {first:?} ({} records at t0)",
+            of_bird.iter().filter(|(t, _)| *t == t0).count()
+        );
+    }
     // A damaged file is an error naming the file.
     let bad = dir.join("bad.rec");
     std::fs::write(&bad, b"TROUPEREC1\nZ").unwrap();
@@ -290,4 +309,70 @@ fn flock_point_mode_answers_each_request() {
         assert!(b.angles.is_some() && b.position.is_none());
     }
     assert_eq!(dev.health.report().resyncs, 0);
+}
+
+#[test]
+fn a_bvh_drives_the_flock_emulator() {
+    let bvh = "HIERARCHY
+ROOT hips
+{
+  OFFSET 0 100 0
+  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+  JOINT head
+  {
+    OFFSET 0 50 0
+    CHANNELS 3 Zrotation Xrotation Yrotation
+    End Site
+    {
+      OFFSET 0 10 0
+    }
+  }
+}
+MOTION
+Frames: 2
+Frame Time: 0.5
+0 100 0 0 0 0 0 0 0
+10 100 0 0 0 90 0 0 0
+";
+    let dir = std::env::temp_dir().join(format!("troupe-bvh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("walk.bvh");
+    std::fs::write(&path, bvh).unwrap();
+    let m = emulator::Motion::from_file(
+        &path,
+        "fob",
+        &["head".to_string(), "hips".to_string()],
+        2,
+        0.01,
+    )
+    .unwrap();
+    // Frame 0 (t = 0.2 s): head at (0, 150, 0) cm; frame 1 (t = 0.7 s): hips moved 10 cm, turned 90° about Y.
+    let (p, q) = m.bird(0.2, 0);
+    assert!(
+        (p - troupe_runtime::glam::DVec3::new(0.0, 1.5, 0.0)).length() < 1e-9,
+        "{p}"
+    );
+    assert!(q.angle_between(troupe_runtime::glam::DQuat::IDENTITY) < 1e-9);
+    let (p, q) = m.bird(0.7, 1);
+    assert!(
+        (p - troupe_runtime::glam::DVec3::new(0.1, 1.0, 0.0)).length() < 1e-9,
+        "{p}"
+    );
+    assert!(
+        (q.angle_between(troupe_runtime::glam::DQuat::IDENTITY) - std::f64::consts::FRAC_PI_2)
+            .abs()
+            < 1e-9
+    );
+    // Errors name the joint and the file.
+    let e = emulator::Motion::from_file(&path, "fob", &["tail".to_string()], 1, 0.01)
+        .err()
+        .unwrap();
+    assert!(
+        e.contains("no joint 'tail'") && e.contains("walk.bvh"),
+        "{e}"
+    );
+    let e = emulator::Motion::from_file(&path, "fob", &[], 3, 0.01)
+        .err()
+        .unwrap();
+    assert!(e.contains("2 joints for 3 birds"), "{e}");
 }
