@@ -494,6 +494,35 @@ impl Performers {
         }
     }
 
+    /// The glove's hand targets of a performer as (DOF index, radians): what a grasp
+    /// corrector takes instead of letting `capture` write the hand.
+    pub fn hand_target(&self, performer: &str) -> Option<Vec<(usize, f64)>> {
+        let p = self.list.iter().find(|p| p.name == performer)?;
+        let g = p.glove.as_ref()?;
+        let t = p.target.lock().ok()?;
+        Some(
+            g.dofs
+                .iter()
+                .flatten()
+                .copied()
+                .chain(g.coupled.iter().map(|c| c.0))
+                .filter(|&d| t.mask.get(d).copied().unwrap_or(false))
+                .map(|d| (d, t.q[d]))
+                .collect(),
+        )
+    }
+
+    /// The latest raw glove values of a performer.
+    pub fn glove_raw(&self, performer: &str) -> Option<Vec<u8>> {
+        self.list
+            .iter()
+            .find(|p| p.name == performer)?
+            .glove
+            .as_ref()?
+            .latest
+            .clone()
+    }
+
     /// A copy of performer `i`'s capture target.
     pub fn target(&self, i: usize) -> Option<CaptureTarget> {
         self.list.get(i)?.target.lock().ok().map(|t| t.clone())

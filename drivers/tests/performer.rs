@@ -233,6 +233,13 @@ fn osc_poses_and_glove_values_drive_a_performer() {
                 sk.dofs()[index].max,
                 "raw 255 = the DOF's upper limit"
             );
+            let perf = _shared.0.lock().unwrap();
+            assert_eq!(perf.glove_raw("oz"), Some(vec![255; 18]));
+            let hand = perf.hand_target("oz").unwrap();
+            assert!(hand.contains(&(index, sk.dofs()[index].max)));
+            assert!(hand
+                .iter()
+                .all(|&(d, _)| sk.dofs()[d].name.starts_with("r_")));
             break;
         }
     }
