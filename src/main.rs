@@ -1,6 +1,7 @@
 //! The `troupe` command line.
 
 mod bench;
+mod devices;
 mod export;
 mod run;
 mod scenario;
@@ -44,6 +45,10 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Export a body template to another format (URDF).
     Export(export::ExportArgs),
+    /// List serial ports and HID devices; probe a device; make a glove calibration.
+    Devices(devices::DevicesArgs),
+    /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
+    Emulate(devices::EmulateArgs),
 }
 
 fn main() -> ExitCode {
@@ -77,6 +82,8 @@ fn main() -> ExitCode {
         Command::Snapshot(args) => view::snapshot(args),
         Command::Export(args) => export::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Devices(args) => devices::run(args),
+        Command::Emulate(args) => devices::emulate(args),
     };
     match result {
         Ok(code) => code,

@@ -70,6 +70,13 @@ pub struct RunArgs {
     /// Bytes one script resume may add to the Lua heap.
     #[arg(long, default_value_t = ScriptLimits::default().memory)]
     pub memory_limit: usize,
+    /// Record every live device stream (timestamps + raw bytes) to FILE.rec.
+    #[arg(long, value_name = "FILE.rec")]
+    pub record_devices: Option<PathBuf>,
+    /// Send every actor's joint poses and the action events over OSC (UDP) to HOST:PORT
+    /// each tick (addresses in docs/devices.md).
+    #[arg(long, value_name = "HOST:PORT")]
+    pub osc_out: Option<String>,
 }
 
 /// Runs the scene and prints the summary.
@@ -88,7 +95,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
     }
-    let mut director = Director::new(config, troupe_actions::action_kinds(), limits)?;
+    let (mut director, devices) =
+        crate::devices::director(config, limits, args.record_devices.as_deref())?;
+    let osc_out = match &args.osc_out {
+        Some(t) => Some(troupe_drivers::osc::OscSender::new(t).map_err(|e| anyhow::anyhow!(e))?),
+        None => None,
+    };
     director
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
@@ -136,8 +148,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             break;
         }
         let events = director.tick();
+        devices.end_tick();
         ticks += 1;
         let scene = director.scene();
+        if let Some(o) = &osc_out {
+            o.send(&scene, &events).map_err(|e| anyhow::anyhow!(e))?;
+        }
         if counts.len() < scene.actors().len() {
             counts.resize(scene.actors().len(), [0; 3]);
         }
@@ -189,6 +205,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         );
     }
     drop(scene);
+    devices.finish()?;
     let reports = director.behaviors();
     let mut failed = 0;
     for r in &reports {

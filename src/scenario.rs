@@ -51,11 +51,8 @@ fn director(file: &Path, threads: usize) -> Result<Director> {
         threads,
         ..SceneConfig::default()
     };
-    let mut d = Director::new(
-        config,
-        troupe_actions::action_kinds(),
-        ScriptLimits::default(),
-    )?;
+    // Performers (troupe.performer, capture) are available to scenario tests too.
+    let (mut d, _devices) = crate::devices::director(config, ScriptLimits::default(), None)?;
     d.load_file(file)?;
     Ok(d)
 }

@@ -108,7 +108,14 @@ pub struct Director {
     lua: Lua,
     limits: ScriptLimits,
     instructions: Arc<AtomicU64>,
+    pre_ticks: Vec<PreTick>,
 }
+
+/// A step another crate installs to run at the start of every tick, before the scripts of
+/// that tick (e.g. draining device samples into performer inputs, so a script and the
+/// scheduler see a sample one tick after it arrived at most). It gets the Lua state (for its
+/// own app data) and the scene as of the previous tick.
+pub type PreTick = Box<dyn FnMut(&Lua, &Scene) -> std::result::Result<(), String> + Send>;
 
 pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<()> {
     let thread = lua.create_thread(f.clone())?;
@@ -144,6 +151,7 @@ impl Director {
             lua,
             limits,
             instructions,
+            pre_ticks: Vec::new(),
         };
         director
             .setup(scene, kinds)
@@ -353,10 +361,26 @@ impl Director {
         self.step_scene()
     }
 
-    /// The script phase of a tick: event handlers for the previous tick's events, then
-    /// every behavior whose wait condition holds, in creation order.
+    /// Adds a step run at the start of every tick, before the scripts (see [`PreTick`]).
+    /// Steps run in the order they were added; a step's error is logged and the tick goes on.
+    pub fn add_pre_tick(&mut self, step: PreTick) {
+        self.pre_ticks.push(step);
+    }
+
+    /// The script phase of a tick: the pre-tick steps, event handlers for the previous
+    /// tick's events, then every behavior whose wait condition holds, in creation order.
     pub fn run_scripts(&mut self) {
         let _span = tracing::trace_span!("scripts").entered();
+        if !self.pre_ticks.is_empty() {
+            let mut steps = std::mem::take(&mut self.pre_ticks);
+            for step in steps.iter_mut() {
+                let scene = self.scene();
+                if let Err(e) = step(&self.lua, &scene) {
+                    tracing::error!("pre-tick step failed: {e}");
+                }
+            }
+            self.pre_ticks = steps;
+        }
         self.run_handlers();
         self.run_behaviors();
     }
@@ -580,6 +604,24 @@ impl Director {
             _ => Wait::NextTick,
         })
     }
+}
+
+/// Skeletons of the scene's actors, by index: for crates that extend the Lua API (e.g.
+/// performers) and need an actor's body while a script runs. `None` outside a director.
+pub fn actor_skeletons(lua: &Lua) -> Option<Vec<Arc<crate::skeleton::Skeleton>>> {
+    let st = lua.app_data_ref::<Stage>()?;
+    Some(
+        st.scene
+            .actors()
+            .iter()
+            .map(|a| a.skeleton.clone())
+            .collect(),
+    )
+}
+
+/// The folder of the scene file being run (relative paths in scripts resolve against it).
+pub fn scene_dir(lua: &Lua) -> Option<PathBuf> {
+    Some(lua.app_data_ref::<Stage>()?.base_dir.clone())
 }
 
 /// A borrow of the director's scene.

@@ -1,0 +1,118 @@
+//! Finding devices: serial ports and HID devices (SpaceMouse family marked), and reading a
+//! SpaceMouse through hidapi.
+
+use crate::spacemouse::{self, ReportKind, SpaceMouseState};
+use serde::Serialize;
+use std::time::{Duration, Instant};
+
+/// A serial port found on the system.
+#[derive(Clone, Debug, Serialize)]
+pub struct SerialInfo {
+    /// Device path.
+    pub path: String,
+    /// What kind of port (USB with vendor/product, PCI, Bluetooth, unknown).
+    pub kind: String,
+}
+
+/// Serial ports (scanned from sysfs; no libudev needed).
+pub fn serial_ports() -> Result<Vec<SerialInfo>, String> {
+    let ports = serialport::available_ports().map_err(|e| format!("listing serial ports: {e}"))?;
+    Ok(ports
+        .into_iter()
+        .map(|p| SerialInfo {
+            path: p.port_name,
+            kind: match p.port_type {
+                serialport::SerialPortType::UsbPort(u) => format!(
+                    "usb {:04x}:{:04x} {}",
+                    u.vid,
+                    u.pid,
+                    u.product.unwrap_or_default()
+                ),
+                serialport::SerialPortType::PciPort => "pci".into(),
+                serialport::SerialPortType::BluetoothPort => "bluetooth".into(),
+                serialport::SerialPortType::Unknown => "unknown".into(),
+            },
+        })
+        .collect())
+}
+
+/// A HID device found on the system.
+#[derive(Clone, Debug, Serialize)]
+pub struct HidInfo {
+    /// hidraw path.
+    pub path: String,
+    /// Vendor ID.
+    pub vendor: u16,
+    /// Product ID.
+    pub product: u16,
+    /// Product string the device reports.
+    pub name: String,
+    /// The SpaceMouse model, when it is one.
+    pub spacemouse: Option<String>,
+}
+
+/// HID devices (hidraw); an error when HID access is unavailable.
+pub fn hid_devices() -> Result<Vec<HidInfo>, String> {
+    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+    Ok(api
+        .device_list()
+        .map(|d| HidInfo {
+            path: d.path().to_string_lossy().into_owned(),
+            vendor: d.vendor_id(),
+            product: d.product_id(),
+            name: d.product_string().unwrap_or("").to_string(),
+            spacemouse: spacemouse::lookup(d.vendor_id(), d.product_id())
+                .map(|(n, _)| n.to_string()),
+        })
+        .collect())
+}
+
+/// Reads a SpaceMouse: the device at `path`, or the first SpaceMouse found; calls `each`
+/// with the state after every motion or button report, `count` times or until `timeout`
+/// passes without a report.
+pub fn read_spacemouse(
+    path: Option<&str>,
+    count: usize,
+    timeout: Duration,
+    mut each: impl FnMut(&SpaceMouseState),
+) -> Result<(String, usize), String> {
+    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+    let info = api
+        .device_list()
+        .find(|d| match path {
+            Some(p) => d.path().to_string_lossy() == p,
+            None => spacemouse::lookup(d.vendor_id(), d.product_id()).is_some(),
+        })
+        .ok_or_else(|| match path {
+            Some(p) => format!("no HID device at {p} (see `troupe devices`)"),
+            None => "no SpaceMouse found (vendors 046d/256f; see `troupe devices`)".to_string(),
+        })?;
+    let (name, kind) = spacemouse::lookup(info.vendor_id(), info.product_id())
+        .unwrap_or(("HID device", ReportKind::Wired));
+    let dev = info
+        .open_device(&api)
+        .map_err(|e| format!("opening {}: {e}", info.path().to_string_lossy()))?;
+    let mut state = SpaceMouseState::default();
+    let mut buf = [0u8; 64];
+    let mut n = 0;
+    let mut last = Instant::now();
+    while n < count {
+        let k = dev
+            .read_timeout(&mut buf, 50)
+            .map_err(|e| format!("reading {name}: {e}"))?;
+        if k == 0 {
+            if last.elapsed() > timeout {
+                break;
+            }
+            continue;
+        }
+        last = Instant::now();
+        if let Err(e) = spacemouse::apply_report(&mut state, kind, &buf[..k]) {
+            tracing::debug!("{name}: {e}");
+            continue;
+        }
+        each(&state);
+        n += 1;
+    }
+    Ok((name.to_string(), n))
+}

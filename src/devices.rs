@@ -1,0 +1,559 @@
+//! `troupe devices` (list, probe, calibrate-glove) and `troupe emulate`.
+
+use anyhow::{anyhow, bail, Context, Result};
+use clap::{Args, Subcommand, ValueEnum};
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::{Duration, Instant};
+use troupe_drivers::driver::{
+    self, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol, Mode, Reading,
+};
+use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions, Motion};
+use troupe_drivers::fob::{Hemisphere, OutputFormat, PositionRange};
+use troupe_drivers::glove::{GloveCalibration, GloveLayout};
+use troupe_drivers::record::Recording;
+
+/// Options of `troupe devices`.
+#[derive(Args)]
+pub struct DevicesArgs {
+    #[command(subcommand)]
+    command: Option<DevicesCommand>,
+    /// Print JSON.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Subcommand)]
+enum DevicesCommand {
+    /// Configure a device and print decoded samples (the first thing to run after plugging in).
+    Probe(ProbeArgs),
+    /// Make a glove calibration from recordings of a flat hand and a fist.
+    CalibrateGlove(CalibrateArgs),
+}
+
+#[derive(Clone, Copy, ValueEnum, PartialEq, Eq)]
+enum ProbeKind {
+    Fob,
+    Cyberglove,
+    Spacemouse,
+}
+
+#[derive(Args)]
+struct ProbeArgs {
+    /// Which device.
+    kind: ProbeKind,
+    /// Serial port (FoB, CyberGlove) or hidraw path (SpaceMouse; default: the first found).
+    #[arg(long)]
+    port: Option<String>,
+    /// FoB output format: position, angles, matrix, quaternion, position-angles,
+    /// position-matrix, position-quaternion.
+    #[arg(long, default_value = "position-angles")]
+    format: String,
+    /// FoB birds (more than one: group mode).
+    #[arg(long, default_value_t = 1)]
+    birds: u8,
+    /// FoB position range in inches: 36, 72 or 144.
+    #[arg(long, default_value = "36")]
+    range: String,
+    /// FoB hemisphere.
+    #[arg(long, default_value = "forward")]
+    hemisphere: String,
+    /// Glove sensors: 18 or 22.
+    #[arg(long, default_value_t = 18)]
+    sensors: usize,
+    /// Glove calibration (JSON) to print calibrated angles too.
+    #[arg(long)]
+    calibration: Option<PathBuf>,
+    /// point (one record per request) or stream.
+    #[arg(long, default_value = "stream")]
+    mode: String,
+    /// Baud rate.
+    #[arg(long, default_value_t = 115_200)]
+    baud: u32,
+    /// Samples to print.
+    #[arg(long, default_value_t = 10)]
+    samples: usize,
+    /// Give up after this many seconds without the samples.
+    #[arg(long, default_value_t = 5.0)]
+    timeout: f64,
+    /// One JSON object per line.
+    #[arg(long)]
+    json: bool,
+}
+
+#[derive(Args)]
+struct CalibrateArgs {
+    /// Recording (.rec) of the flat hand.
+    #[arg(long)]
+    flat: PathBuf,
+    /// Recording (.rec) of the fist.
+    #[arg(long)]
+    fist: PathBuf,
+    /// Hand: right or left.
+    #[arg(long, default_value = "right")]
+    hand: String,
+    /// Where to write the calibration (JSON).
+    #[arg(long)]
+    out: PathBuf,
+}
+
+/// Options of `troupe emulate`.
+#[derive(Args)]
+pub struct EmulateArgs {
+    /// Which device: fob or cyberglove.
+    kind: EmulateKind,
+    /// Motion from a BVH file or a .rec recording (default: built-in synthetic motion).
+    #[arg(long)]
+    from: Option<PathBuf>,
+    /// Birds in the flock.
+    #[arg(long, default_value_t = 6)]
+    birds: u8,
+    /// BVH joints followed by birds 1, 2, … (comma-separated; default: the first joints).
+    #[arg(long, value_delimiter = ',')]
+    joints: Vec<String>,
+    /// BVH units to metres.
+    #[arg(long, default_value_t = 0.01)]
+    scale: f64,
+    /// Position range of the emulated transmitter, inches.
+    #[arg(long, default_value = "36")]
+    range: String,
+    /// Glove sensors: 18 or 22.
+    #[arg(long, default_value_t = 18)]
+    sensors: usize,
+    /// Measurement rate, Hz.
+    #[arg(long, default_value_t = 100.0)]
+    rate: f64,
+    /// Also make a symbolic link at this path to the pty (stable across restarts).
+    #[arg(long)]
+    link: Option<PathBuf>,
+    /// Stop after this many seconds (default: run until interrupted).
+    #[arg(long)]
+    seconds: Option<f64>,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum EmulateKind {
+    Fob,
+    Cyberglove,
+}
+
+fn mode(m: &str) -> Result<Mode> {
+    match m {
+        "stream" => Ok(Mode::Stream),
+        "point" => Ok(Mode::Point),
+        other => bail!("--mode must be point or stream, got '{other}'"),
+    }
+}
+
+/// `troupe devices …`.
+pub fn run(args: DevicesArgs) -> Result<ExitCode> {
+    match args.command {
+        None => list(args.json),
+        Some(DevicesCommand::Probe(p)) => probe(p),
+        Some(DevicesCommand::CalibrateGlove(c)) => calibrate(c),
+    }
+}
+
+fn list(json: bool) -> Result<ExitCode> {
+    let serial = troupe_drivers::hid::serial_ports();
+    let hid = troupe_drivers::hid::hid_devices();
+    if json {
+        let v = serde_json::json!({
+            "serial": serial.as_ref().map_err(|e| e.clone()).ok(),
+            "serial_error": serial.as_ref().err(),
+            "hid": hid.as_ref().ok(),
+            "hid_error": hid.as_ref().err(),
+        });
+        println!("{v}");
+        return Ok(ExitCode::SUCCESS);
+    }
+    println!("serial ports:");
+    match &serial {
+        Ok(v) if v.is_empty() => println!("  (none)"),
+        Ok(v) => v.iter().for_each(|p| println!("  {}  {}", p.path, p.kind)),
+        Err(e) => println!("  unavailable: {e}"),
+    }
+    println!("HID devices:");
+    match &hid {
+        Ok(v) if v.is_empty() => println!("  (none)"),
+        Ok(v) => v.iter().for_each(|d| {
+            println!(
+                "  {}  {:04x}:{:04x}  {}{}",
+                d.path,
+                d.vendor,
+                d.product,
+                d.name,
+                d.spacemouse
+                    .as_ref()
+                    .map(|s| format!("  [SpaceMouse: {s}]"))
+                    .unwrap_or_default()
+            )
+        }),
+        Err(e) => println!("  unavailable: {e}"),
+    }
+    println!("(emulators: `troupe emulate fob` or `troupe emulate cyberglove` print a pty path to probe)");
+    Ok(ExitCode::SUCCESS)
+}
+
+fn probe(a: ProbeArgs) -> Result<ExitCode> {
+    let timeout = Duration::from_secs_f64(a.timeout.max(0.1));
+    if a.kind == ProbeKind::Spacemouse {
+        let json = a.json;
+        let (name, n) =
+            troupe_drivers::hid::read_spacemouse(a.port.as_deref(), a.samples, timeout, |s| {
+                if json {
+                    println!("{}", serde_json::to_string(s).unwrap_or_default());
+                } else {
+                    println!(
+                        "T {:6} {:6} {:6}  R {:6} {:6} {:6}  buttons {:#x}",
+                        s.translation[0],
+                        s.translation[1],
+                        s.translation[2],
+                        s.rotation[0],
+                        s.rotation[1],
+                        s.rotation[2],
+                        s.buttons
+                    );
+                }
+            })
+            .map_err(|e| anyhow!(e))?;
+        eprintln!("{name}: {n} reports");
+        return Ok(if n > 0 {
+            ExitCode::SUCCESS
+        } else {
+            ExitCode::FAILURE
+        });
+    }
+    let port = a.port.clone().ok_or_else(|| {
+        anyhow!(
+            "--port is required for {}",
+            if a.kind == ProbeKind::Fob {
+                "fob"
+            } else {
+                "cyberglove"
+            }
+        )
+    })?;
+    let mut o = DriverOptions::new("probe", &port);
+    o.baud = a.baud;
+    o.max_attempts = Some(3);
+    let calibration = match &a.calibration {
+        Some(p) => Some(GloveCalibration::load(p).map_err(|e| anyhow!(e))?),
+        None => None,
+    };
+    let protocol: Box<dyn driver::Protocol> = match a.kind {
+        ProbeKind::Fob => {
+            let mut c = FobConfig::new(
+                a.birds.max(1),
+                OutputFormat::parse(&a.format).map_err(|e| anyhow!(e))?,
+            );
+            c.layout.range = PositionRange::parse(&a.range).map_err(|e| anyhow!(e))?;
+            c.hemisphere = Hemisphere::parse(&a.hemisphere).map_err(|e| anyhow!(e))?;
+            c.mode = mode(&a.mode)?;
+            Box::new(FobProtocol::new(c))
+        }
+        _ => {
+            if a.sensors != 18 && a.sensors != 22 {
+                bail!("--sensors must be 18 or 22");
+            }
+            if let Some(c) = &calibration {
+                if c.sensors.len() != a.sensors {
+                    bail!(
+                        "the calibration has {} sensors, --sensors is {}",
+                        c.sensors.len(),
+                        a.sensors
+                    );
+                }
+            }
+            Box::new(GloveProtocol::new(GloveConfig {
+                layout: GloveLayout {
+                    sensors: a.sensors,
+                    status_byte: false,
+                },
+                mode: mode(&a.mode)?,
+            }))
+        }
+    };
+    let dev = driver::spawn(o, protocol, None);
+    let start = Instant::now();
+    let mut n = 0;
+    while n < a.samples && start.elapsed() < timeout {
+        if dev.health.state() == driver::HealthState::Failed {
+            break;
+        }
+        match dev.samples.recv_timeout(Duration::from_millis(50)) {
+            Ok(s) => {
+                print_sample(&s, calibration.as_ref(), a.json);
+                n += 1;
+            }
+            Err(_) => continue,
+        }
+    }
+    let h = dev.health.report();
+    dev.stop();
+    eprintln!(
+        "{}: {} samples, {} resyncs, {} dropped bytes{}",
+        h.state.name(),
+        h.samples,
+        h.resyncs,
+        h.dropped_bytes,
+        h.last_error
+            .as_ref()
+            .map(|e| format!("; last error: {e}"))
+            .unwrap_or_default()
+    );
+    if n < a.samples {
+        bail!(
+            "got {n} of {} samples from {port} within {:.1} s{}",
+            a.samples,
+            a.timeout,
+            h.last_error.map(|e| format!(" ({e})")).unwrap_or_default()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) {
+    if json {
+        let mut v = serde_json::json!({ "seq": s.seq, "time": s.time, "reading": &s.reading });
+        if let (Reading::Glove(g), Some(c)) = (&s.reading, cal) {
+            v["angles_deg"] = serde_json::json!(c
+                .angles(&g.raw)
+                .iter()
+                .map(|a| a.to_degrees())
+                .collect::<Vec<_>>());
+        }
+        println!("{v}");
+        return;
+    }
+    match &s.reading {
+        Reading::Bird(b) => {
+            let mut line = format!("{:8.3}s bird {:2}", s.time, b.address);
+            if let Some(p) = b.position {
+                line += &format!("  pos {:8.4} {:8.4} {:8.4} m", p[0], p[1], p[2]);
+            }
+            if let Some(a) = b.angles {
+                line += &format!(
+                    "  azim/elev/roll {:8.2} {:8.2} {:8.2} deg",
+                    a[0], a[1], a[2]
+                );
+            }
+            if let Some(q) = b.quaternion {
+                line += &format!("  quat {:7.4} {:7.4} {:7.4} {:7.4}", q[0], q[1], q[2], q[3]);
+            }
+            if let Some(m) = b.matrix {
+                let m: Vec<String> = m.iter().map(|v| format!("{v:7.4}")).collect();
+                line += &format!("  matrix {}", m.join(" "));
+            }
+            println!("{line}");
+        }
+        Reading::Glove(g) => {
+            let raw: Vec<String> = g.raw.iter().map(|v| format!("{v:3}")).collect();
+            println!("{:8.3}s glove {}", s.time, raw.join(" "));
+            if let Some(c) = cal {
+                let a: Vec<String> = c
+                    .angles(&g.raw)
+                    .iter()
+                    .map(|a| format!("{:5.1}", a.to_degrees()))
+                    .collect();
+                println!("          deg   {}", a.join(" "));
+            }
+        }
+    }
+}
+
+fn mean_glove(path: &std::path::Path) -> Result<Vec<u8>> {
+    let rec = Recording::read(path).map_err(|e| anyhow!(e))?;
+    let s = rec
+        .find("cyberglove")
+        .ok_or_else(|| anyhow!("{}: no single glove stream", path.display()))?;
+    let raws: Vec<Vec<u8>> = rec
+        .readings(s)
+        .map_err(|e| anyhow!(e))?
+        .into_iter()
+        .filter_map(|(_, r)| match r {
+            Reading::Glove(g) => Some(g.raw),
+            _ => None,
+        })
+        .collect();
+    let first = raws
+        .first()
+        .ok_or_else(|| anyhow!("{}: no glove record", path.display()))?;
+    let mut sum = vec![0.0; first.len()];
+    for r in &raws {
+        for (s, &v) in sum.iter_mut().zip(r) {
+            *s += f64::from(v);
+        }
+    }
+    Ok(sum
+        .iter()
+        .map(|s| (s / raws.len() as f64).round() as u8)
+        .collect())
+}
+
+fn calibrate(c: CalibrateArgs) -> Result<ExitCode> {
+    let flat = mean_glove(&c.flat)?;
+    let fist = mean_glove(&c.fist)?;
+    if flat.len() != fist.len() {
+        bail!(
+            "{} has {} sensors, {} has {}",
+            c.flat.display(),
+            flat.len(),
+            c.fist.display(),
+            fist.len()
+        );
+    }
+    let side = match c.hand.as_str() {
+        "right" => "r_",
+        "left" => "l_",
+        other => bail!("--hand must be right or left, got '{other}'"),
+    };
+    // Flat hand: every angle 0. Fist: each flexion sensor at its DOF's upper limit; the
+    // abduction, arch and wrist sensors are not exercised and keep the flat reading as 0.
+    let t = troupe_runtime::template("adult")?;
+    let sk = t.instantiate(troupe_runtime::TemplateParams {
+        height: t.default_height,
+        mass: t.default_mass,
+    })?;
+    let names = troupe_drivers::glove::sensor_names(flat.len());
+    let fist_angles: Vec<f64> = names
+        .iter()
+        .map(|n| {
+            let flexion = n.ends_with("_mpj")
+                || n.ends_with("_pij")
+                || n.ends_with("_dij")
+                || n.ends_with("_ij")
+                || *n == "thumb_rotation";
+            let dof = troupe_drivers::performer::glove_dof_names(n, side)
+                .first()
+                .and_then(|d| sk.dof(d).ok());
+            match (flexion, dof) {
+                (true, Some(d)) => sk.dofs()[d].max,
+                _ => 0.0,
+            }
+        })
+        .collect();
+    let cal = GloveCalibration::from_poses(&flat, &fist, &vec![0.0; flat.len()], &fist_angles)
+        .map_err(|e| anyhow!(e))?;
+    cal.save(&c.out).map_err(|e| anyhow!(e))?;
+    println!("wrote {} ({} sensors)", c.out.display(), flat.len());
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `troupe emulate fob|cyberglove`.
+pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
+    let (kind, name) = match a.kind {
+        EmulateKind::Fob => (DeviceKind::Fob, "fob"),
+        EmulateKind::Cyberglove => (DeviceKind::CyberGlove, "cyberglove"),
+    };
+    if a.sensors != 18 && a.sensors != 22 {
+        bail!("--sensors must be 18 or 22");
+    }
+    if a.birds == 0 || a.birds > 14 {
+        bail!("--birds must be 1…14");
+    }
+    let motion = match &a.from {
+        Some(p) => Motion::from_file(p, name, &a.joints, usize::from(a.birds), a.scale)
+            .map_err(|e| anyhow!(e))?,
+        None => Motion::Synthetic,
+    };
+    let options = EmulatorOptions {
+        birds: a.birds,
+        range: PositionRange::parse(&a.range).map_err(|e| anyhow!(e))?,
+        sensors: a.sensors,
+        rate_hz: a.rate,
+        motion,
+    };
+    let emu = emulator::start(kind, options, a.link.as_deref())
+        .map_err(|e| anyhow!(e))
+        .context("starting the emulator")?;
+    println!("{}", emu.path());
+    use std::io::Write;
+    let _ = std::io::stdout().flush();
+    eprintln!(
+        "emulating a {name} on {} (pty {}); stop with Ctrl-C",
+        emu.path(),
+        emu.pty_path()
+    );
+    match a.seconds {
+        Some(s) => {
+            std::thread::sleep(Duration::from_secs_f64(s.max(0.0)));
+            emu.stop();
+        }
+        None => emu.join(),
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// Device support of a run: performers and, with `--record-devices`, the recorder.
+pub struct RunDevices {
+    performers: troupe_drivers::performer::SharedPerformers,
+    recorder: Option<std::sync::Arc<troupe_drivers::record::Recorder>>,
+    record_path: Option<PathBuf>,
+}
+
+/// A director with every action kind, `capture`, and `troupe.performer`; device streams are
+/// recorded to `record` when given.
+pub fn director(
+    config: troupe_runtime::SceneConfig,
+    limits: troupe_runtime::lua::ScriptLimits,
+    record: Option<&std::path::Path>,
+) -> Result<(troupe_runtime::lua::Director, RunDevices)> {
+    let mut kinds = troupe_actions::action_kinds();
+    troupe_drivers::performer::register(&mut kinds);
+    let mut d = troupe_runtime::lua::Director::new(config, kinds, limits)?;
+    let recorder = match record {
+        Some(p) => Some(std::sync::Arc::new(
+            troupe_drivers::record::Recorder::create(p).map_err(|e| anyhow!(e))?,
+        )),
+        None => None,
+    };
+    let performers =
+        troupe_drivers::performer::install(&mut d, recorder.clone()).map_err(|e| anyhow!(e))?;
+    Ok((
+        d,
+        RunDevices {
+            performers,
+            recorder,
+            record_path: record.map(|p| p.to_path_buf()),
+        },
+    ))
+}
+
+impl RunDevices {
+    /// Call after each tick: the samples used in it are now in a posture (latency).
+    pub fn end_tick(&self) {
+        if let Ok(mut p) = self.performers.0.lock() {
+            p.end_tick();
+        }
+    }
+
+    /// Prints device health and latency, and closes the recording.
+    pub fn finish(&self) -> Result<()> {
+        if let Ok(p) = self.performers.0.lock() {
+            for (who, dev, h) in p.health() {
+                println!(
+                    "  device {who}.{dev}: {}, {} samples, {} resyncs, {} dropped bytes, {} dropped samples",
+                    h.state.name(),
+                    h.samples,
+                    h.resyncs,
+                    h.dropped_bytes,
+                    h.dropped_samples
+                );
+            }
+            if let Some((m, p99)) = troupe_drivers::performer::median_p99(&p.latencies) {
+                println!(
+                    "  sample-to-posture latency: median {:.2} ms, p99 {:.2} ms ({} samples)",
+                    m * 1e3,
+                    p99 * 1e3,
+                    p.latencies.len()
+                );
+            }
+        }
+        if let (Some(r), Some(path)) = (&self.recorder, &self.record_path) {
+            r.finish().map_err(|e| anyhow!(e))?;
+            println!("recorded the device streams to {}", path.display());
+        }
+        Ok(())
+    }
+}
