@@ -180,6 +180,8 @@ pub struct Simulation {
     qdd: Vec<f64>,
     tau: Vec<f64>,
     implicit: Vec<f64>,
+    /// The joint forces averaged over the last `advance`.
+    tau_mean: Vec<f64>,
     /// Generalized momenta of the dynamic DOFs (workspace of the step).
     momenta: Vec<f64>,
     /// Right-hand side and solution of the step's velocity solve.
@@ -254,6 +256,7 @@ impl Simulation {
             qdd: vec![0.0; model.n],
             tau: vec![0.0; model.n],
             implicit: vec![0.0; model.n],
+            tau_mean: vec![0.0; model.n],
             momenta: vec![0.0; model.n],
             rhs: vec![0.0; model.n],
             x: vec![0.0; model.n],
@@ -349,9 +352,17 @@ impl Simulation {
         self.deepest
     }
 
-    /// The control torques applied at the last step (N·m or N per DOF).
+    /// The joint forces applied at the last sub-step (N·m or N per DOF): control (servo,
+    /// track) plus passive joint damping and limit springs; 0 for prescribed DOFs and a
+    /// floating root.
     pub fn torques(&self) -> &[f64] {
         &self.tau
+    }
+
+    /// The same joint forces averaged over the last [`Simulation::advance`] (their
+    /// impulse divided by its duration): what a tick applied, for recording (fig. 3-9).
+    pub fn mean_torques(&self) -> &[f64] {
+        &self.tau_mean
     }
 
     fn prepare(&mut self) {
@@ -406,9 +417,13 @@ impl Simulation {
             return Ok(());
         }
         let start_time = self.time;
+        self.tau_mean.iter_mut().for_each(|t| *t = 0.0);
         for i in 0..steps {
             let elapsed = i as f64 * h;
             self.step(h, control, elapsed)?;
+            for (m, t) in self.tau_mean.iter_mut().zip(&self.tau) {
+                *m += t / steps as f64;
+            }
         }
         self.time = start_time + duration;
         Ok(())

@@ -410,19 +410,33 @@ fn bad_input_is_reported() {
     let e = inverse_dynamics(&s, &q, &vec![0.0; n], &vec![0.0; n], &ext, false).unwrap_err();
     assert!(e.to_string().contains("root_roll"), "{e}");
     assert!(Simulation::new(&s, &q, &vec![0.0; n], &vec![true; n], SimParams::default()).is_err());
-    // A massless or negative solid.
-    let mut b = crate::skeleton::SkeletonBuilder::new("bad");
-    b.joint("root", None, DVec3::ZERO).unwrap();
-    b.dof("x", crate::DofKind::Translation, DVec3::X, -1.0, 1.0)
-        .unwrap();
-    let shape = crate::Shape::Sphere { radius: 0.1 };
-    b.solid(
-        "root",
-        crate::Solid::new("ball", shape, DVec3::ZERO, glam::DQuat::IDENTITY, -1.0),
-    )
-    .unwrap();
-    let e = Model::new(&b.build().unwrap()).unwrap_err();
-    assert!(e.to_string().contains("ball"), "{e}");
+    // A massless or negative solid (or one of NaN mass).
+    for mass in [0.0, -1.0, f64::NAN] {
+        let mut b = crate::skeleton::SkeletonBuilder::new("bad");
+        b.joint("root", None, DVec3::ZERO).unwrap();
+        b.dof("x", crate::DofKind::Translation, DVec3::X, -1.0, 1.0)
+            .unwrap();
+        let shape = crate::Shape::Sphere { radius: 0.1 };
+        let Ok(_) = b.solid(
+            "root",
+            crate::Solid::new("ball", shape, DVec3::ZERO, glam::DQuat::IDENTITY, mass),
+        ) else {
+            continue; // refused earlier, by the skeleton builder
+        };
+        let Ok(skeleton) = b.build() else { continue };
+        let e = Model::new(&skeleton).unwrap_err();
+        assert!(e.to_string().contains("ball"), "mass {mass}: {e}");
+        let n = skeleton.dof_count();
+        let e = Simulation::new(
+            &skeleton,
+            &vec![0.0; n],
+            &vec![0.0; n],
+            &vec![true; n],
+            SimParams::default(),
+        )
+        .unwrap_err();
+        assert!(e.to_string().contains("ball"), "mass {mass}: {e}");
+    }
     // A diverging simulation fails and keeps its last valid state.
     let params = SimParams {
         floor: Some(ContactParams {
