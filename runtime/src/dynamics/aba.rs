@@ -31,9 +31,13 @@ pub(crate) fn aba(
     let fixed = |k: usize| prescribed.is_some_and(|p| p[k]);
     for k in 0..model.n {
         let i = data.inertia[k];
-        let v = data.v[k];
         data.ia[k] = i;
-        data.pa[k] = v.cross_force(&i.apply(&v)) - data.ext[k];
+        data.pa[k] = if model.massive[k] {
+            let v = data.v[k];
+            v.cross_force(&i.apply(&v)) - data.ext[k]
+        } else {
+            Force::ZERO - data.ext[k]
+        };
     }
     for k in (start..model.n).rev() {
         let s = data.s[k];

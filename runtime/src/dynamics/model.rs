@@ -43,6 +43,9 @@ pub struct Model {
     pub(crate) pre: Vec<Option<Transform>>,
     pub(crate) armature: Vec<f64>,
     pub(crate) bodies: Vec<Body>,
+    /// Per link: whether a body rides on it (most links are massless: the first DOFs of
+    /// multi-DOF joints, fingers, toes), so that the passes can skip their inertia.
+    pub(crate) massive: Vec<bool>,
     /// Per joint: the link whose frame carries it, and the joint frame in that link frame.
     pub(crate) joint_link: Vec<Option<(usize, Transform)>>,
     pub(crate) root: Range<usize>,
@@ -185,6 +188,7 @@ impl Model {
             axis: dofs.iter().map(|d| d.axis).collect(),
             pre,
             armature,
+            massive: (0..n).map(|k| bodies.iter().any(|b| b.link == k)).collect(),
             bodies,
             joint_link,
             root_mask: (0..n).map(|k| root.contains(&k)).collect(),
@@ -437,7 +441,11 @@ pub(crate) fn center_of_mass(model: &Model, data: &Data) -> DVec3 {
 /// [`velocities`]).
 pub(crate) fn subtree_momenta(model: &Model, data: &mut Data) {
     for k in 0..model.n {
-        data.f[k] = data.inertia[k].apply(&data.v[k]);
+        data.f[k] = if model.massive[k] {
+            data.inertia[k].apply(&data.v[k])
+        } else {
+            Force::ZERO
+        };
     }
     for k in (0..model.n).rev() {
         if let Some(p) = model.parent[k] {
