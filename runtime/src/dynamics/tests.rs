@@ -259,8 +259,9 @@ fn a_released_body_falls_and_comes_to_rest() {
     }
     let (kinetic, _) = sim.energy();
     eprintln!(
-        "fall: deepest penetration {:.1} mm, lowest COM {lowest_com:.3} m, final kinetic energy {kinetic:.2e} J",
-        deepest * 1e3
+        "fall: deepest penetration {:.1} mm, lowest COM {lowest_com:.3} m, final kinetic energy {kinetic:.2e} J; fixed-point passes per step {:?}",
+        deepest * 1e3,
+        sim.passes().map(|p| p as f64 / 6000.0)
     );
     assert!(lowest_com < 0.4, "it fell: COM at {lowest_com}");
     assert!(deepest < 0.02, "sank {deepest} m");
