@@ -1,17 +1,16 @@
 //! The closed-loop simulator (thesis 3.5, fig. 3-4): forward dynamics integrated with a
-//! semi-implicit (symplectic) Euler step of `small_time_step`, control torques refreshed
-//! every `time_step`, PD servos (eq. 4-1), joint limits as stiff one-sided springs and
-//! floor contact.
+//! symplectic Störmer–Verlet step of `small_time_step` in momentum form (see `step` and
+//! `docs/dynamics.md`), control torques refreshed every `time_step`, PD servos (eq. 4-1),
+//! joint limits as stiff one-sided springs and floor contact.
 //!
 //! DOFs are either *dynamic* (integrated from forces) or *prescribed* (moved
 //! kinematically: their value advances at their set velocity, zero acceleration, and the
 //! dynamics reacts to that motion). When every root DOF of a humanoid root is dynamic the
 //! root is integrated as a floating base (quaternion orientation, spatial velocity), so a
 //! tumbling body never meets the Euler angles' singularity; its Euler DOFs are written
-//! back for output. Each step keeps the total spatial momentum exactly what the forces
-//! made it: after the position update the base velocity is corrected so that the
-//! momentum equals its value at the step's start plus the impulse of the external forces
-//! and gravity over the step (a projection that removes the integrator's momentum drift).
+//! back for output. The base's row of the momentum equation is the whole body's spatial
+//! momentum, which only gravity and external forces change: torque-free motion keeps
+//! linear and angular momentum to round-off.
 
 use super::anderson::Anderson;
 use super::contact::{ContactParams, Floor};
@@ -468,8 +467,8 @@ impl Simulation {
         Ok(())
     }
 
-    /// One semi-implicit Euler step of `h` seconds; `elapsed` is the time since the
-    /// desired values were sampled (desired values advance at the desired velocities).
+    /// One Störmer–Verlet step of `h` seconds; `elapsed` is the time since the desired
+    /// values were sampled (desired values advance at the desired velocities).
     fn step(&mut self, h: f64, control: &Control, elapsed: f64) -> Result<()> {
         let n = self.model.n;
         let root = self.model.root.clone();
