@@ -235,20 +235,31 @@ fn run_records_joint_torques_that_seq_plot_draws() {
         &scene,
         "local ann = troupe.actor{ name = 'ann' }\n\
          ann:pose{ r_shoulder_flexion = 1.2, r_elbow_flexion = 0.5 }\n\
-         ann:servo{ target = { r_shoulder_flexion = 1.2, r_elbow_flexion = 0.5 }, duration = 1 }\n",
+         ann:servo{ target = { r_shoulder_flexion = 1.2, r_elbow_flexion = 0.5 }, duration = 1 }\n\
+         local bob = troupe.actor{ name = 'bob', at = {2, 0, 0} }\n\
+         bob:simulate{ duration = 0.5 }\n",
     )
     .unwrap();
     let trk = temp("torques.trk");
-    let out = succeeds(
-        troupe()
-            .args(["run", "--seconds", "1.5", "--record-torques"])
-            .arg(&trk)
-            .arg(&scene),
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(stdout.contains("joint torques"), "{stdout}");
+    let record = |threads: &str| {
+        let out = succeeds(
+            troupe()
+                .args(["run", "--seconds", "1.5", "--threads", threads])
+                .arg("--record-torques")
+                .arg(&trk)
+                .arg(&scene),
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(stdout.contains("joint torques"), "{stdout}");
+        std::fs::read(&trk).unwrap()
+    };
+    let two = record("2");
+    assert!(record("1") == two, "torques differ between 1 and 2 threads");
     let set = troupe_runtime::trk::read_trk_set(&trk).unwrap();
-    assert_eq!(set.len(), 1);
+    assert_eq!(
+        set.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
+        ["ann", "bob"]
+    );
     let seq = &set[0];
     assert_eq!(seq.name, "ann");
     assert_eq!(seq.meta.get("quantity").map(String::as_str), Some("torque"));

@@ -116,7 +116,7 @@ fn solve_small(
 ) -> Option<[f64; DEPTH]> {
     for c in 0..m {
         let p = (c..m).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        if !(a[p][c].abs() > 0.0) {
+        if a[p][c] == 0.0 || a[p][c].is_nan() {
             return None;
         }
         a.swap(c, p);
