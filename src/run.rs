@@ -45,6 +45,10 @@ pub struct RunArgs {
     /// `.gltf` (+ `.bin`) per actor (`NAME.ACTOR.bvh` when there are several).
     #[arg(long)]
     pub record: Option<PathBuf>,
+    /// Write the joint torques of the dynamics actions (simulate, servo, track), per DOF
+    /// and tick, to a `.trk` file (one sequence per actor; `troupe seq plot` draws it).
+    #[arg(long, value_name = "FILE.trk")]
+    pub record_torques: Option<PathBuf>,
     /// Write the action timeline as Chrome trace-event JSON.
     #[arg(long)]
     pub trace: Option<PathBuf>,
@@ -62,7 +66,7 @@ pub struct RunArgs {
     #[arg(long, default_value = "fit")]
     pub camera: String,
     /// Show the run in a window (needs a display) instead of running headless.
-    #[arg(long, conflicts_with_all = ["frames", "record", "trace", "realtime"])]
+    #[arg(long, conflicts_with_all = ["frames", "record", "record_torques", "trace", "realtime"])]
     pub view: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
@@ -90,7 +94,21 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         instructions: args.instruction_budget,
         memory: args.memory_limit,
     };
-    for path in [&args.record, &args.trace].into_iter().flatten() {
+    if let Some(path) = &args.record_torques {
+        if !path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("trk"))
+        {
+            bail!(
+                "--record-torques {}: torques are written as a .trk file",
+                path.display()
+            );
+        }
+    }
+    for path in [&args.record, &args.record_torques, &args.trace]
+        .into_iter()
+        .flatten()
+    {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
@@ -101,6 +119,11 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         Some(t) => Some(troupe_drivers::osc::OscSender::new(t).map_err(|e| anyhow::anyhow!(e))?),
         None => None,
     };
+    let torques = args.record_torques.as_ref().map(|_| {
+        let log = troupe_actions::dynamics::TorqueLog::new();
+        log.install(director.lua());
+        log
+    });
     director
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
@@ -234,6 +257,23 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             r.len(),
             list.join(", ")
         );
+    }
+    if let (Some(path), Some(log)) = (&args.record_torques, &torques) {
+        let set = log.sequences(&scene);
+        if set.is_empty() {
+            println!(
+                "no dynamics action ran: no torques to record to {}",
+                path.display()
+            );
+        } else {
+            troupe_runtime::trk::write_trk(path, &set)?;
+            println!(
+                "recorded {} joint torques ({} actor(s)) to {}",
+                log.len(),
+                set.len(),
+                path.display()
+            );
+        }
     }
     if let (Some(dir), Some(f)) = (&args.frames, frames.as_mut()) {
         println!(

@@ -265,3 +265,90 @@ fn bench_runs_the_crowd_and_writes_one_json_object_per_run() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--actors"));
 }
+
+#[test]
+fn run_records_joint_torques_that_seq_plot_draws() {
+    // Fig. 3-8/3-9: an arm held forward by servos; the recorded shoulder torque is the
+    // one inverse dynamics predicts for the still posture.
+    let scene = temp("torques.lua");
+    std::fs::write(
+        &scene,
+        "local ann = troupe.actor{ name = 'ann' }\n\
+         ann:pose{ r_shoulder_flexion = 1.2, r_elbow_flexion = 0.5 }\n\
+         ann:servo{ target = { r_shoulder_flexion = 1.2, r_elbow_flexion = 0.5 }, duration = 1 }\n\
+         local bob = troupe.actor{ name = 'bob', at = {2, 0, 0} }\n\
+         bob:simulate{ duration = 0.5 }\n",
+    )
+    .unwrap();
+    let trk = temp("torques.trk");
+    let record = |threads: &str| {
+        let out = succeeds(
+            troupe()
+                .args(["run", "--seconds", "1.5", "--threads", threads])
+                .arg("--record-torques")
+                .arg(&trk)
+                .arg(&scene),
+        );
+        let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
+        assert!(stdout.contains("joint torques"), "{stdout}");
+        std::fs::read(&trk).unwrap()
+    };
+    let two = record("2");
+    assert!(record("1") == two, "torques differ between 1 and 2 threads");
+    let set = troupe_runtime::trk::read_trk_set(&trk).unwrap();
+    assert_eq!(
+        set.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
+        ["ann", "bob"]
+    );
+    let seq = &set[0];
+    assert_eq!(seq.name, "ann");
+    assert_eq!(seq.meta.get("quantity").map(String::as_str), Some("torque"));
+    let shoulder = seq.track("r_shoulder_flexion").expect("a shoulder track");
+    // One key per tick of the action (1 s at 100 Hz).
+    assert!(
+        (99..=101).contains(&shoulder.keys().len()),
+        "{}",
+        shoulder.keys().len()
+    );
+    let s = troupe_runtime::template::default_skeleton("adult").unwrap();
+    let n = s.dof_count();
+    let mut q = vec![0.0; n];
+    q[s.dof("r_shoulder_flexion").unwrap()] = 1.2;
+    q[s.dof("r_elbow_flexion").unwrap()] = 0.5;
+    let ext = troupe_runtime::dynamics::ExternalForces::new(&s);
+    let tau = troupe_runtime::dynamics::inverse_dynamics(
+        &s,
+        &q,
+        &vec![0.0; n],
+        &vec![0.0; n],
+        &ext,
+        true,
+    )
+    .unwrap();
+    let predicted = tau[s.dof("r_shoulder_flexion").unwrap()];
+    let recorded = shoulder.keys().last().unwrap().value;
+    assert!(predicted.abs() > 1.0, "the arm's weight: {predicted} N·m");
+    assert!(
+        (recorded - predicted).abs() < 0.02 * predicted.abs(),
+        "recorded {recorded} N·m, inverse dynamics {predicted} N·m"
+    );
+    // DOFs the action did not simulate have no track.
+    assert!(seq.track("l_knee_flexion").is_none());
+    let png = temp("torques.png");
+    succeeds(
+        troupe()
+            .args(["seq", "plot"])
+            .arg(&trk)
+            .arg(&png)
+            .args(["--dofs", "r_shoulder_flexion,r_elbow_flexion"]),
+    );
+    assert!(std::fs::metadata(&png).unwrap().len() > 1000);
+    // Torques are written as .trk only.
+    let out = troupe()
+        .args(["run", "--seconds", "0.1", "--record-torques", "x.bvh"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains(".trk"));
+}

@@ -8,8 +8,9 @@
 //! actions place). The root is simulated as a floating base only by `simulate`, and only
 //! when the scope holds all six root DOFs; `servo` and `track` never move the root.
 
-use mlua::{MultiValue, Table, Value};
-use std::sync::Arc;
+use mlua::{Lua, MultiValue, Table, Value};
+use std::collections::BTreeMap;
+use std::sync::{Arc, Mutex};
 use troupe_runtime::dynamics::contact::ContactParams;
 use troupe_runtime::dynamics::{Control, Gains, SimParams, Simulation};
 use troupe_runtime::glam::DVec3;
@@ -17,9 +18,104 @@ use troupe_runtime::lua::api::{load_sequence, lua_err_message, vec3, ActorRef, S
 use troupe_runtime::lua::kinds::{
     opt_bool, opt_number, ActionKind, ActionKinds, BuildContext, CommonOptions,
 };
+use troupe_runtime::sequence::{Key, Track as SeqTrack};
 use troupe_runtime::{
-    ActionSpec, DofWriter, Generator, GeneratorContext, Scope, Sequence, Skeleton, Step,
+    ActionSpec, DofWriter, Generator, GeneratorContext, Scene, Scope, Sequence, Skeleton, Step,
 };
+
+/// Per-DOF joint torques of the dynamics actions, recorded tick by tick on request
+/// (`troupe run --record-torques FILE.trk`, thesis fig. 3-9). Install it on a director's
+/// Lua state before the scene starts its actions: every dynamics action built afterwards
+/// logs, each tick, the joint forces it applied over the tick (their mean over the
+/// sub-steps; see `Simulation::mean_torques`) on the DOFs it simulates. Thread-safe; the
+/// result does not depend on the scheduler's thread count (entries are keyed by actor,
+/// DOF and tick; when two dynamics actions drive one DOF in the same tick their torques
+/// add).
+#[derive(Clone, Debug, Default)]
+pub struct TorqueLog(Arc<Mutex<TorqueEntries>>);
+
+/// Per (actor, DOF), per tick: (time, torque).
+type TorqueEntries = BTreeMap<(usize, usize), BTreeMap<u64, (f64, f64)>>;
+
+impl TorqueLog {
+    /// An empty log.
+    pub fn new() -> TorqueLog {
+        TorqueLog::default()
+    }
+
+    /// Makes the dynamics actions built on `lua` log into this log.
+    pub fn install(&self, lua: &Lua) {
+        lua.set_app_data(self.clone());
+    }
+
+    /// The log installed on `lua`, if any.
+    fn installed(lua: &Lua) -> Option<TorqueLog> {
+        lua.app_data_ref::<TorqueLog>().map(|l| l.clone())
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, TorqueEntries> {
+        // A panic while holding the lock leaves plain data: keep using it.
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Adds `torque` (N·m, or N for a translation) on DOF `dof` of actor `actor` at tick
+    /// `tick` (scene time `time`).
+    pub fn record(&self, actor: usize, dof: usize, tick: u64, time: f64, torque: f64) {
+        let mut entries = self.lock();
+        let e = entries
+            .entry((actor, dof))
+            .or_default()
+            .entry(tick)
+            .or_insert((time, 0.0));
+        e.1 += torque;
+    }
+
+    /// Whether nothing was logged.
+    pub fn is_empty(&self) -> bool {
+        self.lock().is_empty()
+    }
+
+    /// Number of (actor, DOF, tick) entries.
+    pub fn len(&self) -> usize {
+        self.lock().values().map(|t| t.len()).sum()
+    }
+
+    /// One sequence per actor that has torques (named after the actor, in actor order),
+    /// one track per DOF named after it, one key per tick: values in N·m (N for a
+    /// translation), `meta quantity torque`.
+    pub fn sequences(&self, scene: &Scene) -> Vec<Sequence> {
+        let entries = self.lock();
+        let mut set: Vec<Sequence> = Vec::new();
+        let mut current: Option<usize> = None;
+        for (&(actor, dof), ticks) in entries.iter() {
+            let Some(info) = scene.actors().get(actor) else {
+                continue;
+            };
+            if current != Some(actor) {
+                current = Some(actor);
+                let mut seq = Sequence::new(info.name.clone());
+                seq.meta.insert("quantity".into(), "torque".into());
+                seq.meta.insert(
+                    "units".into(),
+                    "N·m for rotation DOFs, N for translation DOFs".into(),
+                );
+                seq.meta
+                    .insert("rate".into(), scene.config().rate.to_string());
+                seq.meta.insert("template".into(), info.template.clone());
+                seq.meta
+                    .insert("source".into(), "troupe run --record-torques".into());
+                set.push(seq);
+            }
+            let keys: Vec<Key> = ticks.values().map(|&(t, v)| Key::new(t, v)).collect();
+            let name = info.skeleton.dofs()[dof].name.clone();
+            if let (Ok(track), Some(seq)) = (SeqTrack::new(name, keys), set.last_mut()) {
+                // One track per DOF: adding cannot clash.
+                let _ = seq.add_track(track);
+            }
+        }
+        set
+    }
+}
 
 /// What a servo follows.
 #[derive(Clone, Debug, PartialEq)]
@@ -66,6 +162,7 @@ pub struct DynamicsGenerator {
     desired_qd: Vec<f64>,
     desired_qdd: Vec<f64>,
     at_rest_for: f64,
+    torques: Option<TorqueLog>,
 }
 
 impl DynamicsGenerator {
@@ -100,7 +197,14 @@ impl DynamicsGenerator {
             desired_qd: vec![0.0; n],
             desired_qdd: vec![0.0; n],
             at_rest_for: 0.0,
+            torques: None,
         })
+    }
+
+    /// Logs the joint torques of every tick into `log`.
+    pub fn log_torques(mut self, log: Option<TorqueLog>) -> DynamicsGenerator {
+        self.torques = log;
+        self
     }
 
     fn fill_desired(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
@@ -215,6 +319,14 @@ impl Generator for DynamicsGenerator {
         for k in self.scope.iter() {
             if !sim.is_prescribed(k) {
                 out.set(k, q[k]);
+            }
+        }
+        if let Some(log) = &self.torques {
+            let tau = sim.mean_torques();
+            for k in self.scope.iter() {
+                if !sim.is_prescribed(k) {
+                    log.record(ctx.actor, k, ctx.tick, ctx.time, tau[k]);
+                }
             }
         }
         match &self.drive {
@@ -373,7 +485,8 @@ fn build_simulate(
         push,
         common.duration.is_none(),
     )
-    .map_err(|e| lua_err_message(format!("simulate: {e}")))?;
+    .map_err(|e| lua_err_message(format!("simulate: {e}")))?
+    .log_torques(TorqueLog::installed(ctx.lua));
     Ok((Box::new(generator), common.spec("simulate", scope)))
 }
 
@@ -456,7 +569,8 @@ fn build_servo(
     let params = sim_params(Some(t), "servo", 0.0)?;
     let scope = common.scope.unwrap_or(natural);
     let generator = DynamicsGenerator::new(skel, drive, scope, params, None, false)
-        .map_err(|e| lua_err_message(format!("servo: {e}")))?;
+        .map_err(|e| lua_err_message(format!("servo: {e}")))?
+        .log_torques(TorqueLog::installed(ctx.lua));
     Ok((Box::new(generator), common.spec("servo", scope)))
 }
 
@@ -510,6 +624,7 @@ fn build_track(
     };
     let params = sim_params(Some(t), "track", 0.0)?;
     let generator = DynamicsGenerator::new(skel, drive, scope, params, None, false)
-        .map_err(|e| lua_err_message(format!("track: {e}")))?;
+        .map_err(|e| lua_err_message(format!("track: {e}")))?
+        .log_torques(TorqueLog::installed(ctx.lua));
     Ok((Box::new(generator), common.spec("track", scope)))
 }

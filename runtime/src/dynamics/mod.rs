@@ -19,6 +19,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod aba;
+mod anderson;
 pub mod contact;
 pub mod model;
 pub mod rnea;

@@ -43,6 +43,9 @@ pub struct Model {
     pub(crate) pre: Vec<Option<Transform>>,
     pub(crate) armature: Vec<f64>,
     pub(crate) bodies: Vec<Body>,
+    /// Per link: whether a body rides on it (most links are massless: the first DOFs of
+    /// multi-DOF joints, fingers, toes), so that the passes can skip their inertia.
+    pub(crate) massive: Vec<bool>,
     /// Per joint: the link whose frame carries it, and the joint frame in that link frame.
     pub(crate) joint_link: Vec<Option<(usize, Transform)>>,
     pub(crate) root: Range<usize>,
@@ -185,6 +188,7 @@ impl Model {
             axis: dofs.iter().map(|d| d.axis).collect(),
             pre,
             armature,
+            massive: (0..n).map(|k| bodies.iter().any(|b| b.link == k)).collect(),
             bodies,
             joint_link,
             root_mask: (0..n).map(|k| root.contains(&k)).collect(),
@@ -266,6 +270,8 @@ pub struct Data {
     pub(crate) qd: Vec<f64>,
     pub(crate) qdd: Vec<f64>,
     pub(crate) diag: Vec<f64>,
+    /// Per link: the external and gravity wrench on its whole subtree.
+    pub(crate) w: Vec<Force>,
 }
 
 impl Data {
@@ -290,6 +296,7 @@ impl Data {
             qd: vec![0.0; n],
             qdd: vec![0.0; n],
             diag: vec![0.0; n],
+            w: vec![Force::ZERO; n],
         }
     }
 }
@@ -428,4 +435,58 @@ pub(crate) fn center_of_mass(model: &Model, data: &Data) -> DVec3 {
         s += (data.pos[b.link] + data.rot[b.link] * b.com) * b.mass;
     }
     s / model.total_mass
+}
+
+/// Per link, the total spatial momentum of its subtree into `data.f` (after
+/// [`velocities`]).
+pub(crate) fn subtree_momenta(model: &Model, data: &mut Data) {
+    for k in 0..model.n {
+        data.f[k] = if model.massive[k] {
+            data.inertia[k].apply(&data.v[k])
+        } else {
+            Force::ZERO
+        };
+    }
+    for k in (0..model.n).rev() {
+        if let Some(p) = model.parent[k] {
+            let f = data.f[k];
+            data.f[p] += f;
+        }
+    }
+}
+
+/// Per link, the wrench of gravity and of the external forces in `data.ext` on its
+/// whole subtree into `data.w` (after [`kinematics`]).
+pub(crate) fn subtree_wrenches(model: &Model, data: &mut Data, gravity: DVec3) {
+    for k in 0..model.n {
+        data.w[k] = data.ext[k];
+    }
+    for b in &model.bodies {
+        let com = data.pos[b.link] + data.rot[b.link] * b.com;
+        data.w[b.link] += Force::at_point(com, gravity * b.mass, DVec3::ZERO);
+    }
+    for k in (0..model.n).rev() {
+        if let Some(p) = model.parent[k] {
+            let w = data.w[k];
+            data.w[p] += w;
+        }
+    }
+}
+
+/// Generalized momentum of DOF `k`, `p_k = ∂T/∂q̇_k = S_k·h_k + J_k q̇_k` (`h_k` the
+/// subtree momentum, `J_k` the armature), after [`subtree_momenta`].
+#[inline]
+pub(crate) fn generalized_momentum(model: &Model, data: &Data, k: usize, qd: f64) -> f64 {
+    data.s[k].dot(&data.f[k]) + model.armature[k] * qd
+}
+
+/// The rate of DOF `k`'s generalized momentum without its own joint force:
+/// `ṗ_k − τ_k = S_k·W_k + Ṡ_k·h_k`, with `Ṡ_k = v_k ×ₘ S_k` (the axis moves with its
+/// link), `W_k` the gravity and external wrench on the subtree and `h_k` its momentum;
+/// i.e. `∂L/∂q_k` plus the external generalized force (after [`subtree_wrenches`] and
+/// [`subtree_momenta`]).
+#[inline]
+pub(crate) fn momentum_rate(data: &Data, k: usize) -> f64 {
+    let s = data.s[k];
+    s.dot(&data.w[k]) + data.v[k].cross_motion(&s).dot(&data.f[k])
 }

@@ -39,9 +39,14 @@ pub(crate) fn rnea(
         let ap = model.parent[k].map_or(a_world, |p| data.a[p]);
         let a = ap + data.s[k] * qdd[k] + data.c[k];
         data.a[k] = a;
-        let i = &data.inertia[k];
-        let v = data.v[k];
-        data.f[k] = i.apply(&a) + v.cross_force(&i.apply(&v)) - data.ext[k];
+        if model.massive[k] {
+            let i = &data.inertia[k];
+            let v = data.v[k];
+            data.f[k] = i.apply(&a) + v.cross_force(&i.apply(&v)) - data.ext[k];
+        } else {
+            // No body on this link: only the external wrench (usually none).
+            data.f[k] = Force::ZERO - data.ext[k];
+        }
     }
     for k in (start..model.n).rev() {
         let f = data.f[k];

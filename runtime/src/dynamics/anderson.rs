@@ -1,0 +1,170 @@
+//! Anderson acceleration (Walker & Ni, "Anderson acceleration for fixed-point
+//! iterations", SIAM J. Numer. Anal. 49, 2011) of a fixed-point iteration `z = G(z)`.
+//!
+//! The simulator's implicit velocity equation is a fixed point whose plain iteration
+//! contracts only while `h·|q̇|` times the conditioning of the mass matrix stays below
+//! one; the massless links between two DOF groups (vc4 and skullbase torsions, vt12 and
+//! vt6, …) leave near-null modes with only the armature's inertia, whose gyroscopic
+//! coupling to a spinning segment makes the plain iteration diverge at a few rad/s.
+//! Mixing the last few iterates by least squares (a nonlinear GMRES) converges there.
+
+/// Depth of the history: how many previous iterates are mixed.
+pub(crate) const DEPTH: usize = 6;
+
+/// The history of an Anderson-accelerated iteration on vectors of a fixed length.
+#[derive(Clone, Debug)]
+pub(crate) struct Anderson {
+    /// Differences of successive residuals `f = G(z) − z`, newest at `(head + len − 1) % DEPTH`.
+    df: Vec<Vec<f64>>,
+    /// Differences of successive images `G(z)`.
+    dg: Vec<Vec<f64>>,
+    f_prev: Vec<f64>,
+    g_prev: Vec<f64>,
+    len: usize,
+    head: usize,
+    started: bool,
+}
+
+impl Anderson {
+    /// An empty history for vectors of `n` entries.
+    pub(crate) fn new(n: usize) -> Anderson {
+        Anderson {
+            df: vec![vec![0.0; n]; DEPTH],
+            dg: vec![vec![0.0; n]; DEPTH],
+            f_prev: vec![0.0; n],
+            g_prev: vec![0.0; n],
+            len: 0,
+            head: 0,
+            started: false,
+        }
+    }
+
+    /// Forgets the history (a new fixed-point problem).
+    pub(crate) fn reset(&mut self) {
+        self.len = 0;
+        self.head = 0;
+        self.started = false;
+    }
+
+    /// Given the current iterate `z` and its image `g = G(z)`, writes the next iterate
+    /// into `z`.
+    pub(crate) fn next(&mut self, z: &mut [f64], g: &[f64]) {
+        let n = z.len();
+        if self.started {
+            let slot = (self.head + self.len) % DEPTH;
+            if self.len == DEPTH {
+                self.head = (self.head + 1) % DEPTH;
+            } else {
+                self.len += 1;
+            }
+            for i in 0..n {
+                let f = g[i] - z[i];
+                self.df[slot][i] = f - self.f_prev[i];
+                self.dg[slot][i] = g[i] - self.g_prev[i];
+            }
+        }
+        for i in 0..n {
+            self.f_prev[i] = g[i] - z[i];
+            self.g_prev[i] = g[i];
+        }
+        self.started = true;
+        let m = self.len;
+        if m == 0 {
+            z.copy_from_slice(g);
+            return;
+        }
+        // Least squares min |f − ΔF γ| by the normal equations, lightly regularized.
+        let mut a = [[0.0f64; DEPTH]; DEPTH];
+        let mut b = [0.0f64; DEPTH];
+        let col = |j: usize| (self.head + j) % DEPTH;
+        for r in 0..m {
+            let dr = &self.df[col(r)];
+            b[r] = dot(dr, &self.f_prev);
+            for c in 0..=r {
+                let v = dot(dr, &self.df[col(c)]);
+                a[r][c] = v;
+                a[c][r] = v;
+            }
+        }
+        let trace: f64 = (0..m).map(|i| a[i][i]).sum();
+        for i in 0..m {
+            a[i][i] += 1e-10 * trace + f64::MIN_POSITIVE;
+        }
+        let Some(gamma) = solve_small(&mut a, &mut b, m) else {
+            z.copy_from_slice(g);
+            return;
+        };
+        z.copy_from_slice(g);
+        for j in 0..m {
+            let dg = &self.dg[col(j)];
+            for i in 0..n {
+                z[i] -= gamma[j] * dg[i];
+            }
+        }
+    }
+}
+
+fn dot(a: &[f64], b: &[f64]) -> f64 {
+    a.iter().zip(b).map(|(x, y)| x * y).sum()
+}
+
+/// Gaussian elimination with partial pivoting on the leading `m × m` block.
+fn solve_small(
+    a: &mut [[f64; DEPTH]; DEPTH],
+    b: &mut [f64; DEPTH],
+    m: usize,
+) -> Option<[f64; DEPTH]> {
+    for c in 0..m {
+        let p = (c..m).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
+        if a[p][c] == 0.0 || a[p][c].is_nan() {
+            return None;
+        }
+        a.swap(c, p);
+        b.swap(c, p);
+        for r in c + 1..m {
+            let f = a[r][c] / a[c][c];
+            for k in c..m {
+                a[r][k] -= f * a[c][k];
+            }
+            b[r] -= f * b[c];
+        }
+    }
+    let mut x = [0.0; DEPTH];
+    for r in (0..m).rev() {
+        let mut s = b[r];
+        for k in r + 1..m {
+            s -= a[r][k] * x[k];
+        }
+        x[r] = s / a[r][r];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn it_converges_where_the_plain_iteration_diverges() {
+        // z = G(z) = R z + c with R a rotation scaled by 1.5: the plain iteration
+        // diverges, Anderson converges to the fixed point (I − R)⁻¹ c.
+        let (s, co) = (0.7f64.sin() * 1.5, 0.7f64.cos() * 1.5);
+        let g = |z: &[f64]| vec![co * z[0] - s * z[1] + 1.0, s * z[0] + co * z[1] - 2.0];
+        let mut acc = Anderson::new(2);
+        let mut z = vec![0.0, 0.0];
+        for _ in 0..20 {
+            let gz = g(&z);
+            acc.next(&mut z, &gz);
+        }
+        let gz = g(&z);
+        assert!(
+            (gz[0] - z[0]).abs() < 1e-9 && (gz[1] - z[1]).abs() < 1e-9,
+            "{z:?}"
+        );
+        let mut plain = vec![0.0, 0.0];
+        for _ in 0..20 {
+            plain = g(&plain);
+        }
+        assert!((g(&plain)[0] - plain[0]).abs() > 1.0);
+    }
+}
