@@ -1,8 +1,9 @@
 -- The standard crowd scene of `troupe bench` (docs/PERFORMANCE.md).
--- Every actor loops: walk to a random parcel while waving (a weighted keyframe wave on
+-- Every actor loops: walk to a parcel near it while waving (a weighted keyframe wave on
 -- the right arm over the walk's arm swing), stop, reach for the parcel, look at a
--- neighbour, and go again. The number of actors comes from `BENCH.actors` when
--- `troupe bench` runs it; run alone it has 24:
+-- neighbour, and go again. Parcels are picked within a few metres, so the mix of walking,
+-- reaching and looking is the same at every crowd size. The number of actors comes from
+-- `BENCH.actors` when `troupe bench` runs it; run alone it has 24:
 --   troupe run scripts/bench/crowd.lua --seconds 20 --threads 2
 local count = (BENCH and BENCH.actors) or 24
 
@@ -13,7 +14,19 @@ local parcels = {}
 for p = 1, math.max(2, count // 4) do
   local x, z = (math.random() - 0.5) * side, (math.random() - 0.5) * side
   troupe.object{ name = "pillar" .. p, shape = "box", size = {0.3, 0.95, 0.3}, at = {x, 0.475, z}, mass = 50 }
-  parcels[p] = troupe.object{ name = "parcel" .. p, shape = "box", size = {0.2, 0.1, 0.2}, at = {x, 1.0, z} }
+  parcels[p] = { object = troupe.object{ name = "parcel" .. p, shape = "box", size = {0.2, 0.1, 0.2}, at = {x, 1.0, z} }, x = x, z = z }
+end
+
+-- A random parcel between 1 and 5 m away (the nearest one if none is).
+local function pick_parcel(x, z)
+  local near, nearest, best = {}, nil, math.huge
+  for _, p in ipairs(parcels) do
+    local d = math.sqrt((p.x - x)^2 + (p.z - z)^2)
+    if d >= 1 and d <= 5 then near[#near + 1] = p end
+    if d < best then nearest, best = p, d end
+  end
+  if #near == 0 then return nearest end
+  return near[math.random(#near)]
 end
 
 local wave = troupe.sequence{
@@ -36,10 +49,10 @@ for i, actor in ipairs(actors) do
   actor:behave(function(self)
     wait(math.random() * 0.5)
     while true do
-      -- Walk to a spot in front of a random parcel, waving on the way.
-      local parcel = parcels[math.random(#parcels)]
-      local p = parcel:position()
+      -- Walk to a spot in front of a parcel near by, waving on the way.
       local here = self:position()
+      local pick = pick_parcel(here[1], here[3])
+      local parcel, p = pick.object, { pick.x, 1.0, pick.z }
       local dx, dz = here[1] - p[1], here[3] - p[3]
       local d = math.max(math.sqrt(dx * dx + dz * dz), 1e-6)
       local goal = { p[1] + dx / d * 0.45, 0, p[3] + dz / d * 0.45 }
