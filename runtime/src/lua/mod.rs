@@ -501,40 +501,60 @@ impl Director {
 
     /// Whether behavior `i` should be resumed now, and with what.
     fn due(&mut self, i: usize) -> Option<Resume> {
-        let (wait, time) = {
+        /// What the scene says about a wait, decided under one borrow of the stage (this
+        /// runs for every waiting behavior on every tick).
+        enum Ready {
+            Start,
+            Empty,
+            Ended(Status),
+            First(ActionId),
+            Ask(Function, Option<f64>, f64),
+        }
+        let ready = {
             let st = self.stage_mut();
-            match &st.behaviors[i].state {
-                BehaviorState::Waiting(w) => (w.clone(), st.scene.time()),
-                _ => return None,
+            let behavior = &st.behaviors[i];
+            let BehaviorState::Waiting(wait) = &behavior.state else {
+                return None;
+            };
+            let scene = &st.scene;
+            let ended = |id: ActionId| scene.action_status(id).filter(|s| s.is_final());
+            match wait {
+                Wait::NextTick if !behavior.started => Ready::Start,
+                Wait::NextTick => Ready::Empty,
+                Wait::Time(until) => {
+                    if scene.time() < until - 1e-9 {
+                        return None;
+                    }
+                    Ready::Empty
+                }
+                Wait::Action(id) => Ready::Ended(ended(*id)?),
+                Wait::All(ids) => {
+                    if !ids.iter().all(|id| ended(*id).is_some()) {
+                        return None;
+                    }
+                    Ready::Empty
+                }
+                Wait::Any(ids) => {
+                    Ready::First(ids.iter().copied().find(|id| ended(*id).is_some())?)
+                }
+                Wait::Until(pred, deadline) => Ready::Ask(pred.clone(), *deadline, scene.time()),
             }
         };
-        let ended = |id: ActionId| -> Option<Status> {
-            self.scene()
-                .action_status(id)
-                .filter(|s| s.is_final())
-        };
-        match wait {
-            Wait::NextTick if !self.stage_mut().behaviors[i].started => Some(Resume::Start),
-            Wait::NextTick => Some(Resume::With(MultiValue::new())),
-            Wait::Time(until) => (time >= until - 1e-9).then(|| Resume::With(MultiValue::new())),
-            Wait::Action(id) => {
-                let status = ended(id)?;
+        match ready {
+            Ready::Start => Some(Resume::Start),
+            Ready::Empty => Some(Resume::With(MultiValue::new())),
+            Ready::Ended(status) => {
                 let s = self.lua.create_string(status.name()).ok()?;
                 Some(Resume::With(MultiValue::from_vec(vec![Value::String(s)])))
             }
-            Wait::All(ids) => ids
-                .iter()
-                .all(|id| ended(*id).is_some())
-                .then(|| Resume::With(MultiValue::new())),
-            Wait::Any(ids) => {
-                let id = ids.iter().copied().find(|id| ended(*id).is_some())?;
+            Ready::First(id) => {
                 let u = self
                     .lua
                     .create_userdata(ActionRef::new(&self.lua, id).ok()?)
                     .ok()?;
                 Some(Resume::With(MultiValue::from_vec(vec![Value::UserData(u)])))
             }
-            Wait::Until(pred, deadline) => {
+            Ready::Ask(pred, deadline, time) => {
                 let actor = self.stage_mut().behaviors[i].actor;
                 self.stage_mut().current_actor = actor;
                 match self.guarded(|| pred.call::<Value>(())) {
