@@ -322,3 +322,139 @@ fn glove_scripts_reject_bad_keys() {
     let e = write_glove_script(&p, 20, 100.0, &[(0.0, 0.0)]).unwrap_err();
     assert!(e.contains("18 or 22"), "{e}");
 }
+
+#[test]
+fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
+    let rec = temp("handout.rec");
+    // Close on the ball over 1.5 s, hold it out, open from 5 s.
+    write_glove_script(
+        &rec,
+        18,
+        100.0,
+        &[
+            (0.0, 0.0),
+            (0.5, 0.0),
+            (2.0, 1.0),
+            (5.0, 1.0),
+            (6.0, 0.0),
+            (8.0, 0.0),
+        ],
+    )
+    .unwrap();
+    let (mut d, shared) = director(1);
+    d.load_str(
+        &format!(
+            r#"ann = troupe.actor{{ name = "ann" }}
+               pat = troupe.performer{{ name = "pat", at = {{-0.45, 0, 0.8}}, facing = 180,
+                 devices = {{ glove = {{ replay = {}, hand = "right" }} }} }}
+               arm = pat:play(troupe.sequence{{ r_shoulder_flexion = {{ {{0, 0.7}}, {{12, 0.7}} }},
+                                                r_elbow_flexion = {{ {{0, 0.6}}, {{12, 0.6}} }} }})
+               troupe.object{{ name = "probe", shape = "sphere", radius = 0.03, at = {{0, 3, 5}} }}"#,
+            lua_path(&rec)
+        ),
+        "scene",
+    )
+    .unwrap();
+    // The arm is held out after a tick; then the ball goes into the open hand.
+    d.tick();
+    let pat = d.scene().actor_index("pat").unwrap();
+    let ann = d.scene().actor_index("ann").unwrap();
+    let probe = d.scene().object_index("probe").unwrap();
+    let at = offer_point(&d.scene().world(), pat, Side::Right, probe).unwrap();
+    d.load_str(
+        &format!(
+            r#"ball = troupe.object{{ name = "ball", shape = "sphere", radius = 0.03, at = {{{}, {}, {}}} }}
+               cap = pat:capture{{}}"#,
+            at.x, at.y, at.z
+        ),
+        "ball",
+    )
+    .unwrap();
+    let ball = d.scene().object_index("ball").unwrap();
+    // A performer does not `give`: the error says how to hand an object over.
+    let e = d
+        .load_str(r#"pat:give{ object = ball, to = ann }"#, "give")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("receiver:receive"), "{e}");
+    for _ in 0..250 {
+        d.tick();
+    }
+    assert_eq!(
+        d.scene().holder(ball).map(|h| h.actor),
+        Some(pat),
+        "pat holds the ball"
+    );
+    assert_eq!(state(&shared), HandState::SecureGrasp(ball));
+    // Ann cannot just grasp it out of pat's hand…
+    d.load_str(r#"steal = ann:grasp{ object = ball }"#, "steal")
+        .unwrap();
+    for _ in 0..5 {
+        d.tick();
+    }
+    let steal: String = d.lua().load("return steal.status").eval().unwrap();
+    assert_eq!(steal, "failed", "a plain grasp does not take a held object");
+    // …but receives it from pat.
+    d.load_str(
+        r#"rx = ann:receive{ object = ball, from = pat }"#,
+        "receive",
+    )
+    .unwrap();
+    let mut rx = String::new();
+    for _ in 0..500 {
+        d.tick();
+        rx = d.lua().load("return rx.status").eval().unwrap();
+        if rx != "active" && rx != "pending" {
+            break;
+        }
+    }
+    let error: Option<String> = d.lua().load("return rx.error").eval().unwrap();
+    assert_eq!(rx, "completed", "receive: {error:?}");
+    assert_eq!(
+        d.scene().holder(ball).map(|h| h.actor),
+        Some(ann),
+        "ann holds the ball"
+    );
+    // Pat opens the glove (from 5 s): the hand frees, ann keeps the ball.
+    while d.scene().time() < 7.0 {
+        d.tick();
+    }
+    assert_eq!(state(&shared), HandState::FreeHand);
+    assert_eq!(
+        d.scene().holder(ball).map(|h| h.actor),
+        Some(ann),
+        "ann still holds it"
+    );
+}
+
+/// The glove recording of `scripts/examples/performer_handover.lua` is this script's
+/// output (`TROUPE_WRITE_EXAMPLES=1` rewrites it).
+#[test]
+fn example_glove_recording_is_the_script() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../scripts/examples/performer_handover_glove.rec");
+    let fresh = temp("example.rec");
+    write_glove_script(
+        &fresh,
+        18,
+        100.0,
+        &[
+            (0.0, 0.0),
+            (4.5, 0.0),
+            (6.0, 1.0),
+            (9.0, 1.0),
+            (10.0, 0.0),
+            (12.0, 0.0),
+        ],
+    )
+    .unwrap();
+    if std::env::var_os("TROUPE_WRITE_EXAMPLES").is_some() {
+        std::fs::copy(&fresh, &example).unwrap();
+    }
+    assert_eq!(
+        std::fs::read(&fresh).unwrap(),
+        std::fs::read(&example).unwrap(),
+        "{} differs from its script (TROUPE_WRITE_EXAMPLES=1 rewrites it)",
+        example.display()
+    );
+}
