@@ -35,6 +35,7 @@ fn generator_step(c: &mut Criterion) {
         actors: &actors,
         states: &states,
         objects: &[],
+        holders: &[],
     };
     let mut walk = Walk::velocity(
         &skeleton,
