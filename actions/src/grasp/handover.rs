@@ -58,8 +58,10 @@ impl HandBoard {
         self.hands.iter().find(|h| h.0 == actor).map(|h| h.1)
     }
 
-    /// Opens an offer.
+    /// Opens an offer (and forgets the offers already closed: the board is only touched
+    /// between ticks here, the same way with any thread count).
     pub fn offer(&mut self, offer: Offer) {
+        self.offers.retain(|o| !o.closed.before(u64::MAX));
         self.offers.push(offer);
     }
 
@@ -254,5 +256,28 @@ mod tests {
         assert!(b.may_take(2, 1, 0, 20) && !b.may_take(2, 1, 0, 21));
         b.prune(21);
         assert!(!b.may_take(2, 1, 0, 11), "pruned");
+        // A new offer forgets closed ones.
+        let again = Offer {
+            object: 2,
+            giver: 0,
+            receiver: 1,
+            arrived: Arc::new(Signal::default()),
+            closed: Arc::new(Signal::default()),
+        };
+        b.offer(again.clone());
+        b.offer(Offer {
+            object: 3,
+            closed: Arc::new(Signal::default()),
+            ..again.clone()
+        });
+        let objects = |b: &HandBoard| b.offers.iter().map(|o| o.object).collect::<Vec<_>>();
+        assert_eq!(objects(&b), vec![2, 3], "open offers stay");
+        again.closed.raise(30);
+        b.offer(Offer {
+            object: 4,
+            closed: Arc::new(Signal::default()),
+            ..again
+        });
+        assert_eq!(objects(&b), vec![3, 4], "the closed one is forgotten");
     }
 }
