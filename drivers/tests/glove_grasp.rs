@@ -36,11 +36,11 @@ fn lua_path(p: &Path) -> String {
     format!("{:?}", p.display().to_string())
 }
 
-/// Deepest penetration (metres, ≥ 0) of the right hand's sensors into `object`.
-fn penetration(d: &Director, actor: usize, object: usize) -> f64 {
+/// Deepest penetration (metres, ≥ 0) of `side`'s hand sensors into `object`.
+fn penetration_of(d: &Director, actor: usize, object: usize, side: Side) -> f64 {
     let scene = d.scene();
     let sk = &scene.actors()[actor].skeleton;
-    let hs = HandSensors::new(sk, Side::Right).unwrap();
+    let hs = HandSensors::new(sk, side).unwrap();
     let g = &scene.states()[actor].globals;
     let o = &scene.objects()[object];
     (0..hs.sensors.len())
@@ -50,6 +50,11 @@ fn penetration(d: &Director, actor: usize, object: usize) -> f64 {
 
 /// Every posture and object pose of a run, for the thread comparison.
 type Trace = Vec<Vec<f64>>;
+
+/// Deepest penetration of the right hand's sensors into `object`.
+fn penetration(d: &Director, actor: usize, object: usize) -> f64 {
+    penetration_of(d, actor, object, Side::Right)
+}
 
 fn snapshot(d: &Director) -> Vec<f64> {
     let mut v: Vec<f64> = d
@@ -71,13 +76,15 @@ fn state(s: &SharedPerformers) -> HandState {
 
 /// A ball put where the performer's open right hand can close on it; the glove closes,
 /// the arm lifts, the glove opens.
-fn grasp_run(threads: usize, rec: &Path) -> Trace {
+fn grasp_run(threads: usize, rec: &Path, side: Side) -> Trace {
     let (mut d, shared) = director(threads);
+    let (s, other) = (side.prefix(), side.other().name());
     d.load_str(
         &format!(
-            r#"pat = troupe.performer{{ name = "pat", devices = {{ glove = {{ replay = {}, hand = "right" }} }} }}
+            r#"pat = troupe.performer{{ name = "pat", devices = {{ glove = {{ replay = {}, hand = "{}" }} }} }}
                cap = pat:capture{{}}"#,
-            lua_path(rec)
+            lua_path(rec),
+            side.name()
         ),
         "performer",
     )
@@ -92,7 +99,7 @@ fn grasp_run(threads: usize, rec: &Path) -> Trace {
     )
     .unwrap();
     let probe = d.scene().object_index("probe").unwrap();
-    let at = offer_point(&d.scene().world(), pat, Side::Right, probe).unwrap();
+    let at = offer_point(&d.scene().world(), pat, side, probe).unwrap();
     d.load_str(
         &format!(
             r#"ball = troupe.object{{ name = "ball", shape = "sphere", radius = 0.03, at = {{{}, {}, {}}} }}"#,
@@ -103,8 +110,8 @@ fn grasp_run(threads: usize, rec: &Path) -> Trace {
     .unwrap();
     let ball = d.scene().object_index("ball").unwrap();
     let sk = d.scene().actors()[pat].skeleton.clone();
-    let wrist = sk.joint("r_wrist").unwrap();
-    let left: Vec<usize> = sk.scope("left_hand").unwrap().iter().collect();
+    let wrist = sk.joint(&format!("{s}wrist")).unwrap();
+    let left: Vec<usize> = sk.scope(&format!("{other}_hand")).unwrap().iter().collect();
     let left0: Vec<f64> = left.iter().map(|&i| d.scene().states()[pat].q[i]).collect();
 
     let mut trace = Vec::new();
@@ -118,8 +125,10 @@ fn grasp_run(threads: usize, rec: &Path) -> Trace {
         if tick == 300 {
             // The performer's arm lifts while the hand holds the ball.
             d.load_str(
-                r#"lift = pat:play(troupe.sequence{ r_shoulder_flexion = { {0, 0}, {1, 0.6} },
-                                                    r_elbow_flexion = { {0, 0}, {1, 0.5} } })"#,
+                &format!(
+                    r#"lift = pat:play(troupe.sequence{{ {s}shoulder_flexion = {{ {{0, 0}}, {{1, 0.6}} }},
+                                                         {s}elbow_flexion = {{ {{0, 0}}, {{1, 0.5}} }} }})"#
+                ),
                 "lift",
             )
             .unwrap();
@@ -131,7 +140,7 @@ fn grasp_run(threads: usize, rec: &Path) -> Trace {
         if *states.last().unwrap() != s {
             states.push(s);
         }
-        let pen = penetration(&d, pat, ball);
+        let pen = penetration_of(&d, pat, ball, side);
         assert!(
             pen <= 0.002,
             "tick {tick}: a sensor is {pen} m inside the ball"
@@ -197,9 +206,29 @@ fn glove_closes_on_a_ball_without_penetration_holds_it_and_releases_it() {
         ],
     )
     .unwrap();
-    let one = grasp_run(1, &rec);
-    let two = grasp_run(2, &rec);
+    let one = grasp_run(1, &rec, Side::Right);
+    let two = grasp_run(2, &rec, Side::Right);
     assert!(one == two, "identical with 1 and 2 threads");
+}
+
+#[test]
+fn a_left_glove_grasps_the_same_way() {
+    let rec = temp("grasp-left.rec");
+    write_glove_script(
+        &rec,
+        18,
+        100.0,
+        &[
+            (0.0, 0.0),
+            (1.0, 0.0),
+            (2.5, 1.0),
+            (5.0, 1.0),
+            (6.0, 0.0),
+            (7.0, 0.0),
+        ],
+    )
+    .unwrap();
+    grasp_run(1, &rec, Side::Left);
 }
 
 /// Ann grasps a ball and gives it to pat, who holds out a hand and closes the glove.
