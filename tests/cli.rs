@@ -249,19 +249,14 @@ fn bench_runs_the_crowd_and_writes_one_json_object_per_run() {
             "tick_p99_us",
             "peak_rss_bytes",
         ] {
-            let v = run[field]
-                .as_f64()
-                .unwrap_or_else(|| panic!("{field} in {run}"));
+            let v = run[field].as_f64().unwrap_or_else(|| panic!("{field} in {run}"));
             assert!(v > 0.0, "{field} = {v}");
         }
         assert_eq!(run["ticks"], 50);
         let shares = run["phase_shares"].as_object().unwrap();
         let total: f64 = shares.values().map(|s| s.as_f64().unwrap()).sum();
         assert!((total - 1.0).abs() < 1e-6, "phase shares sum to {total}");
-        seen.push((
-            run["actors"].as_u64().unwrap(),
-            run["threads"].as_u64().unwrap(),
-        ));
+        seen.push((run["actors"].as_u64().unwrap(), run["threads"].as_u64().unwrap()));
     }
     assert_eq!(seen, [(3, 1), (3, 2), (6, 1), (6, 2)]);
 

@@ -57,10 +57,7 @@ fn bvh(c: &mut Criterion) {
     let mut group = c.benchmark_group("bvh");
     group.throughput(Throughput::Bytes(text.len() as u64));
     group.bench_function(
-        format!(
-            "parse CMU 12_01 walk ({} KB, {frames} frames)",
-            text.len() / 1000
-        ),
+        format!("parse CMU 12_01 walk ({} KB, {frames} frames)", text.len() / 1000),
         |b| b.iter(|| parse_bvh(black_box(&text), &path).unwrap()),
     );
     group.finish();

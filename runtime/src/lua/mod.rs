@@ -509,7 +509,9 @@ impl Director {
             }
         };
         let ended = |id: ActionId| -> Option<Status> {
-            self.scene().action_status(id).filter(|s| s.is_final())
+            self.scene()
+                .action_status(id)
+                .filter(|s| s.is_final())
         };
         match wait {
             Wait::NextTick if !self.stage_mut().behaviors[i].started => Some(Resume::Start),
