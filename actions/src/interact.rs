@@ -62,6 +62,11 @@ pub struct Give {
     phase_start: f64,
     q: Vec<f64>,
     samples: Vec<(usize, f64)>,
+    /// Seconds the giver waits at the meeting point.
+    timeout: f64,
+    /// Bring the object into this hand of the receiver (a performer's glove hand) rather
+    /// than to the point between the actors.
+    receiver_hand: Option<Side>,
 }
 
 impl Give {
@@ -81,7 +86,22 @@ impl Give {
             phase_start: 0.0,
             q: Vec::new(),
             samples: Vec::new(),
+            timeout: GIVE_TIMEOUT,
+            receiver_hand: None,
         }
+    }
+
+    /// Waits `seconds` (instead of [`GIVE_TIMEOUT`]) for the receiver to take the object.
+    pub fn with_timeout(mut self, seconds: f64) -> Give {
+        self.timeout = seconds;
+        self
+    }
+
+    /// Brings the object into the receiver's open hand `side` (see
+    /// [`crate::grasp::handover::offer_point`]): for a receiver whose hand a person drives.
+    pub fn into_hand(mut self, side: Side) -> Give {
+        self.receiver_hand = Some(side);
+        self
     }
 }
 
@@ -113,8 +133,11 @@ impl Generator for Give {
         if w.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
             return Err(format!("`{me}` does not hold `{}`", obj.name));
         }
-        let goal = meeting_point(w, ctx.actor, self.receiver)
-            .ok_or_else(|| format!("no actor #{} to give to", self.receiver))?;
+        let goal = match self.receiver_hand {
+            Some(side) => crate::grasp::handover::offer_point(w, self.receiver, side, self.object)?,
+            None => meeting_point(w, ctx.actor, self.receiver)
+                .ok_or_else(|| format!("no actor #{} to give to", self.receiver))?,
+        };
         let now = Transform::new(obj.rotation, obj.position);
         let delta = Transform::new(obj.rotation, goal).mul(&now.inverse());
         let mut ik = ArmIk::new(ctx.skeleton, self.sides[0], 200)?;
@@ -168,10 +191,11 @@ impl Generator for Give {
                         self.phase_start = ctx.local_time;
                     }
                     Some(h) if h.actor == ctx.actor => {
-                        if t > GIVE_TIMEOUT {
+                        if t > self.timeout {
                             return Step::Failed(format!(
-                                "`{}` did not take the object within {GIVE_TIMEOUT} s",
-                                actor_name(ctx.world, self.receiver)
+                                "`{}` did not take the object within {} s",
+                                actor_name(ctx.world, self.receiver),
+                                self.timeout
                             ));
                         }
                     }

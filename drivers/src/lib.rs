@@ -9,6 +9,7 @@ pub mod emulator;
 pub mod fob;
 pub mod gesture;
 pub mod glove;
+pub mod glove_grasp;
 pub mod hid;
 pub mod osc;
 pub mod performer;

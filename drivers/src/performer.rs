@@ -15,6 +15,7 @@ use crate::emulator::bird_pose;
 use crate::fob::{Hemisphere, OutputFormat, PositionRange};
 use crate::gesture::{GestureSet, GestureTracker};
 use crate::glove::{GloveCalibration, GloveLayout};
+use crate::glove_grasp::{GloveHand, HandStatus};
 use crate::osc::{OscInput, OscListener};
 use crate::record::{Recorder, Recording};
 use glam::{DMat3, DQuat, DVec3};
@@ -23,6 +24,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
+use troupe_actions::grasp::handover::SharedHandBoard;
+use troupe_actions::grasp::HandState;
 use troupe_runtime::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
 use troupe_runtime::ik::{IkOptions, IkSolver, IkTask};
 use troupe_runtime::jacobian::Effector;
@@ -30,9 +33,10 @@ use troupe_runtime::kinematics::{forward_kinematics, solve_joint_angles};
 use troupe_runtime::lua::api::{lua_err_message, ActorRef};
 use troupe_runtime::lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_runtime::lua::Director;
+use troupe_runtime::sensors::Side;
 use troupe_runtime::skeleton::{DofKind, Skeleton};
 use troupe_runtime::transform::Transform;
-use troupe_runtime::Scene;
+use troupe_runtime::{Scene, Scope};
 
 /// The rotation from the Flock's transmitter frame (X forward, Y right, Z down) to the
 /// scene's frame (Y up, an actor facing 0° looks along +Z, its right is −X).
@@ -437,6 +441,8 @@ struct GloveInput {
     coupled: Vec<(usize, usize)>,
     latest: Option<Vec<u8>>,
     gestures: Option<GestureTracker>,
+    /// The gloved hand.
+    side: Side,
 }
 
 /// The target a performer's `capture` actions write.
@@ -466,6 +472,8 @@ pub struct Performer {
     calibrate_requested: bool,
     target: Arc<Mutex<CaptureTarget>>,
     gesture_handlers: Vec<Function>,
+    /// The glove hand's grasping-automaton state (4.7), when the performer has a glove.
+    hand: Option<Arc<Mutex<HandStatus>>>,
 }
 
 /// Every performer of a scene, the recorder, and latency measurements.
@@ -510,6 +518,13 @@ impl Performers {
                 .map(|d| (d, t.q[d]))
                 .collect(),
         )
+    }
+
+    /// The glove hand's grasping-automaton state of a performer (None without a glove).
+    pub fn hand_state(&self, performer: &str) -> Option<HandState> {
+        let p = self.list.iter().find(|p| p.name == performer)?;
+        let s = p.hand.as_ref()?.lock().ok()?.state;
+        Some(s)
     }
 
     /// The latest raw glove values of a performer.
@@ -687,20 +702,39 @@ fn base_posture(scene: &Scene, actor: usize) -> Vec<f64> {
     q
 }
 
-/// The `capture` generator: writes the performer's device-driven DOFs within its scope.
+/// The `capture` generator: writes the performer's device-driven DOFs within its scope;
+/// the glove hand's fingers go through the grasping automaton ([`GloveHand`]).
 pub struct Capture {
     target: Arc<Mutex<CaptureTarget>>,
+    hand: Option<GloveHand>,
 }
 
 impl Generator for Capture {
-    fn step(&mut self, _ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        match &mut self.hand {
+            Some(h) => h.start(ctx),
+            None => Ok(()),
+        }
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         let Ok(t) = self.target.lock() else {
             return Step::Failed("capture target lock poisoned".into());
         };
         let scope = out.scope();
+        let fingers = self
+            .hand
+            .as_ref()
+            .map(|h| h.fingers())
+            .unwrap_or(Scope::EMPTY);
         for d in scope.iter() {
-            if t.mask.get(d).copied().unwrap_or(false) {
+            if t.mask.get(d).copied().unwrap_or(false) && !fingers.contains(d) {
                 out.set(d, t.q[d]);
+            }
+        }
+        if let Some(h) = &mut self.hand {
+            if let Err(e) = h.step(ctx, &t.q, &t.mask, out) {
+                return Step::Failed(format!("capture: {e}"));
             }
         }
         Step::Running
@@ -744,10 +778,35 @@ fn build_capture(
         })?;
     let natural = device_scope(p);
     let target = p.target.clone();
+    let glove = p
+        .glove
+        .as_ref()
+        .zip(p.hand.clone())
+        .map(|(g, status)| (g.side, status));
     drop(perf);
-    let mut spec = common.spec("capture", natural);
+    let spec = common.spec("capture", natural);
+    let hand = match glove {
+        // The automaton runs when this capture drives the glove hand's fingers.
+        Some((side, status)) => {
+            let fingers = troupe_runtime::sensors::HandSensors::new(&ctx.skeleton, side)
+                .map_err(|e| lua_err_message(format!("capture: {e}")))?
+                .scope;
+            if spec.scope.intersection(&fingers).is_empty() {
+                None
+            } else {
+                let board = ctx
+                    .lua
+                    .app_data_ref::<SharedHandBoard>()
+                    .map(|b| b.clone())
+                    .ok_or_else(|| lua_err_message("capture: no hand board in this run"))?;
+                Some(GloveHand::new(side, board, status))
+            }
+        }
+        None => None,
+    };
+    let mut spec = spec;
     spec.duration = None;
-    Ok((Box::new(Capture { target }), spec))
+    Ok((Box::new(Capture { target, hand }), spec))
 }
 
 fn device_scope(p: &Performer) -> troupe_runtime::Scope {
@@ -797,6 +856,10 @@ pub fn install(
     })));
     let lua = director.lua();
     lua.set_app_data(shared.clone());
+    // Glove hands and offers to them, shared with `give` (troupe-actions).
+    if lua.app_data_ref::<SharedHandBoard>().is_none() {
+        lua.set_app_data(SharedHandBoard::default());
+    }
     install_lua(lua).map_err(|e| format!("installing the device functions: {e}"))?;
     let s = shared.clone();
     director.add_pre_tick(Box::new(move |lua: &Lua, scene: &Scene| {
@@ -957,6 +1020,44 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
         })?,
     )?;
     devices.set(
+        "hand_state",
+        lua.create_function(|lua, (who, hand): (Value, Option<String>)| {
+            // The glove hand's grasping automaton (4.7): its state, and the object it
+            // touches or holds (nil when free).
+            let i = performer_index(lua, &who)?;
+            let s = shared(lua)?;
+            let perf = s.0.lock().map_err(|_| err("performer lock poisoned"))?;
+            let p = &perf.list[i];
+            let status = p
+                .hand
+                .as_ref()
+                .and_then(|h| h.lock().ok().map(|h| *h))
+                .ok_or_else(|| err(format!("hand_state: `{}` has no glove", p.name)))?;
+            if let Some(h) = hand {
+                let want = Side::parse(&h).map_err(|e| err(format!("hand_state: {e}")))?;
+                if want != status.side {
+                    return Err(err(format!(
+                        "hand_state: `{}` wears the glove on the {} hand, not the {h}",
+                        p.name,
+                        status.side.name()
+                    )));
+                }
+            }
+            let object = match status.state {
+                HandState::FreeHand => None,
+                HandState::GraspingInProgress(o) | HandState::SecureGrasp(o) => Some(o),
+            };
+            drop(perf);
+            let name = match object {
+                Some(o) => troupe_runtime::lua::kinds::with_scene(lua, |sc| {
+                    sc.objects().get(o).map(|x| x.name.clone())
+                })?,
+                None => None,
+            };
+            Ok((status.state.name(), name))
+        })?,
+    )?;
+    devices.set(
         "glove",
         lua.create_function(|lua, who: Value| {
             let i = performer_index(lua, &who)?;
@@ -1113,6 +1214,24 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
         }
     }
     let n = skeleton.dof_count();
+    let hand = match &glove {
+        Some(g) => {
+            let board = lua
+                .app_data_ref::<SharedHandBoard>()
+                .map(|b| b.clone())
+                .ok_or_else(|| err("performer: no hand board in this run"))?;
+            board
+                .0
+                .lock()
+                .map_err(|_| err("hand board lock poisoned"))?
+                .add_hand(actor, g.side);
+            Some(Arc::new(Mutex::new(HandStatus {
+                state: HandState::FreeHand,
+                side: g.side,
+            })))
+        }
+        None => None,
+    };
     let performer = Performer {
         name,
         actor,
@@ -1129,6 +1248,7 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
             made: 0,
         })),
         gesture_handlers: Vec::new(),
+        hand,
     };
     s.0.lock()
         .map_err(|_| err("performer lock poisoned"))?
@@ -1411,6 +1531,11 @@ fn glove_input(
         coupled,
         latest: None,
         gestures,
+        side: if side == "l_" {
+            Side::Left
+        } else {
+            Side::Right
+        },
     })
 }
 

@@ -4,6 +4,7 @@
 
 use super::action::{grasp_scope, Grasp, Release, Signal};
 use super::decision::GraspType;
+use super::handover::{offer_to_hand, receive, SharedHandBoard};
 use super::plan::{plan_grasp, HandChoice, PlanOptions};
 use crate::interact::{FollowHand, Give, HoldHand};
 use crate::manipulate::{Manipulate, ObjectKey};
@@ -43,6 +44,7 @@ pub fn register(kinds: &mut ActionKinds) {
         ("place", build_place),
         ("manipulate", build_manipulate),
         ("give", build_give),
+        ("receive", build_receive),
         ("hold_hand", build_hold_hand),
         ("shake_hands", build_shake_hands),
     ] {
@@ -354,17 +356,49 @@ fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
 fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "give";
     let t = table(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "to", "hand"])?;
+    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "to", "hand", "timeout"])?;
     let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let to = actor_arg(ctx.lua, m, "to", t.get("to")?)?;
     if to == ctx.actor {
         return Err(err(m, "`to` must be another actor"));
     }
+    let timeout = opt_number(&t, m, "timeout")?;
+    if let Some(s) = timeout {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(err(m, format!("`timeout` must be seconds > 0, got {s}")));
+        }
+    }
     let side = ctx.with_scene(|s| holding_side(s, ctx.actor, object))?;
     let side = side.unwrap_or(Side::Right);
-    let arrived = Arc::new(Signal::default());
     let scope = grasp_scope(&ctx.skeleton, &[side]).map_err(|e| err(m, e))?;
-    let giver = Give::new(object, to, side, arrived.clone());
+    // Hands driven by a person (a performer's glove, 4.7) neither reach nor carry.
+    if let Some(board) = ctx.lua.app_data_ref::<SharedHandBoard>().map(|b| b.clone()) {
+        let hands = board
+            .0
+            .lock()
+            .map_err(|_| err(m, "hand board lock poisoned"))?;
+        let (mine, theirs) = (hands.hand(ctx.actor), hands.hand(to));
+        drop(hands);
+        if mine.is_some() {
+            return Err(err(
+                m,
+                "a performer gives by holding the object out: let the receiver take it with \
+                 receiver:receive{object = …, from = performer}, then open the glove",
+            ));
+        }
+        if let Some(hand) = theirs {
+            let giver = offer_to_hand(&board, object, ctx.actor, side, to, hand, timeout)
+                .map_err(|e| err(m, e))?;
+            let mut spec = common.spec(m, scope);
+            spec.duration = None;
+            return Ok((Box::new(giver), spec));
+        }
+    }
+    let arrived = Arc::new(Signal::default());
+    let mut giver = Give::new(object, to, side, arrived.clone());
+    if let Some(t) = timeout {
+        giver = giver.with_timeout(t);
+    }
     // The receiver: a grasp that waits for the object to arrive and may take it from us.
     let choice = hand_choice(m, &t)?;
     let rx_sides = resolve_hands(choice);
@@ -389,6 +423,32 @@ fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
     let mut spec = common.spec(m, scope);
     spec.duration = None;
     Ok((Box::new(giver), spec))
+}
+
+/// `actor:receive{object = OBJ, from = ACTOR, hand = …, duration = reach seconds}`: take
+/// `object` out of `from`'s hand (e.g. from a performer holding it out).
+fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
+    let m = "receive";
+    let t = table(m, args)?;
+    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "from", "hand"])?;
+    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
+    let from = actor_arg(ctx.lua, m, "from", t.get("from")?)?;
+    if from == ctx.actor {
+        return Err(err(m, "`from` must be another actor"));
+    }
+    let choice = hand_choice(m, &t)?;
+    let (g, scope) = receive(
+        &ctx.skeleton,
+        object,
+        from,
+        choice,
+        resolve_hands(choice),
+        common.duration.unwrap_or(1.0),
+    )
+    .map_err(|e| err(m, e))?;
+    let mut spec = common.spec(m, scope);
+    spec.duration = None;
+    Ok((Box::new(g), spec))
 }
 
 fn hold_like(ctx: &BuildContext, m: &str, args: MultiValue, shake: bool) -> Built {

@@ -6,6 +6,7 @@ pub mod action;
 pub mod automaton;
 pub mod close;
 pub mod decision;
+pub mod handover;
 pub mod lua;
 pub mod pattern;
 pub mod plan;
