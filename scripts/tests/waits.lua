@@ -37,6 +37,28 @@ test("wait_all and wait_any", function()
   expect(long.status == "completed", "wait_all waited for the long one")
 end)
 
+test("waits on actions that ended long ago, or end while others wait, resume at once", function()
+  local ann = troupe.actor{ name = "ann" }
+  local done = ann:play(hold(1.0, "r_elbow_flexion", 0.1))
+  run(0.5)
+  expect(done.status == "completed", "ended before anyone waited")
+  local long = ann:play(hold(1.0, "l_elbow_flexion", 0.4))
+  local at = {}
+  ann:behave(function()
+    local t0 = troupe.time()
+    expect(done:wait() == "completed", "the old action's status")
+    wait_all(done)
+    expect(wait_any(long, done) == done, "the ended one is first")
+    at.old = troupe.time() - t0
+    expect(long:wait() == "completed", "the long one")
+    at.long = troupe.time()
+  end)
+  run_until(function() return ann:behavior_status() == "done" end, 2)
+  -- One tick per wait: each resumes on the tick after it was made.
+  expect(math.abs(at.old - 3 / troupe.rate()) < 1e-9, "three waits, three ticks: " .. at.old)
+  expect(at.long <= 0.5 + 0.4 + 2 / troupe.rate(), "woken by the end of the long one: " .. at.long)
+end)
+
 test("wait_until returns false at its timeout", function()
   local got = nil
   local ann = troupe.actor{ name = "ann" }
