@@ -7,8 +7,12 @@
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-/// Actors per claimed chunk.
+/// Most actors per claimed chunk.
 const CHUNK: usize = 16;
+/// Fewest actors per claimed chunk.
+const MIN_CHUNK: usize = 4;
+/// Chunks per worker to aim for, so that the last chunks even out the workers' loads.
+const CHUNKS_PER_WORKER: usize = 8;
 
 /// Runs per-item work on up to `threads` threads (crossbeam scoped workers).
 #[derive(Clone, Copy, Debug)]
@@ -31,7 +35,11 @@ impl WorkerPool {
 
     /// Calls `f(index, item)` once for every item.
     pub fn for_each<T: Send>(&self, items: &mut [T], f: impl Fn(usize, &mut T) + Sync) {
+        // A worker is worth its start-up only with a full chunk's worth of actors.
         let workers = self.threads.min(items.len().div_ceil(CHUNK));
+        // Smaller crowds get smaller chunks: 100 actors in chunks of 16 would leave one
+        // worker with four chunks and the other with three.
+        let size = (items.len() / (self.threads * CHUNKS_PER_WORKER)).clamp(MIN_CHUNK, CHUNK);
         if workers <= 1 {
             for (i, item) in items.iter_mut().enumerate() {
                 f(i, item);
@@ -39,7 +47,7 @@ impl WorkerPool {
             return;
         }
         let chunks: Vec<Mutex<Option<&mut [T]>>> = items
-            .chunks_mut(CHUNK)
+            .chunks_mut(size)
             .map(|c| Mutex::new(Some(c)))
             .collect();
         let next = AtomicUsize::new(0);
@@ -52,7 +60,7 @@ impl WorkerPool {
                 .take();
             if let Some(chunk) = chunk {
                 for (k, item) in chunk.iter_mut().enumerate() {
-                    f(c * CHUNK + k, item);
+                    f(c * size + k, item);
                 }
             }
         };
