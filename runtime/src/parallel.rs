@@ -80,13 +80,16 @@ mod tests {
 
     #[test]
     fn every_item_once_with_its_index() {
-        for threads in [1, 2, 4] {
-            let mut items: Vec<(usize, u32)> = (0..1000).map(|i| (i, 0)).collect();
-            WorkerPool::new(threads).for_each(&mut items, |i, item| {
-                assert_eq!(i, item.0);
-                item.1 += 1;
-            });
-            assert!(items.iter().all(|(_, n)| *n == 1));
+        // Sizes that give one worker, small chunks, a ragged last chunk, full chunks.
+        for count in [0, 1, 10, 17, 100, 133, 1000] {
+            for threads in [1, 2, 4] {
+                let mut items: Vec<(usize, u32)> = (0..count).map(|i| (i, 0)).collect();
+                WorkerPool::new(threads).for_each(&mut items, |i, item| {
+                    assert_eq!(i, item.0);
+                    item.1 += 1;
+                });
+                assert!(items.iter().all(|(_, n)| *n == 1), "{count} on {threads}");
+            }
         }
     }
 }
