@@ -421,29 +421,33 @@ impl Scene {
         Ok(())
     }
 
-    /// The current record of an action.
-    pub fn action(&self, id: ActionId) -> Option<ActionInfo> {
-        let actor = *self.action_owner.get(&id)?;
-        self.work[actor]
-            .runtime
-            .actions
-            .iter()
-            .find(|a| a.id == id)
-            .map(|a| a.info(actor))
-            .or_else(|| self.ended.get(&id).cloned())
-    }
-
     /// The status of an action, without copying its record (for wait conditions checked
     /// every tick).
     pub fn action_status(&self, id: ActionId) -> Option<Status> {
+        match self.find_action(id)? {
+            Ok((_, a)) => Some(a.status),
+            Err(info) => Some(info.status),
+        }
+    }
+
+    /// The current record of an action.
+    pub fn action(&self, id: ActionId) -> Option<ActionInfo> {
+        match self.find_action(id)? {
+            Ok((actor, a)) => Some(a.info(actor)),
+            Err(info) => Some(info.clone()),
+        }
+    }
+
+    /// A known action: still with its actor (and which), or its final record.
+    fn find_action(
+        &self,
+        id: ActionId,
+    ) -> Option<std::result::Result<(usize, &Action), &ActionInfo>> {
         let actor = *self.action_owner.get(&id)?;
-        self.work[actor]
-            .runtime
-            .actions
-            .iter()
-            .find(|a| a.id == id)
-            .map(|a| a.status)
-            .or_else(|| self.ended.get(&id).map(|info| info.status))
+        match self.work[actor].runtime.actions.iter().find(|a| a.id == id) {
+            Some(a) => Some(Ok((actor, a))),
+            None => self.ended.get(&id).map(Err),
+        }
     }
 
     /// The actions of `actor` that have not ended, in creation order.
