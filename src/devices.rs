@@ -243,8 +243,14 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
     };
     let protocol: Box<dyn driver::Protocol> = match a.kind {
         ProbeKind::Fob => {
+            if !(1..=14).contains(&a.birds) {
+                bail!(
+                    "--birds must be 1 to 14 (the FBB addresses of a flock), got {}",
+                    a.birds
+                );
+            }
             let mut c = FobConfig::new(
-                a.birds.max(1),
+                a.birds,
                 OutputFormat::parse(&a.format).map_err(|e| anyhow!(e))?,
             );
             c.layout.range = PositionRange::parse(&a.range).map_err(|e| anyhow!(e))?;

@@ -66,7 +66,7 @@ pub struct RunArgs {
     #[arg(long, default_value = "fit")]
     pub camera: String,
     /// Show the run in a window (needs a display) instead of running headless.
-    #[arg(long, conflicts_with_all = ["frames", "record", "record_torques", "trace", "realtime"])]
+    #[arg(long, conflicts_with_all = ["frames", "record", "record_torques", "trace", "realtime", "record_devices", "osc_out"])]
     pub view: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
@@ -166,6 +166,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let mut counts = vec![[0usize; 3]; director.scene().actors().len()];
     let started = Instant::now();
     let mut ticks = 0;
+    let mut osc_failures = 0u64;
     while ticks < max_ticks {
         if until_idle && ticks > 0 && director.is_idle() {
             break;
@@ -175,7 +176,13 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         ticks += 1;
         let scene = director.scene();
         if let Some(o) = &osc_out {
-            o.send(&scene, &events).map_err(|e| anyhow::anyhow!(e))?;
+            // A lost datagram must not end the run: say so once, count the rest.
+            if let Err(e) = o.send(&scene, &events) {
+                if osc_failures == 0 {
+                    tracing::warn!("--osc-out: {e} (further failures are counted)");
+                }
+                osc_failures += 1;
+            }
         }
         if counts.len() < scene.actors().len() {
             counts.resize(scene.actors().len(), [0; 3]);
@@ -229,6 +236,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     }
     drop(scene);
     devices.finish()?;
+    if osc_failures > 0 {
+        println!("--osc-out: {osc_failures} sends failed");
+    }
     let reports = director.behaviors();
     let mut failed = 0;
     for r in &reports {

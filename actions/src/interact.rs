@@ -67,6 +67,18 @@ pub struct Give {
     /// Bring the object into this hand of the receiver (a performer's glove hand) rather
     /// than to the point between the actors.
     receiver_hand: Option<Side>,
+    /// Raised when this action ends, however it ends (see the `Drop`).
+    ended: Arc<Signal>,
+    /// The last tick this generator started or stepped (0 before).
+    last_tick: u64,
+}
+
+impl Drop for Give {
+    /// The receiver waiting for the object learns that the give ended: the scheduler drops
+    /// a generator on the tick its action ends, one after its last step.
+    fn drop(&mut self) {
+        self.ended.raise(self.last_tick + 1);
+    }
 }
 
 impl Give {
@@ -88,6 +100,8 @@ impl Give {
             samples: Vec::new(),
             timeout: GIVE_TIMEOUT,
             receiver_hand: None,
+            ended: Arc::new(Signal::default()),
+            last_tick: 0,
         }
     }
 
@@ -119,8 +133,16 @@ pub fn meeting_point(world: &World, giver: usize, receiver: usize) -> Option<DVe
     Some(DVec3::new(mid.x, shoulder - 0.3, mid.z))
 }
 
+impl Give {
+    /// The signal raised when this give ends, for a receiver that waits for it.
+    pub fn ended(&self) -> Arc<Signal> {
+        self.ended.clone()
+    }
+}
+
 impl Generator for Give {
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        self.last_tick = ctx.tick;
         let w = ctx.world;
         let obj = w
             .objects
@@ -157,6 +179,7 @@ impl Generator for Give {
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        self.last_tick = ctx.tick;
         let Some(arm) = &self.arm else {
             return Step::Failed("give: not started".into());
         };
@@ -260,14 +283,14 @@ pub struct HoldHand {
 }
 
 impl Drop for HoldHand {
-    /// A hold that ends any other way (cancelled, pre-empted, its duration over) lets the
-    /// follower go too: the scheduler drops the generator on the tick the action ends, one
+    /// A hold that ends any other way (cancelled, pre-empted, its duration over, failed
+    /// to start) lets the follower go too: the scheduler drops the generator on the tick the action ends, one
     /// after its last step, and the follower sees the signal from the next tick on, on
     /// every thread count alike.
     fn drop(&mut self) {
-        if self.last_tick > 0 {
-            self.finished.raise(self.last_tick + 1);
-        }
+        // A hold that never started (it failed to start, or was cancelled while pending)
+        // has `last_tick` 0: its follower is let go at once.
+        self.finished.raise(self.last_tick + 1);
     }
 }
 
@@ -326,6 +349,7 @@ fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
 
 impl Generator for HoldHand {
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+        self.last_tick = ctx.tick;
         let w = ctx.world;
         let me = actor_name(w, ctx.actor);
         if self.other == ctx.actor || self.other >= w.actors.len() {

@@ -260,6 +260,8 @@ fn grasp_is_identical_with_one_and_two_threads() {
     let mut postures = Vec::new();
     for threads in [1, 2] {
         let mut s = scene(threads);
+        // One actor per chunk: the two actors are stepped on both threads.
+        s.set_chunk_size(Some(1));
         s.add_actor(&ActorDesc {
             at: DVec3::new(1.0, 0.0, 0.0),
             ..ActorDesc::new("bob")

@@ -127,6 +127,8 @@ fn give_is_identical_with_one_and_two_threads() {
     let mut out = Vec::new();
     for threads in [1, 2] {
         let (mut s, c, gid, rid) = give_scene(threads);
+        // One actor per chunk: giver and receiver are stepped on both threads.
+        s.set_chunk_size(Some(1));
         run_all(&mut s, &[gid, rid], 1500);
         out.push((
             s.states()[0].q.clone(),

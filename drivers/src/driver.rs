@@ -257,13 +257,25 @@ impl FobConfig {
 pub struct FobProtocol {
     config: FobConfig,
     decoder: RecordDecoder,
+    /// POINT mode: whether the next request may be sent (the last one was answered).
+    poll_due: bool,
+    /// POINT mode: when the last request was sent.
+    last_poll: Instant,
+    /// POINT mode: records still expected for the last request (one per bird).
+    awaited: usize,
 }
 
 impl FobProtocol {
     /// A protocol for the given configuration.
     pub fn new(config: FobConfig) -> FobProtocol {
         let decoder = RecordDecoder::new(config.layout, 1);
-        FobProtocol { config, decoder }
+        FobProtocol {
+            config,
+            decoder,
+            poll_due: true,
+            last_poll: Instant::now(),
+            awaited: 0,
+        }
     }
 }
 
@@ -353,6 +365,9 @@ impl Protocol for FobProtocol {
             }
             write_all(port, &fob::group_mode_command(true))?;
         } else {
+            // A flock left in group mode by an earlier session would label every bird's
+            // records as this one's.
+            write_all(port, &fob::group_mode_command(false))?;
             write_all(port, &[c.layout.format.command()])?;
             let h = c.hemisphere.data();
             write_all(port, &[fob::CMD_HEMISPHERE, h[0], h[1]])?;
@@ -363,18 +378,37 @@ impl Protocol for FobProtocol {
         }
         // A fresh decoder per connection: the thread adds its counters to the earlier totals.
         self.decoder = RecordDecoder::new(c.layout, 1);
+        self.poll_due = true;
         Ok(())
     }
 
     fn before_read(&mut self, port: &mut dyn Port) -> std::io::Result<()> {
-        if self.config.mode == Mode::Point {
+        // One POINT request per answered report (a record from every bird in group mode):
+        // a request on every read would pile replies up in the port. A lost reply must
+        // not stall polling forever: re-poll after 100 ms.
+        if self.config.mode == Mode::Point
+            && (self.poll_due || self.last_poll.elapsed() > Duration::from_millis(100))
+        {
             port.write_all(&[fob::CMD_POINT])?;
+            self.poll_due = false;
+            self.awaited = usize::from(self.config.birds.max(1));
+            self.last_poll = Instant::now();
         }
         Ok(())
     }
 
     fn decode(&mut self, bytes: &[u8], out: &mut dyn FnMut(Reading)) {
-        self.decoder.feed(bytes, |r| out(Reading::Bird(r)));
+        let mut records = 0;
+        self.decoder.feed(bytes, |r| {
+            records += 1;
+            out(Reading::Bird(r))
+        });
+        if records > 0 {
+            self.awaited = self.awaited.saturating_sub(records);
+            if self.awaited == 0 {
+                self.poll_due = true;
+            }
+        }
     }
 
     fn counters(&self) -> (u64, u64) {

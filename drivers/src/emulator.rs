@@ -426,7 +426,7 @@ impl Emulator {
             let _ = t.join();
         }
         if let Some(l) = &self.link {
-            let _ = std::fs::remove_file(l);
+            remove_symlink(l);
         }
     }
 
@@ -463,7 +463,13 @@ pub fn start(
     let pty = Pty::open()?;
     let path = pty.path().to_string();
     if let Some(l) = link {
-        let _ = std::fs::remove_file(l);
+        if std::fs::symlink_metadata(l).is_ok_and(|m| !m.file_type().is_symlink()) {
+            return Err(format!(
+                "--link {}: a file that is not a symbolic link is there; not replacing it",
+                l.display()
+            ));
+        }
+        remove_symlink(l);
         std::os::unix::fs::symlink(&path, l)
             .map_err(|e| format!("linking {} to {path}: {e}", l.display()))?;
     }
@@ -764,5 +770,12 @@ impl GloveEmulator {
                 let _ = pty.write_all(&self.record(b'S', t));
             }
         }
+    }
+}
+
+/// Removes `path` if it is a symbolic link (the emulator's `--link`), and nothing else.
+fn remove_symlink(path: &std::path::Path) {
+    if std::fs::symlink_metadata(path).is_ok_and(|m| m.file_type().is_symlink()) {
+        let _ = std::fs::remove_file(path);
     }
 }

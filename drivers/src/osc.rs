@@ -135,7 +135,9 @@ impl OscListener {
         let thread = std::thread::Builder::new()
             .name(format!("osc {local}"))
             .spawn(move || {
-                let mut buf = vec![0u8; rosc::decoder::MTU];
+                // The largest UDP payload: a bundle with every joint of an actor (what
+                // `--osc-out` sends) is several KB, more than rosc's MTU constant.
+                let mut buf = vec![0u8; 65_507];
                 while !s.load(Ordering::Acquire) {
                     let n = match socket.recv(&mut buf) {
                         Ok(n) => n,

@@ -19,6 +19,8 @@ fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (Director, Share
         seed: 0,
     };
     let mut d = Director::new(config, kinds, ScriptLimits::default()).unwrap();
+    // One actor per chunk: with two threads, even two actors are stepped on both.
+    d.with_scene_mut(|s| s.set_chunk_size(Some(1)));
     let shared = performer::install(&mut d, recorder).unwrap();
     (d, shared)
 }

@@ -18,6 +18,8 @@ const CHUNKS_PER_WORKER: usize = 8;
 #[derive(Clone, Copy, Debug)]
 pub struct WorkerPool {
     threads: usize,
+    /// Actors per chunk, when fixed (tests spread even two actors over two threads).
+    chunk: Option<usize>,
 }
 
 impl WorkerPool {
@@ -25,6 +27,17 @@ impl WorkerPool {
     pub fn new(threads: usize) -> Self {
         WorkerPool {
             threads: threads.max(1),
+            chunk: None,
+        }
+    }
+
+    /// The same pool cutting work into chunks of exactly `items` (at least 1), and using
+    /// every thread whenever there are at least as many chunks; `None` restores the
+    /// automatic sizes.
+    pub fn with_chunk(self, items: Option<usize>) -> Self {
+        WorkerPool {
+            chunk: items.map(|n| n.max(1)),
+            ..self
         }
     }
 
@@ -35,11 +48,16 @@ impl WorkerPool {
 
     /// Calls `f(index, item)` once for every item.
     pub fn for_each<T: Send>(&self, items: &mut [T], f: impl Fn(usize, &mut T) + Sync) {
-        // A worker is worth its start-up only with a full chunk's worth of actors.
-        let workers = self.threads.min(items.len().div_ceil(CHUNK));
-        // Smaller crowds get smaller chunks: 100 actors in chunks of 16 would leave one
-        // worker with four chunks and the other with three.
-        let size = (items.len() / (self.threads * CHUNKS_PER_WORKER)).clamp(MIN_CHUNK, CHUNK);
+        let (workers, size) = match self.chunk {
+            Some(size) => (self.threads.min(items.len().div_ceil(size)), size),
+            None => (
+                // A worker is worth its start-up only with a full chunk's worth of actors.
+                self.threads.min(items.len().div_ceil(CHUNK)),
+                // Smaller crowds get smaller chunks: 100 actors in chunks of 16 would
+                // leave one worker with four chunks and the other with three.
+                (items.len() / (self.threads * CHUNKS_PER_WORKER)).clamp(MIN_CHUNK, CHUNK),
+            ),
+        };
         if workers <= 1 {
             for (i, item) in items.iter_mut().enumerate() {
                 f(i, item);
@@ -81,15 +99,39 @@ mod tests {
     #[test]
     fn every_item_once_with_its_index() {
         // Sizes that give one worker, small chunks, a ragged last chunk, full chunks.
-        for count in [0, 1, 10, 17, 100, 133, 1000] {
+        for count in [0, 1, 2, 10, 17, 100, 133, 1000] {
             for threads in [1, 2, 4] {
-                let mut items: Vec<(usize, u32)> = (0..count).map(|i| (i, 0)).collect();
-                WorkerPool::new(threads).for_each(&mut items, |i, item| {
-                    assert_eq!(i, item.0);
-                    item.1 += 1;
-                });
-                assert!(items.iter().all(|(_, n)| *n == 1), "{count} on {threads}");
+                for chunk in [None, Some(1), Some(3)] {
+                    let mut items: Vec<(usize, u32)> = (0..count).map(|i| (i, 0)).collect();
+                    let pool = WorkerPool::new(threads).with_chunk(chunk);
+                    pool.for_each(&mut items, |i, item| {
+                        assert_eq!(i, item.0);
+                        item.1 += 1;
+                    });
+                    assert!(
+                        items.iter().all(|(_, n)| *n == 1),
+                        "{count} on {threads}, {chunk:?}"
+                    );
+                }
             }
         }
+    }
+
+    #[test]
+    fn a_fixed_chunk_of_one_uses_every_thread_for_two_items() {
+        // Each item waits (up to 2 s) until both have started: only two threads both see it.
+        let started = AtomicUsize::new(0);
+        let mut met = [false; 2];
+        WorkerPool::new(2)
+            .with_chunk(Some(1))
+            .for_each(&mut met, |_, met| {
+                started.fetch_add(1, Ordering::SeqCst);
+                let until = std::time::Instant::now() + std::time::Duration::from_secs(2);
+                while started.load(Ordering::SeqCst) < 2 && std::time::Instant::now() < until {
+                    std::thread::yield_now();
+                }
+                *met = started.load(Ordering::SeqCst) == 2;
+            });
+        assert_eq!(met, [true, true]);
     }
 }

@@ -165,3 +165,25 @@ test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold fre
   expect(run_until(function() return h.status == "cancelled" and follow.status == "completed" end, 1),
          "let go: " .. h.status .. ", follow " .. follow.status)
 end)
+
+test("a give or a hold that fails to start lets the partner's action end", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  -- Ann does not hold the cup: her give fails at its start, Bob's receive must not wait.
+  local g = ann:give{ object = cup, to = bob }
+  local r = bob:actions()[#bob:actions()]
+  expect(r.kind == "receive", "bob receives: " .. r.kind)
+  expect(run_until(function() return g.status == "failed" and r.status == "failed" end, 1),
+         "both end: give " .. g.status .. ", receive " .. r.status)
+  expect(g.error:find("does not hold") ~= nil, g.error)
+  expect(r.error:find("giver") ~= nil, tostring(r.error))
+  -- Carl's hand is out of Ann's reach: the hold fails, the follower ends too.
+  local carl = troupe.actor{ name = "carl", at = {3, 0, 0} }
+  local h = ann:hold_hand{ other = carl }
+  local f = carl:actions()[1]
+  expect(f.kind == "follow_hand", "carl follows")
+  expect(run_until(function() return h.status == "failed" and f.status == "completed" end, 1),
+         "both end: hold " .. h.status .. ", follow " .. f.status)
+end)

@@ -92,6 +92,8 @@ pub struct Grasp {
     samples: Vec<(usize, f64)>,
     /// Wait for this signal before planning (a receiver waits for the giver).
     gate: Option<Arc<Signal>>,
+    /// Raised when the giver's action ended: a receiver still waiting fails.
+    abort: Option<Arc<Signal>>,
     /// Raised when the object is held.
     done: Option<Arc<Signal>>,
 }
@@ -125,8 +127,16 @@ impl Grasp {
             globals: Vec::new(),
             samples: Vec::new(),
             gate: None,
+            abort: None,
             done: None,
         })
+    }
+
+    /// Fails while still waiting for its gate once `abort` is raised (the giver's action
+    /// ended without the object arriving).
+    pub fn abandoned_by(mut self, abort: Arc<Signal>) -> Self {
+        self.abort = Some(abort);
+        self
     }
 
     /// Waits for `gate` before planning.
@@ -219,6 +229,12 @@ impl Generator for Grasp {
             Phase::Waiting => {
                 self.q.copy_from_slice(&ctx.posture.q);
                 let open = self.gate.as_ref().is_some_and(|g| g.before(ctx.tick));
+                if !open && self.abort.as_ref().is_some_and(|a| a.before(ctx.tick)) {
+                    return Step::Failed(
+                        "the giver's action ended before the object reached the meeting point"
+                            .into(),
+                    );
+                }
                 if open {
                     if let Err(e) = self.begin(ctx) {
                         return Step::Failed(e);

@@ -145,9 +145,8 @@ impl Drop for Offering {
     /// Closes the offer the tick after the last step (the scheduler drops a generator on
     /// the tick its action ends), seen by the receiver from the next tick on.
     fn drop(&mut self) {
-        if self.last_tick > 0 {
-            self.closed.raise(self.last_tick + 1);
-        }
+        // Never stepped (cancelled while pending): closed at once.
+        self.closed.raise(self.last_tick + 1);
     }
 }
 

@@ -415,7 +415,8 @@ fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
         1.0,
     )
     .map_err(|e| err(m, e))?
-    .gated(arrived);
+    .gated(arrived)
+    .abandoned_by(giver.ended());
     let mut rx_spec = ActionSpec::new("receive", rx_scope);
     rx_spec.delay = common.delay;
     ctx.with_scene_mut(|s| s.start_action(to, rx_spec, Box::new(receive)))?

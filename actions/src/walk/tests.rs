@@ -458,6 +458,8 @@ fn same_result_with_one_and_two_threads() {
         .iter()
         .map(|&threads| {
             let mut scene = adult_scene(100.0, threads);
+            // One actor per chunk: the three walkers are stepped on both threads.
+            scene.set_chunk_size(Some(1));
             for (i, (from, to)) in [
                 ((0.0, 0.0), (3.0, 3.0)),
                 ((3.0, 0.0), (0.0, 3.0)),
