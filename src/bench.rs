@@ -220,7 +220,7 @@ fn run_one(
         threads,
         ticks: measured,
         wall,
-        tick_mean: total / measured as u32,
+        tick_mean: Duration::from_secs_f64(total.as_secs_f64() / measured as f64),
         tick_p99: p99,
         phases,
         peak_rss,

@@ -50,6 +50,11 @@ test("manipulate with a function of time", function()
                             keys = function(t) return {-0.2, 1.05 + 0.1 * t, 0.38} end }
   expect(run_until(function() return done(m) end, 3), "manipulate: " .. tostring(m.error))
   expect(math.abs(ball:position()[2] - 1.15) < 0.01, "lifted 10 cm")
+  -- 0.28 s is 7.000…01 sampling steps of 0.04 s: the last key must not repeat.
+  local back = ann:manipulate{ object = ball, duration = 0.28,
+                               keys = function(t) return {-0.2, 1.15 - 0.1 * t / 0.28, 0.38} end }
+  expect(run_until(function() return done(back) end, 2), "manipulate 0.28 s: " .. tostring(back.error))
+  expect(math.abs(ball:position()[2] - 1.05) < 0.01, "put back down")
 end)
 
 test("give a cup: the receiver holds it and both complete", function()

@@ -303,10 +303,16 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                 .filter(|d| d.is_finite() && *d > 0.0)
                 .ok_or_else(|| err(m, "a function of time needs `duration` (seconds > 0)"))?;
             const STEP: f64 = 0.04;
-            let n = (duration / STEP).ceil() as usize;
+            // The tolerance keeps `0.28 / 0.04 = 7.000…01` from adding a key at the end
+            // time twice.
+            let n = (duration / STEP - 1e-9).ceil().max(1.0) as usize;
             let mut keys = Vec::with_capacity(n);
             for i in 1..=n {
-                let time = (i as f64 * STEP).min(duration);
+                let time = if i == n {
+                    duration
+                } else {
+                    (i as f64 * STEP).min(duration)
+                };
                 let (at, r): (Value, Value) = f.call(time)?;
                 let position = vec3(&at, &format!("{m}: keys({time})"))?;
                 let rotation = if r.is_nil() {

@@ -68,12 +68,27 @@ pub fn relative_cycle_length(rv: f64) -> f64 {
 pub fn cycle_at(speed: f64, ht: f64, step_scale: f64) -> CycleTimes {
     let rv = (speed / ht).max(MIN_CADENCE_RV);
     let dc = relative_cycle_length(rv) / rv * step_scale;
-    CycleTimes::from_cycle(dc)
+    // Eq. 2-6 leaves no double support below Dc = 0.143 / 0.252 = 0.567 s (shortened
+    // steps at a high speed): the cycle is kept above that, so the steps lengthen.
+    CycleTimes::from_cycle(dc.max(MIN_CYCLE))
 }
+
+/// The shortest cycle (s): eq. 2-6 then still gives about 14 ms of double support.
+pub const MIN_CYCLE: f64 = 0.62;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn short_steps_at_high_speed_keep_a_double_support() {
+        let ht = 0.93;
+        for rv in [1.0, 1.5, 2.0, 3.0] {
+            let c = cycle_at(rv * ht, ht, 0.5);
+            assert!(c.double_support > 0.0, "RV {rv}: {c:?}");
+            assert!(c.cycle >= MIN_CYCLE);
+        }
+    }
 
     #[test]
     fn phase_durations_add_up() {

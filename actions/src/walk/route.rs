@@ -115,6 +115,14 @@ impl Route {
                         if s.is_empty() {
                             return Err("`velocity` gave no samples".into());
                         }
+                        if s.len() < 2 && duration.is_none() {
+                            // The walk's length comes from the samples: one sample spans
+                            // no time at all.
+                            return Err(
+                                "`velocity` samples need a `duration` or at least two samples"
+                                    .into(),
+                            );
+                        }
                         for (i, &v) in s.iter().enumerate() {
                             let t = i as f64 * PROFILE_DT;
                             if !v.is_finite() || v < 0.0 {
@@ -649,5 +657,10 @@ mod tests {
             };
             assert!(r.check(ht).unwrap_err().contains("velocity"), "{v}");
         }
+        let one = Route::Velocity {
+            speed: Speed::Samples(vec![1.0]),
+            duration: None,
+        };
+        assert!(one.check(ht).unwrap_err().contains("duration"));
     }
 }
