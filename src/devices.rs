@@ -359,6 +359,10 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
                 println!("          deg   {}", a.join(" "));
             }
         }
+        Reading::SpaceMouse(m) => println!(
+            "{:8.3}s spacemouse t {:?} r {:?} buttons {:#x}",
+            s.time, m.translation, m.rotation, m.buttons
+        ),
     }
 }
 
