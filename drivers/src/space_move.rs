@@ -509,6 +509,60 @@ mod tests {
     }
 
     #[test]
+    fn a_held_object_is_not_moved_and_a_free_one_is() {
+        use troupe_runtime::holding::HoldRequest;
+        use troupe_runtime::{ActorDesc, SceneConfig, Shape};
+        let mut scene = Scene::new(SceneConfig {
+            rate: 100.0,
+            threads: 1,
+            seed: 0,
+        })
+        .unwrap();
+        let ann = scene.add_actor(&ActorDesc::new("ann")).unwrap();
+        let ball = Shape::Sphere { radius: 0.05 };
+        let held = scene
+            .add_object(Scene::object("held", ball.clone(), DVec3::new(0.0, 1.0, 0.3), 1.0))
+            .unwrap();
+        let free = scene
+            .add_object(Scene::object("free", ball, DVec3::new(1.0, 1.0, 0.0), 1.0))
+            .unwrap();
+        let wrist = scene.actors()[ann].skeleton.joint("r_wrist").unwrap();
+        assert!(scene.request_hold(
+            ann,
+            HoldRequest::Attach {
+                object: held,
+                joint: wrist,
+                from: None
+            }
+        ));
+        let pushed = || Source::Replay {
+            readings: vec![(0.0, Reading::SpaceMouse(full([350, 0, 0], [0; 3])))],
+            next: 0,
+            start: 0.0,
+        };
+        let mut mice = SpaceMice::default();
+        for (name, object) in [("a", held), ("b", free)] {
+            mice.movers.push(Mover {
+                name: name.into(),
+                object,
+                source: pushed(),
+                state: SpaceMouseState::default(),
+                options: MoveOptions::default(),
+            });
+        }
+        let before = scene.objects()[held].position;
+        mice.step(&mut scene);
+        assert_eq!(scene.objects()[held].position, before, "held: not moved");
+        assert!(
+            (scene.objects()[free].position.x - (1.0 + scene.dt())).abs() < 1e-12,
+            "free: moved one tick at full speed"
+        );
+        assert_eq!(mice.state("a").map(|s| s.translation), Some([350, 0, 0]));
+        assert_eq!(mice.health("b"), Some(None), "a replay has no device health");
+        assert_eq!(mice.health("c"), None);
+    }
+
+    #[test]
     fn device_frame_maps_to_a_proper_rotation() {
         // Right × towards-user = down in the device frame; the mapping must keep
         // handedness: scene X × scene Z = −Y (down).
