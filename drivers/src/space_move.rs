@@ -14,7 +14,9 @@
 //! user moves it along +Z, and twisting the cap counter-clockwise seen from above turns the
 //! object counter-clockwise about +Y. The same proper rotation maps the rotation axes.
 
-use crate::driver::{self, DeviceHandle, DriverOptions, HealthReport, HealthState, Opener, Reading};
+use crate::driver::{
+    self, DeviceHandle, DriverOptions, HealthReport, HealthState, Opener, Reading,
+};
 use crate::record::{Recorder, Recording};
 use crate::spacemouse::{SpaceMouseProtocol, SpaceMouseState};
 use glam::{DQuat, DVec3};
@@ -83,10 +85,7 @@ pub fn integrate(
     dt: f64,
 ) -> (DVec3, DQuat) {
     let turn = DQuat::from_scaled_axis(angular * dt);
-    (
-        position + linear * dt,
-        (turn * rotation).normalize(),
-    )
+    (position + linear * dt, (turn * rotation).normalize())
 }
 
 /// Where a mover's readings come from.
@@ -267,11 +266,10 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             if let Value::String(n) = &who {
                 let n = n.to_str()?.to_string();
                 let s = shared(lua)?;
-                let report = s
-                    .0
-                    .lock()
-                    .map_err(|_| err("spacemouse lock poisoned"))?
-                    .health(&n);
+                let report =
+                    s.0.lock()
+                        .map_err(|_| err("spacemouse lock poisoned"))?
+                        .health(&n);
                 if let Some(report) = report {
                     let t = lua.create_table()?;
                     match report {
@@ -325,10 +323,11 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
         }
     }
     let object = match t.get::<Value>("object")? {
-        Value::UserData(u) => u
-            .borrow::<ObjectRef>()
-            .map_err(|_| err("spacemouse: `object` must be an object or an object name"))?
-            .0,
+        Value::UserData(u) => {
+            u.borrow::<ObjectRef>()
+                .map_err(|_| err("spacemouse: `object` must be an object or an object name"))?
+                .0
+        }
         Value::String(n) => {
             let n = n.to_str()?.to_string();
             troupe_runtime::lua::kinds::with_scene(lua, |s| s.object_index(&n))?
@@ -405,9 +404,8 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
             let mut o = DriverOptions::new(&name, path.as_deref().unwrap_or(""));
             // A SpaceMouse at rest sends nothing: silence is not staleness.
             o.stale_after = Duration::MAX;
-            let opener: Opener = Box::new(move |_o: &DriverOptions| {
-                crate::hid::open_spacemouse(path.as_deref())
-            });
+            let opener: Opener =
+                Box::new(move |_o: &DriverOptions| crate::hid::open_spacemouse(path.as_deref()));
             Source::Live(driver::spawn_with(
                 o,
                 Box::new(SpaceMouseProtocol::default()),
@@ -521,7 +519,7 @@ mod tests {
         let ann = scene.add_actor(&ActorDesc::new("ann")).unwrap();
         let ball = Shape::Sphere { radius: 0.05 };
         let held = scene
-            .add_object(Scene::object("held", ball.clone(), DVec3::new(0.0, 1.0, 0.3), 1.0))
+            .add_object(Scene::object("held", ball, DVec3::new(0.0, 1.0, 0.3), 1.0))
             .unwrap();
         let free = scene
             .add_object(Scene::object("free", ball, DVec3::new(1.0, 1.0, 0.0), 1.0))
@@ -558,7 +556,11 @@ mod tests {
             "free: moved one tick at full speed"
         );
         assert_eq!(mice.state("a").map(|s| s.translation), Some([350, 0, 0]));
-        assert_eq!(mice.health("b"), Some(None), "a replay has no device health");
+        assert_eq!(
+            mice.health("b"),
+            Some(None),
+            "a replay has no device health"
+        );
         assert_eq!(mice.health("c"), None);
     }
 

@@ -198,10 +198,9 @@ mod tests {
         let mut got = Vec::new();
         // Wired translation, then a Pro Wireless 13-byte report, then garbage.
         p.decode(&[1, 10, 0, 0, 0, 0, 0], &mut |r| got.push(r));
-        p.decode(
-            &[1, 1, 0, 2, 0, 3, 0, 4, 0, 5, 0, 6, 0],
-            &mut |r| got.push(r),
-        );
+        p.decode(&[1, 1, 0, 2, 0, 3, 0, 4, 0, 5, 0, 6, 0], &mut |r| {
+            got.push(r)
+        });
         p.decode(&[7, 1, 2], &mut |r| got.push(r));
         assert_eq!(got.len(), 2);
         let Reading::SpaceMouse(s) = &got[1] else {

@@ -186,11 +186,26 @@ fn bad_options_are_clear_errors() {
     )
     .unwrap();
     for (code, want) in [
-        (r#"troupe.devices.spacemouse{ object = "nope", replay = "x.rec" }"#, "nope"),
-        (r#"troupe.devices.spacemouse{ object = "crate", sped = 1 }"#, "unknown option `sped`"),
-        (r#"troupe.devices.spacemouse{ object = "crate", deadzone = 1.5, replay = "x.rec" }"#, "deadzone"),
-        (r#"troupe.devices.spacemouse{ object = "crate", replay = "/nonexistent/x.rec" }"#, "/nonexistent/x.rec"),
-        (r#"troupe.devices.spacemouse{ replay = "x.rec" }"#, "`object` is required"),
+        (
+            r#"troupe.devices.spacemouse{ object = "nope", replay = "x.rec" }"#,
+            "nope",
+        ),
+        (
+            r#"troupe.devices.spacemouse{ object = "crate", sped = 1 }"#,
+            "unknown option `sped`",
+        ),
+        (
+            r#"troupe.devices.spacemouse{ object = "crate", deadzone = 1.5, replay = "x.rec" }"#,
+            "deadzone",
+        ),
+        (
+            r#"troupe.devices.spacemouse{ object = "crate", replay = "/nonexistent/x.rec" }"#,
+            "/nonexistent/x.rec",
+        ),
+        (
+            r#"troupe.devices.spacemouse{ replay = "x.rec" }"#,
+            "`object` is required",
+        ),
     ] {
         let e = d.load_str(code, "bad").unwrap_err().to_string();
         assert!(e.contains(want), "{code}: {e}");
