@@ -2,7 +2,8 @@
 //! 13-byte layouts of shared/reference/devices.md) replayed through
 //! `troupe.devices.spacemouse{…}` moves and turns objects by exactly speed × time and
 //! turn × time, identically with 1 and 2 scheduler threads; a missing device leaves the
-//! scene ticking with its health saying why.
+//! scene ticking with its health saying why; live reports are recorded one per chunk and
+//! replay to the same states.
 
 use glam::{DQuat, DVec3};
 use std::path::Path;
@@ -210,4 +211,92 @@ fn bad_options_are_clear_errors() {
         let e = d.load_str(code, "bad").unwrap_err().to_string();
         assert!(e.contains(want), "{code}: {e}");
     }
+}
+
+/// A stand-in for a hidraw device: each read returns one queued report, then reads time
+/// out like a SpaceMouse at rest.
+struct FakeHid(std::collections::VecDeque<Vec<u8>>);
+
+impl std::io::Read for FakeHid {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        match self.0.pop_front() {
+            Some(r) => {
+                buf[..r.len()].copy_from_slice(&r);
+                Ok(r.len())
+            }
+            None => {
+                std::thread::sleep(Duration::from_millis(2));
+                Err(std::io::ErrorKind::TimedOut.into())
+            }
+        }
+    }
+}
+
+impl std::io::Write for FakeHid {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        Ok(buf.len())
+    }
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+#[test]
+fn live_reports_are_recorded_one_per_chunk_and_replay_to_the_same_states() {
+    use troupe_drivers::driver::{self, DriverOptions, Opener, Reading};
+    use troupe_drivers::record::Recording;
+    use troupe_drivers::spacemouse::SpaceMouseProtocol;
+    let dir = std::env::temp_dir().join(format!("troupe-smrec-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("live.rec");
+    let recorder = std::sync::Arc::new(Recorder::create(&path).unwrap());
+    let reports = vec![
+        wired(1, [100, -200, 300]),
+        vec![9, 9], // unknown report ID: counted, not fatal
+        wired(2, [-1, 2, -3]),
+        vec![3, 0x05, 0, 0, 0, 0, 0],
+        wired(1, [0, 0, 0]),
+    ];
+    let mut queue = Some(reports.iter().cloned().collect());
+    let opener: Opener = Box::new(move |_o: &DriverOptions| match queue.take() {
+        Some(q) => Ok(Box::new(FakeHid(q)) as Box<dyn driver::Port>),
+        None => Err("unplugged".into()),
+    });
+    let mut o = DriverOptions::new("nav", "");
+    o.stale_after = Duration::MAX;
+    let dev = driver::spawn_with(
+        o,
+        Box::new(SpaceMouseProtocol::default()),
+        Some(recorder.clone()),
+        opener,
+    );
+    let mut live = Vec::new();
+    let start = Instant::now();
+    while live.len() < 4 {
+        live.extend(dev.drain().into_iter().map(|s| s.reading));
+        assert!(
+            start.elapsed() < Duration::from_secs(10),
+            "only {} samples",
+            live.len()
+        );
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    let health = dev.health.report();
+    assert_eq!(health.resyncs, 1, "the unknown report is counted");
+    assert_eq!(health.state.name(), "streaming");
+    dev.stop();
+    recorder.finish().unwrap();
+    let rec = Recording::read(&path).unwrap();
+    let s = rec.find("spacemouse").unwrap();
+    assert_eq!(rec.streams[s].name, "nav");
+    assert_eq!(rec.chunks.len(), reports.len(), "one chunk per HID report");
+    let replayed: Vec<Reading> = rec.readings(s).unwrap().into_iter().map(|r| r.1).collect();
+    assert_eq!(replayed, live);
+    let Reading::SpaceMouse(last_moving) = &live[2] else {
+        panic!("not a SpaceMouse reading: {:?}", live[2]);
+    };
+    assert_eq!(last_moving.translation, [100, -200, 300]);
+    assert_eq!(last_moving.rotation, [-1, 2, -3]);
+    assert_eq!(last_moving.buttons, 0b101);
+    std::fs::remove_dir_all(&dir).ok();
 }
