@@ -92,11 +92,13 @@ pub fn integrate(
 enum Source {
     /// A live HID device thread.
     Live(DeviceHandle),
-    /// A recording, delivered by scene time since the mover was made.
+    /// A recording, delivered by scene time since the first scene step the mover took
+    /// part in (`start`, set then): whether the mover was made before the first tick or by
+    /// a script mid-tick, its first recorded report then moves the object for a whole tick.
     Replay {
         readings: Vec<(f64, Reading)>,
         next: usize,
-        start: f64,
+        start: Option<f64>,
     },
 }
 
@@ -132,7 +134,8 @@ impl Mover {
                 next,
                 start,
             } => {
-                while *next < readings.len() && readings[*next].0 <= time - *start + 1e-9 {
+                let start = *start.get_or_insert(time);
+                while *next < readings.len() && readings[*next].0 <= time - start + 1e-9 {
                     if let Reading::SpaceMouse(m) = &readings[*next].1 {
                         self.state = *m;
                     }
@@ -367,7 +370,6 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
         }
         g.recorder.clone()
     };
-    let scene_time = troupe_runtime::lua::kinds::with_scene(lua, |s| s.time())?;
     let source = match replay {
         Some(r) => {
             if path.is_some() {
@@ -397,7 +399,7 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
             Source::Replay {
                 readings,
                 next: 0,
-                start: scene_time,
+                start: None,
             }
         }
         None => {
@@ -536,7 +538,7 @@ mod tests {
         let pushed = || Source::Replay {
             readings: vec![(0.0, Reading::SpaceMouse(full([350, 0, 0], [0; 3])))],
             next: 0,
-            start: 0.0,
+            start: None,
         };
         let mut mice = SpaceMice::default();
         for (name, object) in [("a", held), ("b", free)] {

@@ -300,3 +300,40 @@ fn live_reports_are_recorded_one_per_chunk_and_replay_to_the_same_states() {
     assert_eq!(last_moving.buttons, 0b101);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The example's SpaceMouse session (`scripts/examples/spacemouse.rec`), a wired device:
+/// push right 0–2 s, twist counter-clockwise 2–3 s, lift 3–4 s, press and release
+/// button 1 at 4.5 s and 4.6 s, rest.
+fn write_example(path: &Path) {
+    let r = Recorder::create(path).unwrap();
+    let s = r.add_stream("spacemouse", "spacemouse", serde_json::json!({}));
+    let at = |t: f64| (t * 1e6).round() as u64;
+    r.data_at(s, at(0.0), &wired(1, [350, 0, 0]));
+    r.data_at(s, at(2.0), &wired(1, [0, 0, 0]));
+    r.data_at(s, at(2.0), &wired(2, [0, 0, -350]));
+    r.data_at(s, at(3.0), &wired(2, [0, 0, 0]));
+    r.data_at(s, at(3.0), &wired(1, [0, 0, -350]));
+    r.data_at(s, at(4.0), &wired(1, [0, 0, 0]));
+    r.data_at(s, at(4.5), &[3, 0x01, 0, 0, 0, 0, 0]);
+    r.data_at(s, at(4.6), &[3, 0x00, 0, 0, 0, 0, 0]);
+    r.finish().unwrap();
+}
+
+#[test]
+fn example_spacemouse_recording_is_the_script() {
+    let example = Path::new(env!("CARGO_MANIFEST_DIR")).join("../scripts/examples/spacemouse.rec");
+    let dir = std::env::temp_dir().join(format!("troupe-smex-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let fresh = dir.join("spacemouse.rec");
+    write_example(&fresh);
+    if std::env::var_os("TROUPE_WRITE_EXAMPLES").is_some() {
+        std::fs::copy(&fresh, &example).unwrap();
+    }
+    assert_eq!(
+        std::fs::read(&fresh).unwrap(),
+        std::fs::read(&example).unwrap(),
+        "{} differs from its script (TROUPE_WRITE_EXAMPLES=1 rewrites it)",
+        example.display()
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
