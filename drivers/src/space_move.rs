@@ -194,6 +194,14 @@ impl SpaceMice {
             .map(|m| m.health())
     }
 
+    /// Health of every live SpaceMouse: (name, report).
+    pub fn live_health(&self) -> Vec<(String, HealthReport)> {
+        self.movers
+            .iter()
+            .filter_map(|m| m.health().map(|h| (m.name.clone(), h)))
+            .collect()
+    }
+
     /// The latest state of a mover by name.
     pub fn state(&self, name: &str) -> Option<SpaceMouseState> {
         self.movers.iter().find(|m| m.name == name).map(|m| m.state)
