@@ -250,7 +250,7 @@ fn live_reports_are_recorded_one_per_chunk_and_replay_to_the_same_states() {
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("live.rec");
     let recorder = std::sync::Arc::new(Recorder::create(&path).unwrap());
-    let reports = vec![
+    let reports = [
         wired(1, [100, -200, 300]),
         vec![9, 9], // unknown report ID: counted, not fatal
         wired(2, [-1, 2, -3]),
