@@ -365,6 +365,10 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
                 println!("          deg   {}", a.join(" "));
             }
         }
+        Reading::SpaceMouse(m) => println!(
+            "{:8.3}s spacemouse t {:?} r {:?} buttons {:#x}",
+            s.time, m.translation, m.rotation, m.buttons
+        ),
     }
 }
 
@@ -496,6 +500,8 @@ pub struct RunDevices {
     performers: troupe_drivers::performer::SharedPerformers,
     recorder: Option<std::sync::Arc<troupe_drivers::record::Recorder>>,
     record_path: Option<PathBuf>,
+    /// SpaceMice moving objects (`troupe.devices.spacemouse`).
+    space: Option<troupe_drivers::space_move::SharedSpaceMice>,
 }
 
 /// A director with every action kind, `capture`, and `troupe.performer`; device streams are
@@ -516,12 +522,17 @@ pub fn director(
     };
     let performers =
         troupe_drivers::performer::install(&mut d, recorder.clone()).map_err(|e| anyhow!(e))?;
+    let space = d
+        .lua()
+        .app_data_ref::<troupe_drivers::space_move::SharedSpaceMice>()
+        .map(|s| s.clone());
     Ok((
         d,
         RunDevices {
             performers,
             recorder,
             record_path: record.map(|p| p.to_path_buf()),
+            space,
         },
     ))
 }
@@ -553,6 +564,17 @@ impl RunDevices {
                     m * 1e3,
                     p99 * 1e3,
                     p.latencies.len()
+                );
+            }
+        }
+        if let Some(Ok(s)) = self.space.as_ref().map(|s| s.0.lock()) {
+            for (name, h) in s.live_health() {
+                println!(
+                    "  device {name} (spacemouse): {}, {} reports, {} bad reports{}",
+                    h.state.name(),
+                    h.samples,
+                    h.resyncs,
+                    h.last_error.map(|e| format!(" ({e})")).unwrap_or_default()
                 );
             }
         }

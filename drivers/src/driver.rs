@@ -23,6 +23,9 @@ pub enum Reading {
     Bird(BirdRecord),
     /// One CyberGlove record.
     Glove(GloveRecord),
+    /// The state of a SpaceMouse after one HID report.
+    #[serde(rename = "spacemouse")]
+    SpaceMouse(crate::spacemouse::SpaceMouseState),
 }
 
 /// A timestamped reading.

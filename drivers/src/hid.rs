@@ -116,3 +116,57 @@ pub fn read_spacemouse(
     }
     Ok((name.to_string(), n))
 }
+
+/// A SpaceMouse opened through hidapi, seen as a driver port: each `read` returns one HID
+/// report, a read that times out is `TimedOut` (so the driver thread keeps watching its stop
+/// flag), and writes are accepted and ignored (the protocol sends nothing).
+pub struct HidPort {
+    device: hidapi::HidDevice,
+    name: String,
+}
+
+impl std::io::Read for HidPort {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        match self.device.read_timeout(buf, 20) {
+            Ok(0) => Err(std::io::Error::new(
+                std::io::ErrorKind::TimedOut,
+                "no HID report",
+            )),
+            Ok(n) => Ok(n),
+            Err(e) => Err(std::io::Error::other(format!("{}: {e}", self.name))),
+        }
+    }
+}
+
+impl std::io::Write for HidPort {
+    fn write(&mut self, buf: &[u8]) -> std::io::Result<usize> {
+        Ok(buf.len())
+    }
+
+    fn flush(&mut self) -> std::io::Result<()> {
+        Ok(())
+    }
+}
+
+/// Opens the SpaceMouse at hidraw `path`, or the first SpaceMouse found, as a driver port.
+/// The error says which device was missing or could not be opened.
+pub fn open_spacemouse(path: Option<&str>) -> Result<Box<dyn crate::driver::Port>, String> {
+    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+    let info = api
+        .device_list()
+        .find(|d| match path {
+            Some(p) => d.path().to_string_lossy() == p,
+            None => spacemouse::lookup(d.vendor_id(), d.product_id()).is_some(),
+        })
+        .ok_or_else(|| match path {
+            Some(p) => format!("no HID device at {p} (see `troupe devices`)"),
+            None => "no SpaceMouse found (vendors 046d/256f; see `troupe devices`)".to_string(),
+        })?;
+    let name = spacemouse::lookup(info.vendor_id(), info.product_id())
+        .map(|(n, _)| n.to_string())
+        .unwrap_or_else(|| "HID device".into());
+    let device = info
+        .open_device(&api)
+        .map_err(|e| format!("opening {}: {e}", info.path().to_string_lossy()))?;
+    Ok(Box::new(HidPort { device, name }))
+}

@@ -14,4 +14,5 @@ pub mod hid;
 pub mod osc;
 pub mod performer;
 pub mod record;
+pub mod space_move;
 pub mod spacemouse;

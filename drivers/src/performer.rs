@@ -850,6 +850,7 @@ pub fn install(
     director: &mut Director,
     recorder: Option<Arc<Recorder>>,
 ) -> Result<SharedPerformers, String> {
+    let space_recorder = recorder.clone();
     let shared = SharedPerformers(Arc::new(Mutex::new(Performers {
         recorder,
         ..Performers::default()
@@ -874,6 +875,9 @@ pub fn install(
         }
         Ok(())
     }));
+    // SpaceMice move objects rather than actors; they live in their own module, installed
+    // after `troupe.devices` exists.
+    crate::space_move::install(director, space_recorder)?;
     Ok(shared)
 }
 

@@ -28,7 +28,7 @@ pub const MAGIC: &[u8; 11] = b"TROUPEREC1\n";
 pub struct StreamInfo {
     /// Device name.
     pub name: String,
-    /// Device kind: `fob` or `cyberglove`.
+    /// Device kind: `fob`, `cyberglove` or `spacemouse`.
     pub kind: String,
     /// The driver settings needed to decode it.
     pub settings: serde_json::Value,
@@ -279,8 +279,9 @@ pub fn protocol_from_settings(
                 serde_json::from_value(settings.clone()).map_err(|e| e.to_string())?;
             Ok(Box::new(GloveProtocol::new(c)))
         }
+        "spacemouse" => Ok(Box::new(crate::spacemouse::SpaceMouseProtocol::default())),
         other => Err(format!(
-            "unknown device kind '{other}' (expected fob or cyberglove)"
+            "unknown device kind '{other}' (expected fob, cyberglove or spacemouse)"
         )),
     }
 }

@@ -117,6 +117,7 @@ pub struct Director {
     limits: ScriptLimits,
     instructions: Arc<AtomicU64>,
     pre_ticks: Vec<PreTick>,
+    scene_steps: Vec<SceneStep>,
 }
 
 /// A step another crate installs to run at the start of every tick, before the scripts of
@@ -124,6 +125,11 @@ pub struct Director {
 /// scheduler see a sample one tick after it arrived at most). It gets the Lua state (for its
 /// own app data) and the scene as of the previous tick.
 pub type PreTick = Box<dyn FnMut(&Lua, &Scene) -> std::result::Result<(), String> + Send>;
+
+/// A step run right after the pre-tick steps, before the scripts, that may change the scene
+/// itself (e.g. a SpaceMouse moving an object). It gets no Lua state: the scene lives inside
+/// the Lua state's app data, which is borrowed mutably while the step runs.
+pub type SceneStep = Box<dyn FnMut(&mut Scene) -> std::result::Result<(), String> + Send>;
 
 pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<()> {
     let thread = lua.create_thread(f.clone())?;
@@ -161,6 +167,7 @@ impl Director {
             limits,
             instructions,
             pre_ticks: Vec::new(),
+            scene_steps: Vec::new(),
         };
         director
             .setup(scene, kinds)
@@ -377,6 +384,11 @@ impl Director {
         self.pre_ticks.push(step);
     }
 
+    /// Adds a step that changes the scene, run after the pre-tick steps (see [`SceneStep`]).
+    pub fn add_scene_step(&mut self, step: SceneStep) {
+        self.scene_steps.push(step);
+    }
+
     /// The script phase of a tick: the pre-tick steps, event handlers for the previous
     /// tick's events, then every behavior whose wait condition holds, in creation order.
     pub fn run_scripts(&mut self) {
@@ -390,6 +402,18 @@ impl Director {
                 }
             }
             self.pre_ticks = steps;
+        }
+        if !self.scene_steps.is_empty() {
+            let mut steps = std::mem::take(&mut self.scene_steps);
+            {
+                let mut st = self.stage_mut();
+                for step in steps.iter_mut() {
+                    if let Err(e) = step(&mut st.scene) {
+                        tracing::error!("scene step failed: {e}");
+                    }
+                }
+            }
+            self.scene_steps = steps;
         }
         self.run_handlers();
         self.run_behaviors();

@@ -1,0 +1,587 @@
+//! Moving a scene object with a SpaceMouse (`troupe.devices.spacemouse{…}`).
+//!
+//! Each tick, in the scene step that runs right after the pre-tick steps and before the
+//! scripts, every SpaceMouse mover takes the readings that are due — from its device thread
+//! (never blocking: the thread's channel is drained with `try_recv`) or from a replayed
+//! recording by scene time (deterministic) — and moves its object for one tick: a linear
+//! velocity from the three translation axes and an angular velocity from the three rotation
+//! axes, both mapped from the device frame to the scene frame.
+//!
+//! Frames: the SpaceMouse's HID axes are X right, Y towards the user, Z down (right-handed),
+//! rotations right-handed about those axes. The user is taken to sit in front of the scene
+//! looking along −Z (scene Y up), so device (x, y, z) becomes scene (x, −z, y): pushing the
+//! cap right moves the object along +X, lifting it moves it up (+Y), pulling it towards the
+//! user moves it along +Z, and twisting the cap counter-clockwise seen from above turns the
+//! object counter-clockwise about +Y. The same proper rotation maps the rotation axes.
+
+use crate::driver::{
+    self, DeviceHandle, DriverOptions, HealthReport, HealthState, Opener, Reading,
+};
+use crate::record::{Recorder, Recording};
+use crate::spacemouse::{SpaceMouseProtocol, SpaceMouseState};
+use glam::{DQuat, DVec3};
+use mlua::{Lua, Table, Value};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+use troupe_runtime::lua::api::{lua_err_message, ObjectRef};
+use troupe_runtime::lua::Director;
+use troupe_runtime::Scene;
+
+/// How deflection becomes motion.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MoveOptions {
+    /// Metres per second at full deflection.
+    pub speed: f64,
+    /// Radians per second at full deflection.
+    pub turn: f64,
+    /// Fraction of full scale (0…1) under which an axis counts as at rest.
+    pub deadzone: f64,
+}
+
+impl Default for MoveOptions {
+    /// 1 m/s, 90°/s, 5 % deadzone.
+    fn default() -> MoveOptions {
+        MoveOptions {
+            speed: 1.0,
+            turn: 90f64.to_radians(),
+            deadzone: 0.05,
+        }
+    }
+}
+
+/// One axis with the deadzone removed and the rest rescaled so full deflection stays 1: an
+/// axis resting a little off zero does not creep, and the range stays continuous.
+pub fn deadzoned(u: f64, deadzone: f64) -> f64 {
+    let a = u.abs();
+    if a <= deadzone {
+        0.0
+    } else {
+        u.signum() * ((a - deadzone) / (1.0 - deadzone)).min(1.0)
+    }
+}
+
+/// Device axes (X right, Y towards the user, Z down) to scene axes (Y up, user looking
+/// along −Z): (x, y, z) ↦ (x, −z, y).
+pub fn device_to_scene(v: [f64; 3]) -> DVec3 {
+    DVec3::new(v[0], -v[2], v[1])
+}
+
+/// Linear (m/s) and angular (rad/s, scaled axis) velocity in the scene frame for a state.
+pub fn velocity(state: &SpaceMouseState, o: &MoveOptions) -> (DVec3, DVec3) {
+    let t = state.translation_unit().map(|u| deadzoned(u, o.deadzone));
+    let r = state.rotation_unit().map(|u| deadzoned(u, o.deadzone));
+    (device_to_scene(t) * o.speed, device_to_scene(r) * o.turn)
+}
+
+/// Moves a pose for `dt` seconds at the given velocities; the rotation is about the object's
+/// centre, with the angular velocity in the scene frame (so it turns as the cap turns,
+/// whatever the object's own orientation).
+pub fn integrate(
+    position: DVec3,
+    rotation: DQuat,
+    linear: DVec3,
+    angular: DVec3,
+    dt: f64,
+) -> (DVec3, DQuat) {
+    let turn = DQuat::from_scaled_axis(angular * dt);
+    (position + linear * dt, (turn * rotation).normalize())
+}
+
+/// Where a mover's readings come from.
+enum Source {
+    /// A live HID device thread.
+    Live(DeviceHandle),
+    /// A recording, delivered by scene time since the first scene step the mover took
+    /// part in (`start`, set then): whether the mover was made before the first tick or by
+    /// a script mid-tick, its first recorded report then moves the object for a whole tick.
+    Replay {
+        readings: Vec<(f64, Reading)>,
+        next: usize,
+        start: Option<f64>,
+    },
+}
+
+/// One SpaceMouse moving one object.
+struct Mover {
+    name: String,
+    object: usize,
+    source: Source,
+    state: SpaceMouseState,
+    options: MoveOptions,
+}
+
+impl Mover {
+    /// Takes the readings due at `time` into the state.
+    fn update(&mut self, time: f64) {
+        match &mut self.source {
+            Source::Live(h) => {
+                for s in h.drain() {
+                    if let Reading::SpaceMouse(m) = s.reading {
+                        self.state = m;
+                    }
+                }
+                // A device that went away must not keep the object flying with its last axes.
+                if matches!(
+                    h.health.state(),
+                    HealthState::Reconnecting | HealthState::Failed
+                ) {
+                    self.state = SpaceMouseState::default();
+                }
+            }
+            Source::Replay {
+                readings,
+                next,
+                start,
+            } => {
+                let start = *start.get_or_insert(time);
+                while *next < readings.len() && readings[*next].0 <= time - start + 1e-9 {
+                    if let Reading::SpaceMouse(m) = &readings[*next].1 {
+                        self.state = *m;
+                    }
+                    *next += 1;
+                }
+            }
+        }
+    }
+
+    fn health(&self) -> Option<HealthReport> {
+        match &self.source {
+            Source::Live(h) => Some(h.health.report()),
+            Source::Replay { .. } => None,
+        }
+    }
+}
+
+/// Every SpaceMouse mover of a scene, and the recorder for live devices.
+#[derive(Default)]
+pub struct SpaceMice {
+    movers: Vec<Mover>,
+    recorder: Option<Arc<Recorder>>,
+}
+
+/// Lua app data: the shared movers.
+#[derive(Clone)]
+pub struct SharedSpaceMice(pub Arc<Mutex<SpaceMice>>);
+
+impl SpaceMice {
+    /// The scene step: take due readings, then move each object not held by an actor.
+    pub fn step(&mut self, scene: &mut Scene) {
+        let time = scene.time();
+        let dt = scene.dt();
+        for m in &mut self.movers {
+            m.update(time);
+            // A held object follows its holder's hand (crate::holding); moving it here
+            // would fight the hand, so a held object is left alone.
+            if scene.holder(m.object).is_some() {
+                continue;
+            }
+            let (lin, ang) = velocity(&m.state, &m.options);
+            if lin == DVec3::ZERO && ang == DVec3::ZERO {
+                continue;
+            }
+            if let Some(o) = scene.objects_mut().get_mut(m.object) {
+                (o.position, o.rotation) = integrate(o.position, o.rotation, lin, ang, dt);
+            }
+        }
+    }
+
+    /// Health of a mover by name: `Some(None)` for a replay, `None` for an unknown name.
+    pub fn health(&self, name: &str) -> Option<Option<HealthReport>> {
+        self.movers
+            .iter()
+            .find(|m| m.name == name)
+            .map(|m| m.health())
+    }
+
+    /// Health of every live SpaceMouse: (name, report).
+    pub fn live_health(&self) -> Vec<(String, HealthReport)> {
+        self.movers
+            .iter()
+            .filter_map(|m| m.health().map(|h| (m.name.clone(), h)))
+            .collect()
+    }
+
+    /// The latest state of a mover by name.
+    pub fn state(&self, name: &str) -> Option<SpaceMouseState> {
+        self.movers.iter().find(|m| m.name == name).map(|m| m.state)
+    }
+}
+
+/// Installs `troupe.devices.spacemouse` (and SpaceMouse names in `troupe.devices.health`)
+/// and the scene step that moves the objects. Call after [`crate::performer::install`],
+/// which makes `troupe.devices`. `recorder` records live SpaceMouse reports.
+pub fn install(
+    director: &mut Director,
+    recorder: Option<Arc<Recorder>>,
+) -> Result<SharedSpaceMice, String> {
+    let shared = SharedSpaceMice(Arc::new(Mutex::new(SpaceMice {
+        movers: Vec::new(),
+        recorder,
+    })));
+    let lua = director.lua();
+    lua.set_app_data(shared.clone());
+    install_lua(lua).map_err(|e| format!("installing troupe.devices.spacemouse: {e}"))?;
+    let s = shared.clone();
+    director.add_scene_step(Box::new(move |scene: &mut Scene| {
+        s.0.lock()
+            .map_err(|_| "spacemouse lock poisoned".to_string())?
+            .step(scene);
+        Ok(())
+    }));
+    Ok(shared)
+}
+
+fn err(e: impl std::fmt::Display) -> mlua::Error {
+    lua_err_message(e)
+}
+
+fn shared(lua: &Lua) -> mlua::Result<SharedSpaceMice> {
+    lua.app_data_ref::<SharedSpaceMice>()
+        .map(|s| s.clone())
+        .ok_or_else(|| err("devices are not enabled"))
+}
+
+fn resolve(lua: &Lua, p: &str) -> PathBuf {
+    let path = Path::new(p);
+    if path.is_absolute() {
+        path.to_path_buf()
+    } else {
+        troupe_runtime::lua::scene_dir(lua)
+            .unwrap_or_else(|| PathBuf::from("."))
+            .join(path)
+    }
+}
+
+const KEYS: [&str; 8] = [
+    "object", "name", "path", "replay", "stream", "speed", "turn", "deadzone",
+];
+
+fn install_lua(lua: &Lua) -> mlua::Result<()> {
+    let troupe: Table = lua.globals().get("troupe")?;
+    let devices: Table = match troupe.get::<Option<Table>>("devices")? {
+        Some(t) => t,
+        None => {
+            let t = lua.create_table()?;
+            troupe.set("devices", t.clone())?;
+            t
+        }
+    };
+    devices.set("spacemouse", lua.create_function(lua_spacemouse)?)?;
+    // `troupe.devices.health(name)` answers for a SpaceMouse name as it does for a
+    // performer, and passes anything else on to the performers' function.
+    let previous: Option<mlua::Function> = devices.get("health")?;
+    devices.set(
+        "health",
+        lua.create_function(move |lua, who: Value| {
+            if let Value::String(n) = &who {
+                let n = n.to_str()?.to_string();
+                let s = shared(lua)?;
+                let report =
+                    s.0.lock()
+                        .map_err(|_| err("spacemouse lock poisoned"))?
+                        .health(&n);
+                if let Some(report) = report {
+                    let t = lua.create_table()?;
+                    match report {
+                        Some(h) => {
+                            t.set("state", h.state.name())?;
+                            t.set("samples", h.samples)?;
+                            t.set("resyncs", h.resyncs)?;
+                            t.set("dropped_bytes", h.dropped_bytes)?;
+                            t.set("dropped_samples", h.dropped_samples)?;
+                            t.set("connections", h.connections)?;
+                            t.set("error", h.last_error)?;
+                        }
+                        None => t.set("state", "replay")?,
+                    }
+                    let out = lua.create_table()?;
+                    out.set("spacemouse", t)?;
+                    return Ok(Value::Table(out));
+                }
+            }
+            match &previous {
+                Some(f) => f.call::<Value>(who),
+                None => Err(err("health: no device of that name")),
+            }
+        })?,
+    )?;
+    Ok(())
+}
+
+fn number(t: &Table, key: &str, default: f64) -> mlua::Result<f64> {
+    let v: Option<f64> = t
+        .get(key)
+        .map_err(|_| err(format!("spacemouse: `{key}` must be a number")))?;
+    let v = v.unwrap_or(default);
+    if !v.is_finite() {
+        return Err(err(format!("spacemouse: `{key}` must be finite, got {v}")));
+    }
+    Ok(v)
+}
+
+/// `troupe.devices.spacemouse{ object=…, name="spacemouse", path=nil, replay=nil,
+/// stream=nil, speed=1.0, turn=90, deadzone=0.05 }` → the mover's name.
+fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
+    for pair in t.clone().pairs::<Value, Value>() {
+        let (k, _) = pair?;
+        let k = k.to_string()?;
+        if !KEYS.contains(&k.as_str()) {
+            return Err(err(format!(
+                "spacemouse: unknown option `{k}` (known: {})",
+                KEYS.join(", ")
+            )));
+        }
+    }
+    let object = match t.get::<Value>("object")? {
+        Value::UserData(u) => {
+            u.borrow::<ObjectRef>()
+                .map_err(|_| err("spacemouse: `object` must be an object or an object name"))?
+                .0
+        }
+        Value::String(n) => {
+            let n = n.to_str()?.to_string();
+            troupe_runtime::lua::kinds::with_scene(lua, |s| s.object_index(&n))?
+                .map_err(|e| err(format!("spacemouse: {e}")))?
+        }
+        Value::Nil => return Err(err("spacemouse: `object` is required")),
+        _ => {
+            return Err(err(
+                "spacemouse: `object` must be an object or an object name",
+            ))
+        }
+    };
+    let name: String = t
+        .get::<Option<String>>("name")?
+        .unwrap_or_else(|| "spacemouse".into());
+    let speed = number(&t, "speed", 1.0)?;
+    let turn = number(&t, "turn", 90.0)?;
+    let deadzone = number(&t, "deadzone", 0.05)?;
+    if speed < 0.0 || turn < 0.0 {
+        return Err(err("spacemouse: `speed` and `turn` must not be negative"));
+    }
+    if !(0.0..1.0).contains(&deadzone) {
+        return Err(err(format!(
+            "spacemouse: `deadzone` must be in [0, 1), got {deadzone}"
+        )));
+    }
+    let path: Option<String> = t.get("path")?;
+    let replay: Option<String> = t.get("replay")?;
+    let stream: Option<String> = t.get("stream")?;
+    let s = shared(lua)?;
+    let recorder = {
+        let g = s.0.lock().map_err(|_| err("spacemouse lock poisoned"))?;
+        if g.movers.iter().any(|m| m.name == name) {
+            return Err(err(format!(
+                "spacemouse: a SpaceMouse named '{name}' exists already (give another `name`)"
+            )));
+        }
+        g.recorder.clone()
+    };
+    let source = match replay {
+        Some(r) => {
+            if path.is_some() {
+                return Err(err("spacemouse: give `path` or `replay`, not both"));
+            }
+            let file = resolve(lua, &r);
+            let rec = Recording::read(&file).map_err(|e| err(format!("spacemouse: {e}")))?;
+            let i = rec
+                .find(stream.as_deref().unwrap_or("spacemouse"))
+                .ok_or_else(|| {
+                    err(format!(
+                        "spacemouse: {} has no single 'spacemouse' stream (name one with stream=…)",
+                        file.display()
+                    ))
+                })?;
+            if rec.streams[i].kind != "spacemouse" {
+                return Err(err(format!(
+                    "spacemouse: stream '{}' of {} is a {} stream",
+                    rec.streams[i].name,
+                    file.display(),
+                    rec.streams[i].kind
+                )));
+            }
+            let readings = rec
+                .readings(i)
+                .map_err(|e| err(format!("spacemouse: {e}")))?;
+            Source::Replay {
+                readings,
+                next: 0,
+                start: None,
+            }
+        }
+        None => {
+            let mut o = DriverOptions::new(&name, path.as_deref().unwrap_or(""));
+            // A SpaceMouse at rest sends nothing: silence is not staleness.
+            o.stale_after = Duration::MAX;
+            let opener: Opener =
+                Box::new(move |_o: &DriverOptions| crate::hid::open_spacemouse(path.as_deref()));
+            Source::Live(driver::spawn_with(
+                o,
+                Box::new(SpaceMouseProtocol::default()),
+                recorder,
+                opener,
+            ))
+        }
+    };
+    s.0.lock()
+        .map_err(|_| err("spacemouse lock poisoned"))?
+        .movers
+        .push(Mover {
+            name: name.clone(),
+            object,
+            source,
+            state: SpaceMouseState::default(),
+            options: MoveOptions {
+                speed,
+                turn: turn.to_radians(),
+                deadzone,
+            },
+        });
+    Ok(name)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn full(translation: [i16; 3], rotation: [i16; 3]) -> SpaceMouseState {
+        SpaceMouseState {
+            translation,
+            rotation,
+            buttons: 0,
+        }
+    }
+
+    /// Integrates a constant state for `seconds` at 100 Hz.
+    fn run(state: SpaceMouseState, o: &MoveOptions, seconds: f64) -> (DVec3, DQuat) {
+        let (lin, ang) = velocity(&state, o);
+        let mut pose = (DVec3::ZERO, DQuat::IDENTITY);
+        let steps = (seconds * 100.0).round() as usize;
+        for _ in 0..steps {
+            pose = integrate(pose.0, pose.1, lin, ang, 0.01);
+        }
+        pose
+    }
+
+    #[test]
+    fn full_deflection_for_one_second_moves_speed_metres_along_the_right_axis() {
+        let o = MoveOptions {
+            speed: 0.5,
+            ..MoveOptions::default()
+        };
+        // Cap pushed right: +X.
+        let (p, _) = run(full([350, 0, 0], [0; 3]), &o, 1.0);
+        assert!((p - DVec3::new(0.5, 0.0, 0.0)).length() < 1e-9, "{p}");
+        // Cap pulled towards the user: +Z.
+        let (p, _) = run(full([0, 350, 0], [0; 3]), &o, 1.0);
+        assert!((p - DVec3::new(0.0, 0.0, 0.5)).length() < 1e-9, "{p}");
+        // Cap lifted (device −Z): up, +Y.
+        let (p, _) = run(full([0, 0, -350], [0; 3]), &o, 1.0);
+        assert!((p - DVec3::new(0.0, 0.5, 0.0)).length() < 1e-9, "{p}");
+        // Beyond full scale is clamped to full speed.
+        let (p, _) = run(full([400, 0, 0], [0; 3]), &o, 1.0);
+        assert!((p.x - 0.5).abs() < 1e-9);
+    }
+
+    #[test]
+    fn full_twist_for_one_second_turns_turn_degrees_about_up() {
+        let o = MoveOptions {
+            turn: 90f64.to_radians(),
+            ..MoveOptions::default()
+        };
+        // Twist about device −Z (up): counter-clockwise from above, +Y in the scene.
+        let (p, q) = run(full([0; 3], [0, 0, -350]), &o, 1.0);
+        assert_eq!(p, DVec3::ZERO);
+        let want = DQuat::from_rotation_y(90f64.to_radians());
+        assert!(q.angle_between(want) < 1e-9, "{q:?}");
+        // Device Rx (about right) is scene X.
+        let (_, q) = run(full([0; 3], [350, 0, 0]), &o, 1.0);
+        assert!(q.angle_between(DQuat::from_rotation_x(90f64.to_radians())) < 1e-9);
+    }
+
+    #[test]
+    fn deadzone_holds_small_deflections_and_keeps_full_scale() {
+        let o = MoveOptions {
+            deadzone: 0.1,
+            ..MoveOptions::default()
+        };
+        // 30 / 350 < 0.1: nothing moves.
+        let (lin, ang) = velocity(&full([30, -30, 30], [-30, 30, 0]), &o);
+        assert_eq!((lin, ang), (DVec3::ZERO, DVec3::ZERO));
+        // Just past the deadzone moves slowly; full scale is still full speed.
+        assert!(deadzoned(0.2, 0.1) > 0.0 && deadzoned(0.2, 0.1) < 0.2);
+        assert_eq!(deadzoned(1.0, 0.1), 1.0);
+        assert_eq!(deadzoned(-1.0, 0.1), -1.0);
+        assert_eq!(deadzoned(0.1, 0.1), 0.0);
+    }
+
+    #[test]
+    fn a_held_object_is_not_moved_and_a_free_one_is() {
+        use troupe_runtime::holding::HoldRequest;
+        use troupe_runtime::{ActorDesc, SceneConfig, Shape};
+        let mut scene = Scene::new(SceneConfig {
+            rate: 100.0,
+            threads: 1,
+            seed: 0,
+        })
+        .unwrap();
+        let ann = scene.add_actor(&ActorDesc::new("ann")).unwrap();
+        let ball = Shape::Sphere { radius: 0.05 };
+        let held = scene
+            .add_object(Scene::object("held", ball, DVec3::new(0.0, 1.0, 0.3), 1.0))
+            .unwrap();
+        let free = scene
+            .add_object(Scene::object("free", ball, DVec3::new(1.0, 1.0, 0.0), 1.0))
+            .unwrap();
+        let wrist = scene.actors()[ann].skeleton.joint("r_wrist").unwrap();
+        assert!(scene.request_hold(
+            ann,
+            HoldRequest::Attach {
+                object: held,
+                joint: wrist,
+                from: None
+            }
+        ));
+        let pushed = || Source::Replay {
+            readings: vec![(0.0, Reading::SpaceMouse(full([350, 0, 0], [0; 3])))],
+            next: 0,
+            start: None,
+        };
+        let mut mice = SpaceMice::default();
+        for (name, object) in [("a", held), ("b", free)] {
+            mice.movers.push(Mover {
+                name: name.into(),
+                object,
+                source: pushed(),
+                state: SpaceMouseState::default(),
+                options: MoveOptions::default(),
+            });
+        }
+        let before = scene.objects()[held].position;
+        mice.step(&mut scene);
+        assert_eq!(scene.objects()[held].position, before, "held: not moved");
+        assert!(
+            (scene.objects()[free].position.x - (1.0 + scene.dt())).abs() < 1e-12,
+            "free: moved one tick at full speed"
+        );
+        assert_eq!(mice.state("a").map(|s| s.translation), Some([350, 0, 0]));
+        assert_eq!(
+            mice.health("b"),
+            Some(None),
+            "a replay has no device health"
+        );
+        assert_eq!(mice.health("c"), None);
+    }
+
+    #[test]
+    fn device_frame_maps_to_a_proper_rotation() {
+        // Right × towards-user = down in the device frame; the mapping must keep
+        // handedness: scene X × scene Z = −Y (down).
+        let x = device_to_scene([1.0, 0.0, 0.0]);
+        let y = device_to_scene([0.0, 1.0, 0.0]);
+        let z = device_to_scene([0.0, 0.0, 1.0]);
+        assert_eq!(x.cross(y), z);
+        assert_eq!(z, DVec3::new(0.0, -1.0, 0.0));
+    }
+}
