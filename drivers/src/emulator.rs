@@ -274,6 +274,7 @@ fn pick(times: &[f64], t: f64) -> Option<usize> {
 }
 
 /// The pose a bird record describes (orientation from whichever field the format has).
+/// An all-zero quaternion or matrix gives a non-finite rotation: callers check.
 pub fn bird_pose(b: &fob::BirdRecord) -> (DVec3, DQuat) {
     let p = b.position.map(DVec3::from_array).unwrap_or(DVec3::ZERO);
     let q = if let Some([w, x, y, z]) = b.quaternion {

@@ -572,7 +572,13 @@ impl Performers {
             if let Some(f) = &mut p.fob {
                 for (r, at) in f.source.take(time) {
                     if let Reading::Bird(b) = r {
-                        f.latest.insert(b.address, bird_pose(&b));
+                        // An all-zero quaternion or matrix decodes, but is no rotation:
+                        // such a record is skipped rather than turned into NaN joints.
+                        let (position, rotation) = bird_pose(&b);
+                        if !(position.is_finite() && rotation.is_finite()) {
+                            continue;
+                        }
+                        f.latest.insert(b.address, (position, rotation));
                         changed = true;
                         newest = newest.max(at);
                     }
