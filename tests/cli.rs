@@ -372,7 +372,11 @@ fn every_example_scene_runs_without_a_failed_action_or_behavior() {
         let out = succeeds(troupe().args(["run", "--seconds", "12"]).arg(&path));
         let text = String::from_utf8_lossy(&out.stdout);
         for line in text.lines().filter(|l| l.contains("actions:")) {
-            assert!(line.trim_end().ends_with(" 0 failed"), "{}: {line}", path.display());
+            assert!(
+                line.trim_end().ends_with(" 0 failed"),
+                "{}: {line}",
+                path.display()
+            );
         }
         assert!(!text.contains("behavior of"), "{}: {text}", path.display());
     }
