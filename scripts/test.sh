@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# The whole test suite: formatting, lints, Rust tests, then the Lua scenario tests.
+# The whole test suite: formatting, lints, Rust tests, then the Lua scenario tests on one
+# and on two threads.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 scripts/setup.sh
@@ -7,3 +8,5 @@ cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace
 cargo run -q -- test
+# Again with two threads stepping even the smallest scenes (one actor per chunk).
+cargo run -q -- test --threads 2 --chunk 1

@@ -38,6 +38,11 @@ pub struct RunArgs {
     /// Worker threads for stepping actors.
     #[arg(long, default_value_t = 1)]
     pub threads: usize,
+    /// Actors a worker claims at a time (default: sized by the crowd; a second worker
+    /// starts only above 16 actors). `--chunk 1` steps even two actors on two threads,
+    /// to check that a small scene is bit-identical whatever the thread count.
+    #[arg(long)]
+    pub chunk: Option<usize>,
     /// Seed for the scene's random numbers.
     #[arg(long, default_value_t = 0)]
     pub seed: u64,
@@ -115,6 +120,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     }
     let (mut director, devices) =
         crate::devices::director(config, limits, args.record_devices.as_deref())?;
+    director.with_scene_mut(|s| s.set_chunk_size(args.chunk));
     let osc_out = match &args.osc_out {
         Some(t) => Some(troupe_drivers::osc::OscSender::new(t).map_err(|e| anyhow::anyhow!(e))?),
         None => None,

@@ -18,6 +18,11 @@ pub struct TestArgs {
     /// Worker threads for stepping actors.
     #[arg(long, default_value_t = 1)]
     pub threads: usize,
+    /// Actors a worker claims at a time (default: sized by the crowd; a second worker
+    /// starts only above 16 actors). `--chunk 1` steps even two actors on two threads,
+    /// to check that a small scene is bit-identical whatever the thread count.
+    #[arg(long)]
+    pub chunk: Option<usize>,
 }
 
 fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
@@ -46,13 +51,14 @@ fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-fn director(file: &Path, threads: usize) -> Result<Director> {
+fn director(file: &Path, threads: usize, chunk: Option<usize>) -> Result<Director> {
     let config = SceneConfig {
         threads,
         ..SceneConfig::default()
     };
     // Performers (troupe.performer, capture) are available to scenario tests too.
     let (mut d, _devices) = crate::devices::director(config, ScriptLimits::default(), None)?;
+    d.with_scene_mut(|s| s.set_chunk_size(chunk));
     d.load_file(file)?;
     Ok(d)
 }
@@ -61,7 +67,7 @@ fn director(file: &Path, threads: usize) -> Result<Director> {
 pub fn run(args: TestArgs) -> Result<ExitCode> {
     let (mut passed, mut failed) = (0, 0);
     for file in collect(&args.paths)? {
-        let names = match director(&file, args.threads) {
+        let names = match director(&file, args.threads, args.chunk) {
             Ok(d) => d.test_names(),
             Err(e) => {
                 println!("FAIL {}: {e:#}", file.display());
@@ -70,7 +76,7 @@ pub fn run(args: TestArgs) -> Result<ExitCode> {
             }
         };
         for (index, name) in names.iter().enumerate() {
-            match run_one(&file, index, args.timeout, args.threads) {
+            match run_one(&file, index, args.timeout, args.threads, args.chunk) {
                 Ok(seconds) => {
                     passed += 1;
                     println!(
@@ -96,8 +102,14 @@ pub fn run(args: TestArgs) -> Result<ExitCode> {
     })
 }
 
-fn run_one(file: &Path, index: usize, timeout: f64, threads: usize) -> Result<f64, String> {
-    let mut d = director(file, threads).map_err(|e| format!("{e:#}"))?;
+fn run_one(
+    file: &Path,
+    index: usize,
+    timeout: f64,
+    threads: usize,
+    chunk: Option<usize>,
+) -> Result<f64, String> {
+    let mut d = director(file, threads, chunk).map_err(|e| format!("{e:#}"))?;
     d.start_test(index).map_err(|e| e.to_string())?;
     let rate = d.scene().config().rate;
     let max_ticks = (timeout * rate).ceil() as u64;

@@ -289,7 +289,15 @@ fn run_records_joint_torques_that_seq_plot_draws() {
     let record = |threads: &str| {
         let out = succeeds(
             troupe()
-                .args(["run", "--seconds", "1.5", "--threads", threads])
+                .args([
+                    "run",
+                    "--seconds",
+                    "1.5",
+                    "--threads",
+                    threads,
+                    "--chunk",
+                    "1",
+                ])
                 .arg("--record-torques")
                 .arg(&trk)
                 .arg(&scene),

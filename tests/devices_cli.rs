@@ -169,7 +169,15 @@ fn run_records_device_streams_and_replay_is_deterministic() {
         ok(troupe()
             .arg("run")
             .arg(&replay)
-            .args(["--ticks", "100", "--threads", threads, "--record"])
+            .args([
+                "--ticks",
+                "100",
+                "--threads",
+                threads,
+                "--chunk",
+                "1",
+                "--record",
+            ])
             .arg(file));
     }
     assert_eq!(

@@ -13,6 +13,9 @@ fn run(threads: &str) -> String {
             "12",
             "--threads",
             threads,
+            // One actor per chunk: the two actors are stepped on both threads.
+            "--chunk",
+            "1",
         ])
         .output()
         .unwrap();
