@@ -87,10 +87,10 @@ pub(crate) struct Stage {
     pub behaviors: Vec<Behavior>,
     pub handlers: Vec<(usize, String, Function)>,
     pub pending_events: Vec<Event>,
-    /// Actions that ended in the last scene step. Every end of an action is such an
-    /// event, so a behavior waiting on actions needs looking at only when one of its
-    /// actions is here: with 1,000 behaviors, looking up every awaited action on every
-    /// tick cost 5 % of the tick in cache misses.
+    /// Actions that ended in the scene steps since the behaviors last ran. Every end of
+    /// an action is such an event, so a behavior waiting on actions needs looking at only
+    /// when one of its actions is here: with 1,000 behaviors, looking up every awaited
+    /// action on every tick cost 5 % of the tick in cache misses.
     pub ended_last_step: HashSet<ActionId>,
     pub base_dir: PathBuf,
     pub current_actor: Option<usize>,
@@ -430,7 +430,6 @@ impl Director {
                 .forget_ended_actions(before, |id| pins.as_ref().is_some_and(|p| p.is_pinned(id)));
         }
         st.pending_events.extend(events.iter().cloned());
-        st.ended_last_step.clear();
         for e in &events {
             if e.status.is_final() {
                 st.ended_last_step.insert(e.action);
@@ -534,7 +533,11 @@ impl Director {
             st.behaviors[i].state = state;
             st.behaviors[i].checked = false;
         }
-        self.stage_mut().current_actor = None;
+        let mut st = self.stage_mut();
+        st.current_actor = None;
+        // Every waiting behavior has seen these ends now; steps run before the next
+        // script phase add theirs.
+        st.ended_last_step.clear();
     }
 
     fn fail(&mut self, i: usize, msg: String) {
