@@ -323,11 +323,9 @@ impl Walk {
     /// the feet have caught up with the body, so that no support lasts longer than the
     /// legs can reach. At constant speed it is the speed, as eq. 2-5 wants.
     fn cadence_speed(&self, plan: &Plan, t: f64) -> f64 {
-        let now = plan.sample(t, self.heading).speed;
-        let ahead = plan.sample(t + CADENCE_LOOKAHEAD, self.heading).speed;
-        let behind = plan
-            .sample((t - CADENCE_LOOKBACK).max(0.0), self.heading)
-            .speed;
+        let now = plan.speed(t);
+        let ahead = plan.speed(t + CADENCE_LOOKAHEAD);
+        let behind = plan.speed((t - CADENCE_LOOKBACK).max(0.0));
         now.max(ahead).max(behind)
     }
 
@@ -454,7 +452,7 @@ impl Walk {
                     let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height)
                         * (1.0 + self.options.run);
                     let swing_time = (1.0 - sigma) * self.cycle(self.cadence).cycle;
-                    let body = plan.sample(self.t, self.heading).speed;
+                    let body = plan.speed(self.t);
                     let start_rate = if step > 1e-6 {
                         (body * swing_time / step).clamp(0.0, 1.5)
                     } else {

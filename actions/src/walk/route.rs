@@ -480,6 +480,15 @@ impl Plan {
         }
     }
 
+    /// The body's speed `t` seconds after the start: [`Plan::sample`]'s `speed`, without
+    /// finding the position and heading (the cadence asks for several speeds a tick).
+    pub fn speed(&self, t: f64) -> f64 {
+        match &self.kind {
+            PlanKind::Along { profile, .. } => profile.at(t).1,
+            PlanKind::Follow { .. } => self.sample(t, 0.0).speed,
+        }
+    }
+
     /// The body's position, heading and speed `t` seconds after the start; `fallback` is
     /// the heading to keep where the route gives none (a followed path at rest).
     pub fn sample(&self, t: f64, fallback: f64) -> RootSample {
@@ -607,6 +616,8 @@ mod tests {
                 (d - plan.sample(t, 0.0).speed).abs() < 1e-4,
                 "speed at {t}: {d}"
             );
+            // The speed alone is exactly the sample's.
+            assert_eq!(plan.speed(t).to_bits(), plan.sample(t, 0.0).speed.to_bits());
             t += 0.05;
         }
     }
