@@ -77,16 +77,7 @@ pub fn read_spacemouse(
     mut each: impl FnMut(&SpaceMouseState),
 ) -> Result<(String, usize), String> {
     let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
-    let info = api
-        .device_list()
-        .find(|d| match path {
-            Some(p) => d.path().to_string_lossy() == p,
-            None => spacemouse::lookup(d.vendor_id(), d.product_id()).is_some(),
-        })
-        .ok_or_else(|| match path {
-            Some(p) => format!("no HID device at {p} (see `troupe devices`)"),
-            None => "no SpaceMouse found (vendors 046d/256f; see `troupe devices`)".to_string(),
-        })?;
+    let info = find_spacemouse(&api, path)?;
     let (name, kind) = spacemouse::lookup(info.vendor_id(), info.product_id())
         .unwrap_or(("HID device", ReportKind::Wired));
     let dev = info
@@ -148,12 +139,13 @@ impl std::io::Write for HidPort {
     }
 }
 
-/// Opens the SpaceMouse at hidraw `path`, or the first SpaceMouse found, as a driver port.
-/// The error says which device was missing or could not be opened.
-pub fn open_spacemouse(path: Option<&str>) -> Result<Box<dyn crate::driver::Port>, String> {
-    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
-    let info = api
-        .device_list()
+/// The HID device at hidraw `path`, or the first SpaceMouse found; the error says which
+/// was missing.
+fn find_spacemouse<'a>(
+    api: &'a hidapi::HidApi,
+    path: Option<&str>,
+) -> Result<&'a hidapi::DeviceInfo, String> {
+    api.device_list()
         .find(|d| match path {
             Some(p) => d.path().to_string_lossy() == p,
             None => spacemouse::lookup(d.vendor_id(), d.product_id()).is_some(),
@@ -161,7 +153,14 @@ pub fn open_spacemouse(path: Option<&str>) -> Result<Box<dyn crate::driver::Port
         .ok_or_else(|| match path {
             Some(p) => format!("no HID device at {p} (see `troupe devices`)"),
             None => "no SpaceMouse found (vendors 046d/256f; see `troupe devices`)".to_string(),
-        })?;
+        })
+}
+
+/// Opens the SpaceMouse at hidraw `path`, or the first SpaceMouse found, as a driver port.
+/// The error says which device was missing or could not be opened.
+pub fn open_spacemouse(path: Option<&str>) -> Result<Box<dyn crate::driver::Port>, String> {
+    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+    let info = find_spacemouse(&api, path)?;
     let name = spacemouse::lookup(info.vendor_id(), info.product_id())
         .map(|(n, _)| n.to_string())
         .unwrap_or_else(|| "HID device".into());

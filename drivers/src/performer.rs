@@ -985,21 +985,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             ];
             for (dev, report) in reports {
                 let Some(report) = report else { continue };
-                let t = lua.create_table()?;
-                match report {
-                    Some(h) => {
-                        t.set("state", h.state.name())?;
-                        t.set("samples", h.samples)?;
-                        t.set("resyncs", h.resyncs)?;
-                        t.set("dropped_bytes", h.dropped_bytes)?;
-                        t.set("dropped_samples", h.dropped_samples)?;
-                        t.set("connections", h.connections)?;
-                        t.set("error", h.last_error)?;
-                    }
-                    // A replayed device, or a glove fed over OSC.
-                    None => t.set("state", "replay")?,
-                }
-                out.set(dev, t)?;
+                out.set(dev, health_table(lua, report)?)?;
             }
             Ok(out)
         })?,
@@ -1558,6 +1544,25 @@ pub fn median_p99(v: &[f64]) -> Option<(f64, f64)> {
     s.sort_by(|a, b| a.total_cmp(b));
     let at = |p: f64| s[((s.len() - 1) as f64 * p).round() as usize];
     Some((at(0.5), at(0.99)))
+}
+
+/// A device's health as a Lua table (`troupe.devices.health`): its state and counters, or
+/// `state = "replay"` for a replayed device or a glove fed over OSC (`None`).
+pub(crate) fn health_table(lua: &Lua, report: Option<HealthReport>) -> mlua::Result<Table> {
+    let t = lua.create_table()?;
+    match report {
+        Some(h) => {
+            t.set("state", h.state.name())?;
+            t.set("samples", h.samples)?;
+            t.set("resyncs", h.resyncs)?;
+            t.set("dropped_bytes", h.dropped_bytes)?;
+            t.set("dropped_samples", h.dropped_samples)?;
+            t.set("connections", h.connections)?;
+            t.set("error", h.last_error)?;
+        }
+        None => t.set("state", "replay")?,
+    }
+    Ok(t)
 }
 
 #[cfg(test)]

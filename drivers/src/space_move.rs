@@ -282,19 +282,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
                         .map_err(|_| err("spacemouse lock poisoned"))?
                         .health(&n);
                 if let Some(report) = report {
-                    let t = lua.create_table()?;
-                    match report {
-                        Some(h) => {
-                            t.set("state", h.state.name())?;
-                            t.set("samples", h.samples)?;
-                            t.set("resyncs", h.resyncs)?;
-                            t.set("dropped_bytes", h.dropped_bytes)?;
-                            t.set("dropped_samples", h.dropped_samples)?;
-                            t.set("connections", h.connections)?;
-                            t.set("error", h.last_error)?;
-                        }
-                        None => t.set("state", "replay")?,
-                    }
+                    let t = crate::performer::health_table(lua, report)?;
                     let out = lua.create_table()?;
                     out.set("spacemouse", t)?;
                     return Ok(Value::Table(out));
