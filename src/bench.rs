@@ -9,8 +9,8 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::SceneConfig;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::SceneConfig;
 
 /// The standard crowd scene; `BENCH.actors` sets its size.
 const CROWD_SCENE: &str = include_str!("../scripts/bench/crowd.lua");

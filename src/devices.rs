@@ -420,8 +420,8 @@ fn calibrate(c: CalibrateArgs) -> Result<ExitCode> {
     };
     // Flat hand: every angle 0. Fist: each flexion sensor at its DOF's upper limit; the
     // abduction, arch and wrist sensors are not exercised and keep the flat reading as 0.
-    let t = troupe_runtime::template("adult")?;
-    let sk = t.instantiate(troupe_runtime::TemplateParams {
+    let t = troupe_body::template("adult")?;
+    let sk = t.instantiate(troupe_body::TemplateParams {
         height: t.default_height,
         mass: t.default_mass,
     })?;
@@ -507,13 +507,13 @@ pub struct RunDevices {
 /// A director with every action kind, `capture`, and `troupe.performer`; device streams are
 /// recorded to `record` when given.
 pub fn director(
-    config: troupe_runtime::SceneConfig,
-    limits: troupe_runtime::lua::ScriptLimits,
+    config: troupe_scene::SceneConfig,
+    limits: troupe_lua::ScriptLimits,
     record: Option<&std::path::Path>,
-) -> Result<(troupe_runtime::lua::Director, RunDevices)> {
+) -> Result<(troupe_lua::Director, RunDevices)> {
     let mut kinds = troupe_actions::action_kinds();
     troupe_drivers::performer::register(&mut kinds);
-    let mut d = troupe_runtime::lua::Director::new(config, kinds, limits)?;
+    let mut d = troupe_lua::Director::new(config, kinds, limits)?;
     let recorder = match record {
         Some(p) => Some(std::sync::Arc::new(
             troupe_drivers::record::Recorder::create(p).map_err(|e| anyhow!(e))?,

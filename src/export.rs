@@ -16,8 +16,8 @@ use clap::{Args, Subcommand};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::process::ExitCode;
-use troupe_runtime::glam::{DMat3, DVec3};
-use troupe_runtime::{DofKind, Skeleton, TemplateParams};
+use troupe_body::glam::{DMat3, DVec3};
+use troupe_body::{DofKind, Skeleton, TemplateParams};
 
 /// Options of `troupe export`.
 #[derive(Args)]
@@ -56,7 +56,7 @@ struct UrdfArgs {
 pub fn run(args: ExportArgs) -> Result<ExitCode> {
     match args.format {
         Format::Urdf(a) => {
-            let t = troupe_runtime::template(&a.template)?;
+            let t = troupe_body::template(&a.template)?;
             let d = t.default_params();
             let skeleton = t.instantiate(TemplateParams {
                 height: a.height.unwrap_or(d.height),
@@ -229,9 +229,9 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
 mod tests {
     use super::*;
     use std::collections::HashMap;
-    use troupe_runtime::glam::DQuat;
-    use troupe_runtime::kinematics::forward_kinematics;
-    use troupe_runtime::{template, Transform};
+    use troupe_body::glam::DQuat;
+    use troupe_body::kinematics::forward_kinematics;
+    use troupe_body::{template, Transform};
 
     /// One parsed URDF joint.
     struct UJoint {

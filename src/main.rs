@@ -60,7 +60,7 @@ fn main() -> ExitCode {
     }
     let cli = Cli::parse();
     let default_log = match cli.command {
-        Command::Test(_) => "warn,lua=info,troupe_runtime::lua=off,wgpu_hal::gles::egl=off",
+        Command::Test(_) => "warn,lua=info,troupe_lua=off,wgpu_hal::gles::egl=off",
         _ => "warn,lua=info,wgpu_hal::gles::egl=off",
     };
     let filter = tracing_subscriber::EnvFilter::try_new(cli.log.as_deref().unwrap_or(default_log))

@@ -5,11 +5,11 @@ use clap::Args;
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::pacing::Pacer;
-use troupe_runtime::record::PostureRecorder;
-use troupe_runtime::timeline::TimelineRecorder;
-use troupe_runtime::{SceneConfig, Status};
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::pacing::Pacer;
+use troupe_scene::record::PostureRecorder;
+use troupe_scene::timeline::TimelineRecorder;
+use troupe_scene::{SceneConfig, Status};
 
 /// Options of `troupe run`.
 #[derive(Args)]
@@ -282,7 +282,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
                 path.display()
             );
         } else {
-            troupe_runtime::trk::write_trk(path, &set)?;
+            troupe_formats::trk::write_trk(path, &set)?;
             println!(
                 "recorded {} joint torques ({} actor(s)) to {}",
                 log.len(),
@@ -318,15 +318,15 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
 /// `.gltf` hold one actor each, so a scene of several actors writes `NAME.ACTOR.EXT`.
 fn write_recording(
     path: &std::path::Path,
-    sequences: &[troupe_runtime::Sequence],
-    scene: &troupe_runtime::Scene,
+    sequences: &[troupe_motion::Sequence],
+    scene: &troupe_scene::Scene,
 ) -> Result<Vec<PathBuf>> {
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
         .unwrap_or_default();
     if ext == "trk" {
-        troupe_runtime::trk::write_trk(path, sequences)?;
+        troupe_formats::trk::write_trk(path, sequences)?;
         return Ok(vec![path.to_path_buf()]);
     }
     if ext != "bvh" && ext != "gltf" {
@@ -343,13 +343,13 @@ fn write_recording(
             let stem = path.file_stem().unwrap_or_default().to_string_lossy();
             path.with_file_name(format!("{stem}.{}.{ext}", actor.name))
         };
-        let rig = troupe_runtime::gltf::Rig::from_sequence(&actor.skeleton, seq)?;
+        let rig = troupe_formats::gltf::Rig::from_sequence(&actor.skeleton, seq)?;
         if ext == "bvh" {
             let order = "ZXY".parse()?;
-            let bvh = troupe_runtime::bvh::from_rig(&rig, seq.frame_time(), order, 100.0)?;
-            troupe_runtime::bvh::write_bvh(&out, &bvh)?;
+            let bvh = troupe_formats::bvh::from_rig(&rig, seq.frame_time(), order, 100.0)?;
+            troupe_formats::bvh::write_bvh(&out, &bvh)?;
         } else {
-            troupe_runtime::gltf::write_gltf(&out, &rig, &actor.name)?;
+            troupe_formats::gltf::write_gltf(&out, &rig, &actor.name)?;
         }
         written.push(out);
     }

@@ -4,8 +4,8 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::SceneConfig;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::SceneConfig;
 
 /// Options of `troupe test`.
 #[derive(Args)]

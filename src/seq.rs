@@ -11,14 +11,14 @@ use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
-use troupe_runtime::bvh::{read_bvh, write_bvh, Bvh, RotationOrder};
-use troupe_runtime::compress::{compress_pyramid, compress_spline, SplineOptions};
-use troupe_runtime::gltf::{write_gltf, Rig};
-use troupe_runtime::pyramid::{self, Grid};
-use troupe_runtime::retarget::{retarget, RetargetMap};
-use troupe_runtime::trk::{read_trk_set, write_trk};
-use troupe_runtime::warp::{squeeze_stretch, warp_sequence, TimeWarp};
-use troupe_runtime::{seqblend, Sequence};
+use troupe_formats::bvh::{read_bvh, write_bvh, Bvh, RotationOrder};
+use troupe_formats::gltf::{write_gltf, Rig};
+use troupe_formats::retarget::{retarget, RetargetMap};
+use troupe_formats::trk::{read_trk_set, write_trk};
+use troupe_motion::offline::compress::{compress_pyramid, compress_spline, SplineOptions};
+use troupe_motion::offline::pyramid::{self, Grid};
+use troupe_motion::offline::warp::{squeeze_stretch, warp_sequence, TimeWarp};
+use troupe_motion::{offline::blend as seqblend, Sequence};
 
 /// Options of `troupe seq`.
 #[derive(Args)]
@@ -379,7 +379,7 @@ fn convert(
         .unwrap_or_default();
     let gltf_out = is_ext(output, "gltf");
     if let Some(t) = template {
-        let t = troupe_runtime::template(&t)?;
+        let t = troupe_body::template(&t)?;
         let skeleton = t.instantiate(t.default_params())?;
         let seq = if is_ext(input, "bvh") {
             let bvh = read_bvh(input)?;

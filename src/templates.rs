@@ -3,7 +3,7 @@
 use anyhow::Result;
 use clap::Args;
 use std::process::ExitCode;
-use troupe_runtime::{templates, DofKind};
+use troupe_body::{templates, DofKind};
 
 /// Options of `troupe templates`.
 #[derive(Args)]
@@ -19,7 +19,7 @@ pub struct TemplatesArgs {
 pub fn run(args: TemplatesArgs) -> Result<ExitCode> {
     let all = templates();
     let chosen: Vec<_> = match &args.name {
-        Some(n) => vec![troupe_runtime::template(n)?],
+        Some(n) => vec![troupe_body::template(n)?],
         None => all,
     };
     for t in chosen {

@@ -6,8 +6,11 @@ use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use troupe_actions::Keyframe;
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::{trk, ActionSpec, ActorDesc, DofKind, Scene, SceneConfig, Sequence};
+use troupe_body::glam::DVec3;
+use troupe_body::DofKind;
+use troupe_formats::trk;
+use troupe_motion::Sequence;
+use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 use troupe_viewer::{
     parse_size, run_window, BodyStyle, Camera, Frame, FrameWriter, Hand, HandState,
     OffscreenRenderer, RenderOptions, ViewerError, WindowOptions,
@@ -136,12 +139,12 @@ fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
             })
             .collect()),
         "bvh" | "gltf" => {
-            let t = troupe_runtime::template(template)?;
+            let t = troupe_body::template(template)?;
             let skeleton = t.instantiate(t.default_params())?;
             let sequence = if ext == "bvh" {
-                troupe_runtime::retarget::load_sequence_for(&skeleton, path)?
+                troupe_formats::retarget::load_sequence_for(&skeleton, path)?
             } else {
-                troupe_runtime::gltf_import::read_gltf_motion(path, &skeleton)?
+                troupe_formats::gltf_import::read_gltf_motion(path, &skeleton)?
             };
             Ok(vec![Performer {
                 name: sequence.name.clone(),

@@ -81,7 +81,7 @@ fn the_recording_and_trace_are_readable() {
         .output()
         .unwrap();
     assert!(out.status.success());
-    let set = troupe_runtime::trk::read_trk_set(&trk).unwrap();
+    let set = troupe_formats::trk::read_trk_set(&trk).unwrap();
     assert_eq!(
         set.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
         ["ann", "bob"]
@@ -308,7 +308,7 @@ fn run_records_joint_torques_that_seq_plot_draws() {
     };
     let two = record("2");
     assert!(record("1") == two, "torques differ between 1 and 2 threads");
-    let set = troupe_runtime::trk::read_trk_set(&trk).unwrap();
+    let set = troupe_formats::trk::read_trk_set(&trk).unwrap();
     assert_eq!(
         set.iter().map(|s| s.name.as_str()).collect::<Vec<_>>(),
         ["ann", "bob"]
@@ -323,21 +323,15 @@ fn run_records_joint_torques_that_seq_plot_draws() {
         "{}",
         shoulder.keys().len()
     );
-    let s = troupe_runtime::template::default_skeleton("adult").unwrap();
+    let s = troupe_body::template::default_skeleton("adult").unwrap();
     let n = s.dof_count();
     let mut q = vec![0.0; n];
     q[s.dof("r_shoulder_flexion").unwrap()] = 1.2;
     q[s.dof("r_elbow_flexion").unwrap()] = 0.5;
-    let ext = troupe_runtime::dynamics::ExternalForces::new(&s);
-    let tau = troupe_runtime::dynamics::inverse_dynamics(
-        &s,
-        &q,
-        &vec![0.0; n],
-        &vec![0.0; n],
-        &ext,
-        true,
-    )
-    .unwrap();
+    let ext = troupe_body::dynamics::ExternalForces::new(&s);
+    let tau =
+        troupe_body::dynamics::inverse_dynamics(&s, &q, &vec![0.0; n], &vec![0.0; n], &ext, true)
+            .unwrap();
     let predicted = tau[s.dof("r_shoulder_flexion").unwrap()];
     let recorded = shoulder.keys().last().unwrap().value;
     assert!(predicted.abs() > 1.0, "the arm's weight: {predicted} N·m");

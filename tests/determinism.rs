@@ -1,7 +1,8 @@
 //! The same scene gives bit-identical postures whatever the number of worker threads.
 
 use troupe_actions::Keyframe;
-use troupe_runtime::{ActionSpec, ActorDesc, Key, Mode, Scene, SceneConfig, Sequence, Track};
+use troupe_motion::{Key, Sequence, Track};
+use troupe_scene::{ActionSpec, ActorDesc, Mode, Scene, SceneConfig};
 
 /// A small deterministic pseudo-random generator (SplitMix64) for the test scene.
 struct Mix(u64);
@@ -55,7 +56,7 @@ fn run(threads: usize) -> Vec<Vec<u64>> {
                 } else {
                     "adult".into()
                 },
-                at: troupe_runtime::glam::DVec3::new(i as f64, 0.0, 0.0),
+                at: troupe_body::glam::DVec3::new(i as f64, 0.0, 0.0),
                 ..ActorDesc::new(format!("actor{i}"))
             })
             .unwrap();

@@ -2,7 +2,7 @@
 
 use std::path::PathBuf;
 use std::process::Command;
-use troupe_runtime::bvh::read_bvh;
+use troupe_formats::bvh::read_bvh;
 
 fn shared(name: &str) -> PathBuf {
     PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/bvh")).join(name)

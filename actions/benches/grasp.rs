@@ -6,9 +6,10 @@ use std::hint::black_box;
 use troupe_actions::grasp::automaton::GraspAutomaton;
 use troupe_actions::grasp::pattern::HandPattern;
 use troupe_actions::grasp::{plan_grasp, GraspType, HandModel, PlanOptions};
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::sensors::{object_distance, Side};
-use troupe_runtime::{ActorDesc, Scene, SceneConfig, Scope, Shape};
+use troupe_body::glam::DVec3;
+use troupe_body::sensors::{object_distance, Side};
+use troupe_body::{Scope, Shape};
+use troupe_scene::{ActorDesc, Scene, SceneConfig};
 
 fn shapes() -> Vec<(&'static str, Shape)> {
     vec![

@@ -4,13 +4,14 @@
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use troupe_actions::{action_kinds, Keyframe};
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::{ActionSpec, ActorDesc, Key, Scene, SceneConfig, Sequence, Track};
+use troupe_body::glam::DVec3;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_motion::{Key, Sequence, Track};
+use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 
 const ACTORS: usize = 1000;
 
-fn full_body_sequence(skeleton: &troupe_runtime::Skeleton) -> Sequence {
+fn full_body_sequence(skeleton: &troupe_body::Skeleton) -> Sequence {
     let mut seq = Sequence::new("full body");
     seq.looping = true;
     for (d, dof) in skeleton.dofs().iter().enumerate().skip(6) {

@@ -6,11 +6,12 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::sync::Arc;
 use troupe_actions::walk::Speed;
 use troupe_actions::{Walk, WalkOptions};
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::template::{template, TemplateParams};
-use troupe_runtime::{
-    ActionSpec, ActorDesc, ActorInfo, ActorState, DofWriter, Generator, GeneratorContext, Scene,
-    SceneConfig, World,
+use troupe_body::glam::DVec3;
+use troupe_body::template::{template, TemplateParams};
+use troupe_body::ActorState;
+use troupe_scene::{
+    ActionSpec, ActorDesc, ActorInfo, DofWriter, Generator, GeneratorContext, Scene, SceneConfig,
+    World,
 };
 
 const ACTORS: usize = 1000;

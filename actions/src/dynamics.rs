@@ -11,17 +11,17 @@
 use mlua::{Lua, MultiValue, Table, Value};
 use std::collections::BTreeMap;
 use std::sync::{Arc, Mutex};
-use troupe_runtime::dynamics::contact::ContactParams;
-use troupe_runtime::dynamics::{Control, Gains, SimParams, Simulation};
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::lua::api::{load_sequence, lua_err_message, vec3, ActorRef, SequenceRef};
-use troupe_runtime::lua::kinds::{
+use troupe_body::dynamics::contact::ContactParams;
+use troupe_body::dynamics::{Control, Gains, SimParams, Simulation};
+use troupe_body::glam::DVec3;
+use troupe_body::{Scope, Skeleton};
+use troupe_lua::api::{load_sequence, lua_err_message, vec3, ActorRef, SequenceRef};
+use troupe_lua::kinds::{
     opt_bool, opt_number, ActionKind, ActionKinds, BuildContext, CommonOptions,
 };
-use troupe_runtime::sequence::{Key, Track as SeqTrack};
-use troupe_runtime::{
-    ActionSpec, DofWriter, Generator, GeneratorContext, Scene, Scope, Sequence, Skeleton, Step,
-};
+use troupe_motion::sequence::{Key, Track as SeqTrack};
+use troupe_motion::Sequence;
+use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, Scene, Step};
 
 /// Per-DOF joint torques of the dynamics actions, recorded tick by tick on request
 /// (`troupe run --record-torques FILE.trk`, thesis fig. 3-9). Install it on a director's
@@ -176,7 +176,7 @@ impl DynamicsGenerator {
         params: SimParams,
         push: Option<(DVec3, DVec3, f64)>,
         finish_at_rest: bool,
-    ) -> troupe_runtime::Result<DynamicsGenerator> {
+    ) -> troupe_scene::Result<DynamicsGenerator> {
         params.validate()?;
         let mut tracks = Vec::new();
         if let Drive::Track { sequence, .. } = &drive {

@@ -26,10 +26,11 @@ use crate::grasp::plan::{
 use crate::grasp::GraspType;
 use crate::reach::quintic;
 use std::sync::Arc;
-use troupe_runtime::glam::{DQuat, DVec3};
-use troupe_runtime::jacobian::rotation_error;
-use troupe_runtime::sensors::{solid_distance, Side};
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Step, Transform, World};
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::jacobian::rotation_error;
+use troupe_body::sensors::{solid_distance, Side};
+use troupe_body::{Scope, Transform};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step, World};
 
 /// The giver waits this long for the receiver to take the object.
 pub const GIVE_TIMEOUT: f64 = 10.0;

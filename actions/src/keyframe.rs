@@ -1,9 +1,9 @@
 //! The keyframe generator: plays a [`Sequence`] of Hermite tracks on a scope.
 
 use std::sync::Arc;
-use troupe_runtime::{
-    DofWriter, Error, Generator, GeneratorContext, Result, Scope, Sequence, Skeleton, Step,
-};
+use troupe_body::{Scope, Skeleton};
+use troupe_motion::Sequence;
+use troupe_scene::{DofWriter, Error, Generator, GeneratorContext, Result, Step};
 
 /// Plays a sequence's tracks on the DOFs they name, from the sequence's first key time.
 /// Actors playing the same sequence share its keys.
@@ -109,7 +109,8 @@ impl Generator for Keyframe {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_runtime::{ActionSpec, ActorDesc, Key, Scene, SceneConfig, Track};
+    use troupe_motion::{Key, Track};
+    use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 
     /// Plays `seq` and checks every tick against direct evaluation of its tracks.
     fn plays_exactly(seq: Sequence, shared: bool) {

@@ -4,17 +4,16 @@ use crate::keyframe::Keyframe;
 use crate::look_at::LookAt;
 use crate::reach::{Reach, ReachSpec, Target};
 use mlua::{MultiValue, Table, Value};
-use troupe_runtime::glam::{DQuat, DVec3, EulerRot};
-use troupe_runtime::jacobian::{ancestor_dofs, scope_dofs_moving, Effector};
-use troupe_runtime::lua::api::{
-    load_sequence, lua_err_message, vec3, ActorRef, ObjectRef, SequenceRef,
-};
-use troupe_runtime::lua::kinds::{
+use troupe_body::glam::{DQuat, DVec3, EulerRot};
+use troupe_body::jacobian::{ancestor_dofs, scope_dofs_moving, Effector};
+use troupe_body::Scope;
+use troupe_lua::api::{load_sequence, lua_err_message, vec3, ActorRef, ObjectRef, SequenceRef};
+use troupe_lua::kinds::{
     opt_bool, opt_string, ActionKind, ActionKinds, BuildContext, CommonOptions,
 };
-use troupe_runtime::{ActionSpec, Generator, Scope};
+use troupe_scene::{ActionSpec, Generator};
 
-/// Every action kind implemented here, ready for a [`troupe_runtime::lua::Director`].
+/// Every action kind implemented here, ready for a [`troupe_lua::Director`].
 pub fn action_kinds() -> ActionKinds {
     let mut kinds = ActionKinds::default();
     kinds.register(ActionKind {
@@ -220,7 +219,7 @@ fn build_reaching(
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
     let target = parse_target(ctx, method, t.get("target")?)?;
     let self_collision = opt_bool(t, method, "self_collision")?
-        .or_else(|| troupe_runtime::lua::settings::self_collision(ctx.lua, ctx.actor))
+        .or_else(|| troupe_lua::settings::self_collision(ctx.lua, ctx.actor))
         .unwrap_or(collision_default);
     let scope = common.scope.unwrap_or(natural);
     let dofs = scope_dofs_moving(&ctx.skeleton, &scope, effector.joint);
@@ -271,7 +270,7 @@ fn build_reach(
         }
     };
     let skeleton = &ctx.skeleton;
-    let err = |e: troupe_runtime::Error| lua_err_message(format!("reach: {e}"));
+    let err = |e: troupe_body::Error| lua_err_message(format!("reach: {e}"));
     let wrist = skeleton.joint(&format!("{side}_wrist")).map_err(err)?;
     let hand_name = format!("{side}_hand");
     let point = skeleton

@@ -8,9 +8,10 @@
 //! their limits) from where the head is, with the faster [`EYE_TIME_CONSTANT`].
 
 use crate::reach::Target;
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::kinematics::forward_kinematics;
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Skeleton, Step, Transform};
+use troupe_body::glam::DVec3;
+use troupe_body::kinematics::forward_kinematics;
+use troupe_body::{Skeleton, Transform};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
 
 /// Seconds for the head to cover 63 % of the way to a new direction.
 pub const HEAD_TIME_CONSTANT: f64 = 0.15;

@@ -8,9 +8,10 @@
 //! its previous solution.
 
 use crate::grasp::plan::ArmIk;
-use troupe_runtime::glam::{DQuat, DVec3};
-use troupe_runtime::sensors::Side;
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Step, Transform};
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::sensors::Side;
+use troupe_body::Transform;
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
 
 /// The arm must follow the last key within this distance (metres).
 pub const FOLLOW_TOLERANCE: f64 = 0.01;

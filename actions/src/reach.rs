@@ -11,11 +11,12 @@
 //! residual distance in the reason.
 
 use std::sync::Arc;
-use troupe_runtime::glam::{DQuat, DVec3};
-use troupe_runtime::ik::{Goal, IkOptions, IkSolver, IkTask};
-use troupe_runtime::jacobian::Effector;
-use troupe_runtime::self_collision::{BodySensors, CollisionAvoidance};
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Skeleton, Step, World};
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
+use troupe_body::jacobian::Effector;
+use troupe_body::self_collision::{BodySensors, CollisionAvoidance};
+use troupe_body::Skeleton;
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step, World};
 
 /// A reach completes when the effector ends this close to its goal (metres).
 pub const POSITION_TOLERANCE: f64 = 1e-3;
@@ -312,7 +313,7 @@ impl Generator for Reach {
         let g = self.solver.globals();
         let distance = (self.spec.effector.position(g) - goal).length();
         let angle = self.spec.orientation.map_or(0.0, |r| {
-            troupe_runtime::jacobian::rotation_error(self.spec.effector.rotation(g), r).length()
+            troupe_body::jacobian::rotation_error(self.spec.effector.rotation(g), r).length()
         });
         if distance <= POSITION_TOLERANCE && angle <= ORIENTATION_TOLERANCE {
             Step::Finished

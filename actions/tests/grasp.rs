@@ -3,9 +3,10 @@
 
 use troupe_actions::grasp::action::{grasp_scope, Grasp, Release};
 use troupe_actions::grasp::{HandModel, PlanOptions};
-use troupe_runtime::glam::{DQuat, DVec3};
-use troupe_runtime::sensors::{object_distance, Side};
-use troupe_runtime::{ActionId, ActionSpec, ActorDesc, Scene, SceneConfig, Shape, Status};
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::sensors::{object_distance, Side};
+use troupe_body::Shape;
+use troupe_scene::{ActionId, ActionSpec, ActorDesc, Scene, SceneConfig, Status};
 
 fn scene(threads: usize) -> Scene {
     let mut s = Scene::new(SceneConfig {
@@ -175,7 +176,7 @@ fn release_lets_go_and_place_puts_the_object_down() {
         o,
         vec![Side::Right],
         Some((
-            troupe_runtime::Transform::new(s.objects()[o].rotation, at),
+            troupe_body::Transform::new(s.objects()[o].rotation, at),
             0.8,
         )),
     )
@@ -240,7 +241,7 @@ fn out_of_reach_and_held_by_another_fail_with_reasons() {
     let wrist = s.actors()[1].skeleton.joint("r_wrist").unwrap();
     assert!(s.request_hold(
         1,
-        troupe_runtime::holding::HoldRequest::Attach {
+        troupe_scene::holding::HoldRequest::Attach {
             object: cup,
             joint: wrist,
             from: None

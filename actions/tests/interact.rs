@@ -6,11 +6,12 @@ use troupe_actions::grasp::action::{grasp_scope, Grasp};
 use troupe_actions::grasp::{HandChoice, HandModel, PlanOptions, Signal};
 use troupe_actions::interact::{FollowHand, Give, HoldHand};
 use troupe_actions::manipulate::{Manipulate, ObjectKey};
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::sensors::Side;
-use troupe_runtime::{
+use troupe_body::glam::DVec3;
+use troupe_body::sensors::Side;
+use troupe_body::Shape;
+use troupe_scene::{
     ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Scene, SceneConfig,
-    Shape, Status, Step,
+    Status, Step,
 };
 
 fn run_all(s: &mut Scene, ids: &[ActionId], max_ticks: usize) {

@@ -2,8 +2,8 @@
 
 use std::path::Path;
 use troupe_actions::Keyframe;
-use troupe_runtime::retarget::load_sequence_for;
-use troupe_runtime::template;
+use troupe_body::template;
+use troupe_formats::retarget::load_sequence_for;
 
 #[test]
 fn retargeted_cmu_walk_binds_to_the_keyframe_generator() {

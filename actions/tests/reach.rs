@@ -2,10 +2,11 @@
 
 use troupe_actions::reach::{Reach, ReachSpec, Target, POSITION_TOLERANCE};
 use troupe_actions::LookAt;
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::jacobian::{scope_dofs_moving, Effector};
-use troupe_runtime::self_collision::BodySensors;
-use troupe_runtime::{ActionId, ActionSpec, ActorDesc, Scene, SceneConfig, Shape, Status};
+use troupe_body::glam::DVec3;
+use troupe_body::jacobian::{scope_dofs_moving, Effector};
+use troupe_body::self_collision::BodySensors;
+use troupe_body::Shape;
+use troupe_scene::{ActionId, ActionSpec, ActorDesc, Scene, SceneConfig, Status};
 
 fn scene() -> Scene {
     let mut s = Scene::new(SceneConfig::default()).unwrap();

@@ -74,9 +74,9 @@ fn decoders(c: &mut Criterion) {
 }
 
 fn converter(c: &mut Criterion) {
-    let t = troupe_runtime::template("adult").unwrap();
+    let t = troupe_body::template("adult").unwrap();
     let sk = Arc::new(
-        t.instantiate(troupe_runtime::TemplateParams {
+        t.instantiate(troupe_body::TemplateParams {
             height: t.default_height,
             mass: t.default_mass,
         })
@@ -125,13 +125,13 @@ fn converter(c: &mut Criterion) {
         for (k, &d) in moving.iter().enumerate() {
             q[d] = sk.dofs()[d].clamp(0.4 * (time * (1.0 + 0.3 * k as f64)).sin());
         }
-        let mut g = vec![troupe_runtime::transform::Transform::IDENTITY; sk.joints().len()];
-        troupe_runtime::kinematics::forward_kinematics(&sk, &q, &mut g);
+        let mut g = vec![troupe_body::transform::Transform::IDENTITY; sk.joints().len()];
+        troupe_body::kinematics::forward_kinematics(&sk, &q, &mut g);
         joints
             .iter()
             .enumerate()
             .map(|(i, &j)| {
-                let p = frame.inverse() * (g[j].translation + troupe_runtime::glam::DVec3::Z);
+                let p = frame.inverse() * (g[j].translation + troupe_body::glam::DVec3::Z);
                 let r = frame.inverse() * g[j].rotation * frame;
                 (i as u8 + 1, (p, r))
             })

@@ -4,11 +4,11 @@
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use troupe_actions::grasp::handover::offer_point;
+use troupe_body::sensors::Side;
 use troupe_drivers::glove_grasp::write_glove_script;
 use troupe_drivers::performer;
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::sensors::Side;
-use troupe_runtime::SceneConfig;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::SceneConfig;
 
 fn scene(ball: bool) -> Director {
     let dir = std::env::temp_dir().join(format!("troupe-glove-bench-{}", std::process::id()));

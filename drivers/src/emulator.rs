@@ -122,7 +122,7 @@ pub enum Motion {
     /// A BVH file: bird `i` follows joint `joints[i]`, positions scaled to metres.
     Bvh {
         /// The motion.
-        bvh: Box<troupe_runtime::bvh::Bvh>,
+        bvh: Box<troupe_formats::bvh::Bvh>,
         /// Joint index per bird.
         joints: Vec<usize>,
         /// File units to metres.
@@ -153,7 +153,7 @@ impl Motion {
             .to_ascii_lowercase();
         match ext.as_str() {
             "bvh" => {
-                let bvh = troupe_runtime::bvh::read_bvh(path).map_err(|e| e.to_string())?;
+                let bvh = troupe_formats::bvh::read_bvh(path).map_err(|e| e.to_string())?;
                 let idx: Vec<usize> = if joints.is_empty() {
                     (0..birds.min(bvh.joints().len())).collect()
                 } else {
@@ -206,8 +206,7 @@ impl Motion {
             Motion::Bvh { bvh, joints, scale } => {
                 let frames = bvh.frame_count().max(1);
                 let k = ((t / bvh.frame_time().max(1e-6)) as usize) % frames;
-                let mut g =
-                    vec![troupe_runtime::transform::Transform::IDENTITY; bvh.joints().len()];
+                let mut g = vec![troupe_body::transform::Transform::IDENTITY; bvh.joints().len()];
                 bvh.global_transforms(k, &mut g);
                 let tr = g[joints[i.min(joints.len() - 1)]];
                 (tr.translation * *scale, tr.rotation)

@@ -9,16 +9,17 @@
 //! the wrist the fingers are checked against is the one the tick will show. Objects the
 //! performer holds are moved with that wrist before the check; others are at their last
 //! tick's pose. Hold requests go through the writer and are applied after the parallel
-//! step (`troupe_runtime::holding`), and the only cross-actor input, an offer from a
+//! step (`troupe_scene::holding`), and the only cross-actor input, an offer from a
 //! giver, is stamped by tick: the results are identical with any thread count.
 
 use std::sync::{Arc, Mutex};
 use troupe_actions::grasp::handover::SharedHandBoard;
 use troupe_actions::grasp::{GraspAutomaton, HandDecision, HandState};
-use troupe_runtime::holding::HoldRequest;
-use troupe_runtime::kinematics::forward_kinematics;
-use troupe_runtime::sensors::Side;
-use troupe_runtime::{DofWriter, GeneratorContext, Object, Scope, Transform};
+use troupe_body::kinematics::forward_kinematics;
+use troupe_body::sensors::Side;
+use troupe_body::{Scope, Transform};
+use troupe_scene::holding::HoldRequest;
+use troupe_scene::{DofWriter, GeneratorContext, Object};
 
 /// What Lua sees of a glove hand: the automaton's state and the object it concerns.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

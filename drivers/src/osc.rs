@@ -19,7 +19,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
-use troupe_runtime::Scene;
+use troupe_scene::Scene;
 
 /// One decoded OSC input.
 #[derive(Clone, Debug, PartialEq)]
@@ -211,7 +211,7 @@ impl OscSender {
     }
 
     /// The packets of one tick: a bundle of joint poses per actor, then one message per event.
-    pub fn packets(scene: &Scene, events: &[troupe_runtime::Event]) -> Vec<OscPacket> {
+    pub fn packets(scene: &Scene, events: &[troupe_scene::Event]) -> Vec<OscPacket> {
         let mut out = Vec::new();
         for (i, actor) in scene.actors().iter().enumerate() {
             let state = &scene.states()[i];
@@ -262,7 +262,7 @@ impl OscSender {
     }
 
     /// Sends one tick's poses and events; returns the datagrams sent.
-    pub fn send(&self, scene: &Scene, events: &[troupe_runtime::Event]) -> Result<usize, String> {
+    pub fn send(&self, scene: &Scene, events: &[troupe_scene::Event]) -> Result<usize, String> {
         let mut n = 0;
         for p in OscSender::packets(scene, events) {
             let bytes = rosc::encoder::encode(&p).map_err(|e| format!("OSC: encoding: {e}"))?;

@@ -26,17 +26,18 @@ use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use troupe_actions::grasp::handover::SharedHandBoard;
 use troupe_actions::grasp::HandState;
-use troupe_runtime::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
-use troupe_runtime::ik::{IkOptions, IkSolver, IkTask};
-use troupe_runtime::jacobian::Effector;
-use troupe_runtime::kinematics::{forward_kinematics, solve_joint_angles};
-use troupe_runtime::lua::api::{lua_err_message, ActorRef};
-use troupe_runtime::lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
-use troupe_runtime::lua::Director;
-use troupe_runtime::sensors::Side;
-use troupe_runtime::skeleton::{DofKind, Skeleton};
-use troupe_runtime::transform::Transform;
-use troupe_runtime::{Scene, Scope};
+use troupe_body::ik::{IkOptions, IkSolver, IkTask};
+use troupe_body::jacobian::Effector;
+use troupe_body::kinematics::{forward_kinematics, solve_joint_angles};
+use troupe_body::sensors::Side;
+use troupe_body::skeleton::{DofKind, Skeleton};
+use troupe_body::transform::Transform;
+use troupe_body::Scope;
+use troupe_lua::api::{lua_err_message, ActorRef};
+use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
+use troupe_lua::Director;
+use troupe_scene::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::Scene;
 
 /// The rotation from the Flock's transmitter frame (X forward, Y right, Z down) to the
 /// scene's frame (Y up, an actor facing 0° looks along +Z, its right is −X).
@@ -794,7 +795,7 @@ fn build_capture(
     let hand = match glove {
         // The automaton runs when this capture drives the glove hand's fingers.
         Some((side, status)) => {
-            let fingers = troupe_runtime::sensors::HandSensors::new(&ctx.skeleton, side)
+            let fingers = troupe_body::sensors::HandSensors::new(&ctx.skeleton, side)
                 .map_err(|e| lua_err_message(format!("capture: {e}")))?
                 .scope;
             if spec.scope.intersection(&fingers).is_empty() {
@@ -815,7 +816,7 @@ fn build_capture(
     Ok((Box::new(Capture { target, hand }), spec))
 }
 
-fn device_scope(p: &Performer) -> troupe_runtime::Scope {
+fn device_scope(p: &Performer) -> troupe_body::Scope {
     let mut dofs: Vec<usize> = Vec::new();
     let sk = &p.skeleton;
     let converters = p
@@ -898,7 +899,7 @@ fn shared(lua: &Lua) -> mlua::Result<SharedPerformers> {
 }
 
 fn base_dir(lua: &Lua) -> PathBuf {
-    troupe_runtime::lua::scene_dir(lua).unwrap_or_else(|| PathBuf::from("."))
+    troupe_lua::scene_dir(lua).unwrap_or_else(|| PathBuf::from("."))
 }
 
 fn resolve(lua: &Lua, p: &str) -> PathBuf {
@@ -1045,7 +1046,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             };
             drop(perf);
             let name = match object {
-                Some(o) => troupe_runtime::lua::kinds::with_scene(lua, |sc| {
+                Some(o) => troupe_lua::kinds::with_scene(lua, |sc| {
                     sc.objects().get(o).map(|x| x.name.clone())
                 })?,
                 None => None,
@@ -1156,7 +1157,7 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
     };
     let actor = ud.borrow::<ActorRef>()?.0;
     let name: String = t.get("name")?;
-    let skeleton = troupe_runtime::lua::actor_skeletons(lua)
+    let skeleton = troupe_lua::actor_skeletons(lua)
         .ok_or_else(|| err("no scene"))?
         .get(actor)
         .cloned()
@@ -1568,10 +1569,10 @@ pub(crate) fn health_table(lua: &Lua, report: Option<HealthReport>) -> mlua::Res
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_runtime::TemplateParams;
+    use troupe_body::TemplateParams;
 
     fn adult() -> Arc<Skeleton> {
-        let t = troupe_runtime::template("adult").unwrap();
+        let t = troupe_body::template("adult").unwrap();
         Arc::new(
             t.instantiate(TemplateParams {
                 height: t.default_height,

@@ -24,9 +24,9 @@ use mlua::{Lua, Table, Value};
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
-use troupe_runtime::lua::api::{lua_err_message, ObjectRef};
-use troupe_runtime::lua::Director;
-use troupe_runtime::Scene;
+use troupe_lua::api::{lua_err_message, ObjectRef};
+use troupe_lua::Director;
+use troupe_scene::Scene;
 
 /// How deflection becomes motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -247,7 +247,7 @@ fn resolve(lua: &Lua, p: &str) -> PathBuf {
     if path.is_absolute() {
         path.to_path_buf()
     } else {
-        troupe_runtime::lua::scene_dir(lua)
+        troupe_lua::scene_dir(lua)
             .unwrap_or_else(|| PathBuf::from("."))
             .join(path)
     }
@@ -329,7 +329,7 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
         }
         Value::String(n) => {
             let n = n.to_str()?.to_string();
-            troupe_runtime::lua::kinds::with_scene(lua, |s| s.object_index(&n))?
+            troupe_lua::kinds::with_scene(lua, |s| s.object_index(&n))?
                 .map_err(|e| err(format!("spacemouse: {e}")))?
         }
         Value::Nil => return Err(err("spacemouse: `object` is required")),
@@ -506,8 +506,9 @@ mod tests {
 
     #[test]
     fn a_held_object_is_not_moved_and_a_free_one_is() {
-        use troupe_runtime::holding::HoldRequest;
-        use troupe_runtime::{ActorDesc, SceneConfig, Shape};
+        use troupe_body::Shape;
+        use troupe_scene::holding::HoldRequest;
+        use troupe_scene::{ActorDesc, SceneConfig};
         let mut scene = Scene::new(SceneConfig {
             rate: 100.0,
             threads: 1,

@@ -7,11 +7,11 @@
 use std::path::{Path, PathBuf};
 use troupe_actions::grasp::handover::offer_point;
 use troupe_actions::grasp::HandState;
+use troupe_body::sensors::{HandSensors, Side};
 use troupe_drivers::glove_grasp::write_glove_script;
 use troupe_drivers::performer::{self, SharedPerformers};
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::sensors::{HandSensors, Side};
-use troupe_runtime::SceneConfig;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::SceneConfig;
 
 fn director(threads: usize) -> (Director, SharedPerformers) {
     let mut kinds = troupe_actions::action_kinds();
@@ -118,7 +118,7 @@ fn grasp_run(threads: usize, rec: &Path, side: Side) -> Trace {
 
     let mut trace = Vec::new();
     let mut states = vec![HandState::FreeHand];
-    let mut grip: Option<troupe_runtime::glam::DVec3> = None;
+    let mut grip: Option<troupe_body::glam::DVec3> = None;
     let mut wrist_travel: f64 = 0.0;
     let mut worst_follow: f64 = 0.0;
     let mut lifted = false;

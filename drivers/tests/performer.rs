@@ -6,9 +6,9 @@ use std::time::{Duration, Instant};
 use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions};
 use troupe_drivers::performer::{self, median_p99, SharedPerformers};
 use troupe_drivers::record::Recorder;
-use troupe_runtime::lua::kinds::ActionKinds;
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::SceneConfig;
+use troupe_lua::kinds::ActionKinds;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::SceneConfig;
 
 fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (Director, SharedPerformers) {
     let mut kinds = ActionKinds::default();
@@ -177,7 +177,7 @@ fn bad_performer_options_are_clear_errors() {
 #[test]
 fn osc_poses_and_glove_values_drive_a_performer() {
     use rosc::{OscMessage, OscPacket, OscType};
-    use troupe_runtime::glam::{DQuat, DVec3};
+    use troupe_body::glam::{DQuat, DVec3};
     let port = std::net::UdpSocket::bind("127.0.0.1:0")
         .unwrap()
         .local_addr()

@@ -349,18 +349,17 @@ Frame Time: 0.5
     // Frame 0 (t = 0.2 s): head at (0, 150, 0) cm; frame 1 (t = 0.7 s): hips moved 10 cm, turned 90° about Y.
     let (p, q) = m.bird(0.2, 0);
     assert!(
-        (p - troupe_runtime::glam::DVec3::new(0.0, 1.5, 0.0)).length() < 1e-9,
+        (p - troupe_body::glam::DVec3::new(0.0, 1.5, 0.0)).length() < 1e-9,
         "{p}"
     );
-    assert!(q.angle_between(troupe_runtime::glam::DQuat::IDENTITY) < 1e-9);
+    assert!(q.angle_between(troupe_body::glam::DQuat::IDENTITY) < 1e-9);
     let (p, q) = m.bird(0.7, 1);
     assert!(
-        (p - troupe_runtime::glam::DVec3::new(0.1, 1.0, 0.0)).length() < 1e-9,
+        (p - troupe_body::glam::DVec3::new(0.1, 1.0, 0.0)).length() < 1e-9,
         "{p}"
     );
     assert!(
-        (q.angle_between(troupe_runtime::glam::DQuat::IDENTITY) - std::f64::consts::FRAC_PI_2)
-            .abs()
+        (q.angle_between(troupe_body::glam::DQuat::IDENTITY) - std::f64::consts::FRAC_PI_2).abs()
             < 1e-9
     );
     // Errors name the joint and the file.

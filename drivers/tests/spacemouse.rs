@@ -10,9 +10,9 @@ use std::path::Path;
 use std::time::{Duration, Instant};
 use troupe_drivers::performer;
 use troupe_drivers::record::Recorder;
-use troupe_runtime::lua::kinds::ActionKinds;
-use troupe_runtime::lua::{Director, ScriptLimits};
-use troupe_runtime::SceneConfig;
+use troupe_lua::kinds::ActionKinds;
+use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::SceneConfig;
 
 fn director(threads: usize) -> Director {
     let mut kinds = ActionKinds::default();

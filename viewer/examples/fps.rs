@@ -10,8 +10,8 @@
 //! each in a different pose that changes every frame.
 
 use std::time::Instant;
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::{ActorDesc, Scene, SceneConfig};
+use troupe_body::glam::DVec3;
+use troupe_scene::{ActorDesc, Scene, SceneConfig};
 use troupe_viewer::{parse_size, Camera, Frame, OffscreenRenderer, RenderOptions};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
@@ -75,7 +75,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             sk.dof("l_knee_flexion")?,
         ];
         let camera = Camera::fit();
-        let pose = |scene: &mut Scene, t: f64| -> Result<(), troupe_runtime::Error> {
+        let pose = |scene: &mut Scene, t: f64| -> Result<(), troupe_scene::Error> {
             for a in 0..n {
                 let phase = t + a as f64 * 0.7;
                 let v: Vec<_> = dofs

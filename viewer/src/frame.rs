@@ -3,7 +3,8 @@
 
 use glam::{Quat, Vec3};
 use std::sync::Arc;
-use troupe_runtime::{Scene, Shape, Skeleton, Status, Transform};
+use troupe_body::{Shape, Skeleton, Transform};
+use troupe_scene::{Scene, Status};
 
 /// The grasp state of one hand (thesis 4.7), shown by tinting the hand solid.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]

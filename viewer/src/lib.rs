@@ -37,7 +37,7 @@ pub use wgpu::Backends;
 pub use window::{run_window, FrameSlot, PlaybackControl, WindowOptions};
 
 use std::path::{Path, PathBuf};
-use troupe_runtime::Scene;
+use troupe_scene::Scene;
 
 /// Everything that can go wrong in the viewer. None of it affects the simulation.
 #[derive(Debug, thiserror::Error)]
@@ -123,7 +123,7 @@ pub fn render_scene_png(
 ///
 /// ```no_run
 /// # use troupe_viewer::{Camera, FrameWriter};
-/// # fn f(scene: &mut troupe_runtime::Scene) -> Result<(), troupe_viewer::ViewerError> {
+/// # fn f(scene: &mut troupe_scene::Scene) -> Result<(), troupe_viewer::ViewerError> {
 /// let mut frames = FrameWriter::new("frames", (1280, 720), Camera::fit(), 4)?;
 /// for _ in 0..100 {
 ///     scene.step();

@@ -5,7 +5,7 @@
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 use std::f32::consts::TAU;
-use troupe_runtime::Shape;
+use troupe_body::Shape;
 
 /// A mesh vertex: position and unit normal in the unit mesh's frame.
 #[repr(C)]

@@ -2,8 +2,8 @@
 //! against the same camera projection the renderer uses. These tests never skip: a
 //! machine without any adapter fails them with the viewer's install hint.
 
-use troupe_runtime::glam::Vec3;
-use troupe_runtime::{ActorDesc, Scene, SceneConfig};
+use troupe_body::glam::Vec3;
+use troupe_scene::{ActorDesc, Scene, SceneConfig};
 use troupe_viewer::{
     BodyStyle, Camera, Frame, Hand, HandState, OffscreenRenderer, RenderOptions, RgbaImage, Sensor,
     BACKGROUND,
@@ -243,7 +243,7 @@ fn fit_camera_frames_every_actor() {
     let mut scene = Scene::new(SceneConfig::default()).unwrap();
     for (i, x) in [-3.0, 0.0, 3.0].into_iter().enumerate() {
         let mut d = ActorDesc::new(format!("a{i}"));
-        d.at = troupe_runtime::glam::DVec3::new(x, 0.0, 0.0);
+        d.at = troupe_body::glam::DVec3::new(x, 0.0, 0.0);
         scene.add_actor(&d).unwrap();
     }
     let frame = Frame::from_scene(&scene);

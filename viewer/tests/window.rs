@@ -3,7 +3,7 @@
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use troupe_runtime::{ActorDesc, Scene, SceneConfig};
+use troupe_scene::{ActorDesc, Scene, SceneConfig};
 use troupe_viewer::{run_window, Frame, WindowOptions};
 
 fn has_display() -> bool {

@@ -12,9 +12,10 @@ use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
 use crate::reach::quintic;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use troupe_runtime::holding::HoldRequest;
-use troupe_runtime::sensors::{object_distance, Side};
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Skeleton, Step, Transform};
+use troupe_body::sensors::{object_distance, Side};
+use troupe_body::{Scope, Skeleton, Transform};
+use troupe_scene::holding::HoldRequest;
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
 
 /// Seconds the fingers take to close along a pattern.
 pub const CLOSE_SECONDS: f64 = 0.6;

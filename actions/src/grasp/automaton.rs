@@ -14,8 +14,8 @@
 //! | `GraspingInProgress(o)` | nothing touches | `FreeHand` | — |
 //! | `SecureGrasp(o)` | the thumb or every other finger is more than [`RELEASE_DISTANCE`] from `o` (the hand opens) | `GraspingInProgress` or `FreeHand` | release `o` |
 //!
-//! The caller applies the decisions (for a scene: [`troupe_runtime::holding::HoldRequest`]
-//! `Attach`/`Release` through its generator's writer, or [`troupe_runtime::Scene::request_hold`]).
+//! The caller applies the decisions (for a scene: [`troupe_scene::holding::HoldRequest`]
+//! `Attach`/`Release` through its generator's writer, or [`troupe_scene::Scene::request_hold`]).
 
 use super::close::{HandModel, CONTACT_DISTANCE};
 
@@ -23,9 +23,10 @@ use super::close::{HandModel, CONTACT_DISTANCE};
 /// far from the object (metres): hysteresis, so fingers sliding on the surface while the
 /// glove keeps closing do not release and re-attach the object.
 pub const RELEASE_DISTANCE: f64 = 0.006;
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::sensors::{object_distance, Side};
-use troupe_runtime::{Object, Scope, Skeleton, Transform};
+use troupe_body::glam::DVec3;
+use troupe_body::sensors::{object_distance, Side};
+use troupe_body::{Scope, Skeleton, Transform};
+use troupe_scene::Object;
 
 /// The automaton's states (4.7: pale skin, blue, green in the thesis' display).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -253,8 +254,8 @@ impl GraspAutomaton {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_runtime::template::default_skeleton;
-    use troupe_runtime::{ActorState, Shape};
+    use troupe_body::template::default_skeleton;
+    use troupe_body::{ActorState, Shape};
 
     /// A ball in front of the right palm, and the hand's posture.
     fn setup(radius: f64) -> (Skeleton, ActorState, Object, GraspAutomaton) {
@@ -266,7 +267,7 @@ mod tests {
         let palm = w.transform_point(hs.palm);
         let n = w.rotation * hs.palm_normal;
         let palm_r = hs.sensors.last().unwrap().radius;
-        let ball = troupe_runtime::Scene::object(
+        let ball = troupe_scene::Scene::object(
             "ball",
             Shape::Sphere { radius },
             // Toward the wrist and the thumb side, where the thumb can oppose the fingers.

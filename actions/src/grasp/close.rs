@@ -3,12 +3,12 @@
 //! the DOFs above it in the finger ([`HandSensor::stops`]) go back to their last
 //! non-penetrating values and stop, while the other DOFs keep moving.
 //!
-//! [`HandSensor::stops`]: troupe_runtime::sensors::HandSensor::stops
+//! [`HandSensor::stops`]: troupe_body::sensors::HandSensor::stops
 
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::kinematics::local_transform;
-use troupe_runtime::sensors::{HandSensors, Side};
-use troupe_runtime::{Scope, Skeleton, Transform};
+use troupe_body::glam::DVec3;
+use troupe_body::kinematics::local_transform;
+use troupe_body::sensors::{HandSensors, Side};
+use troupe_body::{Scope, Skeleton, Transform};
 
 /// A sensor this close to an obstacle (metres) counts as touching it.
 pub const CONTACT_DISTANCE: f64 = 0.002;
@@ -149,7 +149,7 @@ impl HandModel {
         self.finger_kinematics(skeleton, q, globals);
     }
 
-    /// For each finger (in [`troupe_runtime::sensors::FINGERS`] order): whether one of
+    /// For each finger (in [`troupe_body::sensors::FINGERS`] order): whether one of
     /// its sensors is within [`CONTACT_DISTANCE`] of the field.
     pub fn fingers_touching(&self, globals: &[Transform], field: Field) -> [bool; 5] {
         let mut touching = [false; 5];

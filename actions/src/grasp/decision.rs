@@ -16,7 +16,7 @@
 //! used": anything whose largest size is below [`TINY`]·L is pinched; anything the hand
 //! must span more than [`LARGE`]·L across is held with both hands.
 
-use troupe_runtime::Shape;
+use troupe_body::Shape;
 
 /// A box thinner than this fraction of the hand length is thin.
 pub const THIN: f64 = 0.15;
@@ -162,7 +162,7 @@ pub fn decide(shape: &Shape, hand_length: f64) -> Decision {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_runtime::glam::DVec3;
+    use troupe_body::glam::DVec3;
 
     const L: f64 = 0.19;
 

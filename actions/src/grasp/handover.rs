@@ -15,9 +15,10 @@ use super::action::{grasp_scope, Grasp, Signal};
 use super::plan::{HandChoice, PlanOptions};
 use crate::interact::Give;
 use std::sync::{Arc, Mutex};
-use troupe_runtime::glam::DVec3;
-use troupe_runtime::sensors::{object_distance, HandSensors, Side};
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Object, Step, Transform, World};
+use troupe_body::glam::DVec3;
+use troupe_body::sensors::{object_distance, HandSensors, Side};
+use troupe_body::Transform;
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Object, Step, World};
 
 /// How far (metres) the object's surface stays from the open palm's sensor when it is
 /// brought into a hand: close enough that closing fingers reach it at once.
@@ -119,7 +120,7 @@ pub fn offer_point(
     let hs = HandSensors::new(&info.skeleton, side).map_err(|e| e.to_string())?;
     let sk = &info.skeleton;
     let mut globals = vec![Transform::IDENTITY; sk.joints().len()];
-    troupe_runtime::kinematics::forward_kinematics(sk, &vec![0.0; sk.dof_count()], &mut globals);
+    troupe_body::kinematics::forward_kinematics(sk, &vec![0.0; sk.dof_count()], &mut globals);
     let wrist = world.states[receiver].globals[hs.wrist];
     // The object's extent along the palm normal: a point 1 m out along it is
     // `1 − extent` from the surface.
@@ -204,13 +205,13 @@ pub fn offer_to_hand(
 /// out of `from`'s hand (how a synthetic actor takes an object a performer holds out; the
 /// performer then opens the glove).
 pub fn receive(
-    skeleton: &troupe_runtime::Skeleton,
+    skeleton: &troupe_body::Skeleton,
     object: usize,
     from: usize,
     hand: HandChoice,
     sides: Vec<Side>,
     reach_seconds: f64,
-) -> Result<(Grasp, troupe_runtime::Scope), String> {
+) -> Result<(Grasp, troupe_body::Scope), String> {
     let scope = grasp_scope(skeleton, &sides)?;
     let g = Grasp::new(
         object,

@@ -10,13 +10,14 @@ use crate::interact::{FollowHand, Give, HoldHand};
 use crate::manipulate::{Manipulate, ObjectKey};
 use mlua::{Lua, MultiValue, Table, Value};
 use std::sync::Arc;
-use troupe_runtime::glam::{DQuat, DVec3, EulerRot};
-use troupe_runtime::lua::api::{lua_err_message, vec3, ActorRef, ObjectRef};
-use troupe_runtime::lua::kinds::{
+use troupe_body::glam::{DQuat, DVec3, EulerRot};
+use troupe_body::sensors::Side;
+use troupe_body::Transform;
+use troupe_lua::api::{lua_err_message, vec3, ActorRef, ObjectRef};
+use troupe_lua::kinds::{
     opt_number, opt_string, with_scene, ActionKind, ActionKinds, BuildContext, CommonOptions,
 };
-use troupe_runtime::sensors::Side;
-use troupe_runtime::{ActionSpec, Generator, Scene, Transform};
+use troupe_scene::{ActionSpec, Generator, Scene};
 
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
 
@@ -24,22 +25,22 @@ type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
 struct Refuse(String);
 
 impl Generator for Refuse {
-    fn start(&mut self, _: &troupe_runtime::GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, _: &troupe_scene::GeneratorContext) -> Result<(), String> {
         Err(self.0.clone())
     }
     fn step(
         &mut self,
-        _: &troupe_runtime::GeneratorContext,
-        _: &mut troupe_runtime::DofWriter,
-    ) -> troupe_runtime::Step {
-        troupe_runtime::Step::Failed(self.0.clone())
+        _: &troupe_scene::GeneratorContext,
+        _: &mut troupe_scene::DofWriter,
+    ) -> troupe_scene::Step {
+        troupe_scene::Step::Failed(self.0.clone())
     }
 }
 
 /// Registers the hand actions and `troupe.plan_grasp`.
 pub fn register(kinds: &mut ActionKinds) {
     for (method, build) in [
-        ("grasp", build_grasp as troupe_runtime::lua::kinds::BuildFn),
+        ("grasp", build_grasp as troupe_lua::kinds::BuildFn),
         ("release", build_release),
         ("place", build_place),
         ("manipulate", build_manipulate),

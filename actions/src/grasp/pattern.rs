@@ -8,8 +8,8 @@
 //! grasp each finger is either in contact or at its limit.
 
 use super::decision::GraspType;
-use troupe_runtime::sensors::Side;
-use troupe_runtime::Skeleton;
+use troupe_body::sensors::Side;
+use troupe_body::Skeleton;
 
 /// Closes a flexion fully (clamped to the DOF's upper limit).
 const FULL: f64 = 180.0;

@@ -17,11 +17,12 @@
 
 use super::close::HandModel;
 use super::decision::{decide, Decision, GraspType};
-use troupe_runtime::glam::{DMat3, DQuat, DVec3};
-use troupe_runtime::ik::{Goal, IkOptions, IkSolver, IkTask};
-use troupe_runtime::jacobian::{rotation_error, scope_dofs_moving, Effector};
-use troupe_runtime::sensors::{object_distance, Side};
-use troupe_runtime::{ActorState, Object, Shape, Skeleton, Transform, World};
+use troupe_body::glam::{DMat3, DQuat, DVec3};
+use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
+use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
+use troupe_body::sensors::{object_distance, Side};
+use troupe_body::{ActorState, Shape, Skeleton, Transform};
+use troupe_scene::{Object, World};
 
 /// Weight of rotation (per radian) against translation (per metre) in the frame cost.
 pub const ROTATION_WEIGHT: f64 = 0.15;

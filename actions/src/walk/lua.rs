@@ -4,12 +4,12 @@
 use super::route::{Route, Speed, PROFILE_DT};
 use super::{Walk, WalkOptions};
 use mlua::{MultiValue, Table, Value};
-use troupe_runtime::glam::DVec2;
-use troupe_runtime::lua::api::{load_sequence, lua_err_message, SequenceRef};
-use troupe_runtime::lua::kinds::{
+use troupe_body::glam::DVec2;
+use troupe_lua::api::{load_sequence, lua_err_message, SequenceRef};
+use troupe_lua::kinds::{
     opt_bool, opt_number, ActionKind, ActionKinds, BuildContext, CommonOptions,
 };
-use troupe_runtime::{ActionSpec, Generator};
+use troupe_scene::{ActionSpec, Generator};
 
 /// The walk's own option names (besides the common ones).
 const WALK_OPTIONS: [&str; 13] = [

@@ -34,8 +34,10 @@ pub use route::{Plan, RootSample, Route, Speed};
 use route::{smoothstep, wrap};
 use std::f64::consts::TAU;
 use std::sync::Arc;
-use troupe_runtime::glam::{DVec2, DVec3};
-use troupe_runtime::{DofWriter, Generator, GeneratorContext, Scope, Sequence, Skeleton, Step};
+use troupe_body::glam::{DVec2, DVec3};
+use troupe_body::{Scope, Skeleton};
+use troupe_motion::Sequence;
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
 /// body will be at that point of the support.
@@ -762,6 +764,6 @@ impl Generator for Walk {
 mod tests;
 
 /// Registers the Lua `walk` action kind.
-pub fn register(kinds: &mut troupe_runtime::lua::kinds::ActionKinds) {
+pub fn register(kinds: &mut troupe_lua::kinds::ActionKinds) {
     lua::register(kinds);
 }

@@ -6,12 +6,12 @@
 //! The leg IK is closed-form (law of cosines for the knee, then the hip's flexion and
 //! abduction, then the ankle and subtalar from the wanted foot orientation): it is exact
 //! whenever the target is within reach, costs a few dozen flops and never allocates, which
-//! the crowd benchmark needs; the general Jacobian solver of `troupe_runtime::ik` would
+//! the crowd benchmark needs; the general Jacobian solver of `troupe_body::ik` would
 //! iterate for the same answer.
 
-use troupe_runtime::glam::{DQuat, DVec2, DVec3};
-use troupe_runtime::kinematics::forward_kinematics;
-use troupe_runtime::{Skeleton, Transform};
+use troupe_body::glam::{DQuat, DVec2, DVec3};
+use troupe_body::kinematics::forward_kinematics;
+use troupe_body::{Skeleton, Transform};
 
 /// One leg's DOFs, axis signs and geometry.
 #[derive(Clone, Debug)]
@@ -79,7 +79,7 @@ fn sign_along(skeleton: &Skeleton, dof: usize, unit: DVec3) -> Result<f64, Strin
 
 impl Rig {
     /// Reads a humanoid template skeleton (the `adult` or `child` of
-    /// `troupe_runtime::template`, any size).
+    /// `troupe_body::template`, any size).
     pub fn new(skeleton: &Skeleton) -> Result<Rig, String> {
         let d = |n: &str| skeleton.dof(n).map_err(|e| e.to_string());
         let j = |n: &str| skeleton.joint(n).map_err(|e| e.to_string());
@@ -139,7 +139,7 @@ impl Rig {
                 .iter()
                 .find(|(_, solid)| solid.name == n("foot"))
                 .and_then(|(jj, solid)| match solid.shape {
-                    troupe_runtime::Shape::Frustum { height, .. } => {
+                    troupe_body::Shape::Frustum { height, .. } => {
                         Some(rest[*jj].transform_point(solid.center).z - height / 2.0)
                     }
                     _ => None,
@@ -386,7 +386,7 @@ impl Rig {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_runtime::template::default_skeleton;
+    use troupe_body::template::default_skeleton;
 
     #[test]
     fn leg_ik_puts_the_ankle_and_the_foot_where_asked() {

@@ -7,8 +7,8 @@
 //! where the body will be when a foot that is about to swing reaches mid-stance.
 
 use std::sync::Arc;
-use troupe_runtime::glam::DVec2;
-use troupe_runtime::{Sequence, Track};
+use troupe_body::glam::DVec2;
+use troupe_motion::{Sequence, Track};
 
 /// Seconds to speed up from standing to the cruising speed, and to slow down to a stop
 /// (the start and stop transitions).

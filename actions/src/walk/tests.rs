@@ -2,9 +2,11 @@
 //! forward kinematics) and measured on the resulting joint positions.
 
 use super::*;
-use troupe_runtime::action::Status;
-use troupe_runtime::kinematics::forward_kinematics;
-use troupe_runtime::{ActionSpec, ActorDesc, Key, Scene, SceneConfig, Track, Transform};
+use troupe_body::kinematics::forward_kinematics;
+use troupe_body::Transform;
+use troupe_motion::{Key, Track};
+use troupe_scene::action::Status;
+use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 
 /// Points of one foot's sole: (joint, position in that joint's frame).
 struct Sole {
@@ -322,7 +324,7 @@ fn a_speed_change_keeps_joint_values_and_velocities_continuous() {
         .unwrap()
     });
     let dofs = {
-        let skel = troupe_runtime::template::default_skeleton("adult").unwrap();
+        let skel = troupe_body::template::default_skeleton("adult").unwrap();
         Walk::to(&skel, DVec3::new(1.0, 0.0, 0.0), WalkOptions::default())
             .unwrap()
             .dofs()
@@ -375,7 +377,7 @@ fn a_speed_change_keeps_joint_values_and_velocities_continuous() {
 
 #[test]
 fn bad_input_is_a_clear_error() {
-    let s = troupe_runtime::template::default_skeleton("adult").unwrap();
+    let s = troupe_body::template::default_skeleton("adult").unwrap();
     let o = WalkOptions::default();
     let err = |r: Result<Walk, String>| r.err().expect("an error");
     assert!(err(Walk::to(&s, DVec3::new(f64::NAN, 0.0, 1.0), o)).contains("not finite"));
@@ -491,7 +493,7 @@ fn same_result_with_one_and_two_threads() {
 
 #[test]
 fn the_walk_leaves_head_and_hands_free() {
-    let s = troupe_runtime::template::default_skeleton("adult").unwrap();
+    let s = troupe_body::template::default_skeleton("adult").unwrap();
     let w = Walk::to(&s, DVec3::new(1.0, 0.0, 1.0), WalkOptions::default()).unwrap();
     let scope = w.scope();
     for free in ["head", "right_hand", "left_hand"] {

@@ -1,0 +1,11 @@
+//! troupe's file formats: BVH in and out, glTF in and out, the native `.trk` track file,
+//! and retargeting between rigs.
+
+pub mod bvh;
+pub mod error;
+pub mod gltf;
+pub mod gltf_import;
+pub mod retarget;
+pub mod trk;
+
+pub use error::{Error, Result};

@@ -1,0 +1,697 @@
+//! The Lua API: the `troupe` table, actor, object, action and sequence values.
+
+use super::kinds::{opt_number, opt_string};
+use super::{BehaviorState, Stage};
+use crate::error::Error;
+use crate::kinds::BuildContext;
+use glam::{DQuat, DVec3};
+use mlua::{
+    AnyUserData, Function, Lua, MetaMethod, MultiValue, Table, UserData, UserDataFields,
+    UserDataMethods, Value,
+};
+use std::path::Path;
+use std::sync::Arc;
+use troupe_body::skeleton::Skeleton;
+use troupe_body::solid::Shape;
+use troupe_motion::sequence::{Key, Sequence, Track};
+use troupe_scene::action::ActionId;
+use troupe_scene::scene::ActorDesc;
+use troupe_scene::world::Object;
+
+/// A Lua handle on an actor.
+#[derive(Clone, Copy, Debug)]
+pub struct ActorRef(pub usize);
+/// A Lua handle on an object.
+#[derive(Clone, Copy, Debug)]
+pub struct ObjectRef(pub usize);
+/// A Lua handle on an action. While a handle is alive, the scene keeps the action's
+/// final record (see [`Pins`]).
+#[derive(Debug)]
+pub struct ActionRef(pub ActionId, Arc<Pins>);
+
+/// Counts the live Lua handles of each action, so that the records of ended actions no
+/// script can see any more can be forgotten.
+#[derive(Debug, Default)]
+pub struct Pins(std::sync::Mutex<std::collections::HashMap<ActionId, u32>>);
+
+impl Pins {
+    fn add(&self, id: ActionId) {
+        *self.lock().entry(id).or_insert(0) += 1;
+    }
+    fn release(&self, id: ActionId) {
+        let mut map = self.lock();
+        if let Some(n) = map.get_mut(&id) {
+            *n -= 1;
+            if *n == 0 {
+                map.remove(&id);
+            }
+        }
+    }
+    /// Whether a live handle refers to `id`.
+    pub fn is_pinned(&self, id: ActionId) -> bool {
+        self.lock().contains_key(&id)
+    }
+    fn lock(&self) -> std::sync::MutexGuard<'_, std::collections::HashMap<ActionId, u32>> {
+        self.0.lock().unwrap_or_else(|p| p.into_inner())
+    }
+}
+
+impl ActionRef {
+    /// A new handle on `id` (pinning its record).
+    pub fn new(lua: &Lua, id: ActionId) -> mlua::Result<ActionRef> {
+        let pins = lua
+            .app_data_ref::<Arc<Pins>>()
+            .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?
+            .clone();
+        pins.add(id);
+        Ok(ActionRef(id, pins))
+    }
+}
+
+impl Drop for ActionRef {
+    fn drop(&mut self) {
+        self.1.release(self.0);
+    }
+}
+/// A loaded sequence.
+#[derive(Clone, Debug)]
+pub struct SequenceRef(pub Arc<Sequence>);
+
+/// A Lua runtime error with this message.
+pub fn lua_err_message(e: impl std::fmt::Display) -> mlua::Error {
+    lua_err(e)
+}
+
+pub(crate) fn lua_err(e: impl std::fmt::Display) -> mlua::Error {
+    mlua::Error::runtime(e.to_string())
+}
+
+fn stage(lua: &Lua) -> mlua::Result<mlua::AppDataRefMut<'_, Stage>> {
+    lua.app_data_mut::<Stage>()
+        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))
+}
+
+/// Reads `{x, y, z}` or `{x=…, y=…, z=…}`.
+pub fn vec3(value: &Value, what: &str) -> mlua::Result<DVec3> {
+    let Value::Table(t) = value else {
+        return Err(mlua::Error::runtime(format!(
+            "{what} must be a table {{x, y, z}}, got {}",
+            value.type_name()
+        )));
+    };
+    let get = |i: i64, k: &str| -> mlua::Result<f64> {
+        let v: Value = t.get(i)?;
+        let v = if v.is_nil() { t.get(k)? } else { v };
+        match v {
+            Value::Integer(i) => Ok(i as f64),
+            Value::Number(n) if n.is_finite() => Ok(n),
+            other => Err(mlua::Error::runtime(format!(
+                "{what}.{k} must be a finite number, got {}",
+                other.type_name()
+            ))),
+        }
+    };
+    Ok(DVec3::new(get(1, "x")?, get(2, "y")?, get(3, "z")?))
+}
+
+fn vec3_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
+    let t = lua.create_table()?;
+    t.raw_set(1, v.x)?;
+    t.raw_set(2, v.y)?;
+    t.raw_set(3, v.z)?;
+    Ok(t)
+}
+
+fn check_keys(t: &Table, what: &str, known: &[&str]) -> mlua::Result<()> {
+    for pair in t.pairs::<Value, Value>() {
+        let (k, _) = pair?;
+        let ok = matches!(&k, Value::String(s) if known.contains(&s.to_str()?.as_ref()));
+        if !ok {
+            let name = match &k {
+                Value::String(s) => s.to_str()?.to_string(),
+                other => format!("<{}>", other.type_name()),
+            };
+            return Err(mlua::Error::runtime(format!(
+                "{what}: unknown field `{name}` (known: {})",
+                known.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+impl UserData for ActorRef {
+    fn add_fields<F: UserDataFields<Self>>(fields: &mut F) {
+        fields.add_field_method_get("name", |lua, this| {
+            Ok(stage(lua)?.scene.actors()[this.0].name.clone())
+        });
+        fields.add_field_method_get("template", |lua, this| {
+            Ok(stage(lua)?.scene.actors()[this.0].template.clone())
+        });
+        fields.add_field_method_get("height", |lua, this| {
+            Ok(stage(lua)?.scene.actors()[this.0].params.height)
+        });
+    }
+
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        super::dynamics::add_actor_methods(methods);
+        methods.add_method("behave", |lua, this, f: Function| {
+            super::add_behavior(lua, Some(this.0), f)
+        });
+        methods.add_method("position", |lua, this, ()| {
+            let p = {
+                let st = stage(lua)?;
+                st.scene.states()[this.0].globals[0].translation
+            };
+            vec3_table(lua, p)
+        });
+        methods.add_method("joint_position", |lua, this, name: String| {
+            let p = {
+                let st = stage(lua)?;
+                let skel = &st.scene.actors()[this.0].skeleton;
+                let j = skel.joint(&name).map_err(lua_err)?;
+                st.scene.states()[this.0].globals[j].translation
+            };
+            vec3_table(lua, p)
+        });
+        methods.add_method("dof", |lua, this, name: String| {
+            let st = stage(lua)?;
+            let d = st.scene.actors()[this.0]
+                .skeleton
+                .dof(&name)
+                .map_err(lua_err)?;
+            Ok(st.scene.states()[this.0].q[d])
+        });
+        methods.add_method("dofs", |lua, this, scope: String| {
+            let names: Vec<String> = {
+                let st = stage(lua)?;
+                let skel = &st.scene.actors()[this.0].skeleton;
+                let s = skel.scope(&scope).map_err(lua_err)?;
+                skel.dof_names(&s).into_iter().map(String::from).collect()
+            };
+            lua.create_sequence_from(names)
+        });
+        methods.add_method("holding", |lua, this, ()| {
+            let held = stage(lua)?.scene.held_by(this.0);
+            lua.create_sequence_from(held.into_iter().map(ObjectRef))
+        });
+        methods.add_method("actions", |lua, this, ()| {
+            let ids: Vec<ActionId> = stage(lua)?
+                .scene
+                .actions_of(this.0)
+                .iter()
+                .map(|a| a.id)
+                .collect();
+            let handles = ids
+                .into_iter()
+                .map(|id| ActionRef::new(lua, id))
+                .collect::<mlua::Result<Vec<_>>>()?;
+            lua.create_sequence_from(handles)
+        });
+        methods.add_method("pose", |lua, this, values: Table| {
+            let mut st = stage(lua)?;
+            let skel = st.scene.actors()[this.0].skeleton.clone();
+            let mut set = Vec::new();
+            for pair in values.pairs::<String, f64>() {
+                let (name, v) = pair
+                    .map_err(|e| lua_err(format!("pose: expects {{dof_name = number, …}}: {e}")))?;
+                set.push((skel.dof(&name).map_err(lua_err)?, v));
+            }
+            set.sort_by_key(|(d, _)| *d);
+            st.scene.set_dofs(this.0, &set).map_err(lua_err)
+        });
+        methods.add_method("set", |lua, this, t: Table| {
+            super::settings::set(lua, this.0, &t)
+        });
+        methods.add_method("on", |lua, this, (event, f): (String, Function)| {
+            const EVENTS: [&str; 4] = [
+                "action_started",
+                "action_completed",
+                "action_failed",
+                "action_cancelled",
+            ];
+            if !EVENTS.contains(&event.as_str()) {
+                return Err(lua_err(format!(
+                    "on: unknown event `{event}` (known: {})",
+                    EVENTS.join(", ")
+                )));
+            }
+            stage(lua)?.handlers.push((this.0, event, f));
+            Ok(())
+        });
+        methods.add_method("behavior_status", |lua, this, ()| {
+            let st = stage(lua)?;
+            let mut status = "none";
+            for b in st.behaviors.iter().filter(|b| b.actor == Some(this.0)) {
+                status = match (&b.state, status) {
+                    (BehaviorState::Failed(_), _) => "failed",
+                    (_, "failed") => "failed",
+                    (BehaviorState::Waiting(_), _) => "running",
+                    (BehaviorState::Done, "running") => "running",
+                    (BehaviorState::Done, _) => "done",
+                };
+            }
+            Ok(status)
+        });
+        methods.add_method("behavior_error", |lua, this, ()| {
+            let st = stage(lua)?;
+            Ok(st
+                .behaviors
+                .iter()
+                .filter(|b| b.actor == Some(this.0))
+                .find_map(|b| match &b.state {
+                    BehaviorState::Failed(e) => Some(e.clone()),
+                    _ => None,
+                }))
+        });
+        methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
+            let kind = {
+                let st = stage(lua)?;
+                st.kinds.get(&key).copied()
+            };
+            match kind {
+                Some(kind) => {
+                    let actor = this.0;
+                    let f = lua.create_function(move |lua, args: MultiValue| {
+                        let mut args = args.into_iter();
+                        // Method call: the first argument is the actor itself.
+                        args.next();
+                        start_kind(lua, actor, kind, args.collect())
+                    })?;
+                    Ok(Value::Function(f))
+                }
+                None => Err(lua_err(format!("actor has no method or field `{key}`"))),
+            }
+        });
+        methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
+            Ok(format!("actor {}", stage(lua)?.scene.actors()[this.0].name))
+        });
+        methods.add_meta_method(MetaMethod::Eq, |_, this, other: AnyUserData| {
+            Ok(other.borrow::<ActorRef>().is_ok_and(|o| o.0 == this.0))
+        });
+    }
+}
+
+fn start_kind(
+    lua: &Lua,
+    actor: usize,
+    kind: super::kinds::ActionKind,
+    args: MultiValue,
+) -> mlua::Result<ActionRef> {
+    let ctx = {
+        let st = stage(lua)?;
+        BuildContext {
+            lua,
+            actor,
+            skeleton: st.scene.actors()[actor].skeleton.clone(),
+            base_dir: st.base_dir.clone(),
+        }
+    };
+    let (generator, spec) = {
+        (kind.build)(&ctx, args).map_err(|e| match e {
+            mlua::Error::RuntimeError(m) if !m.starts_with(kind.method) => {
+                lua_err(format!("{}: {m}", kind.method))
+            }
+            other => other,
+        })?
+    };
+    let id = stage(lua)?
+        .scene
+        .start_action(actor, spec, generator)
+        .map_err(|e| lua_err(format!("{}: {e}", kind.method)))?;
+    ActionRef::new(lua, id)
+}
+
+impl UserData for ObjectRef {
+    fn add_fields<F: UserDataFields<Self>>(fields: &mut F) {
+        fields.add_field_method_get("name", |lua, this| {
+            Ok(stage(lua)?.scene.objects()[this.0].name.clone())
+        });
+        fields.add_field_method_get("shape", |lua, this| {
+            Ok(stage(lua)?.scene.objects()[this.0].shape.kind_name())
+        });
+        fields.add_field_method_get("mass", |lua, this| {
+            Ok(stage(lua)?.scene.objects()[this.0].mass)
+        });
+        fields.add_field_method_get("holder", |lua, this| {
+            Ok(stage(lua)?.scene.holder(this.0).map(|h| ActorRef(h.actor)))
+        });
+    }
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("position", |lua, this, ()| {
+            let p = stage(lua)?.scene.objects()[this.0].position;
+            vec3_table(lua, p)
+        });
+        methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
+            Ok(format!(
+                "object {}",
+                stage(lua)?.scene.objects()[this.0].name
+            ))
+        });
+    }
+}
+
+impl UserData for ActionRef {
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("cancel", |lua, this, ()| {
+            stage(lua)?.scene.cancel(this.0).map_err(lua_err)
+        });
+        methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
+            if key == "wait" {
+                return lua
+                    .named_registry_value::<Function>("troupe.action_wait")
+                    .map(Value::Function);
+            }
+            let info = stage(lua)?
+                .scene
+                .action(this.0)
+                .ok_or_else(|| lua_err(format!("no action {}", this.0)))?;
+            Ok(match key.as_str() {
+                "id" => Value::Integer(info.id.0 as i64),
+                "status" => Value::String(lua.create_string(info.status.name())?),
+                "kind" => Value::String(lua.create_string(&info.kind)?),
+                "mode" => Value::String(lua.create_string(info.mode.name())?),
+                "weight" => Value::Number(info.weight),
+                "error" => match info.reason {
+                    Some(r) if info.status != troupe_scene::action::Status::Completed => {
+                        Value::String(lua.create_string(&r)?)
+                    }
+                    _ => Value::Nil,
+                },
+                _ => return Err(lua_err(format!("action has no field `{key}`"))),
+            })
+        });
+        methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
+            Ok(format!("action {}", this.0))
+        });
+        methods.add_meta_method(MetaMethod::Eq, |_, this, other: AnyUserData| {
+            Ok(other.borrow::<ActionRef>().is_ok_and(|o| o.0 == this.0))
+        });
+    }
+}
+
+impl UserData for SequenceRef {
+    fn add_fields<F: UserDataFields<Self>>(fields: &mut F) {
+        fields.add_field_method_get("name", |_, this| Ok(this.0.name.clone()));
+        fields.add_field_method_get("duration", |_, this| Ok(this.0.duration()));
+        fields.add_field_method_get("loop", |_, this| Ok(this.0.looping));
+    }
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("dofs", |lua, this, ()| {
+            lua.create_sequence_from(this.0.tracks().iter().map(|t| t.dof().to_string()))
+        });
+    }
+}
+
+/// Resolves a path from a script: as given if it exists, else relative to the scene file.
+pub fn resolve_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
+    let p = Path::new(path);
+    if p.is_absolute() || p.exists() {
+        p.to_path_buf()
+    } else {
+        base_dir.join(p)
+    }
+}
+
+/// Loads a sequence file once per path (and per skeleton for BVH and glTF): a `.trk` as
+/// it is, a `.bvh` retargeted onto `skeleton` (the default adult when `None`) by
+/// [`troupe_formats::retarget::load_sequence_for`], a troupe `.gltf` read back onto `skeleton`.
+pub fn load_sequence(
+    lua: &Lua,
+    path: &str,
+    skeleton: Option<&Arc<Skeleton>>,
+) -> mlua::Result<Arc<Sequence>> {
+    let full = resolve_path(&stage(lua)?.base_dir, path);
+    let ext = full
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
+    // cache key names the body (none: a .trk, or the default adult).
+    let bound_to_body = ext == "bvh" || ext == "gltf";
+    let key = (
+        full.clone(),
+        skeleton
+            .filter(|_| bound_to_body)
+            .map(|s| Arc::as_ptr(s) as usize),
+    );
+    if let Some(s) = stage(lua)?.sequences.get(&key) {
+        return Ok(s.clone());
+    }
+    let skeleton = match (bound_to_body, skeleton) {
+        (false, _) => None,
+        (true, Some(s)) => Some(s.clone()),
+        (true, None) => Some(Arc::new(
+            troupe_body::template::default_skeleton("adult").map_err(lua_err)?,
+        )),
+    };
+    let seq = match &skeleton {
+        Some(skel) if ext == "gltf" => troupe_formats::gltf_import::read_gltf_motion(&full, skel),
+        Some(skel) => troupe_formats::retarget::load_sequence_for(skel, &full),
+        None => troupe_formats::trk::read_trk(&full),
+    };
+    let seq = Arc::new(seq.map_err(lua_err)?);
+    stage(lua)?.sequences.insert(key, seq.clone());
+    Ok(seq)
+}
+
+/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = … }`.
+fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
+    let mut seq = Sequence::new(opt_string(t, "sequence", "name")?.unwrap_or_default());
+    let mut tracks = Vec::new();
+    for pair in t.pairs::<String, Value>() {
+        let (dof, keys) = pair?;
+        match dof.as_str() {
+            "loop" => {
+                seq.looping = matches!(keys, Value::Boolean(true));
+                continue;
+            }
+            "name" => continue,
+            _ => {}
+        }
+        let Value::Table(keys) = keys else {
+            return Err(lua_err(format!(
+                "sequence: track `{dof}` must be a list of {{t, value[, slope]}}"
+            )));
+        };
+        let mut list = Vec::new();
+        for (i, key) in keys.sequence_values::<Table>().enumerate() {
+            let key = key.map_err(|_| {
+                lua_err(format!(
+                    "sequence: track `{dof}` key {} must be {{t, value[, slope]}}",
+                    i + 1
+                ))
+            })?;
+            let n = |k: i64| -> mlua::Result<Option<f64>> {
+                match key.get::<Value>(k)? {
+                    Value::Nil => Ok(None),
+                    Value::Integer(i) => Ok(Some(i as f64)),
+                    Value::Number(x) => Ok(Some(x)),
+                    other => Err(lua_err(format!(
+                        "sequence: track `{dof}` key {}: expected numbers, got {}",
+                        i + 1,
+                        other.type_name()
+                    ))),
+                }
+            };
+            let (Some(time), Some(value)) = (n(1)?, n(2)?) else {
+                return Err(lua_err(format!(
+                    "sequence: track `{dof}` key {} needs a time and a value",
+                    i + 1
+                )));
+            };
+            list.push(Key {
+                time,
+                value,
+                slope: n(3)?,
+            });
+        }
+        tracks.push(Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?);
+    }
+    // Table iteration order is not stable across runs: sort for determinism.
+    tracks.sort_by(|a, b| a.dof().cmp(b.dof()));
+    for track in tracks {
+        seq.add_track(track).map_err(lua_err)?;
+    }
+    Ok(seq)
+}
+
+fn object_shape(t: &Table) -> mlua::Result<Shape> {
+    let shape = opt_string(t, "object", "shape")?.unwrap_or_else(|| "box".into());
+    let num = |k: &str| -> mlua::Result<f64> {
+        opt_number(t, "object", k)?.ok_or_else(|| lua_err(format!("object: a {shape} needs `{k}`")))
+    };
+    let shape = match shape.as_str() {
+        "box" => Shape::Box {
+            half_extents: vec3(&t.get::<Value>("size")?, "object: size")? / 2.0,
+        },
+        "sphere" => Shape::Sphere {
+            radius: num("radius")?,
+        },
+        "cylinder" => Shape::Cylinder {
+            radius: num("radius")?,
+            height: num("height")?,
+        },
+        "frustum" => Shape::Frustum {
+            bottom_radius: num("bottom_radius")?,
+            top_radius: num("top_radius")?,
+            height: num("height")?,
+        },
+        "ellipsoid" => Shape::Ellipsoid {
+            radii: vec3(&t.get::<Value>("radii")?, "object: radii")?,
+        },
+        other => {
+            return Err(lua_err(format!(
+                "object: unknown shape `{other}` (known: box, sphere, cylinder, frustum, ellipsoid)"
+            )))
+        }
+    };
+    shape
+        .validate()
+        .map_err(|e| lua_err(format!("object: {e}")))?;
+    Ok(shape)
+}
+
+/// Installs the `troupe` table.
+pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
+    let troupe = lua.create_table()?;
+    troupe.set(
+        "actor",
+        lua.create_function(|lua, t: Table| {
+            check_keys(
+                &t,
+                "actor",
+                &["name", "template", "height", "mass", "at", "facing"],
+            )?;
+            let name = opt_string(&t, "actor", "name")?
+                .ok_or_else(|| lua_err("actor: `name` is required"))?;
+            let at: Value = t.get("at")?;
+            let desc = ActorDesc {
+                name,
+                template: opt_string(&t, "actor", "template")?.unwrap_or_else(|| "adult".into()),
+                height: opt_number(&t, "actor", "height")?,
+                mass: opt_number(&t, "actor", "mass")?,
+                at: if at.is_nil() {
+                    DVec3::ZERO
+                } else {
+                    vec3(&at, "actor: at")?
+                },
+                facing_degrees: opt_number(&t, "actor", "facing")?.unwrap_or(0.0),
+            };
+            let index = stage(lua)?
+                .scene
+                .add_actor(&desc)
+                .map_err(|e| lua_err(format!("actor: {e}")))?;
+            Ok(ActorRef(index))
+        })?,
+    )?;
+    troupe.set(
+        "object",
+        lua.create_function(|lua, t: Table| {
+            check_keys(
+                &t,
+                "object",
+                &[
+                    "name",
+                    "shape",
+                    "size",
+                    "radius",
+                    "height",
+                    "bottom_radius",
+                    "top_radius",
+                    "radii",
+                    "at",
+                    "mass",
+                    "rotation",
+                ],
+            )?;
+            let name = opt_string(&t, "object", "name")?
+                .ok_or_else(|| lua_err("object: `name` is required"))?;
+            let shape = object_shape(&t)?;
+            let at: Value = t.get("at")?;
+            let rot: Value = t.get("rotation")?;
+            let rotation = if rot.is_nil() {
+                DQuat::IDENTITY
+            } else {
+                let r = vec3(&rot, "object: rotation (degrees about x, y, z)")?;
+                DQuat::from_euler(
+                    glam::EulerRot::YXZ,
+                    r.y.to_radians(),
+                    r.x.to_radians(),
+                    r.z.to_radians(),
+                )
+            };
+            let object = Object {
+                name,
+                shape,
+                position: if at.is_nil() {
+                    DVec3::ZERO
+                } else {
+                    vec3(&at, "object: at")?
+                },
+                rotation,
+                mass: opt_number(&t, "object", "mass")?.unwrap_or(1.0),
+            };
+            let index = stage(lua)?
+                .scene
+                .add_object(object)
+                .map_err(|e| lua_err(format!("object: {e}")))?;
+            Ok(ObjectRef(index))
+        })?,
+    )?;
+    troupe.set(
+        "time",
+        lua.create_function(|lua, ()| Ok(stage(lua)?.scene.time()))?,
+    )?;
+    troupe.set(
+        "tick",
+        lua.create_function(|lua, ()| Ok(stage(lua)?.scene.tick()))?,
+    )?;
+    troupe.set(
+        "seed",
+        lua.create_function(|lua, ()| Ok(stage(lua)?.scene.config().seed))?,
+    )?;
+    troupe.set(
+        "rate",
+        lua.create_function(|lua, ()| Ok(stage(lua)?.scene.config().rate))?,
+    )?;
+    troupe.set(
+        "sequence",
+        lua.create_function(|lua, v: Value| match v {
+            Value::String(s) => Ok(SequenceRef(load_sequence(lua, &s.to_str()?, None)?)),
+            Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(&t)?))),
+            other => Err(lua_err(format!(
+                "sequence: expects a file path or a table of tracks, got {}",
+                other.type_name()
+            ))),
+        })?,
+    )?;
+    troupe.set(
+        "actors",
+        lua.create_function(|lua, ()| {
+            let n = stage(lua)?.scene.actors().len();
+            lua.create_sequence_from((0..n).map(ActorRef))
+        })?,
+    )?;
+    troupe.set(
+        "get_actor",
+        lua.create_function(|lua, name: String| {
+            let i = stage(lua)?.scene.actor_index(&name).map_err(lua_err)?;
+            Ok(ActorRef(i))
+        })?,
+    )?;
+    troupe.set(
+        "get_object",
+        lua.create_function(|lua, name: String| {
+            let i = stage(lua)?.scene.object_index(&name).map_err(lua_err)?;
+            Ok(ObjectRef(i))
+        })?,
+    )?;
+    lua.globals().set("troupe", troupe)?;
+    Ok(())
+}
+
+/// Turns a runtime error into a Lua error (for builders in other crates).
+pub fn to_lua_error(e: Error) -> mlua::Error {
+    lua_err(e)
+}

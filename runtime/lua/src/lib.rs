@@ -1,0 +1,786 @@
+//! The Lua bridge: a scene is a Lua file; each autonomous actor's behavior is a coroutine
+//! that starts actions and waits for them.
+//!
+//! The [`Director`] owns the Lua state and the [`Scene`] (kept as Lua app data so that API
+//! calls reach it). Each tick it first calls the event handlers for the previous tick's
+//! events, then resumes, in creation order, every behavior whose wait condition holds,
+//! and finally steps the scene. Every resume runs under an instruction budget and a
+//! memory allowance; a behavior that errors or exceeds them fails alone.
+
+pub mod api;
+mod dynamics;
+pub mod error;
+pub mod kinds;
+pub mod settings;
+
+pub use crate::error::{Error, Result};
+use api::{lua_err, ActionRef};
+use kinds::ActionKinds;
+use mlua::{
+    Function, HookTriggers, Lua, LuaOptions, MultiValue, StdLib, Table, Thread, Value, VmState,
+};
+use std::collections::{HashMap, HashSet};
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
+use troupe_motion::sequence::Sequence;
+use troupe_scene::action::{ActionId, Event, Status};
+use troupe_scene::scene::{Scene, SceneConfig};
+
+/// Limits on what one resume of a script may do.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ScriptLimits {
+    /// VM instructions one resume (or handler call) may execute before it is stopped.
+    pub instructions: u64,
+    /// Bytes one resume may add to the Lua heap before allocation fails.
+    pub memory: usize,
+}
+
+impl Default for ScriptLimits {
+    fn default() -> Self {
+        ScriptLimits {
+            instructions: 5_000_000,
+            memory: 16 << 20,
+        }
+    }
+}
+
+/// What a behavior waits for.
+#[derive(Clone, Debug)]
+pub(crate) enum Wait {
+    /// Resume on the next tick (just created, or yielded without a condition).
+    NextTick,
+    /// Resume once scene time reaches this.
+    Time(f64),
+    /// Resume with the action's final status once it ends.
+    Action(ActionId),
+    /// Resume once all these have ended.
+    All(Vec<ActionId>),
+    /// Resume with the first of these that ends.
+    Any(Vec<ActionId>),
+    /// Resume with `true` once the predicate holds, `false` at the deadline.
+    Until(Function, Option<f64>),
+}
+
+/// Where a behavior is.
+#[derive(Clone, Debug)]
+pub(crate) enum BehaviorState {
+    Waiting(Wait),
+    Done,
+    Failed(String),
+}
+
+pub(crate) struct Behavior {
+    pub actor: Option<usize>,
+    pub thread: Thread,
+    pub state: BehaviorState,
+    /// Whether the coroutine has been resumed once (its first resume passes `self`).
+    pub started: bool,
+    /// Whether its wait on actions has been checked against the scene once; after that,
+    /// only an action ending can make it due (see [`Stage::ended_last_step`]).
+    pub checked: bool,
+}
+
+/// Everything Lua callbacks reach: kept in the Lua state's app data.
+pub(crate) struct Stage {
+    pub scene: Scene,
+    pub kinds: ActionKinds,
+    pub behaviors: Vec<Behavior>,
+    pub handlers: Vec<(usize, String, Function)>,
+    pub pending_events: Vec<Event>,
+    /// Actions that ended in the scene steps since the behaviors last ran. Every end of
+    /// an action is such an event, so a behavior waiting on actions needs looking at only
+    /// when one of its actions is here: with 1,000 behaviors, looking up every awaited
+    /// action on every tick cost 5 % of the tick in cache misses.
+    pub ended_last_step: HashSet<ActionId>,
+    pub base_dir: PathBuf,
+    pub current_actor: Option<usize>,
+    /// Loaded sequences by path (and skeleton, for retargeted BVH).
+    pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
+    pub tests: Vec<(String, Function)>,
+    pub handler_failures: Vec<(usize, String)>,
+}
+
+/// How a behavior ended, for summaries.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BehaviorReport {
+    /// The actor's name (`test` for a test body).
+    pub actor: String,
+    /// `running`, `done` or `failed`.
+    pub status: &'static str,
+    /// The error with its location and traceback, when it failed.
+    pub error: Option<String>,
+}
+
+/// Runs a Lua scene: owns the Lua state and the scene inside it.
+pub struct Director {
+    lua: Lua,
+    limits: ScriptLimits,
+    instructions: Arc<AtomicU64>,
+    pre_ticks: Vec<PreTick>,
+    scene_steps: Vec<SceneStep>,
+}
+
+/// A step another crate installs to run at the start of every tick, before the scripts of
+/// that tick (e.g. draining device samples into performer inputs, so a script and the
+/// scheduler see a sample one tick after it arrived at most). It gets the Lua state (for its
+/// own app data) and the scene as of the previous tick.
+pub type PreTick = Box<dyn FnMut(&Lua, &Scene) -> std::result::Result<(), String> + Send>;
+
+/// A step run right after the pre-tick steps, before the scripts, that may change the scene
+/// itself (e.g. a SpaceMouse moving an object). It gets no Lua state: the scene lives inside
+/// the Lua state's app data, which is borrowed mutably while the step runs.
+pub type SceneStep = Box<dyn FnMut(&mut Scene) -> std::result::Result<(), String> + Send>;
+
+pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<()> {
+    let thread = lua.create_thread(f.clone())?;
+    let mut st = lua
+        .app_data_mut::<Stage>()
+        .ok_or_else(|| lua_err("no scene"))?;
+    // The behavior receives its actor as `self`.
+    st.behaviors.push(Behavior {
+        actor,
+        thread,
+        state: BehaviorState::Waiting(Wait::NextTick),
+        started: false,
+        checked: false,
+    });
+    Ok(())
+}
+
+const SCRIPT_LIB: &str = "scripts/lib";
+/// Ended actions no handle refers to are forgotten this long after they ended.
+const ENDED_RETENTION_SECONDS: f64 = 10.0;
+/// How often (in ticks) forgotten actions are pruned.
+const PRUNE_EVERY_TICKS: u64 = 100;
+
+impl Director {
+    /// A director with an empty scene, the sandboxed standard library, the troupe API and
+    /// the given action kinds.
+    pub fn new(config: SceneConfig, kinds: ActionKinds, limits: ScriptLimits) -> Result<Director> {
+        let scene = Scene::new(config)?;
+        let libs = StdLib::COROUTINE | StdLib::TABLE | StdLib::STRING | StdLib::UTF8 | StdLib::MATH;
+        let lua =
+            Lua::new_with(libs, LuaOptions::new()).map_err(|e| Error::Invalid(e.to_string()))?;
+        let instructions = Arc::new(AtomicU64::new(0));
+        let director = Director {
+            lua,
+            limits,
+            instructions,
+            pre_ticks: Vec::new(),
+            scene_steps: Vec::new(),
+        };
+        director
+            .setup(scene, kinds)
+            .map_err(|e| Error::Invalid(format!("setting up Lua: {e}")))?;
+        Ok(director)
+    }
+
+    fn setup(&self, scene: Scene, kinds: ActionKinds) -> mlua::Result<()> {
+        let lua = &self.lua;
+        let functions = kinds.functions().to_vec();
+        let seed = scene.config().seed;
+        lua.set_app_data(Arc::new(api::Pins::default()));
+        lua.set_app_data(Stage {
+            scene,
+            kinds,
+            behaviors: Vec::new(),
+            handlers: Vec::new(),
+            pending_events: Vec::new(),
+            ended_last_step: HashSet::new(),
+            base_dir: PathBuf::from("."),
+            current_actor: None,
+            sequences: HashMap::new(),
+            tests: Vec::new(),
+            handler_failures: Vec::new(),
+        });
+        let globals = lua.globals();
+        for name in ["dofile", "loadfile", "load", "require", "collectgarbage"] {
+            globals.raw_set(name, Value::Nil)?;
+        }
+        // Deterministic random numbers: seeded from the scene seed.
+        lua.load(format!("math.randomseed({seed})")).exec()?;
+        globals.set(
+            "print",
+            lua.create_function(|lua, args: MultiValue| {
+                let text = args
+                    .iter()
+                    .map(|v| {
+                        v.to_string()
+                            .unwrap_or_else(|_| format!("<{}>", v.type_name()))
+                    })
+                    .collect::<Vec<_>>()
+                    .join("\t");
+                let who = lua
+                    .app_data_ref::<Stage>()
+                    .and_then(|st| st.current_actor.map(|a| st.scene.actors()[a].name.clone()))
+                    .unwrap_or_else(|| "scene".into());
+                tracing::info!(target: "lua", actor = %who, "{text}");
+                Ok(())
+            })?,
+        )?;
+        globals.set("require", lua.create_function(require)?)?;
+        globals.set(
+            "test",
+            lua.create_function(|lua, (name, f): (String, Function)| {
+                let mut st = lua
+                    .app_data_mut::<Stage>()
+                    .ok_or_else(|| lua_err("no scene"))?;
+                st.tests.push((name, f));
+                Ok(())
+            })?,
+        )?;
+        api::install(lua)?;
+        let troupe: mlua::Table = globals.get("troupe")?;
+        for (name, make) in functions {
+            troupe.set(name, make(lua)?)?;
+        }
+        lua.load(include_str!("prelude.lua"))
+            .set_name("=prelude")
+            .exec()?;
+        let wait: Function = globals.get("__troupe_action_wait")?;
+        lua.set_named_registry_value("troupe.action_wait", wait)?;
+        globals.raw_set("__troupe_action_wait", Value::Nil)?;
+        lua.set_named_registry_value("troupe.modules", lua.create_table()?)?;
+
+        let counter = self.instructions.clone();
+        let budget = self.limits.instructions;
+        const EVERY: u32 = 1000;
+        lua.set_global_hook(HookTriggers::new().every_nth_instruction(EVERY), move |_, _| {
+            let used = counter.fetch_add(EVERY as u64, Ordering::Relaxed) + EVERY as u64;
+            if used > budget {
+                Err(mlua::Error::runtime(format!(
+                    "instruction budget of {budget} instructions per resume exceeded (runaway script?)"
+                )))
+            } else {
+                Ok(VmState::Continue)
+            }
+        })?;
+        Ok(())
+    }
+
+    /// Runs a scene file: it creates actors and objects and registers behaviors.
+    pub fn load_file(&mut self, path: &Path) -> Result<()> {
+        let code = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+        let dir = if dir.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            dir
+        };
+        self.stage_mut().base_dir = dir;
+        self.load_str(&code, &path.display().to_string())
+    }
+
+    /// Runs scene code given as text; `name` appears in error locations.
+    pub fn load_str(&mut self, code: &str, name: &str) -> Result<()> {
+        let chunk = self.lua.load(code).set_name(format!("@{name}"));
+        self.guarded(|| chunk.exec())
+            .map_err(|e| Error::Invalid(format!("{name}: {}", describe(&e, self.limits))))
+    }
+
+    /// Runs `f` under the instruction budget and the memory allowance.
+    fn guarded<R>(&self, f: impl FnOnce() -> mlua::Result<R>) -> mlua::Result<R> {
+        self.instructions.store(0, Ordering::Relaxed);
+        let limit = self.lua.used_memory() + self.limits.memory;
+        // A failure to set the limit only means allocation is unbounded for this call.
+        let _ = self.lua.set_memory_limit(limit);
+        let result = f();
+        let _ = self.lua.set_memory_limit(0);
+        result
+    }
+
+    /// The scene (as of the last tick).
+    pub fn scene(&self) -> SceneRef<'_> {
+        SceneRef(
+            self.lua
+                .app_data_ref::<Stage>()
+                .expect("the stage is installed at creation"),
+        )
+    }
+
+    /// Runs `f` on the scene itself, between ticks (to configure it, e.g. profiling).
+    pub fn with_scene_mut<R>(&mut self, f: impl FnOnce(&mut Scene) -> R) -> R {
+        f(&mut self.stage_mut().scene)
+    }
+
+    fn stage_mut(&self) -> mlua::AppDataRefMut<'_, Stage> {
+        self.lua
+            .app_data_mut::<Stage>()
+            .expect("the stage is installed at creation")
+    }
+
+    /// The Lua state (for tests and embedding).
+    pub fn lua(&self) -> &Lua {
+        &self.lua
+    }
+
+    /// The tests registered by `test(name, fn)` calls so far.
+    pub fn test_names(&self) -> Vec<String> {
+        self.stage_mut()
+            .tests
+            .iter()
+            .map(|(n, _)| n.clone())
+            .collect()
+    }
+
+    /// Starts registered test number `index` as a behavior without an actor.
+    pub fn start_test(&mut self, index: usize) -> Result<()> {
+        let f = self
+            .stage_mut()
+            .tests
+            .get(index)
+            .map(|(_, f)| f.clone())
+            .ok_or_else(|| Error::Invalid(format!("no test #{index}")))?;
+        add_behavior(&self.lua, None, f).map_err(|e| Error::Invalid(e.to_string()))
+    }
+
+    /// Whether every behavior has ended and no action is pending or running.
+    pub fn is_idle(&self) -> bool {
+        let st = self.stage_mut();
+        st.behaviors
+            .iter()
+            .all(|b| !matches!(b.state, BehaviorState::Waiting(_)))
+            && !st.scene.has_unfinished_actions()
+    }
+
+    /// Reports of every behavior, in creation order.
+    pub fn behaviors(&self) -> Vec<BehaviorReport> {
+        let st = self.stage_mut();
+        st.behaviors
+            .iter()
+            .map(|b| BehaviorReport {
+                actor: b
+                    .actor
+                    .map(|a| st.scene.actors()[a].name.clone())
+                    .unwrap_or_else(|| "test".into()),
+                status: match b.state {
+                    BehaviorState::Waiting(_) => "running",
+                    BehaviorState::Done => "done",
+                    BehaviorState::Failed(_) => "failed",
+                },
+                error: match &b.state {
+                    BehaviorState::Failed(e) => Some(e.clone()),
+                    _ => None,
+                },
+            })
+            .chain(st.handler_failures.iter().map(|(a, e)| BehaviorReport {
+                actor: st.scene.actors()[*a].name.clone(),
+                status: "failed",
+                error: Some(format!("in an event handler: {e}")),
+            }))
+            .collect()
+    }
+
+    /// One tick: [`Director::run_scripts`] then [`Director::step_scene`]. Returns the
+    /// scene's events of this tick.
+    pub fn tick(&mut self) -> Vec<Event> {
+        self.run_scripts();
+        self.step_scene()
+    }
+
+    /// Adds a step run at the start of every tick, before the scripts (see [`PreTick`]).
+    /// Steps run in the order they were added; a step's error is logged and the tick goes on.
+    pub fn add_pre_tick(&mut self, step: PreTick) {
+        self.pre_ticks.push(step);
+    }
+
+    /// Adds a step that changes the scene, run after the pre-tick steps (see [`SceneStep`]).
+    pub fn add_scene_step(&mut self, step: SceneStep) {
+        self.scene_steps.push(step);
+    }
+
+    /// The script phase of a tick: the pre-tick steps, event handlers for the previous
+    /// tick's events, then every behavior whose wait condition holds, in creation order.
+    pub fn run_scripts(&mut self) {
+        let _span = tracing::trace_span!("scripts").entered();
+        if !self.pre_ticks.is_empty() {
+            let mut steps = std::mem::take(&mut self.pre_ticks);
+            for step in steps.iter_mut() {
+                let scene = self.scene();
+                if let Err(e) = step(&self.lua, &scene) {
+                    tracing::error!("pre-tick step failed: {e}");
+                }
+            }
+            self.pre_ticks = steps;
+        }
+        if !self.scene_steps.is_empty() {
+            let mut steps = std::mem::take(&mut self.scene_steps);
+            {
+                let mut st = self.stage_mut();
+                for step in steps.iter_mut() {
+                    if let Err(e) = step(&mut st.scene) {
+                        tracing::error!("scene step failed: {e}");
+                    }
+                }
+            }
+            self.scene_steps = steps;
+        }
+        self.run_handlers();
+        self.run_behaviors();
+    }
+
+    /// The scene phase of a tick: the scheduler steps every actor. Returns its events.
+    pub fn step_scene(&mut self) -> Vec<Event> {
+        let mut st = self.stage_mut();
+        let events = st.scene.step().to_vec();
+        if st.scene.tick().is_multiple_of(PRUNE_EVERY_TICKS) {
+            let pins = self.lua.app_data_ref::<Arc<api::Pins>>().map(|p| p.clone());
+            let before = st.scene.time() - ENDED_RETENTION_SECONDS;
+            st.scene
+                .forget_ended_actions(before, |id| pins.as_ref().is_some_and(|p| p.is_pinned(id)));
+        }
+        st.pending_events.extend(events.iter().cloned());
+        for e in &events {
+            if e.status.is_final() {
+                st.ended_last_step.insert(e.action);
+            }
+        }
+        events
+    }
+
+    fn run_handlers(&mut self) {
+        let (events, handlers) = {
+            let mut st = self.stage_mut();
+            if st.pending_events.is_empty() || st.handlers.is_empty() {
+                st.pending_events.clear();
+                return;
+            }
+            (std::mem::take(&mut st.pending_events), st.handlers.clone())
+        };
+        for event in events {
+            let name = match event.status {
+                Status::Completed => "action_completed",
+                Status::Failed => "action_failed",
+                Status::Cancelled => "action_cancelled",
+                _ => "action_started",
+            };
+            if name == "action_started" && !self.is_first_start(&event) {
+                continue;
+            }
+            for (actor, ev, f) in handlers.iter() {
+                if *actor != event.actor || ev != name {
+                    continue;
+                }
+                self.stage_mut().current_actor = Some(*actor);
+                let result =
+                    self.guarded(|| f.call::<()>(ActionRef::new(&self.lua, event.action)?));
+                if let Err(e) = result {
+                    let msg = describe(&e, self.limits);
+                    tracing::error!(actor = %self.scene().actors()[*actor].name, "event handler failed: {msg}");
+                    self.stage_mut().handler_failures.push((*actor, msg));
+                }
+            }
+        }
+        self.stage_mut().current_actor = None;
+    }
+
+    /// `action_started` fires once: on `initiating`, or on `active` for an action without
+    /// ease-in (whose `active` event comes at its start time).
+    fn is_first_start(&self, event: &Event) -> bool {
+        match event.status {
+            Status::Initiating => true,
+            Status::Active => self
+                .scene()
+                .action(event.action)
+                .is_some_and(|a| a.started_at == Some(event.time)),
+            _ => false,
+        }
+    }
+
+    fn run_behaviors(&mut self) {
+        let count = self.stage_mut().behaviors.len();
+        for i in 0..count {
+            let Some(args) = self.due(i) else { continue };
+            let (thread, actor) = {
+                let mut st = self.stage_mut();
+                st.behaviors[i].started = true;
+                (st.behaviors[i].thread.clone(), st.behaviors[i].actor)
+            };
+            self.stage_mut().current_actor = actor;
+            let args = match (args, actor) {
+                // First resume: pass the actor as `self`.
+                (Resume::Start, Some(a)) => MultiValue::from_vec(vec![Value::UserData(match self
+                    .lua
+                    .create_userdata(api::ActorRef(a))
+                {
+                    Ok(u) => u,
+                    Err(e) => {
+                        self.fail(i, e.to_string());
+                        continue;
+                    }
+                })]),
+                (Resume::Start, None) => MultiValue::new(),
+                (Resume::With(values), _) => values,
+            };
+            let result = self.guarded(|| thread.resume::<MultiValue>(args));
+            let state = match result {
+                Err(e) => BehaviorState::Failed(describe(&e, self.limits)),
+                Ok(_) if thread.status() != mlua::prelude::LuaThreadStatus::Resumable => {
+                    BehaviorState::Done
+                }
+                Ok(yielded) => match self.parse_wait(yielded) {
+                    Ok(w) => BehaviorState::Waiting(w),
+                    Err(e) => BehaviorState::Failed(e.to_string()),
+                },
+            };
+            if let BehaviorState::Failed(msg) = &state {
+                let who = actor
+                    .map(|a| self.scene().actors()[a].name.clone())
+                    .unwrap_or_else(|| "test".into());
+                tracing::error!(actor = %who, "behavior failed: {msg}");
+            }
+            let mut st = self.stage_mut();
+            st.behaviors[i].state = state;
+            st.behaviors[i].checked = false;
+        }
+        let mut st = self.stage_mut();
+        st.current_actor = None;
+        // Every waiting behavior has seen these ends now; steps run before the next
+        // script phase add theirs.
+        st.ended_last_step.clear();
+    }
+
+    fn fail(&mut self, i: usize, msg: String) {
+        self.stage_mut().behaviors[i].state = BehaviorState::Failed(msg);
+    }
+
+    /// Whether behavior `i` should be resumed now, and with what.
+    fn due(&mut self, i: usize) -> Option<Resume> {
+        /// What the scene says about a wait, decided under one borrow of the stage (this
+        /// runs for every waiting behavior on every tick).
+        enum Ready {
+            Start,
+            Empty,
+            Ended(Status),
+            First(ActionId),
+            Ask(Function, Option<f64>, f64),
+        }
+        let ready = {
+            let mut st = self.stage_mut();
+            let st = &mut *st;
+            let behavior = &mut st.behaviors[i];
+            let BehaviorState::Waiting(wait) = &behavior.state else {
+                return None;
+            };
+            let awaited: &[ActionId] = match wait {
+                Wait::Action(id) => std::slice::from_ref(id),
+                Wait::All(ids) | Wait::Any(ids) => ids,
+                _ => &[],
+            };
+            if !awaited.is_empty() {
+                if behavior.checked && !awaited.iter().any(|id| st.ended_last_step.contains(id)) {
+                    return None;
+                }
+                behavior.checked = true;
+            }
+            let scene = &st.scene;
+            let ended = |id: ActionId| scene.action_status(id).filter(|s| s.is_final());
+            match wait {
+                Wait::NextTick if !behavior.started => Ready::Start,
+                Wait::NextTick => Ready::Empty,
+                Wait::Time(until) => {
+                    if scene.time() < until - 1e-9 {
+                        return None;
+                    }
+                    Ready::Empty
+                }
+                Wait::Action(id) => Ready::Ended(ended(*id)?),
+                Wait::All(ids) => {
+                    if !ids.iter().all(|id| ended(*id).is_some()) {
+                        return None;
+                    }
+                    Ready::Empty
+                }
+                Wait::Any(ids) => {
+                    Ready::First(ids.iter().copied().find(|id| ended(*id).is_some())?)
+                }
+                Wait::Until(pred, deadline) => Ready::Ask(pred.clone(), *deadline, scene.time()),
+            }
+        };
+        match ready {
+            Ready::Start => Some(Resume::Start),
+            Ready::Empty => Some(Resume::With(MultiValue::new())),
+            Ready::Ended(status) => {
+                let s = self.lua.create_string(status.name()).ok()?;
+                Some(Resume::With(MultiValue::from_vec(vec![Value::String(s)])))
+            }
+            Ready::First(id) => {
+                let u = self
+                    .lua
+                    .create_userdata(ActionRef::new(&self.lua, id).ok()?)
+                    .ok()?;
+                Some(Resume::With(MultiValue::from_vec(vec![Value::UserData(u)])))
+            }
+            Ready::Ask(pred, deadline, time) => {
+                let actor = self.stage_mut().behaviors[i].actor;
+                self.stage_mut().current_actor = actor;
+                match self.guarded(|| pred.call::<Value>(())) {
+                    Ok(v) if !matches!(v, Value::Nil | Value::Boolean(false)) => Some(
+                        Resume::With(MultiValue::from_vec(vec![Value::Boolean(true)])),
+                    ),
+                    Ok(_) if deadline.is_some_and(|d| time >= d - 1e-9) => Some(Resume::With(
+                        MultiValue::from_vec(vec![Value::Boolean(false)]),
+                    )),
+                    Ok(_) => None,
+                    Err(e) => {
+                        self.fail(
+                            i,
+                            format!("in a wait_until condition: {}", describe(&e, self.limits)),
+                        );
+                        None
+                    }
+                }
+            }
+        }
+    }
+
+    /// Reads what a behavior yielded into its next wait.
+    fn parse_wait(&self, yielded: MultiValue) -> mlua::Result<Wait> {
+        let time = self.scene().time();
+        let mut values = yielded.into_iter();
+        let kind = match values.next() {
+            Some(Value::String(s)) => s.to_str()?.to_string(),
+            // A bare coroutine.yield() waits one tick.
+            _ => return Ok(Wait::NextTick),
+        };
+        let ids = |v: Option<Value>| -> mlua::Result<Vec<ActionId>> {
+            let Some(Value::Table(t)) = v else {
+                return Err(lua_err("expected a list of actions"));
+            };
+            t.sequence_values::<mlua::UserDataRef<ActionRef>>()
+                .map(|a| {
+                    a.map(|a| a.0)
+                        .map_err(|_| lua_err("wait_all/wait_any: every argument must be an action"))
+                })
+                .collect()
+        };
+        Ok(match kind.as_str() {
+            "time" => match values.next() {
+                Some(Value::Number(s)) => Wait::Time(time + s),
+                Some(Value::Integer(s)) => Wait::Time(time + s as f64),
+                _ => Wait::NextTick,
+            },
+            "action" => match values.next() {
+                Some(Value::UserData(u)) => Wait::Action(u.borrow::<ActionRef>()?.0),
+                _ => return Err(lua_err("wait: not an action")),
+            },
+            "all" => Wait::All(ids(values.next())?),
+            "any" => Wait::Any(ids(values.next())?),
+            "until" => {
+                let f = match values.next() {
+                    Some(Value::Function(f)) => f,
+                    _ => return Err(lua_err("wait_until: not a function")),
+                };
+                let deadline = match values.next() {
+                    Some(Value::Number(t)) => Some(time + t),
+                    Some(Value::Integer(t)) => Some(time + t as f64),
+                    _ => None,
+                };
+                Wait::Until(f, deadline)
+            }
+            _ => Wait::NextTick,
+        })
+    }
+}
+
+/// Skeletons of the scene's actors, by index: for crates that extend the Lua API (e.g.
+/// performers) and need an actor's body while a script runs. `None` outside a director.
+pub fn actor_skeletons(lua: &Lua) -> Option<Vec<Arc<troupe_body::skeleton::Skeleton>>> {
+    let st = lua.app_data_ref::<Stage>()?;
+    Some(
+        st.scene
+            .actors()
+            .iter()
+            .map(|a| a.skeleton.clone())
+            .collect(),
+    )
+}
+
+/// The folder of the scene file being run (relative paths in scripts resolve against it).
+pub fn scene_dir(lua: &Lua) -> Option<PathBuf> {
+    Some(lua.app_data_ref::<Stage>()?.base_dir.clone())
+}
+
+/// A borrow of the director's scene.
+pub struct SceneRef<'a>(mlua::AppDataRef<'a, Stage>);
+
+impl std::ops::Deref for SceneRef<'_> {
+    type Target = Scene;
+    fn deref(&self) -> &Scene {
+        &self.0.scene
+    }
+}
+
+enum Resume {
+    Start,
+    With(MultiValue),
+}
+
+/// A readable error: script errors keep their location and traceback; budget and memory
+/// failures say which limit stopped the script.
+fn describe(e: &mlua::Error, limits: ScriptLimits) -> String {
+    match e {
+        mlua::Error::MemoryError(_) => format!(
+            "memory limit exceeded: a resume may add at most {} bytes to the Lua heap",
+            limits.memory
+        ),
+        mlua::Error::CallbackError { traceback, cause } => {
+            format!("{}\n{traceback}", describe(cause, limits))
+        }
+        mlua::Error::WithContext { context, cause } => {
+            format!("{context}: {}", describe(cause, limits))
+        }
+        other => other.to_string(),
+    }
+}
+
+/// `require(name)`: loads `name.lua` from the scene's folder or from `scripts/lib/`, once.
+fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '-')
+    {
+        return Err(lua_err(format!("require: invalid module name `{name}`")));
+    }
+    let modules: Table = lua.named_registry_value("troupe.modules")?;
+    if let Some(v) = modules.get::<Option<Value>>(name.as_str())? {
+        return Ok(v);
+    }
+    let rel = format!("{}.lua", name.replace('.', "/"));
+    let base = lua
+        .app_data_ref::<Stage>()
+        .map(|st| st.base_dir.clone())
+        .unwrap_or_default();
+    // The scene's own folder, then the `scripts/lib/` of the project the scene belongs to
+    // (the nearest enclosing `scripts` folder), then `scripts/lib/` of the working folder.
+    let mut candidates = vec![base.join(&rel)];
+    if let Ok(abs) = base.canonicalize() {
+        if let Some(scripts) = abs
+            .ancestors()
+            .find(|a| a.file_name().is_some_and(|n| n == "scripts"))
+        {
+            candidates.push(scripts.join("lib").join(&rel));
+        }
+    }
+    candidates.push(Path::new(SCRIPT_LIB).join(&rel));
+    let path = candidates.iter().find(|p| p.is_file()).ok_or_else(|| {
+        lua_err(format!(
+            "require: module `{name}` not found in the scene's folder or {SCRIPT_LIB}/"
+        ))
+    })?;
+    let code = std::fs::read_to_string(path)
+        .map_err(|e| lua_err(format!("require: {}: {e}", path.display())))?;
+    let value: Value = lua
+        .load(code)
+        .set_name(format!("@{}", path.display()))
+        .call(())?;
+    let value = if value.is_nil() {
+        Value::Boolean(true)
+    } else {
+        value
+    };
+    modules.set(name.as_str(), value.clone())?;
+    Ok(value)
+}

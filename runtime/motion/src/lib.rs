@@ -1,0 +1,10 @@
+//! troupe's motion: sequences of per-DOF Hermite tracks, sampled at run time by the
+//! keyframe action, and apart from them the offline tools of thesis chapter 5 that make
+//! and edit sequences ([`offline`]).
+
+pub mod error;
+pub mod offline;
+pub mod sequence;
+
+pub use error::{Error, Result};
+pub use sequence::{Key, Sequence, Track};

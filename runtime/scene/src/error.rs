@@ -1,0 +1,47 @@
+//! The errors of building and driving a scene: unknown names, refused actions.
+
+use thiserror::Error;
+
+/// Everything that can go wrong when building or driving a scene from outside input.
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum Error {
+    /// An actor name that the scene does not have.
+    #[error("unknown actor `{0}`")]
+    UnknownActor(String),
+    /// An object name that the scene does not have.
+    #[error("unknown object `{0}`")]
+    UnknownObject(String),
+    /// A name used twice where names must be unique.
+    #[error("{what} `{name}` already exists")]
+    Duplicate { what: &'static str, name: String },
+    /// A numeric parameter outside its valid range.
+    #[error("invalid {what}: {value} ({expected})")]
+    InvalidValue {
+        what: String,
+        value: f64,
+        expected: String,
+    },
+    /// Anything else a caller asked for that cannot be done, with the reason.
+    #[error("{0}")]
+    Invalid(String),
+    /// The body model refused a value or a name.
+    #[error(transparent)]
+    Body(#[from] troupe_body::Error),
+    /// A sequence is not valid.
+    #[error(transparent)]
+    Motion(#[from] troupe_motion::Error),
+}
+
+impl Error {
+    /// Shorthand for [`Error::InvalidValue`].
+    pub fn invalid_value(what: impl Into<String>, value: f64, expected: impl Into<String>) -> Self {
+        Error::InvalidValue {
+            what: what.into(),
+            value,
+            expected: expected.into(),
+        }
+    }
+}
+
+/// The scene crate's result type.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

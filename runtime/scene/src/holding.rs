@@ -1,0 +1,134 @@
+//! Attachments (thesis 4.4): an object held by a hand follows the hand's joint.
+//!
+//! Generators cannot touch the scene, so a grasp generator *asks* for an attachment through
+//! its [`crate::DofWriter`] ([`crate::DofWriter::request`]). After every actor has been
+//! stepped and its forward kinematics done (tick step 6), the scene applies the requests
+//! in actor order, then in the order each actor's actions emitted them, and finally moves
+//! every held object to `joint global · grip`. Requests are applied serially after the
+//! parallel step, so the outcome does not depend on the thread count.
+//!
+//! Rules, checked when a request is applied:
+//! - `Attach` succeeds when the object is free, already held by the same actor (a
+//!   re-grip), or held by the actor named in `from` (a hand-over, `actor:give`);
+//!   otherwise it is ignored and the requester sees the true holder in the next snapshot.
+//! - `Release` only releases an object the requesting actor holds.
+//! - `Place` sets the object's pose and frees it, if the requester holds it or nobody does.
+
+use crate::world::Object;
+use glam::{DQuat, DVec3};
+use troupe_body::state::ActorState;
+use troupe_body::transform::Transform;
+
+/// Who holds an object and how.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Holder {
+    /// Index of the holding actor.
+    pub actor: usize,
+    /// The joint the object is rigidly attached to (a wrist).
+    pub joint: usize,
+    /// The object's pose in that joint's frame, fixed at attachment.
+    pub grip: Transform,
+}
+
+/// What a generator asks of the scene about objects.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum HoldRequest {
+    /// Attach `object` to `joint` of the requesting actor, keeping its current world pose.
+    Attach {
+        /// Object index.
+        object: usize,
+        /// Joint of the requesting actor.
+        joint: usize,
+        /// Accept the object from this actor's hand (a hand-over).
+        from: Option<usize>,
+    },
+    /// Let go of `object` (it stays where it is).
+    Release {
+        /// Object index.
+        object: usize,
+    },
+    /// Let go of `object` and put it at this pose.
+    Place {
+        /// Object index.
+        object: usize,
+        /// World position of the object's centre.
+        position: DVec3,
+        /// World orientation.
+        rotation: DQuat,
+    },
+}
+
+/// Applies one request of `actor`; returns whether it took effect.
+pub(crate) fn apply(
+    actor: usize,
+    request: HoldRequest,
+    holders: &mut [Option<Holder>],
+    objects: &mut [Object],
+    states: &[ActorState],
+) -> bool {
+    match request {
+        HoldRequest::Attach {
+            object,
+            joint,
+            from,
+        } => {
+            let (Some(slot), Some(obj)) = (holders.get(object), objects.get(object)) else {
+                return false;
+            };
+            let allowed = match slot {
+                None => true,
+                Some(h) => h.actor == actor || from == Some(h.actor),
+            };
+            let Some(frame) = states.get(actor).and_then(|s| s.globals.get(joint)) else {
+                return false;
+            };
+            if !allowed {
+                return false;
+            }
+            // The grip is taken from this tick's posture, so the object does not jump.
+            let grip = frame
+                .inverse()
+                .mul(&Transform::new(obj.rotation, obj.position));
+            holders[object] = Some(Holder { actor, joint, grip });
+            true
+        }
+        HoldRequest::Release { object } => match holders.get(object) {
+            Some(Some(h)) if h.actor == actor => {
+                holders[object] = None;
+                true
+            }
+            _ => false,
+        },
+        HoldRequest::Place {
+            object,
+            position,
+            rotation,
+        } => {
+            let free = match holders.get(object) {
+                Some(None) => true,
+                Some(Some(h)) => h.actor == actor,
+                None => false,
+            };
+            if !free || !position.is_finite() || !rotation.is_finite() {
+                return false;
+            }
+            holders[object] = None;
+            objects[object].position = position;
+            objects[object].rotation = rotation.normalize();
+            true
+        }
+    }
+}
+
+/// Moves every held object to its holder's joint frame composed with its grip.
+pub(crate) fn follow(holders: &[Option<Holder>], objects: &mut [Object], states: &[ActorState]) {
+    for (object, holder) in objects.iter_mut().zip(holders) {
+        let Some(h) = holder else { continue };
+        let Some(frame) = states.get(h.actor).and_then(|s| s.globals.get(h.joint)) else {
+            continue;
+        };
+        let pose = frame.mul(&h.grip);
+        object.position = pose.translation;
+        object.rotation = pose.rotation.normalize();
+    }
+}

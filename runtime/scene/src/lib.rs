@@ -1,0 +1,24 @@
+//! troupe's scene: actors and objects, their actions and the scheduler that admits,
+//! steps and blends them tick by tick, the world snapshot generators read, holding, and
+//! the observers that record a run.
+
+pub mod action;
+pub mod blend;
+pub mod error;
+pub mod holding;
+pub mod pacing;
+pub mod parallel;
+pub mod profile;
+pub mod record;
+pub mod scene;
+pub mod scheduler;
+pub mod timeline;
+pub mod world;
+
+pub use action::{
+    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode, Status,
+    Step,
+};
+pub use error::{Error, Result};
+pub use scene::{ActorDesc, Scene, SceneConfig};
+pub use world::{ActorInfo, Object, World};

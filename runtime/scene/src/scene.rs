@@ -1,0 +1,565 @@
+//! The scene: actors, objects and their actions, stepped tick by tick.
+
+use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
+use crate::error::{Error, Result};
+use crate::holding::{self, HoldRequest, Holder};
+use crate::parallel::WorkerPool;
+use crate::profile::StepProfile;
+use crate::scheduler::{Action, ActorRuntime, TickClock};
+use crate::world::{ActorInfo, Object, World};
+use glam::{DQuat, DVec3};
+use std::collections::HashMap;
+use std::hash::{BuildHasherDefault, Hasher};
+use std::sync::Arc;
+use std::time::Instant;
+use troupe_body::skeleton::Skeleton;
+use troupe_body::solid::Shape;
+use troupe_body::state::ActorState;
+use troupe_body::template::{template, TemplateParams};
+
+/// A map keyed by action id. Scripts look actions up every tick (their wait
+/// conditions), and ids are small sequential integers, so a multiplicative hash serves
+/// better than the default DoS-resistant SipHash (which cost 4 % of a 1,000-actor tick).
+type IdMap<V> = HashMap<ActionId, V, BuildHasherDefault<IdHasher>>;
+
+/// Fibonacci hashing of a `u64` id: spreads sequential ids over all bits.
+#[derive(Default)]
+struct IdHasher(u64);
+
+impl Hasher for IdHasher {
+    fn finish(&self) -> u64 {
+        self.0
+    }
+
+    fn write(&mut self, bytes: &[u8]) {
+        // Only `write_u64` is used for ids; other input still hashes, byte by byte.
+        for &b in bytes {
+            self.write_u64(u64::from(b) ^ self.0.rotate_left(8));
+        }
+    }
+
+    fn write_u64(&mut self, n: u64) {
+        self.0 = n.wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    }
+}
+
+/// How a scene runs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneConfig {
+    /// Ticks per second (default 100).
+    pub rate: f64,
+    /// Worker threads for stepping actors (default 1).
+    pub threads: usize,
+    /// Seed for anything random in the scene (scripts, benchmarks).
+    pub seed: u64,
+}
+
+impl Default for SceneConfig {
+    fn default() -> Self {
+        SceneConfig {
+            rate: 100.0,
+            threads: 1,
+            seed: 0,
+        }
+    }
+}
+
+/// How to make an actor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ActorDesc {
+    /// Unique name.
+    pub name: String,
+    /// Body template name.
+    pub template: String,
+    /// Height in metres; the template's default when `None`.
+    pub height: Option<f64>,
+    /// Mass in kilograms; the template's default when `None`.
+    pub mass: Option<f64>,
+    /// Where it stands on the floor (x, z; y is ignored).
+    pub at: DVec3,
+    /// Heading in degrees about +Y; 0 faces +Z.
+    pub facing_degrees: f64,
+}
+
+impl ActorDesc {
+    /// An adult of default size at the origin facing +Z.
+    pub fn new(name: impl Into<String>) -> Self {
+        ActorDesc {
+            name: name.into(),
+            template: "adult".into(),
+            height: None,
+            mass: None,
+            at: DVec3::ZERO,
+            facing_degrees: 0.0,
+        }
+    }
+}
+
+/// The part of each actor that the parallel step writes.
+struct ActorWork {
+    runtime: ActorRuntime,
+    next: ActorState,
+}
+
+/// A set of actors and objects with their actions; [`Scene::step`] advances one tick.
+pub struct Scene {
+    config: SceneConfig,
+    tick: u64,
+    actors: Vec<ActorInfo>,
+    states: Vec<ActorState>,
+    work: Vec<ActorWork>,
+    objects: Vec<Object>,
+    holders: Vec<Option<Holder>>,
+    next_action: u64,
+    action_owner: IdMap<usize>,
+    ended: IdMap<ActionInfo>,
+    events: Vec<Event>,
+    pool: WorkerPool,
+    profiling: bool,
+    profile: StepProfile,
+    skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
+}
+
+impl Scene {
+    /// An empty scene.
+    pub fn new(config: SceneConfig) -> Result<Scene> {
+        if !(config.rate.is_finite() && config.rate > 0.0 && config.rate <= 10_000.0) {
+            return Err(Error::invalid_value(
+                "tick rate",
+                config.rate,
+                "0 < rate ≤ 10000 Hz",
+            ));
+        }
+        if config.threads == 0 || config.threads > 256 {
+            return Err(Error::invalid_value(
+                "threads",
+                config.threads as f64,
+                "1 to 256",
+            ));
+        }
+        Ok(Scene {
+            config,
+            tick: 0,
+            actors: Vec::new(),
+            states: Vec::new(),
+            work: Vec::new(),
+            objects: Vec::new(),
+            holders: Vec::new(),
+            next_action: 1,
+            action_owner: IdMap::default(),
+            ended: IdMap::default(),
+            events: Vec::new(),
+            pool: WorkerPool::new(config.threads),
+            profiling: false,
+            profile: StepProfile::default(),
+            skeleton_cache: Vec::new(),
+        })
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> SceneConfig {
+        self.config
+    }
+    /// Seconds per tick.
+    pub fn dt(&self) -> f64 {
+        1.0 / self.config.rate
+    }
+    /// Ticks done so far.
+    pub fn tick(&self) -> u64 {
+        self.tick
+    }
+    /// Scene time in seconds.
+    pub fn time(&self) -> f64 {
+        self.tick as f64 / self.config.rate
+    }
+    /// The actors' fixed descriptions, by index.
+    pub fn actors(&self) -> &[ActorInfo] {
+        &self.actors
+    }
+    /// The actors' states at the end of the last tick, by index.
+    pub fn states(&self) -> &[ActorState] {
+        &self.states
+    }
+    /// The objects, by index.
+    pub fn objects(&self) -> &[Object] {
+        &self.objects
+    }
+    /// Mutable access to the objects (for drivers and attachments between ticks).
+    pub fn objects_mut(&mut self) -> &mut [Object] {
+        &mut self.objects
+    }
+    /// Status changes of the last tick, in actor order then occurrence order.
+    pub fn events(&self) -> &[Event] {
+        &self.events
+    }
+    /// The read-only world view as of the last tick.
+    pub fn world(&self) -> World<'_> {
+        World {
+            time: self.time(),
+            actors: &self.actors,
+            states: &self.states,
+            objects: &self.objects,
+            holders: &self.holders,
+        }
+    }
+
+    /// Who holds object `object`, if anyone.
+    pub fn holder(&self, object: usize) -> Option<Holder> {
+        self.holders.get(object).copied().flatten()
+    }
+
+    /// The objects `actor` holds, in object order.
+    pub fn held_by(&self, actor: usize) -> Vec<usize> {
+        (0..self.holders.len())
+            .filter(|&o| self.holders[o].is_some_and(|h| h.actor == actor))
+            .collect()
+    }
+
+    /// Applies an attach/release/place request as if `actor`'s action had made it, then
+    /// moves held objects; returns whether it took effect (for tools and tests).
+    pub fn request_hold(&mut self, actor: usize, request: HoldRequest) -> bool {
+        let done = holding::apply(
+            actor,
+            request,
+            &mut self.holders,
+            &mut self.objects,
+            &self.states,
+        );
+        holding::follow(&self.holders, &mut self.objects, &self.states);
+        done
+    }
+
+    /// The index of the actor called `name`.
+    pub fn actor_index(&self, name: &str) -> Result<usize> {
+        self.actors
+            .iter()
+            .position(|a| a.name == name)
+            .ok_or_else(|| Error::UnknownActor(name.to_string()))
+    }
+
+    /// The index of the object called `name`.
+    pub fn object_index(&self, name: &str) -> Result<usize> {
+        self.objects
+            .iter()
+            .position(|o| o.name == name)
+            .ok_or_else(|| Error::UnknownObject(name.to_string()))
+    }
+
+    /// Adds an actor built from a template; actors of equal template and parameters share
+    /// one skeleton.
+    pub fn add_actor(&mut self, desc: &ActorDesc) -> Result<usize> {
+        if desc.name.is_empty() {
+            return Err(Error::Invalid("an actor needs a name".into()));
+        }
+        if self.actors.iter().any(|a| a.name == desc.name) {
+            return Err(Error::Duplicate {
+                what: "actor",
+                name: desc.name.clone(),
+            });
+        }
+        if !desc.at.is_finite() || !desc.facing_degrees.is_finite() {
+            return Err(Error::Invalid(format!(
+                "actor `{}`: position and facing must be finite numbers",
+                desc.name
+            )));
+        }
+        let t = template(&desc.template)?;
+        let params = TemplateParams {
+            height: desc.height.unwrap_or(t.default_height),
+            mass: desc.mass.unwrap_or(t.default_mass),
+        };
+        let skeleton = match self
+            .skeleton_cache
+            .iter()
+            .find(|(n, p, _)| *n == desc.template && *p == params)
+        {
+            Some((_, _, s)) => s.clone(),
+            None => {
+                let s = Arc::new(t.instantiate(params)?);
+                self.skeleton_cache
+                    .push((desc.template.clone(), params, s.clone()));
+                s
+            }
+        };
+        let mut q = vec![0.0; skeleton.dof_count()];
+        q[skeleton.dof("root_x")?] = desc.at.x;
+        q[skeleton.dof("root_z")?] = desc.at.z;
+        q[skeleton.dof("root_yaw")?] = desc.facing_degrees.to_radians();
+        let state = ActorState::new(&skeleton, q);
+        self.work.push(ActorWork {
+            runtime: ActorRuntime::default(),
+            next: state.clone(),
+        });
+        self.states.push(state);
+        self.actors.push(ActorInfo {
+            name: desc.name.clone(),
+            template: desc.template.clone(),
+            params,
+            skeleton,
+        });
+        Ok(self.actors.len() - 1)
+    }
+
+    /// Adds a rigid object.
+    pub fn add_object(&mut self, object: Object) -> Result<usize> {
+        if object.name.is_empty() {
+            return Err(Error::Invalid("an object needs a name".into()));
+        }
+        if self.objects.iter().any(|o| o.name == object.name) {
+            return Err(Error::Duplicate {
+                what: "object",
+                name: object.name,
+            });
+        }
+        object.shape.validate()?;
+        if !(object.mass.is_finite() && object.mass > 0.0) {
+            return Err(Error::invalid_value(
+                "object mass",
+                object.mass,
+                "a finite mass > 0 kg",
+            ));
+        }
+        if !object.position.is_finite() || !object.rotation.is_finite() {
+            return Err(Error::Invalid(format!(
+                "object `{}`: position and rotation must be finite",
+                object.name
+            )));
+        }
+        self.objects.push(object);
+        self.holders.push(None);
+        Ok(self.objects.len() - 1)
+    }
+
+    /// Builds an object of `shape` at `position`.
+    pub fn object(name: impl Into<String>, shape: Shape, position: DVec3, mass: f64) -> Object {
+        Object {
+            name: name.into(),
+            shape,
+            position,
+            rotation: DQuat::IDENTITY,
+            mass,
+        }
+    }
+
+    /// Sets DOFs of an actor directly (value and held value); an action driving them takes
+    /// over on the next tick. Values are clamped to the DOF limits.
+    pub fn set_dofs(&mut self, actor: usize, values: &[(usize, f64)]) -> Result<()> {
+        let info = self
+            .actors
+            .get(actor)
+            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        let skeleton = info.skeleton.clone();
+        let state = &mut self.states[actor];
+        for &(d, v) in values {
+            let dof = skeleton.dofs().get(d).ok_or_else(|| {
+                Error::Body(troupe_body::Error::UnknownDof {
+                    name: format!("#{d}"),
+                    skeleton: skeleton.name().to_string(),
+                })
+            })?;
+            if !v.is_finite() {
+                return Err(Error::invalid_value(dof.name.clone(), v, "a finite number"));
+            }
+            state.q[d] = dof.clamp(v);
+            state.held[d] = state.q[d];
+        }
+        state.update_kinematics(&skeleton);
+        Ok(())
+    }
+
+    /// Creates an action for `actor`; it waits as `pending` until the scheduler admits it.
+    pub fn start_action(
+        &mut self,
+        actor: usize,
+        spec: ActionSpec,
+        generator: Box<dyn Generator>,
+    ) -> Result<ActionId> {
+        let info = self
+            .actors
+            .get(actor)
+            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        spec.validate()?;
+        if spec.scope.iter().any(|d| d >= info.skeleton.dof_count()) {
+            return Err(Error::Invalid(format!(
+                "{} action: scope names DOFs the actor `{}` does not have",
+                spec.kind, info.name
+            )));
+        }
+        let id = ActionId(self.next_action);
+        self.next_action += 1;
+        let begin = self.time() + spec.delay;
+        self.work[actor].runtime.push(Action {
+            id,
+            spec,
+            status: Status::Pending,
+            begin,
+            started_at: None,
+            terminate_at: None,
+            ended_at: None,
+            ending: Status::Completed,
+            reason: None,
+            cancel_requested: false,
+            generator,
+        });
+        self.action_owner.insert(id, actor);
+        Ok(id)
+    }
+
+    /// Asks an action to stop: a pending one is cancelled on the next tick, a running one
+    /// eases out and ends `cancelled`. Cancelling an ended action does nothing.
+    pub fn cancel(&mut self, id: ActionId) -> Result<()> {
+        let actor = *self
+            .action_owner
+            .get(&id)
+            .ok_or_else(|| Error::Invalid(format!("no action {id}")))?;
+        if let Some(a) = self.work[actor]
+            .runtime
+            .actions
+            .iter_mut()
+            .find(|a| a.id == id)
+        {
+            a.cancel_requested = true;
+        }
+        Ok(())
+    }
+
+    /// The status of an action, without copying its record (for wait conditions checked
+    /// every tick).
+    pub fn action_status(&self, id: ActionId) -> Option<Status> {
+        match self.find_action(id)? {
+            Ok((_, a)) => Some(a.status),
+            Err(info) => Some(info.status),
+        }
+    }
+
+    /// The current record of an action.
+    pub fn action(&self, id: ActionId) -> Option<ActionInfo> {
+        match self.find_action(id)? {
+            Ok((actor, a)) => Some(a.info(actor)),
+            Err(info) => Some(info.clone()),
+        }
+    }
+
+    /// A known action: still with its actor (and which), or its final record.
+    fn find_action(
+        &self,
+        id: ActionId,
+    ) -> Option<std::result::Result<(usize, &Action), &ActionInfo>> {
+        let actor = *self.action_owner.get(&id)?;
+        match self.work[actor].runtime.actions.iter().find(|a| a.id == id) {
+            Some(a) => Some(Ok((actor, a))),
+            None => self.ended.get(&id).map(Err),
+        }
+    }
+
+    /// The actions of `actor` that have not ended, in creation order.
+    pub fn actions_of(&self, actor: usize) -> Vec<ActionInfo> {
+        self.work
+            .get(actor)
+            .map(|w| w.runtime.actions.iter().map(|a| a.info(actor)).collect())
+            .unwrap_or_default()
+    }
+
+    /// Forgets the records of actions that ended before `before` (scene time) unless
+    /// `keep(id)` says someone still refers to them; returns how many were forgotten.
+    /// Long runs start many actions: this keeps memory bounded.
+    pub fn forget_ended_actions(&mut self, before: f64, keep: impl Fn(ActionId) -> bool) -> usize {
+        let old: Vec<ActionId> = self
+            .ended
+            .iter()
+            .filter(|(id, info)| info.ended_at.is_some_and(|t| t < before) && !keep(**id))
+            .map(|(id, _)| *id)
+            .collect();
+        for id in &old {
+            self.ended.remove(id);
+            self.action_owner.remove(id);
+        }
+        old.len()
+    }
+
+    /// Whether any action of any actor has not ended.
+    pub fn has_unfinished_actions(&self) -> bool {
+        self.work.iter().any(|w| !w.runtime.actions.is_empty())
+    }
+
+    /// Fixes how many actors a worker claims at a time (`None`: sized by the crowd).
+    /// Tests set 1 so that even two actors are stepped on two threads.
+    pub fn set_chunk_size(&mut self, actors: Option<usize>) {
+        self.pool = self.pool.with_chunk(actors);
+    }
+
+    /// Switches per-phase timing of [`Scene::step`] on or off (off by default).
+    pub fn set_profiling(&mut self, on: bool) {
+        self.profiling = on;
+    }
+
+    /// The phase timings gathered since the last call, which resets them.
+    pub fn take_profile(&mut self) -> StepProfile {
+        std::mem::take(&mut self.profile)
+    }
+
+    /// Generator writes refused so far because they fell outside their action's scope.
+    pub fn refused_writes(&self) -> u64 {
+        self.work.iter().map(|w| w.runtime.refused_writes).sum()
+    }
+
+    /// Advances one tick: every actor is stepped (in parallel when threads > 1) against
+    /// the previous tick's world, then the new states are published.
+    pub fn step(&mut self) -> &[Event] {
+        self.tick += 1;
+        let clock = TickClock {
+            tick: self.tick,
+            time: self.time(),
+            dt: self.dt(),
+            profile: self.profiling,
+        };
+        let started = self.profiling.then(Instant::now);
+        {
+            let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
+            let world = World {
+                time: clock.time - clock.dt,
+                actors: &self.actors,
+                states: &self.states,
+                objects: &self.objects,
+                holders: &self.holders,
+            };
+            let actors = &self.actors;
+            let states = &self.states;
+            self.pool.for_each(&mut self.work, |i, w| {
+                let skeleton = &actors[i].skeleton;
+                w.runtime
+                    .tick(i, skeleton, &world, &states[i], &mut w.next, clock);
+            });
+        }
+        let joined = self.profiling.then(Instant::now);
+        let _span = tracing::trace_span!("publish", tick = self.tick).entered();
+        self.events.clear();
+        for (i, w) in self.work.iter_mut().enumerate() {
+            std::mem::swap(&mut self.states[i], &mut w.next);
+            self.events.extend(w.runtime.events.iter().cloned());
+            for info in w.runtime.ended.drain(..) {
+                self.ended.insert(info.id, info);
+            }
+            if self.profiling {
+                self.profile
+                    .actors
+                    .add(&std::mem::take(&mut w.runtime.phases));
+            }
+        }
+        let published = self.profiling.then(Instant::now);
+        // Tick step 6 (DESIGN.md): attachments, after every actor's forward kinematics,
+        // serially in actor order so the result is independent of the thread count.
+        for (i, w) in self.work.iter_mut().enumerate() {
+            for r in w.runtime.hold_requests.drain(..) {
+                holding::apply(i, r, &mut self.holders, &mut self.objects, &self.states);
+            }
+        }
+        holding::follow(&self.holders, &mut self.objects, &self.states);
+        if let (Some(started), Some(joined), Some(published)) = (started, joined, published) {
+            self.profile.step_wall += joined - started;
+            self.profile.publish_wall += published - joined;
+            self.profile.collision_wall += published.elapsed();
+        }
+        &self.events
+    }
+}

@@ -1,0 +1,369 @@
+//! The per-actor scheduler: admission of pending actions by priority mode, status
+//! transitions, stepping the generators and blending their output.
+//!
+//! One tick of one actor at scene time `t` runs these phases in order:
+//!
+//! 1. **Admission.** Pending actions are considered in creation order. A cancel request
+//!    on a pending action cancels it. An action whose begin time (creation + `delay`) has
+//!    come is admitted if its mode allows: `default` only when no running action and no
+//!    earlier pending action of the actor overlaps its scope (so it starts on the tick
+//!    after the last conflicting action stopped); `weighted` always; `exclusive` always,
+//!    pre-empting every running action that overlaps it; `clearing` always, pre-empting
+//!    every running action of the actor and cancelling every earlier pending one. A
+//!    pre-empted action eases out over its own `ease_out` and ends `cancelled`.
+//!    Admission moves an action to `initiating` (or straight to `active` without
+//!    ease-in) and calls its generator's `start`.
+//! 2. **Transitions.** Cancel requests start the ease-out; `initiating` becomes `active`
+//!    once `ease_in` has passed; an action with a `duration` starts terminating at
+//!    `start + duration − ease_out`; a terminating action whose ease-out is over ends
+//!    (it contributes nothing on that tick).
+//! 3. **Generators.** Every running action's generator is stepped with the previous
+//!    tick's snapshot and writes its scope; its output enters the blend with weight ×
+//!    ease factor. A generator reporting `Finished` starts the ease-out (or completes at
+//!    once, its last output counted); `Failed` ends the action at once, output discarded.
+//! 4. **Blend and kinematics**: [`crate::blend`], then forward kinematics.
+//!
+//! Each actor's tick reads only the previous tick's world and writes only its own state,
+//! so actors are stepped in parallel and the result does not depend on the thread count.
+
+use crate::action::{
+    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode, Status,
+    Step,
+};
+use crate::blend::{ease_factor, Accumulator};
+use crate::profile::{ActorPhases, PhaseClock};
+use crate::world::World;
+use troupe_body::skeleton::Skeleton;
+use troupe_body::state::ActorState;
+
+/// An action owned by the scheduler.
+pub(crate) struct Action {
+    pub id: ActionId,
+    pub spec: ActionSpec,
+    pub status: Status,
+    pub begin: f64,
+    pub started_at: Option<f64>,
+    pub terminate_at: Option<f64>,
+    pub ended_at: Option<f64>,
+    /// The status the action takes when its ease-out ends.
+    pub ending: Status,
+    pub reason: Option<String>,
+    pub cancel_requested: bool,
+    pub generator: Box<dyn Generator>,
+}
+
+impl Action {
+    pub(crate) fn info(&self, actor: usize) -> ActionInfo {
+        ActionInfo {
+            id: self.id,
+            actor,
+            kind: self.spec.kind.clone(),
+            scope: self.spec.scope,
+            mode: self.spec.mode,
+            weight: self.spec.weight,
+            status: self.status,
+            reason: self.reason.clone(),
+            started_at: self.started_at,
+            ended_at: self.ended_at,
+        }
+    }
+}
+
+/// Everything the scheduler keeps for one actor between ticks.
+#[derive(Default)]
+pub struct ActorRuntime {
+    pub(crate) actions: Vec<Action>,
+    /// Actions that ended during the last tick, for the scene's records.
+    pub(crate) ended: Vec<ActionInfo>,
+    /// Status changes of the last tick.
+    pub(crate) events: Vec<Event>,
+    /// Generator writes refused because they fell outside the action's scope.
+    pub(crate) refused_writes: u64,
+    /// Time spent per phase since the scene last collected it (when profiling).
+    pub(crate) phases: ActorPhases,
+    /// Attach/release requests of the last tick, in emission order (see [`crate::holding`]).
+    pub(crate) hold_requests: Vec<crate::holding::HoldRequest>,
+    scratch: Vec<f64>,
+    accumulator: Accumulator,
+}
+
+/// The clock of one tick.
+#[derive(Clone, Copy)]
+pub(crate) struct TickClock {
+    pub tick: u64,
+    pub time: f64,
+    pub dt: f64,
+    /// Whether to time the phases.
+    pub profile: bool,
+}
+
+struct Transitions<'a> {
+    actor: usize,
+    clock: TickClock,
+    events: &'a mut Vec<Event>,
+}
+
+impl Transitions<'_> {
+    fn set(&mut self, action: &mut Action, status: Status) {
+        action.status = status;
+        if status.is_final() {
+            action.ended_at = Some(self.clock.time);
+        }
+        self.events.push(Event {
+            tick: self.clock.tick,
+            time: self.clock.time,
+            actor: self.actor,
+            action: action.id,
+            kind: action.spec.kind.clone(),
+            status,
+            reason: if status.is_final() {
+                action.reason.clone()
+            } else {
+                None
+            },
+        });
+    }
+
+    /// Starts the ease-out toward `ending`, or ends at once without one.
+    fn terminate(&mut self, action: &mut Action, ending: Status, reason: Option<String>) {
+        if action.status == Status::Terminating {
+            if ending == Status::Cancelled {
+                action.ending = ending;
+                action.reason = reason;
+            }
+            return;
+        }
+        action.ending = ending;
+        action.reason = reason;
+        if action.spec.ease_out > 0.0 {
+            action.terminate_at = Some(self.clock.time);
+            self.set(action, Status::Terminating);
+        } else {
+            self.set(action, ending);
+        }
+    }
+}
+
+impl ActorRuntime {
+    pub(crate) fn push(&mut self, action: Action) {
+        self.actions.push(action);
+    }
+
+    /// Runs one tick of this actor: admission, transitions, generators, blend, FK.
+    pub(crate) fn tick(
+        &mut self,
+        actor: usize,
+        skeleton: &Skeleton,
+        world: &World,
+        previous: &ActorState,
+        next: &mut ActorState,
+        clock: TickClock,
+    ) {
+        let mut stopwatch = PhaseClock::start(clock.profile);
+        self.events.clear();
+        self.ended.clear();
+        self.hold_requests.clear();
+        let mut tr = Transitions {
+            actor,
+            clock,
+            events: &mut self.events,
+        };
+        admit(&mut self.actions, &mut tr, actor, skeleton, world, previous);
+        advance(&mut self.actions, &mut tr);
+        stopwatch.lap(&mut self.phases.scheduling);
+
+        // Generators and blend.
+        let n = skeleton.dof_count();
+        self.accumulator.reset(n);
+        self.scratch.resize(n, 0.0);
+        for action in self.actions.iter_mut() {
+            if !action.status.is_running() {
+                continue;
+            }
+            let start = action.started_at.unwrap_or(clock.time);
+            let ctx = GeneratorContext {
+                time: clock.time,
+                dt: clock.dt,
+                tick: clock.tick,
+                local_time: clock.time - start,
+                actor,
+                skeleton,
+                posture: previous,
+                world,
+                scope: action.spec.scope,
+            };
+            let mut out = DofWriter::new(action.spec.scope, &mut self.scratch);
+            let step = action.generator.step(&ctx, &mut out);
+            let (written, refused) = (out.written(), out.refused());
+            let requests = out.take_requests();
+            if refused > 0 {
+                if self.refused_writes == 0 {
+                    tracing::warn!(actor, action = %action.id, kind = %action.spec.kind,
+                        "generator wrote DOFs outside its scope; the writes were ignored");
+                }
+                self.refused_writes += refused as u64;
+            }
+            if let Step::Failed(reason) = step {
+                action.reason = Some(reason);
+                tr.set(action, Status::Failed);
+                continue;
+            }
+            self.hold_requests.extend(requests);
+            let w = action.spec.base_weight()
+                * ease_factor(
+                    clock.time,
+                    start,
+                    action.spec.ease_in,
+                    action.terminate_at,
+                    action.spec.ease_out,
+                );
+            if w > 0.0 {
+                for d in written.iter() {
+                    self.accumulator.add(d, self.scratch[d], w);
+                }
+            }
+            if step == Step::Finished {
+                tr.terminate(action, Status::Completed, None);
+            }
+        }
+
+        stopwatch.lap(&mut self.phases.generators);
+        next.held.copy_from_slice(&previous.held);
+        let limits = skeleton.limits();
+        self.accumulator
+            .resolve(&mut next.held, &mut next.q, |d, v| {
+                let (min, max) = limits[d];
+                v.clamp(min, max)
+            });
+        for d in 0..n {
+            next.qd[d] = (next.q[d] - previous.q[d]) / clock.dt;
+        }
+        next.update_kinematics(skeleton);
+        stopwatch.lap(&mut self.phases.blend_fk);
+
+        // Retire ended actions, keeping their final record.
+        let mut i = 0;
+        while i < self.actions.len() {
+            if self.actions[i].status.is_final() {
+                let a = self.actions.remove(i);
+                self.ended.push(a.info(actor));
+            } else {
+                i += 1;
+            }
+        }
+        stopwatch.lap(&mut self.phases.scheduling);
+    }
+}
+
+fn admit(
+    actions: &mut [Action],
+    tr: &mut Transitions,
+    actor: usize,
+    skeleton: &Skeleton,
+    world: &World,
+    posture: &ActorState,
+) {
+    let time = tr.clock.time;
+    for i in 0..actions.len() {
+        if actions[i].status != Status::Pending {
+            continue;
+        }
+        if actions[i].cancel_requested {
+            actions[i].reason = Some("cancelled".into());
+            tr.set(&mut actions[i], Status::Cancelled);
+            continue;
+        }
+        if actions[i].begin > time + 1e-9 {
+            continue;
+        }
+        let scope = actions[i].spec.scope;
+        let admitted = match actions[i].spec.mode {
+            Mode::Default => !actions.iter().enumerate().any(|(j, other)| {
+                j != i
+                    && other.spec.scope.overlaps(&scope)
+                    && (other.status.is_running() || (other.status == Status::Pending && j < i))
+            }),
+            Mode::Weighted => true,
+            Mode::Exclusive | Mode::Clearing => {
+                let clearing = actions[i].spec.mode == Mode::Clearing;
+                let id = actions[i].id;
+                for (j, other) in actions.iter_mut().enumerate() {
+                    if j == i || other.status.is_final() {
+                        continue;
+                    }
+                    let hit = clearing || other.spec.scope.overlaps(&scope);
+                    let reason = Some(format!("pre-empted by action {id}"));
+                    if hit && other.status.is_running() {
+                        tr.terminate(other, Status::Cancelled, reason);
+                    } else if clearing && other.status == Status::Pending && j < i {
+                        other.reason = reason;
+                        tr.set(other, Status::Cancelled);
+                    }
+                }
+                true
+            }
+        };
+        if !admitted {
+            continue;
+        }
+        let action = &mut actions[i];
+        action.started_at = Some(time);
+        let ctx = GeneratorContext {
+            time,
+            dt: tr.clock.dt,
+            tick: tr.clock.tick,
+            local_time: 0.0,
+            actor,
+            skeleton,
+            posture,
+            world,
+            scope,
+        };
+        let first = if action.spec.ease_in > 0.0 {
+            Status::Initiating
+        } else {
+            Status::Active
+        };
+        tr.set(action, first);
+        if let Err(reason) = action.generator.start(&ctx) {
+            action.reason = Some(reason);
+            tr.set(action, Status::Failed);
+        }
+    }
+}
+
+fn advance(actions: &mut [Action], tr: &mut Transitions) {
+    let time = tr.clock.time;
+    for action in actions.iter_mut() {
+        if !action.status.is_running() {
+            continue;
+        }
+        let start = action.started_at.unwrap_or(time);
+        if action.cancel_requested && action.ending != Status::Cancelled {
+            tr.terminate(action, Status::Cancelled, Some("cancelled".into()));
+            if action.status.is_final() {
+                continue;
+            }
+        }
+        if action.status == Status::Initiating && time - start >= action.spec.ease_in - 1e-9 {
+            tr.set(action, Status::Active);
+        }
+        if let Some(duration) = action.spec.duration {
+            if action.status != Status::Terminating
+                && time - start >= duration - action.spec.ease_out - 1e-9
+            {
+                tr.terminate(action, Status::Completed, None);
+                if action.status.is_final() {
+                    continue;
+                }
+            }
+        }
+        if action.status == Status::Terminating {
+            let t0 = action.terminate_at.unwrap_or(time);
+            if time - t0 >= action.spec.ease_out - 1e-9 {
+                let ending = action.ending;
+                tr.set(action, ending);
+            }
+        }
+    }
+}

@@ -1,0 +1,52 @@
+//! The read-only view of a scene that generators see: every actor and object as they were
+//! at the end of the previous tick.
+
+use std::sync::Arc;
+pub use troupe_body::object::Object;
+use troupe_body::skeleton::Skeleton;
+use troupe_body::state::ActorState;
+use troupe_body::template::TemplateParams;
+
+/// What does not change about an actor during a run.
+#[derive(Clone, Debug)]
+pub struct ActorInfo {
+    /// Unique name in the scene.
+    pub name: String,
+    /// Template name.
+    pub template: String,
+    /// Template parameters.
+    pub params: TemplateParams,
+    /// The shared skeleton.
+    pub skeleton: Arc<Skeleton>,
+}
+
+/// The scene at the end of the previous tick.
+pub struct World<'a> {
+    /// Scene time of that tick.
+    pub time: f64,
+    /// Every actor's fixed description, by actor index.
+    pub actors: &'a [ActorInfo],
+    /// Every actor's state, by actor index.
+    pub states: &'a [ActorState],
+    /// Every object, by object index.
+    pub objects: &'a [Object],
+    /// Who holds each object, by object index (see [`crate::holding`]).
+    pub holders: &'a [Option<crate::holding::Holder>],
+}
+
+impl World<'_> {
+    /// The index of the actor called `name`.
+    pub fn actor_index(&self, name: &str) -> Option<usize> {
+        self.actors.iter().position(|a| a.name == name)
+    }
+
+    /// The index of the object called `name`.
+    pub fn object_index(&self, name: &str) -> Option<usize> {
+        self.objects.iter().position(|o| o.name == name)
+    }
+
+    /// Who holds object `object`, if anyone.
+    pub fn holder(&self, object: usize) -> Option<crate::holding::Holder> {
+        self.holders.get(object).copied().flatten()
+    }
+}

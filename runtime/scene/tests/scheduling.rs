@@ -1,0 +1,617 @@
+//! Every priority mode and transition of the scheduler, checked tick by tick.
+
+use troupe_body::Scope;
+use troupe_scene::blend::ease;
+use troupe_scene::{
+    ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Mode, Scene,
+    SceneConfig, Status, Step,
+};
+
+/// Writes one constant value on every DOF of its scope, forever (or fails, or finishes).
+struct Constant {
+    value: f64,
+    finish_after: Option<f64>,
+    fail_after: Option<f64>,
+}
+
+impl Generator for Constant {
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        if self.fail_after.is_some_and(|t| ctx.local_time >= t) {
+            return Step::Failed("the generator gave up".into());
+        }
+        for d in ctx.scope.iter() {
+            out.set(d, self.value);
+        }
+        if self.finish_after.is_some_and(|t| ctx.local_time >= t) {
+            Step::Finished
+        } else {
+            Step::Running
+        }
+    }
+}
+
+fn constant(value: f64) -> Box<Constant> {
+    Box::new(Constant {
+        value,
+        finish_after: None,
+        fail_after: None,
+    })
+}
+
+/// Writes every DOF of the skeleton, ignoring its scope.
+struct Rogue;
+
+impl Generator for Rogue {
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        for d in 0..ctx.skeleton.dof_count() {
+            out.set(d, 0.5);
+        }
+        Step::Running
+    }
+}
+
+fn scene() -> (Scene, usize) {
+    let mut scene = Scene::new(SceneConfig::default()).unwrap();
+    let actor = scene.add_actor(&ActorDesc::new("ann")).unwrap();
+    (scene, actor)
+}
+
+fn scope(scene: &Scene, expr: &str) -> Scope {
+    scene.actors()[0].skeleton.scope(expr).unwrap()
+}
+
+fn dof(scene: &Scene, name: &str) -> usize {
+    scene.actors()[0].skeleton.dof(name).unwrap()
+}
+
+fn spec(scene: &Scene, expr: &str, mode: Mode) -> ActionSpec {
+    ActionSpec {
+        mode,
+        ..ActionSpec::new("test", scope(scene, expr))
+    }
+}
+
+fn status(scene: &Scene, id: ActionId) -> Status {
+    scene.action(id).unwrap().status
+}
+
+fn q(scene: &Scene, name: &str) -> f64 {
+    scene.states()[0].q[dof(scene, name)]
+}
+
+/// Steps until `id` reaches `status`; returns the tick at which it did.
+fn run_until(scene: &mut Scene, id: ActionId, status: Status, max: u64) -> u64 {
+    for _ in 0..max {
+        let events = scene.step().to_vec();
+        if events.iter().any(|e| e.action == id && e.status == status) {
+            return scene.tick();
+        }
+    }
+    panic!("action {id} never reached {status:?}");
+}
+
+#[test]
+fn default_waits_for_an_overlapping_action_and_starts_the_tick_after() {
+    let (mut s, a) = scene();
+    let first = s
+        .start_action(
+            a,
+            ActionSpec {
+                duration: Some(0.1),
+                ..spec(&s, "right_arm", Mode::Default)
+            },
+            constant(0.3),
+        )
+        .unwrap();
+    let second = s
+        .start_action(a, spec(&s, "r_elbow", Mode::Default), constant(0.6))
+        .unwrap();
+    s.step();
+    assert_eq!(status(&s, first), Status::Active);
+    assert_eq!(status(&s, second), Status::Pending);
+    let done = run_until(&mut s, first, Status::Completed, 100);
+    assert_eq!(status(&s, second), Status::Pending);
+    let started = run_until(&mut s, second, Status::Active, 2);
+    assert_eq!(started, done + 1);
+    assert_eq!(q(&s, "r_elbow_flexion"), 0.6);
+    // The first action's DOFs outside the second's scope hold their last value.
+    assert_eq!(q(&s, "r_shoulder_flexion"), 0.3);
+}
+
+#[test]
+fn default_waits_for_earlier_pending_actions_in_order() {
+    let (mut s, a) = scene();
+    let long = s
+        .start_action(
+            a,
+            ActionSpec {
+                duration: Some(0.05),
+                ..spec(&s, "right_arm", Mode::Default)
+            },
+            constant(0.1),
+        )
+        .unwrap();
+    let mid = s
+        .start_action(
+            a,
+            ActionSpec {
+                duration: Some(0.05),
+                ..spec(&s, "r_wrist", Mode::Default)
+            },
+            constant(0.2),
+        )
+        .unwrap();
+    let last = s
+        .start_action(a, spec(&s, "r_wrist+r_elbow", Mode::Default), constant(0.3))
+        .unwrap();
+    let t_long = run_until(&mut s, long, Status::Completed, 50);
+    let t_mid = run_until(&mut s, mid, Status::Completed, 50);
+    assert!(t_mid > t_long);
+    assert_eq!(status(&s, last), Status::Pending);
+    s.step();
+    assert_eq!(status(&s, last), Status::Active);
+}
+
+#[test]
+fn disjoint_scopes_run_together() {
+    let (mut s, a) = scene();
+    let left = s
+        .start_action(a, spec(&s, "left_arm", Mode::Default), constant(0.2))
+        .unwrap();
+    let right = s
+        .start_action(a, spec(&s, "right_arm", Mode::Default), constant(0.4))
+        .unwrap();
+    let legs = s
+        .start_action(a, spec(&s, "legs", Mode::Exclusive), constant(0.1))
+        .unwrap();
+    s.step();
+    for id in [left, right, legs] {
+        assert_eq!(status(&s, id), Status::Active);
+    }
+    assert_eq!(q(&s, "l_elbow_flexion"), 0.2);
+    assert_eq!(q(&s, "r_elbow_flexion"), 0.4);
+    assert_eq!(q(&s, "l_knee_flexion"), 0.1);
+}
+
+#[test]
+fn weighted_actions_blend_by_weight() {
+    let (mut s, a) = scene();
+    let w = |s: &Scene, weight| ActionSpec {
+        weight,
+        ..spec(s, "r_elbow_flexion", Mode::Weighted)
+    };
+    // Alone at weight 0.7: 70 % of the way from the held value (0).
+    let one = s.start_action(a, w(&s, 0.7), constant(1.0)).unwrap();
+    s.step();
+    assert!((q(&s, "r_elbow_flexion") - 0.7).abs() < 1e-12);
+    // Two at 0.7 and 0.6 (total ≥ 1): normalised, (0.7·1 + 0.6·2) / 1.3.
+    s.start_action(a, w(&s, 0.6), constant(2.0)).unwrap();
+    s.step();
+    assert!((q(&s, "r_elbow_flexion") - (0.7 + 1.2) / 1.3).abs() < 1e-12);
+    assert_eq!(status(&s, one), Status::Active);
+}
+
+#[test]
+fn ease_in_and_out_follow_the_documented_curve() {
+    let (mut s, a) = scene();
+    // A weighted action below full weight leaves the held value (0) in place, so the
+    // DOF shows weight × ease factor directly.
+    let spec = ActionSpec {
+        weight: 0.5,
+        ease_in: 0.2,
+        ease_out: 0.1,
+        duration: Some(0.5),
+        ..spec(&s, "r_elbow_flexion", Mode::Weighted)
+    };
+    let id = s.start_action(a, spec, constant(1.0)).unwrap();
+    let mut seen = Vec::new();
+    for _ in 0..60 {
+        s.step();
+        seen.push((s.time(), q(&s, "r_elbow_flexion"), status(&s, id)));
+    }
+    let start = seen[0].0;
+    for (t, value, st) in &seen {
+        let local = t - start;
+        let factor = if local < 0.4 - 1e-9 {
+            ease(local / 0.2)
+        } else if local < 0.5 - 1e-9 {
+            1.0 - ease((local - 0.4) / 0.1)
+        } else {
+            0.0
+        };
+        assert!(
+            (value - 0.5 * factor).abs() < 1e-9,
+            "t={local:.2}: {value} vs {} ({st:?})",
+            0.5 * factor
+        );
+    }
+    assert_eq!(seen[0].2, Status::Initiating);
+    assert_eq!(seen[25].2, Status::Active);
+    assert_eq!(seen[45].2, Status::Terminating);
+    assert_eq!(seen[55].2, Status::Completed);
+}
+
+#[test]
+fn a_full_weight_action_easing_out_comes_to_rest_where_it_was() {
+    // The held value follows a fully driven DOF, so a lone action's ease-out fades its
+    // still-moving output into the pose it had when the ease-out began.
+    struct Ramp;
+    impl Generator for Ramp {
+        fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+            for d in ctx.scope.iter() {
+                out.set(d, ctx.local_time);
+            }
+            Step::Running
+        }
+    }
+    let (mut s, a) = scene();
+    let spec = ActionSpec {
+        ease_out: 0.2,
+        duration: Some(1.0),
+        ..spec(&s, "r_elbow_flexion", Mode::Default)
+    };
+    let id = s.start_action(a, spec, Box::new(Ramp)).unwrap();
+    run_until(&mut s, id, Status::Terminating, 200);
+    let at_ease_out = q(&s, "r_elbow_flexion");
+    run_until(&mut s, id, Status::Completed, 200);
+    let end = q(&s, "r_elbow_flexion");
+    assert!((end - at_ease_out).abs() < 1e-12, "{end} vs {at_ease_out}");
+    for _ in 0..3 {
+        s.step();
+        assert_eq!(q(&s, "r_elbow_flexion"), end);
+    }
+}
+
+#[test]
+fn exclusive_preempts_and_the_preempted_action_eases_out_cancelled() {
+    let (mut s, a) = scene();
+    let base = ActionSpec {
+        ease_out: 0.1,
+        ..spec(&s, "right_arm", Mode::Default)
+    };
+    let old = s.start_action(a, base, constant(1.0)).unwrap();
+    let other = s
+        .start_action(a, spec(&s, "left_arm", Mode::Default), constant(0.5))
+        .unwrap();
+    for _ in 0..10 {
+        s.step();
+    }
+    let excl = ActionSpec {
+        ease_in: 0.1,
+        ..spec(&s, "r_elbow", Mode::Exclusive)
+    };
+    let new = s.start_action(a, excl, constant(2.0)).unwrap();
+    s.step();
+    assert_eq!(status(&s, new), Status::Initiating);
+    assert_eq!(status(&s, old), Status::Terminating);
+    assert_eq!(
+        status(&s, other),
+        Status::Active,
+        "disjoint scopes are not pre-empted"
+    );
+    // Cross-fade: the two weights sum to one, the value moves monotonically from 1 to 2.
+    let mut last = q(&s, "r_elbow_flexion");
+    for _ in 0..12 {
+        s.step();
+        let v = q(&s, "r_elbow_flexion");
+        assert!(v >= last - 1e-12 && v <= 2.0 + 1e-12);
+        last = v;
+    }
+    assert_eq!(q(&s, "r_elbow_flexion"), 2.0);
+    let info = s.action(old).unwrap();
+    assert_eq!(info.status, Status::Cancelled);
+    assert!(info.reason.unwrap().contains("pre-empted"));
+}
+
+#[test]
+fn clearing_stops_every_action_of_the_actor() {
+    let (mut s, a) = scene();
+    let arm = s
+        .start_action(a, spec(&s, "right_arm", Mode::Default), constant(1.0))
+        .unwrap();
+    let leg = s
+        .start_action(a, spec(&s, "left_leg", Mode::Weighted), constant(0.3))
+        .unwrap();
+    s.step();
+    let queued = s
+        .start_action(a, spec(&s, "right_arm", Mode::Default), constant(0.1))
+        .unwrap();
+    let clear = s
+        .start_action(a, spec(&s, "head", Mode::Clearing), constant(0.2))
+        .unwrap();
+    s.step();
+    for id in [arm, leg, queued] {
+        assert_eq!(status(&s, id), Status::Cancelled, "{id}");
+    }
+    assert_eq!(status(&s, clear), Status::Active);
+}
+
+#[test]
+fn cancel_pending_and_running() {
+    let (mut s, a) = scene();
+    let later = s
+        .start_action(
+            a,
+            ActionSpec {
+                delay: 1.0,
+                ..spec(&s, "left_arm", Mode::Default)
+            },
+            constant(1.0),
+        )
+        .unwrap();
+    let running = s
+        .start_action(
+            a,
+            ActionSpec {
+                ease_out: 0.05,
+                ..spec(&s, "right_arm", Mode::Default)
+            },
+            constant(1.0),
+        )
+        .unwrap();
+    s.step();
+    s.cancel(later).unwrap();
+    s.cancel(running).unwrap();
+    s.step();
+    assert_eq!(status(&s, later), Status::Cancelled);
+    assert_eq!(status(&s, running), Status::Terminating);
+    run_until(&mut s, running, Status::Cancelled, 10);
+    assert!(!s.has_unfinished_actions());
+}
+
+#[test]
+fn delay_postpones_the_start() {
+    let (mut s, a) = scene();
+    let id = s
+        .start_action(
+            a,
+            ActionSpec {
+                delay: 0.25,
+                ..spec(&s, "left_arm", Mode::Weighted)
+            },
+            constant(1.0),
+        )
+        .unwrap();
+    let tick = run_until(&mut s, id, Status::Active, 100);
+    assert_eq!(tick, 25);
+}
+
+#[test]
+fn finished_generator_completes_and_the_dof_holds_its_last_value() {
+    let (mut s, a) = scene();
+    let gen = Box::new(Constant {
+        value: 0.8,
+        finish_after: Some(0.1),
+        fail_after: None,
+    });
+    let id = s
+        .start_action(a, spec(&s, "r_knee", Mode::Default), gen)
+        .unwrap();
+    run_until(&mut s, id, Status::Completed, 50);
+    for _ in 0..5 {
+        s.step();
+        assert_eq!(q(&s, "r_knee_flexion"), 0.8);
+    }
+}
+
+#[test]
+fn failing_generator_fails_with_its_reason() {
+    let (mut s, a) = scene();
+    let gen = Box::new(Constant {
+        value: 0.8,
+        finish_after: None,
+        fail_after: Some(0.05),
+    });
+    let id = s
+        .start_action(a, spec(&s, "r_knee", Mode::Default), gen)
+        .unwrap();
+    run_until(&mut s, id, Status::Failed, 50);
+    assert_eq!(
+        s.action(id).unwrap().reason.as_deref(),
+        Some("the generator gave up")
+    );
+}
+
+#[test]
+fn an_action_never_changes_a_dof_outside_its_scope() {
+    let (mut s, a) = scene();
+    let before = s.states()[0].q.clone();
+    let arm = scope(&s, "right_arm");
+    s.start_action(a, spec(&s, "right_arm", Mode::Exclusive), Box::new(Rogue))
+        .unwrap();
+    for _ in 0..5 {
+        s.step();
+    }
+    for (d, (b, after)) in before.iter().zip(&s.states()[0].q).enumerate() {
+        if arm.contains(d) {
+            assert_eq!(
+                *after,
+                0.5_f64.clamp(
+                    s.actors()[0].skeleton.dofs()[d].min,
+                    s.actors()[0].skeleton.dofs()[d].max
+                )
+            );
+        } else {
+            assert_eq!(b, after, "DOF {d} outside the scope changed");
+        }
+    }
+    assert!(s.refused_writes() > 0);
+}
+
+#[test]
+fn pose_sets_dofs_and_an_action_takes_over() {
+    let (mut s, a) = scene();
+    let d = dof(&s, "r_elbow_flexion");
+    s.set_dofs(a, &[(d, 1.0)]).unwrap();
+    s.step();
+    assert_eq!(q(&s, "r_elbow_flexion"), 1.0, "undriven DOFs hold");
+    s.start_action(a, spec(&s, "r_elbow_flexion", Mode::Default), constant(0.2))
+        .unwrap();
+    s.step();
+    assert_eq!(q(&s, "r_elbow_flexion"), 0.2);
+    // Values are clamped to the limits.
+    s.set_dofs(a, &[(d, 99.0)]).unwrap();
+    assert_eq!(
+        q(&s, "r_elbow_flexion"),
+        s.actors()[0].skeleton.dofs()[d].max
+    );
+}
+
+#[test]
+fn bad_input_gives_clear_errors() {
+    let (mut s, a) = scene();
+    let skel = s.actors()[0].skeleton.clone();
+    assert!(matches!(
+        skel.scope("right_wing"),
+        Err(troupe_body::Error::UnknownScope { .. })
+    ));
+    assert!(matches!(
+        skel.dof("r_elbow_twist"),
+        Err(troupe_body::Error::UnknownDof { .. })
+    ));
+    assert!(matches!(
+        skel.joint("r_antenna"),
+        Err(troupe_body::Error::UnknownJoint { .. })
+    ));
+    let base = spec(&s, "right_arm", Mode::Weighted);
+    let cases = [
+        (
+            ActionSpec {
+                weight: 1.5,
+                ..base.clone()
+            },
+            "weight",
+        ),
+        (
+            ActionSpec {
+                weight: -0.1,
+                ..base.clone()
+            },
+            "weight",
+        ),
+        (
+            ActionSpec {
+                weight: f64::NAN,
+                ..base.clone()
+            },
+            "weight",
+        ),
+        (
+            ActionSpec {
+                duration: Some(-1.0),
+                ..base.clone()
+            },
+            "duration",
+        ),
+        (
+            ActionSpec {
+                delay: -1.0,
+                ..base.clone()
+            },
+            "delay",
+        ),
+        (
+            ActionSpec {
+                ease_in: -0.5,
+                ..base.clone()
+            },
+            "ease_in",
+        ),
+        (
+            ActionSpec {
+                duration: Some(1.0),
+                ease_in: 0.8,
+                ease_out: 0.8,
+                ..base.clone()
+            },
+            "ease_in + ease_out",
+        ),
+        (
+            ActionSpec {
+                scope: Scope::EMPTY,
+                ..base.clone()
+            },
+            "scope",
+        ),
+    ];
+    for (bad, needle) in cases {
+        let err = s
+            .start_action(a, bad, constant(0.0))
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(needle), "{err}");
+    }
+    assert!(s.start_action(7, base, constant(0.0)).is_err());
+    assert!(Mode::parse("polite").is_err());
+    assert!(s
+        .add_actor(&ActorDesc {
+            template: "robot".into(),
+            ..ActorDesc::new("bob")
+        })
+        .is_err());
+    assert!(
+        s.add_actor(&ActorDesc::new("ann")).is_err(),
+        "duplicate name"
+    );
+    assert!(s
+        .add_actor(&ActorDesc {
+            height: Some(-2.0),
+            ..ActorDesc::new("tiny")
+        })
+        .is_err());
+}
+
+#[test]
+fn ended_actions_are_forgotten_unless_kept() {
+    let (mut s, a) = scene();
+    let spec = ActionSpec {
+        duration: Some(0.05),
+        ..spec(&s, "r_knee", Mode::Weighted)
+    };
+    let kept = s.start_action(a, spec.clone(), constant(0.1)).unwrap();
+    let dropped = s.start_action(a, spec, constant(0.2)).unwrap();
+    for _ in 0..20 {
+        s.step();
+    }
+    assert_eq!(status(&s, kept), Status::Completed);
+    assert_eq!(
+        s.forget_ended_actions(0.0, |_| false),
+        0,
+        "nothing ended before t = 0"
+    );
+    assert_eq!(s.forget_ended_actions(s.time(), |id| id == kept), 1);
+    assert!(s.action(dropped).is_none());
+    assert_eq!(status(&s, kept), Status::Completed);
+}
+
+#[test]
+fn the_worked_example_of_docs_scheduling_md() {
+    let (mut s, a) = scene();
+    let at = |s: &mut Scene, tick: u64| {
+        while s.tick() < tick {
+            s.step();
+        }
+        q(s, "r_elbow_flexion")
+    };
+    at(&mut s, 99); // created at t = 0.99 s, admitted on the tick at t = 1 s
+    let wave = ActionSpec {
+        weight: 0.6,
+        ease_in: 0.5,
+        ease_out: 0.5,
+        ..spec(&s, "right_arm", Mode::Weighted)
+    };
+    let wave = s.start_action(a, wave, constant(1.2)).unwrap();
+    assert!((at(&mut s, 125) - 0.36).abs() < 1e-9);
+    assert!((at(&mut s, 150) - 0.72).abs() < 1e-9);
+    at(&mut s, 199);
+    let excl = ActionSpec {
+        ease_in: 0.5,
+        ..spec(&s, "right_arm", Mode::Exclusive)
+    };
+    s.start_action(a, excl, constant(0.4)).unwrap();
+    assert!((at(&mut s, 225) - 0.56).abs() < 1e-9);
+    assert!((at(&mut s, 250) - 0.4).abs() < 1e-9);
+    let info = s.action(wave).unwrap();
+    assert_eq!(info.status, Status::Cancelled);
+    assert_eq!(info.reason.as_deref(), Some("pre-empted by action #2"));
+}
