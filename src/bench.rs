@@ -145,11 +145,12 @@ fn run_one(
         threads,
         seed: args.seed,
     };
-    let mut director = Director::new(
+    let mut session = Director::session(
         config,
         troupe_actions::action_kinds(),
         ScriptLimits::default(),
     )?;
+    let (director, scene) = session.script_and_scene();
     {
         let lua = director.lua();
         let bench = lua.create_table()?;
@@ -157,39 +158,36 @@ fn run_one(
         lua.globals().set("BENCH", bench)?;
     }
     match &args.scene {
-        Some(path) => director.load_file(path)?,
-        None => director.load_str(CROWD_SCENE, CROWD_SCENE_NAME)?,
+        Some(path) => director.load_file(scene, path)?,
+        None => director.load_str(scene, CROWD_SCENE, CROWD_SCENE_NAME)?,
     }
 
     for _ in 0..warmup {
-        director.tick();
+        session.tick()?;
         bar.inc(actors as u64);
     }
     let profiling = !args.no_phases;
-    director.with_scene_mut(|s| {
-        s.set_profiling(profiling);
-        s.take_profile();
-    });
+    session.scene_mut().set_profiling(profiling);
+    session.scene_mut().take_profile();
+    session.set_phase_timing(profiling);
+    session.take_phase_times();
     let mut tick_times = Vec::with_capacity(measured);
-    let mut scripts = Duration::ZERO;
     let started = Instant::now();
     for _ in 0..measured {
         let t0 = Instant::now();
-        director.run_scripts();
-        let t1 = Instant::now();
-        director.step_scene();
-        let t2 = Instant::now();
-        scripts += t1 - t0;
-        tick_times.push(t2 - t0);
+        session.tick()?;
+        tick_times.push(t0.elapsed());
         bar.inc(actors as u64);
     }
     let wall = started.elapsed();
-    let profile = director.with_scene_mut(|s| s.take_profile());
+    let profile = session.scene_mut().take_profile();
+    let scripts = session.take_phase_times().script;
     let peak_rss = memory::peak_rss();
 
     // A benchmark whose behaviors died measures an idle crowd: refuse to report it.
-    let failed: Vec<_> = director
-        .behaviors()
+    let failed: Vec<_> = session
+        .script()
+        .behaviors(session.scene())
         .into_iter()
         .filter_map(|r| r.error.map(|e| format!("{}: {}", r.actor, e)))
         .collect();

@@ -495,7 +495,9 @@ pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-/// Device support of a run: performers and, with `--record-devices`, the recorder.
+/// Device support of a run: performers and, with `--record-devices`, the recorder. As an
+/// observer it closes each tick for the latency measurement, and at the end reports every
+/// device's health and closes the recording.
 pub struct RunDevices {
     performers: troupe_drivers::performer::SharedPerformers,
     recorder: Option<std::sync::Arc<troupe_drivers::record::Recorder>>,
@@ -504,30 +506,32 @@ pub struct RunDevices {
     space: Option<troupe_drivers::space_move::SharedSpaceMice>,
 }
 
-/// A director with every action kind, `capture`, and `troupe.performer`; device streams are
-/// recorded to `record` when given.
-pub fn director(
+/// A Lua session with every action kind, `capture`, `troupe.performer` and the device
+/// inputs; device streams are recorded to `record` when given. Observe the returned
+/// [`RunDevices`] to measure latency and report health at the end.
+pub fn session(
     config: troupe_scene::SceneConfig,
     limits: troupe_lua::ScriptLimits,
     record: Option<&std::path::Path>,
-) -> Result<(troupe_lua::Director, RunDevices)> {
+) -> Result<(troupe_lua::LuaSession, RunDevices)> {
     let mut kinds = troupe_actions::action_kinds();
     troupe_drivers::performer::register(&mut kinds);
-    let mut d = troupe_lua::Director::new(config, kinds, limits)?;
+    let mut session = troupe_lua::Director::session(config, kinds, limits)?;
     let recorder = match record {
         Some(p) => Some(std::sync::Arc::new(
             troupe_drivers::record::Recorder::create(p).map_err(|e| anyhow!(e))?,
         )),
         None => None,
     };
-    let performers =
-        troupe_drivers::performer::install(&mut d, recorder.clone()).map_err(|e| anyhow!(e))?;
-    let space = d
+    let performers = troupe_drivers::performer::install(&mut session, recorder.clone())
+        .map_err(|e| anyhow!(e))?;
+    let space = session
+        .script()
         .lua()
         .app_data_ref::<troupe_drivers::space_move::SharedSpaceMice>()
         .map(|s| s.clone());
     Ok((
-        d,
+        session,
         RunDevices {
             performers,
             recorder,
@@ -537,51 +541,62 @@ pub fn director(
     ))
 }
 
-impl RunDevices {
-    /// Call after each tick: the samples used in it are now in a posture (latency).
-    pub fn end_tick(&self) {
+impl troupe_scene::Observer for RunDevices {
+    fn name(&self) -> String {
+        "devices".into()
+    }
+
+    /// The samples used in this tick are now in a posture (latency).
+    fn publish(
+        &mut self,
+        _scene: &troupe_scene::Scene,
+        _events: &[troupe_scene::Event],
+    ) -> troupe_scene::Result<()> {
         if let Ok(mut p) = self.performers.0.lock() {
             p.end_tick();
         }
+        Ok(())
     }
 
-    /// Prints device health and latency, and closes the recording.
-    pub fn finish(&self) -> Result<()> {
+    /// Device health and latency, and the recording closed.
+    fn finish(&mut self, _scene: &troupe_scene::Scene) -> troupe_scene::Result<Option<String>> {
+        let mut lines = Vec::new();
         if let Ok(p) = self.performers.0.lock() {
             for (who, dev, h) in p.health() {
-                println!(
+                lines.push(format!(
                     "  device {who}.{dev}: {}, {} samples, {} resyncs, {} dropped bytes, {} dropped samples",
                     h.state.name(),
                     h.samples,
                     h.resyncs,
                     h.dropped_bytes,
                     h.dropped_samples
-                );
+                ));
             }
             if let Some((m, p99)) = troupe_drivers::performer::median_p99(&p.latencies) {
-                println!(
+                lines.push(format!(
                     "  sample-to-posture latency: median {:.2} ms, p99 {:.2} ms ({} samples)",
                     m * 1e3,
                     p99 * 1e3,
                     p.latencies.len()
-                );
+                ));
             }
         }
         if let Some(Ok(s)) = self.space.as_ref().map(|s| s.0.lock()) {
             for (name, h) in s.live_health() {
-                println!(
+                lines.push(format!(
                     "  device {name} (spacemouse): {}, {} reports, {} bad reports{}",
                     h.state.name(),
                     h.samples,
                     h.resyncs,
                     h.last_error.map(|e| format!(" ({e})")).unwrap_or_default()
-                );
+                ));
             }
         }
         if let (Some(r), Some(path)) = (&self.recorder, &self.record_path) {
-            r.finish().map_err(|e| anyhow!(e))?;
-            println!("recorded the device streams to {}", path.display());
+            r.finish()
+                .map_err(|e| troupe_scene::Error::Invalid(e.to_string()))?;
+            lines.push(format!("recorded the device streams to {}", path.display()));
         }
-        Ok(())
+        Ok((!lines.is_empty()).then(|| lines.join("\n")))
     }
 }

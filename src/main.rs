@@ -3,6 +3,7 @@
 mod bench;
 mod devices;
 mod export;
+mod observers;
 mod run;
 mod scenario;
 mod seq;

@@ -1,15 +1,16 @@
 //! `troupe run`: load a Lua scene and run it headless, recording what was asked.
 
+use crate::observers::{RecordFile, TorqueFile, TraceFile};
 use anyhow::{bail, Context, Result};
 use clap::Args;
 use std::path::PathBuf;
 use std::process::ExitCode;
+use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{Director, LuaSession, ScriptLimits};
 use troupe_scene::pacing::Pacer;
-use troupe_scene::record::PostureRecorder;
-use troupe_scene::timeline::TimelineRecorder;
-use troupe_scene::{SceneConfig, Status};
+use troupe_scene::tally::ActionTally;
+use troupe_scene::{ObserverHandle, RunLimit, SceneConfig};
 
 /// Options of `troupe run`.
 #[derive(Args)]
@@ -118,134 +119,89 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
     }
-    let (mut director, devices) =
-        crate::devices::director(config, limits, args.record_devices.as_deref())?;
-    director.with_scene_mut(|s| s.set_chunk_size(args.chunk));
-    let osc_out = match &args.osc_out {
-        Some(t) => Some(troupe_drivers::osc::OscSender::new(t).map_err(|e| anyhow::anyhow!(e))?),
-        None => None,
-    };
+    let (mut session, devices) =
+        crate::devices::session(config, limits, args.record_devices.as_deref())?;
+    session.scene_mut().set_chunk_size(args.chunk);
     let torques = args.record_torques.as_ref().map(|_| {
         let log = troupe_actions::dynamics::TorqueLog::new();
-        log.install(director.lua());
+        log.install(session.script().lua());
         log
     });
+    let (director, scene) = session.script_and_scene();
     director
-        .load_file(&args.scene)
+        .load_file(scene, &args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let dt = 1.0 / args.rate;
-    let max_ticks = match (args.ticks, args.seconds) {
-        (Some(t), _) => t,
-        (None, Some(s)) => {
-            if !(s.is_finite() && s >= 0.0) {
-                bail!("--seconds must be a number ≥ 0");
+    let limit = RunLimit {
+        ticks: match (args.ticks, args.seconds) {
+            (Some(t), _) => t,
+            (None, Some(s)) => {
+                if !(s.is_finite() && s >= 0.0) {
+                    bail!("--seconds must be a number ≥ 0");
+                }
+                (s / dt).round() as u64
             }
-            (s / dt).round() as u64
-        }
-        (None, None) => (args.max_seconds / dt).ceil() as u64,
+            (None, None) => (args.max_seconds / dt).ceil() as u64,
+        },
+        until_idle: args.until_idle || (args.ticks.is_none() && args.seconds.is_none()),
     };
-    let until_idle = args.until_idle || (args.ticks.is_none() && args.seconds.is_none());
 
-    if args.view {
-        return view_run(director, &args);
+    // What every run, headless or in a window, attaches to its session.
+    let tally = session.observe(ActionTally::new());
+    session.observe(devices);
+    if let Some(target) = &args.osc_out {
+        session.observe(troupe_drivers::osc::OscOut::new(target).map_err(|e| anyhow::anyhow!(e))?);
     }
-    let mut frames = match &args.frames {
-        Some(dir) => Some(troupe_viewer::FrameWriter::new(
+    if let Some(path) = &args.record {
+        session.observe(RecordFile::new(path));
+    }
+    if let (Some(path), Some(log)) = (&args.record_torques, torques) {
+        session.observe(TorqueFile::new(log, path));
+    }
+    if let Some(path) = &args.trace {
+        session.observe(TraceFile::new(path));
+    }
+    if args.view {
+        return view_run(session, tally, limit, &args);
+    }
+    if let Some(dir) = &args.frames {
+        session.observe(troupe_viewer::FrameWriter::new(
             dir,
             troupe_viewer::parse_size(&args.size)?,
             args.camera.parse()?,
             args.every,
-        )?),
-        None => None,
-    };
-    if let Some(f) = frames.as_mut() {
-        f.tick(&director.scene())?;
+        )?);
     }
-    let mut recorder = args.record.as_ref().map(|_| PostureRecorder::new());
-    let mut timeline = args.trace.as_ref().map(|_| TimelineRecorder::new());
-    if let Some(r) = recorder.as_mut() {
-        r.sample(&director.scene());
+    // Pacing comes last: it waits once everything else has seen the tick.
+    if args.realtime {
+        session.observe(Pacer::new(Duration::from_secs_f64(dt)));
     }
-    let mut pacer = args
-        .realtime
-        .then(|| Pacer::new(Duration::from_secs_f64(dt)));
-    let mut counts = vec![[0usize; 3]; director.scene().actors().len()];
     let started = Instant::now();
-    let mut ticks = 0;
-    let mut osc_failures = 0u64;
-    while ticks < max_ticks {
-        if until_idle && ticks > 0 && director.is_idle() {
-            break;
-        }
-        let events = director.tick();
-        devices.end_tick();
-        ticks += 1;
-        let scene = director.scene();
-        if let Some(o) = &osc_out {
-            // A lost datagram must not end the run: say so once, count the rest.
-            if let Err(e) = o.send(&scene, &events) {
-                if osc_failures == 0 {
-                    tracing::warn!("--osc-out: {e} (further failures are counted)");
-                }
-                osc_failures += 1;
-            }
-        }
-        if counts.len() < scene.actors().len() {
-            counts.resize(scene.actors().len(), [0; 3]);
-        }
-        for e in &events {
-            match e.status {
-                Status::Completed => counts[e.actor][0] += 1,
-                Status::Cancelled => counts[e.actor][1] += 1,
-                Status::Failed => counts[e.actor][2] += 1,
-                _ => {}
-            }
-        }
-        if let Some(r) = recorder.as_mut() {
-            r.sample(&scene);
-        }
-        if let Some(t) = timeline.as_mut() {
-            t.record(&scene, &events);
-        }
-        if let Some(f) = frames.as_mut() {
-            f.tick(&scene)?;
-        }
-        drop(scene);
-        if let Some(p) = pacer.as_mut() {
-            p.wait();
-        }
-    }
+    let ran = session.run(limit);
     let wall = started.elapsed();
-    let scene = director.scene();
+    let ticks = session.scene().tick();
     println!(
         "ran {} for {ticks} ticks: {:.2} s simulated in {:.3} s wall ({} actors, {} thread{})",
         args.scene.display(),
-        scene.time(),
+        session.scene().time(),
         wall.as_secs_f64(),
-        scene.actors().len(),
+        session.scene().actors().len(),
         args.threads,
         if args.threads == 1 { "" } else { "s" }
     );
-    if let Some(p) = &pacer {
-        println!(
-            "real time: {} overruns (worst {:.1} ms late)",
-            p.overruns(),
-            p.worst_lateness().as_secs_f64() * 1e3
-        );
-    }
-    for (i, actor) in scene.actors().iter().enumerate() {
-        let [done, cancelled, failed] = counts[i];
-        println!(
-            "  {:<12} actions: {done} completed, {cancelled} cancelled, {failed} failed",
-            actor.name
-        );
-    }
-    drop(scene);
-    devices.finish()?;
-    if osc_failures > 0 {
-        println!("--osc-out: {osc_failures} sends failed");
-    }
-    let reports = director.behaviors();
+    report(session, tally, limit, ran.map(drop))
+}
+
+/// Prints what a run did, lets every observer write its output (even after an error, so
+/// nothing recorded is lost), and returns the exit code.
+fn report(
+    mut session: LuaSession,
+    tally: ObserverHandle<ActionTally>,
+    limit: RunLimit,
+    ran: troupe_scene::Result<()>,
+) -> Result<ExitCode> {
+    println!("{}", session.observer(tally).summary(session.scene()));
+    let reports = session.script().behaviors(session.scene());
     let mut failed = 0;
     for r in &reports {
         if let Some(err) = &r.error {
@@ -261,52 +217,15 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
     }
     let still = reports.iter().filter(|r| r.status == "running").count();
-    if until_idle && still > 0 {
+    if limit.until_idle && still > 0 {
         println!("  stopped at --max-seconds with {still} behavior(s) still running");
     }
-    let scene = director.scene();
-    if let (Some(path), Some(r)) = (&args.record, &recorder) {
-        let written = write_recording(path, &r.sequences(&scene), &scene)?;
-        let list: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
-        println!(
-            "recorded {} ticks of postures to {}",
-            r.len(),
-            list.join(", ")
-        );
+    let finished = session.finish();
+    for line in finished.iter().flatten() {
+        println!("{line}");
     }
-    if let (Some(path), Some(log)) = (&args.record_torques, &torques) {
-        let set = log.sequences(&scene);
-        if set.is_empty() {
-            println!(
-                "no dynamics action ran: no torques to record to {}",
-                path.display()
-            );
-        } else {
-            troupe_formats::trk::write_trk(path, &set)?;
-            println!(
-                "recorded {} joint torques ({} actor(s)) to {}",
-                log.len(),
-                set.len(),
-                path.display()
-            );
-        }
-    }
-    if let (Some(dir), Some(f)) = (&args.frames, frames.as_mut()) {
-        println!(
-            "wrote {} frames to {} (rendered on {})",
-            f.written(),
-            dir.display(),
-            f.renderer_mut().adapter()
-        );
-    }
-    if let (Some(path), Some(t)) = (&args.trace, timeline.as_mut()) {
-        let json = serde_json::to_string(&t.to_json(&scene))?;
-        std::fs::write(path, json).with_context(|| format!("writing {}", path.display()))?;
-        println!(
-            "wrote the action timeline to {} (open in Perfetto or chrome://tracing)",
-            path.display()
-        );
-    }
+    ran?;
+    finished?;
     Ok(if failed > 0 {
         ExitCode::FAILURE
     } else {
@@ -314,50 +233,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     })
 }
 
-/// Writes a recording by the file's extension: `.trk` holds every actor; `.bvh` and
-/// `.gltf` hold one actor each, so a scene of several actors writes `NAME.ACTOR.EXT`.
-fn write_recording(
-    path: &std::path::Path,
-    sequences: &[troupe_motion::Sequence],
-    scene: &troupe_scene::Scene,
-) -> Result<Vec<PathBuf>> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if ext == "trk" {
-        troupe_formats::trk::write_trk(path, sequences)?;
-        return Ok(vec![path.to_path_buf()]);
-    }
-    if ext != "bvh" && ext != "gltf" {
-        bail!(
-            "--record {}: use a .trk, .bvh or .gltf file",
-            path.display()
-        );
-    }
-    let mut written = Vec::new();
-    for (seq, actor) in sequences.iter().zip(scene.actors()) {
-        let out = if sequences.len() == 1 {
-            path.to_path_buf()
-        } else {
-            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-            path.with_file_name(format!("{stem}.{}.{ext}", actor.name))
-        };
-        let rig = troupe_formats::gltf::Rig::from_sequence(&actor.skeleton, seq)?;
-        if ext == "bvh" {
-            let order = "ZXY".parse()?;
-            let bvh = troupe_formats::bvh::from_rig(&rig, seq.frame_time(), order, 100.0)?;
-            troupe_formats::bvh::write_bvh(&out, &bvh)?;
-        } else {
-            troupe_formats::gltf::write_gltf(&out, &rig, &actor.name)?;
-        }
-        written.push(out);
-    }
-    Ok(written)
-}
-
-/// `--view`: the scene runs on the window's simulation thread until the window closes.
-fn view_run(mut director: Director, args: &RunArgs) -> Result<ExitCode> {
+/// `--view`: the session runs on the window's simulation thread until the window closes
+/// or the run's limit is reached; it records, traces and sends OSC like a headless run.
+fn view_run(
+    session: LuaSession,
+    tally: ObserverHandle<ActionTally>,
+    limit: RunLimit,
+    args: &RunArgs,
+) -> Result<ExitCode> {
     if !crate::view::has_display() {
         bail!("--view needs a display (DISPLAY or WAYLAND_DISPLAY); run headless with --frames DIR instead");
     }
@@ -368,11 +251,45 @@ fn view_run(mut director: Director, args: &RunArgs) -> Result<ExitCode> {
         tick_seconds: 1.0 / args.rate,
         ..Default::default()
     };
-    troupe_viewer::run_window(options, move || {
-        director.tick();
-        troupe_viewer::Frame::from_scene(&director.scene())
-    })?;
-    Ok(ExitCode::SUCCESS)
+    // The window keeps showing the last frame once the run is over; the first error
+    // stops the ticks and is reported when the window closes. The session comes back
+    // through the mutex to write its outputs.
+    struct Windowed {
+        session: LuaSession,
+        ticks: u64,
+        outcome: troupe_scene::Result<()>,
+    }
+    let shared = Arc::new(Mutex::new(Windowed {
+        session,
+        ticks: 0,
+        outcome: Ok(()),
+    }));
+    let sim = shared.clone();
+    let shown = troupe_viewer::run_window(options, move || {
+        let mut w = sim.lock().unwrap_or_else(|e| e.into_inner());
+        let over =
+            w.ticks >= limit.ticks || (limit.until_idle && w.ticks > 0 && w.session.is_idle());
+        if !over && w.outcome.is_ok() {
+            w.outcome = w.session.tick().map(drop);
+            w.ticks += 1;
+        }
+        troupe_viewer::Frame::from_scene(w.session.scene())
+    });
+    let Windowed {
+        session, outcome, ..
+    } = Arc::try_unwrap(shared)
+        .map_err(|_| anyhow::anyhow!("the simulation thread still holds the session"))?
+        .into_inner()
+        .unwrap_or_else(|e| e.into_inner());
+    println!(
+        "ran {} for {} ticks in a window: {:.2} s simulated",
+        args.scene.display(),
+        session.scene().tick(),
+        session.scene().time()
+    );
+    let code = report(session, tally, limit, outcome)?;
+    shown?;
+    Ok(code)
 }
 
 /// Options of `troupe render`.
@@ -417,18 +334,20 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         threads: 1,
         seed: args.seed,
     };
-    let mut director = Director::new(
+    let mut session = Director::session(
         config,
         troupe_actions::action_kinds(),
         ScriptLimits::default(),
     )?;
+    let (director, scene) = session.script_and_scene();
     director
-        .load_file(&args.scene)
+        .load_file(scene, &args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let ticks = (args.at * args.rate).round() as u64;
-    for _ in 0..ticks {
-        director.tick();
-    }
+    session.run(RunLimit {
+        ticks,
+        until_idle: false,
+    })?;
     if let Some(dir) = args.out.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
@@ -442,12 +361,12 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         },
         ..Default::default()
     });
-    let frame = troupe_viewer::Frame::from_scene(&director.scene());
+    let frame = troupe_viewer::Frame::from_scene(session.scene());
     renderer.save_png(&frame, &camera, &args.out)?;
     println!(
         "rendered {} at t = {:.2} s to {}",
         args.scene.display(),
-        director.scene().time(),
+        session.scene().time(),
         args.out.display()
     );
     Ok(ExitCode::SUCCESS)

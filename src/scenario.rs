@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{LuaSession, ScriptLimits};
 use troupe_scene::SceneConfig;
 
 /// Options of `troupe test`.
@@ -51,24 +51,25 @@ fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>> {
     Ok(files)
 }
 
-fn director(file: &Path, threads: usize, chunk: Option<usize>) -> Result<Director> {
+fn session(file: &Path, threads: usize, chunk: Option<usize>) -> Result<LuaSession> {
     let config = SceneConfig {
         threads,
         ..SceneConfig::default()
     };
     // Performers (troupe.performer, capture) are available to scenario tests too.
-    let (mut d, _devices) = crate::devices::director(config, ScriptLimits::default(), None)?;
-    d.with_scene_mut(|s| s.set_chunk_size(chunk));
-    d.load_file(file)?;
-    Ok(d)
+    let (mut session, _devices) = crate::devices::session(config, ScriptLimits::default(), None)?;
+    session.scene_mut().set_chunk_size(chunk);
+    let (director, scene) = session.script_and_scene();
+    director.load_file(scene, file)?;
+    Ok(session)
 }
 
 /// Runs every test and prints one line each, then `N passed, N failed`.
 pub fn run(args: TestArgs) -> Result<ExitCode> {
     let (mut passed, mut failed) = (0, 0);
     for file in collect(&args.paths)? {
-        let names = match director(&file, args.threads, args.chunk) {
-            Ok(d) => d.test_names(),
+        let names = match session(&file, args.threads, args.chunk) {
+            Ok(s) => s.script().test_names(),
             Err(e) => {
                 println!("FAIL {}: {e:#}", file.display());
                 failed += 1;
@@ -109,16 +110,23 @@ fn run_one(
     threads: usize,
     chunk: Option<usize>,
 ) -> Result<f64, String> {
-    let mut d = director(file, threads, chunk).map_err(|e| format!("{e:#}"))?;
-    d.start_test(index).map_err(|e| e.to_string())?;
-    let rate = d.scene().config().rate;
+    let mut s = session(file, threads, chunk).map_err(|e| format!("{e:#}"))?;
+    s.script_and_scene()
+        .0
+        .start_test(index)
+        .map_err(|e| e.to_string())?;
+    let rate = s.scene().config().rate;
     let max_ticks = (timeout * rate).ceil() as u64;
     for _ in 0..=max_ticks {
-        d.tick();
-        let test = d.behaviors().into_iter().find(|b| b.actor == "test");
+        s.tick().map_err(|e| e.to_string())?;
+        let test = s
+            .script()
+            .behaviors(s.scene())
+            .into_iter()
+            .find(|b| b.actor == "test");
         match test {
             Some(b) if b.status == "failed" => return Err(b.error.unwrap_or_default()),
-            Some(b) if b.status == "done" => return Ok(d.scene().time()),
+            Some(b) if b.status == "done" => return Ok(s.scene().time()),
             _ => {}
         }
     }

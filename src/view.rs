@@ -10,7 +10,7 @@ use troupe_body::glam::DVec3;
 use troupe_body::DofKind;
 use troupe_formats::trk;
 use troupe_motion::Sequence;
-use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
+use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
 use troupe_viewer::{
     parse_size, run_window, BodyStyle, Camera, Frame, FrameWriter, Hand, HandState,
     OffscreenRenderer, RenderOptions, ViewerError, WindowOptions,
@@ -228,7 +228,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer.renderer_mut().set_options(options);
         writer.renderer_mut().set_multisampling(!args.no_msaa);
-        return write_frames(&mut scene, &dir, writer, seconds);
+        return write_frames(Session::new(scene), writer, seconds);
     }
     let options = WindowOptions {
         title: format!("troupe view {}", args.file.display()),
@@ -238,10 +238,12 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         tick_seconds: scene.dt(),
         close_after_frames: None,
     };
-    // The scene moves to the simulation thread; keep nothing else that needs it.
+    // The session moves to the simulation thread; keep nothing else that needs it.
+    let mut session = Session::new(scene);
     let result = run_window(options, move || {
-        scene.step();
-        Frame::from_scene(&scene)
+        // No observer can fail here; a tick always happens.
+        let _ = session.tick();
+        Frame::from_scene(session.scene())
     });
     match result {
         Ok(()) => Ok(ExitCode::SUCCESS),
@@ -252,25 +254,17 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     }
 }
 
-fn write_frames(
-    scene: &mut Scene,
-    dir: &Path,
-    mut writer: FrameWriter,
-    seconds: f64,
-) -> Result<ExitCode> {
-    let ticks = (seconds * scene.config().rate).ceil() as u64;
-    writer.tick(scene)?;
-    for _ in 0..ticks {
-        scene.step();
-        writer.tick(scene)?;
+/// Plays the session headless for `seconds`, writing pictures.
+fn write_frames(mut session: Session, writer: FrameWriter, seconds: f64) -> Result<ExitCode> {
+    let ticks = (seconds * session.scene().config().rate).ceil() as u64;
+    session.observe(writer);
+    session.run(RunLimit {
+        ticks,
+        until_idle: false,
+    })?;
+    for line in session.finish()? {
+        println!("{line} over {seconds:.2} s");
     }
-    println!(
-        "wrote {} frames ({:.2} s) to {} on {}",
-        writer.written(),
-        seconds,
-        dir.display(),
-        writer.renderer_mut().adapter()
-    );
     Ok(ExitCode::SUCCESS)
 }
 
@@ -366,7 +360,9 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         }
         scene.set_dofs(actor, &values)?;
     }
-    let mut frame = Frame::from_scene(&scene);
+    // A snapshot is a session that never ticks: the posed scene is its only frame.
+    let session = Session::new(scene);
+    let mut frame = Frame::from_scene(session.scene());
     for (actor, pose) in frame.actors.iter_mut().zip(&poses) {
         for &(hand, state) in &pose.hands {
             actor.set_hand(hand, state);

@@ -5,7 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use troupe_actions::{action_kinds, Keyframe};
 use troupe_body::glam::DVec3;
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{Director, LuaSessionExt, ScriptLimits};
 use troupe_motion::{Key, Sequence, Track};
 use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 
@@ -85,13 +85,13 @@ fn lua_tick(c: &mut Criterion) {
             threads,
             ..SceneConfig::default()
         };
-        let mut d = Director::new(config, action_kinds(), ScriptLimits::default()).unwrap();
+        let mut d = Director::session(config, action_kinds(), ScriptLimits::default()).unwrap();
         d.load_str(BEHAVIOR, "bench.lua").unwrap();
         for _ in 0..100 {
-            d.tick();
+            d.tick().unwrap();
         }
         group.bench_function(format!("{threads} thread(s)"), |b| {
-            b.iter(|| d.tick().len())
+            b.iter(|| d.tick().unwrap().len())
         });
     }
     group.finish();
@@ -100,7 +100,7 @@ fn lua_tick(c: &mut Criterion) {
     let mut group = c.benchmark_group("scripts phase/1000 Lua behaviors");
     group.throughput(Throughput::Elements(ACTORS as u64));
     group.sample_size(20);
-    let mut d = Director::new(
+    let mut d = Director::session(
         SceneConfig::default(),
         action_kinds(),
         ScriptLimits::default(),
@@ -108,18 +108,16 @@ fn lua_tick(c: &mut Criterion) {
     .unwrap();
     d.load_str(BEHAVIOR, "bench.lua").unwrap();
     for _ in 0..100 {
-        d.tick();
+        d.tick().unwrap();
     }
     group.bench_function("1 thread", |b| {
         b.iter_custom(|iters| {
-            let mut scripts = std::time::Duration::ZERO;
+            d.set_phase_timing(true);
+            d.take_phase_times();
             for _ in 0..iters {
-                let start = std::time::Instant::now();
-                d.run_scripts();
-                scripts += start.elapsed();
-                d.step_scene();
+                d.tick().unwrap();
             }
-            scripts
+            d.take_phase_times().script
         })
     });
     group.finish();

@@ -7,10 +7,10 @@ use troupe_actions::grasp::handover::offer_point;
 use troupe_body::sensors::Side;
 use troupe_drivers::glove_grasp::write_glove_script;
 use troupe_drivers::performer;
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
-fn scene(ball: bool) -> Director {
+fn scene(ball: bool) -> LuaSession {
     let dir = std::env::temp_dir().join(format!("troupe-glove-bench-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let rec = dir.join("fist.rec");
@@ -24,7 +24,7 @@ fn scene(ball: bool) -> Director {
     .unwrap();
     let mut kinds = troupe_actions::action_kinds();
     performer::register(&mut kinds);
-    let mut d = Director::new(SceneConfig::default(), kinds, ScriptLimits::default()).unwrap();
+    let mut d = Director::session(SceneConfig::default(), kinds, ScriptLimits::default()).unwrap();
     performer::install(&mut d, None).unwrap();
     d.load_str(
         &format!(
@@ -50,7 +50,7 @@ fn scene(ball: bool) -> Director {
     }
     d.load_str("pat:capture{}", "capture").unwrap();
     while d.scene().time() < 2.0 {
-        d.tick();
+        d.tick().unwrap();
     }
     if ball {
         let b = d.scene().object_index("ball").unwrap();
@@ -62,11 +62,11 @@ fn scene(ball: bool) -> Director {
 fn bench(c: &mut Criterion) {
     let mut held = scene(true);
     c.bench_function("performer_tick_glove_fist_holding_a_ball", |b| {
-        b.iter(|| held.tick())
+        b.iter(|| held.tick().unwrap())
     });
     let mut free = scene(false);
     c.bench_function("performer_tick_glove_fist_nothing_near", |b| {
-        b.iter(|| free.tick())
+        b.iter(|| free.tick().unwrap())
     });
 }
 

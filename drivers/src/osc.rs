@@ -275,6 +275,52 @@ impl OscSender {
     }
 }
 
+/// Sends every tick's poses and events over OSC as a session observer. A lost datagram
+/// must not end a run: the first failure is logged, the rest are counted.
+pub struct OscOut {
+    sender: OscSender,
+    failures: u64,
+}
+
+impl OscOut {
+    /// An observer sending to `target` (`host:port`).
+    pub fn new(target: &str) -> Result<OscOut, String> {
+        Ok(OscOut {
+            sender: OscSender::new(target)?,
+            failures: 0,
+        })
+    }
+
+    /// Sends that failed so far.
+    pub fn failures(&self) -> u64 {
+        self.failures
+    }
+}
+
+impl troupe_scene::Observer for OscOut {
+    fn name(&self) -> String {
+        format!("--osc-out {}", self.sender.target)
+    }
+
+    fn publish(
+        &mut self,
+        scene: &Scene,
+        events: &[troupe_scene::Event],
+    ) -> troupe_scene::Result<()> {
+        if let Err(e) = self.sender.send(scene, events) {
+            if self.failures == 0 {
+                tracing::warn!("--osc-out: {e} (further failures are counted)");
+            }
+            self.failures += 1;
+        }
+        Ok(())
+    }
+
+    fn finish(&mut self, _scene: &Scene) -> troupe_scene::Result<Option<String>> {
+        Ok((self.failures > 0).then(|| format!("--osc-out: {} sends failed", self.failures)))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

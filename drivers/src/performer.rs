@@ -35,9 +35,9 @@ use troupe_body::transform::Transform;
 use troupe_body::Scope;
 use troupe_lua::api::{lua_err_message, ActorRef};
 use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
-use troupe_lua::Director;
+use troupe_lua::LuaSession;
 use troupe_scene::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
-use troupe_scene::Scene;
+use troupe_scene::{Input, Scene};
 
 /// The rotation from the Flock's transmitter frame (X forward, Y right, Z down) to the
 /// scene's frame (Y up, an actor facing 0° looks along +Z, its right is −X).
@@ -483,12 +483,18 @@ pub struct Performers {
     list: Vec<Performer>,
     recorder: Option<Arc<Recorder>>,
     ticks: u64,
+    /// Gesture events of the last input phase (handler, performer, new gesture, previous),
+    /// called by the director at the start of its script phase.
+    gesture_events: Vec<GestureEvent>,
     /// Arrival instants of samples used by the targets made this tick, for latency.
     pending_latency: Vec<Instant>,
     /// Arrival-to-posture latencies (seconds) of every live sample used, measured when the
     /// tick that used it has finished stepping (see [`Performers::end_tick`]).
     pub latencies: Vec<f64>,
 }
+
+/// A gesture handler to call: the handler, the performer, the new and the previous gesture.
+type GestureEvent = (Function, String, String, Option<String>);
 
 /// Lua app data: the shared performers.
 #[derive(Clone)]
@@ -561,9 +567,9 @@ impl Performers {
         v
     }
 
-    /// The pre-tick step: drain, convert, fire gestures. Returns the gesture events
-    /// (handlers, performer name, new, previous) to call after the lock is released.
-    fn pre_tick(&mut self, scene: &Scene) -> Vec<(Function, String, String, Option<String>)> {
+    /// The input phase: drain, convert, note gestures. Returns the gesture events
+    /// (handlers, performer name, new, previous) for the script phase to call.
+    fn pre_tick(&mut self, scene: &Scene) -> Vec<GestureEvent> {
         self.ticks += 1;
         let mut events = Vec::new();
         let time = scene.time();
@@ -851,10 +857,30 @@ pub fn register(kinds: &mut ActionKinds) {
     });
 }
 
-/// Installs `troupe.performer`, `troupe.devices.*` and the pre-tick step on a director.
-/// `recorder` records every live device stream (`--record-devices`).
+/// Drains every performer's devices into its capture target (the session's input phase).
+struct PerformerInput(SharedPerformers);
+
+impl Input for PerformerInput {
+    fn name(&self) -> String {
+        "performers".into()
+    }
+
+    fn poll(&mut self, scene: &mut Scene) -> troupe_scene::Result<()> {
+        let mut performers = self.0 .0.lock().map_err(|_| troupe_scene::Error::Input {
+            input: "performers".into(),
+            message: "lock poisoned by a panic".into(),
+        })?;
+        let events = performers.pre_tick(scene);
+        performers.gesture_events.extend(events);
+        Ok(())
+    }
+}
+
+/// Installs `troupe.performer` and `troupe.devices.*` on the session's director, the
+/// performers' and SpaceMice's inputs on the session, and the script hook that calls
+/// gesture handlers. `recorder` records every live device stream (`--record-devices`).
 pub fn install(
-    director: &mut Director,
+    session: &mut LuaSession,
     recorder: Option<Arc<Recorder>>,
 ) -> Result<SharedPerformers, String> {
     let space_recorder = recorder.clone();
@@ -862,6 +888,7 @@ pub fn install(
         recorder,
         ..Performers::default()
     })));
+    let (director, _) = session.script_and_scene();
     let lua = director.lua();
     lua.set_app_data(shared.clone());
     // Glove hands and offers to them, shared with `give` (troupe-actions).
@@ -870,21 +897,26 @@ pub fn install(
     }
     install_lua(lua).map_err(|e| format!("installing the device functions: {e}"))?;
     let s = shared.clone();
-    director.add_pre_tick(Box::new(move |lua: &Lua, scene: &Scene| {
-        let events =
-            s.0.lock()
-                .map_err(|_| "performer lock poisoned".to_string())?
-                .pre_tick(scene);
-        let _ = lua;
+    director.add_script_hook(Box::new(move |_lua: &Lua| {
+        // Take the events and release the lock before calling Lua: a handler may query
+        // the performers.
+        let events = std::mem::take(
+            &mut s
+                .0
+                .lock()
+                .map_err(|_| err("performer lock poisoned"))?
+                .gesture_events,
+        );
         for (f, name, new, old) in events {
             f.call::<()>((name.clone(), new, old))
-                .map_err(|e| format!("gesture handler of '{name}': {e}"))?;
+                .map_err(|e| err(format!("gesture handler of '{name}': {e}")))?;
         }
         Ok(())
     }));
+    session.add_input(Box::new(PerformerInput(shared.clone())));
     // SpaceMice move objects rather than actors; they live in their own module, installed
     // after `troupe.devices` exists.
-    crate::space_move::install(director, space_recorder)?;
+    crate::space_move::install(session, space_recorder)?;
     Ok(shared)
 }
 

@@ -25,8 +25,8 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use troupe_lua::api::{lua_err_message, ObjectRef};
-use troupe_lua::Director;
-use troupe_scene::Scene;
+use troupe_lua::LuaSession;
+use troupe_scene::{Input, Scene};
 
 /// How deflection becomes motion.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -208,27 +208,43 @@ impl SpaceMice {
     }
 }
 
+/// Moves the objects of every SpaceMouse (the session's input phase).
+struct SpaceMouseInput(SharedSpaceMice);
+
+impl Input for SpaceMouseInput {
+    fn name(&self) -> String {
+        "spacemouse".into()
+    }
+
+    fn poll(&mut self, scene: &mut Scene) -> troupe_scene::Result<()> {
+        self.0
+             .0
+            .lock()
+            .map_err(|_| troupe_scene::Error::Input {
+                input: "spacemouse".into(),
+                message: "lock poisoned by a panic".into(),
+            })?
+            .step(scene);
+        Ok(())
+    }
+}
+
 /// Installs `troupe.devices.spacemouse` (and SpaceMouse names in `troupe.devices.health`)
-/// and the scene step that moves the objects. Call after [`crate::performer::install`],
-/// which makes `troupe.devices`. `recorder` records live SpaceMouse reports.
+/// on the session's director and the input that moves the objects. Call after
+/// [`crate::performer::install`], which makes `troupe.devices`. `recorder` records live
+/// SpaceMouse reports.
 pub fn install(
-    director: &mut Director,
+    session: &mut LuaSession,
     recorder: Option<Arc<Recorder>>,
 ) -> Result<SharedSpaceMice, String> {
     let shared = SharedSpaceMice(Arc::new(Mutex::new(SpaceMice {
         movers: Vec::new(),
         recorder,
     })));
-    let lua = director.lua();
+    let lua = session.script().lua();
     lua.set_app_data(shared.clone());
     install_lua(lua).map_err(|e| format!("installing troupe.devices.spacemouse: {e}"))?;
-    let s = shared.clone();
-    director.add_scene_step(Box::new(move |scene: &mut Scene| {
-        s.0.lock()
-            .map_err(|_| "spacemouse lock poisoned".to_string())?
-            .step(scene);
-        Ok(())
-    }));
+    session.add_input(Box::new(SpaceMouseInput(shared.clone())));
     Ok(shared)
 }
 

@@ -10,10 +10,10 @@ use troupe_actions::grasp::HandState;
 use troupe_body::sensors::{HandSensors, Side};
 use troupe_drivers::glove_grasp::write_glove_script;
 use troupe_drivers::performer::{self, SharedPerformers};
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
-fn director(threads: usize) -> (Director, SharedPerformers) {
+fn director(threads: usize) -> (LuaSession, SharedPerformers) {
     let mut kinds = troupe_actions::action_kinds();
     performer::register(&mut kinds);
     let config = SceneConfig {
@@ -21,9 +21,9 @@ fn director(threads: usize) -> (Director, SharedPerformers) {
         threads,
         seed: 0,
     };
-    let mut d = Director::new(config, kinds, ScriptLimits::default()).unwrap();
+    let mut d = Director::session(config, kinds, ScriptLimits::default()).unwrap();
     // One actor per chunk: with two threads, even two actors are stepped on both.
-    d.with_scene_mut(|s| s.set_chunk_size(Some(1)));
+    d.scene_mut().set_chunk_size(Some(1));
     let shared = performer::install(&mut d, None).unwrap();
     (d, shared)
 }
@@ -39,7 +39,7 @@ fn lua_path(p: &Path) -> String {
 }
 
 /// Deepest penetration (metres, ≥ 0) of `side`'s hand sensors into `object`.
-fn penetration_of(d: &Director, actor: usize, object: usize, side: Side) -> f64 {
+fn penetration_of(d: &LuaSession, actor: usize, object: usize, side: Side) -> f64 {
     let scene = d.scene();
     let sk = &scene.actors()[actor].skeleton;
     let hs = HandSensors::new(sk, side).unwrap();
@@ -54,11 +54,11 @@ fn penetration_of(d: &Director, actor: usize, object: usize, side: Side) -> f64 
 type Trace = Vec<Vec<f64>>;
 
 /// Deepest penetration of the right hand's sensors into `object`.
-fn penetration(d: &Director, actor: usize, object: usize) -> f64 {
+fn penetration(d: &LuaSession, actor: usize, object: usize) -> f64 {
     penetration_of(d, actor, object, Side::Right)
 }
 
-fn snapshot(d: &Director) -> Vec<f64> {
+fn snapshot(d: &LuaSession) -> Vec<f64> {
     let mut v: Vec<f64> = d
         .scene()
         .states()
@@ -136,7 +136,7 @@ fn grasp_run(threads: usize, rec: &Path, side: Side) -> Trace {
             .unwrap();
             lifted = true;
         }
-        d.tick();
+        d.tick().unwrap();
         trace.push(snapshot(&d));
         let s = state(&shared);
         if *states.last().unwrap() != s {
@@ -245,8 +245,8 @@ fn give_run(threads: usize, rec: &Path, close: bool) -> (Trace, String, Option<S
     .unwrap();
     let mut trace = Vec::new();
     for _ in 0..400 {
-        d.tick();
-        let st: String = d.lua().load("return g.status").eval().unwrap();
+        d.tick().unwrap();
+        let st: String = d.eval("return g.status").unwrap();
         if st == "completed" {
             break;
         }
@@ -272,7 +272,7 @@ fn give_run(threads: usize, rec: &Path, close: bool) -> (Trace, String, Option<S
     .unwrap();
     let pat = d.scene().actor_index("pat").unwrap();
     for _ in 0..30 {
-        d.tick();
+        d.tick().unwrap();
     }
     d.load_str(
         r#"give = ann:give{ object = ball, to = pat, timeout = 4 }"#,
@@ -281,18 +281,18 @@ fn give_run(threads: usize, rec: &Path, close: bool) -> (Trace, String, Option<S
     .unwrap();
     let mut status = String::new();
     for _ in 0..900 {
-        d.tick();
+        d.tick().unwrap();
         trace.push(snapshot(&d));
         assert!(
             penetration(&d, pat, ball) <= 0.002,
             "no sensor of pat inside the ball"
         );
-        status = d.lua().load("return give.status").eval().unwrap();
+        status = d.eval("return give.status").unwrap();
         if status == "completed" || status == "failed" {
             break;
         }
     }
-    let error: Option<String> = d.lua().load("return give.error").eval().unwrap();
+    let error: Option<String> = d.eval("return give.error").unwrap();
     if close {
         assert_eq!(status, "completed", "the give completed: {error:?}");
         assert_eq!(
@@ -302,9 +302,7 @@ fn give_run(threads: usize, rec: &Path, close: bool) -> (Trace, String, Option<S
         );
         assert_eq!(state(&shared), HandState::SecureGrasp(ball));
         let (name, object): (String, Option<String>) = d
-            .lua()
-            .load(r#"return troupe.devices.hand_state(pat, "right")"#)
-            .eval()
+            .eval(r#"return troupe.devices.hand_state(pat, "right")"#)
             .unwrap();
         assert_eq!(
             (name.as_str(), object.as_deref()),
@@ -387,7 +385,7 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
     )
     .unwrap();
     // The arm is held out after a tick; then the ball goes into the open hand.
-    d.tick();
+    d.tick().unwrap();
     let pat = d.scene().actor_index("pat").unwrap();
     let ann = d.scene().actor_index("ann").unwrap();
     let probe = d.scene().object_index("probe").unwrap();
@@ -409,7 +407,7 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
         .to_string();
     assert!(e.contains("receiver:receive"), "{e}");
     for _ in 0..250 {
-        d.tick();
+        d.tick().unwrap();
     }
     assert_eq!(
         d.scene().holder(ball).map(|h| h.actor),
@@ -421,9 +419,9 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
     d.load_str(r#"steal = ann:grasp{ object = ball }"#, "steal")
         .unwrap();
     for _ in 0..5 {
-        d.tick();
+        d.tick().unwrap();
     }
-    let steal: String = d.lua().load("return steal.status").eval().unwrap();
+    let steal: String = d.eval("return steal.status").unwrap();
     assert_eq!(steal, "failed", "a plain grasp does not take a held object");
     // …but receives it from pat.
     d.load_str(
@@ -433,13 +431,13 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
     .unwrap();
     let mut rx = String::new();
     for _ in 0..500 {
-        d.tick();
-        rx = d.lua().load("return rx.status").eval().unwrap();
+        d.tick().unwrap();
+        rx = d.eval("return rx.status").unwrap();
         if rx != "active" && rx != "pending" {
             break;
         }
     }
-    let error: Option<String> = d.lua().load("return rx.error").eval().unwrap();
+    let error: Option<String> = d.eval("return rx.error").unwrap();
     assert_eq!(rx, "completed", "receive: {error:?}");
     assert_eq!(
         d.scene().holder(ball).map(|h| h.actor),
@@ -448,7 +446,7 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
     );
     // Pat opens the glove (from 5 s): the hand frees, ann keeps the ball.
     while d.scene().time() < 7.0 {
-        d.tick();
+        d.tick().unwrap();
     }
     assert_eq!(state(&shared), HandState::FreeHand);
     assert_eq!(

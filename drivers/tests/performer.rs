@@ -7,10 +7,10 @@ use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions};
 use troupe_drivers::performer::{self, median_p99, SharedPerformers};
 use troupe_drivers::record::Recorder;
 use troupe_lua::kinds::ActionKinds;
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
-fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (Director, SharedPerformers) {
+fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (LuaSession, SharedPerformers) {
     let mut kinds = ActionKinds::default();
     performer::register(&mut kinds);
     let config = SceneConfig {
@@ -18,9 +18,9 @@ fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (Director, Share
         threads,
         seed: 0,
     };
-    let mut d = Director::new(config, kinds, ScriptLimits::default()).unwrap();
+    let mut d = Director::session(config, kinds, ScriptLimits::default()).unwrap();
     // One actor per chunk: with two threads, even two actors are stepped on both.
-    d.with_scene_mut(|s| s.set_chunk_size(Some(1)));
+    d.scene_mut().set_chunk_size(Some(1));
     let shared = performer::install(&mut d, recorder).unwrap();
     (d, shared)
 }
@@ -74,7 +74,7 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
             start.elapsed() < Duration::from_secs(20),
             "performer never followed the devices"
         );
-        d.tick();
+        d.tick().unwrap();
         let mut perf = shared.0.lock().unwrap();
         perf.end_tick();
         let made_now = {
@@ -120,7 +120,7 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
         d.load_str(&scene(&replay, &replay), "replay").unwrap();
         let mut postures = Vec::new();
         for _ in 0..150 {
-            d.tick();
+            d.tick().unwrap();
             postures.push(d.scene().states()[0].q.clone());
         }
         postures
@@ -226,7 +226,7 @@ fn osc_poses_and_glove_values_drive_a_performer() {
             .unwrap();
         sock.send_to(&glove, ("127.0.0.1", port)).unwrap();
         std::thread::sleep(Duration::from_millis(5));
-        d.tick();
+        d.tick().unwrap();
         let st = d.scene().states()[0].clone();
         if st.q[index] > 0.0 && (st.globals[0].translation - pelvis).length() < 1e-6 {
             assert!(st.globals[0].rotation.angle_between(yaw) < 1e-6);
@@ -259,11 +259,9 @@ fn health_is_visible_from_lua_and_a_missing_port_keeps_the_scene_ticking() {
     .unwrap();
     let start = Instant::now();
     loop {
-        d.tick();
+        d.tick().unwrap();
         let h: mlua::Table = d
-            .lua()
-            .load(r#"return troupe.devices.health("ghost").fob"#)
-            .eval()
+            .eval(r#"return troupe.devices.health("ghost").fob"#)
             .unwrap();
         let state: String = h.get("state").unwrap();
         // The thread starts out reconnecting; after its first attempt the error says why.
@@ -335,9 +333,9 @@ fn gestures_trained_from_recordings_fire_lua_events_on_change() {
     );
     d.load_str(&code, "gestures").unwrap();
     for _ in 0..80 {
-        d.tick();
+        d.tick().unwrap();
     }
-    let fired: Vec<String> = d.lua().load("return troupe.fired").eval().unwrap();
+    let fired: Vec<String> = d.eval("return troupe.fired").unwrap();
     assert_eq!(
         fired,
         vec!["g:neutral<nil", "g:fist<neutral", "g:neutral<fist"]

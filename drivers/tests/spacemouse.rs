@@ -11,10 +11,10 @@ use std::time::{Duration, Instant};
 use troupe_drivers::performer;
 use troupe_drivers::record::Recorder;
 use troupe_lua::kinds::ActionKinds;
-use troupe_lua::{Director, ScriptLimits};
+use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
-fn director(threads: usize) -> Director {
+fn director(threads: usize) -> LuaSession {
     let mut kinds = ActionKinds::default();
     performer::register(&mut kinds);
     let config = SceneConfig {
@@ -22,7 +22,7 @@ fn director(threads: usize) -> Director {
         threads,
         seed: 0,
     };
-    let mut d = Director::new(config, kinds, ScriptLimits::default()).unwrap();
+    let mut d = Director::session(config, kinds, ScriptLimits::default()).unwrap();
     performer::install(&mut d, None).unwrap();
     d
 }
@@ -85,12 +85,10 @@ fn run(threads: usize, rec: &Path) -> Vec<(DVec3, DQuat)> {
     )
     .unwrap();
     for _ in 0..200 {
-        d.tick();
+        d.tick().unwrap();
     }
     let health: String = d
-        .lua()
-        .load(r#"return troupe.devices.health("nav").spacemouse.state"#)
-        .eval()
+        .eval(r#"return troupe.devices.health("nav").spacemouse.state"#)
         .unwrap();
     assert_eq!(health, "replay");
     let poses = d
@@ -147,14 +145,12 @@ fn a_missing_device_keeps_the_scene_ticking_and_health_says_why() {
     .unwrap();
     let start = Instant::now();
     let error = loop {
-        d.tick();
+        d.tick().unwrap();
         let (state, error): (String, Option<String>) = d
-            .lua()
-            .load(
+            .eval(
                 r#"local h = troupe.devices.health("spacemouse").spacemouse
                    return h.state, h.error"#,
             )
-            .eval()
             .unwrap();
         assert!(
             state == "reconnecting" || state == "failed",

@@ -195,3 +195,35 @@ impl FrameWriter {
         self.written
     }
 }
+
+impl troupe_scene::Observer for FrameWriter {
+    fn name(&self) -> String {
+        format!("--frames {}", self.dir.display())
+    }
+
+    /// The first picture shows the scene before the first tick.
+    fn start(&mut self, scene: &Scene) -> troupe_scene::Result<()> {
+        self.tick(scene).map(drop).map_err(frame_error)
+    }
+
+    fn publish(
+        &mut self,
+        scene: &Scene,
+        _events: &[troupe_scene::Event],
+    ) -> troupe_scene::Result<()> {
+        self.tick(scene).map(drop).map_err(frame_error)
+    }
+
+    fn finish(&mut self, _scene: &Scene) -> troupe_scene::Result<Option<String>> {
+        Ok(Some(format!(
+            "wrote {} frames to {} (rendered on {})",
+            self.written,
+            self.dir.display(),
+            self.renderer.adapter()
+        )))
+    }
+}
+
+fn frame_error(e: ViewerError) -> troupe_scene::Error {
+    troupe_scene::Error::Invalid(e.to_string())
+}

@@ -1,11 +1,13 @@
 //! The Lua bridge: a scene is a Lua file; each autonomous actor's behavior is a coroutine
 //! that starts actions and waits for them.
 //!
-//! The [`Director`] owns the Lua state and the [`Scene`] (kept as Lua app data so that API
-//! calls reach it). Each tick it first calls the event handlers for the previous tick's
-//! events, then resumes, in creation order, every behavior whose wait condition holds,
-//! and finally steps the scene. Every resume runs under an instruction budget and a
-//! memory allowance; a behavior that errors or exceeds them fails alone.
+//! The [`Director`] owns the Lua state and is the script phase of a
+//! [`troupe_scene::Session`]: the session owns the [`Scene`] and lends it to the director
+//! for the phase (it is kept in the Lua state's app data meanwhile, so that API calls reach
+//! it). In its phase the director runs the script hooks other crates installed, calls the
+//! event handlers for the previous tick's events, then resumes, in creation order, every
+//! behavior whose wait condition holds. Every resume runs under an instruction budget and
+//! a memory allowance; a behavior that errors or exceeds them fails alone.
 
 pub mod api;
 mod dynamics;
@@ -17,7 +19,8 @@ pub use crate::error::{Error, Result};
 use api::{lua_err, ActionRef};
 use kinds::ActionKinds;
 use mlua::{
-    Function, HookTriggers, Lua, LuaOptions, MultiValue, StdLib, Table, Thread, Value, VmState,
+    FromLuaMulti, Function, HookTriggers, Lua, LuaOptions, MultiValue, StdLib, Table, Thread,
+    Value, VmState,
 };
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -26,6 +29,7 @@ use std::sync::Arc;
 use troupe_motion::sequence::Sequence;
 use troupe_scene::action::{ActionId, Event, Status};
 use troupe_scene::scene::{Scene, SceneConfig};
+use troupe_scene::session::{Script, Session};
 
 /// Limits on what one resume of a script may do.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -83,6 +87,8 @@ pub(crate) struct Behavior {
 
 /// Everything Lua callbacks reach: kept in the Lua state's app data.
 pub(crate) struct Stage {
+    /// The session's scene while it is lent to the director (the script phase, loading a
+    /// file); an empty scene of the same configuration otherwise.
     pub scene: Scene,
     pub kinds: ActionKinds,
     pub behaviors: Vec<Behavior>,
@@ -112,25 +118,22 @@ pub struct BehaviorReport {
     pub error: Option<String>,
 }
 
-/// Runs a Lua scene: owns the Lua state and the scene inside it.
+/// Runs Lua scenes: owns the Lua state, and directs a session's scene in its script phase.
 pub struct Director {
     lua: Lua,
     limits: ScriptLimits,
     instructions: Arc<AtomicU64>,
-    pre_ticks: Vec<PreTick>,
-    scene_steps: Vec<SceneStep>,
+    hooks: Vec<ScriptHook>,
 }
 
-/// A step another crate installs to run at the start of every tick, before the scripts of
-/// that tick (e.g. draining device samples into performer inputs, so a script and the
-/// scheduler see a sample one tick after it arrived at most). It gets the Lua state (for its
-/// own app data) and the scene as of the previous tick.
-pub type PreTick = Box<dyn FnMut(&Lua, &Scene) -> std::result::Result<(), String> + Send>;
+/// A session directed by Lua behaviors.
+pub type LuaSession = Session<Director>;
 
-/// A step run right after the pre-tick steps, before the scripts, that may change the scene
-/// itself (e.g. a SpaceMouse moving an object). It gets no Lua state: the scene lives inside
-/// the Lua state's app data, which is borrowed mutably while the step runs.
-pub type SceneStep = Box<dyn FnMut(&mut Scene) -> std::result::Result<(), String> + Send>;
+/// Lua work another crate installs at the start of every script phase, before the event
+/// handlers and behaviors (e.g. calling the gesture handlers of a performer's glove, whose
+/// samples the session's input phase drained). The scene is the session's, lent for the
+/// phase. An error is logged and the phase goes on.
+pub type ScriptHook = Box<dyn FnMut(&Lua) -> mlua::Result<()> + Send>;
 
 pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<()> {
     let thread = lua.create_thread(f.clone())?;
@@ -155,9 +158,10 @@ const ENDED_RETENTION_SECONDS: f64 = 10.0;
 const PRUNE_EVERY_TICKS: u64 = 100;
 
 impl Director {
-    /// A director with an empty scene, the sandboxed standard library, the troupe API and
-    /// the given action kinds.
+    /// A director for scenes of `config` (its seed seeds `math.random`), with the
+    /// sandboxed standard library, the troupe API and the given action kinds.
     pub fn new(config: SceneConfig, kinds: ActionKinds, limits: ScriptLimits) -> Result<Director> {
+        // Holds the stage's place while no scene is lent.
         let scene = Scene::new(config)?;
         let libs = StdLib::COROUTINE | StdLib::TABLE | StdLib::STRING | StdLib::UTF8 | StdLib::MATH;
         let lua =
@@ -167,8 +171,7 @@ impl Director {
             lua,
             limits,
             instructions,
-            pre_ticks: Vec::new(),
-            scene_steps: Vec::new(),
+            hooks: Vec::new(),
         };
         director
             .setup(scene, kinds)
@@ -259,8 +262,27 @@ impl Director {
         Ok(())
     }
 
-    /// Runs a scene file: it creates actors and objects and registers behaviors.
-    pub fn load_file(&mut self, path: &Path) -> Result<()> {
+    /// A session of an empty scene of `config`, directed by a new director.
+    pub fn session(
+        config: SceneConfig,
+        kinds: ActionKinds,
+        limits: ScriptLimits,
+    ) -> Result<LuaSession> {
+        let director = Director::new(config, kinds, limits)?;
+        Ok(Session::with_script(Scene::new(config)?, director))
+    }
+
+    /// Lends `scene` to the Lua callbacks while `f` runs.
+    fn lend<R>(&mut self, scene: &mut Scene, f: impl FnOnce(&mut Director) -> R) -> R {
+        std::mem::swap(&mut self.stage_mut().scene, scene);
+        let result = f(self);
+        std::mem::swap(&mut self.stage_mut().scene, scene);
+        result
+    }
+
+    /// Runs a scene file on `scene`: it creates actors and objects and registers
+    /// behaviors.
+    pub fn load_file(&mut self, scene: &mut Scene, path: &Path) -> Result<()> {
         let code = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
         let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
         let dir = if dir.as_os_str().is_empty() {
@@ -269,14 +291,27 @@ impl Director {
             dir
         };
         self.stage_mut().base_dir = dir;
-        self.load_str(&code, &path.display().to_string())
+        self.load_str(scene, &code, &path.display().to_string())
     }
 
-    /// Runs scene code given as text; `name` appears in error locations.
-    pub fn load_str(&mut self, code: &str, name: &str) -> Result<()> {
-        let chunk = self.lua.load(code).set_name(format!("@{name}"));
-        self.guarded(|| chunk.exec())
-            .map_err(|e| Error::Invalid(format!("{name}: {}", describe(&e, self.limits))))
+    /// Runs scene code given as text on `scene`; `name` appears in error locations.
+    pub fn load_str(&mut self, scene: &mut Scene, code: &str, name: &str) -> Result<()> {
+        self.lend(scene, |d| {
+            let chunk = d.lua.load(code).set_name(format!("@{name}"));
+            d.guarded(|| chunk.exec())
+                .map_err(|e| Error::Script(format!("{name}: {}", describe(&e, d.limits))))
+        })
+    }
+
+    /// Evaluates a Lua expression or chunk against `scene` between ticks (for tests, tools
+    /// and embedding programs that ask the script what it knows), under the same limits
+    /// as a resume.
+    pub fn eval<R: FromLuaMulti>(&mut self, scene: &mut Scene, code: &str) -> Result<R> {
+        self.lend(scene, |d| {
+            let chunk = d.lua.load(code).set_name("=eval");
+            d.guarded(|| chunk.eval::<R>())
+                .map_err(|e| Error::Script(describe(&e, d.limits)))
+        })
     }
 
     /// Runs `f` under the instruction budget and the memory allowance.
@@ -290,18 +325,13 @@ impl Director {
         result
     }
 
-    /// The scene (as of the last tick).
-    pub fn scene(&self) -> SceneRef<'_> {
+    /// The scene lent for the phase or the load under way.
+    fn scene(&self) -> SceneRef<'_> {
         SceneRef(
             self.lua
                 .app_data_ref::<Stage>()
                 .expect("the stage is installed at creation"),
         )
-    }
-
-    /// Runs `f` on the scene itself, between ticks (to configure it, e.g. profiling).
-    pub fn with_scene_mut<R>(&mut self, f: impl FnOnce(&mut Scene) -> R) -> R {
-        f(&mut self.stage_mut().scene)
     }
 
     fn stage_mut(&self) -> mlua::AppDataRefMut<'_, Stage> {
@@ -335,24 +365,16 @@ impl Director {
         add_behavior(&self.lua, None, f).map_err(|e| Error::Invalid(e.to_string()))
     }
 
-    /// Whether every behavior has ended and no action is pending or running.
-    pub fn is_idle(&self) -> bool {
-        let st = self.stage_mut();
-        st.behaviors
-            .iter()
-            .all(|b| !matches!(b.state, BehaviorState::Waiting(_)))
-            && !st.scene.has_unfinished_actions()
-    }
-
-    /// Reports of every behavior, in creation order.
-    pub fn behaviors(&self) -> Vec<BehaviorReport> {
+    /// Reports of every behavior, in creation order; `scene` is the one directed (it names
+    /// the actors).
+    pub fn behaviors(&self, scene: &Scene) -> Vec<BehaviorReport> {
         let st = self.stage_mut();
         st.behaviors
             .iter()
             .map(|b| BehaviorReport {
                 actor: b
                     .actor
-                    .map(|a| st.scene.actors()[a].name.clone())
+                    .map(|a| scene.actors()[a].name.clone())
                     .unwrap_or_else(|| "test".into()),
                 status: match b.state {
                     BehaviorState::Waiting(_) => "running",
@@ -365,78 +387,48 @@ impl Director {
                 },
             })
             .chain(st.handler_failures.iter().map(|(a, e)| BehaviorReport {
-                actor: st.scene.actors()[*a].name.clone(),
+                actor: scene.actors()[*a].name.clone(),
                 status: "failed",
                 error: Some(format!("in an event handler: {e}")),
             }))
             .collect()
     }
 
-    /// One tick: [`Director::run_scripts`] then [`Director::step_scene`]. Returns the
-    /// scene's events of this tick.
-    pub fn tick(&mut self) -> Vec<Event> {
-        self.run_scripts();
-        self.step_scene()
+    /// Adds Lua work run at the start of every script phase (see [`ScriptHook`]), in the
+    /// order added.
+    pub fn add_script_hook(&mut self, hook: ScriptHook) {
+        self.hooks.push(hook);
     }
 
-    /// Adds a step run at the start of every tick, before the scripts (see [`PreTick`]).
-    /// Steps run in the order they were added; a step's error is logged and the tick goes on.
-    pub fn add_pre_tick(&mut self, step: PreTick) {
-        self.pre_ticks.push(step);
-    }
-
-    /// Adds a step that changes the scene, run after the pre-tick steps (see [`SceneStep`]).
-    pub fn add_scene_step(&mut self, step: SceneStep) {
-        self.scene_steps.push(step);
-    }
-
-    /// The script phase of a tick: the pre-tick steps, event handlers for the previous
-    /// tick's events, then every behavior whose wait condition holds, in creation order.
-    pub fn run_scripts(&mut self) {
-        let _span = tracing::trace_span!("scripts").entered();
-        if !self.pre_ticks.is_empty() {
-            let mut steps = std::mem::take(&mut self.pre_ticks);
-            for step in steps.iter_mut() {
-                let scene = self.scene();
-                if let Err(e) = step(&self.lua, &scene) {
-                    tracing::error!("pre-tick step failed: {e}");
-                }
-            }
-            self.pre_ticks = steps;
+    fn run_hooks(&mut self) {
+        if self.hooks.is_empty() {
+            return;
         }
-        if !self.scene_steps.is_empty() {
-            let mut steps = std::mem::take(&mut self.scene_steps);
-            {
-                let mut st = self.stage_mut();
-                for step in steps.iter_mut() {
-                    if let Err(e) = step(&mut st.scene) {
-                        tracing::error!("scene step failed: {e}");
-                    }
-                }
+        let mut hooks = std::mem::take(&mut self.hooks);
+        for hook in hooks.iter_mut() {
+            if let Err(e) = self.guarded(|| hook(&self.lua)) {
+                tracing::error!("script hook failed: {}", describe(&e, self.limits));
             }
-            self.scene_steps = steps;
         }
-        self.run_handlers();
-        self.run_behaviors();
+        self.hooks = hooks;
     }
 
-    /// The scene phase of a tick: the scheduler steps every actor. Returns its events.
-    pub fn step_scene(&mut self) -> Vec<Event> {
-        let mut st = self.stage_mut();
-        let events = st.scene.step().to_vec();
-        if st.scene.tick().is_multiple_of(PRUNE_EVERY_TICKS) {
+    /// Notes a step's events: handlers see them in the next phase, and behaviors waiting on
+    /// an action that ended are looked at then. Every so often, forgets the records of
+    /// actions that ended long ago and that no Lua handle refers to.
+    fn note_step(&mut self, scene: &mut Scene, events: &[Event]) {
+        if scene.tick().is_multiple_of(PRUNE_EVERY_TICKS) {
             let pins = self.lua.app_data_ref::<Arc<api::Pins>>().map(|p| p.clone());
-            let before = st.scene.time() - ENDED_RETENTION_SECONDS;
-            st.scene
-                .forget_ended_actions(before, |id| pins.as_ref().is_some_and(|p| p.is_pinned(id)));
+            let before = scene.time() - ENDED_RETENTION_SECONDS;
+            scene.forget_ended_actions(before, |id| pins.as_ref().is_some_and(|p| p.is_pinned(id)));
         }
+        let mut st = self.stage_mut();
         st.pending_events.extend(events.iter().cloned());
-        for e in &events {
+        for e in events {
             if e.status.is_final() {
                 st.ended_last_step.insert(e.action);
             }
         }
-        events
     }
 
     fn run_handlers(&mut self) {
@@ -702,8 +694,8 @@ pub fn scene_dir(lua: &Lua) -> Option<PathBuf> {
     Some(lua.app_data_ref::<Stage>()?.base_dir.clone())
 }
 
-/// A borrow of the director's scene.
-pub struct SceneRef<'a>(mlua::AppDataRef<'a, Stage>);
+/// A borrow of the scene lent to the director.
+struct SceneRef<'a>(mlua::AppDataRef<'a, Stage>);
 
 impl std::ops::Deref for SceneRef<'_> {
     type Target = Scene;
@@ -783,4 +775,68 @@ fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
     };
     modules.set(name.as_str(), value.clone())?;
     Ok(value)
+}
+
+impl Script for Director {
+    /// The script phase: hooks, event handlers for the previous tick's events, then every
+    /// behavior whose wait condition holds, in creation order.
+    fn run(&mut self, scene: &mut Scene) {
+        let _span = tracing::trace_span!("scripts").entered();
+        self.lend(scene, |d| {
+            d.run_hooks();
+            d.run_handlers();
+            d.run_behaviors();
+        });
+    }
+
+    fn stepped(&mut self, scene: &mut Scene, events: &[Event]) {
+        self.note_step(scene, events);
+    }
+
+    fn is_idle(&self) -> bool {
+        self.stage_mut()
+            .behaviors
+            .iter()
+            .all(|b| !matches!(b.state, BehaviorState::Waiting(_)))
+    }
+}
+
+/// Scene files and reports on a [`LuaSession`], without taking its director and scene
+/// apart by hand.
+pub trait LuaSessionExt {
+    /// Runs a scene file on the session's scene (see [`Director::load_file`]).
+    fn load_file(&mut self, path: &Path) -> Result<()>;
+    /// Runs scene code given as text (see [`Director::load_str`]).
+    fn load_str(&mut self, code: &str, name: &str) -> Result<()>;
+    /// Evaluates Lua code against the session's scene (see [`Director::eval`]).
+    fn eval<R: FromLuaMulti>(&mut self, code: &str) -> Result<R>;
+    /// Reports of every behavior, in creation order.
+    fn behaviors(&self) -> Vec<BehaviorReport>;
+    /// The Lua state (for tests and embedding).
+    fn lua(&self) -> &Lua;
+}
+
+impl LuaSessionExt for LuaSession {
+    fn load_file(&mut self, path: &Path) -> Result<()> {
+        let (director, scene) = self.script_and_scene();
+        director.load_file(scene, path)
+    }
+
+    fn load_str(&mut self, code: &str, name: &str) -> Result<()> {
+        let (director, scene) = self.script_and_scene();
+        director.load_str(scene, code, name)
+    }
+
+    fn eval<R: FromLuaMulti>(&mut self, code: &str) -> Result<R> {
+        let (director, scene) = self.script_and_scene();
+        director.eval(scene, code)
+    }
+
+    fn behaviors(&self) -> Vec<BehaviorReport> {
+        self.script().behaviors(self.scene())
+    }
+
+    fn lua(&self) -> &Lua {
+        self.script().lua()
+    }
 }

@@ -24,6 +24,12 @@ pub enum Error {
     /// Anything else a caller asked for that cannot be done, with the reason.
     #[error("{0}")]
     Invalid(String),
+    /// An observer of a session failed (a recording that could not be written).
+    #[error("{observer}: {message}")]
+    Observer { observer: String, message: String },
+    /// An input of a session failed (a device that vanished, a malformed packet).
+    #[error("{input}: {message}")]
+    Input { input: String, message: String },
     /// The body model refused a value or a name.
     #[error(transparent)]
     Body(#[from] troupe_body::Error),

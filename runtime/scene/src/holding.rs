@@ -14,8 +14,8 @@
 //! - `Release` only releases an object the requesting actor holds.
 //! - `Place` sets the object's pose and frees it, if the requester holds it or nobody does.
 
-use crate::world::Object;
 use glam::{DQuat, DVec3};
+use troupe_body::object::Object;
 use troupe_body::state::ActorState;
 use troupe_body::transform::Transform;
 

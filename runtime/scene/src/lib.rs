@@ -12,6 +12,8 @@ pub mod profile;
 pub mod record;
 pub mod scene;
 pub mod scheduler;
+pub mod session;
+pub mod tally;
 pub mod timeline;
 pub mod world;
 
@@ -21,4 +23,5 @@ pub use action::{
 };
 pub use error::{Error, Result};
 pub use scene::{ActorDesc, Scene, SceneConfig};
+pub use session::{Input, NoScript, Observer, ObserverHandle, RunLimit, Script, Session};
 pub use world::{ActorInfo, Object, World};

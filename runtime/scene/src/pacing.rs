@@ -1,5 +1,9 @@
 //! Real-time pacing: sleep until each tick's deadline and count overruns.
 
+use crate::action::Event;
+use crate::error::Result;
+use crate::scene::Scene;
+use crate::session::Observer;
 use std::time::{Duration, Instant};
 
 /// Keeps a loop at a fixed period in wall-clock time.
@@ -52,5 +56,33 @@ impl Pacer {
     /// The latest a tick has finished after its deadline.
     pub fn worst_lateness(&self) -> Duration {
         self.worst_lateness
+    }
+}
+
+impl Observer for Pacer {
+    fn name(&self) -> String {
+        "real-time pacing".into()
+    }
+
+    /// Restarts the schedule: the first tick is due one period after the run starts, not
+    /// after the pacer was made (loading a scene may take a while).
+    fn start(&mut self, _scene: &Scene) -> Result<()> {
+        self.next = Instant::now() + self.period;
+        Ok(())
+    }
+
+    /// Waits for the tick's deadline.
+    fn publish(&mut self, _scene: &Scene, _events: &[Event]) -> Result<()> {
+        self.wait();
+        Ok(())
+    }
+
+    /// How many ticks were late.
+    fn finish(&mut self, _scene: &Scene) -> Result<Option<String>> {
+        Ok(Some(format!(
+            "real time: {} overruns (worst {:.1} ms late)",
+            self.overruns,
+            self.worst_lateness.as_secs_f64() * 1e3
+        )))
     }
 }

@@ -1,6 +1,9 @@
 //! Recording postures tick by tick into sequences (one per actor), for `.trk` output.
 
+use crate::action::Event;
+use crate::error::Result;
 use crate::scene::Scene;
+use crate::session::Observer;
 use troupe_motion::sequence::{Key, Sequence, Track};
 
 /// Collects every actor's DOF values at every tick.
@@ -74,5 +77,22 @@ impl PostureRecorder {
             set.push(seq);
         }
         set
+    }
+}
+
+impl Observer for PostureRecorder {
+    fn name(&self) -> String {
+        "posture recorder".into()
+    }
+
+    /// Records the postures the run starts from.
+    fn start(&mut self, scene: &Scene) -> Result<()> {
+        self.sample(scene);
+        Ok(())
+    }
+
+    fn publish(&mut self, scene: &Scene, _events: &[Event]) -> Result<()> {
+        self.sample(scene);
+        Ok(())
     }
 }

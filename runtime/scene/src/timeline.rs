@@ -2,7 +2,9 @@
 //! per actor, one span per action phase.
 
 use crate::action::{ActionId, Event, Status};
+use crate::error::Result;
 use crate::scene::Scene;
+use crate::session::Observer;
 use serde_json::{json, Value};
 use std::collections::HashMap;
 
@@ -87,5 +89,16 @@ impl TimelineRecorder {
         );
         events.extend(self.spans.iter().cloned());
         json!({ "traceEvents": events, "displayTimeUnit": "ms" })
+    }
+}
+
+impl Observer for TimelineRecorder {
+    fn name(&self) -> String {
+        "action timeline".into()
+    }
+
+    fn publish(&mut self, scene: &Scene, events: &[Event]) -> Result<()> {
+        self.record(scene, events);
+        Ok(())
     }
 }
