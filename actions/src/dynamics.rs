@@ -15,10 +15,9 @@ use troupe_body::dynamics::contact::ContactParams;
 use troupe_body::dynamics::{Control, Gains, SimParams, Simulation};
 use troupe_body::glam::DVec3;
 use troupe_body::{Scope, Skeleton};
-use troupe_lua::api::{load_sequence, lua_err_message, vec3, ActorRef, SequenceRef};
-use troupe_lua::kinds::{
-    opt_bool, opt_number, ActionKind, ActionKinds, BuildContext, CommonOptions,
-};
+use troupe_lua::api::{load_sequence, lua_err_message, ActorRef, SequenceRef};
+use troupe_lua::kinds::args::{opt_bool, opt_number, opt_table_arg, vec3};
+use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_motion::sequence::{Key, Track as SeqTrack};
 use troupe_motion::Sequence;
 use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, Scene, Step};
@@ -375,18 +374,6 @@ const SIM_OPTIONS: [&str; 6] = [
     "limits",
 ];
 
-fn options(args: MultiValue, method: &str) -> mlua::Result<Option<Table>> {
-    let mut args = args.into_iter();
-    match args.next() {
-        None | Some(Value::Nil) => Ok(None),
-        Some(Value::Table(t)) => Ok(Some(t)),
-        Some(other) => Err(lua_err_message(format!(
-            "{method}: expects a table of options, got {}",
-            other.type_name()
-        ))),
-    }
-}
-
 fn sim_params(t: Option<&Table>, method: &str, damping: f64) -> mlua::Result<SimParams> {
     let mut p = SimParams {
         damping,
@@ -446,7 +433,7 @@ fn build_simulate(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let opts = options(args, "simulate")?;
+    let opts = opt_table_arg("simulate", args)?;
     let common = CommonOptions::parse(ctx, "simulate", opts.as_ref(), &extras(&["push"]))?;
     let params = sim_params(opts.as_ref(), "simulate", 2.0)?;
     let mut push = None;
@@ -495,7 +482,7 @@ fn build_servo(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let opts = options(args, "servo")?;
+    let opts = opt_table_arg("servo", args)?;
     let common = CommonOptions::parse(
         ctx,
         "servo",
@@ -579,7 +566,7 @@ fn build_track(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let opts = options(args, "track")?;
+    let opts = opt_table_arg("track", args)?;
     let common = CommonOptions::parse(
         ctx,
         "track",

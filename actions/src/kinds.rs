@@ -4,13 +4,12 @@ use crate::keyframe::Keyframe;
 use crate::look_at::LookAt;
 use crate::reach::{Reach, ReachSpec, Target};
 use mlua::{MultiValue, Table, Value};
-use troupe_body::glam::{DQuat, DVec3, EulerRot};
+use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::jacobian::{ancestor_dofs, scope_dofs_moving, Effector};
 use troupe_body::Scope;
-use troupe_lua::api::{load_sequence, lua_err_message, vec3, ActorRef, ObjectRef, SequenceRef};
-use troupe_lua::kinds::{
-    opt_bool, opt_string, ActionKind, ActionKinds, BuildContext, CommonOptions,
-};
+use troupe_lua::api::{load_sequence, lua_err_message, ActorRef, ObjectRef, SequenceRef};
+use troupe_lua::kinds::args::{euler_degrees, opt_bool, opt_string, table_arg, vec3};
+use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
 /// Every action kind implemented here, ready for a [`troupe_lua::Director`].
@@ -84,18 +83,6 @@ fn build_play(
         .map_err(|e| lua_err_message(format!("play: {e}")))?;
     let spec = common.spec("keyframe", generator.scope());
     Ok((Box::new(generator), spec))
-}
-
-/// The single table argument of `reach`, `ik` and `look_at`.
-fn options_table(method: &str, args: MultiValue) -> mlua::Result<Table> {
-    let mut args = args.into_iter();
-    match (args.next(), args.next()) {
-        (Some(Value::Table(t)), None) => Ok(t),
-        (first, _) => Err(lua_err_message(format!(
-            "{method}: expects one table of options, got {}",
-            first.map(|v| v.type_name()).unwrap_or("nothing")
-        ))),
-    }
 }
 
 /// Reads a target: an object, an actor (its root), `{actor = A, joint = NAME[, offset =
@@ -179,16 +166,11 @@ fn parse_orientation(method: &str, t: &Table) -> mlua::Result<Option<DQuat>> {
     if v.is_nil() {
         return Ok(None);
     }
-    let r = vec3(
+    euler_degrees(
         &v,
         &format!("{method}: orientation (degrees about x, y, z)"),
-    )?;
-    Ok(Some(DQuat::from_euler(
-        EulerRot::YXZ,
-        r.y.to_radians(),
-        r.x.to_radians(),
-        r.z.to_radians(),
-    )))
+    )
+    .map(Some)
 }
 
 /// Reads `via = {{x, y, z}, …}`.
@@ -253,7 +235,7 @@ fn build_reach(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let t = options_table("reach", args)?;
+    let t = table_arg("reach", args)?;
     let common = CommonOptions::parse(
         ctx,
         "reach",
@@ -302,7 +284,7 @@ fn build_ik(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let t = options_table("ik", args)?;
+    let t = table_arg("ik", args)?;
     let common = CommonOptions::parse(
         ctx,
         "ik",
@@ -346,7 +328,7 @@ fn build_look_at(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let t = options_table("look_at", args)?;
+    let t = table_arg("look_at", args)?;
     let common = CommonOptions::parse(ctx, "look_at", Some(&t), &["target"])?;
     let target = parse_target(ctx, "look_at", t.get("target")?)?;
     let generator =

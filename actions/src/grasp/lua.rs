@@ -10,13 +10,13 @@ use crate::interact::{FollowHand, Give, HoldHand};
 use crate::manipulate::{Manipulate, ObjectKey};
 use mlua::{Lua, MultiValue, Table, Value};
 use std::sync::Arc;
-use troupe_body::glam::{DQuat, DVec3, EulerRot};
+use troupe_body::glam::{DVec3, EulerRot};
 use troupe_body::sensors::Side;
 use troupe_body::Transform;
-use troupe_lua::api::{lua_err_message, vec3, ActorRef, ObjectRef};
-use troupe_lua::kinds::{
-    opt_number, opt_string, with_scene, ActionKind, ActionKinds, BuildContext, CommonOptions,
+use troupe_lua::kinds::args::{
+    actor_arg, err, euler_degrees, object_arg, opt_number, opt_string, table_arg, vec3,
 };
+use troupe_lua::kinds::{with_scene, ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator, Scene};
 
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
@@ -54,72 +54,6 @@ pub fn register(kinds: &mut ActionKinds) {
     kinds.register_function("plan_grasp", make_plan_grasp);
 }
 
-fn err(method: &str, e: impl std::fmt::Display) -> mlua::Error {
-    lua_err_message(format!("{method}: {e}"))
-}
-
-fn table(method: &str, args: MultiValue) -> mlua::Result<Table> {
-    let mut args = args.into_iter();
-    match (args.next(), args.next()) {
-        (Some(Value::Table(t)), None) => Ok(t),
-        (first, _) => Err(err(
-            method,
-            format!(
-                "expects one table of options, got {}",
-                first.map(|v| v.type_name()).unwrap_or("nothing")
-            ),
-        )),
-    }
-}
-
-/// An object given as a handle or a name.
-fn object_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<usize> {
-    match v {
-        Value::UserData(u) => u.borrow::<ObjectRef>().map(|o| o.0).map_err(|_| {
-            err(
-                method,
-                format!("`{key}` must be an object or an object's name"),
-            )
-        }),
-        Value::String(name) => {
-            let name = name.to_str()?.to_string();
-            with_scene(lua, |s| s.object_index(&name))?.map_err(|e| err(method, e))
-        }
-        Value::Nil => Err(err(method, format!("`{key}` is required"))),
-        other => Err(err(
-            method,
-            format!(
-                "`{key}` must be an object or an object's name, got {}",
-                other.type_name()
-            ),
-        )),
-    }
-}
-
-/// An actor given as a handle or a name.
-fn actor_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<usize> {
-    match v {
-        Value::UserData(u) => u.borrow::<ActorRef>().map(|a| a.0).map_err(|_| {
-            err(
-                method,
-                format!("`{key}` must be an actor or an actor's name"),
-            )
-        }),
-        Value::String(name) => {
-            let name = name.to_str()?.to_string();
-            with_scene(lua, |s| s.actor_index(&name))?.map_err(|e| err(method, e))
-        }
-        Value::Nil => Err(err(method, format!("`{key}` is required"))),
-        other => Err(err(
-            method,
-            format!(
-                "`{key}` must be an actor or an actor's name, got {}",
-                other.type_name()
-            ),
-        )),
-    }
-}
-
 fn side_arg(method: &str, t: &Table, key: &str, default: Side) -> mlua::Result<Side> {
     match opt_string(t, method, key)? {
         None => Ok(default),
@@ -136,17 +70,6 @@ fn holding_side(scene: &Scene, actor: usize, object: usize) -> Option<Side> {
     } else {
         Side::Right
     })
-}
-
-/// Euler degrees (Y, X, Z order, as objects) to a rotation.
-fn rotation(v: &Value, what: &str) -> mlua::Result<DQuat> {
-    let r = vec3(v, what)?;
-    Ok(DQuat::from_euler(
-        EulerRot::YXZ,
-        r.y.to_radians(),
-        r.x.to_radians(),
-        r.z.to_radians(),
-    ))
 }
 
 /// The hands a choice may use (`auto`: both, the plan picks).
@@ -175,7 +98,7 @@ fn pattern(method: &str, t: &Table) -> mlua::Result<Option<GraspType>> {
 /// duration = reach seconds, <common options>}`.
 fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "grasp";
-    let t = table(m, args)?;
+    let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
     let choice = hand_choice(m, &t)?;
     let sides = resolve_hands(choice);
@@ -232,7 +155,7 @@ fn release_like(
             let r = if r.is_nil() {
                 rot
             } else {
-                rotation(&r, &format!("{m}: rotation"))?
+                euler_degrees(&r, &format!("{m}: rotation"))?
             };
             Some((Transform::new(r, at), common.duration.unwrap_or(1.0)))
         }
@@ -247,14 +170,14 @@ fn release_like(
 
 /// `actor:release{object = OBJ, <common options>}`.
 fn build_release(ctx: &BuildContext, args: MultiValue) -> Built {
-    let t = table("release", args)?;
+    let t = table_arg("release", args)?;
     let common = CommonOptions::parse(ctx, "release", Some(&t), &["object"])?;
     release_like(ctx, "release", &t, &common, None)
 }
 
 /// `actor:place{object = OBJ, at = {x, y, z}, rotation = {x, y, z}, duration = s}`.
 fn build_place(ctx: &BuildContext, args: MultiValue) -> Built {
-    let t = table("place", args)?;
+    let t = table_arg("place", args)?;
     let common = CommonOptions::parse(ctx, "place", Some(&t), &["object", "at", "rotation"])?;
     let at: Value = t.get("at")?;
     if at.is_nil() {
@@ -289,7 +212,10 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                 let rotation = if r.is_nil() {
                     None
                 } else {
-                    Some(rotation(&r, &format!("{m}: keys[{}].rotation", i + 1))?)
+                    Some(euler_degrees(
+                        &r,
+                        &format!("{m}: keys[{}].rotation", i + 1),
+                    )?)
                 };
                 keys.push(ObjectKey {
                     time,
@@ -319,7 +245,7 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                 let rotation = if r.is_nil() {
                     None
                 } else {
-                    Some(rotation(&r, &format!("{m}: keys({time}) rotation"))?)
+                    Some(euler_degrees(&r, &format!("{m}: keys({time}) rotation"))?)
                 };
                 keys.push(ObjectKey {
                     time,
@@ -343,7 +269,7 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
 /// `actor:manipulate{object = OBJ, keys = {…} | function(t) … end, duration = s}`.
 fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "manipulate";
-    let t = table(m, args)?;
+    let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "keys"])?;
     let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let keys = parse_keys(t.get("keys")?, common.duration)?;
@@ -362,7 +288,7 @@ fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
 /// `actor:give{object = OBJ, to = ACTOR}`: starts the receiver's `receive` action too.
 fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "give";
-    let t = table(m, args)?;
+    let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "to", "hand", "timeout"])?;
     let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let to = actor_arg(ctx.lua, m, "to", t.get("to")?)?;
@@ -437,7 +363,7 @@ fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
 /// `object` out of `from`'s hand (e.g. from a performer holding it out).
 fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "receive";
-    let t = table(m, args)?;
+    let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "from", "hand"])?;
     let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let from = actor_arg(ctx.lua, m, "from", t.get("from")?)?;
@@ -460,7 +386,7 @@ fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
 }
 
 fn hold_like(ctx: &BuildContext, m: &str, args: MultiValue, shake: bool) -> Built {
-    let t = table(m, args)?;
+    let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["other", "hand", "other_hand"])?;
     let other = actor_arg(ctx.lua, m, "other", t.get("other")?)?;
     if other == ctx.actor {

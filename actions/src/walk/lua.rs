@@ -3,12 +3,11 @@
 
 use super::route::{Route, Speed, PROFILE_DT};
 use super::{Walk, WalkOptions};
-use mlua::{MultiValue, Table, Value};
+use mlua::{MultiValue, Value};
 use troupe_body::glam::DVec2;
 use troupe_lua::api::{load_sequence, lua_err_message, SequenceRef};
-use troupe_lua::kinds::{
-    opt_bool, opt_number, ActionKind, ActionKinds, BuildContext, CommonOptions,
-};
+use troupe_lua::kinds::args::{number, opt_bool, opt_number, table_arg};
+use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
 /// The walk's own option names (besides the common ones).
@@ -34,14 +33,6 @@ pub fn register(kinds: &mut ActionKinds) {
         method: "walk",
         build: build_walk,
     });
-}
-
-fn number(v: &Value) -> Option<f64> {
-    match v {
-        Value::Integer(i) => Some(*i as f64),
-        Value::Number(n) => Some(*n),
-        _ => None,
-    }
 }
 
 /// Reads a floor point: `{x, z}`, `{x, y, z}` (y must be the floor) or `{x=…, z=…}`.
@@ -99,16 +90,7 @@ fn build_walk(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let mut args = args.into_iter();
-    let t: Table = match (args.next(), args.next()) {
-        (Some(Value::Table(t)), None) => t,
-        (first, _) => {
-            return Err(lua_err_message(format!(
-                "walk: expects one table of options, got {}",
-                first.map(|v| v.type_name()).unwrap_or("nothing")
-            )))
-        }
-    };
+    let t = table_arg("walk", args)?;
     let common = CommonOptions::parse(ctx, "walk", Some(&t), &WALK_OPTIONS)?;
     let mut options = WalkOptions::default();
     let num = |k: &str| opt_number(&t, "walk", k);
