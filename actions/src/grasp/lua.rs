@@ -16,7 +16,7 @@ use troupe_body::Transform;
 use troupe_lua::kinds::args::{
     actor_arg, err, euler_degrees, object_arg, opt_number, opt_string, table_arg, vec3,
 };
-use troupe_lua::kinds::{with_scene, ActionKind, ActionKinds, BuildContext, CommonOptions};
+use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator, Scene};
 
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
@@ -35,23 +35,6 @@ impl Generator for Refuse {
     ) -> troupe_scene::Step {
         troupe_scene::Step::Failed(self.0.clone())
     }
-}
-
-/// Registers the hand actions and `troupe.plan_grasp`.
-pub fn register(kinds: &mut ActionKinds) {
-    for (method, build) in [
-        ("grasp", build_grasp as troupe_lua::kinds::BuildFn),
-        ("release", build_release),
-        ("place", build_place),
-        ("manipulate", build_manipulate),
-        ("give", build_give),
-        ("receive", build_receive),
-        ("hold_hand", build_hold_hand),
-        ("shake_hands", build_shake_hands),
-    ] {
-        kinds.register(ActionKind { method, build });
-    }
-    kinds.register_function("plan_grasp", make_plan_grasp);
 }
 
 fn side_arg(method: &str, t: &Table, key: &str, default: Side) -> mlua::Result<Side> {
@@ -96,7 +79,7 @@ fn pattern(method: &str, t: &Table) -> mlua::Result<Option<GraspType>> {
 
 /// `actor:grasp{object = OBJ, hand = "right"|"left"|"both"|"auto", pattern = TYPE,
 /// duration = reach seconds, <common options>}`.
-fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "grasp";
     let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
@@ -169,14 +152,14 @@ fn release_like(
 }
 
 /// `actor:release{object = OBJ, <common options>}`.
-fn build_release(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_release(ctx: &BuildContext, args: MultiValue) -> Built {
     let t = table_arg("release", args)?;
     let common = CommonOptions::parse(ctx, "release", Some(&t), &["object"])?;
     release_like(ctx, "release", &t, &common, None)
 }
 
 /// `actor:place{object = OBJ, at = {x, y, z}, rotation = {x, y, z}, duration = s}`.
-fn build_place(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_place(ctx: &BuildContext, args: MultiValue) -> Built {
     let t = table_arg("place", args)?;
     let common = CommonOptions::parse(ctx, "place", Some(&t), &["object", "at", "rotation"])?;
     let at: Value = t.get("at")?;
@@ -267,7 +250,7 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
 }
 
 /// `actor:manipulate{object = OBJ, keys = {…} | function(t) … end, duration = s}`.
-fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "manipulate";
     let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "keys"])?;
@@ -286,7 +269,7 @@ fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
 }
 
 /// `actor:give{object = OBJ, to = ACTOR}`: starts the receiver's `receive` action too.
-fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "give";
     let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "to", "hand", "timeout"])?;
@@ -361,7 +344,7 @@ fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
 
 /// `actor:receive{object = OBJ, from = ACTOR, hand = …, duration = reach seconds}`: take
 /// `object` out of `from`'s hand (e.g. from a performer holding it out).
-fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "receive";
     let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "from", "hand"])?;
@@ -424,12 +407,12 @@ fn hold_like(ctx: &BuildContext, m: &str, args: MultiValue, shake: bool) -> Buil
 }
 
 /// `actor:hold_hand{other = ACTOR, hand = "right", other_hand = "left", duration = s}`.
-fn build_hold_hand(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_hold_hand(ctx: &BuildContext, args: MultiValue) -> Built {
     hold_like(ctx, "hold_hand", args, false)
 }
 
 /// `actor:shake_hands{other = ACTOR, hand = "right", other_hand = "right"}`.
-fn build_shake_hands(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_shake_hands(ctx: &BuildContext, args: MultiValue) -> Built {
     hold_like(ctx, "shake_hands", args, true)
 }
 
@@ -443,7 +426,7 @@ fn vec_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
 
 /// `troupe.plan_grasp(actor, object[, {hand = …, pattern = …}])` → a plan table, or nil
 /// and the reason.
-fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
+pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
     lua.create_function(
         |lua, (actor, object, opts): (Value, Value, Option<Table>)| {
             let m = "plan_grasp";

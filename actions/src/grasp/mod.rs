@@ -7,7 +7,7 @@ pub mod automaton;
 pub mod close;
 pub mod decision;
 pub mod handover;
-pub mod lua;
+pub(crate) mod lua;
 pub mod pattern;
 pub mod plan;
 
@@ -15,6 +15,5 @@ pub use action::{Grasp, Release, Signal};
 pub use automaton::{AutomatonOutput, GraspAutomaton, HandDecision, HandState};
 pub use close::HandModel;
 pub use decision::{decide, Decision, GraspType};
-pub use lua::register;
 pub use pattern::HandPattern;
 pub use plan::{plan_grasp, GraspPlan, HandChoice, HandPlan, PlanOptions};

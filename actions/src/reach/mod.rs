@@ -10,6 +10,12 @@
 //! [`ORIENTATION_TOLERANCE`] when an orientation is asked) and fails otherwise, with the
 //! residual distance in the reason.
 
+pub(crate) mod lua;
+pub mod options;
+
+pub use options::{ReachOptions, Reacher};
+
+use crate::error::{OptionError, Result};
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
@@ -55,7 +61,7 @@ pub enum Target {
 
 impl Target {
     /// The target's world position now, or why it cannot be found.
-    pub fn position(&self, world: &World) -> Result<DVec3, String> {
+    pub fn position(&self, world: &World) -> std::result::Result<DVec3, String> {
         let p = match self {
             Target::Point(p) => *p,
             Target::Object(name) => world
@@ -88,6 +94,20 @@ impl Target {
             Ok(p)
         } else {
             Err("the target position is not finite".into())
+        }
+    }
+}
+
+impl Target {
+    /// Refuses a point target that is not finite (names and joints are looked up when
+    /// the action runs).
+    pub fn check(&self) -> Result<(), OptionError> {
+        match self {
+            Target::Point(p) if !p.is_finite() => Err(OptionError::refused(
+                "target",
+                "the target position is not finite",
+            )),
+            _ => Ok(()),
         }
     }
 }
@@ -133,29 +153,15 @@ pub fn quintic(t: f64) -> f64 {
 impl Reach {
     /// A reach on `skeleton`. Fails when the DOF list is empty or invalid, the duration is
     /// not positive, or a via point is not finite.
-    pub fn new(skeleton: &Skeleton, spec: ReachSpec) -> Result<Reach, String> {
-        if !(spec.duration.is_finite() && spec.duration > 0.0) {
-            return Err(format!(
-                "duration must be a finite number of seconds > 0, got {}",
-                spec.duration
-            ));
-        }
-        if spec.via.iter().any(|v| !v.is_finite()) {
-            return Err("via points must be finite".into());
-        }
-        if let Target::Point(p) = &spec.target {
-            if !p.is_finite() {
-                return Err("the target position is not finite".into());
-            }
-        }
+    pub fn new(skeleton: &Skeleton, spec: ReachSpec) -> Result<Reach> {
+        options::check_path(spec.duration, &spec.via, &spec.target)?;
         let options = IkOptions {
             max_iterations: 30,
             ..IkOptions::default()
         };
-        let solver =
-            IkSolver::new(skeleton, spec.dofs.clone(), options).map_err(|e| e.to_string())?;
+        let solver = IkSolver::new(skeleton, spec.dofs.clone(), options)?;
         let (sensors, effector_sensor) = if spec.self_collision {
-            let s = BodySensors::new(skeleton).map_err(|e| e.to_string())?;
+            let s = BodySensors::new(skeleton)?;
             // The sensor riding on the effector's joint (the hand) follows the main task.
             let own = s
                 .sensors()
