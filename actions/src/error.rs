@@ -65,6 +65,15 @@ impl OptionError {
     }
 }
 
+#[cfg(test)]
+impl OptionError {
+    /// Asserts that this error refuses `option` and names it in its message.
+    pub(crate) fn assert_names(&self, option: &str) {
+        assert_eq!(self.option(), option, "{self}");
+        assert!(self.to_string().contains(option), "{self}");
+    }
+}
+
 /// Why an action cannot be made.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ActionError {
@@ -78,10 +87,13 @@ pub enum ActionError {
     /// The scene refused (an unknown actor or object, an action that cannot start).
     #[error(transparent)]
     Scene(#[from] troupe_scene::Error),
-    /// The body lacks what the action needs (a humanoid's legs for a walk, hands for a
-    /// grasp), with what is missing.
+    /// The actor cannot do the action (a body without a humanoid's legs for a walk, a
+    /// performer's device-driven hand for a give), and why.
     #[error("{0}")]
     Unfit(String),
+    /// State shared between actors (the hand board) was left locked by a panic.
+    #[error("{0} lock poisoned")]
+    Poisoned(&'static str),
 }
 
 /// The result of making an action.

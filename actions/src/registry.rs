@@ -4,7 +4,7 @@
 //! `lua.rs` that reads those options); adding one means adding its folder, a line here
 //! and its section in `docs/lua-api.md`.
 
-use crate::{dynamics, grasp, keyframe, look_at, reach, walk};
+use crate::{dynamics, grasp, interact, keyframe, look_at, manipulate, reach, walk};
 use troupe_lua::kinds::{ActionKind, ActionKinds, BuildFn, MakeFunction};
 
 /// Each actor method and the builder that reads its Lua arguments.
@@ -20,11 +20,11 @@ const KINDS: [(&str, BuildFn); 16] = [
     ("grasp", grasp::lua::build_grasp),
     ("release", grasp::lua::build_release),
     ("place", grasp::lua::build_place),
-    ("manipulate", grasp::lua::build_manipulate),
-    ("give", grasp::lua::build_give),
-    ("receive", grasp::lua::build_receive),
-    ("hold_hand", grasp::lua::build_hold_hand),
-    ("shake_hands", grasp::lua::build_shake_hands),
+    ("manipulate", manipulate::lua::build_manipulate),
+    ("give", interact::lua::build_give),
+    ("receive", interact::lua::build_receive),
+    ("hold_hand", interact::lua::build_hold_hand),
+    ("shake_hands", interact::lua::build_shake_hands),
 ];
 
 /// The `troupe` functions that go with the kinds.

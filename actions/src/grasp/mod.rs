@@ -8,6 +8,7 @@ pub mod close;
 pub mod decision;
 pub mod handover;
 pub(crate) mod lua;
+pub mod options;
 pub mod pattern;
 pub mod plan;
 
@@ -15,5 +16,6 @@ pub use action::{Grasp, Release, Signal};
 pub use automaton::{AutomatonOutput, GraspAutomaton, HandDecision, HandState};
 pub use close::HandModel;
 pub use decision::{decide, Decision, GraspType};
+pub use options::{GraspOptions, Place, ReleaseOptions};
 pub use pattern::HandPattern;
 pub use plan::{plan_grasp, GraspPlan, HandChoice, HandPlan, PlanOptions};

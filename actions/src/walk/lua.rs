@@ -197,18 +197,18 @@ pub fn build_walk(
                     }
                     Speed::Samples(samples)
                 }
-                v => {
-                    match number(&v) {
-                        Some(x) => Speed::Constant(x),
-                        None => return Err(err(
+                v => match number(&v) {
+                    Some(x) => Speed::Constant(x),
+                    None => {
+                        return Err(err(
                             "walk",
                             format!(
                                 "`velocity` must be a speed (m/s) or a function of time, got {}",
                                 v.type_name()
                             ),
-                        )),
+                        ))
                     }
-                }
+                },
             };
             Route::Velocity { speed, duration }
         }

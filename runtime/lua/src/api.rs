@@ -1,6 +1,6 @@
 //! The Lua API: the `troupe` table, actor, object, action and sequence values.
 
-use super::kinds::args::{check_keys, euler_degrees, opt_number, opt_string, vec3};
+use super::kinds::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
 use super::{BehaviorState, Stage};
 use crate::error::Error;
 use crate::kinds::BuildContext;
@@ -89,14 +89,6 @@ pub(crate) fn lua_err(e: impl std::fmt::Display) -> mlua::Error {
 fn stage(lua: &Lua) -> mlua::Result<mlua::AppDataRefMut<'_, Stage>> {
     lua.app_data_mut::<Stage>()
         .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))
-}
-
-fn vec3_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
-    let t = lua.create_table()?;
-    t.raw_set(1, v.x)?;
-    t.raw_set(2, v.y)?;
-    t.raw_set(3, v.z)?;
-    Ok(t)
 }
 
 impl UserData for ActorRef {

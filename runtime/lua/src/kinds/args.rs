@@ -135,6 +135,15 @@ pub fn vec3(value: &Value, what: &str) -> mlua::Result<DVec3> {
     Ok(DVec3::new(get(1, "x")?, get(2, "y")?, get(3, "z")?))
 }
 
+/// A new Lua table `{x, y, z}`.
+pub fn vec3_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
+    let t = lua.create_table()?;
+    t.raw_set(1, v.x)?;
+    t.raw_set(2, v.y)?;
+    t.raw_set(3, v.z)?;
+    Ok(t)
+}
+
 /// Reads a rotation given as Euler degrees `{x, y, z}`, applied in the order Y, X, Z (as
 /// every rotation in the API: objects, reach orientations, manipulation keys).
 pub fn euler_degrees(value: &Value, what: &str) -> mlua::Result<DQuat> {
