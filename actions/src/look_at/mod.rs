@@ -100,7 +100,7 @@ impl LookAt {
 
 impl Generator for LookAt {
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
-        self.target.position(ctx.world)?;
+        self.target.position(ctx.world).map_err(|e| e.to_string())?;
         self.q = ctx.posture.q.clone();
         Ok(())
     }
@@ -108,7 +108,7 @@ impl Generator for LookAt {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         let target = match self.target.position(ctx.world) {
             Ok(p) => p,
-            Err(e) => return Step::Failed(e),
+            Err(e) => return Step::Failed(e.to_string()),
         };
         if self.q.len() != ctx.posture.q.len() {
             self.q = ctx.posture.q.clone();
