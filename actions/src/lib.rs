@@ -1,19 +1,23 @@
-//! troupe's motion generators. Each module is one kind of ACTION's generator; each
-//! generator writes only the DOFs of its action's scope.
+//! troupe's motion generators, one folder per kind of ACTION: the generator, its options
+//! (plain Rust, with `validate()`), and a `lua.rs` that reads those options from a script.
+//! [`registry`] lists every kind for the Lua director. Each generator writes only the
+//! DOFs of its action's scope.
 
 pub mod dynamics;
+pub mod error;
 pub mod grasp;
 pub mod interact;
 pub mod keyframe;
-pub mod kinds;
 pub mod look_at;
 pub mod manipulate;
 pub mod reach;
+pub mod registry;
 pub mod walk;
 
-pub use dynamics::DynamicsGenerator;
-pub use keyframe::Keyframe;
-pub use kinds::action_kinds;
-pub use look_at::LookAt;
-pub use reach::{Reach, ReachSpec, Target};
+pub use dynamics::{DynamicsGenerator, DynamicsOptions};
+pub use error::{ActionError, OptionError};
+pub use keyframe::{Keyframe, KeyframeOptions};
+pub use look_at::{LookAt, LookAtOptions};
+pub use reach::{Reach, ReachOptions, ReachSpec, Reacher, Target};
+pub use registry::action_kinds;
 pub use walk::{Walk, WalkOptions};

@@ -9,13 +9,15 @@
 use super::close::HandModel;
 use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
+use crate::error::{OptionError, Result};
 use crate::reach::quintic;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
+use troupe_body::glam::DVec3;
 use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::holding::HoldRequest;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Scene, Step};
 
 /// Seconds the fingers take to close along a pattern.
 pub const CLOSE_SECONDS: f64 = 0.6;
@@ -50,15 +52,46 @@ impl Signal {
 }
 
 /// The DOFs a grasp with these hands drives: arms and hands.
-pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope, String> {
+pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope> {
     let mut scope = Scope::EMPTY;
     for s in sides {
-        let e = skeleton
-            .scope(&format!("{0}_arm+{0}_hand", s.name()))
-            .map_err(|e| e.to_string())?;
+        let e = skeleton.scope(&format!("{0}_arm+{0}_hand", s.name()))?;
         scope = scope.union(&e);
     }
     Ok(scope)
+}
+
+/// Refuses a place that is not finite or not reached in a positive time.
+pub(crate) fn check_place(at: DVec3, seconds: f64) -> Result<(), OptionError> {
+    check_duration(seconds)?;
+    if at.is_finite() {
+        Ok(())
+    } else {
+        Err(OptionError::refused("at", "place: `at` must be finite"))
+    }
+}
+
+/// The hand of `actor` that holds `object`, if one does.
+pub fn holding_side(scene: &Scene, actor: usize, object: usize) -> Option<Side> {
+    let h = scene.holder(object).filter(|h| h.actor == actor)?;
+    let name = &scene.actors()[actor].skeleton.joints()[h.joint].name;
+    Some(if name.starts_with("l_") {
+        Side::Left
+    } else {
+        Side::Right
+    })
+}
+
+/// Refuses a duration that is not a finite number of seconds > 0.
+pub(crate) fn check_duration(seconds: f64) -> Result<(), OptionError> {
+    if seconds.is_finite() && seconds > 0.0 {
+        Ok(())
+    } else {
+        Err(OptionError::refused(
+            "duration",
+            format!("duration must be a finite number of seconds > 0, got {seconds}"),
+        ))
+    }
 }
 
 /// One hand's closing state.
@@ -107,12 +140,8 @@ impl Grasp {
         options: PlanOptions,
         sides: Vec<Side>,
         reach_seconds: f64,
-    ) -> Result<Grasp, String> {
-        if !(reach_seconds.is_finite() && reach_seconds > 0.0) {
-            return Err(format!(
-                "duration must be a finite number of seconds > 0, got {reach_seconds}"
-            ));
-        }
+    ) -> Result<Grasp> {
+        check_duration(reach_seconds)?;
         Ok(Grasp {
             object,
             options,
@@ -375,16 +404,9 @@ impl Release {
         object: usize,
         sides: Vec<Side>,
         place: Option<(Transform, f64)>,
-    ) -> Result<Release, String> {
+    ) -> Result<Release> {
         if let Some((pose, seconds)) = &place {
-            if !(seconds.is_finite() && *seconds > 0.0) {
-                return Err(format!(
-                    "duration must be a finite number of seconds > 0, got {seconds}"
-                ));
-            }
-            if !pose.translation.is_finite() {
-                return Err("place: `at` must be finite".into());
-            }
+            check_place(pose.translation, *seconds)?;
         }
         Ok(Release {
             object,

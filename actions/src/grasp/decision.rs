@@ -16,6 +16,7 @@
 //! used": anything whose largest size is below [`TINY`]·L is pinched; anything the hand
 //! must span more than [`LARGE`]·L across is held with both hands.
 
+use crate::error::OptionError;
 use troupe_body::Shape;
 
 /// A box thinner than this fraction of the hand length is thin.
@@ -66,12 +67,12 @@ impl GraspType {
     }
 
     /// Parses a script name.
-    pub fn parse(name: &str) -> Result<GraspType, String> {
+    pub fn parse(name: &str) -> Result<GraspType, OptionError> {
         GraspType::ALL
             .into_iter()
             .find(|g| g.name() == name)
             .ok_or_else(|| {
-                format!("unknown grasp pattern `{name}` (expected lateral, pinch, tripod, wrap or disk)")
+                OptionError::refused("pattern", format!("unknown grasp pattern `{name}` (expected lateral, pinch, tripod, wrap or disk)"))
             })
     }
 }
@@ -216,6 +217,8 @@ mod tests {
         for g in GraspType::ALL {
             assert_eq!(GraspType::parse(g.name()), Ok(g));
         }
-        assert!(GraspType::parse("fist").unwrap_err().contains("fist"));
+        let e = GraspType::parse("fist").unwrap_err();
+        assert_eq!(e.option(), "pattern");
+        assert!(e.to_string().contains("fist"), "{e}");
     }
 }

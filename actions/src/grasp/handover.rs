@@ -176,7 +176,7 @@ pub fn offer_to_hand(
     receiver: usize,
     hand: Side,
     timeout: Option<f64>,
-) -> Result<Offering, String> {
+) -> crate::error::Result<Offering> {
     let arrived = Arc::new(Signal::default());
     let closed = Arc::new(Signal::default());
     let mut give = Give::new(object, receiver, side, arrived.clone()).into_hand(hand);
@@ -186,7 +186,7 @@ pub fn offer_to_hand(
     board
         .0
         .lock()
-        .map_err(|_| "hand board lock poisoned".to_string())?
+        .map_err(|_| crate::error::ActionError::Poisoned("hand board"))?
         .offer(Offer {
             object,
             giver,
@@ -211,7 +211,7 @@ pub fn receive(
     hand: HandChoice,
     sides: Vec<Side>,
     reach_seconds: f64,
-) -> Result<(Grasp, troupe_body::Scope), String> {
+) -> crate::error::Result<(Grasp, troupe_body::Scope)> {
     let scope = grasp_scope(skeleton, &sides)?;
     let g = Grasp::new(
         object,

@@ -1,184 +1,63 @@
-//! The Lua face of grasping, manipulation and interaction: the actor methods `grasp`,
-//! `release`, `place`, `manipulate`, `give`, `hold_hand`, `shake_hands` and the query
-//! `troupe.plan_grasp`.
+//! `actor:grasp{…}`, `actor:release{…}`, `actor:place{…}` and `troupe.plan_grasp(…)` in
+//! Lua: reads [`GraspOptions`] and [`ReleaseOptions`], and the hand and pattern names
+//! that `give` and `receive` share.
 
-use super::action::{grasp_scope, Grasp, Release, Signal};
+use super::action::grasp_scope;
 use super::decision::GraspType;
-use super::handover::{offer_to_hand, receive, SharedHandBoard};
+use super::options::{GraspOptions, Place, ReleaseOptions};
 use super::plan::{plan_grasp, HandChoice, PlanOptions};
-use crate::interact::{FollowHand, Give, HoldHand};
-use crate::manipulate::{Manipulate, ObjectKey};
 use mlua::{Lua, MultiValue, Table, Value};
-use std::sync::Arc;
-use troupe_body::glam::{DQuat, DVec3, EulerRot};
-use troupe_body::sensors::Side;
-use troupe_body::Transform;
-use troupe_lua::api::{lua_err_message, vec3, ActorRef, ObjectRef};
-use troupe_lua::kinds::{
-    opt_number, opt_string, with_scene, ActionKind, ActionKinds, BuildContext, CommonOptions,
+use troupe_body::glam::{DVec3, EulerRot};
+use troupe_lua::kinds::args::{
+    actor_arg, err, euler_degrees, object_arg, opt_string, table_arg, vec3, vec3_table,
 };
-use troupe_scene::{ActionSpec, Generator, Scene};
+use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};
+use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
 
+/// What a builder returns: the generator and its spec.
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
 
 /// An action that fails at its start with a reason (e.g. an unknown object's name).
 struct Refuse(String);
 
 impl Generator for Refuse {
-    fn start(&mut self, _: &troupe_scene::GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, _: &GeneratorContext) -> Result<(), String> {
         Err(self.0.clone())
     }
-    fn step(
-        &mut self,
-        _: &troupe_scene::GeneratorContext,
-        _: &mut troupe_scene::DofWriter,
-    ) -> troupe_scene::Step {
-        troupe_scene::Step::Failed(self.0.clone())
+    fn step(&mut self, _: &GeneratorContext, _: &mut DofWriter) -> Step {
+        Step::Failed(self.0.clone())
     }
 }
 
-/// Registers the hand actions and `troupe.plan_grasp`.
-pub fn register(kinds: &mut ActionKinds) {
-    for (method, build) in [
-        ("grasp", build_grasp as troupe_lua::kinds::BuildFn),
-        ("release", build_release),
-        ("place", build_place),
-        ("manipulate", build_manipulate),
-        ("give", build_give),
-        ("receive", build_receive),
-        ("hold_hand", build_hold_hand),
-        ("shake_hands", build_shake_hands),
-    ] {
-        kinds.register(ActionKind { method, build });
-    }
-    kinds.register_function("plan_grasp", make_plan_grasp);
-}
-
-fn err(method: &str, e: impl std::fmt::Display) -> mlua::Error {
-    lua_err_message(format!("{method}: {e}"))
-}
-
-fn table(method: &str, args: MultiValue) -> mlua::Result<Table> {
-    let mut args = args.into_iter();
-    match (args.next(), args.next()) {
-        (Some(Value::Table(t)), None) => Ok(t),
-        (first, _) => Err(err(
-            method,
-            format!(
-                "expects one table of options, got {}",
-                first.map(|v| v.type_name()).unwrap_or("nothing")
-            ),
-        )),
-    }
-}
-
-/// An object given as a handle or a name.
-fn object_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<usize> {
-    match v {
-        Value::UserData(u) => u.borrow::<ObjectRef>().map(|o| o.0).map_err(|_| {
-            err(
-                method,
-                format!("`{key}` must be an object or an object's name"),
-            )
-        }),
-        Value::String(name) => {
-            let name = name.to_str()?.to_string();
-            with_scene(lua, |s| s.object_index(&name))?.map_err(|e| err(method, e))
-        }
-        Value::Nil => Err(err(method, format!("`{key}` is required"))),
-        other => Err(err(
-            method,
-            format!(
-                "`{key}` must be an object or an object's name, got {}",
-                other.type_name()
-            ),
-        )),
-    }
-}
-
-/// An actor given as a handle or a name.
-fn actor_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<usize> {
-    match v {
-        Value::UserData(u) => u.borrow::<ActorRef>().map(|a| a.0).map_err(|_| {
-            err(
-                method,
-                format!("`{key}` must be an actor or an actor's name"),
-            )
-        }),
-        Value::String(name) => {
-            let name = name.to_str()?.to_string();
-            with_scene(lua, |s| s.actor_index(&name))?.map_err(|e| err(method, e))
-        }
-        Value::Nil => Err(err(method, format!("`{key}` is required"))),
-        other => Err(err(
-            method,
-            format!(
-                "`{key}` must be an actor or an actor's name, got {}",
-                other.type_name()
-            ),
-        )),
-    }
-}
-
-fn side_arg(method: &str, t: &Table, key: &str, default: Side) -> mlua::Result<Side> {
-    match opt_string(t, method, key)? {
-        None => Ok(default),
-        Some(s) => Side::parse(&s).map_err(|e| err(method, format!("`{key}`: {e}"))),
-    }
-}
-
-/// The hand holding `object` for `actor`, if it does.
-fn holding_side(scene: &Scene, actor: usize, object: usize) -> Option<Side> {
-    let h = scene.holder(object).filter(|h| h.actor == actor)?;
-    let name = &scene.actors()[actor].skeleton.joints()[h.joint].name;
-    Some(if name.starts_with("l_") {
-        Side::Left
-    } else {
-        Side::Right
-    })
-}
-
-/// Euler degrees (Y, X, Z order, as objects) to a rotation.
-fn rotation(v: &Value, what: &str) -> mlua::Result<DQuat> {
-    let r = vec3(v, what)?;
-    Ok(DQuat::from_euler(
-        EulerRot::YXZ,
-        r.y.to_radians(),
-        r.x.to_radians(),
-        r.z.to_radians(),
-    ))
-}
-
-/// The hands a choice may use (`auto`: both, the plan picks).
-fn resolve_hands(choice: HandChoice) -> Vec<Side> {
-    match choice {
-        HandChoice::Right => vec![Side::Right],
-        HandChoice::Left => vec![Side::Left],
-        HandChoice::Both | HandChoice::Auto => vec![Side::Right, Side::Left],
-    }
-}
-
-fn hand_choice(method: &str, t: &Table) -> mlua::Result<HandChoice> {
+/// Reads `hand = "right"|"left"|"both"|"auto"` (default `auto`).
+pub(crate) fn hand_choice(method: &str, t: &Table) -> mlua::Result<HandChoice> {
     match opt_string(t, method, "hand")? {
         None => Ok(HandChoice::Auto),
         Some(h) => HandChoice::parse(&h).map_err(|e| err(method, e)),
     }
 }
 
+/// Reads `pattern = TYPE` (default: the decision table's).
 fn pattern(method: &str, t: &Table) -> mlua::Result<Option<GraspType>> {
     opt_string(t, method, "pattern")?
         .map(|p| GraspType::parse(&p).map_err(|e| err(method, e)))
         .transpose()
 }
 
+/// Makes a spec for a hand action that decides itself when it is done.
+fn open_ended(common: &CommonOptions, kind: &str, scope: troupe_body::Scope) -> ActionSpec {
+    let mut spec = common.spec(kind, scope);
+    spec.duration = None;
+    spec
+}
+
 /// `actor:grasp{object = OBJ, hand = "right"|"left"|"both"|"auto", pattern = TYPE,
 /// duration = reach seconds, <common options>}`.
-fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
+pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "grasp";
-    let t = table(m, args)?;
+    let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
-    let choice = hand_choice(m, &t)?;
-    let sides = resolve_hands(choice);
+    let hand = hand_choice(m, &t)?;
     let object = match t.get::<Value>("object")? {
         // An unknown name is bad scene data, not a script error: the action fails with
         // the reason, like an unreachable or held object.
@@ -187,337 +66,79 @@ fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
             match with_scene(ctx.lua, |s| s.object_index(&name))? {
                 Ok(i) => i,
                 Err(e) => {
-                    let scope = grasp_scope(&ctx.skeleton, &sides).map_err(|e| err(m, e))?;
-                    let mut spec = common.spec("grasp", scope);
-                    spec.duration = None;
-                    return Ok((Box::new(Refuse(e.to_string())), spec));
+                    let scope = grasp_scope(&ctx.skeleton, &hand.sides()).map_err(|e| err(m, e))?;
+                    return Ok((
+                        Box::new(Refuse(e.to_string())),
+                        open_ended(&common, m, scope),
+                    ));
                 }
             }
         }
         other => object_arg(ctx.lua, m, "object", other)?,
     };
-    let options = PlanOptions {
-        hand: choice,
-        grasp: pattern(m, &t)?,
-        ..PlanOptions::default()
+    let options = GraspOptions {
+        object,
+        hand,
+        pattern: pattern(m, &t)?,
+        duration: common.duration.unwrap_or(1.0),
     };
-    let scope = grasp_scope(&ctx.skeleton, &sides).map_err(|e| err(m, e))?;
-    let g = Grasp::new(object, options, sides, common.duration.unwrap_or(1.0))
-        .map_err(|e| err(m, e))?;
-    let mut spec = common.spec("grasp", scope);
+    let scope = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
+    let grasp = options.grasp().map_err(|e| err(m, e))?;
     // The generator decides when it is done; `duration` is the reach time.
-    spec.duration = None;
-    Ok((Box::new(g), spec))
+    Ok((Box::new(grasp), open_ended(&common, m, scope)))
 }
 
+/// Makes a release (or, with `place`, a place) of `t`'s `object`.
 fn release_like(
     ctx: &BuildContext,
     m: &str,
     t: &Table,
     common: &CommonOptions,
-    place: Option<DVec3>,
+    place: Option<Place>,
 ) -> Built {
-    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
-    let (side, rot) = ctx.with_scene(|s| {
-        (
-            holding_side(s, ctx.actor, object),
-            s.objects()[object].rotation,
-        )
-    })?;
-    // Not holding it: the action fails at its start with the reason.
-    let sides = vec![side.unwrap_or(Side::Right)];
-    let place = match place {
-        Some(at) => {
-            let r: Value = t.get("rotation")?;
-            let r = if r.is_nil() {
-                rot
-            } else {
-                rotation(&r, &format!("{m}: rotation"))?
-            };
-            Some((Transform::new(r, at), common.duration.unwrap_or(1.0)))
-        }
-        None => None,
+    let options = ReleaseOptions {
+        object: object_arg(ctx.lua, m, "object", t.get("object")?)?,
+        place,
     };
-    let scope = grasp_scope(&ctx.skeleton, &sides).map_err(|e| err(m, e))?;
-    let g = Release::new(object, sides, place).map_err(|e| err(m, e))?;
-    let mut spec = common.spec(m, scope);
-    spec.duration = None;
-    Ok((Box::new(g), spec))
+    // Not holding it: the action fails at its start with the reason.
+    let (release, scope) = ctx
+        .with_scene(|s| options.release(s, ctx.actor))?
+        .map_err(|e| err(m, e))?;
+    Ok((Box::new(release), open_ended(common, m, scope)))
 }
 
 /// `actor:release{object = OBJ, <common options>}`.
-fn build_release(ctx: &BuildContext, args: MultiValue) -> Built {
-    let t = table("release", args)?;
+pub fn build_release(ctx: &BuildContext, args: MultiValue) -> Built {
+    let t = table_arg("release", args)?;
     let common = CommonOptions::parse(ctx, "release", Some(&t), &["object"])?;
     release_like(ctx, "release", &t, &common, None)
 }
 
 /// `actor:place{object = OBJ, at = {x, y, z}, rotation = {x, y, z}, duration = s}`.
-fn build_place(ctx: &BuildContext, args: MultiValue) -> Built {
-    let t = table("place", args)?;
-    let common = CommonOptions::parse(ctx, "place", Some(&t), &["object", "at", "rotation"])?;
+pub fn build_place(ctx: &BuildContext, args: MultiValue) -> Built {
+    let m = "place";
+    let t = table_arg(m, args)?;
+    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "at", "rotation"])?;
     let at: Value = t.get("at")?;
     if at.is_nil() {
-        return Err(err("place", "`at` is required"));
+        return Err(err(m, "`at` is required"));
     }
-    let at = vec3(&at, "place: at")?;
-    release_like(ctx, "place", &t, &common, Some(at))
-}
-
-/// Object keys from `{ {t = s, at = {x, y, z}, rotation = {x, y, z}}, … }` or a Lua
-/// function `f(t) -> at[, rotation]` sampled every 0.04 s (4.4) over `duration`.
-fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
-    let m = "manipulate";
-    match v {
-        Value::Table(list) => {
-            let mut keys = Vec::new();
-            for (i, k) in list.sequence_values::<Value>().enumerate() {
-                let Value::Table(k) = k? else {
-                    return Err(err(
-                        m,
-                        format!(
-                            "keys[{}] must be a table {{t = …, at = {{x, y, z}}}}",
-                            i + 1
-                        ),
-                    ));
-                };
-                let time = opt_number(&k, m, "t")?
-                    .ok_or_else(|| err(m, format!("keys[{}].t is required", i + 1)))?;
-                let at: Value = k.get("at")?;
-                let position = vec3(&at, &format!("{m}: keys[{}].at", i + 1))?;
-                let r: Value = k.get("rotation")?;
-                let rotation = if r.is_nil() {
-                    None
-                } else {
-                    Some(rotation(&r, &format!("{m}: keys[{}].rotation", i + 1))?)
-                };
-                keys.push(ObjectKey {
-                    time,
-                    position,
-                    rotation,
-                });
-            }
-            Ok(keys)
-        }
-        Value::Function(f) => {
-            let duration = duration
-                .filter(|d| d.is_finite() && *d > 0.0)
-                .ok_or_else(|| err(m, "a function of time needs `duration` (seconds > 0)"))?;
-            const STEP: f64 = 0.04;
-            // The tolerance keeps `0.28 / 0.04 = 7.000…01` from adding a key at the end
-            // time twice.
-            let n = (duration / STEP - 1e-9).ceil().max(1.0) as usize;
-            let mut keys = Vec::with_capacity(n);
-            for i in 1..=n {
-                let time = if i == n {
-                    duration
-                } else {
-                    (i as f64 * STEP).min(duration)
-                };
-                let (at, r): (Value, Value) = f.call(time)?;
-                let position = vec3(&at, &format!("{m}: keys({time})"))?;
-                let rotation = if r.is_nil() {
-                    None
-                } else {
-                    Some(rotation(&r, &format!("{m}: keys({time}) rotation"))?)
-                };
-                keys.push(ObjectKey {
-                    time,
-                    position,
-                    rotation,
-                });
-            }
-            Ok(keys)
-        }
-        Value::Nil => Err(err(m, "`keys` is required")),
-        other => Err(err(
-            m,
-            format!(
-                "`keys` must be a list of keys or a function of time, got {}",
-                other.type_name()
-            ),
-        )),
-    }
-}
-
-/// `actor:manipulate{object = OBJ, keys = {…} | function(t) … end, duration = s}`.
-fn build_manipulate(ctx: &BuildContext, args: MultiValue) -> Built {
-    let m = "manipulate";
-    let t = table(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "keys"])?;
-    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
-    let keys = parse_keys(t.get("keys")?, common.duration)?;
-    let side = ctx.with_scene(|s| holding_side(s, ctx.actor, object))?;
-    let sides = vec![side.unwrap_or(Side::Right)];
-    let scope = ctx
-        .skeleton
-        .scope(&format!("{}_arm", sides[0].name()))
-        .map_err(|e| err(m, e))?;
-    let g = Manipulate::new(object, keys, sides).map_err(|e| err(m, e))?;
-    let mut spec = common.spec(m, scope);
-    spec.duration = None;
-    Ok((Box::new(g), spec))
-}
-
-/// `actor:give{object = OBJ, to = ACTOR}`: starts the receiver's `receive` action too.
-fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
-    let m = "give";
-    let t = table(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "to", "hand", "timeout"])?;
-    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
-    let to = actor_arg(ctx.lua, m, "to", t.get("to")?)?;
-    if to == ctx.actor {
-        return Err(err(m, "`to` must be another actor"));
-    }
-    let timeout = opt_number(&t, m, "timeout")?;
-    if let Some(s) = timeout {
-        if !(s.is_finite() && s > 0.0) {
-            return Err(err(m, format!("`timeout` must be seconds > 0, got {s}")));
-        }
-    }
-    let side = ctx.with_scene(|s| holding_side(s, ctx.actor, object))?;
-    let side = side.unwrap_or(Side::Right);
-    let scope = grasp_scope(&ctx.skeleton, &[side]).map_err(|e| err(m, e))?;
-    // Hands driven by a person (a performer's glove, 4.7) neither reach nor carry.
-    if let Some(board) = ctx.lua.app_data_ref::<SharedHandBoard>().map(|b| b.clone()) {
-        let hands = board
-            .0
-            .lock()
-            .map_err(|_| err(m, "hand board lock poisoned"))?;
-        let (mine, theirs) = (hands.hand(ctx.actor), hands.hand(to));
-        drop(hands);
-        if mine.is_some() {
-            return Err(err(
-                m,
-                "a performer gives by holding the object out: let the receiver take it with \
-                 receiver:receive{object = …, from = performer}, then open the glove",
-            ));
-        }
-        if let Some(hand) = theirs {
-            let giver = offer_to_hand(&board, object, ctx.actor, side, to, hand, timeout)
-                .map_err(|e| err(m, e))?;
-            let mut spec = common.spec(m, scope);
-            spec.duration = None;
-            return Ok((Box::new(giver), spec));
-        }
-    }
-    let arrived = Arc::new(Signal::default());
-    let mut giver = Give::new(object, to, side, arrived.clone());
-    if let Some(t) = timeout {
-        giver = giver.with_timeout(t);
-    }
-    // The receiver: a grasp that waits for the object to arrive and may take it from us.
-    let choice = hand_choice(m, &t)?;
-    let rx_sides = resolve_hands(choice);
-    let rx_skel = ctx.with_scene(|s| s.actors()[to].skeleton.clone())?;
-    let rx_scope = grasp_scope(&rx_skel, &rx_sides).map_err(|e| err(m, e))?;
-    let receive = Grasp::new(
-        object,
-        PlanOptions {
-            hand: choice,
-            from: Some(ctx.actor),
-            ..PlanOptions::default()
+    let rotation: Value = t.get("rotation")?;
+    let place = Place {
+        at: vec3(&at, "place: at")?,
+        rotation: if rotation.is_nil() {
+            None
+        } else {
+            Some(euler_degrees(&rotation, "place: rotation")?)
         },
-        rx_sides,
-        1.0,
-    )
-    .map_err(|e| err(m, e))?
-    .gated(arrived)
-    .abandoned_by(giver.ended());
-    let mut rx_spec = ActionSpec::new("receive", rx_scope);
-    rx_spec.delay = common.delay;
-    ctx.with_scene_mut(|s| s.start_action(to, rx_spec, Box::new(receive)))?
-        .map_err(|e| err(m, e))?;
-    let mut spec = common.spec(m, scope);
-    spec.duration = None;
-    Ok((Box::new(giver), spec))
-}
-
-/// `actor:receive{object = OBJ, from = ACTOR, hand = …, duration = reach seconds}`: take
-/// `object` out of `from`'s hand (e.g. from a performer holding it out).
-fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
-    let m = "receive";
-    let t = table(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "from", "hand"])?;
-    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
-    let from = actor_arg(ctx.lua, m, "from", t.get("from")?)?;
-    if from == ctx.actor {
-        return Err(err(m, "`from` must be another actor"));
-    }
-    let choice = hand_choice(m, &t)?;
-    let (g, scope) = receive(
-        &ctx.skeleton,
-        object,
-        from,
-        choice,
-        resolve_hands(choice),
-        common.duration.unwrap_or(1.0),
-    )
-    .map_err(|e| err(m, e))?;
-    let mut spec = common.spec(m, scope);
-    spec.duration = None;
-    Ok((Box::new(g), spec))
-}
-
-fn hold_like(ctx: &BuildContext, m: &str, args: MultiValue, shake: bool) -> Built {
-    let t = table(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["other", "hand", "other_hand"])?;
-    let other = actor_arg(ctx.lua, m, "other", t.get("other")?)?;
-    if other == ctx.actor {
-        return Err(err(m, "`other` must be another actor"));
-    }
-    let side = side_arg(m, &t, "hand", Side::Right)?;
-    let default_other = if shake { Side::Right } else { side.other() };
-    let other_side = side_arg(m, &t, "other_hand", default_other)?;
-    let held = Arc::new(Signal::default());
-    let finished = Arc::new(Signal::default());
-    let active = HoldHand::new(
-        other,
-        side,
-        other_side,
-        shake,
-        held.clone(),
-        finished.clone(),
-    );
-    let scope = grasp_scope(&ctx.skeleton, &[side]).map_err(|e| err(m, e))?;
-    let wrist = ctx
-        .skeleton
-        .joint(&format!("{}wrist", side.prefix()))
-        .map_err(|e| err(m, e))?;
-    let other_skel = ctx.with_scene(|s| s.actors()[other].skeleton.clone())?;
-    let follow_scope = other_skel
-        .scope(&format!("{}_arm", other_side.name()))
-        .map_err(|e| err(m, e))?;
-    let follow = FollowHand::new(ctx.actor, wrist, other_side, held, finished);
-    let mut follow_spec = ActionSpec::new("follow_hand", follow_scope);
-    follow_spec.delay = common.delay;
-    follow_spec.duration = common.duration;
-    ctx.with_scene_mut(|s| s.start_action(other, follow_spec, Box::new(follow)))?
-        .map_err(|e| err(m, e))?;
-    Ok((Box::new(active), common.spec(m, scope)))
-}
-
-/// `actor:hold_hand{other = ACTOR, hand = "right", other_hand = "left", duration = s}`.
-fn build_hold_hand(ctx: &BuildContext, args: MultiValue) -> Built {
-    hold_like(ctx, "hold_hand", args, false)
-}
-
-/// `actor:shake_hands{other = ACTOR, hand = "right", other_hand = "right"}`.
-fn build_shake_hands(ctx: &BuildContext, args: MultiValue) -> Built {
-    hold_like(ctx, "shake_hands", args, true)
-}
-
-fn vec_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
-    let t = lua.create_table()?;
-    t.set(1, v.x)?;
-    t.set(2, v.y)?;
-    t.set(3, v.z)?;
-    Ok(t)
+        duration: common.duration.unwrap_or(1.0),
+    };
+    release_like(ctx, m, &t, &common, Some(place))
 }
 
 /// `troupe.plan_grasp(actor, object[, {hand = …, pattern = …}])` → a plan table, or nil
 /// and the reason.
-fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
+pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
     lua.create_function(
         |lua, (actor, object, opts): (Value, Value, Option<Table>)| {
             let m = "plan_grasp";
@@ -550,12 +171,12 @@ fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
                     for (i, h) in plan.hands.iter().enumerate() {
                         let ht = lua.create_table()?;
                         ht.set("hand", h.side.name())?;
-                        ht.set("palm", vec_table(lua, h.palm)?)?;
-                        ht.set("wrist", vec_table(lua, h.wrist.translation)?)?;
+                        ht.set("palm", vec3_table(lua, h.palm)?)?;
+                        ht.set("wrist", vec3_table(lua, h.wrist.translation)?)?;
                         let (y, x, z) = h.wrist.rotation.to_euler(EulerRot::YXZ);
                         ht.set(
                             "rotation",
-                            vec_table(
+                            vec3_table(
                                 lua,
                                 DVec3::new(x.to_degrees(), y.to_degrees(), z.to_degrees()),
                             )?,

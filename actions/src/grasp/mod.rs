@@ -7,7 +7,8 @@ pub mod automaton;
 pub mod close;
 pub mod decision;
 pub mod handover;
-pub mod lua;
+pub(crate) mod lua;
+pub mod options;
 pub mod pattern;
 pub mod plan;
 
@@ -15,6 +16,6 @@ pub use action::{Grasp, Release, Signal};
 pub use automaton::{AutomatonOutput, GraspAutomaton, HandDecision, HandState};
 pub use close::HandModel;
 pub use decision::{decide, Decision, GraspType};
-pub use lua::register;
+pub use options::{GraspOptions, Place, ReleaseOptions};
 pub use pattern::HandPattern;
 pub use plan::{plan_grasp, GraspPlan, HandChoice, HandPlan, PlanOptions};

@@ -17,6 +17,7 @@
 
 use super::close::HandModel;
 use super::decision::{decide, Decision, GraspType};
+use crate::error::OptionError;
 use troupe_body::glam::{DMat3, DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
@@ -54,15 +55,27 @@ pub enum HandChoice {
 
 impl HandChoice {
     /// Parses `right`, `left`, `both` or `auto`.
-    pub fn parse(name: &str) -> Result<HandChoice, String> {
+    pub fn parse(name: &str) -> Result<HandChoice, OptionError> {
         match name {
             "right" => Ok(HandChoice::Right),
             "left" => Ok(HandChoice::Left),
             "both" => Ok(HandChoice::Both),
             "auto" => Ok(HandChoice::Auto),
-            other => Err(format!(
-                "unknown hand `{other}` (expected \"right\", \"left\", \"both\" or \"auto\")"
+            other => Err(OptionError::refused(
+                "hand",
+                format!(
+                    "unknown hand `{other}` (expected \"right\", \"left\", \"both\" or \"auto\")"
+                ),
             )),
+        }
+    }
+
+    /// The hands the choice may use (`auto`: both, the plan picks).
+    pub fn sides(self) -> Vec<Side> {
+        match self {
+            HandChoice::Right => vec![Side::Right],
+            HandChoice::Left => vec![Side::Left],
+            HandChoice::Both | HandChoice::Auto => vec![Side::Right, Side::Left],
         }
     }
 }

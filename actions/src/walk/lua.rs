@@ -3,12 +3,11 @@
 
 use super::route::{Route, Speed, PROFILE_DT};
 use super::{Walk, WalkOptions};
-use mlua::{MultiValue, Table, Value};
+use mlua::{MultiValue, Value};
 use troupe_body::glam::DVec2;
-use troupe_lua::api::{load_sequence, lua_err_message, SequenceRef};
-use troupe_lua::kinds::{
-    opt_bool, opt_number, ActionKind, ActionKinds, BuildContext, CommonOptions,
-};
+use troupe_lua::api::{load_sequence, SequenceRef};
+use troupe_lua::kinds::args::{err, number, opt_bool, opt_number, table_arg};
+use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
 /// The walk's own option names (besides the common ones).
@@ -28,29 +27,16 @@ const WALK_OPTIONS: [&str; 13] = [
     "arms",
 ];
 
-/// Registers `walk`.
-pub fn register(kinds: &mut ActionKinds) {
-    kinds.register(ActionKind {
-        method: "walk",
-        build: build_walk,
-    });
-}
-
-fn number(v: &Value) -> Option<f64> {
-    match v {
-        Value::Integer(i) => Some(*i as f64),
-        Value::Number(n) => Some(*n),
-        _ => None,
-    }
-}
-
 /// Reads a floor point: `{x, z}`, `{x, y, z}` (y must be the floor) or `{x=…, z=…}`.
 fn floor_point(v: &Value, what: &str) -> mlua::Result<DVec2> {
     let Value::Table(t) = v else {
-        return Err(lua_err_message(format!(
-            "walk: {what} must be a point {{x, z}} or {{x, 0, z}}, got {}",
-            v.type_name()
-        )));
+        return Err(err(
+            "walk",
+            format!(
+                "{what} must be a point {{x, z}} or {{x, 0, z}}, got {}",
+                v.type_name()
+            ),
+        ));
     };
     let items: Vec<Value> = t
         .clone()
@@ -67,26 +53,25 @@ fn floor_point(v: &Value, what: &str) -> mlua::Result<DVec2> {
             match (x, z) {
                 (Some(x), Some(z)) => (x, y, z),
                 _ => {
-                    return Err(lua_err_message(format!(
-                        "walk: {what} must be a point {{x, z}} or {{x, 0, z}} of numbers"
-                    )))
+                    return Err(err(
+                        "walk",
+                        format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
+                    ))
                 }
             }
         }
         _ => {
-            return Err(lua_err_message(format!(
-                "walk: {what} must be a point {{x, z}} or {{x, 0, z}} of numbers"
-            )))
+            return Err(err(
+                "walk",
+                format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
+            ))
         }
     };
     if !(x.is_finite() && y.is_finite() && z.is_finite()) {
-        return Err(lua_err_message(format!(
-            "walk: {what} ({x}, {y}, {z}) is not finite"
-        )));
+        return Err(err("walk", format!("{what} ({x}, {y}, {z}) is not finite")));
     }
     if y.abs() > 0.05 {
-        return Err(lua_err_message(format!(
-            "walk: {what} ({x}, {y}, {z}) is unreachable by walking: it is {y:.2} m off the floor (y must be 0)"
+        return Err(err("walk", format!("{what} ({x}, {y}, {z}) is unreachable by walking: it is {y:.2} m off the floor (y must be 0)"
         )));
     }
     Ok(DVec2::new(x, z))
@@ -95,20 +80,11 @@ fn floor_point(v: &Value, what: &str) -> mlua::Result<DVec2> {
 /// `actor:walk{ to = {x, 0, z} | path = {{x, z}, …} | velocity = number_or_function |
 /// follow = SEQUENCE_or_path, speed = m/s, heading = degrees, step_length, step_width,
 /// pelvis, arm_swing, bounce, run, arms = bool, <common options> }`.
-fn build_walk(
+pub fn build_walk(
     ctx: &BuildContext,
     args: MultiValue,
 ) -> mlua::Result<(Box<dyn Generator>, ActionSpec)> {
-    let mut args = args.into_iter();
-    let t: Table = match (args.next(), args.next()) {
-        (Some(Value::Table(t)), None) => t,
-        (first, _) => {
-            return Err(lua_err_message(format!(
-                "walk: expects one table of options, got {}",
-                first.map(|v| v.type_name()).unwrap_or("nothing")
-            )))
-        }
-    };
+    let t = table_arg("walk", args)?;
     let common = CommonOptions::parse(ctx, "walk", Some(&t), &WALK_OPTIONS)?;
     let mut options = WalkOptions::default();
     let num = |k: &str| opt_number(&t, "walk", k);
@@ -117,9 +93,10 @@ fn build_walk(
     }
     if let Some(h) = num("heading")? {
         if !h.is_finite() {
-            return Err(lua_err_message(format!(
-                "walk: `heading` must be finite degrees, got {h}"
-            )));
+            return Err(err(
+                "walk",
+                format!("`heading` must be finite degrees, got {h}"),
+            ));
         }
         options.heading = Some(h.to_radians());
     }
@@ -143,24 +120,29 @@ fn build_walk(
         .filter(|k| !matches!(t.get::<Value>(*k), Ok(Value::Nil)))
         .collect();
     if given.len() != 1 {
-        return Err(lua_err_message(format!(
-            "walk: give exactly one of `to`, `path`, `velocity` or `follow` (got {})",
-            if given.is_empty() {
-                "none".to_string()
-            } else {
-                given.join(", ")
-            }
-        )));
+        return Err(err(
+            "walk",
+            format!(
+                "give exactly one of `to`, `path`, `velocity` or `follow` (got {})",
+                if given.is_empty() {
+                    "none".to_string()
+                } else {
+                    given.join(", ")
+                }
+            ),
+        ));
     }
     let kind = given[0];
     if kind != "velocity" && common.duration.is_some() {
-        return Err(lua_err_message(format!(
-            "walk: `duration` applies to velocity walks; a `{kind}` walk ends when it arrives"
-        )));
+        return Err(err(
+            "walk",
+            format!("`duration` applies to velocity walks; a `{kind}` walk ends when it arrives"),
+        ));
     }
     if kind == "velocity" && num("speed")?.is_some() {
-        return Err(lua_err_message(
-            "walk: a velocity walk takes its speed from `velocity`, not `speed`",
+        return Err(err(
+            "walk",
+            "a velocity walk takes its speed from `velocity`, not `speed`",
         ));
     }
     let route = match kind {
@@ -171,9 +153,7 @@ fn build_walk(
         },
         "path" => {
             let Value::Table(list) = t.get::<Value>("path")? else {
-                return Err(lua_err_message(
-                    "walk: `path` must be a list of points {{x, z}, …}",
-                ));
+                return Err(err("walk", "`path` must be a list of points {{x, z}, …}"));
             };
             let mut points = Vec::new();
             for (i, v) in list.sequence_values::<Value>().enumerate() {
@@ -190,27 +170,26 @@ fn build_walk(
             let speed = match t.get::<Value>("velocity")? {
                 Value::Function(f) => {
                     let Some(d) = duration else {
-                        return Err(lua_err_message(
-                            "walk: `velocity = function(t)` needs a `duration` (seconds)",
+                        return Err(err(
+                            "walk",
+                            "`velocity = function(t)` needs a `duration` (seconds)",
                         ));
                     };
                     if !(d.is_finite() && d > 0.0 && d <= 3600.0) {
-                        return Err(lua_err_message(format!(
-                            "walk: `duration` must be in (0, 3600] s, got {d}"
-                        )));
+                        return Err(err(
+                            "walk",
+                            format!("`duration` must be in (0, 3600] s, got {d}"),
+                        ));
                     }
                     let n = (d / PROFILE_DT).round() as usize + 1;
                     let mut samples = Vec::with_capacity(n);
                     for i in 0..n {
                         let time = i as f64 * PROFILE_DT;
                         let v: Value = f.call(time).map_err(|e| {
-                            lua_err_message(format!(
-                                "walk: `velocity` failed at t = {time:.2} s: {e}"
-                            ))
+                            err("walk", format!("`velocity` failed at t = {time:.2} s: {e}"))
                         })?;
                         let v = number(&v).ok_or_else(|| {
-                            lua_err_message(format!(
-                                "walk: `velocity` returned {} at t = {time:.2} s: expected a speed in m/s",
+                            err("walk", format!("`velocity` returned {} at t = {time:.2} s: expected a speed in m/s",
                                 v.type_name()
                             ))
                         })?;
@@ -221,10 +200,13 @@ fn build_walk(
                 v => match number(&v) {
                     Some(x) => Speed::Constant(x),
                     None => {
-                        return Err(lua_err_message(format!(
-                            "walk: `velocity` must be a speed (m/s) or a function of time, got {}",
-                            v.type_name()
-                        )))
+                        return Err(err(
+                            "walk",
+                            format!(
+                                "`velocity` must be a speed (m/s) or a function of time, got {}",
+                                v.type_name()
+                            ),
+                        ))
                     }
                 },
             };
@@ -235,24 +217,24 @@ fn build_walk(
                 Value::UserData(u) => match u.borrow::<SequenceRef>() {
                     Ok(s) => s.0.clone(),
                     Err(_) => {
-                        return Err(lua_err_message(
-                            "walk: `follow` must be a sequence or a file path",
-                        ))
+                        return Err(err("walk", "`follow` must be a sequence or a file path"))
                     }
                 },
                 Value::String(p) => load_sequence(ctx.lua, &p.to_str()?, Some(&ctx.skeleton))?,
                 other => {
-                    return Err(lua_err_message(format!(
-                        "walk: `follow` must be a sequence or a file path, got {}",
-                        other.type_name()
-                    )))
+                    return Err(err(
+                        "walk",
+                        format!(
+                            "`follow` must be a sequence or a file path, got {}",
+                            other.type_name()
+                        ),
+                    ))
                 }
             };
             Route::Follow(seq)
         }
     };
-    let walk = Walk::new(&ctx.skeleton, route, options)
-        .map_err(|e| lua_err_message(format!("walk: {e}")))?;
+    let walk = Walk::new(&ctx.skeleton, route, options).map_err(|e| err("walk", e))?;
     let mut spec = common.spec("walk", walk.scope());
     // The walk decides when it has arrived (and a velocity walk's duration is its route's).
     spec.duration = None;

@@ -23,14 +23,17 @@
 //! finishes once the body stands.
 
 pub mod cycle;
-mod lua;
+pub(crate) mod lua;
+pub mod options;
 pub mod rig;
 pub mod route;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
+pub use options::WalkOptions;
 pub use rig::Rig;
 pub use route::{Plan, RootSample, Route, Speed};
 
+use crate::error::{OptionError, Result};
 use route::{smoothstep, wrap};
 use std::f64::consts::TAU;
 use std::sync::Arc;
@@ -60,69 +63,6 @@ pub const BLEND_IN_TIME: f64 = 0.4;
 pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
 pub const CADENCE_LOOKBACK: f64 = 0.6;
-
-/// The personification and speed options of a walk (fig. 6-11); 1 is the thesis' walk
-/// for every scale.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WalkOptions {
-    /// Cruising speed in m/s for `to` and `path` walks.
-    pub speed: f64,
-    /// Heading to face on arrival (radians about +Y, 0 faces +Z); `None` faces the
-    /// direction of travel.
-    pub heading: Option<f64>,
-    /// Step (and cycle) length scale at a given speed: longer, slower steps above 1.
-    pub step_length: f64,
-    /// Scale of the lateral distance between the feet.
-    pub step_width: f64,
-    /// Scale of the pelvis' rotation, list and sway ("the movement of the pelvis").
-    pub pelvis: f64,
-    /// Scale of the arm swing.
-    pub arm_swing: f64,
-    /// Scale of the vertical bounce of the pelvis.
-    pub bounce: f64,
-    /// 0 for a walk, up to 1 for a run-like gait: bent knees, forward lean, flexed
-    /// elbows, larger bounce and foot lift (fig. 6-11 a, b).
-    pub run: f64,
-    /// Whether the walk swings the arms (false leaves the arm DOFs to other actions).
-    pub arms: bool,
-}
-
-impl Default for WalkOptions {
-    fn default() -> Self {
-        WalkOptions {
-            speed: 1.3,
-            heading: None,
-            step_length: 1.0,
-            step_width: 1.0,
-            pelvis: 1.0,
-            arm_swing: 1.0,
-            bounce: 1.0,
-            run: 0.0,
-            arms: true,
-        }
-    }
-}
-
-impl WalkOptions {
-    /// Checks every option; the error names the offending one and its valid range.
-    pub fn check(&self) -> Result<(), String> {
-        for (name, v, lo, hi) in [
-            ("step_length", self.step_length, 0.5, 1.5),
-            ("step_width", self.step_width, 0.0, 3.0),
-            ("pelvis", self.pelvis, 0.0, 3.0),
-            ("arm_swing", self.arm_swing, 0.0, 3.0),
-            ("bounce", self.bounce, 0.0, 3.0),
-            ("run", self.run, 0.0, 1.0),
-        ] {
-            if !(v.is_finite() && (lo..=hi).contains(&v)) {
-                return Err(format!(
-                    "`{name}` must be a number in [{lo}, {hi}], got {v}"
-                ));
-            }
-        }
-        Ok(())
-    }
-}
 
 /// Where a swinging foot will land.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -202,9 +142,9 @@ type UpperValues = ([f64; 6], [f64; 3], [f64; 4], [[f64; 3]; 2]);
 
 impl Walk {
     /// A walk of `route` by a body built from a humanoid template.
-    pub fn new(skeleton: &Skeleton, route: Route, options: WalkOptions) -> Result<Walk, String> {
+    pub fn new(skeleton: &Skeleton, route: Route, options: WalkOptions) -> Result<Walk> {
         let rig = Rig::new(skeleton)?;
-        options.check()?;
+        options.validate()?;
         route.check(rig.thigh_height)?;
         let dofs = rig.dofs(options.arms);
         let flat = Foot::Stance {
@@ -237,25 +177,23 @@ impl Walk {
     }
 
     /// A walk to floor point `goal` (its y must be the floor, 0) at `options.speed`.
-    pub fn to(skeleton: &Skeleton, goal: DVec3, options: WalkOptions) -> Result<Walk, String> {
+    pub fn to(skeleton: &Skeleton, goal: DVec3, options: WalkOptions) -> Result<Walk> {
         if !goal.is_finite() {
-            return Err(format!("the target {goal} is not finite"));
+            return Err(
+                OptionError::refused("to", format!("the target {goal} is not finite")).into(),
+            );
         }
         if goal.y.abs() > 0.05 {
-            return Err(format!(
+            return Err(OptionError::refused("to", format!(
                 "the target {goal} is unreachable by walking: it is {:.2} m off the floor (y must be 0)",
                 goal.y
-            ));
+            )).into());
         }
         Walk::path(skeleton, vec![DVec2::new(goal.x, goal.z)], options)
     }
 
     /// A walk through floor points (x, z), ending at the last one.
-    pub fn path(
-        skeleton: &Skeleton,
-        points: Vec<DVec2>,
-        options: WalkOptions,
-    ) -> Result<Walk, String> {
+    pub fn path(skeleton: &Skeleton, points: Vec<DVec2>, options: WalkOptions) -> Result<Walk> {
         let route = Route::Path {
             points,
             heading: options.heading,
@@ -270,7 +208,7 @@ impl Walk {
         speed: Speed,
         duration: Option<f64>,
         options: WalkOptions,
-    ) -> Result<Walk, String> {
+    ) -> Result<Walk> {
         Walk::new(skeleton, Route::Velocity { speed, duration }, options)
     }
 
@@ -279,7 +217,7 @@ impl Walk {
         skeleton: &Skeleton,
         sequence: Arc<Sequence>,
         options: WalkOptions,
-    ) -> Result<Walk, String> {
+    ) -> Result<Walk> {
         Walk::new(skeleton, Route::Follow(sequence), options)
     }
 
@@ -762,8 +700,3 @@ impl Generator for Walk {
 
 #[cfg(test)]
 mod tests;
-
-/// Registers the Lua `walk` action kind.
-pub fn register(kinds: &mut troupe_lua::kinds::ActionKinds) {
-    lua::register(kinds);
-}

@@ -9,6 +9,7 @@
 //! the crowd benchmark needs; the general Jacobian solver of `troupe_body::ik` would
 //! iterate for the same answer.
 
+use crate::error::{ActionError, Result};
 use troupe_body::glam::{DQuat, DVec2, DVec3};
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::{Skeleton, Transform};
@@ -65,14 +66,14 @@ pub struct Rig {
 }
 
 /// The sign of `axis` along `unit`, or an error when it is not (anti)parallel to it.
-fn sign_along(skeleton: &Skeleton, dof: usize, unit: DVec3) -> Result<f64, String> {
+fn sign_along(skeleton: &Skeleton, dof: usize, unit: DVec3) -> Result<f64> {
     let d = &skeleton.dofs()[dof];
     let c = d.axis.dot(unit);
     if (c.abs() - 1.0).abs() > 1e-9 {
-        return Err(format!(
+        return Err(ActionError::Unfit(format!(
             "DOF `{}` turns about {} where the walking motor expects ±{unit}: not a humanoid template leg",
             d.name, d.axis
-        ));
+        )));
     }
     Ok(c.signum())
 }
@@ -80,9 +81,9 @@ fn sign_along(skeleton: &Skeleton, dof: usize, unit: DVec3) -> Result<f64, Strin
 impl Rig {
     /// Reads a humanoid template skeleton (the `adult` or `child` of
     /// `troupe_body::template`, any size).
-    pub fn new(skeleton: &Skeleton) -> Result<Rig, String> {
-        let d = |n: &str| skeleton.dof(n).map_err(|e| e.to_string());
-        let j = |n: &str| skeleton.joint(n).map_err(|e| e.to_string());
+    pub fn new(skeleton: &Skeleton) -> Result<Rig> {
+        let d = |n: &str| skeleton.dof(n);
+        let j = |n: &str| skeleton.joint(n);
         let mut rest = vec![Transform::IDENTITY; skeleton.joints().len()];
         forward_kinematics(skeleton, &vec![0.0; skeleton.dof_count()], &mut rest);
         let root_joint = j("HumanoidRoot")?;
@@ -123,9 +124,9 @@ impl Rig {
             let shank_v = joints[ankle].offset;
             for (what, v) in [("thigh", thigh_v), ("shank", shank_v)] {
                 if v.x.abs() > 1e-9 || v.z.abs() > 1e-9 || v.y >= 0.0 {
-                    return Err(format!(
+                    return Err(ActionError::Unfit(format!(
                         "the {s}{what} does not hang straight down at rest: not a humanoid template leg"
-                    ));
+                    )));
                 }
             }
             let ankle_rest = rest[ankle].translation;

@@ -6,6 +6,7 @@
 //! The plan is known in advance for every kind of route, so the foot placement can ask
 //! where the body will be when a foot that is about to swing reaches mid-stance.
 
+use crate::error::OptionError;
 use std::sync::Arc;
 use troupe_body::glam::DVec2;
 use troupe_motion::{Sequence, Track};
@@ -61,18 +62,21 @@ pub enum Speed {
 
 impl Route {
     /// Checks every number of the route; the error names what is wrong and where.
-    pub fn check(&self, ht: f64) -> Result<(), String> {
+    pub fn check(&self, ht: f64) -> Result<(), OptionError> {
         let max_speed = super::cycle::MAX_RV * ht;
-        let speed_ok = |v: f64, what: &str| -> Result<(), String> {
+        let speed_ok = |v: f64, option: &'static str, what: &str| -> Result<(), OptionError> {
             if !v.is_finite() || v <= 0.0 {
-                return Err(format!("{what} must be a finite number > 0 m/s, got {v}"));
+                return Err(OptionError::refused(
+                    option,
+                    format!("{what} must be a finite number > 0 m/s, got {v}"),
+                ));
             }
             if v > max_speed {
-                return Err(format!(
+                return Err(OptionError::refused(option, format!(
                     "{what} {v} m/s is beyond the walking model (relative velocity {:.2} > {} for a thigh height of {ht:.3} m, i.e. at most {max_speed:.2} m/s)",
                     v / ht,
                     super::cycle::MAX_RV
-                ));
+                )));
             }
             Ok(())
         };
@@ -82,56 +86,74 @@ impl Route {
                 heading,
                 speed,
             } => {
-                speed_ok(*speed, "`speed`")?;
+                speed_ok(*speed, "speed", "`speed`")?;
                 if points.is_empty() {
-                    return Err("the path is empty: give at least one point".into());
+                    return Err(OptionError::refused(
+                        "path",
+                        "the path is empty: give at least one point",
+                    ));
                 }
                 for (i, p) in points.iter().enumerate() {
                     if !p.is_finite() {
-                        return Err(format!("path point {} is not finite ({p})", i + 1));
+                        return Err(OptionError::refused(
+                            "path",
+                            format!("path point {} is not finite ({p})", i + 1),
+                        ));
                     }
                     if p.length() > 10_000.0 {
-                        return Err(format!(
-                            "path point {} ({p}) is more than 10 km away: unreachable",
-                            i + 1
+                        return Err(OptionError::refused(
+                            "path",
+                            format!(
+                                "path point {} ({p}) is more than 10 km away: unreachable",
+                                i + 1
+                            ),
                         ));
                     }
                 }
                 if let Some(h) = heading {
                     if !h.is_finite() {
-                        return Err(format!("`heading` must be finite, got {h}"));
+                        return Err(OptionError::refused(
+                            "heading",
+                            format!("`heading` must be finite, got {h}"),
+                        ));
                     }
                 }
             }
             Route::Velocity { speed, duration } => {
                 if let Some(d) = duration {
                     if !d.is_finite() || *d <= 0.0 {
-                        return Err(format!("`duration` must be a finite number > 0 s, got {d}"));
+                        return Err(OptionError::refused(
+                            "duration",
+                            format!("`duration` must be a finite number > 0 s, got {d}"),
+                        ));
                     }
                 }
                 match speed {
-                    Speed::Constant(v) => speed_ok(*v, "`velocity`")?,
+                    Speed::Constant(v) => speed_ok(*v, "velocity", "`velocity`")?,
                     Speed::Samples(s) => {
                         if s.is_empty() {
-                            return Err("`velocity` gave no samples".into());
+                            return Err(OptionError::refused(
+                                "velocity",
+                                "`velocity` gave no samples",
+                            ));
                         }
                         if s.len() < 2 && duration.is_none() {
                             // The walk's length comes from the samples: one sample spans
                             // no time at all.
-                            return Err(
-                                "`velocity` samples need a `duration` or at least two samples"
-                                    .into(),
-                            );
+                            return Err(OptionError::refused(
+                                "velocity",
+                                "`velocity` samples need a `duration` or at least two samples",
+                            ));
                         }
                         for (i, &v) in s.iter().enumerate() {
                             let t = i as f64 * PROFILE_DT;
                             if !v.is_finite() || v < 0.0 {
-                                return Err(format!(
+                                return Err(OptionError::refused("velocity", format!(
                                     "`velocity` returned {v} at t = {t:.2} s: expected a finite speed ≥ 0 m/s"
-                                ));
+                                )));
                             }
                             if v > max_speed {
-                                speed_ok(v, &format!("`velocity` at t = {t:.2} s"))?;
+                                speed_ok(v, "velocity", &format!("`velocity` at t = {t:.2} s"))?;
                             }
                         }
                     }
@@ -140,14 +162,17 @@ impl Route {
             Route::Follow(seq) => {
                 for dof in ["root_x", "root_z"] {
                     if seq.track(dof).is_none() {
-                        return Err(format!(
+                        return Err(OptionError::refused("follow", format!(
                             "the followed sequence `{}` has no `{dof}` track (it needs root_x and root_z, and optionally root_yaw)",
                             seq.name
-                        ));
+                        )));
                     }
                 }
                 if seq.duration().is_nan() || seq.duration() <= 0.0 {
-                    return Err(format!("the followed sequence `{}` is empty", seq.name));
+                    return Err(OptionError::refused(
+                        "follow",
+                        format!("the followed sequence `{}` is empty", seq.name),
+                    ));
                 }
             }
         }
@@ -646,32 +671,38 @@ mod tests {
         }
     }
 
+    /// Asserts that `route` is refused, naming `option`, with `needle` in the message.
+    fn refused(route: &Route, option: &str, needle: &str) {
+        let e = route.check(0.93).expect_err(needle);
+        assert_eq!(e.option(), option, "{e}");
+        assert!(e.to_string().contains(needle), "{e}");
+    }
+
     #[test]
     fn bad_routes_are_named() {
-        let ht = 0.93;
         let empty = Route::Path {
             points: vec![],
             heading: None,
             speed: 1.0,
         };
-        assert!(empty.check(ht).unwrap_err().contains("empty"));
+        refused(&empty, "path", "empty");
         let nan = Route::Path {
             points: vec![DVec2::new(1.0, 1.0), DVec2::new(f64::NAN, 0.0)],
             heading: None,
             speed: 1.0,
         };
-        assert!(nan.check(ht).unwrap_err().contains("path point 2"));
+        refused(&nan, "path", "path point 2");
         for v in [0.0, -1.0, f64::NAN, 50.0] {
             let r = Route::Velocity {
                 speed: Speed::Constant(v),
                 duration: None,
             };
-            assert!(r.check(ht).unwrap_err().contains("velocity"), "{v}");
+            refused(&r, "velocity", "velocity");
         }
         let one = Route::Velocity {
             speed: Speed::Samples(vec![1.0]),
             duration: None,
         };
-        assert!(one.check(ht).unwrap_err().contains("duration"));
+        refused(&one, "velocity", "duration");
     }
 }

@@ -2,6 +2,7 @@
 //! forward kinematics) and measured on the resulting joint positions.
 
 use super::*;
+use crate::error::ActionError;
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::Transform;
 use troupe_motion::{Key, Track};
@@ -379,7 +380,7 @@ fn a_speed_change_keeps_joint_values_and_velocities_continuous() {
 fn bad_input_is_a_clear_error() {
     let s = troupe_body::template::default_skeleton("adult").unwrap();
     let o = WalkOptions::default();
-    let err = |r: Result<Walk, String>| r.err().expect("an error");
+    let err = |r: Result<Walk, ActionError>| r.err().expect("an error").to_string();
     assert!(err(Walk::to(&s, DVec3::new(f64::NAN, 0.0, 1.0), o)).contains("not finite"));
     assert!(err(Walk::to(&s, DVec3::new(1.0, 1.5, 1.0), o)).contains("unreachable"));
     assert!(err(Walk::to(&s, DVec3::new(1e6, 0.0, 1.0), o)).contains("unreachable"));

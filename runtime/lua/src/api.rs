@@ -1,6 +1,6 @@
 //! The Lua API: the `troupe` table, actor, object, action and sequence values.
 
-use super::kinds::{opt_number, opt_string};
+use super::kinds::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
 use super::{BehaviorState, Stage};
 use crate::error::Error;
 use crate::kinds::BuildContext;
@@ -89,55 +89,6 @@ pub(crate) fn lua_err(e: impl std::fmt::Display) -> mlua::Error {
 fn stage(lua: &Lua) -> mlua::Result<mlua::AppDataRefMut<'_, Stage>> {
     lua.app_data_mut::<Stage>()
         .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))
-}
-
-/// Reads `{x, y, z}` or `{x=…, y=…, z=…}`.
-pub fn vec3(value: &Value, what: &str) -> mlua::Result<DVec3> {
-    let Value::Table(t) = value else {
-        return Err(mlua::Error::runtime(format!(
-            "{what} must be a table {{x, y, z}}, got {}",
-            value.type_name()
-        )));
-    };
-    let get = |i: i64, k: &str| -> mlua::Result<f64> {
-        let v: Value = t.get(i)?;
-        let v = if v.is_nil() { t.get(k)? } else { v };
-        match v {
-            Value::Integer(i) => Ok(i as f64),
-            Value::Number(n) if n.is_finite() => Ok(n),
-            other => Err(mlua::Error::runtime(format!(
-                "{what}.{k} must be a finite number, got {}",
-                other.type_name()
-            ))),
-        }
-    };
-    Ok(DVec3::new(get(1, "x")?, get(2, "y")?, get(3, "z")?))
-}
-
-fn vec3_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
-    let t = lua.create_table()?;
-    t.raw_set(1, v.x)?;
-    t.raw_set(2, v.y)?;
-    t.raw_set(3, v.z)?;
-    Ok(t)
-}
-
-fn check_keys(t: &Table, what: &str, known: &[&str]) -> mlua::Result<()> {
-    for pair in t.pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let ok = matches!(&k, Value::String(s) if known.contains(&s.to_str()?.as_ref()));
-        if !ok {
-            let name = match &k {
-                Value::String(s) => s.to_str()?.to_string(),
-                other => format!("<{}>", other.type_name()),
-            };
-            return Err(mlua::Error::runtime(format!(
-                "{what}: unknown field `{name}` (known: {})",
-                known.join(", ")
-            )));
-        }
-    }
-    Ok(())
 }
 
 impl UserData for ActorRef {
@@ -613,13 +564,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
             let rotation = if rot.is_nil() {
                 DQuat::IDENTITY
             } else {
-                let r = vec3(&rot, "object: rotation (degrees about x, y, z)")?;
-                DQuat::from_euler(
-                    glam::EulerRot::YXZ,
-                    r.y.to_radians(),
-                    r.x.to_radians(),
-                    r.z.to_radians(),
-                )
+                euler_degrees(&rot, "object: rotation (degrees about x, y, z)")?
             };
             let object = Object {
                 name,

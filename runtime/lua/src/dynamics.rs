@@ -1,7 +1,8 @@
 //! `actor:inverse_dynamics{…}` and `actor:forward_dynamics{…}`: plain functions (not
 //! actions) over tables keyed by DOF name.
 
-use super::api::{vec3, ActorRef};
+use super::api::ActorRef;
+use super::kinds::args::{check_keys, err, number, vec3};
 use super::Stage;
 use mlua::{Lua, Table, UserDataMethods, Value};
 use troupe_body::dynamics::{check_state, Dynamics, ExternalForces};
@@ -16,10 +17,6 @@ pub(crate) fn add_actor_methods<M: UserDataMethods<ActorRef>>(methods: &mut M) {
     });
 }
 
-fn err(e: impl std::fmt::Display) -> mlua::Error {
-    mlua::Error::runtime(e.to_string())
-}
-
 /// Reads `{dof_name = number, …}` into `out` (missing entries stay as they are).
 fn read(
     t: &Table,
@@ -32,31 +29,30 @@ fn read(
         Value::Nil => return Ok(false),
         Value::Table(v) => v,
         other => {
-            return Err(err(format!(
-                "{method}: `{key}` must be a table {{dof_name = number, …}}, got {}",
-                other.type_name()
-            )))
+            return Err(err(
+                method,
+                format!(
+                    "`{key}` must be a table {{dof_name = number, …}}, got {}",
+                    other.type_name()
+                ),
+            ))
         }
     };
     for pair in values.pairs::<Value, Value>() {
         let (k, v) = pair?;
         let Value::String(name) = k else {
-            return Err(err(format!("{method}: `{key}` keys must be DOF names")));
+            return Err(err(method, format!("`{key}` keys must be DOF names")));
         };
         let name = name.to_str()?.to_string();
         let d = skeleton
             .dof(&name)
-            .map_err(|e| err(format!("{method}: {key}: {e}")))?;
-        out[d] = match v {
-            Value::Integer(i) => i as f64,
-            Value::Number(x) => x,
-            other => {
-                return Err(err(format!(
-                    "{method}: {key}.{name} must be a number, got {}",
-                    other.type_name()
-                )))
-            }
-        };
+            .map_err(|e| err(method, format!("{key}: {e}")))?;
+        out[d] = number(&v).ok_or_else(|| {
+            err(
+                method,
+                format!("{key}.{name} must be a number, got {}", v.type_name()),
+            )
+        })?;
     }
     Ok(true)
 }
@@ -68,24 +64,11 @@ fn call(lua: &Lua, actor: usize, t: &Table, inverse: bool) -> mlua::Result<Table
         "forward_dynamics"
     };
     let input = if inverse { "qdd" } else { "tau" };
-    for pair in t.pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let ok = matches!(&k, Value::String(s)
-            if ["q", "qd", input, "fixed_root", "gravity"].contains(&s.to_str()?.as_ref()));
-        if !ok {
-            return Err(err(format!(
-                "{method}: unknown field `{}` (known: q, qd, {input}, fixed_root, gravity)",
-                match &k {
-                    Value::String(s) => s.to_str()?.to_string(),
-                    other => format!("<{}>", other.type_name()),
-                }
-            )));
-        }
-    }
+    check_keys(t, method, &["q", "qd", input, "fixed_root", "gravity"])?;
     let (skeleton, posture) = {
         let stage = lua
             .app_data_ref::<Stage>()
-            .ok_or_else(|| err("troupe: no scene is loaded"))?;
+            .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
         (
             stage.scene.actors()[actor].skeleton.clone(),
             stage.scene.states()[actor].q.clone(),
@@ -104,16 +87,16 @@ fn call(lua: &Lua, actor: usize, t: &Table, inverse: bool) -> mlua::Result<Table
         Value::Nil => false,
         Value::Boolean(b) => b,
         other => {
-            return Err(err(format!(
-                "{method}: fixed_root must be a boolean, got {}",
-                other.type_name()
-            )))
+            return Err(err(
+                method,
+                format!("fixed_root must be a boolean, got {}", other.type_name()),
+            ))
         }
     };
     for (what, v) in [("q", &q), ("qd", &qd), (input, &x)] {
-        check_state(&skeleton, what, v).map_err(|e| err(format!("{method}: {e}")))?;
+        check_state(&skeleton, what, v).map_err(|e| err(method, e))?;
     }
-    let mut dynamics = Dynamics::new(&skeleton).map_err(|e| err(format!("{method}: {e}")))?;
+    let mut dynamics = Dynamics::new(&skeleton).map_err(|e| err(method, e))?;
     let g: Value = t.get("gravity")?;
     if !g.is_nil() {
         dynamics.set_gravity(vec3(&g, &format!("{method}: gravity"))?);
@@ -125,7 +108,7 @@ fn call(lua: &Lua, actor: usize, t: &Table, inverse: bool) -> mlua::Result<Table
     } else {
         dynamics
             .forward_dynamics(&q, &qd, &x, &ext, fixed_root, &mut out)
-            .map_err(|e| err(format!("{method}: {e}")))?;
+            .map_err(|e| err(method, e))?;
     }
     let result = lua.create_table_with_capacity(0, n)?;
     for (d, v) in skeleton.dofs().iter().zip(out) {

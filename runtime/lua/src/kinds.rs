@@ -4,6 +4,9 @@
 //! turns the Lua arguments into a generator and an [`ActionSpec`]; a new kind is one
 //! [`ActionKinds::register`] call.
 
+pub mod args;
+
+use args::{err, opt_number, opt_string};
 use mlua::{Lua, MultiValue, Table, Value};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -158,19 +161,19 @@ impl CommonOptions {
             let name = match &key {
                 Value::String(s) => s.to_str()?.to_string(),
                 other => {
-                    return Err(mlua::Error::runtime(format!(
-                        "{method}: option names must be strings, got {}",
-                        other.type_name()
-                    )))
+                    return Err(err(
+                        method,
+                        format!("option names must be strings, got {}", other.type_name()),
+                    ))
                 }
             };
             if !COMMON_OPTIONS.contains(&name.as_str()) && !extra.contains(&name.as_str()) {
                 let mut known: Vec<&str> = COMMON_OPTIONS.to_vec();
                 known.extend_from_slice(extra);
-                return Err(mlua::Error::runtime(format!(
-                    "{method}: unknown option `{name}` (known: {})",
-                    known.join(", ")
-                )));
+                return Err(err(
+                    method,
+                    format!("unknown option `{name}` (known: {})", known.join(", ")),
+                ));
             }
         }
         let skeleton = &ctx.skeleton;
@@ -178,12 +181,11 @@ impl CommonOptions {
             o.scope = Some(
                 skeleton
                     .scope(&expr)
-                    .map_err(|e| mlua::Error::runtime(format!("{method}: option `scope`: {e}")))?,
+                    .map_err(|e| err(method, format!("option `scope`: {e}")))?,
             );
         }
         if let Some(mode) = opt_string(opts, method, "mode")? {
-            o.mode = Mode::parse(&mode)
-                .map_err(|e| mlua::Error::runtime(format!("{method}: option `mode`: {e}")))?;
+            o.mode = Mode::parse(&mode).map_err(|e| err(method, format!("option `mode`: {e}")))?;
         }
         if let Some(w) = opt_number(opts, method, "weight")? {
             o.weight = w;
@@ -208,42 +210,5 @@ impl CommonOptions {
             ease_in: self.ease_in,
             ease_out: self.ease_out,
         }
-    }
-}
-
-/// Reads an optional string option, with an error naming it when it has another type.
-pub fn opt_string(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<String>> {
-    match opts.get::<Value>(key)? {
-        Value::Nil => Ok(None),
-        Value::String(s) => Ok(Some(s.to_str()?.to_string())),
-        other => Err(mlua::Error::runtime(format!(
-            "{method}: option `{key}` must be a string, got {}",
-            other.type_name()
-        ))),
-    }
-}
-
-/// Reads an optional number option, with an error naming it when it has another type.
-pub fn opt_number(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<f64>> {
-    match opts.get::<Value>(key)? {
-        Value::Nil => Ok(None),
-        Value::Integer(i) => Ok(Some(i as f64)),
-        Value::Number(n) => Ok(Some(n)),
-        other => Err(mlua::Error::runtime(format!(
-            "{method}: option `{key}` must be a number, got {}",
-            other.type_name()
-        ))),
-    }
-}
-
-/// Reads an optional boolean option, with an error naming it when it has another type.
-pub fn opt_bool(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<bool>> {
-    match opts.get::<Value>(key)? {
-        Value::Nil => Ok(None),
-        Value::Boolean(b) => Ok(Some(b)),
-        other => Err(mlua::Error::runtime(format!(
-            "{method}: option `{key}` must be a boolean, got {}",
-            other.type_name()
-        ))),
     }
 }

@@ -17,6 +17,11 @@
 //!   by IK every tick, extrapolating the active hand one tick ahead.
 //! - **shake hands**: hold hands, then the active hand moves up and down and both follow.
 
+pub(crate) mod lua;
+pub mod options;
+
+pub use options::{GiveOptions, HoldHandOptions, ReceiveOptions};
+
 use crate::grasp::action::{Signal, CLOSE_SECONDS, OPEN_SECONDS};
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};

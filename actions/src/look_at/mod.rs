@@ -7,6 +7,12 @@
 //! time constant of [`HEAD_TIME_CONSTANT`]. The eyes then aim exactly (pan, tilt, within
 //! their limits) from where the head is, with the faster [`EYE_TIME_CONSTANT`].
 
+pub(crate) mod lua;
+pub mod options;
+
+pub use options::LookAtOptions;
+
+use crate::error::Result;
 use crate::reach::Target;
 use troupe_body::glam::DVec3;
 use troupe_body::kinematics::forward_kinematics;
@@ -48,9 +54,9 @@ fn yaw_pitch(d: DVec3) -> (f64, f64) {
 impl LookAt {
     /// A look-at on a humanoid `skeleton` (needs `vt1`, `vc4`, `skullbase` and eyeball
     /// joints).
-    pub fn new(skeleton: &Skeleton, target: Target) -> Result<LookAt, String> {
-        let d = |n: &str| skeleton.dof(n).map_err(|e| e.to_string());
-        let j = |n: &str| skeleton.joint(n).map_err(|e| e.to_string());
+    pub fn new(skeleton: &Skeleton, target: Target) -> Result<LookAt> {
+        let d = |n: &str| skeleton.dof(n);
+        let j = |n: &str| skeleton.joint(n);
         let mut eyes = Vec::new();
         for side in ["l", "r"] {
             eyes.push((
@@ -59,11 +65,7 @@ impl LookAt {
                 d(&format!("{side}_eyeball_tilt"))?,
             ));
         }
-        if let Target::Point(p) = &target {
-            if !p.is_finite() {
-                return Err("the target position is not finite".into());
-            }
-        }
+        target.check()?;
         Ok(LookAt {
             target,
             dofs: Dofs {
@@ -98,7 +100,7 @@ impl LookAt {
 
 impl Generator for LookAt {
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
-        self.target.position(ctx.world)?;
+        self.target.position(ctx.world).map_err(|e| e.to_string())?;
         self.q = ctx.posture.q.clone();
         Ok(())
     }
@@ -106,7 +108,7 @@ impl Generator for LookAt {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         let target = match self.target.position(ctx.world) {
             Ok(p) => p,
-            Err(e) => return Step::Failed(e),
+            Err(e) => return Step::Failed(e.to_string()),
         };
         if self.q.len() != ctx.posture.q.len() {
             self.q = ctx.posture.q.clone();

@@ -7,6 +7,12 @@
 //! applied to the wrist's start pose (the grip stays fixed), and IK solves the arm from
 //! its previous solution.
 
+pub(crate) mod lua;
+pub mod options;
+
+pub use options::ManipulateOptions;
+
+use crate::error::OptionError;
 use crate::grasp::plan::ArmIk;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::sensors::Side;
@@ -73,26 +79,8 @@ impl Manipulate {
         object: usize,
         keys: Vec<ObjectKey>,
         sides: Vec<Side>,
-    ) -> Result<Manipulate, String> {
-        if keys.is_empty() {
-            return Err("`keys` needs at least one key".into());
-        }
-        for (i, k) in keys.iter().enumerate() {
-            if !(k.time.is_finite() && k.time >= 0.0 && k.position.is_finite()) {
-                return Err(format!(
-                    "key {}: time and position must be finite (time ≥ 0)",
-                    i + 1
-                ));
-            }
-            if i > 0 && k.time <= keys[i - 1].time {
-                return Err(format!(
-                    "key {}: times must increase (got {} after {})",
-                    i + 1,
-                    k.time,
-                    keys[i - 1].time
-                ));
-            }
-        }
+    ) -> Result<Manipulate, OptionError> {
+        options::check_keys(&keys)?;
         Ok(Manipulate {
             object,
             keys,

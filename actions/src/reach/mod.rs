@@ -10,6 +10,12 @@
 //! [`ORIENTATION_TOLERANCE`] when an orientation is asked) and fails otherwise, with the
 //! residual distance in the reason.
 
+pub(crate) mod lua;
+pub mod options;
+
+pub use options::{ReachOptions, Reacher};
+
+use crate::error::{OptionError, Result};
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
@@ -55,7 +61,7 @@ pub enum Target {
 
 impl Target {
     /// The target's world position now, or why it cannot be found.
-    pub fn position(&self, world: &World) -> Result<DVec3, String> {
+    pub fn position(&self, world: &World) -> Result<DVec3, TargetLost> {
         let p = match self {
             Target::Point(p) => *p,
             Target::Object(name) => world
@@ -63,7 +69,7 @@ impl Target {
                 .iter()
                 .find(|o| &o.name == name)
                 .map(|o| o.position)
-                .ok_or_else(|| format!("target object `{name}` is gone"))?,
+                .ok_or_else(|| TargetLost::Object(name.clone()))?,
             Target::Joint {
                 actor,
                 joint,
@@ -72,22 +78,61 @@ impl Target {
                 let a = world
                     .actor_index(actor)
                     .filter(|&a| a < world.states.len())
-                    .ok_or_else(|| format!("target actor `{actor}` is gone"))?;
-                let j = world.actors[a]
-                    .skeleton
-                    .joint(joint)
-                    .map_err(|e| e.to_string())?;
+                    .ok_or_else(|| TargetLost::Actor(actor.clone()))?;
+                let j = world.actors[a].skeleton.joint(joint)?;
                 world.states[a]
                     .globals
                     .get(j)
-                    .ok_or_else(|| format!("target actor `{actor}` has no joint `{joint}`"))?
+                    .ok_or_else(|| TargetLost::Joint {
+                        actor: actor.clone(),
+                        joint: joint.clone(),
+                    })?
                     .transform_point(*offset)
             }
         };
         if p.is_finite() {
             Ok(p)
         } else {
-            Err("the target position is not finite".into())
+            Err(TargetLost::NotFinite)
+        }
+    }
+}
+
+/// Why a target cannot be found in the world while an action runs.
+#[derive(Debug, thiserror::Error, Clone, PartialEq)]
+pub enum TargetLost {
+    /// The object left the scene.
+    #[error("target object `{0}` is gone")]
+    Object(String),
+    /// The actor left the scene.
+    #[error("target actor `{0}` is gone")]
+    Actor(String),
+    /// The actor's body has no such joint.
+    #[error(transparent)]
+    Body(#[from] troupe_body::Error),
+    /// The actor's posture has no transform for the joint.
+    #[error("target actor `{actor}` has no joint `{joint}`")]
+    Joint {
+        /// The actor's name.
+        actor: String,
+        /// The joint's name.
+        joint: String,
+    },
+    /// The position is not finite.
+    #[error("the target position is not finite")]
+    NotFinite,
+}
+
+impl Target {
+    /// Refuses a point target that is not finite (names and joints are looked up when
+    /// the action runs).
+    pub fn check(&self) -> Result<(), OptionError> {
+        match self {
+            Target::Point(p) if !p.is_finite() => Err(OptionError::refused(
+                "target",
+                "the target position is not finite",
+            )),
+            _ => Ok(()),
         }
     }
 }
@@ -133,29 +178,15 @@ pub fn quintic(t: f64) -> f64 {
 impl Reach {
     /// A reach on `skeleton`. Fails when the DOF list is empty or invalid, the duration is
     /// not positive, or a via point is not finite.
-    pub fn new(skeleton: &Skeleton, spec: ReachSpec) -> Result<Reach, String> {
-        if !(spec.duration.is_finite() && spec.duration > 0.0) {
-            return Err(format!(
-                "duration must be a finite number of seconds > 0, got {}",
-                spec.duration
-            ));
-        }
-        if spec.via.iter().any(|v| !v.is_finite()) {
-            return Err("via points must be finite".into());
-        }
-        if let Target::Point(p) = &spec.target {
-            if !p.is_finite() {
-                return Err("the target position is not finite".into());
-            }
-        }
+    pub fn new(skeleton: &Skeleton, spec: ReachSpec) -> Result<Reach> {
+        options::check_path(spec.duration, &spec.via, &spec.target)?;
         let options = IkOptions {
             max_iterations: 30,
             ..IkOptions::default()
         };
-        let solver =
-            IkSolver::new(skeleton, spec.dofs.clone(), options).map_err(|e| e.to_string())?;
+        let solver = IkSolver::new(skeleton, spec.dofs.clone(), options)?;
         let (sensors, effector_sensor) = if spec.self_collision {
-            let s = BodySensors::new(skeleton).map_err(|e| e.to_string())?;
+            let s = BodySensors::new(skeleton)?;
             // The sensor riding on the effector's joint (the hand) follows the main task.
             let own = s
                 .sensors()
@@ -213,7 +244,11 @@ impl Reach {
 
 impl Generator for Reach {
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
-        let goal = self.spec.target.position(ctx.world)?;
+        let goal = self
+            .spec
+            .target
+            .position(ctx.world)
+            .map_err(|e| e.to_string())?;
         self.q = ctx.posture.q.clone();
         self.start = self.spec.effector.position(&ctx.posture.globals);
         self.start_rotation = self.spec.effector.rotation(&ctx.posture.globals);
@@ -235,7 +270,7 @@ impl Generator for Reach {
         }
         let goal = match self.spec.target.position(ctx.world) {
             Ok(g) => g,
-            Err(e) => return Step::Failed(e),
+            Err(e) => return Step::Failed(e.to_string()),
         };
         // The body as it is, with this action's own DOFs as it last solved them.
         let dofs = self.solver.dofs().to_vec();

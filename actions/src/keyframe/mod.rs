@@ -1,9 +1,15 @@
 //! The keyframe generator: plays a [`Sequence`] of Hermite tracks on a scope.
 
+pub(crate) mod lua;
+pub mod options;
+
+pub use options::KeyframeOptions;
+
+use crate::error::Result;
 use std::sync::Arc;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
-use troupe_scene::{DofWriter, Error, Generator, GeneratorContext, Result, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
 
 /// Plays a sequence's tracks on the DOFs they name, from the sequence's first key time.
 /// Actors playing the same sequence share its keys.
@@ -46,10 +52,7 @@ impl Keyframe {
             }
         }
         if tracks.is_empty() {
-            return Err(Error::Invalid(format!(
-                "sequence `{}` has no track on the requested scope",
-                sequence.name
-            )));
+            return Err(options::no_track(&sequence).into());
         }
         let first = tracks.first().map(|&(_, i, _)| &sequence.tracks()[i]);
         let shared_times = first.is_some_and(|f| {

@@ -1,0 +1,216 @@
+//! The options of `simulate`, `servo` and `track`: what drives the simulated DOFs, the
+//! simulation's parameters, an optional push, and which DOFs are simulated.
+
+use super::{Drive, DynamicsGenerator, ServoTarget};
+use crate::error::{OptionError, Result};
+use troupe_body::dynamics::{Gains, SimParams};
+use troupe_body::glam::DVec3;
+use troupe_body::{Scope, Skeleton};
+
+/// A force and a torque applied at the centre of mass from the start of a `simulate`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Push {
+    /// Force (N, world).
+    pub force: DVec3,
+    /// Torque (N·m, world).
+    pub torque: DVec3,
+    /// Seconds it lasts.
+    pub duration: f64,
+}
+
+/// The options of a dynamics action.
+#[derive(Clone, Debug)]
+pub struct DynamicsOptions {
+    /// What drives the simulated DOFs (and so the kind: `simulate`, `servo`, `track`).
+    pub drive: Drive,
+    /// The simulation's parameters (time steps, gravity, floor, limits, damping).
+    pub params: SimParams,
+    /// A push at the start (`simulate` only).
+    pub push: Option<Push>,
+    /// Whether the action ends once the body has stayed still for half a second.
+    pub finish_at_rest: bool,
+}
+
+impl DynamicsOptions {
+    /// Options for `drive` with the defaults of its kind: a passive simulation is damped
+    /// (2 per second) and ends at rest; servos and tracking are undamped and run until
+    /// stopped (tracking: until the sequence ends).
+    pub fn new(drive: Drive) -> DynamicsOptions {
+        let passive = matches!(drive, Drive::Passive);
+        DynamicsOptions {
+            drive,
+            params: SimParams {
+                damping: if passive { 2.0 } else { 0.0 },
+                ..SimParams::default()
+            },
+            push: None,
+            finish_at_rest: passive,
+        }
+    }
+
+    /// The kind of action these options make.
+    pub fn kind(&self) -> &'static str {
+        match self.drive {
+            Drive::Passive => "simulate",
+            Drive::Servo { .. } => "servo",
+            Drive::Track { .. } => "track",
+        }
+    }
+
+    /// Checks the options that do not depend on a body: the simulation's parameters and
+    /// the gains (the body model's errors name the parameter), the push, a posture's
+    /// values.
+    pub fn validate(&self) -> Result<()> {
+        self.params.validate()?;
+        match &self.drive {
+            Drive::Passive => {}
+            Drive::Servo { target, gains, .. } => {
+                gains.validate()?;
+                if let ServoTarget::Posture(values) = target {
+                    if let Some((k, v)) = values.iter().find(|(_, v)| !v.is_finite()) {
+                        return Err(OptionError::invalid(
+                            "target",
+                            format!("finite values (DOF #{k})"),
+                            v,
+                        )
+                        .into());
+                    }
+                }
+            }
+            Drive::Track { gains, .. } => gains.validate()?,
+        }
+        if let Some(push) = &self.push {
+            if !(push.duration.is_finite() && push.duration >= 0.0) {
+                return Err(OptionError::refused("push", "push.duration must be ≥ 0").into());
+            }
+        }
+        Ok(())
+    }
+
+    /// The DOFs the action simulates: `asked` or the drive's natural scope (a passive
+    /// simulation: the whole body; a posture servo: the DOFs it names; an actor servo:
+    /// the body without the root; tracking: the sequence's DOFs), the root always left
+    /// out of tracking.
+    pub fn scope(&self, skeleton: &Skeleton, asked: Option<Scope>) -> Result<Scope> {
+        let root = Scope::range(skeleton.joints()[0].dofs.clone());
+        let body = skeleton
+            .scope("body")
+            .unwrap_or_else(|_| skeleton.all().difference(&root));
+        let scope = match &self.drive {
+            Drive::Passive => asked.unwrap_or_else(|| skeleton.all()),
+            Drive::Servo {
+                target: ServoTarget::Posture(values),
+                ..
+            } => asked.unwrap_or_else(|| {
+                let named: Scope = values.iter().map(|(k, _)| *k).collect();
+                named.intersection(&body)
+            }),
+            Drive::Servo { .. } => asked.unwrap_or(body),
+            Drive::Track { sequence, .. } => {
+                let mut natural = Scope::EMPTY;
+                for track in sequence.tracks() {
+                    natural.insert(skeleton.dof(track.dof())?);
+                }
+                let scope = asked.unwrap_or(natural).difference(&root);
+                if scope.is_empty() {
+                    return Err(OptionError::refused(
+                        "scope",
+                        "nothing to track (the sequence's DOFs on the scope, root excluded)",
+                    )
+                    .into());
+                }
+                scope
+            }
+        };
+        Ok(scope)
+    }
+
+    /// The generator for `skeleton` on `scope`, once the options are valid.
+    pub fn generator(&self, skeleton: &Skeleton, scope: Scope) -> Result<DynamicsGenerator> {
+        DynamicsGenerator::new(skeleton, self, scope)
+    }
+}
+
+/// The gains of a servo or a tracker: `kp` alone sets `kd` to its critical damping.
+pub fn gains(kp: Option<f64>, kd: Option<f64>) -> Gains {
+    let mut g = Gains::default();
+    if let Some(kp) = kp {
+        g.kp = kp;
+        g.kd = 2.0 * kp.max(0.0).sqrt();
+    }
+    if let Some(kd) = kd {
+        g.kd = kd;
+    }
+    g
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::sync::Arc;
+    use troupe_body::template::default_skeleton;
+    use troupe_motion::{Key, Sequence, Track};
+
+    fn servo(values: Vec<(usize, f64)>, gains: Gains) -> DynamicsOptions {
+        DynamicsOptions::new(Drive::Servo {
+            target: ServoTarget::Posture(values),
+            gains,
+            gravity_compensation: true,
+        })
+    }
+
+    fn refused(options: DynamicsOptions, needle: &str) {
+        let e = options.validate().expect_err(needle);
+        assert!(e.to_string().contains(needle), "{e}");
+    }
+
+    #[test]
+    fn the_defaults_of_each_kind_pass() {
+        let simulate = DynamicsOptions::new(Drive::Passive);
+        simulate.validate().unwrap();
+        assert_eq!(simulate.kind(), "simulate");
+        assert!(simulate.finish_at_rest);
+        assert_eq!(simulate.params.damping, 2.0);
+        let s = servo(vec![(7, 0.5)], gains(Some(100.0), None));
+        s.validate().unwrap();
+        assert_eq!(s.kind(), "servo");
+        assert_eq!(gains(Some(100.0), None).kd, 20.0);
+    }
+
+    #[test]
+    fn each_bad_option_is_refused_naming_it() {
+        refused(servo(vec![(7, 0.5)], gains(Some(-1.0), None)), "kp");
+        refused(servo(vec![(7, 0.5)], gains(None, Some(f64::NAN))), "kd");
+        refused(servo(vec![(7, f64::INFINITY)], Gains::default()), "target");
+        let mut damped = DynamicsOptions::new(Drive::Passive);
+        damped.params.damping = -1.0;
+        refused(damped, "damping");
+        let mut stepped = DynamicsOptions::new(Drive::Passive);
+        stepped.params.time_step = 0.0;
+        refused(stepped, "time_step");
+        let pushed = DynamicsOptions {
+            push: Some(Push {
+                force: DVec3::X,
+                torque: DVec3::ZERO,
+                duration: -0.1,
+            }),
+            ..DynamicsOptions::new(Drive::Passive)
+        };
+        refused(pushed, "push");
+    }
+
+    #[test]
+    fn tracking_only_the_root_is_refused() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let mut seq = Sequence::new("slide");
+        let keys = vec![Key::new(0.0, 0.0), Key::new(1.0, 1.0)];
+        seq.add_track(Track::new("root_x", keys).unwrap()).unwrap();
+        let track = DynamicsOptions::new(Drive::Track {
+            sequence: Arc::new(seq),
+            gains: Gains::default(),
+        });
+        track.validate().unwrap();
+        let e = track.scope(&skeleton, None).expect_err("refused");
+        assert!(e.to_string().contains("nothing to track"), "{e}");
+    }
+}

@@ -1,0 +1,155 @@
+//! The options of `grasp`, `release` and `place`: which object, which hand(s), which
+//! pattern, how long, and where to put the object down.
+
+use super::action::{check_duration, check_place, grasp_scope, holding_side, Grasp, Release};
+use super::decision::GraspType;
+use super::plan::{HandChoice, PlanOptions};
+use crate::error::{OptionError, Result};
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::sensors::Side;
+use troupe_body::{Scope, Skeleton, Transform};
+use troupe_scene::Scene;
+
+/// The options of a grasp.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GraspOptions {
+    /// The object's index in the scene.
+    pub object: usize,
+    /// Which hand(s).
+    pub hand: HandChoice,
+    /// The grasp type, instead of the one the decision table picks.
+    pub pattern: Option<GraspType>,
+    /// Seconds to reach the object.
+    pub duration: f64,
+}
+
+impl GraspOptions {
+    /// Grasps `object` with the hand(s) the plan picks, the table's pattern, reaching in
+    /// one second.
+    pub fn new(object: usize) -> GraspOptions {
+        GraspOptions {
+            object,
+            hand: HandChoice::Auto,
+            pattern: None,
+            duration: 1.0,
+        }
+    }
+
+    /// Checks the options that do not depend on a body: the reach time.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        check_duration(self.duration)
+    }
+
+    /// The DOFs a grasp with these hands drives, on `skeleton`.
+    pub fn scope(&self, skeleton: &Skeleton) -> Result<Scope> {
+        grasp_scope(skeleton, &self.hand.sides())
+    }
+
+    /// The grasp generator, once the options are valid.
+    pub fn grasp(&self) -> Result<Grasp> {
+        self.validate()?;
+        let options = PlanOptions {
+            hand: self.hand,
+            grasp: self.pattern,
+            ..PlanOptions::default()
+        };
+        Grasp::new(self.object, options, self.hand.sides(), self.duration)
+    }
+}
+
+/// Where `place` puts an object down.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Place {
+    /// The object's centre at the end (world).
+    pub at: DVec3,
+    /// Its orientation at the end; `None` keeps the one it has.
+    pub rotation: Option<DQuat>,
+    /// Seconds to carry it there.
+    pub duration: f64,
+}
+
+/// The options of a release, or of a place when [`ReleaseOptions::place`] is given.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReleaseOptions {
+    /// The object's index in the scene.
+    pub object: usize,
+    /// Where to put it down first.
+    pub place: Option<Place>,
+}
+
+impl ReleaseOptions {
+    /// Checks the options that do not depend on the scene: a finite place reached in a
+    /// positive time.
+    pub fn validate(&self) -> Result<(), OptionError> {
+        match &self.place {
+            Some(place) => check_place(place.at, place.duration),
+            None => Ok(()),
+        }
+    }
+
+    /// The release generator for `actor` of `scene` and the DOFs it drives: the hand
+    /// that holds the object (the right one when none does: the action then fails at its
+    /// start, saying so).
+    pub fn release(&self, scene: &Scene, actor: usize) -> Result<(Release, Scope)> {
+        self.validate()?;
+        let side = holding_side(scene, actor, self.object).unwrap_or(Side::Right);
+        let place = self.place.map(|p| {
+            let rotation = p.rotation.unwrap_or(scene.objects()[self.object].rotation);
+            (Transform::new(rotation, p.at), p.duration)
+        });
+        let scope = grasp_scope(&scene.actors()[actor].skeleton, &[side])?;
+        Ok((Release::new(self.object, vec![side], place)?, scope))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn good_options_pass() {
+        GraspOptions::new(0).validate().unwrap();
+        let place = Place {
+            at: DVec3::new(0.4, 0.9, 0.3),
+            rotation: None,
+            duration: 0.5,
+        };
+        ReleaseOptions {
+            object: 0,
+            place: Some(place),
+        }
+        .validate()
+        .unwrap();
+    }
+
+    #[test]
+    fn each_bad_option_is_named() {
+        let grasp = GraspOptions {
+            duration: -1.0,
+            ..GraspOptions::new(0)
+        };
+        grasp.validate().unwrap_err().assert_names("duration");
+        let place = |at: DVec3, duration: f64| ReleaseOptions {
+            object: 0,
+            place: Some(Place {
+                at,
+                rotation: None,
+                duration,
+            }),
+        };
+        place(DVec3::ZERO, 0.0)
+            .validate()
+            .unwrap_err()
+            .assert_names("duration");
+        place(DVec3::NAN, 1.0)
+            .validate()
+            .unwrap_err()
+            .assert_names("at");
+        HandChoice::parse("middle")
+            .unwrap_err()
+            .assert_names("hand");
+        GraspType::parse("fist")
+            .unwrap_err()
+            .assert_names("pattern");
+    }
+}

@@ -1,0 +1,280 @@
+//! The options of the interactions: `give` (which starts the receiver's `receive` too),
+//! `receive`, and `hold_hand` / `shake_hands` (which start the other's `follow_hand`).
+
+use super::{FollowHand, Give, HoldHand};
+use crate::error::{ActionError, OptionError, Result};
+use crate::grasp::action::{check_duration, grasp_scope, holding_side, Grasp, Signal};
+use crate::grasp::handover::{offer_to_hand, receive, SharedHandBoard};
+use crate::grasp::plan::{HandChoice, PlanOptions};
+use std::sync::Arc;
+use troupe_body::sensors::Side;
+use troupe_body::{Scope, Skeleton};
+use troupe_scene::{ActionSpec, Generator, Scene};
+
+/// Refuses `other` when it is the actor itself.
+fn another(option: &'static str, other: usize, actor: usize) -> Result<(), OptionError> {
+    if other == actor {
+        return Err(OptionError::refused(
+            option,
+            format!("`{option}` must be another actor"),
+        ));
+    }
+    Ok(())
+}
+
+/// The options of a give.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GiveOptions {
+    /// The held object's index in the scene.
+    pub object: usize,
+    /// The receiver's index.
+    pub to: usize,
+    /// The receiver's hand(s).
+    pub hand: HandChoice,
+    /// Seconds the giver waits for the receiver; `None`: [`super::GIVE_TIMEOUT`].
+    pub timeout: Option<f64>,
+}
+
+impl GiveOptions {
+    /// `giver` gives `object` to `to`, who takes it with the hand(s) its plan picks.
+    pub fn new(object: usize, to: usize) -> GiveOptions {
+        GiveOptions {
+            object,
+            to,
+            hand: HandChoice::Auto,
+            timeout: None,
+        }
+    }
+
+    /// Checks the options for `giver`: another actor receives, a timeout is positive.
+    pub fn validate(&self, giver: usize) -> Result<(), OptionError> {
+        another("to", self.to, giver)?;
+        if let Some(s) = self.timeout {
+            if !(s.is_finite() && s > 0.0) {
+                return Err(OptionError::invalid("timeout", "seconds > 0", s));
+            }
+        }
+        Ok(())
+    }
+
+    /// Makes `giver`'s action and the DOFs it drives. A receiver whose hand a person
+    /// drives (listed on `board`) takes the object when its glove closes; any other
+    /// receiver gets a `receive` action started on `scene` now, `delay` seconds ahead
+    /// like the give, which waits for the object to arrive.
+    pub fn start(
+        &self,
+        scene: &mut Scene,
+        giver: usize,
+        delay: f64,
+        board: Option<&SharedHandBoard>,
+    ) -> Result<(Box<dyn Generator>, Scope)> {
+        self.validate(giver)?;
+        let side = holding_side(scene, giver, self.object).unwrap_or(Side::Right);
+        let scope = grasp_scope(&scene.actors()[giver].skeleton, &[side])?;
+        // Hands driven by a person (a performer's glove, 4.7) neither reach nor carry.
+        if let Some(board) = board {
+            let hands = board
+                .0
+                .lock()
+                .map_err(|_| ActionError::Poisoned("hand board"))?;
+            let (mine, theirs) = (hands.hand(giver), hands.hand(self.to));
+            drop(hands);
+            if mine.is_some() {
+                return Err(ActionError::Unfit(
+                    "a performer gives by holding the object out: let the receiver take it with \
+                     receiver:receive{object = …, from = performer}, then open the glove"
+                        .into(),
+                ));
+            }
+            if let Some(hand) = theirs {
+                let giver =
+                    offer_to_hand(board, self.object, giver, side, self.to, hand, self.timeout)?;
+                return Ok((Box::new(giver), scope));
+            }
+        }
+        let arrived = Arc::new(Signal::default());
+        let mut give = Give::new(self.object, self.to, side, arrived.clone());
+        if let Some(t) = self.timeout {
+            give = give.with_timeout(t);
+        }
+        // The receiver: a grasp that waits for the object to arrive and may take it from
+        // the giver.
+        let sides = self.hand.sides();
+        let rx_scope = grasp_scope(&scene.actors()[self.to].skeleton, &sides)?;
+        let plan = PlanOptions {
+            hand: self.hand,
+            from: Some(giver),
+            ..PlanOptions::default()
+        };
+        let take = Grasp::new(self.object, plan, sides, 1.0)?
+            .gated(arrived)
+            .abandoned_by(give.ended());
+        let mut rx_spec = ActionSpec::new("receive", rx_scope);
+        rx_spec.delay = delay;
+        scene.start_action(self.to, rx_spec, Box::new(take))?;
+        Ok((Box::new(give), scope))
+    }
+}
+
+/// The options of a receive: take an object out of another actor's hand.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ReceiveOptions {
+    /// The object's index in the scene.
+    pub object: usize,
+    /// The actor holding it out.
+    pub from: usize,
+    /// The receiving hand(s).
+    pub hand: HandChoice,
+    /// Seconds to reach it.
+    pub duration: f64,
+}
+
+impl ReceiveOptions {
+    /// Checks the options for `receiver`: another actor gives, the reach time is
+    /// positive.
+    pub fn validate(&self, receiver: usize) -> Result<(), OptionError> {
+        another("from", self.from, receiver)?;
+        check_duration(self.duration)
+    }
+
+    /// The receiving grasp for `receiver` (built on `skeleton`) and the DOFs it drives.
+    pub fn receive(&self, skeleton: &Skeleton, receiver: usize) -> Result<(Grasp, Scope)> {
+        self.validate(receiver)?;
+        let sides = self.hand.sides();
+        receive(
+            skeleton,
+            self.object,
+            self.from,
+            self.hand,
+            sides,
+            self.duration,
+        )
+    }
+}
+
+/// The options of `hold_hand` and `shake_hands`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HoldHandOptions {
+    /// The other actor.
+    pub other: usize,
+    /// The acting actor's hand.
+    pub hand: Side,
+    /// The other actor's hand.
+    pub other_hand: Side,
+    /// Shake the held hand and let go (`shake_hands`), instead of holding it on.
+    pub shake: bool,
+}
+
+impl HoldHandOptions {
+    /// Takes `other`'s hand with `hand`: its opposite hand to hold hands side by side,
+    /// its same hand to shake hands.
+    pub fn new(other: usize, hand: Side, shake: bool) -> HoldHandOptions {
+        HoldHandOptions {
+            other,
+            hand,
+            other_hand: if shake { Side::Right } else { hand.other() },
+            shake,
+        }
+    }
+
+    /// The kind of action: `hold_hand` or `shake_hands`.
+    pub fn kind(&self) -> &'static str {
+        if self.shake {
+            "shake_hands"
+        } else {
+            "hold_hand"
+        }
+    }
+
+    /// Checks the options for `actor`: the other is another actor.
+    pub fn validate(&self, actor: usize) -> Result<(), OptionError> {
+        another("other", self.other, actor)
+    }
+
+    /// Makes `actor`'s action and the DOFs it drives, and starts the other's
+    /// `follow_hand` on `scene` now, `delay` seconds ahead and lasting `duration` like
+    /// the hold.
+    pub fn start(
+        &self,
+        scene: &mut Scene,
+        actor: usize,
+        delay: f64,
+        duration: Option<f64>,
+    ) -> Result<(HoldHand, Scope)> {
+        self.validate(actor)?;
+        let held = Arc::new(Signal::default());
+        let finished = Arc::new(Signal::default());
+        let active = HoldHand::new(
+            self.other,
+            self.hand,
+            self.other_hand,
+            self.shake,
+            held.clone(),
+            finished.clone(),
+        );
+        let skeleton = scene.actors()[actor].skeleton.clone();
+        let scope = grasp_scope(&skeleton, &[self.hand])?;
+        let wrist = skeleton.joint(&format!("{}wrist", self.hand.prefix()))?;
+        let follow_scope = scene.actors()[self.other]
+            .skeleton
+            .scope(&format!("{}_arm", self.other_hand.name()))?;
+        let follow = FollowHand::new(actor, wrist, self.other_hand, held, finished);
+        let mut follow_spec = ActionSpec::new("follow_hand", follow_scope);
+        follow_spec.delay = delay;
+        follow_spec.duration = duration;
+        scene.start_action(self.other, follow_spec, Box::new(follow))?;
+        Ok((active, scope))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn good_options_pass() {
+        GiveOptions::new(0, 1).validate(0).unwrap();
+        let receive = ReceiveOptions {
+            object: 0,
+            from: 1,
+            hand: HandChoice::Right,
+            duration: 1.0,
+        };
+        receive.validate(0).unwrap();
+        let hold = HoldHandOptions::new(1, Side::Right, false);
+        hold.validate(0).unwrap();
+        assert_eq!(hold.other_hand, Side::Left);
+        assert_eq!(
+            HoldHandOptions::new(1, Side::Left, true).other_hand,
+            Side::Right
+        );
+    }
+
+    #[test]
+    fn each_bad_option_is_named() {
+        GiveOptions::new(0, 0)
+            .validate(0)
+            .unwrap_err()
+            .assert_names("to");
+        let slow = GiveOptions {
+            timeout: Some(0.0),
+            ..GiveOptions::new(0, 1)
+        };
+        slow.validate(0).unwrap_err().assert_names("timeout");
+        let receive = ReceiveOptions {
+            object: 0,
+            from: 0,
+            hand: HandChoice::Auto,
+            duration: 1.0,
+        };
+        receive.validate(0).unwrap_err().assert_names("from");
+        let hasty = ReceiveOptions {
+            from: 1,
+            duration: f64::NAN,
+            ..receive
+        };
+        hasty.validate(0).unwrap_err().assert_names("duration");
+        let alone = HoldHandOptions::new(0, Side::Right, true);
+        alone.validate(0).unwrap_err().assert_names("other");
+    }
+}

@@ -1,0 +1,299 @@
+//! Reading the arguments of a Lua call: the options table, typed optional options, points,
+//! rotations and handles given as values or names. Every error names the method (and the
+//! option), so that a script author sees which call and which key to fix.
+//!
+//! The action kinds of `troupe-actions` and the device functions of `troupe-drivers` read
+//! their arguments with these; a `lua.rs` of an action kind should need nothing else.
+
+use crate::api::{lua_err_message, ActorRef, ObjectRef};
+use crate::kinds::with_scene;
+use glam::{DQuat, DVec3, EulerRot};
+use mlua::{Lua, MultiValue, Table, UserData, Value};
+use troupe_scene::scene::Scene;
+
+/// A Lua runtime error `"{method}: {message}"`.
+pub fn err(method: &str, message: impl std::fmt::Display) -> mlua::Error {
+    lua_err_message(format!("{method}: {message}"))
+}
+
+/// The one table of options a method takes (`actor:reach{…}`); anything else is an error.
+pub fn table_arg(method: &str, args: MultiValue) -> mlua::Result<Table> {
+    let mut args = args.into_iter();
+    match (args.next(), args.next()) {
+        (Some(Value::Table(t)), None) => Ok(t),
+        (first, _) => Err(err(
+            method,
+            format!(
+                "expects one table of options, got {}",
+                first.map(|v| v.type_name()).unwrap_or("nothing")
+            ),
+        )),
+    }
+}
+
+/// The table of options a method may take or leave out (`actor:simulate()`).
+pub fn opt_table_arg(method: &str, args: MultiValue) -> mlua::Result<Option<Table>> {
+    match args.into_iter().next() {
+        None | Some(Value::Nil) => Ok(None),
+        Some(Value::Table(t)) => Ok(Some(t)),
+        Some(other) => Err(err(
+            method,
+            format!("expects a table of options, got {}", other.type_name()),
+        )),
+    }
+}
+
+/// Refuses any key of `t` that is not in `known`, naming it and listing the known ones.
+pub fn check_keys(t: &Table, what: &str, known: &[&str]) -> mlua::Result<()> {
+    for pair in t.pairs::<Value, Value>() {
+        let (k, _) = pair?;
+        let ok = matches!(&k, Value::String(s) if known.contains(&s.to_str()?.as_ref()));
+        if !ok {
+            let name = match &k {
+                Value::String(s) => s.to_str()?.to_string(),
+                other => format!("<{}>", other.type_name()),
+            };
+            return Err(err(
+                what,
+                format!("unknown field `{name}` (known: {})", known.join(", ")),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// A Lua number (integer or float) as `f64`; `None` for any other value.
+pub fn number(v: &Value) -> Option<f64> {
+    match v {
+        Value::Integer(i) => Some(*i as f64),
+        Value::Number(n) => Some(*n),
+        _ => None,
+    }
+}
+
+/// Reads an optional string option, with an error naming it when it has another type.
+pub fn opt_string(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<String>> {
+    match opts.get::<Value>(key)? {
+        Value::Nil => Ok(None),
+        Value::String(s) => Ok(Some(s.to_str()?.to_string())),
+        other => Err(err(
+            method,
+            format!("option `{key}` must be a string, got {}", other.type_name()),
+        )),
+    }
+}
+
+/// Reads an optional number option, with an error naming it when it has another type.
+pub fn opt_number(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<f64>> {
+    let v = opts.get::<Value>(key)?;
+    match (number(&v), v) {
+        (_, Value::Nil) => Ok(None),
+        (Some(n), _) => Ok(Some(n)),
+        (None, other) => Err(err(
+            method,
+            format!("option `{key}` must be a number, got {}", other.type_name()),
+        )),
+    }
+}
+
+/// Reads an optional boolean option, with an error naming it when it has another type.
+pub fn opt_bool(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<bool>> {
+    match opts.get::<Value>(key)? {
+        Value::Nil => Ok(None),
+        Value::Boolean(b) => Ok(Some(b)),
+        other => Err(err(
+            method,
+            format!(
+                "option `{key}` must be a boolean, got {}",
+                other.type_name()
+            ),
+        )),
+    }
+}
+
+/// Reads a point `{x, y, z}` or `{x=…, y=…, z=…}` of finite numbers; `what` names it in
+/// errors.
+pub fn vec3(value: &Value, what: &str) -> mlua::Result<DVec3> {
+    let Value::Table(t) = value else {
+        return Err(lua_err_message(format!(
+            "{what} must be a table {{x, y, z}}, got {}",
+            value.type_name()
+        )));
+    };
+    let get = |i: i64, k: &str| -> mlua::Result<f64> {
+        let v: Value = t.get(i)?;
+        let v = if v.is_nil() { t.get(k)? } else { v };
+        match v {
+            Value::Integer(i) => Ok(i as f64),
+            Value::Number(n) if n.is_finite() => Ok(n),
+            other => Err(lua_err_message(format!(
+                "{what}.{k} must be a finite number, got {}",
+                other.type_name()
+            ))),
+        }
+    };
+    Ok(DVec3::new(get(1, "x")?, get(2, "y")?, get(3, "z")?))
+}
+
+/// A new Lua table `{x, y, z}`.
+pub fn vec3_table(lua: &Lua, v: DVec3) -> mlua::Result<Table> {
+    let t = lua.create_table()?;
+    t.raw_set(1, v.x)?;
+    t.raw_set(2, v.y)?;
+    t.raw_set(3, v.z)?;
+    Ok(t)
+}
+
+/// Reads a rotation given as Euler degrees `{x, y, z}`, applied in the order Y, X, Z (as
+/// every rotation in the API: objects, reach orientations, manipulation keys).
+pub fn euler_degrees(value: &Value, what: &str) -> mlua::Result<DQuat> {
+    let r = vec3(value, what)?;
+    Ok(DQuat::from_euler(
+        EulerRot::YXZ,
+        r.y.to_radians(),
+        r.x.to_radians(),
+        r.z.to_radians(),
+    ))
+}
+
+/// An object given as a handle or by name: its index in the scene.
+pub fn object_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<usize> {
+    handle_or_name(
+        lua,
+        method,
+        key,
+        "object",
+        v,
+        |o: &ObjectRef| o.0,
+        Scene::object_index,
+    )
+}
+
+/// An actor given as a handle or by name: its index in the scene.
+pub fn actor_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<usize> {
+    handle_or_name(
+        lua,
+        method,
+        key,
+        "actor",
+        v,
+        |a: &ActorRef| a.0,
+        Scene::actor_index,
+    )
+}
+
+/// A handle `H` (a `noun` such as "actor") or a name that `lookup` finds in the scene.
+fn handle_or_name<H: UserData + 'static>(
+    lua: &Lua,
+    method: &str,
+    key: &str,
+    noun: &str,
+    v: Value,
+    index: fn(&H) -> usize,
+    lookup: fn(&Scene, &str) -> troupe_scene::Result<usize>,
+) -> mlua::Result<usize> {
+    let expected = format!("`{key}` must be an {noun} or an {noun}'s name");
+    match v {
+        Value::UserData(u) => u
+            .borrow::<H>()
+            .map(|h| index(&h))
+            .map_err(|_| err(method, &expected)),
+        Value::String(name) => {
+            let name = name.to_str()?.to_string();
+            with_scene(lua, |s| lookup(s, &name))?.map_err(|e| err(method, e))
+        }
+        Value::Nil => Err(err(method, format!("`{key}` is required"))),
+        other => Err(err(
+            method,
+            format!("{expected}, got {}", other.type_name()),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Asserts that `r` is an error whose message contains `needle`.
+    fn refused<T: std::fmt::Debug>(r: mlua::Result<T>, needle: &str) {
+        let e = r.unwrap_err().to_string();
+        assert!(e.contains(needle), "{e}");
+    }
+
+    fn table(lua: &Lua, src: &str) -> Table {
+        lua.load(src).eval().expect("a table")
+    }
+
+    #[test]
+    fn typed_options_name_the_key_and_the_type() {
+        let lua = Lua::new();
+        let t = table(&lua, "{ n = 2, x = 1.5, s = 'a', b = true }");
+        assert_eq!(opt_number(&t, "m", "n").unwrap(), Some(2.0));
+        assert_eq!(opt_number(&t, "m", "x").unwrap(), Some(1.5));
+        assert_eq!(opt_number(&t, "m", "none").unwrap(), None);
+        assert_eq!(opt_string(&t, "m", "s").unwrap().as_deref(), Some("a"));
+        assert_eq!(opt_bool(&t, "m", "b").unwrap(), Some(true));
+        refused(
+            opt_number(&t, "m", "s"),
+            "m: option `s` must be a number, got string",
+        );
+        refused(
+            opt_bool(&t, "m", "n"),
+            "m: option `n` must be a boolean, got integer",
+        );
+        refused(
+            opt_string(&t, "m", "b"),
+            "m: option `b` must be a string, got boolean",
+        );
+    }
+
+    #[test]
+    fn unknown_keys_are_named() {
+        let lua = Lua::new();
+        let t = table(&lua, "{ name = 'a', nmae = 'b' }");
+        check_keys(&t, "actor", &["name", "nmae"]).unwrap();
+        refused(
+            check_keys(&t, "actor", &["name"]),
+            "actor: unknown field `nmae` (known: name)",
+        );
+    }
+
+    #[test]
+    fn table_arguments() {
+        let lua = Lua::new();
+        let t = table(&lua, "{}");
+        let one = MultiValue::from_vec(vec![Value::Table(t.clone())]);
+        assert!(table_arg("reach", one.clone()).is_ok());
+        assert!(opt_table_arg("simulate", one).unwrap().is_some());
+        assert!(opt_table_arg("simulate", MultiValue::new())
+            .unwrap()
+            .is_none());
+        refused(
+            table_arg("reach", MultiValue::new()),
+            "reach: expects one table of options, got nothing",
+        );
+        let two = MultiValue::from_vec(vec![Value::Table(t.clone()), Value::Table(t)]);
+        assert!(table_arg("reach", two).is_err());
+        refused(
+            opt_table_arg("simulate", MultiValue::from_vec(vec![Value::Integer(1)])),
+            "expects a table of options, got integer",
+        );
+    }
+
+    #[test]
+    fn points_and_rotations() {
+        let lua = Lua::new();
+        let p = Value::Table(table(&lua, "{ 1, 2, 3 }"));
+        assert_eq!(vec3(&p, "at").unwrap(), DVec3::new(1.0, 2.0, 3.0));
+        let named = Value::Table(table(&lua, "{ x = 1, y = 2, z = 3 }"));
+        assert_eq!(vec3(&named, "at").unwrap(), DVec3::new(1.0, 2.0, 3.0));
+        refused(
+            vec3(&Value::Table(table(&lua, "{ 1, 2 }")), "at"),
+            "at.z must be a finite number, got nil",
+        );
+        let quarter = Value::Table(table(&lua, "{ 0, 90, 0 }"));
+        let q = euler_degrees(&quarter, "rotation").unwrap();
+        let turned = q * DVec3::Z;
+        assert!((turned - DVec3::X).length() < 1e-12, "{turned}");
+    }
+}
