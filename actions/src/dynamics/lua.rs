@@ -8,7 +8,7 @@ use troupe_body::dynamics::contact::ContactParams;
 use troupe_body::dynamics::SimParams;
 use troupe_body::glam::DVec3;
 use troupe_lua::api::{load_sequence, ActorRef, SequenceRef};
-use troupe_lua::kinds::args::{err, opt_bool, opt_number, opt_table_arg, vec3};
+use troupe_lua::args::{err, opt_bool, opt_number, opt_table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

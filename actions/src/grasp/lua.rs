@@ -8,7 +8,7 @@ use super::options::{GraspOptions, Place, ReleaseOptions};
 use super::plan::{plan_grasp, HandChoice, PlanOptions};
 use mlua::{Lua, MultiValue, Table, Value};
 use troupe_body::glam::{DVec3, EulerRot};
-use troupe_lua::kinds::args::{
+use troupe_lua::args::{
     actor_arg, err, euler_degrees, object_arg, opt_string, table_arg, vec3, vec3_table,
 };
 use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};

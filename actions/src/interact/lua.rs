@@ -6,7 +6,7 @@ use crate::grasp::handover::SharedHandBoard;
 use crate::grasp::lua::hand_choice;
 use mlua::{MultiValue, Table};
 use troupe_body::sensors::Side;
-use troupe_lua::kinds::args::{actor_arg, err, object_arg, opt_number, opt_string, table_arg};
+use troupe_lua::args::{actor_arg, err, object_arg, opt_number, opt_string, table_arg};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

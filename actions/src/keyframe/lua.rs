@@ -3,7 +3,7 @@
 use super::KeyframeOptions;
 use mlua::{MultiValue, Value};
 use troupe_lua::api::{load_sequence, SequenceRef};
-use troupe_lua::kinds::args::{err, opt_bool};
+use troupe_lua::args::{err, opt_bool};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

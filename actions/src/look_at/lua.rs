@@ -3,7 +3,7 @@
 use super::LookAtOptions;
 use mlua::MultiValue;
 use troupe_body::Scope;
-use troupe_lua::kinds::args::{err, table_arg};
+use troupe_lua::args::{err, table_arg};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

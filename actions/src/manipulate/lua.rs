@@ -3,7 +3,7 @@
 
 use super::{ManipulateOptions, ObjectKey};
 use mlua::{MultiValue, Value};
-use troupe_lua::kinds::args::{err, euler_degrees, object_arg, opt_number, table_arg, vec3};
+use troupe_lua::args::{err, euler_degrees, object_arg, opt_number, table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

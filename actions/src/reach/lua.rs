@@ -7,7 +7,7 @@ use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::sensors::Side;
 use troupe_body::Scope;
 use troupe_lua::api::{ActorRef, ObjectRef};
-use troupe_lua::kinds::args::{err, euler_degrees, opt_bool, opt_string, table_arg, vec3};
+use troupe_lua::args::{err, euler_degrees, opt_bool, opt_string, table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

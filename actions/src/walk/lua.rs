@@ -6,7 +6,7 @@ use super::{Walk, WalkOptions};
 use mlua::{MultiValue, Value};
 use troupe_body::glam::DVec2;
 use troupe_lua::api::{load_sequence, SequenceRef};
-use troupe_lua::kinds::args::{err, number, opt_bool, opt_number, table_arg};
+use troupe_lua::args::{err, number, opt_bool, opt_number, table_arg};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 

@@ -1,7 +1,7 @@
 //! The Lua API: the `troupe` table, actor, object, action and sequence values.
 
-use super::kinds::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
 use super::{BehaviorState, Stage};
+use crate::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
 use crate::error::Error;
 use crate::kinds::BuildContext;
 use glam::{DQuat, DVec3};

@@ -2,8 +2,8 @@
 //! actions) over tables keyed by DOF name.
 
 use super::api::ActorRef;
-use super::kinds::args::{check_keys, err, number, vec3};
 use super::Stage;
+use crate::args::{check_keys, err, number, vec3};
 use mlua::{Lua, Table, UserDataMethods, Value};
 use troupe_body::dynamics::{check_state, Dynamics, ExternalForces};
 

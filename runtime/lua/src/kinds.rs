@@ -4,9 +4,7 @@
 //! turns the Lua arguments into a generator and an [`ActionSpec`]; a new kind is one
 //! [`ActionKinds::register`] call.
 
-pub mod args;
-
-use args::{err, opt_number, opt_string};
+use crate::args::{err, opt_number, opt_string};
 use mlua::{Lua, MultiValue, Table, Value};
 use std::path::PathBuf;
 use std::sync::Arc;

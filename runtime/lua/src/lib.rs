@@ -10,6 +10,7 @@
 //! a memory allowance; a behavior that errors or exceeds them fails alone.
 
 pub mod api;
+pub mod args;
 mod dynamics;
 pub mod error;
 pub mod kinds;
