@@ -11,6 +11,7 @@ pub mod keyframe;
 pub mod look_at;
 pub mod manipulate;
 pub mod reach;
+#[cfg(feature = "lua")]
 pub mod registry;
 pub mod walk;
 
@@ -19,5 +20,6 @@ pub use error::{ActionError, OptionError};
 pub use keyframe::{Keyframe, KeyframeOptions};
 pub use look_at::{LookAt, LookAtOptions};
 pub use reach::{Reach, ReachOptions, ReachSpec, Reacher, Target};
+#[cfg(feature = "lua")]
 pub use registry::action_kinds;
 pub use walk::{Walk, WalkOptions};

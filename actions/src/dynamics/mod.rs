@@ -8,6 +8,7 @@
 //! actions place). The root is simulated as a floating base only by `simulate`, and only
 //! when the scope holds all six root DOFs; `servo` and `track` never move the root.
 
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 pub mod torque_log;

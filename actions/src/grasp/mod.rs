@@ -7,6 +7,7 @@ pub mod automaton;
 pub mod close;
 pub mod decision;
 pub mod handover;
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 pub mod pattern;

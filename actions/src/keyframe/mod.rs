@@ -1,5 +1,6 @@
 //! The keyframe generator: plays a [`Sequence`] of Hermite tracks on a scope.
 
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 

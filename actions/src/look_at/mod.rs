@@ -7,6 +7,7 @@
 //! time constant of [`HEAD_TIME_CONSTANT`]. The eyes then aim exactly (pan, tilt, within
 //! their limits) from where the head is, with the faster [`EYE_TIME_CONSTANT`].
 
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 

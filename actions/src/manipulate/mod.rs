@@ -7,6 +7,7 @@
 //! applied to the wrist's start pose (the grip stays fixed), and IK solves the arm from
 //! its previous solution.
 
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 

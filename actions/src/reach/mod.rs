@@ -10,6 +10,7 @@
 //! [`ORIENTATION_TOLERANCE`] when an orientation is asked) and fails otherwise, with the
 //! residual distance in the reason.
 
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 

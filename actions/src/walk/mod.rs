@@ -23,6 +23,7 @@
 //! finishes once the body stands.
 
 pub mod cycle;
+#[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 pub mod rig;
