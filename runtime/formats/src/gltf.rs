@@ -3,162 +3,13 @@
 //! (and translations for joints that move, like the root). Metres, Y up, facing +Z —
 //! glTF's own conventions, so no axis change is needed.
 
-use crate::bvh::Bvh;
 use crate::error::{Error, Result};
-use glam::{DMat4, DQuat, DVec3};
+use glam::{DMat4, DQuat};
 use serde_json::{json, Value};
 use std::path::Path;
-use troupe_body::kinematics::{forward_kinematics, local_transform};
-use troupe_body::skeleton::{DofKind, Skeleton};
-use troupe_body::transform::Transform;
-use troupe_motion::sequence::Sequence;
 
-/// A rig and its motion, ready to write: joints in topological order with rest local
-/// translations, and per-frame local rotations (and translations of joints that move).
-#[derive(Clone, Debug, PartialEq)]
-pub struct Rig {
-    /// Joint names.
-    pub names: Vec<String>,
-    /// Parent index per joint.
-    pub parents: Vec<Option<usize>>,
-    /// Rest local transform per joint (metres).
-    pub rest: Vec<Transform>,
-    /// Frame times (seconds, increasing).
-    pub times: Vec<f64>,
-    /// `rotations[frame][joint]`.
-    pub rotations: Vec<Vec<DQuat>>,
-    /// Joints whose translation is animated, with `translations[frame][i]` for the i-th.
-    pub moving: Vec<usize>,
-    /// Animated translations (metres).
-    pub translations: Vec<Vec<DVec3>>,
-}
-
-impl Rig {
-    /// A troupe skeleton playing `seq` (sampled every `seq.frame_time()`; DOFs without a
-    /// track stay at zero).
-    pub fn from_sequence(skeleton: &Skeleton, seq: &Sequence) -> Result<Rig> {
-        let mut bind = Vec::new();
-        for t in seq.tracks() {
-            bind.push((skeleton.dof(t.dof())?, t));
-        }
-        let ft = seq.frame_time();
-        let n = (seq.duration() / ft).round() as usize + 1;
-        if n > 10_000_000 {
-            return Err(Error::Invalid(format!("{n} frames is too many to export")));
-        }
-        let joints = skeleton.joints();
-        let zero = vec![0.0; skeleton.dof_count()];
-        let moving: Vec<usize> = (0..joints.len())
-            .filter(|&j| {
-                joints[j]
-                    .dofs
-                    .clone()
-                    .any(|d| skeleton.dofs()[d].kind == DofKind::Translation)
-            })
-            .collect();
-        let mut rig = Rig {
-            names: joints.iter().map(|j| j.name.clone()).collect(),
-            parents: joints.iter().map(|j| j.parent).collect(),
-            rest: (0..joints.len())
-                .map(|j| local_transform(skeleton, j, &zero))
-                .collect(),
-            times: Vec::with_capacity(n),
-            rotations: Vec::with_capacity(n),
-            moving: moving.clone(),
-            translations: Vec::with_capacity(n),
-        };
-        let mut q = zero.clone();
-        let mut cursors = vec![0usize; bind.len()];
-        for k in 0..n {
-            let t = seq.start() + k as f64 * ft;
-            for (i, (d, track)) in bind.iter().enumerate() {
-                q[*d] = track.value_at(t, &mut cursors[i]);
-            }
-            let locals: Vec<Transform> = (0..joints.len())
-                .map(|j| local_transform(skeleton, j, &q))
-                .collect();
-            rig.times.push(t - seq.start());
-            rig.rotations
-                .push(locals.iter().map(|l| l.rotation).collect());
-            rig.translations
-                .push(moving.iter().map(|&j| locals[j].translation).collect());
-        }
-        Ok(rig)
-    }
-
-    /// A BVH motion on its own hierarchy; lengths are multiplied by `scale` (metres per
-    /// file unit). End sites become leaf joints named `<joint>_end`.
-    pub fn from_bvh(bvh: &Bvh, scale: f64) -> Rig {
-        let joints = bvh.joints();
-        let mut names: Vec<String> = joints.iter().map(|j| j.name.clone()).collect();
-        let mut parents: Vec<Option<usize>> = joints.iter().map(|j| j.parent).collect();
-        let mut rest: Vec<Transform> = joints
-            .iter()
-            .map(|j| Transform::from_translation(j.offset * scale))
-            .collect();
-        let mut ends = Vec::new();
-        for (j, jt) in joints.iter().enumerate() {
-            for (e, off) in jt.end_sites.iter().enumerate() {
-                let suffix = if e == 0 {
-                    String::new()
-                } else {
-                    format!("{e}")
-                };
-                names.push(format!("{}_end{suffix}", jt.name));
-                parents.push(Some(j));
-                rest.push(Transform::from_translation(*off * scale));
-                ends.push(j);
-            }
-        }
-        let moving: Vec<usize> = (0..joints.len())
-            .filter(|&j| {
-                joints[j]
-                    .channels
-                    .iter()
-                    .any(|c| matches!(c, crate::bvh::Channel::Position(_)))
-            })
-            .collect();
-        let n = bvh.frame_count();
-        let mut rig = Rig {
-            names,
-            parents,
-            rest,
-            times: (0..n).map(|k| k as f64 * bvh.frame_time()).collect(),
-            rotations: Vec::with_capacity(n),
-            moving: moving.clone(),
-            translations: Vec::with_capacity(n),
-        };
-        for k in 0..n {
-            let frame = bvh.frame(k);
-            let locals: Vec<Transform> = (0..joints.len())
-                .map(|j| bvh.local_transform(j, frame))
-                .collect();
-            let mut rots: Vec<DQuat> = locals.iter().map(|l| l.rotation).collect();
-            rots.extend(ends.iter().map(|_| DQuat::IDENTITY));
-            rig.rotations.push(rots);
-            rig.translations.push(
-                moving
-                    .iter()
-                    .map(|&j| locals[j].translation * scale)
-                    .collect(),
-            );
-        }
-        rig
-    }
-
-    /// Global rest transforms.
-    fn rest_globals(&self) -> Vec<Transform> {
-        let mut g: Vec<Transform> = Vec::with_capacity(self.rest.len());
-        for (j, local) in self.rest.iter().enumerate() {
-            let t = match self.parents[j] {
-                Some(p) => g[p].mul(local),
-                None => *local,
-            };
-            g.push(t);
-        }
-        g
-    }
-}
+/// The rig glTF files are written from.
+pub use crate::rig::Rig;
 
 /// A growing binary buffer with its buffer views and accessors.
 struct Buffer {
@@ -316,41 +167,10 @@ pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
     std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
 }
 
-/// Global joint positions of a rig at frame `k` (for checks and tests).
-pub fn rig_positions(rig: &Rig, k: usize) -> Vec<DVec3> {
-    let mut g: Vec<Transform> = Vec::with_capacity(rig.names.len());
-    let mut moving = rig.moving.iter().enumerate();
-    let mut next = moving.next();
-    for j in 0..rig.names.len() {
-        let mut local = Transform::new(rig.rotations[k][j], rig.rest[j].translation);
-        if let Some((i, &m)) = next {
-            if m == j {
-                local.translation = rig.translations[k][i];
-                next = moving.next();
-            }
-        }
-        let t = match rig.parents[j] {
-            Some(p) => g[p].mul(&local),
-            None => local,
-        };
-        g.push(t);
-    }
-    g.iter().map(|t| t.translation).collect()
-}
-
-/// Check that a troupe rig reproduces forward kinematics (used by tests).
-#[doc(hidden)]
-pub fn fk_positions(skeleton: &Skeleton, q: &[f64]) -> Vec<DVec3> {
-    let mut g = vec![Transform::IDENTITY; skeleton.joints().len()];
-    forward_kinematics(skeleton, q, &mut g);
-    g.iter().map(|t| t.translation).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::read_bvh;
-    use troupe_body::template::template;
+    use crate::bvh::{fixtures, read_bvh};
 
     fn check_consistent(doc: &Value, bin: &[u8]) {
         assert_eq!(doc["asset"]["version"], "2.0");
@@ -401,19 +221,9 @@ mod tests {
     }
 
     #[test]
-    fn bvh_export_is_consistent_and_matches_fk() {
-        let path = format!(
-            "{}/../../../shared/data/bvh/pybvhrepo_cmu_12_01_walk.bvh",
-            env!("CARGO_MANIFEST_DIR")
-        );
-        let bvh = read_bvh(path).unwrap();
+    fn bvh_export_is_consistent() {
+        let bvh = read_bvh(fixtures::data("pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
         let rig = Rig::from_bvh(&bvh, 0.056444);
-        for k in [0, 100, 523] {
-            let p = rig_positions(&rig, k);
-            for (a, b) in p.iter().zip(bvh.joint_positions(k)) {
-                assert!((*a - b * 0.056444).length() < 1e-9);
-            }
-        }
         let dir = std::env::temp_dir().join(format!("troupe-gltf-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("walk.gltf");
@@ -424,34 +234,5 @@ mod tests {
         check_consistent(&doc, &bin);
         assert_eq!(doc["nodes"].as_array().unwrap().len(), 31 + 7);
         std::fs::remove_dir_all(dir).ok();
-    }
-
-    #[test]
-    fn troupe_export_reproduces_forward_kinematics() {
-        let t = template("adult").unwrap();
-        let s = t.instantiate(t.default_params()).unwrap();
-        let mut seq = Sequence::new("wave");
-        use troupe_motion::sequence::{Key, Track};
-        for (dof, v) in [
-            ("l_shoulder_abduction", 1.2),
-            ("root_x", 0.5),
-            ("l_elbow_flexion", 0.8),
-        ] {
-            seq.add_track(Track::new(dof, vec![Key::new(0.0, 0.0), Key::new(1.0, v)]).unwrap())
-                .unwrap();
-        }
-        seq.meta.insert("rate".into(), "10".into());
-        let rig = Rig::from_sequence(&s, &seq).unwrap();
-        assert_eq!(rig.times.len(), 11);
-        let mut q = vec![0.0; s.dof_count()];
-        for tr in seq.tracks() {
-            q[s.dof(tr.dof()).unwrap()] = tr.value(0.7);
-        }
-        let want = fk_positions(&s, &q);
-        for (a, b) in rig_positions(&rig, 7).iter().zip(&want) {
-            assert!((*a - *b).length() < 1e-9, "{a} {b}");
-        }
-        let (doc, bin) = to_gltf(&rig, "wave", "wave.bin");
-        check_consistent(&doc, &bin);
     }
 }

@@ -244,7 +244,8 @@ fn sample_vec3(input: &[f32], output: &[f32], t: f64) -> DVec3 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::gltf::{fk_positions, write_gltf, Rig};
+    use crate::gltf::{write_gltf, Rig};
+    use crate::rig::tests::fk_positions;
     use troupe_body::template::template;
 
     #[test]

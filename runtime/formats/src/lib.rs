@@ -6,6 +6,8 @@ pub mod error;
 pub mod gltf;
 pub mod gltf_import;
 pub mod retarget;
+pub mod rig;
 pub mod trk;
 
 pub use error::{Error, Result};
+pub use rig::Rig;
