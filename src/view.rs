@@ -144,7 +144,7 @@ fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
             let sequence = if ext == "bvh" {
                 troupe_formats::retarget::load_sequence_for(&skeleton, path)?
             } else {
-                troupe_formats::gltf_import::read_gltf_motion(path, &skeleton)?
+                troupe_formats::gltf::read_gltf_motion(path, &skeleton)?
             };
             Ok(vec![Performer {
                 name: sequence.name.clone(),

@@ -4,7 +4,6 @@
 pub mod bvh;
 pub mod error;
 pub mod gltf;
-pub mod gltf_import;
 pub mod retarget;
 pub mod rig;
 pub mod trk;

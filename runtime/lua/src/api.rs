@@ -446,7 +446,7 @@ pub fn load_sequence(
         )),
     };
     let seq = match &skeleton {
-        Some(skel) if ext == "gltf" => troupe_formats::gltf_import::read_gltf_motion(&full, skel),
+        Some(skel) if ext == "gltf" => troupe_formats::gltf::read_gltf_motion(&full, skel),
         Some(skel) => troupe_formats::retarget::load_sequence_for(skel, &full),
         None => troupe_formats::trk::read_trk(&full),
     };
