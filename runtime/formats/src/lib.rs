@@ -7,6 +7,7 @@ pub mod gltf;
 pub mod retarget;
 pub mod rig;
 pub mod trk;
+pub mod urdf;
 
 pub use error::{Error, Result};
 pub use rig::Rig;
