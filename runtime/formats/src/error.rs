@@ -22,6 +22,14 @@ pub enum Error {
         line: usize,
         message: String,
     },
+    /// A file whose extension names no motion format troupe reads or writes.
+    #[error(
+        "{path}: cannot read or write `{extension}` motion files (use .trk, .bvh, .gltf or .glb)"
+    )]
+    UnknownFormat { path: String, extension: String },
+    /// A file whose motion is bound to a body (BVH, glTF), loaded without one.
+    #[error("{path}: a {format} motion plays on a body; give the skeleton to load it onto")]
+    NeedsBody { path: String, format: String },
     /// A file that could not be read or written.
     #[error("{path}: {message}")]
     Io { path: String, message: String },

@@ -452,23 +452,15 @@ pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result
     Ok(seq)
 }
 
-/// Loads a sequence to play on `skeleton`: a `.trk` file is read as it is (its first
-/// sequence); a `.bvh` on troupe's own hierarchy is read back exactly
-/// ([`troupe_named_motion`]); any other `.bvh` is retargeted with the map in `<file>.map`
+/// Reads a BVH file to play on `skeleton`: a BVH on troupe's own hierarchy is read back
+/// exactly ([`troupe_named_motion`]); any other is retargeted with the map in `<file>.map`
 /// beside it if that exists, else the built-in map (CMU or Mixamo) that matches its joint
-/// names best.
+/// names best. (Other formats: [`crate::load_sequence`].)
 pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let is_bvh = path
-        .extension()
-        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("bvh"));
-    if !is_bvh {
-        let mut set = crate::trk::read_trk_set(path)?;
-        return Ok(set.remove(0));
-    }
     let bvh = read_bvh(path)?;
     if is_troupe_rig(skeleton, &bvh) {
         return troupe_named_motion(skeleton, &bvh, &name);
