@@ -22,6 +22,12 @@ pub enum Error {
         line: usize,
         message: String,
     },
+    /// A rotation order that is not three distinct axes.
+    #[error("bad rotation order `{0}`: three distinct axes of X, Y and Z, e.g. ZXY")]
+    RotationOrder(String),
+    /// A retargeting map that cannot map a BVH onto a troupe body.
+    #[error("retarget map `{map}`: {message}")]
+    Retarget { map: String, message: String },
     /// A file whose extension names no motion format troupe reads or writes.
     #[error(
         "{path}: cannot read or write `{extension}` motion files (use .trk, .bvh, .gltf or .glb)"

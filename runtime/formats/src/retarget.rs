@@ -208,10 +208,10 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
         };
         let ti = skeleton.joint(t)?;
         if pairs.iter().any(|p| p.0 == ti) {
-            return Err(Error::Invalid(format!(
-                "retarget map `{}`: troupe joint `{t}` mapped twice",
-                map.name
-            )));
+            return Err(Error::Retarget {
+                map: map.name.clone(),
+                message: format!("troupe joint `{t}` mapped twice"),
+            });
         }
         pairs.push((ti, bi, order));
     }
@@ -221,11 +221,13 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
         .position(|j| j.parent.is_none())
         .unwrap_or(0);
     if !pairs.iter().any(|p| p.0 == root) {
-        return Err(Error::Invalid(format!(
-            "retarget map `{}` does not map the BVH onto troupe's root `{}`",
-            map.name,
-            skeleton.joints()[root].name
-        )));
+        return Err(Error::Retarget {
+            map: map.name.clone(),
+            message: format!(
+                "does not map the BVH onto troupe's root `{}`",
+                skeleton.joints()[root].name
+            ),
+        });
     }
     pairs.sort_by_key(|p| p.0);
 
@@ -303,10 +305,13 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
             match dof.kind {
                 DofKind::Rotation => {
                     if axes.contains(&ax) {
-                        return Err(Error::Invalid(format!(
-                            "joint `{}`: two rotation DOFs about one axis",
-                            joint.name
-                        )));
+                        return Err(Error::Retarget {
+                            map: map.name.clone(),
+                            message: format!(
+                                "joint `{}` has two rotation DOFs about one axis",
+                                joint.name
+                            ),
+                        });
                     }
                     axes.push(ax);
                     dofs.push((d, sign));

@@ -47,14 +47,7 @@ impl Rig {
             bind.push((skeleton.dof(t.dof())?, t));
         }
         let ft = seq.frame_time();
-        let n = (seq.duration() / ft).round() as usize + 1;
-        if n > MAX_FRAMES {
-            return Err(Error::invalid_value(
-                "frame count to export",
-                n as f64,
-                format!("at most {MAX_FRAMES}"),
-            ));
-        }
+        let n = sampled_frames(seq)?;
         let joints = skeleton.joints();
         let zero = vec![0.0; skeleton.dof_count()];
         let moving: Vec<usize> = (0..joints.len())
@@ -119,6 +112,20 @@ impl Rig {
     pub fn positions(&self, k: usize) -> Vec<DVec3> {
         self.globals(k).iter().map(|t| t.translation).collect()
     }
+}
+
+/// How many frames `seq` has when sampled every `seq.frame_time()` from its start to its
+/// end, at most [`MAX_FRAMES`].
+pub fn sampled_frames(seq: &Sequence) -> Result<usize> {
+    let n = (seq.duration() / seq.frame_time()).round() as usize + 1;
+    if n > MAX_FRAMES {
+        return Err(Error::invalid_value(
+            "frame count",
+            n as f64,
+            format!("at most {MAX_FRAMES}"),
+        ));
+    }
+    Ok(n)
 }
 
 /// Forward kinematics of a parent-first hierarchy: `globals[j] = globals[parent(j)] ·

@@ -139,15 +139,11 @@ impl FromStr for RotationOrder {
                 _ => None,
             })
             .collect::<Option<_>>()
-            .ok_or_else(|| Error::Invalid(format!("bad rotation order `{s}` (e.g. ZXY)")))?;
+            .ok_or_else(|| Error::RotationOrder(s.to_string()))?;
         RotationOrder::ALL
             .into_iter()
             .find(|o| o.0[..] == axes[..])
-            .ok_or_else(|| {
-                Error::Invalid(format!(
-                    "bad rotation order `{s}`: three distinct axes, e.g. ZXY"
-                ))
-            })
+            .ok_or_else(|| Error::RotationOrder(s.to_string()))
     }
 }
 

@@ -3,8 +3,8 @@
 
 use super::channel::Channel;
 use super::motion::Bvh;
-use crate::error::{Error, Result};
-use crate::rig::MAX_FRAMES;
+use crate::error::Result;
+use crate::rig::sampled_frames;
 use troupe_motion::sequence::{Key, Sequence, Track};
 
 impl Bvh {
@@ -52,14 +52,7 @@ impl Bvh {
     /// track keeps this motion's value at the same frame (its last frame past the end).
     pub fn with_channel_sequence(&self, seq: &Sequence, scale: f64) -> Result<Bvh> {
         let ft = seq.frame_time();
-        let n = (seq.duration() / ft).round() as usize + 1;
-        if n > MAX_FRAMES {
-            return Err(Error::invalid_value(
-                "BVH frame count",
-                n as f64,
-                format!("at most {MAX_FRAMES}"),
-            ));
-        }
+        let n = sampled_frames(seq)?;
         let mut data = Vec::with_capacity(n * self.channel_count());
         let tracks: Vec<Option<&Track>> = self
             .joints()
