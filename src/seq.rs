@@ -169,6 +169,12 @@ fn load(path: &Path, scale: f64) -> Result<Loaded> {
             bvh: Some(bvh),
         });
     }
+    if Format::of(path)?.binds_to_body() {
+        bail!(
+            "{}: glTF input needs --template (the body to read it onto)",
+            path.display()
+        );
+    }
     let mut set = load_sequences(path, None)?;
     if set.len() != 1 {
         tracing::warn!(

@@ -18,15 +18,15 @@ use troupe_viewer::{
 /// Options of `troupe view`.
 #[derive(Args)]
 #[command(
-    about = "Play a recording (.trk, .bvh, .gltf) on actors: in a window, or headless into PNG frames",
-    long_about = "Play a recording (.trk, .bvh, .gltf) on actors. With a display (DISPLAY or \
+    about = "Play a recording (.trk, .bvh, .gltf, .glb) on actors: in a window, or headless into PNG frames",
+    long_about = "Play a recording (.trk, .bvh, .gltf, .glb) on actors. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
         actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
-    /// The recording to play (.trk, possibly several actors; .bvh; or .gltf written by troupe).
+    /// The recording to play (.trk, possibly several actors; .bvh; or .gltf/.glb written by troupe).
     file: PathBuf,
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
