@@ -68,3 +68,27 @@ impl Error {
 
 /// The formats crate's result type.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Asserts that parsing `text` failed with an [`Error::Parse`] naming `file`, `line` and a
+/// message containing `needle` (for the readers' tests).
+#[cfg(test)]
+pub(crate) fn assert_parse_error<T: std::fmt::Debug>(
+    result: Result<T>,
+    text: &str,
+    file: &str,
+    line: usize,
+    needle: &str,
+) {
+    match result {
+        Err(Error::Parse {
+            file: f,
+            line: l,
+            message,
+        }) => {
+            assert_eq!(f, file);
+            assert_eq!(l, line, "{text:?}: {message}");
+            assert!(message.contains(needle), "{text:?}: {message}");
+        }
+        other => panic!("{text:?}: {other:?}"),
+    }
+}

@@ -482,7 +482,9 @@ pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_body::template::template;
+    use crate::bvh::{from_rig, parse_bvh};
+    use crate::rig::tests::{adult, every_dof_moving, fk_positions, posture};
+    use crate::rig::Rig;
 
     fn data(name: &str) -> std::path::PathBuf {
         format!(
@@ -490,11 +492,6 @@ mod tests {
             env!("CARGO_MANIFEST_DIR")
         )
         .into()
-    }
-
-    fn adult() -> Skeleton {
-        let t = template("adult").unwrap();
-        t.instantiate(t.default_params()).unwrap()
     }
 
     fn fk(s: &Skeleton, seq: &Sequence, t: f64) -> Vec<Transform> {
@@ -587,5 +584,38 @@ mod tests {
         // The root stands at troupe's height: BVH hips 90 above the feet → troupe's root.
         assert!(seq.track("root_y").unwrap().value(0.0).abs() < 1e-9);
         assert!(RetargetMap::parse("a b c\n", "m").is_err());
+    }
+
+    #[test]
+    fn a_troupe_motion_exported_as_bvh_keeps_every_joint_position() {
+        let skel = adult();
+        let seq = every_dof_moving(&skel, 5, 0.2, "50");
+        let rig = Rig::from_sequence(&skel, &seq).unwrap();
+        let order: RotationOrder = "ZXY".parse().unwrap();
+        let bvh = from_rig(&rig, seq.frame_time(), order, 100.0).unwrap();
+        let back = parse_bvh(&bvh.to_bvh_string(), "export.bvh").unwrap();
+        // Read back onto the same body, the motion gives the same postures.
+        assert!(is_troupe_rig(&skel, &back));
+        let replay = troupe_named_motion(&skel, &back, "replay").unwrap();
+        for k in [0, 13, 40] {
+            let time = k as f64 * seq.frame_time();
+            let expected = fk_positions(&skel, &posture(&skel, &seq, time));
+            let replayed = fk_positions(&skel, &posture(&skel, &replay, time));
+            for (e, r) in expected.iter().zip(replayed) {
+                assert!(
+                    (*e - r).length() < 1e-6,
+                    "replayed posture at frame {k}: {e} vs {r}"
+                );
+            }
+            let got = back.joint_positions(k);
+            for (j, (e, g)) in expected.iter().zip(&got).enumerate() {
+                assert!(
+                    (*e - *g / 100.0).length() < 1e-6,
+                    "frame {k} joint {}: {e} vs {}",
+                    skel.joints()[j].name,
+                    *g / 100.0
+                );
+            }
+        }
     }
 }

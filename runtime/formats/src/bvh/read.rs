@@ -281,6 +281,7 @@ mod tests {
     use super::*;
     use crate::bvh::fixtures::{data, shared_files};
     use crate::bvh::Axis;
+    use crate::error::assert_parse_error;
 
     #[test]
     fn every_shared_file_imports_with_the_documented_shape() {
@@ -357,18 +358,7 @@ mod tests {
             ),
         ];
         for (text, line, needle) in cases {
-            match parse_bvh(text, "f.bvh") {
-                Err(Error::Parse {
-                    file,
-                    line: l,
-                    message,
-                }) => {
-                    assert_eq!(file, "f.bvh");
-                    assert_eq!(l, line, "{text:?}: {message}");
-                    assert!(message.contains(needle), "{text:?}: {message}");
-                }
-                other => panic!("{text:?}: {other:?}"),
-            }
+            assert_parse_error(parse_bvh(text, "f.bvh"), text, "f.bvh", line, needle);
         }
         // A wrong `Frames:` count is a warning; the rows are used.
         let more = ok.replace("Frames: 2", "Frames: 99999999999");
