@@ -13,3 +13,14 @@ if ((${#missing[@]})); then
   $SUDO DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
 fi
 command -v cargo >/dev/null || { echo "setup: Rust (cargo) is required: https://rustup.rs" >&2; exit 1; }
+# The Khronos glTF validator, for the test that checks the glTF files troupe writes
+# (runtime/formats/tests/khronos_validator.rs, which is skipped with a note without it).
+# Installed from the npm registry only, into .tools/node, once.
+GLTF_VALIDATOR=2.0.0-dev.3.10
+tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/node"
+if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/package.json" ]; then
+  echo "setup: installing gltf-validator@$GLTF_VALIDATOR into $tools" >&2
+  mkdir -p "$tools"
+  npm install --prefix "$tools" --no-save --no-audit --no-fund "gltf-validator@$GLTF_VALIDATOR" >&2 ||
+    echo "setup: could not install gltf-validator; its test will be skipped" >&2
+fi

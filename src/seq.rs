@@ -12,9 +12,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 use troupe_formats::bvh::{read_bvh, write_bvh, Bvh, RotationOrder};
-use troupe_formats::gltf::{write_gltf, Rig};
 use troupe_formats::retarget::{retarget, RetargetMap};
-use troupe_formats::trk::{read_trk_set, write_trk};
+use troupe_formats::{load_sequence, load_sequences, save_rig, save_sequences, Format, Rig};
 use troupe_motion::offline::compress::{compress_pyramid, compress_spline, SplineOptions};
 use troupe_motion::offline::pyramid::{self, Grid};
 use troupe_motion::offline::warp::{squeeze_stretch, warp_sequence, TimeWarp};
@@ -46,21 +45,22 @@ enum SeqCommand {
         #[arg(long)]
         json: bool,
     },
-    /// Converts between .bvh, .trk and .gltf (BVH rotation order chosen on output).
+    /// Converts between .bvh, .trk, .gltf and .glb (BVH rotation order chosen on output).
     Convert {
-        /// Input .bvh or .trk.
+        /// Input .bvh or .trk (or, with --template, a .gltf/.glb written by troupe).
         input: PathBuf,
-        /// Output .bvh, .trk or .gltf.
+        /// Output .bvh, .trk, .gltf or .glb.
         output: PathBuf,
         /// Rotation order written to a BVH output (e.g. ZXY); default: as read.
         #[arg(long)]
         rotation_order: Option<String>,
-        /// Retarget a BVH onto this body template (e.g. `adult`), or play a .trk on it for
-        /// glTF output.
+        /// Play the input on this body template (e.g. `adult`): a BVH is retargeted onto it
+        /// (read back exactly if it is troupe's own hierarchy), a .trk or glTF played on it;
+        /// the output may then be .trk, .bvh (on the template's hierarchy) or glTF.
         #[arg(long)]
         template: Option<String>,
-        /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: detect
-        /// CMU or Mixamo names.
+        /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: the
+        /// `.map` beside the BVH, else detect CMU or Mixamo names.
         #[arg(long)]
         map: Option<PathBuf>,
     },
@@ -153,42 +153,46 @@ struct Loaded {
     bvh: Option<Bvh>,
 }
 
-fn is_ext(path: &Path, ext: &str) -> bool {
-    path.extension()
-        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case(ext))
-}
-
+/// Loads the sequence of an input: a BVH as its own channels (keeping the motion, to write
+/// BVH back); any other file through the dispatch (the first sequence of a `.trk`).
 fn load(path: &Path, scale: f64) -> Result<Loaded> {
-    let name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    if is_ext(path, "bvh") {
+    if Format::of(path)? == Format::Bvh {
+        let name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let bvh = read_bvh(path)?;
         let mut seq = bvh.to_channel_sequence(&name, scale)?;
         seq.meta.insert("source".into(), path.display().to_string());
-        Ok(Loaded {
+        return Ok(Loaded {
             seq,
             bvh: Some(bvh),
-        })
-    } else {
-        let mut set = read_trk_set(path)?;
-        if set.len() != 1 {
-            tracing::warn!(
-                "{}: {} sequences; using the first",
-                path.display(),
-                set.len()
-            );
-        }
-        Ok(Loaded {
-            seq: set.remove(0),
-            bvh: None,
-        })
+        });
     }
+    if Format::of(path)?.binds_to_body() {
+        bail!(
+            "{}: glTF input needs --template (the body to read it onto)",
+            path.display()
+        );
+    }
+    let mut set = load_sequences(path, None)?;
+    if set.len() != 1 {
+        tracing::warn!(
+            "{}: {} sequences; using the first",
+            path.display(),
+            set.len()
+        );
+    }
+    Ok(Loaded {
+        seq: set.remove(0),
+        bvh: None,
+    })
 }
 
+/// Saves an edited sequence: to BVH on the hierarchy of the BVH input it came from,
+/// otherwise through the dispatch (a `.trk`).
 fn save(path: &Path, seq: &Sequence, template: Option<&Bvh>, scale: f64) -> Result<()> {
-    if is_ext(path, "bvh") {
+    if Format::of(path)? == Format::Bvh {
         let Some(b) = template else {
             bail!(
                 "{}: writing BVH needs a BVH input (its hierarchy)",
@@ -202,7 +206,7 @@ fn save(path: &Path, seq: &Sequence, template: Option<&Bvh>, scale: f64) -> Resu
             .unwrap_or(scale);
         write_bvh(path, &b.with_channel_sequence(seq, scale)?)?;
     } else {
-        write_trk(path, std::slice::from_ref(seq))?;
+        save_sequences(path, std::slice::from_ref(seq), [])?;
     }
     Ok(())
 }
@@ -377,35 +381,34 @@ fn convert(
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let gltf_out = is_ext(output, "gltf");
+    let input_format = Format::of(input)?;
+    let output_format = Format::of(output)?;
+    let gltf_out = matches!(output_format, Format::Gltf | Format::Glb);
     if let Some(t) = template {
         let t = troupe_body::template(&t)?;
         let skeleton = t.instantiate(t.default_params())?;
-        let seq = if is_ext(input, "bvh") {
-            let bvh = read_bvh(input)?;
-            let map = match map {
-                Some(m) => RetargetMap::read(m)?,
-                None => RetargetMap::detect(&bvh),
-            };
-            println!("retargeting with the `{}` map", map.name);
-            retarget(&skeleton, &bvh, &map, &name)?
-        } else {
-            load(input, scale)?.seq
+        let seq = match (input_format, map) {
+            (Format::Bvh, Some(m)) => {
+                retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)?
+            }
+            (Format::Trk, _) => load(input, scale)?.seq,
+            _ => load_sequence(input, Some(&skeleton))?,
         };
-        if gltf_out {
-            write_gltf(output, &Rig::from_sequence(&skeleton, &seq)?, &name)?;
-        } else if is_ext(output, "bvh") {
-            bail!("BVH output of a retargeted sequence is not supported; write .trk or .gltf");
-        } else {
-            write_trk(output, std::slice::from_ref(&seq))?;
+        if let Some(map) = seq.meta.get("retarget_map") {
+            println!("retargeting with the `{map}` map");
         }
-    } else if is_ext(input, "bvh") && (is_ext(output, "bvh") || gltf_out) {
+        save_sequences(
+            output,
+            std::slice::from_ref(&seq),
+            [(name.as_str(), &skeleton)],
+        )?;
+    } else if input_format == Format::Bvh && (output_format == Format::Bvh || gltf_out) {
         let mut b = read_bvh(input)?;
         if let Some(o) = order {
             b = b.with_rotation_order(o);
         }
         if gltf_out {
-            write_gltf(output, &Rig::from_bvh(&b, scale), &name)?;
+            save_rig(output, &Rig::from_bvh(&b, scale), &name, b.frame_time())?;
         } else {
             write_bvh(output, &b)?;
         }
@@ -424,7 +427,11 @@ fn convert(
 }
 
 fn info(file: &Path, frame: usize, positions: bool, as_json: bool, scale: f64) -> Result<()> {
-    if is_ext(file, "bvh") {
+    let format = Format::of(file)?;
+    if format.binds_to_body() && format != Format::Bvh {
+        bail!("{}: `seq info` reads .bvh and .trk files", file.display());
+    }
+    if format == Format::Bvh {
         let b = read_bvh(file)?;
         let joints: Vec<_> = b
             .joints()
@@ -497,7 +504,7 @@ fn info(file: &Path, frame: usize, positions: bool, as_json: bool, scale: f64) -
             }
         }
     } else {
-        let set = read_trk_set(file)?;
+        let set = load_sequences(file, None)?;
         if positions {
             bail!("--positions needs a BVH file (a .trk has no hierarchy)");
         }

@@ -8,7 +8,6 @@ use std::process::ExitCode;
 use troupe_actions::Keyframe;
 use troupe_body::glam::DVec3;
 use troupe_body::DofKind;
-use troupe_formats::trk;
 use troupe_motion::Sequence;
 use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
 use troupe_viewer::{
@@ -19,15 +18,15 @@ use troupe_viewer::{
 /// Options of `troupe view`.
 #[derive(Args)]
 #[command(
-    about = "Play a recording (.trk, .bvh, .gltf) on actors: in a window, or headless into PNG frames",
-    long_about = "Play a recording (.trk, .bvh, .gltf) on actors. With a display (DISPLAY or \
+    about = "Play a recording (.trk, .bvh, .gltf, .glb) on actors: in a window, or headless into PNG frames",
+    long_about = "Play a recording (.trk, .bvh, .gltf, .glb) on actors. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
         actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
-    /// The recording to play (.trk, possibly several actors; .bvh; or .gltf written by troupe).
+    /// The recording to play (.trk, possibly several actors; .bvh; or .gltf/.glb written by troupe).
     file: PathBuf,
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
@@ -101,8 +100,6 @@ pub struct SnapshotArgs {
     spacing: f64,
 }
 
-/// Loads a recording to play on one actor. Every supported format is dispatched here, by
-/// file extension: add new loaders (BVH, glTF) as further arms.
 /// One actor of a recording: its sequence and the body it was recorded on.
 struct Performer {
     name: String,
@@ -111,53 +108,31 @@ struct Performer {
     height: Option<f64>,
 }
 
-/// Reads a recording by its extension: a `.trk` set plays one actor per sequence (on the
-/// template and height stored in its metadata, else `template`); a `.bvh` is retargeted
-/// onto `template`; a `.gltf` written by troupe is read back onto `template`.
+/// Reads a recording ([`troupe_formats::load_sequences`] chooses the reader): each
+/// sequence plays one actor, on the template and height stored in its metadata (a
+/// `--record` `.trk`), else on `template` — which a `.bvh` is retargeted onto and a
+/// `.gltf`/`.glb` written by troupe is read back onto.
 fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    match ext.as_str() {
-        "trk" => Ok(trk::read_trk_set(path)?
-            .into_iter()
-            .enumerate()
-            .map(|(i, sequence)| Performer {
-                name: if sequence.name.is_empty() {
-                    format!("actor{i}")
-                } else {
-                    sequence.name.clone()
-                },
-                template: sequence
-                    .meta
-                    .get("template")
-                    .cloned()
-                    .unwrap_or_else(|| template.to_string()),
-                height: sequence.meta.get("height").and_then(|h| h.parse().ok()),
-                sequence,
-            })
-            .collect()),
-        "bvh" | "gltf" => {
-            let t = troupe_body::template(template)?;
-            let skeleton = t.instantiate(t.default_params())?;
-            let sequence = if ext == "bvh" {
-                troupe_formats::retarget::load_sequence_for(&skeleton, path)?
+    let t = troupe_body::template(template)?;
+    let skeleton = t.instantiate(t.default_params())?;
+    Ok(troupe_formats::load_sequences(path, Some(&skeleton))?
+        .into_iter()
+        .enumerate()
+        .map(|(i, sequence)| Performer {
+            name: if sequence.name.is_empty() {
+                format!("actor{i}")
             } else {
-                troupe_formats::gltf_import::read_gltf_motion(path, &skeleton)?
-            };
-            Ok(vec![Performer {
-                name: sequence.name.clone(),
-                sequence,
-                template: template.to_string(),
-                height: None,
-            }])
-        }
-        _ => bail!(
-            "{}: cannot play `.{ext}` files; supported recordings: .trk, .bvh, .gltf",
-            path.display()
-        ),
-    }
+                sequence.name.clone()
+            },
+            template: sequence
+                .meta
+                .get("template")
+                .cloned()
+                .unwrap_or_else(|| template.to_string()),
+            height: sequence.meta.get("height").and_then(|h| h.parse().ok()),
+            sequence,
+        })
+        .collect())
 }
 
 pub(crate) fn has_display() -> bool {

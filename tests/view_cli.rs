@@ -112,7 +112,7 @@ fn view_refuses_unknown_formats() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("supported recordings: .trk, .bvh, .gltf"),
+        err.contains("`.fbx` motion files (use .trk, .bvh, .gltf or .glb)"),
         "{err}"
     );
     // A known format that is missing names the file.

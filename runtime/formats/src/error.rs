@@ -22,6 +22,20 @@ pub enum Error {
         line: usize,
         message: String,
     },
+    /// A rotation order that is not three distinct axes.
+    #[error("bad rotation order `{0}`: three distinct axes of X, Y and Z, e.g. ZXY")]
+    RotationOrder(String),
+    /// A retargeting map that cannot map a BVH onto a troupe body.
+    #[error("retarget map `{map}`: {message}")]
+    Retarget { map: String, message: String },
+    /// A file whose extension names no motion format troupe reads or writes.
+    #[error(
+        "{path}: cannot read or write `{extension}` motion files (use .trk, .bvh, .gltf or .glb)"
+    )]
+    UnknownFormat { path: String, extension: String },
+    /// A file whose motion is bound to a body (BVH, glTF), loaded without one.
+    #[error("{path}: a {format} motion plays on a body; give the skeleton to load it onto")]
+    NeedsBody { path: String, format: String },
     /// A file that could not be read or written.
     #[error("{path}: {message}")]
     Io { path: String, message: String },
@@ -54,3 +68,27 @@ impl Error {
 
 /// The formats crate's result type.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// Asserts that parsing `text` failed with an [`Error::Parse`] naming `file`, `line` and a
+/// message containing `needle` (for the readers' tests).
+#[cfg(test)]
+pub(crate) fn assert_parse_error<T: std::fmt::Debug>(
+    result: Result<T>,
+    text: &str,
+    file: &str,
+    line: usize,
+    needle: &str,
+) {
+    match result {
+        Err(Error::Parse {
+            file: f,
+            line: l,
+            message,
+        }) => {
+            assert_eq!(f, file);
+            assert_eq!(l, line, "{text:?}: {message}");
+            assert!(message.contains(needle), "{text:?}: {message}");
+        }
+        other => panic!("{text:?}: {other:?}"),
+    }
+}

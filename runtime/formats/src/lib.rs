@@ -1,11 +1,19 @@
-//! troupe's file formats: BVH in and out, glTF in and out, the native `.trk` track file,
-//! and retargeting between rigs.
+//! troupe's file formats: the native `.trk` track file, BVH and glTF in and out, URDF
+//! out, retargeting BVH motion onto troupe bodies, and the one [`Rig`] type the skeletal
+//! formats share.
+//!
+//! Callers that hold a path choose nothing themselves: [`load_sequences`] /
+//! [`load_sequence`] and [`save_sequences`] pick the format by extension ([`dispatch`]).
 
 pub mod bvh;
+pub mod dispatch;
 pub mod error;
 pub mod gltf;
-pub mod gltf_import;
 pub mod retarget;
+pub mod rig;
 pub mod trk;
+pub mod urdf;
 
+pub use dispatch::{load_sequence, load_sequences, save_rig, save_sequences, Format};
 pub use error::{Error, Result};
+pub use rig::Rig;

@@ -208,10 +208,10 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
         };
         let ti = skeleton.joint(t)?;
         if pairs.iter().any(|p| p.0 == ti) {
-            return Err(Error::Invalid(format!(
-                "retarget map `{}`: troupe joint `{t}` mapped twice",
-                map.name
-            )));
+            return Err(Error::Retarget {
+                map: map.name.clone(),
+                message: format!("troupe joint `{t}` mapped twice"),
+            });
         }
         pairs.push((ti, bi, order));
     }
@@ -221,11 +221,13 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
         .position(|j| j.parent.is_none())
         .unwrap_or(0);
     if !pairs.iter().any(|p| p.0 == root) {
-        return Err(Error::Invalid(format!(
-            "retarget map `{}` does not map the BVH onto troupe's root `{}`",
-            map.name,
-            skeleton.joints()[root].name
-        )));
+        return Err(Error::Retarget {
+            map: map.name.clone(),
+            message: format!(
+                "does not map the BVH onto troupe's root `{}`",
+                skeleton.joints()[root].name
+            ),
+        });
     }
     pairs.sort_by_key(|p| p.0);
 
@@ -303,10 +305,13 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
             match dof.kind {
                 DofKind::Rotation => {
                     if axes.contains(&ax) {
-                        return Err(Error::Invalid(format!(
-                            "joint `{}`: two rotation DOFs about one axis",
-                            joint.name
-                        )));
+                        return Err(Error::Retarget {
+                            map: map.name.clone(),
+                            message: format!(
+                                "joint `{}` has two rotation DOFs about one axis",
+                                joint.name
+                            ),
+                        });
                     }
                     axes.push(ax);
                     dofs.push((d, sign));
@@ -452,23 +457,15 @@ pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result
     Ok(seq)
 }
 
-/// Loads a sequence to play on `skeleton`: a `.trk` file is read as it is (its first
-/// sequence); a `.bvh` on troupe's own hierarchy is read back exactly
-/// ([`troupe_named_motion`]); any other `.bvh` is retargeted with the map in `<file>.map`
+/// Reads a BVH file to play on `skeleton`: a BVH on troupe's own hierarchy is read back
+/// exactly ([`troupe_named_motion`]); any other is retargeted with the map in `<file>.map`
 /// beside it if that exists, else the built-in map (CMU or Mixamo) that matches its joint
-/// names best.
+/// names best. (Other formats: [`crate::load_sequence`].)
 pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let is_bvh = path
-        .extension()
-        .is_some_and(|e| e.to_string_lossy().eq_ignore_ascii_case("bvh"));
-    if !is_bvh {
-        let mut set = crate::trk::read_trk_set(path)?;
-        return Ok(set.remove(0));
-    }
     let bvh = read_bvh(path)?;
     if is_troupe_rig(skeleton, &bvh) {
         return troupe_named_motion(skeleton, &bvh, &name);
@@ -485,7 +482,9 @@ pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use troupe_body::template::template;
+    use crate::bvh::{from_rig, parse_bvh};
+    use crate::rig::tests::{adult, every_dof_moving, fk_positions, posture};
+    use crate::rig::Rig;
 
     fn data(name: &str) -> std::path::PathBuf {
         format!(
@@ -493,11 +492,6 @@ mod tests {
             env!("CARGO_MANIFEST_DIR")
         )
         .into()
-    }
-
-    fn adult() -> Skeleton {
-        let t = template("adult").unwrap();
-        t.instantiate(t.default_params()).unwrap()
     }
 
     fn fk(s: &Skeleton, seq: &Sequence, t: f64) -> Vec<Transform> {
@@ -590,5 +584,38 @@ mod tests {
         // The root stands at troupe's height: BVH hips 90 above the feet → troupe's root.
         assert!(seq.track("root_y").unwrap().value(0.0).abs() < 1e-9);
         assert!(RetargetMap::parse("a b c\n", "m").is_err());
+    }
+
+    #[test]
+    fn a_troupe_motion_exported_as_bvh_keeps_every_joint_position() {
+        let skel = adult();
+        let seq = every_dof_moving(&skel, 5, 0.2, "50");
+        let rig = Rig::from_sequence(&skel, &seq).unwrap();
+        let order: RotationOrder = "ZXY".parse().unwrap();
+        let bvh = from_rig(&rig, seq.frame_time(), order, 100.0).unwrap();
+        let back = parse_bvh(&bvh.to_bvh_string(), "export.bvh").unwrap();
+        // Read back onto the same body, the motion gives the same postures.
+        assert!(is_troupe_rig(&skel, &back));
+        let replay = troupe_named_motion(&skel, &back, "replay").unwrap();
+        for k in [0, 13, 40] {
+            let time = k as f64 * seq.frame_time();
+            let expected = fk_positions(&skel, &posture(&skel, &seq, time));
+            let replayed = fk_positions(&skel, &posture(&skel, &replay, time));
+            for (e, r) in expected.iter().zip(replayed) {
+                assert!(
+                    (*e - r).length() < 1e-6,
+                    "replayed posture at frame {k}: {e} vs {r}"
+                );
+            }
+            let got = back.joint_positions(k);
+            for (j, (e, g)) in expected.iter().zip(&got).enumerate() {
+                assert!(
+                    (*e - *g / 100.0).length() < 1e-6,
+                    "frame {k} joint {}: {e} vs {}",
+                    skel.joints()[j].name,
+                    *g / 100.0
+                );
+            }
+        }
     }
 }

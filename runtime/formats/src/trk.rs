@@ -211,6 +211,7 @@ pub fn write_trk(path: impl AsRef<Path>, set: &[Sequence]) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::error::assert_parse_error;
     use proptest::prelude::*;
 
     const WAVE: &str = "troupe-trk 1\n# a wave\nsequence wave\nloop true\nmeta rate 100\ntrack r_shoulder_abduction\n0 0\n0.5 1.2 0\n1 0\nend\n";
@@ -243,18 +244,7 @@ mod tests {
             ("troupe-trk 1\ntrack x\n0 inf\nend\n", 3, "finite"),
         ];
         for (text, line, needle) in cases {
-            match parse_trk(text, "f.trk") {
-                Err(Error::Parse {
-                    file,
-                    line: l,
-                    message,
-                }) => {
-                    assert_eq!(file, "f.trk");
-                    assert_eq!(l, line, "{text:?}: {message}");
-                    assert!(message.contains(needle), "{message}");
-                }
-                other => panic!("{text:?}: {other:?}"),
-            }
+            assert_parse_error(parse_trk(text, "f.trk"), text, "f.trk", line, needle);
         }
     }
 

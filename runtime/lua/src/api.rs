@@ -364,22 +364,20 @@ pub fn resolve_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
     }
 }
 
-/// Loads a sequence file once per path (and per skeleton for BVH and glTF): a `.trk` as
-/// it is, a `.bvh` retargeted onto `skeleton` (the default adult when `None`) by
-/// [`troupe_formats::retarget::load_sequence_for`], a troupe `.gltf` read back onto `skeleton`.
+/// Loads a sequence file once per path (and per skeleton for BVH and glTF) with
+/// [`troupe_formats::load_sequence`]: a `.trk` as it is, a `.bvh`, `.gltf` or `.glb` onto
+/// `skeleton` (the default adult when `None`).
 pub fn load_sequence(
     lua: &Lua,
     path: &str,
     skeleton: Option<&Arc<Skeleton>>,
 ) -> mlua::Result<Arc<Sequence>> {
     let full = resolve_path(&stage(lua)?.base_dir, path);
-    let ext = full
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
     // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
     // cache key names the body (none: a .trk, or the default adult).
-    let bound_to_body = ext == "bvh" || ext == "gltf";
+    let bound_to_body = troupe_formats::Format::of(&full)
+        .map_err(lua_err)?
+        .binds_to_body();
     let key = (
         full.clone(),
         skeleton
@@ -396,12 +394,8 @@ pub fn load_sequence(
             troupe_body::template::default_skeleton("adult").map_err(lua_err)?,
         )),
     };
-    let seq = match &skeleton {
-        Some(skel) if ext == "gltf" => troupe_formats::gltf_import::read_gltf_motion(&full, skel),
-        Some(skel) => troupe_formats::retarget::load_sequence_for(skel, &full),
-        None => troupe_formats::trk::read_trk(&full),
-    };
-    let seq = Arc::new(seq.map_err(lua_err)?);
+    let seq = troupe_formats::load_sequence(&full, skeleton.as_deref()).map_err(lua_err)?;
+    let seq = Arc::new(seq);
     stage(lua)?.sequences.insert(key, seq.clone());
     Ok(seq)
 }

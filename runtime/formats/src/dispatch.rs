@@ -1,0 +1,243 @@
+//! The one place that chooses a reader or a writer by a file's extension.
+//!
+//! | extension | holds | loaded | saved |
+//! |---|---|---|---|
+//! | `.trk` | any number of sequences, tracks named by DOF | as written | every sequence in one file |
+//! | `.bvh` | one actor's motion on a joint hierarchy | onto a body: exactly if the hierarchy is the body's own, else retargeted | one file per actor, on its body's hierarchy |
+//! | `.gltf`, `.glb` | one actor's motion on a node hierarchy | onto a body whose joint names the nodes carry | one file per actor |
+//!
+//! A `.trk` names DOFs and plays on any body; the other formats carry a skeleton of their
+//! own, so loading them needs the body to play on, and saving them needs each sequence's
+//! body. Saving several actors to a one-actor format writes `NAME.ACTOR.EXT` for each.
+
+use crate::bvh::{from_rig, write_bvh, Axis, RotationOrder};
+use crate::error::{Error, Result};
+use crate::gltf::{read_gltf_motion, write_glb, write_gltf};
+use crate::retarget::load_sequence_for;
+use crate::rig::Rig;
+use crate::trk::{read_trk, read_trk_set, write_trk};
+use std::path::{Path, PathBuf};
+use troupe_body::skeleton::Skeleton;
+use troupe_motion::sequence::Sequence;
+
+/// The rotation order of the BVH files troupe writes from a body's motion.
+pub const BVH_ROTATION_ORDER: RotationOrder = RotationOrder([Axis::Z, Axis::X, Axis::Y]);
+/// BVH length units per metre of the files troupe writes from a body's motion
+/// (centimetres).
+pub const BVH_UNITS_PER_METRE: f64 = 100.0;
+
+/// A motion file format, as its extension names it.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// troupe's own track file, `.trk`.
+    Trk,
+    /// Biovision Hierarchy, `.bvh`.
+    Bvh,
+    /// glTF 2.0 JSON with its buffers beside or embedded, `.gltf`.
+    Gltf,
+    /// Binary glTF 2.0, `.glb`.
+    Glb,
+}
+
+impl Format {
+    /// The format of `path` by its extension (case-insensitive).
+    pub fn of(path: &Path) -> Result<Format> {
+        let ext = path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+            .unwrap_or_default();
+        match ext.as_str() {
+            "trk" => Ok(Format::Trk),
+            "bvh" => Ok(Format::Bvh),
+            "gltf" => Ok(Format::Gltf),
+            "glb" => Ok(Format::Glb),
+            _ => Err(Error::UnknownFormat {
+                path: path.display().to_string(),
+                extension: format!(".{ext}"),
+            }),
+        }
+    }
+
+    /// Whether the format carries a skeleton of its own, so that its motion is loaded
+    /// onto a body (every format but `.trk`).
+    pub fn binds_to_body(self) -> bool {
+        self != Format::Trk
+    }
+
+    /// The format's name in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Trk => ".trk",
+            Format::Bvh => "BVH",
+            Format::Gltf | Format::Glb => "glTF",
+        }
+    }
+}
+
+/// Every sequence of a motion file, to play on `body`: a `.trk` as written (`body` is not
+/// needed); a `.bvh`, `.gltf` or `.glb` as one sequence onto `body` (see the module
+/// table), which must then be given.
+pub fn load_sequences(path: impl AsRef<Path>, body: Option<&Skeleton>) -> Result<Vec<Sequence>> {
+    let path = path.as_ref();
+    match Format::of(path)? {
+        Format::Trk => read_trk_set(path),
+        format => load_onto_body(path, format, body).map(|s| vec![s]),
+    }
+}
+
+/// The one sequence of a motion file, to play on `body`, as [`load_sequences`] reads it;
+/// a `.trk` that holds several sequences is an error.
+pub fn load_sequence(path: impl AsRef<Path>, body: Option<&Skeleton>) -> Result<Sequence> {
+    let path = path.as_ref();
+    match Format::of(path)? {
+        Format::Trk => read_trk(path),
+        format => load_onto_body(path, format, body),
+    }
+}
+
+/// A BVH or glTF motion onto `body`.
+fn load_onto_body(path: &Path, format: Format, body: Option<&Skeleton>) -> Result<Sequence> {
+    let body = body.ok_or_else(|| Error::NeedsBody {
+        path: path.display().to_string(),
+        format: format.name().into(),
+    })?;
+    match format {
+        Format::Bvh => load_sequence_for(body, path),
+        _ => read_gltf_motion(path, body),
+    }
+}
+
+/// Saves `sequences` to `path` and returns the files written: a `.trk` holds them all;
+/// to a one-actor format each sequence is written on its actor's body — `actors` gives
+/// `(name, skeleton)` in the sequences' order — as `path` itself when there is one
+/// sequence, else `NAME.ACTOR.EXT` beside it.
+pub fn save_sequences<'a>(
+    path: impl AsRef<Path>,
+    sequences: &[Sequence],
+    actors: impl IntoIterator<Item = (&'a str, &'a Skeleton)>,
+) -> Result<Vec<PathBuf>> {
+    let path = path.as_ref();
+    let format = Format::of(path)?;
+    if format == Format::Trk {
+        write_trk(path, sequences)?;
+        return Ok(vec![path.to_path_buf()]);
+    }
+    let mut written = Vec::new();
+    for (seq, (actor, skeleton)) in sequences.iter().zip(actors) {
+        let out = if sequences.len() == 1 {
+            path.to_path_buf()
+        } else {
+            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+            let ext = path.extension().unwrap_or_default().to_string_lossy();
+            path.with_file_name(format!("{stem}.{actor}.{ext}"))
+        };
+        let rig = Rig::from_sequence(skeleton, seq)?;
+        save_rig(&out, &rig, actor, seq.frame_time())?;
+        written.push(out);
+    }
+    Ok(written)
+}
+
+/// Saves a rig's motion to a one-actor format by `path`'s extension: glTF names its scene
+/// `name`; BVH is written in [`BVH_ROTATION_ORDER`] and [`BVH_UNITS_PER_METRE`], a frame
+/// every `frame_time` seconds. A `.trk` cannot hold a rig (it names DOFs, not joints).
+pub fn save_rig(path: impl AsRef<Path>, rig: &Rig, name: &str, frame_time: f64) -> Result<()> {
+    let path = path.as_ref();
+    match Format::of(path)? {
+        Format::Bvh => write_bvh(
+            path,
+            &from_rig(rig, frame_time, BVH_ROTATION_ORDER, BVH_UNITS_PER_METRE)?,
+        ),
+        Format::Gltf => write_gltf(path, rig, name),
+        Format::Glb => write_glb(path, rig, name),
+        Format::Trk => Err(Error::Invalid(format!(
+            "{}: a .trk holds DOF tracks, not a joint hierarchy; save the sequence instead",
+            path.display()
+        ))),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::rig::tests::{adult, every_dof_moving, fk_positions, posture};
+
+    #[test]
+    fn formats_by_extension() {
+        for (file, format) in [
+            ("a.trk", Format::Trk),
+            ("a.BVH", Format::Bvh),
+            ("dir.v2/a.gltf", Format::Gltf),
+            ("a.Glb", Format::Glb),
+        ] {
+            assert_eq!(Format::of(Path::new(file)).unwrap(), format, "{file}");
+        }
+        for file in ["a.txt", "a", "a.trk.bak"] {
+            assert!(matches!(
+                Format::of(Path::new(file)),
+                Err(Error::UnknownFormat { .. })
+            ));
+        }
+    }
+
+    #[test]
+    fn every_format_saves_and_loads_two_actors() {
+        let skel = adult();
+        let both = [
+            every_dof_moving(&skel, 4, 0.25, "20"),
+            every_dof_moving(&skel, 3, 0.5, "20"),
+        ];
+        let dir = std::env::temp_dir().join(format!("troupe-dispatch-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let actors = [("ann", &skel), ("bob", &skel)];
+        for ext in ["trk", "bvh", "gltf", "glb"] {
+            let path = dir.join(format!("rec.{ext}"));
+            let written = save_sequences(&path, &both, actors).unwrap();
+            let loaded: Vec<Sequence> = written
+                .iter()
+                .flat_map(|f| load_sequences(f, Some(&skel)).unwrap())
+                .collect();
+            if ext == "trk" {
+                assert_eq!(written, std::slice::from_ref(&path));
+                assert_eq!(loaded, both);
+                continue;
+            }
+            assert_eq!(
+                written,
+                [
+                    dir.join(format!("rec.ann.{ext}")),
+                    dir.join(format!("rec.bob.{ext}"))
+                ]
+            );
+            for (want, got) in both.iter().zip(&loaded) {
+                let time = 0.25;
+                let p = fk_positions(&skel, &posture(&skel, want, time));
+                let q = fk_positions(&skel, &posture(&skel, got, time));
+                for (x, y) in p.iter().zip(&q) {
+                    // glTF stores f32; BVH round-trips exactly up to the decomposition.
+                    assert!((*x - *y).length() < 2e-3, "{ext}: {x} vs {y}");
+                }
+            }
+        }
+        // One sequence is written to the path itself.
+        let one = dir.join("one.bvh");
+        assert_eq!(
+            save_sequences(&one, &both[..1], [("ann", &skel)]).unwrap(),
+            std::slice::from_ref(&one)
+        );
+        // Motion bound to a body needs one; a .trk does not.
+        assert!(matches!(
+            load_sequences(&one, None),
+            Err(Error::NeedsBody { .. })
+        ));
+        assert_eq!(load_sequence(dir.join("rec.trk"), None).ok(), None);
+        assert!(save_rig(
+            dir.join("x.trk"),
+            &Rig::from_sequence(&skel, &both[0]).unwrap(),
+            "x",
+            0.05
+        )
+        .is_err());
+        std::fs::remove_dir_all(dir).ok();
+    }
+}

@@ -1,0 +1,425 @@
+//! Reading motion back from glTF 2.0 with the `gltf` crate: the first animation of a
+//! `.gltf` or `.glb` whose nodes carry troupe joint names (as `--record OUT.gltf` and
+//! `troupe seq convert … OUT.gltf --template` write them) becomes a troupe [`Sequence`]
+//! for a given skeleton.
+//!
+//! Each joint's animated local rotation is turned back into the angles of its DOFs by a
+//! small least-squares solve (exact when the rotation is one the DOF axes can make); the
+//! root's animated translation gives `root_x/y/z`. Buffers may be external files, base64
+//! `data:` URIs or the binary chunk of a `.glb`; channels are read from tightly packed
+//! 32-bit float accessors (what troupe writes), and everything else is refused with a
+//! message naming the file and what was wrong.
+
+use crate::error::{Error, Result};
+use ::gltf::accessor::{DataType, Dimensions};
+use ::gltf::animation::{Interpolation, Property};
+use ::gltf::buffer::Source;
+use ::gltf::{Accessor, Gltf};
+use base64::Engine as _;
+use glam::{DQuat, DVec3};
+use std::path::Path;
+use troupe_body::kinematics::solve_joint_angles;
+use troupe_body::skeleton::{DofKind, Skeleton};
+use troupe_motion::sequence::{Key, Sequence, Track};
+
+/// Bytes of a binary glTF header: magic, version and total length.
+const GLB_HEADER: usize = 12;
+
+/// Reads the first animation of a glTF file (`.gltf` or `.glb`) as a sequence for
+/// `skeleton`.
+pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<Sequence> {
+    let path = path.as_ref();
+    let file = path.display().to_string();
+    let bad = |message: String| Error::Parse {
+        file: file.clone(),
+        line: 1,
+        message,
+    };
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    check_glb_header(&bytes).map_err(bad)?;
+    let gltf = Gltf::from_slice(&bytes).map_err(|e| match e {
+        ::gltf::Error::Deserialize(e) => Error::Parse {
+            file: file.clone(),
+            line: e.line().max(1),
+            message: format!("not glTF JSON: {e}"),
+        },
+        other => bad(format!("not valid glTF: {other}")),
+    })?;
+    let buffers = load_buffers(&gltf, path, &bad)?;
+
+    let animation = gltf
+        .animations()
+        .next()
+        .ok_or_else(|| bad("the file has no animation".into()))?;
+    let mut rotations: Vec<(usize, Vec<f32>, Vec<f32>)> = Vec::new();
+    let mut translation: Option<(Vec<f32>, Vec<f32>)> = None;
+    for (c, channel) in animation.channels().enumerate() {
+        let node = channel.target().node();
+        let Some(name) = node.name() else {
+            return Err(bad(format!(
+                "animation channel {c}: target node {} has no name",
+                node.index()
+            )));
+        };
+        let Ok(joint) = skeleton.joint(name) else {
+            continue;
+        };
+        let sampler = channel.sampler();
+        if sampler.interpolation() == Interpolation::CubicSpline {
+            return Err(bad(format!(
+                "animation channel {c}: CUBICSPLINE samplers are not supported (LINEAR or STEP)"
+            )));
+        }
+        let input = floats(sampler.input(), Dimensions::Scalar, &buffers, &bad)?;
+        match channel.target().property() {
+            Property::Rotation => rotations.push((
+                joint,
+                input,
+                floats(sampler.output(), Dimensions::Vec4, &buffers, &bad)?,
+            )),
+            Property::Translation if joint == 0 => {
+                translation = Some((
+                    input,
+                    floats(sampler.output(), Dimensions::Vec3, &buffers, &bad)?,
+                ))
+            }
+            _ => {}
+        }
+    }
+    if rotations.is_empty() && translation.is_none() {
+        return Err(bad(format!(
+            "no animation channel targets a joint of the `{}` skeleton (node names must be troupe joint names)",
+            skeleton.name()
+        )));
+    }
+    // Sample every channel at the times of the longest input.
+    let times: Vec<f64> = rotations
+        .iter()
+        .map(|(_, t, _)| t)
+        .chain(translation.as_ref().map(|(t, _)| t))
+        .max_by_key(|t| t.len())
+        .map(|t| t.iter().map(|&x| x as f64).collect())
+        .unwrap_or_default();
+    if times.windows(2).any(|w| w[1] <= w[0]) || times.iter().any(|t| !t.is_finite()) {
+        return Err(bad("animation times must be finite and increasing".into()));
+    }
+
+    let n = skeleton.dof_count();
+    let mut q = vec![0.0; n];
+    let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(times.len()); n];
+    let mut driven = vec![false; n];
+    for &t in &times {
+        for (joint, input, output) in &rotations {
+            let r = sample_quat(input, output, t);
+            solve_joint_angles(skeleton, *joint, r, &mut q);
+            for d in skeleton.joints()[*joint].dofs.clone() {
+                driven[d] |= skeleton.dofs()[d].kind == DofKind::Rotation;
+            }
+        }
+        if let Some((input, output)) = &translation {
+            let local = sample_vec3(input, output, t) - skeleton.joints()[0].offset;
+            for d in skeleton.joints()[0].dofs.clone() {
+                let dof = &skeleton.dofs()[d];
+                if dof.kind == DofKind::Translation {
+                    q[d] = local.dot(dof.axis);
+                    driven[d] = true;
+                }
+            }
+        }
+        for (d, v) in q.iter().enumerate() {
+            values[d].push(*v);
+        }
+    }
+    let mut seq = Sequence::new(
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+    );
+    seq.meta.insert("source".into(), file.clone());
+    if times.len() > 1 {
+        let rate = (times.len() - 1) as f64 / (times[times.len() - 1] - times[0]);
+        seq.meta.insert("rate".into(), format!("{}", rate.round()));
+    }
+    for d in (0..n).filter(|&d| driven[d]) {
+        let keys = times
+            .iter()
+            .zip(&values[d])
+            .map(|(&t, &v)| Key::new(t, v))
+            .collect();
+        seq.add_track(Track::new(skeleton.dofs()[d].name.clone(), keys)?)?;
+    }
+    Ok(seq)
+}
+
+/// Refuses a binary glTF whose header is cut short or declares a total length shorter
+/// than itself, which `gltf` would otherwise subtract past zero.
+fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
+    if !bytes.starts_with(b"glTF") {
+        return Ok(());
+    }
+    let Some(length) = bytes.get(8..GLB_HEADER) else {
+        return Err(format!(
+            "truncated binary glTF: {} bytes, shorter than its {GLB_HEADER}-byte header",
+            bytes.len()
+        ));
+    };
+    let declared = u32::from_le_bytes([length[0], length[1], length[2], length[3]]) as usize;
+    if declared < GLB_HEADER {
+        return Err(format!(
+            "binary glTF header declares {declared} bytes, shorter than the header itself"
+        ));
+    }
+    Ok(())
+}
+
+/// The bytes of every buffer of `gltf`: the `.glb` binary chunk, a base64 `data:` URI,
+/// or a file beside `path`.
+fn load_buffers(gltf: &Gltf, path: &Path, bad: &dyn Fn(String) -> Error) -> Result<Vec<Vec<u8>>> {
+    let dir = path.parent().unwrap_or(Path::new("."));
+    gltf.buffers()
+        .map(|buffer| match buffer.source() {
+            Source::Bin => gltf.blob.clone().ok_or_else(|| {
+                bad(format!(
+                    "buffer {} is the binary chunk, but the file has none",
+                    buffer.index()
+                ))
+            }),
+            Source::Uri(uri) if uri.starts_with("data:") => {
+                decode_data_uri(uri).map_err(|why| bad(format!("buffer {}: {why}", buffer.index())))
+            }
+            Source::Uri(uri) => {
+                let file = dir.join(uri);
+                std::fs::read(&file).map_err(|e| Error::io(&file, e))
+            }
+        })
+        .collect()
+}
+
+/// The bytes of a `data:[MEDIA-TYPE];base64,PAYLOAD` URI.
+fn decode_data_uri(uri: &str) -> std::result::Result<Vec<u8>, String> {
+    let (header, payload) = uri
+        .split_once(',')
+        .ok_or("a data URI without a `,` before its data")?;
+    if !header.ends_with(";base64") {
+        return Err("a data URI that is not base64 (`data:…;base64,…`)".into());
+    }
+    base64::engine::general_purpose::STANDARD
+        .decode(payload)
+        .map_err(|e| format!("a data URI that is not valid base64: {e}"))
+}
+
+/// The values of a tightly packed accessor of 32-bit floats with `dims` components,
+/// checking every size against the buffer (a bad file is an error, never a panic).
+fn floats(
+    accessor: Accessor<'_>,
+    dims: Dimensions,
+    buffers: &[Vec<u8>],
+    bad: &dyn Fn(String) -> Error,
+) -> Result<Vec<f32>> {
+    let i = accessor.index();
+    let kind = match dims {
+        Dimensions::Scalar => "SCALAR",
+        Dimensions::Vec3 => "VEC3",
+        _ => "VEC4",
+    };
+    if accessor.data_type() != DataType::F32 || accessor.dimensions() != dims {
+        return Err(bad(format!(
+            "accessor {i}: expected {kind} of 32-bit floats"
+        )));
+    }
+    if accessor.sparse().is_some() {
+        return Err(bad(format!(
+            "accessor {i}: sparse accessors are not supported"
+        )));
+    }
+    let view = accessor
+        .view()
+        .ok_or_else(|| bad(format!("accessor {i}: no buffer view")))?;
+    let size = 4 * dims.multiplicity();
+    if view.stride().unwrap_or(size) != size {
+        return Err(bad(format!(
+            "accessor {i}: interleaved buffer views are not supported"
+        )));
+    }
+    let data = &buffers[view.buffer().index()];
+    let count = accessor.count();
+    let start = view.offset().checked_add(accessor.offset());
+    let range = start
+        .zip(count.checked_mul(size))
+        .and_then(|(s, len)| Some(s..s.checked_add(len)?))
+        .filter(|r| r.end <= data.len());
+    let range = range.ok_or_else(|| {
+        bad(format!(
+            "accessor {i}: {count} × {kind} does not fit in the buffer"
+        ))
+    })?;
+    Ok(data[range]
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect())
+}
+
+/// The segment of `input` holding `t` and the fraction along it (clamped at the ends).
+fn locate(input: &[f32], t: f64) -> (usize, usize, f64) {
+    let n = input.len();
+    if n < 2 || t <= input[0] as f64 {
+        return (0, 0, 0.0);
+    }
+    if t >= input[n - 1] as f64 {
+        return (n - 1, n - 1, 0.0);
+    }
+    let i = input.partition_point(|&x| (x as f64) <= t) - 1;
+    let span = (input[i + 1] - input[i]) as f64;
+    (
+        i,
+        i + 1,
+        if span > 0.0 {
+            (t - input[i] as f64) / span
+        } else {
+            0.0
+        },
+    )
+}
+
+fn sample_quat(input: &[f32], output: &[f32], t: f64) -> DQuat {
+    let get = |k: usize| {
+        let o = &output[(4 * k).min(output.len().saturating_sub(4))..];
+        DQuat::from_xyzw(o[0] as f64, o[1] as f64, o[2] as f64, o[3] as f64).normalize()
+    };
+    let (a, b, f) = locate(input, t);
+    get(a).slerp(get(b), f)
+}
+
+fn sample_vec3(input: &[f32], output: &[f32], t: f64) -> DVec3 {
+    let get = |k: usize| {
+        let o = &output[(3 * k).min(output.len().saturating_sub(3))..];
+        DVec3::new(o[0] as f64, o[1] as f64, o[2] as f64)
+    };
+    let (a, b, f) = locate(input, t);
+    get(a).lerp(get(b), f)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gltf::{write_glb, write_gltf};
+    use crate::rig::tests::{adult, every_dof_moving, fk_positions, posture};
+    use crate::rig::Rig;
+    use serde_json::Value;
+    use std::path::PathBuf;
+
+    /// A fresh scratch directory for one test.
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("troupe-{name}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    /// Checks that `back` replays `seq` on `skel` within glTF's precision.
+    fn same_postures(skel: &Skeleton, seq: &Sequence, back: &Sequence) {
+        for time in [0.0, 0.5, 1.2] {
+            let a = fk_positions(skel, &posture(skel, seq, time));
+            let b = fk_positions(skel, &posture(skel, back, time));
+            for (j, (x, y)) in a.iter().zip(&b).enumerate() {
+                // f32 storage in glTF and linear resampling bound the error.
+                assert!(
+                    (*x - *y).length() < 2e-3,
+                    "t={time} {}: {x} vs {y}",
+                    skel.joints()[j].name
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn gltf_glb_and_data_uri_files_read_back_to_the_same_positions() {
+        let skel = adult();
+        let seq = every_dof_moving(&skel, 4, 0.5, "30");
+        let rig = Rig::from_sequence(&skel, &seq).unwrap();
+        let dir = scratch("gltf-read");
+        let gltf = dir.join("motion.gltf");
+        write_gltf(&gltf, &rig, "motion").unwrap();
+        same_postures(&skel, &seq, &read_gltf_motion(&gltf, &skel).unwrap());
+
+        let glb = dir.join("motion.glb");
+        write_glb(&glb, &rig, "motion").unwrap();
+        let back = read_gltf_motion(&glb, &skel).unwrap();
+        same_postures(&skel, &seq, &back);
+        // The same document and buffer, so the same keys, whichever container held them.
+        assert!(back.tracks() == read_gltf_motion(&gltf, &skel).unwrap().tracks());
+
+        // The same document with its buffer embedded as a data URI.
+        let bin = std::fs::read(dir.join("motion.bin")).unwrap();
+        let mut doc: Value = serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+        doc["buffers"][0]["uri"] = format!(
+            "data:application/octet-stream;base64,{}",
+            base64::engine::general_purpose::STANDARD.encode(&bin)
+        )
+        .into();
+        let embedded = dir.join("embedded.gltf");
+        std::fs::write(&embedded, doc.to_string()).unwrap();
+        same_postures(&skel, &seq, &read_gltf_motion(&embedded, &skel).unwrap());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn bad_files_are_errors_that_name_the_file_never_panics() {
+        let skel = adult();
+        let rig = Rig::from_sequence(&skel, &every_dof_moving(&skel, 3, 0.5, "10")).unwrap();
+        let dir = scratch("gltf-bad");
+        let glb = dir.join("motion.glb");
+        write_glb(&glb, &rig, "motion").unwrap();
+        let bytes = std::fs::read(&glb).unwrap();
+        let gltf = dir.join("motion.gltf");
+        write_gltf(&gltf, &rig, "motion").unwrap();
+        let mut doc: Value = serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+        let with_uri = |uri: &str| {
+            let mut d = doc.clone();
+            d["buffers"][0]["uri"] = uri.into();
+            d.to_string().into_bytes()
+        };
+        std::fs::write(dir.join("short.bin"), [0u8; 3]).unwrap();
+        let mut tiny_header = bytes[..20].to_vec();
+        tiny_header[8..12].copy_from_slice(&4u32.to_le_bytes());
+        let cases: Vec<(&str, Vec<u8>, &str)> = vec![
+            ("garbage.gltf", b"{ not json".to_vec(), "not glTF JSON"),
+            ("garbage.glb", vec![0xff; 64], "not glTF JSON"),
+            (
+                "cut.glb",
+                bytes[..bytes.len() / 2].to_vec(),
+                "not valid glTF",
+            ),
+            ("header.glb", bytes[..7].to_vec(), "truncated binary glTF"),
+            ("tiny.glb", tiny_header, "shorter than the header"),
+            ("short.gltf", with_uri("short.bin"), "does not fit"),
+            ("text.gltf", with_uri("data:text/plain,hello"), "not base64"),
+            ("b64.gltf", with_uri("data:;base64,@@@"), "not valid base64"),
+            ("empty.gltf", Vec::new(), "not glTF JSON"),
+        ];
+        for (name, content, needle) in cases {
+            let file = dir.join(name);
+            std::fs::write(&file, content).unwrap();
+            match read_gltf_motion(&file, &skel) {
+                Err(Error::Parse {
+                    file: f, message, ..
+                }) => {
+                    assert_eq!(f, file.display().to_string());
+                    assert!(message.contains(needle), "{name}: {message}");
+                }
+                other => panic!("{name}: {other:?}"),
+            }
+        }
+        // A buffer file that is missing names that file.
+        std::fs::write(dir.join("lost.gltf"), with_uri("lost.bin")).unwrap();
+        let err = read_gltf_motion(dir.join("lost.gltf"), &skel).unwrap_err();
+        assert!(err.to_string().contains("lost.bin"), "{err}");
+        // Nodes that are not troupe joints.
+        for node in doc["nodes"].as_array_mut().unwrap() {
+            node["name"] = "elsewhere".into();
+        }
+        std::fs::write(dir.join("other.gltf"), doc.to_string()).unwrap();
+        let err = read_gltf_motion(dir.join("other.gltf"), &skel).unwrap_err();
+        assert!(err.to_string().contains("troupe joint names"), "{err}");
+        std::fs::remove_dir_all(dir).ok();
+    }
+}

@@ -1,0 +1,277 @@
+//! Writing a rig as glTF 2.0 with `gltf-json`'s typed structures: a `.gltf` (JSON) with a
+//! `.bin` buffer beside it, or one binary `.glb`.
+
+use crate::error::{Error, Result};
+use crate::rig::Rig;
+use ::gltf::binary::{Glb, Header};
+use glam::{DMat4, DQuat};
+use gltf_json as json;
+use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::animation::{Interpolation, Property};
+use json::validation::{Checked::Valid, USize64};
+use json::{Index, Root};
+use std::borrow::Cow;
+use std::path::Path;
+
+/// A growing binary buffer and the document whose buffer views and accessors point into
+/// it.
+struct Builder {
+    root: Root,
+    bytes: Vec<u8>,
+}
+
+impl Builder {
+    /// Adds `count` elements of `type_` from f32 `data` as one view and one accessor; with
+    /// `bounds`, the accessor carries its min and max (glTF requires them on animation
+    /// inputs).
+    fn floats(
+        &mut self,
+        data: &[f32],
+        type_: Type,
+        count: usize,
+        bounds: bool,
+    ) -> Index<json::Accessor> {
+        pad_to_four(&mut self.bytes);
+        let offset = self.bytes.len();
+        for x in data {
+            self.bytes.extend_from_slice(&x.to_le_bytes());
+        }
+        let view = self.root.push(json::buffer::View {
+            buffer: Index::new(0),
+            byte_length: USize64::from(data.len() * 4),
+            byte_offset: Some(USize64::from(offset)),
+            byte_stride: None,
+            name: None,
+            target: None,
+            extensions: None,
+            extras: Default::default(),
+        });
+        let (min, max) = if bounds {
+            let min = data.iter().copied().fold(f32::INFINITY, f32::min);
+            let max = data.iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            (
+                Some(json::Value::from(vec![min])),
+                Some(json::Value::from(vec![max])),
+            )
+        } else {
+            (None, None)
+        };
+        self.root.push(json::Accessor {
+            buffer_view: Some(view),
+            byte_offset: None,
+            count: USize64::from(count),
+            component_type: Valid(GenericComponentType(ComponentType::F32)),
+            type_: Valid(type_),
+            min,
+            max,
+            name: None,
+            normalized: false,
+            sparse: None,
+            extensions: None,
+            extras: Default::default(),
+        })
+    }
+
+    /// Adds one `LINEAR` sampler from `input` to `output` and a channel driving `path` of
+    /// `node`.
+    fn channel(
+        &mut self,
+        animation: &mut json::Animation,
+        input: Index<json::Accessor>,
+        output: Index<json::Accessor>,
+        node: usize,
+        path: Property,
+    ) {
+        let sampler = Index::push(
+            &mut animation.samplers,
+            json::animation::Sampler {
+                input,
+                output,
+                interpolation: Valid(Interpolation::Linear),
+                extensions: None,
+                extras: Default::default(),
+            },
+        );
+        animation.channels.push(json::animation::Channel {
+            sampler,
+            target: json::animation::Target {
+                node: Index::new(node as u32),
+                path: Valid(path),
+                extensions: None,
+                extras: Default::default(),
+            },
+            extensions: None,
+            extras: Default::default(),
+        });
+    }
+}
+
+/// Zero bytes up to the next multiple of four (glTF aligns views and chunks so).
+fn pad_to_four(bytes: &mut Vec<u8>) {
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+}
+
+/// The glTF document and binary buffer of `rig`: one node per joint, one skin, one
+/// animation named `name`. `bin_uri` is how the document names the buffer (`None`: the
+/// binary chunk of a `.glb`).
+pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) {
+    let n = rig.names.len();
+    let mut b = Builder {
+        root: Root {
+            asset: json::Asset {
+                generator: Some(concat!("troupe ", env!("CARGO_PKG_VERSION")).into()),
+                ..Default::default()
+            },
+            ..Default::default()
+        },
+        bytes: Vec::new(),
+    };
+    for j in 0..n {
+        let t = rig.rest[j].translation.as_vec3();
+        let r = rig.rest[j].rotation;
+        let children: Vec<Index<json::Node>> = (0..n)
+            .filter(|&c| rig.parents[c] == Some(j))
+            .map(|c| Index::new(c as u32))
+            .collect();
+        b.root.push(json::Node {
+            name: Some(rig.names[j].clone()),
+            translation: Some(t.to_array()),
+            rotation: (r != DQuat::IDENTITY)
+                .then(|| json::scene::UnitQuaternion(r.as_quat().to_array())),
+            children: (!children.is_empty()).then_some(children),
+            ..Default::default()
+        });
+    }
+    let roots: Vec<Index<json::Node>> = (0..n)
+        .filter(|&j| rig.parents[j].is_none())
+        .map(|j| Index::new(j as u32))
+        .collect();
+
+    // Inverse bind matrices: inverse of each joint's global rest transform (column major).
+    let ibm: Vec<f32> = rig
+        .rest_globals()
+        .iter()
+        .flat_map(|g| {
+            DMat4::from_rotation_translation(g.rotation, g.translation)
+                .inverse()
+                .to_cols_array()
+                .map(|x| x as f32)
+        })
+        .collect();
+    let ibm = b.floats(&ibm, Type::Mat4, n, false);
+
+    let mut animation = json::Animation {
+        name: Some(name.into()),
+        channels: Vec::new(),
+        samplers: Vec::new(),
+        extensions: None,
+        extras: Default::default(),
+    };
+    let frames = rig.times.len();
+    if frames > 0 {
+        let times: Vec<f32> = rig.times.iter().map(|&t| t as f32).collect();
+        let input = b.floats(&times, Type::Scalar, frames, true);
+        for j in 0..n {
+            if rig.rotations.iter().all(|f| f[j] == DQuat::IDENTITY) {
+                continue;
+            }
+            let mut prev = DQuat::IDENTITY;
+            let data: Vec<f32> = rig
+                .rotations
+                .iter()
+                .flat_map(|f| {
+                    // Keep neighbouring quaternions in one hemisphere for interpolation.
+                    let mut q = f[j].normalize();
+                    if q.dot(prev) < 0.0 {
+                        q = -q;
+                    }
+                    prev = q;
+                    q.as_quat().to_array()
+                })
+                .collect();
+            let output = b.floats(&data, Type::Vec4, frames, false);
+            b.channel(&mut animation, input, output, j, Property::Rotation);
+        }
+        for (i, &j) in rig.moving.iter().enumerate() {
+            let data: Vec<f32> = rig
+                .translations
+                .iter()
+                .flat_map(|f| f[i].as_vec3().to_array())
+                .collect();
+            let output = b.floats(&data, Type::Vec3, frames, false);
+            b.channel(&mut animation, input, output, j, Property::Translation);
+        }
+    }
+    pad_to_four(&mut b.bytes);
+    let skin = json::Skin {
+        name: Some(name.into()),
+        joints: (0..n).map(|j| Index::new(j as u32)).collect(),
+        inverse_bind_matrices: Some(ibm),
+        skeleton: roots.first().copied(),
+        extensions: None,
+        extras: Default::default(),
+    };
+    b.root.push(skin);
+    let scene = b.root.push(json::Scene {
+        name: Some(name.into()),
+        nodes: roots,
+        extensions: None,
+        extras: Default::default(),
+    });
+    b.root.scene = Some(scene);
+    b.root.push(json::Buffer {
+        byte_length: USize64::from(b.bytes.len()),
+        uri: bin_uri.map(str::to_string),
+        name: None,
+        extensions: None,
+        extras: Default::default(),
+    });
+    if !animation.channels.is_empty() {
+        b.root.push(animation);
+    }
+    (b.root, b.bytes)
+}
+
+/// Writes `rig` as `path` (`.gltf`) and a `.bin` of the same stem beside it.
+pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
+    let path = path.as_ref();
+    let bin = path.with_extension("bin");
+    let uri = bin
+        .file_name()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "motion.bin".into());
+    let (root, bytes) = to_gltf(rig, name, Some(&uri));
+    let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
+    std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+    std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
+}
+
+/// Writes `rig` as one binary glTF file `path` (`.glb`): a JSON chunk and a binary chunk.
+pub fn write_glb(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
+    let path = path.as_ref();
+    let (root, bytes) = to_gltf(rig, name, None);
+    let glb = Glb {
+        header: Header {
+            magic: *b"glTF",
+            version: 2,
+            // `Glb::to_vec` computes the total length (and pads both chunks) itself.
+            length: 0,
+        },
+        json: Cow::Owned(root.to_vec().map_err(|e| json_error(path, e))?),
+        bin: Some(Cow::Owned(bytes)),
+    };
+    let bytes = glb.to_vec().map_err(|e| Error::Io {
+        path: path.display().to_string(),
+        message: format!("binary glTF: {e}"),
+    })?;
+    std::fs::write(path, bytes).map_err(|e| Error::io(path, e))
+}
+
+/// A document that did not serialize (it cannot happen for what [`to_gltf`] builds, and
+/// still names the file if it does).
+fn json_error(path: &Path, e: serde_json::Error) -> Error {
+    Error::Io {
+        path: path.display().to_string(),
+        message: format!("glTF JSON: {e}"),
+    }
+}

@@ -1,0 +1,339 @@
+//! URDF export: a body as a robot description, for dynamics and robotics tools.
+//!
+//! Conventions (also in docs/formats.md, "URDF export"):
+//! * one URDF joint per troupe DOF, named exactly as the DOF; the DOFs of one troupe joint
+//!   are chained through massless links `<dof>_link`; the last one's child link carries
+//!   the segment and is named as the troupe joint;
+//! * Z up, X forward, Y left (REP 103): a troupe vector `(x, y, z)` is written
+//!   `(z, x, y)`;
+//! * limits in radians / metres; unlimited rotations are `continuous`; the root's
+//!   translations are `prismatic` within ±1000 m;
+//! * each segment link carries the mass, centre of mass and inertia of the solids attached
+//!   to its joint.
+
+use glam::{DMat3, DVec3};
+use std::fmt::Write as _;
+use troupe_body::skeleton::{DofKind, Skeleton};
+
+/// Troupe's Y-up frame to URDF's Z-up frame: `(x, y, z) ↦ (z, x, y)`.
+fn z_up(v: DVec3) -> DVec3 {
+    DVec3::new(v.z, v.x, v.y)
+}
+
+/// The rotation matrix of [`z_up`].
+fn z_up_matrix() -> DMat3 {
+    DMat3::from_cols(z_up(DVec3::X), z_up(DVec3::Y), z_up(DVec3::Z))
+}
+
+/// A vector as URDF writes it: three numbers separated by spaces.
+fn xyz(v: DVec3) -> String {
+    format!("{} {} {}", v.x, v.y, v.z)
+}
+
+/// Half-range of the root's prismatic joints in the file (URDF needs finite limits).
+pub const PRISMATIC_RANGE: f64 = 1000.0;
+/// Nominal effort limit written for every moving joint (troupe has no actuator model).
+pub const NOMINAL_EFFORT: f64 = 1000.0;
+/// Nominal velocity limit written for every moving joint.
+pub const NOMINAL_VELOCITY: f64 = 100.0;
+
+/// The URDF text of `skeleton`; with `fixed_root`, the root joint is attached to
+/// `base_link` by a fixed joint instead of its DOFs.
+pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
+    let c = z_up_matrix();
+    let mut s = String::new();
+    let _ = writeln!(s, "<?xml version=\"1.0\"?>");
+    let _ = writeln!(
+        s,
+        "<!-- troupe body template `{}` ({:.3} kg): Z up, one joint per DOF; see docs/formats.md -->",
+        skeleton.name(),
+        skeleton.total_mass()
+    );
+    let _ = writeln!(s, "<robot name=\"{}\">", skeleton.name());
+    let _ = writeln!(s, "  <link name=\"base_link\"/>");
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        // The segment link, with the solids attached to this joint.
+        let solids: Vec<_> = skeleton
+            .solids()
+            .iter()
+            .filter(|(k, _)| *k == j)
+            .map(|(_, s)| s)
+            .collect();
+        let mass: f64 = solids.iter().map(|s| s.mass).sum();
+        if mass > 0.0 {
+            let com = solids
+                .iter()
+                .map(|s| s.center_of_mass * s.mass)
+                .sum::<DVec3>()
+                / mass;
+            let mut inertia = DMat3::ZERO;
+            for sol in &solids {
+                let r = sol.center_of_mass - com;
+                let shift = DMat3::from_diagonal(DVec3::splat(r.dot(r)))
+                    - DMat3::from_cols(r * r.x, r * r.y, r * r.z);
+                inertia += sol.inertia + shift * sol.mass;
+            }
+            let i = c * inertia * c.transpose();
+            let _ = writeln!(s, "  <link name=\"{}\">", joint.name);
+            let _ = writeln!(s, "    <inertial>");
+            let _ = writeln!(
+                s,
+                "      <origin xyz=\"{}\" rpy=\"0 0 0\"/>",
+                xyz(z_up(com))
+            );
+            let _ = writeln!(s, "      <mass value=\"{mass}\"/>");
+            let _ = writeln!(
+                s,
+                "      <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>",
+                i.x_axis.x, i.y_axis.x, i.z_axis.x, i.y_axis.y, i.z_axis.y, i.z_axis.z
+            );
+            let _ = writeln!(s, "    </inertial>");
+            let _ = writeln!(s, "  </link>");
+        } else {
+            let _ = writeln!(s, "  <link name=\"{}\"/>", joint.name);
+        }
+        let parent = match joint.parent {
+            Some(p) => skeleton.joints()[p].name.clone(),
+            None => "base_link".to_string(),
+        };
+        let dofs = joint.dofs.clone();
+        if dofs.is_empty() || (fixed_root && joint.parent.is_none()) {
+            let _ = writeln!(s, "  <joint name=\"{}_fixed\" type=\"fixed\">", joint.name);
+            let _ = writeln!(s, "    <parent link=\"{parent}\"/>");
+            let _ = writeln!(s, "    <child link=\"{}\"/>", joint.name);
+            let _ = writeln!(
+                s,
+                "    <origin xyz=\"{}\" rpy=\"0 0 0\"/>",
+                xyz(z_up(joint.offset))
+            );
+            let _ = writeln!(s, "  </joint>");
+            continue;
+        }
+        let mut from = parent;
+        for d in dofs.clone() {
+            let dof = &skeleton.dofs()[d];
+            let last = d + 1 == dofs.end;
+            let child = if last {
+                joint.name.clone()
+            } else {
+                let name = format!("{}_link", dof.name);
+                let _ = writeln!(s, "  <link name=\"{name}\"/>");
+                name
+            };
+            let (kind, limits) = match dof.kind {
+                DofKind::Rotation if dof.min.is_finite() && dof.max.is_finite() => {
+                    ("revolute", Some((dof.min, dof.max)))
+                }
+                DofKind::Rotation => ("continuous", None),
+                DofKind::Translation => (
+                    "prismatic",
+                    Some((dof.min.max(-PRISMATIC_RANGE), dof.max.min(PRISMATIC_RANGE))),
+                ),
+            };
+            let origin = if d == dofs.start {
+                joint.offset
+            } else {
+                DVec3::ZERO
+            };
+            let _ = writeln!(s, "  <joint name=\"{}\" type=\"{kind}\">", dof.name);
+            let _ = writeln!(s, "    <parent link=\"{from}\"/>");
+            let _ = writeln!(s, "    <child link=\"{child}\"/>");
+            let _ = writeln!(
+                s,
+                "    <origin xyz=\"{}\" rpy=\"0 0 0\"/>",
+                xyz(z_up(origin))
+            );
+            let _ = writeln!(s, "    <axis xyz=\"{}\"/>", xyz(z_up(dof.axis)));
+            match limits {
+                Some((lo, hi)) => {
+                    let _ = writeln!(
+                        s,
+                        "    <limit lower=\"{lo}\" upper=\"{hi}\" effort=\"{NOMINAL_EFFORT}\" velocity=\"{NOMINAL_VELOCITY}\"/>"
+                    );
+                }
+                None => {
+                    let _ = writeln!(
+                        s,
+                        "    <limit effort=\"{NOMINAL_EFFORT}\" velocity=\"{NOMINAL_VELOCITY}\"/>"
+                    );
+                }
+            }
+            let _ = writeln!(s, "  </joint>");
+            from = child;
+        }
+    }
+    let _ = writeln!(s, "</robot>");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::DQuat;
+    use std::collections::HashMap;
+    use troupe_body::kinematics::forward_kinematics;
+    use troupe_body::template::template;
+    use troupe_body::transform::Transform;
+
+    /// One parsed URDF joint.
+    struct UJoint {
+        kind: String,
+        parent: String,
+        child: String,
+        xyz: DVec3,
+        rpy: DVec3,
+        axis: DVec3,
+        limits: Option<(f64, f64)>,
+    }
+
+    fn vec(s: Option<&str>) -> DVec3 {
+        let v: Vec<f64> = s
+            .unwrap_or("0 0 0")
+            .split_whitespace()
+            .map(|x| x.parse().unwrap())
+            .collect();
+        DVec3::new(v[0], v[1], v[2])
+    }
+
+    fn parse(text: &str) -> (HashMap<String, UJoint>, HashMap<String, f64>) {
+        let doc = roxmltree::Document::parse(text).unwrap();
+        let robot = doc.root_element();
+        assert_eq!(robot.tag_name().name(), "robot");
+        let mut joints = HashMap::new();
+        let mut masses = HashMap::new();
+        for n in robot.children().filter(|n| n.is_element()) {
+            let child = |tag: &str| n.children().find(|c| c.has_tag_name(tag));
+            match n.tag_name().name() {
+                "link" => {
+                    if let Some(m) = n
+                        .descendants()
+                        .find(|c| c.has_tag_name("mass"))
+                        .and_then(|m| m.attribute("value"))
+                    {
+                        masses.insert(n.attribute("name").unwrap().to_string(), m.parse().unwrap());
+                    }
+                }
+                "joint" => {
+                    let origin = child("origin");
+                    let limit = child("limit");
+                    joints.insert(
+                        n.attribute("name").unwrap().to_string(),
+                        UJoint {
+                            kind: n.attribute("type").unwrap().to_string(),
+                            parent: child("parent").unwrap().attribute("link").unwrap().into(),
+                            child: child("child").unwrap().attribute("link").unwrap().into(),
+                            xyz: vec(origin.and_then(|o| o.attribute("xyz"))),
+                            rpy: vec(origin.and_then(|o| o.attribute("rpy"))),
+                            axis: vec(child("axis").and_then(|a| a.attribute("xyz"))),
+                            limits: limit.and_then(|l| {
+                                Some((
+                                    l.attribute("lower")?.parse().ok()?,
+                                    l.attribute("upper")?.parse().ok()?,
+                                ))
+                            }),
+                        },
+                    );
+                }
+                _ => {}
+            }
+        }
+        (joints, masses)
+    }
+
+    /// World frames of every link for joint values `values` (by URDF joint name).
+    fn urdf_fk(
+        joints: &HashMap<String, UJoint>,
+        values: &HashMap<String, f64>,
+    ) -> HashMap<String, Transform> {
+        let mut frames = HashMap::new();
+        frames.insert("base_link".to_string(), Transform::IDENTITY);
+        let mut changed = true;
+        while changed {
+            changed = false;
+            for (name, j) in joints {
+                if frames.contains_key(&j.child) {
+                    continue;
+                }
+                let Some(parent) = frames.get(&j.parent).copied() else {
+                    continue;
+                };
+                let rot = DQuat::from_rotation_z(j.rpy.z)
+                    * DQuat::from_rotation_y(j.rpy.y)
+                    * DQuat::from_rotation_x(j.rpy.x);
+                let origin = Transform::new(rot, j.xyz);
+                let v = values.get(name).copied().unwrap_or(0.0);
+                let motion = match j.kind.as_str() {
+                    "revolute" | "continuous" => {
+                        Transform::new(DQuat::from_axis_angle(j.axis.normalize(), v), DVec3::ZERO)
+                    }
+                    "prismatic" => Transform::from_translation(j.axis * v),
+                    _ => Transform::IDENTITY,
+                };
+                frames.insert(j.child.clone(), parent.mul(&origin).mul(&motion));
+                changed = true;
+            }
+        }
+        frames
+    }
+
+    fn from_z_up(v: DVec3) -> DVec3 {
+        DVec3::new(v.y, v.z, v.x)
+    }
+
+    #[test]
+    fn exported_urdf_matches_troupe_kinematics_and_masses() {
+        for (name, fixed) in [("adult", false), ("child", false), ("adult", true)] {
+            let t = template(name).unwrap();
+            let s = t.instantiate(t.default_params()).unwrap();
+            let text = urdf(&s, fixed);
+            let (joints, masses) = parse(&text);
+            // Every DOF is a joint named as the DOF, with its limits.
+            for (i, d) in s.dofs().iter().enumerate() {
+                if fixed && i < 6 {
+                    assert!(!joints.contains_key(&d.name));
+                    continue;
+                }
+                let j = &joints[&d.name];
+                if d.min.is_finite() && d.kind == DofKind::Rotation {
+                    assert_eq!(j.limits, Some((d.min, d.max)), "{}", d.name);
+                }
+            }
+            let total: f64 = masses.values().sum();
+            assert!((total - s.total_mass()).abs() < 1e-9);
+            // Random postures: every troupe joint's link lands where troupe's FK puts it.
+            let mut seed = 99u64;
+            for _ in 0..50 {
+                let mut q = vec![0.0; s.dof_count()];
+                let mut values = HashMap::new();
+                for (i, d) in s.dofs().iter().enumerate() {
+                    seed = seed
+                        .wrapping_mul(6364136223846793005)
+                        .wrapping_add(1442695040888963407);
+                    let u = (seed >> 11) as f64 / (1u64 << 53) as f64;
+                    if fixed && i < 6 {
+                        continue;
+                    }
+                    let (lo, hi) = if d.min.is_finite() {
+                        (d.min, d.max)
+                    } else {
+                        (-2.0, 2.0)
+                    };
+                    q[i] = lo + (hi - lo) * u;
+                    values.insert(d.name.clone(), q[i]);
+                }
+                let mut g = vec![Transform::IDENTITY; s.joints().len()];
+                forward_kinematics(&s, &q, &mut g);
+                let frames = urdf_fk(&joints, &values);
+                for (j, joint) in s.joints().iter().enumerate() {
+                    let p = from_z_up(frames[&joint.name].translation);
+                    assert!(
+                        (p - g[j].translation).length() < 1e-9,
+                        "{name}: {} at {p}, troupe {}",
+                        joint.name,
+                        g[j].translation
+                    );
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,79 @@
+//! The glTF files troupe writes pass the Khronos glTF validator with no error and no
+//! warning: a troupe body's motion and a BVH on its own hierarchy, as `.gltf` + `.bin` and
+//! as `.glb`.
+//!
+//! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
+//! into `.tools/node`; without node or without that package the test prints why and
+//! checks nothing.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use troupe_body::template::template;
+use troupe_formats::bvh::read_bvh;
+use troupe_formats::gltf::{write_glb, write_gltf};
+use troupe_formats::Rig;
+use troupe_motion::sequence::{Key, Sequence, Track};
+
+fn repo() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+/// A troupe body waving and walking forward.
+fn troupe_rig() -> Rig {
+    let t = template("adult").unwrap();
+    let skeleton = t.instantiate(t.default_params()).unwrap();
+    let mut seq = Sequence::new("wave");
+    seq.meta.insert("rate".into(), "30".into());
+    for (dof, v) in [
+        ("r_shoulder_abduction", 1.4),
+        ("r_elbow_flexion", 0.9),
+        ("root_z", 0.5),
+    ] {
+        let keys = vec![Key::new(0.0, 0.0), Key::new(0.5, v), Key::new(1.0, 0.0)];
+        seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
+    }
+    Rig::from_sequence(&skeleton, &seq).unwrap()
+}
+
+#[test]
+fn written_gltf_files_pass_the_khronos_validator() {
+    let modules = repo().join(".tools/node/node_modules");
+    if Command::new("node").arg("--version").output().is_err() {
+        println!("skipped: node is not installed, so the Khronos glTF validator cannot run");
+        return;
+    }
+    if !modules.join("gltf-validator").is_dir() {
+        println!(
+            "skipped: the Khronos glTF validator is not installed (scripts/setup.sh installs it into {})",
+            modules.display()
+        );
+        return;
+    }
+    let dir = std::env::temp_dir().join(format!("troupe-khronos-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let bvh = read_bvh(repo().join("../shared/data/bvh/pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
+    let mut files = Vec::new();
+    for (name, rig) in [
+        ("wave", troupe_rig()),
+        ("walk", Rig::from_bvh(&bvh, 0.056444)),
+    ] {
+        let gltf = dir.join(format!("{name}.gltf"));
+        let glb = dir.join(format!("{name}.glb"));
+        write_gltf(&gltf, &rig, name).unwrap();
+        write_glb(&glb, &rig, name).unwrap();
+        files.extend([gltf, glb]);
+    }
+    let out = Command::new("node")
+        .arg(repo().join("scripts/validate-gltf.js"))
+        .args(&files)
+        .env("NODE_PATH", &modules)
+        .output()
+        .unwrap();
+    let report = String::from_utf8_lossy(&out.stdout);
+    println!("{report}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "the validator reports problems:\n{report}"
+    );
+    std::fs::remove_dir_all(dir).ok();
+}
