@@ -2,7 +2,6 @@
 //! `--trace` attach to a session. The gathering lives in the runtime (the posture
 //! recorder, the torque log, the timeline); writing files by format is the command line's.
 
-use anyhow::bail;
 use std::path::{Path, PathBuf};
 use troupe_actions::dynamics::TorqueLog;
 use troupe_scene::record::PostureRecorder;
@@ -40,8 +39,16 @@ impl Observer for RecordFile {
     }
 
     fn finish(&mut self, scene: &Scene) -> Result<Option<String>> {
-        let written = write_recording(&self.path, &self.recorder.sequences(scene), scene)
-            .map_err(|e| troupe_scene::Error::Invalid(format!("{e:#}")))?;
+        // `.trk` holds every actor; `.bvh`, `.gltf` and `.glb` one each (`NAME.ACTOR.EXT`).
+        let written = troupe_formats::save_sequences(
+            &self.path,
+            &self.recorder.sequences(scene),
+            scene
+                .actors()
+                .iter()
+                .map(|a| (a.name.as_str(), &*a.skeleton)),
+        )
+        .map_err(|e| troupe_scene::Error::Invalid(e.to_string()))?;
         let list: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
         Ok(Some(format!(
             "recorded {} ticks of postures to {}",
@@ -130,46 +137,4 @@ impl Observer for TraceFile {
             self.path.display()
         )))
     }
-}
-
-/// Writes a recording by the file's extension: `.trk` holds every actor; `.bvh` and
-/// `.gltf` hold one actor each, so a scene of several actors writes `NAME.ACTOR.EXT`.
-fn write_recording(
-    path: &std::path::Path,
-    sequences: &[troupe_motion::Sequence],
-    scene: &troupe_scene::Scene,
-) -> anyhow::Result<Vec<PathBuf>> {
-    let ext = path
-        .extension()
-        .map(|e| e.to_string_lossy().to_ascii_lowercase())
-        .unwrap_or_default();
-    if ext == "trk" {
-        troupe_formats::trk::write_trk(path, sequences)?;
-        return Ok(vec![path.to_path_buf()]);
-    }
-    if ext != "bvh" && ext != "gltf" {
-        bail!(
-            "--record {}: use a .trk, .bvh or .gltf file",
-            path.display()
-        );
-    }
-    let mut written = Vec::new();
-    for (seq, actor) in sequences.iter().zip(scene.actors()) {
-        let out = if sequences.len() == 1 {
-            path.to_path_buf()
-        } else {
-            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-            path.with_file_name(format!("{stem}.{}.{ext}", actor.name))
-        };
-        let rig = troupe_formats::gltf::Rig::from_sequence(&actor.skeleton, seq)?;
-        if ext == "bvh" {
-            let order = "ZXY".parse()?;
-            let bvh = troupe_formats::bvh::from_rig(&rig, seq.frame_time(), order, 100.0)?;
-            troupe_formats::bvh::write_bvh(&out, &bvh)?;
-        } else {
-            troupe_formats::gltf::write_gltf(&out, &rig, &actor.name)?;
-        }
-        written.push(out);
-    }
-    Ok(written)
 }
