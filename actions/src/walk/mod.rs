@@ -31,10 +31,11 @@ pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
 pub use rig::Rig;
 pub use route::{Plan, RootSample, Route, Speed};
 
-use route::{smoothstep, wrap};
+use route::wrap;
 use std::f64::consts::TAU;
 use std::sync::Arc;
 use troupe_body::glam::{DVec2, DVec3};
+use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};

@@ -11,6 +11,7 @@ pub mod ik;
 pub mod jacobian;
 pub mod kinematics;
 pub mod linalg;
+pub mod math;
 pub mod object;
 pub mod scope;
 pub mod self_collision;

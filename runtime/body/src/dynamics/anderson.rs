@@ -8,6 +8,9 @@
 //! coupling to a spinning segment makes the plain iteration diverge at a few rad/s.
 //! Mixing the last few iterates by least squares (a nonlinear GMRES) converges there.
 
+use crate::linalg::dot;
+use crate::math::solve_small;
+
 /// Depth of the history: how many previous iterates are mixed.
 pub(crate) const DEPTH: usize = 6;
 
@@ -102,42 +105,6 @@ impl Anderson {
             }
         }
     }
-}
-
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Gaussian elimination with partial pivoting on the leading `m × m` block.
-fn solve_small(
-    a: &mut [[f64; DEPTH]; DEPTH],
-    b: &mut [f64; DEPTH],
-    m: usize,
-) -> Option<[f64; DEPTH]> {
-    for c in 0..m {
-        let p = (c..m).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        if a[p][c] == 0.0 || a[p][c].is_nan() {
-            return None;
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..m {
-            let f = a[r][c] / a[c][c];
-            for k in c..m {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = [0.0; DEPTH];
-    for r in (0..m).rev() {
-        let mut s = b[r];
-        for k in r + 1..m {
-            s -= a[r][k] * x[k];
-        }
-        x[r] = s / a[r][r];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 #[cfg(test)]
