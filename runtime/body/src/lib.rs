@@ -5,6 +5,8 @@
 //! It follows Pinocchio's Model/Data split: a skeleton never changes once built, and every
 //! algorithm reads it and writes only the state or workspace it is given.
 
+#![warn(missing_docs)]
+
 pub mod dynamics;
 pub mod error;
 pub mod ik;

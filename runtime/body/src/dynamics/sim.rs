@@ -1000,10 +1000,10 @@ impl Simulation {
     }
 
     fn diverged(&self, what: &str) -> Error {
-        Error::Invalid(format!(
-            "dynamics: the simulation diverged at t = {:.3} s: {what}",
-            self.time
-        ))
+        Error::Diverged {
+            time: self.time,
+            what: what.to_string(),
+        }
     }
 }
 
