@@ -534,16 +534,16 @@ impl Simulation {
                 } => {
                     if *gravity_compensation {
                         self.data.ext.iter_mut().for_each(|f| *f = Force::ZERO);
-                        let zero = std::mem::take(&mut self.qdd);
-                        let mut zero = zero;
+                        // Inverse dynamics at zero acceleration, in the accelerations'
+                        // buffer borrowed for the call.
+                        let mut zero = std::mem::take(&mut self.qdd);
                         zero.iter_mut().for_each(|a| *a = 0.0);
-                        let a_base = Motion::ZERO;
                         rnea(
                             &self.model,
                             &mut self.data,
                             &zero,
                             self.params.gravity,
-                            base.as_ref().map(|b| (b, a_base)),
+                            base.as_ref().map(|b| (b, Motion::ZERO)),
                             &mut self.held,
                         );
                         self.qdd = zero;
