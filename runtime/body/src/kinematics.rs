@@ -128,8 +128,9 @@ pub fn solve_joint_angles(skeleton: &Skeleton, joint: usize, target: DQuat, q: &
 /// `[a0, a1, a2, b]`; an unknown whose pivot vanishes is left at 0.
 ///
 /// Not [`math::solve_small`]: that one eliminates below the pivot and substitutes back,
-/// which rounds differently, and the angles solved here feed recorded postures (glTF
-/// import, retargeting, performers' gloves), so switching would change recordings.
+/// which rounds differently (about 2 % of solves from random postures end a bit apart),
+/// and the angles solved here become postures (performers' trackers, glTF import,
+/// retargeting), so switching would change what those record.
 fn gauss_jordan(m: &mut [[f64; 4]; 3], k: usize) -> [f64; 3] {
     for col in 0..k {
         let pivot = (col..k)
