@@ -8,6 +8,7 @@
 //! grasp each finger is either in contact or at its limit.
 
 use super::decision::GraspType;
+use troupe_body::math::smoothstep;
 use troupe_body::sensors::Side;
 use troupe_body::Skeleton;
 
@@ -177,7 +178,7 @@ impl BoundPattern {
             } else {
                 0.0
             };
-            let e = u * u * (3.0 - 2.0 * u);
+            let e = smoothstep(u);
             out.push((d, start + (target - start) * e));
         }
     }

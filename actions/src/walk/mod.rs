@@ -35,10 +35,11 @@ pub use rig::Rig;
 pub use route::{Plan, RootSample, Route, Speed};
 
 use crate::error::{OptionError, Result};
-use route::{smoothstep, wrap};
+use route::wrap;
 use std::f64::consts::TAU;
 use std::sync::Arc;
 use troupe_body::glam::{DVec2, DVec3};
+use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};

@@ -9,6 +9,7 @@
 use crate::error::OptionError;
 use std::sync::Arc;
 use troupe_body::glam::DVec2;
+use troupe_body::math::smoothstep;
 use troupe_motion::{Sequence, Track};
 
 /// Seconds to speed up from standing to the cruising speed, and to slow down to a stop
@@ -211,12 +212,6 @@ pub fn wrap(a: f64) -> f64 {
         x += t;
     }
     x
-}
-
-/// 3u² − 2u³ on [0, 1], clamped outside.
-pub fn smoothstep(u: f64) -> f64 {
-    let u = u.clamp(0.0, 1.0);
-    u * u * (3.0 - 2.0 * u)
 }
 
 /// ∫₀ᵘ smoothstep, for u in [0, 1] (u³ − u⁴/2).

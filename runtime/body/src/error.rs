@@ -7,30 +7,69 @@ use thiserror::Error;
 pub enum Error {
     /// A joint name that the skeleton does not have.
     #[error("unknown joint `{name}` in skeleton `{skeleton}`")]
-    UnknownJoint { name: String, skeleton: String },
+    UnknownJoint {
+        /// The name asked for.
+        name: String,
+        /// The skeleton's name.
+        skeleton: String,
+    },
     /// A DOF name that the skeleton does not have.
     #[error("unknown DOF `{name}` in skeleton `{skeleton}`")]
-    UnknownDof { name: String, skeleton: String },
+    UnknownDof {
+        /// The name asked for.
+        name: String,
+        /// The skeleton's name.
+        skeleton: String,
+    },
     /// A scope name (or scope expression term) that means nothing for the skeleton.
     #[error("unknown scope `{name}` in skeleton `{skeleton}` (known scopes: {known})")]
     UnknownScope {
+        /// The name or term asked for.
         name: String,
+        /// The skeleton's name.
         skeleton: String,
+        /// The skeleton's scope names, comma-separated.
         known: String,
     },
     /// A body template name that does not exist.
     #[error("unknown body template `{name}` (known templates: {known})")]
-    UnknownTemplate { name: String, known: String },
+    UnknownTemplate {
+        /// The name asked for.
+        name: String,
+        /// The template names, comma-separated.
+        known: String,
+    },
     /// A name used twice where names must be unique.
     #[error("{what} `{name}` already exists")]
-    Duplicate { what: &'static str, name: String },
+    Duplicate {
+        /// What kind of thing is named (joint, DOF, scope, …).
+        what: &'static str,
+        /// The name used twice.
+        name: String,
+    },
     /// A numeric parameter outside its valid range.
     #[error("invalid {what}: {value} ({expected})")]
     InvalidValue {
+        /// The parameter.
         what: String,
+        /// The value given.
         value: f64,
+        /// The range it must be in.
         expected: String,
     },
+    /// A simulation step that could not be taken: a speed above the limit, a value that
+    /// is not finite, or a DOF that lost all its inertia. The state is the one at the
+    /// failed step's start.
+    #[error("dynamics: the simulation diverged at t = {time:.3} s: {what}")]
+    Diverged {
+        /// The simulated time at the failed step's start (s).
+        time: f64,
+        /// What went wrong.
+        what: String,
+    },
+    /// Forward dynamics at a posture with no unique acceleration.
+    #[error("dynamics: singular configuration (a free root at pitch ±90° has no unique Euler-angle acceleration)")]
+    SingularConfiguration,
     /// Anything else a caller asked for that cannot be done, with the reason.
     #[error("{0}")]
     Invalid(String),

@@ -1,5 +1,6 @@
 //! Forward kinematics: from DOF values to every joint's global (REF) transform.
 
+use crate::math;
 use crate::skeleton::{DofKind, Skeleton};
 use crate::transform::Transform;
 use glam::{DQuat, DVec3};
@@ -8,11 +9,7 @@ use glam::{DQuat, DVec3};
 #[inline]
 pub fn dof_transform(kind: DofKind, axis: DVec3, value: f64) -> Transform {
     match kind {
-        DofKind::Rotation => {
-            let (s, c) = (value * 0.5).sin_cos();
-            let v = axis * s;
-            Transform::new(DQuat::from_xyzw(v.x, v.y, v.z, c), DVec3::ZERO)
-        }
+        DofKind::Rotation => Transform::new(DQuat::from_axis_angle(axis, value), DVec3::ZERO),
         DofKind::Translation => Transform::from_translation(axis * value),
     }
 }
@@ -44,11 +41,7 @@ pub fn forward_kinematics(skeleton: &Skeleton, q: &[f64], globals: &mut [Transfo
                 // only moves it (cheaper than a full transform product).
                 let dof = &dofs[d];
                 match dof.kind {
-                    DofKind::Rotation => {
-                        let (s, c) = (q[d] * 0.5).sin_cos();
-                        let v = dof.axis * s;
-                        frame.rotation *= DQuat::from_xyzw(v.x, v.y, v.z, c);
-                    }
+                    DofKind::Rotation => frame.rotation *= DQuat::from_axis_angle(dof.axis, q[d]),
                     DofKind::Translation => {
                         frame.translation += frame.rotation * (dof.axis * q[d]);
                     }
@@ -72,17 +65,12 @@ pub fn local_transform(skeleton: &Skeleton, j: usize, q: &[f64]) -> Transform {
 
 /// The world position of the whole body's centre of mass for the given joint globals.
 pub fn center_of_mass(skeleton: &Skeleton, globals: &[Transform]) -> DVec3 {
-    let mut sum = DVec3::ZERO;
-    let mut mass = 0.0;
-    for (j, solid) in skeleton.solids() {
-        sum += globals[*j].transform_point(solid.center_of_mass) * solid.mass;
-        mass += solid.mass;
-    }
-    if mass > 0.0 {
-        sum / mass
-    } else {
-        DVec3::ZERO
-    }
+    math::center_of_mass(skeleton.solids().iter().map(|(j, solid)| {
+        (
+            globals[*j].transform_point(solid.center_of_mass),
+            solid.mass,
+        )
+    }))
 }
 
 /// Sets the rotation DOFs of `joint` in `q` so that their product comes closest to
@@ -129,16 +117,21 @@ pub fn solve_joint_angles(skeleton: &Skeleton, joint: usize, target: DQuat, q: &
             }
             m[i][3] = axes[i].dot(e);
         }
-        let delta = solve_small(&mut m, k);
+        let delta = gauss_jordan(&mut m, k);
         for (i, &d) in dofs.iter().enumerate() {
             q[d] += delta[i];
         }
     }
 }
 
-/// Gaussian elimination with partial pivoting on a k×k system (k ≤ 3) stored as rows
-/// `[a0, a1, a2, b]`.
-fn solve_small(m: &mut [[f64; 4]; 3], k: usize) -> [f64; 3] {
+/// Gauss–Jordan elimination with partial pivoting on a k×k system (k ≤ 3) stored as rows
+/// `[a0, a1, a2, b]`; an unknown whose pivot vanishes is left at 0.
+///
+/// Not [`math::solve_small`]: that one eliminates below the pivot and substitutes back,
+/// which rounds differently (about 2 % of solves from random postures end a bit apart),
+/// and the angles solved here become postures (performers' trackers, glTF import,
+/// retargeting), so switching would change what those record.
+fn gauss_jordan(m: &mut [[f64; 4]; 3], k: usize) -> [f64; 3] {
     for col in 0..k {
         let pivot = (col..k)
             .max_by(|&a, &b| m[a][col].abs().total_cmp(&m[b][col].abs()))

@@ -5,12 +5,15 @@
 //! It follows Pinocchio's Model/Data split: a skeleton never changes once built, and every
 //! algorithm reads it and writes only the state or workspace it is given.
 
+#![warn(missing_docs)]
+
 pub mod dynamics;
 pub mod error;
 pub mod ik;
 pub mod jacobian;
 pub mod kinematics;
 pub mod linalg;
+pub mod math;
 pub mod object;
 pub mod scope;
 pub mod self_collision;

@@ -11,20 +11,37 @@ use std::f64::consts::PI;
 /// A solid's shape in its canonical frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Shape {
-    /// A box with the given half extents along X, Y, Z.
-    Box { half_extents: DVec3 },
-    /// A sphere.
-    Sphere { radius: f64 },
+    /// A box centred on the origin.
+    Box {
+        /// Half its size along X, Y, Z (m).
+        half_extents: DVec3,
+    },
+    /// A sphere centred on the origin.
+    Sphere {
+        /// Its radius (m).
+        radius: f64,
+    },
     /// A cylinder along Y, centred on the origin.
-    Cylinder { radius: f64, height: f64 },
-    /// A truncated cone along Y: `bottom_radius` at y = -height/2, `top_radius` at +height/2.
-    Frustum {
-        bottom_radius: f64,
-        top_radius: f64,
+    Cylinder {
+        /// Its radius (m).
+        radius: f64,
+        /// Its length along Y (m).
         height: f64,
     },
-    /// An ellipsoid with the given semi-axes along X, Y, Z.
-    Ellipsoid { radii: DVec3 },
+    /// A truncated cone along Y, centred on the origin.
+    Frustum {
+        /// The radius at y = −height/2 (m).
+        bottom_radius: f64,
+        /// The radius at y = +height/2 (m).
+        top_radius: f64,
+        /// Its length along Y (m).
+        height: f64,
+    },
+    /// An ellipsoid centred on the origin.
+    Ellipsoid {
+        /// Its semi-axes along X, Y, Z (m).
+        radii: DVec3,
+    },
 }
 
 /// Mass properties of a solid of unit mass in its canonical frame.

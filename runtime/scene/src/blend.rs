@@ -14,11 +14,12 @@
 //! The result is clamped to the DOF's limits. `h` is also set directly by
 //! `Scene::set_dofs` (Lua `actor:pose{}`).
 
+use troupe_body::math::smoothstep;
+
 /// The ease curve: smoothstep `3x² − 2x³` on [0, 1], with zero slope at both ends.
 #[inline]
 pub fn ease(x: f64) -> f64 {
-    let x = x.clamp(0.0, 1.0);
-    x * x * (3.0 - 2.0 * x)
+    smoothstep(x)
 }
 
 /// The ease factor of an action at `time`: rises from 0 to 1 over `ease_in` seconds after

@@ -8,12 +8,87 @@
 //! coupling to a spinning segment makes the plain iteration diverge at a few rad/s.
 //! Mixing the last few iterates by least squares (a nonlinear GMRES) converges there.
 
+use crate::linalg::dot;
+use crate::math::solve_small;
+
 /// Depth of the history: how many previous iterates are mixed.
-pub(crate) const DEPTH: usize = 6;
+const DEPTH: usize = 6;
+/// Most passes of one solve.
+pub(crate) const MAX_ITERATIONS: usize = 60;
+/// Relative change of the iterate at which the fixed point is reached (far below the
+/// simulator step's O(h²) error; tighter only costs passes).
+const CONVERGED: f64 = 1e-8;
+
+/// How a fixed-point solve ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Outcome {
+    /// The last pass moved the iterate by at most `CONVERGED` relative to its size.
+    Converged,
+    /// The change was not a finite number: the caller's checks of the state report it.
+    NotFinite,
+    /// [`MAX_ITERATIONS`] passes without converging: the last image stands as the answer.
+    Unconverged,
+    /// The map could not be evaluated at the current iterate.
+    Failed,
+}
+
+/// An Anderson-accelerated solve of `z = G(z)` on vectors of a fixed length, with its
+/// buffers kept between solves.
+#[derive(Clone, Debug)]
+pub(crate) struct FixedPoint {
+    /// The iterate: the caller writes the initial guess here before [`FixedPoint::solve`].
+    pub(crate) z: Vec<f64>,
+    /// `G(z)` of the last pass.
+    image: Vec<f64>,
+    anderson: Anderson,
+}
+
+impl FixedPoint {
+    /// A solver for vectors of `n` entries.
+    pub(crate) fn new(n: usize) -> FixedPoint {
+        FixedPoint {
+            z: vec![0.0; n],
+            image: vec![0.0; n],
+            anderson: Anderson::new(n),
+        }
+    }
+
+    /// Iterates from the guess in `z`: each pass counts in `passes` and has `map(z, g)`
+    /// write `G(z)` into `g`, or return `false` when `G` cannot be evaluated there. The
+    /// side effects of the last call of `map` are the caller's answer: after a
+    /// convergence, an exhausted budget or a non-finite change, that call's image is the
+    /// solution.
+    pub(crate) fn solve(
+        &mut self,
+        passes: &mut u64,
+        mut map: impl FnMut(&[f64], &mut [f64]) -> bool,
+    ) -> Outcome {
+        self.anderson.reset();
+        for _ in 0..MAX_ITERATIONS {
+            *passes += 1;
+            if !map(&self.z, &mut self.image) {
+                return Outcome::Failed;
+            }
+            let (mut change, mut scale): (f64, f64) = (0.0, 0.0);
+            for (g, z) in self.image.iter().zip(&self.z) {
+                change = change.max((g - z).abs());
+                scale = scale.max(g.abs());
+            }
+            if !change.is_finite() {
+                return Outcome::NotFinite;
+            }
+            if change <= CONVERGED * (1.0 + scale) {
+                return Outcome::Converged;
+            }
+            self.anderson.next(&mut self.z, &self.image);
+        }
+        Outcome::Unconverged
+    }
+}
 
 /// The history of an Anderson-accelerated iteration on vectors of a fixed length.
 #[derive(Clone, Debug)]
-pub(crate) struct Anderson {
+struct Anderson {
     /// Differences of successive residuals `f = G(z) − z`, newest at `(head + len − 1) % DEPTH`.
     df: Vec<Vec<f64>>,
     /// Differences of successive images `G(z)`.
@@ -27,7 +102,7 @@ pub(crate) struct Anderson {
 
 impl Anderson {
     /// An empty history for vectors of `n` entries.
-    pub(crate) fn new(n: usize) -> Anderson {
+    fn new(n: usize) -> Anderson {
         Anderson {
             df: vec![vec![0.0; n]; DEPTH],
             dg: vec![vec![0.0; n]; DEPTH],
@@ -40,7 +115,7 @@ impl Anderson {
     }
 
     /// Forgets the history (a new fixed-point problem).
-    pub(crate) fn reset(&mut self) {
+    fn reset(&mut self) {
         self.len = 0;
         self.head = 0;
         self.started = false;
@@ -48,7 +123,7 @@ impl Anderson {
 
     /// Given the current iterate `z` and its image `g = G(z)`, writes the next iterate
     /// into `z`.
-    pub(crate) fn next(&mut self, z: &mut [f64], g: &[f64]) {
+    fn next(&mut self, z: &mut [f64], g: &[f64]) {
         let n = z.len();
         if self.started {
             let slot = (self.head + self.len) % DEPTH;
@@ -104,42 +179,6 @@ impl Anderson {
     }
 }
 
-fn dot(a: &[f64], b: &[f64]) -> f64 {
-    a.iter().zip(b).map(|(x, y)| x * y).sum()
-}
-
-/// Gaussian elimination with partial pivoting on the leading `m × m` block.
-fn solve_small(
-    a: &mut [[f64; DEPTH]; DEPTH],
-    b: &mut [f64; DEPTH],
-    m: usize,
-) -> Option<[f64; DEPTH]> {
-    for c in 0..m {
-        let p = (c..m).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        if a[p][c] == 0.0 || a[p][c].is_nan() {
-            return None;
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..m {
-            let f = a[r][c] / a[c][c];
-            for k in c..m {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = [0.0; DEPTH];
-    for r in (0..m).rev() {
-        let mut s = b[r];
-        for k in r + 1..m {
-            s -= a[r][k] * x[k];
-        }
-        x[r] = s / a[r][r];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -166,5 +205,40 @@ mod tests {
             plain = g(&plain);
         }
         assert!((g(&plain)[0] - plain[0]).abs() > 1.0);
+    }
+
+    #[test]
+    fn a_solve_says_how_it_ended() {
+        let mut passes = 0;
+        let mut solver = FixedPoint::new(1);
+        // z = cos z converges in a few passes.
+        let outcome = solver.solve(&mut passes, |z, g| {
+            g[0] = z[0].cos();
+            true
+        });
+        assert_eq!(outcome, Outcome::Converged);
+        assert!(
+            (solver.z[0] - solver.z[0].cos()).abs() < 1e-6,
+            "{}",
+            solver.z[0]
+        );
+        assert!(passes < MAX_ITERATIONS as u64);
+        // z = z + 1 has no fixed point: the budget runs out and says so. (From 0 every
+        // iterate is a whole number, so no rounding hands Anderson a spurious secant.)
+        passes = 0;
+        solver.z[0] = 0.0;
+        let outcome = solver.solve(&mut passes, |z, g| {
+            g[0] = z[0] + 1.0;
+            true
+        });
+        assert_eq!(outcome, Outcome::Unconverged);
+        assert_eq!(passes, MAX_ITERATIONS as u64);
+        let outcome = solver.solve(&mut passes, |_, g| {
+            g[0] = f64::INFINITY;
+            true
+        });
+        assert_eq!(outcome, Outcome::NotFinite);
+        let outcome = solver.solve(&mut passes, |_, _| false);
+        assert_eq!(outcome, Outcome::Failed);
     }
 }

@@ -227,9 +227,7 @@ impl Dynamics {
             qdd,
         );
         if ok.is_none() || qdd.iter().any(|a| !a.is_finite()) {
-            return Err(Error::Invalid(
-                "dynamics: singular configuration (a free root at pitch ±90° has no unique Euler-angle acceleration)".into(),
-            ));
+            return Err(Error::SingularConfiguration);
         }
         Ok(())
     }

@@ -4,6 +4,7 @@
 
 use super::spatial::{Force, Inertia, Motion};
 use crate::error::{Error, Result};
+use crate::math;
 use crate::skeleton::{DofKind, Skeleton};
 use crate::transform::Transform;
 use glam::{DMat3, DQuat, DVec3};
@@ -313,6 +314,11 @@ pub(crate) fn first_link(model: &Model, base: Option<&FloatingBase>) -> usize {
 
 /// Link frames, joint axes (`S`) and world inertias for posture `q`. With a floating base,
 /// the root DOFs are ignored and every root link takes the base's pose.
+///
+/// The frames are those of [`crate::kinematics::forward_kinematics`], walked per link
+/// instead of per joint, with each link's rotation renormalized (the simulator integrates
+/// over thousands of steps) and the motion axes computed on the way: sharing that
+/// function would change the rounding of one of the two, and both feed recordings.
 pub(crate) fn kinematics(model: &Model, data: &mut Data, q: &[f64], base: Option<&FloatingBase>) {
     let start = first_link(model, base);
     if let Some(b) = base {
@@ -430,11 +436,13 @@ pub(crate) fn momentum(model: &Model, data: &Data) -> Force {
 
 /// The whole body's centre of mass, after [`kinematics`].
 pub(crate) fn center_of_mass(model: &Model, data: &Data) -> DVec3 {
-    let mut s = DVec3::ZERO;
-    for b in &model.bodies {
-        s += (data.pos[b.link] + data.rot[b.link] * b.com) * b.mass;
-    }
-    s / model.total_mass
+    // The bodies' masses sum to `model.total_mass` in this order, which is positive.
+    math::center_of_mass(
+        model
+            .bodies
+            .iter()
+            .map(|b| (data.pos[b.link] + data.rot[b.link] * b.com, b.mass)),
+    )
 }
 
 /// Per link, the total spatial momentum of its subtree into `data.f` (after

@@ -12,7 +12,7 @@
 //! momentum, which only gravity and external forces change: torque-free motion keeps
 //! linear and angular momentum to round-off.
 
-use super::anderson::Anderson;
+use super::anderson::{FixedPoint, Outcome};
 use super::contact::{ContactParams, Floor};
 use super::model::{self, Data, FloatingBase, Model};
 use super::rnea::rnea;
@@ -21,12 +21,6 @@ use super::{aba, ExternalForces, GRAVITY};
 use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
 use glam::{DMat3, DQuat, DVec3, EulerRot};
-
-/// Most fixed-point passes of one step's implicit velocity equation.
-const MAX_ITERATIONS: usize = 60;
-/// Relative change of the velocities at which the fixed point is reached (far below
-/// the step's O(h²) error; tighter only costs passes).
-const CONVERGED: f64 = 1e-8;
 
 /// PD gains per unit of inertia: the torque on DOF `k` is
 /// `M_kk · (kp · (q_d − q) + kd · (q̇_d − q̇))`, where `M_kk` (kg·m², or kg for a
@@ -184,6 +178,8 @@ pub struct Simulation {
     tau_mean: Vec<f64>,
     /// Fixed-point passes of each implicit stage since the start.
     passes: [u64; 2],
+    /// Steps whose fixed point of each implicit stage ran out of passes.
+    unconverged: [u64; 2],
     /// Generalized momenta of the dynamic DOFs (workspace of the step).
     momenta: Vec<f64>,
     /// Right-hand side and solution of the step's velocity solve.
@@ -192,12 +188,11 @@ pub struct Simulation {
     /// The state at the step's start, restored when the step fails.
     q_prev: Vec<f64>,
     qd_prev: Vec<f64>,
-    /// Fixed-point iterate and its image: base velocity (ω, v), then joint velocities.
-    z: Vec<f64>,
-    gz: Vec<f64>,
-    /// The half-step velocities at the step's start posture (same layout as `z`).
+    /// The implicit stages' solver; its iterate is the base velocity (ω, v), then the
+    /// joint velocities.
+    fixed_point: FixedPoint,
+    /// The half-step velocities at the step's start posture (same layout as the iterate).
     xa: Vec<f64>,
-    anderson: Anderson,
     held: Vec<f64>,
     prescribed: Vec<bool>,
     base: Option<FloatingBase>,
@@ -260,15 +255,14 @@ impl Simulation {
             implicit: vec![0.0; model.n],
             tau_mean: vec![0.0; model.n],
             passes: [0; 2],
+            unconverged: [0; 2],
             momenta: vec![0.0; model.n],
             rhs: vec![0.0; model.n],
             x: vec![0.0; model.n],
             q_prev: vec![0.0; model.n],
             qd_prev: vec![0.0; model.n],
-            z: vec![0.0; model.n + 6],
-            gz: vec![0.0; model.n + 6],
+            fixed_point: FixedPoint::new(model.n + 6),
             xa: vec![0.0; model.n + 6],
-            anderson: Anderson::new(model.n + 6),
             held: vec![0.0; model.n],
             prescribed,
             base: None,
@@ -367,6 +361,15 @@ impl Simulation {
     /// also a kinematics pass and a factorization): a measure of the integrator's cost.
     pub fn passes(&self) -> [u64; 2] {
         self.passes
+    }
+
+    /// Steps so far whose velocity stage and whose posture stage stopped at the most
+    /// passes (60) without converging. Such a step is not refused: it goes on from the
+    /// last pass, with an error larger than the integrator's, which a count that grows
+    /// with time makes visible (a `small_time_step` too long for a fast spin or a stiff
+    /// servo).
+    pub fn unconverged_steps(&self) -> [u64; 2] {
+        self.unconverged
     }
 
     /// The same joint forces averaged over the last [`Simulation::advance`] (their
@@ -468,13 +471,59 @@ impl Simulation {
     }
 
     /// One Störmer–Verlet step of `h` seconds; `elapsed` is the time since the desired
-    /// values were sampled (desired values advance at the desired velocities).
+    /// values were sampled (desired values advance at the desired velocities). A step
+    /// that fails leaves the state as it was at its start.
+    ///
+    /// The scheme, in momentum form (generalized leapfrog, Hairer, Lubich & Wanner,
+    /// "Geometric Numerical Integration", VI.3; see the module docs). With p = ∂T/∂q̇ the
+    /// generalized momenta (the whole body's spatial momentum for a floating base) and
+    /// F(q, q̇) = ∂L/∂q + Q_ext their rate without the joint forces:
+    ///   p½ = p + h/2 (τ + F(q, q̇½)),            q̇½ = M(q)⁻¹ p½      (implicit in q̇½)
+    ///   q⁺ = q + h/2 (q̇½ + M(q⁺)⁻¹ p½)                              (implicit in q⁺)
+    ///   p⁺ = p½ + h/2 (τ + F(q⁺, M(q⁺)⁻¹ p½)),   q̇⁺ = M(q⁺)⁻¹ p⁺.
+    /// Symplectic and second order: energy oscillates instead of drifting. Both implicit
+    /// equations are fixed points solved with Anderson acceleration, each pass an O(n)
+    /// momentum sweep and an articulated-body solve. The per-DOF springs and dampers
+    /// (servo, limits, damping) keep their linearly implicit first-order treatment (`D`,
+    /// added to the mass matrix in the first half).
     fn step(&mut self, h: f64, control: &Control, elapsed: f64) -> Result<()> {
-        let n = self.model.n;
-        let root = self.model.root.clone();
-        let base = self.base;
+        self.q_prev.copy_from_slice(&self.q);
+        self.qd_prev.copy_from_slice(&self.qd);
+        let base_at_start = self.base;
+        let outcome = self.integrate(h, control, elapsed);
+        if outcome.is_err() {
+            self.q.copy_from_slice(&self.q_prev);
+            self.qd.copy_from_slice(&self.qd_prev);
+            self.base = base_at_start;
+        }
+        outcome
+    }
+
+    /// The stages of [`Simulation::step`], in order.
+    fn integrate(&mut self, h: f64, control: &Control, elapsed: f64) -> Result<()> {
         self.prepare();
-        // Control refresh every time_step: mass diagonal and inverse-dynamics torques.
+        self.refresh_control(control, h);
+        self.load_external(false);
+        self.joint_forces(control, h, elapsed);
+        let frame = self.enter_moving_frame();
+        let start = self.start_momenta(frame, h);
+        let half_velocity = self.first_kick(&start)?;
+        let (drift_velocity, candidate) = self
+            .drift(&start, half_velocity)
+            .ok_or_else(|| self.singular())?;
+        let (velocity, end_momentum) = self
+            .second_kick(&start, drift_velocity, candidate)
+            .ok_or_else(|| self.singular())?;
+        self.finish_step(&start, velocity, candidate, end_momentum)
+    }
+
+    /// The inverse-dynamics box of the control loop (thesis 3.5, fig. 3-4): every
+    /// `time_step`, the mass diagonal that scales the servo gains and the torques held
+    /// until the next refresh (gravity compensation for the servos, inverse dynamics of
+    /// the corrected desired acceleration for tracking).
+    fn refresh_control(&mut self, control: &Control, h: f64) {
+        let n = self.model.n;
+        let base = self.base;
         if self.control_due {
             model::mass_diagonal(&self.model, &mut self.data, base.as_ref());
             match control {
@@ -485,16 +534,16 @@ impl Simulation {
                 } => {
                     if *gravity_compensation {
                         self.data.ext.iter_mut().for_each(|f| *f = Force::ZERO);
-                        let zero = std::mem::take(&mut self.qdd);
-                        let mut zero = zero;
+                        // Inverse dynamics at zero acceleration, in the accelerations'
+                        // buffer borrowed for the call.
+                        let mut zero = std::mem::take(&mut self.qdd);
                         zero.iter_mut().for_each(|a| *a = 0.0);
-                        let a_base = Motion::ZERO;
                         rnea(
                             &self.model,
                             &mut self.data,
                             &zero,
                             self.params.gravity,
-                            base.as_ref().map(|b| (b, a_base)),
+                            base.as_ref().map(|b| (b, Motion::ZERO)),
                             &mut self.held,
                         );
                         self.qdd = zero;
@@ -531,15 +580,21 @@ impl Simulation {
             self.since_control = 0.0;
             self.control_due = true;
         }
-        // External forces, contact.
-        self.load_external(false);
-        // Generalized forces. Servo, damping and limit springs act per DOF: their
-        // stiffness k and damping c are integrated implicitly (h·c + h²·k is added to the
-        // DOF's inertia in the forward dynamics), so stiff gains stay stable.
+    }
+
+    /// The joint forces τ that enter the forward dynamics (thesis 3.4's input torques):
+    /// the held control torques, the PD servos (eq. 4-1), passive damping and the
+    /// joint-limit springs. Their stiffness k and
+    /// damping c are integrated implicitly (h·c + h²·k is added to the DOF's inertia in
+    /// the forward dynamics), so stiff gains stay stable.
+    fn joint_forces(&mut self, control: &Control, h: f64, elapsed: f64) {
+        let n = self.model.n;
+        let root = self.model.root.clone();
+        let floating = self.base.is_some();
         let diag = &self.data.diag;
         for k in 0..n {
             self.implicit[k] = 0.0;
-            if self.prescribed[k] || (base.is_some() && root.contains(&k)) {
+            if self.prescribed[k] || (floating && root.contains(&k)) {
                 self.tau[k] = 0.0;
                 continue;
             }
@@ -563,33 +618,26 @@ impl Simulation {
             self.tau[k] = t;
             self.implicit[k] = h * damp + h * h * stiff;
         }
-        // Störmer–Verlet in momentum form (generalized leapfrog, Hairer, Lubich & Wanner,
-        // "Geometric Numerical Integration", VI.3; see the module docs). With p = ∂T/∂q̇
-        // the generalized momenta (the whole body's spatial momentum for a floating base)
-        // and F(q, q̇) = ∂L/∂q + Q_ext their rate without the joint forces:
-        //   p½ = p + h/2 (τ + F(q, q̇½)),            q̇½ = M(q)⁻¹ p½      (implicit in q̇½)
-        //   q⁺ = q + h/2 (q̇½ + M(q⁺)⁻¹ p½)                              (implicit in q⁺)
-        //   p⁺ = p½ + h/2 (τ + F(q⁺, M(q⁺)⁻¹ p½)),   q̇⁺ = M(q⁺)⁻¹ p⁺.
-        // Symplectic and second order: energy oscillates instead of drifting. Both
-        // implicit equations are fixed points solved with Anderson acceleration, each pass
-        // an O(n) momentum sweep and an articulated-body solve. The per-DOF springs and
-        // dampers (servo, limits, damping) keep their linearly implicit first-order
-        // treatment (`D`, added to the mass matrix in the first half).
-        //
-        // A floating base is stepped in the inertial frame that, at the step's start,
-        // has its origin at the base and moves with it: world Plücker coordinates far
-        // from the origin or at a high falling speed would otherwise make the
-        // discretisation error grow with them (it is not Galilean invariant).
-        // The frame moves with the centre of mass, so that the body's linear momentum
-        // in it is nil at the step's start (see the correction at the step's end).
-        let (shift, carry) = match base {
-            Some(b) => (
-                b.position,
-                model::momentum(&self.model, &self.data).f / self.model.total_mass,
-            ),
-            None => (DVec3::ZERO, DVec3::ZERO),
+    }
+
+    /// Not in the thesis (its root is not a floating base): the inertial frame a floating
+    /// base is stepped in. At the step's start it has its
+    /// origin at the base and moves with the centre of mass. World Plücker coordinates
+    /// far from the origin or at a high falling speed would otherwise make the
+    /// discretisation error grow with them (it is not Galilean invariant), and in it the
+    /// body's linear momentum is nil at the step's start (see [`Simulation::finish_step`]).
+    /// Moves the external wrenches and the link frames into it.
+    fn enter_moving_frame(&mut self) -> MovingFrame {
+        let Some(b) = self.base else {
+            return MovingFrame {
+                base: None,
+                shift: DVec3::ZERO,
+                carry: DVec3::ZERO,
+            };
         };
-        let base = base.map(|b| FloatingBase {
+        let shift = b.position;
+        let carry = model::momentum(&self.model, &self.data).f / self.model.total_mass;
+        let base = Some(FloatingBase {
             position: DVec3::ZERO,
             rotation: b.rotation,
             velocity: Motion::new(
@@ -597,61 +645,77 @@ impl Simulation {
                 b.velocity.v + b.velocity.w.cross(b.position) - carry,
             ),
         });
-        if base.is_some() {
-            for f in &mut self.data.ext {
-                f.n -= shift.cross(f.f);
-            }
-            model::kinematics(&self.model, &mut self.data, &self.q, base.as_ref());
-            model::velocities(&self.model, &mut self.data, &self.qd, base.as_ref());
+        for f in &mut self.data.ext {
+            f.n -= shift.cross(f.f);
         }
+        model::kinematics(&self.model, &mut self.data, &self.q, base.as_ref());
+        model::velocities(&self.model, &mut self.data, &self.qd, base.as_ref());
+        MovingFrame { base, shift, carry }
+    }
+
+    /// The state thesis 3.4's integration starts from, in momentum form: the generalized
+    /// momenta p = ∂T/∂q̇ of the dynamic DOFs at the step's start, and the
+    /// base's row (the whole body's spatial momentum) after its first half kick, which
+    /// only the impulse of gravity and external forces changes (world axes, about the
+    /// origin: no velocity-product term).
+    fn start_momenta(&mut self, frame: MovingFrame, h: f64) -> StepStart {
+        let n = self.model.n;
+        let root = self.model.root.clone();
         let start_com = model::center_of_mass(&self.model, &self.data);
-        let gravity = self.params.gravity;
-        model::subtree_wrenches(&self.model, &mut self.data, gravity);
+        model::subtree_wrenches(&self.model, &mut self.data, self.params.gravity);
         model::subtree_momenta(&self.model, &mut self.data);
-        let first = if base.is_some() { root.end } else { 0 };
+        let first = if frame.base.is_some() { root.end } else { 0 };
         for k in first..n {
             if !self.prescribed[k] {
                 self.momenta[k] =
                     model::generalized_momentum(&self.model, &self.data, k, self.qd[k]);
             }
         }
-        let b = root.end.max(1) - 1;
-        // The base's row: momentum changes by the impulse of gravity and external forces
-        // only (world axes, about the origin: no velocity-product term).
-        let base_half = self.data.f[b] + self.data.w[b] * (0.5 * h);
-        let start_momentum_linear = self.data.f[b].f;
-        self.q_prev.copy_from_slice(&self.q);
-        self.qd_prev.copy_from_slice(&self.qd);
-        let base0 = self.base;
-        let implicit = &self.implicit[..];
+        let base_link = root.end.max(1) - 1;
+        StepStart {
+            h,
+            frame,
+            first,
+            base_link,
+            start_com,
+            start_momentum_linear: self.data.f[base_link].f,
+            base_half: self.data.f[base_link] + self.data.w[base_link] * (0.5 * h),
+        }
+    }
+
+    /// The first half of thesis 3.4's time integration, a kick implicit in the half-step
+    /// velocities (each pass a forward-dynamics solve, Appendix A):
+    /// p½ = p + h/2 (τ + F(q, q̇½)), q̇½ = M(q)⁻¹ p½. The unknowns (base velocity ω, v;
+    /// joint velocities) are iterated with Anderson acceleration (see `anderson`): the
+    /// plain iteration diverges on the near-null modes of massless links. Leaves p½ in
+    /// `momenta` and q̇½ in `x`, and returns the base's half-step velocity.
+    fn first_kick(&mut self, s: &StepStart) -> Result<Motion> {
+        let n = self.model.n;
+        let h = s.h;
+        let base = s.frame.base;
         if aba::factor(
             &self.model,
             &mut self.data,
             Some(&self.prescribed),
-            Some(implicit),
+            Some(&self.implicit),
             base.as_ref(),
         )
         .is_none()
         {
-            return Err(self.diverged("a DOF lost all its inertia (singular configuration)"));
+            return Err(self.singular());
         }
-        // Unknowns z = (base velocity ω, v; joint velocities), iterated with Anderson
-        // acceleration (see `anderson`): the plain iteration diverges on the near-null
-        // modes of massless links.
         let mut base_velocity = base.map_or(Motion::ZERO, |b| b.velocity);
-        put_motion(&mut self.z, base_velocity);
-        self.z[6..].copy_from_slice(&self.qd);
-        self.anderson.reset();
-        for _ in 0..MAX_ITERATIONS {
-            self.passes[0] += 1;
-            self.x.copy_from_slice(&self.z[6..]);
+        put_motion(&mut self.fixed_point.z, base_velocity);
+        self.fixed_point.z[6..].copy_from_slice(&self.qd);
+        let outcome = self.fixed_point.solve(&mut self.passes[0], |z, image| {
+            self.x.copy_from_slice(&z[6..]);
             let iterate = base.map(|mut b| {
-                b.velocity = get_motion(&self.z);
+                b.velocity = get_motion(z);
                 b
             });
             model::velocities(&self.model, &mut self.data, &self.x, iterate.as_ref());
             model::subtree_momenta(&self.model, &mut self.data);
-            for k in first..n {
+            for k in s.first..n {
                 if !self.prescribed[k] {
                     self.rhs[k] = self.momenta[k]
                         + 0.5 * h * (self.held[k] + model::momentum_rate(&self.data, k))
@@ -664,44 +728,52 @@ impl Simulation {
                 &mut self.data,
                 &self.rhs,
                 Some(&self.prescribed),
-                base.as_ref().map(|b| (b, base_half)),
+                base.as_ref().map(|b| (b, s.base_half)),
                 &mut self.x,
             ) else {
-                return Err(self.diverged("a DOF lost all its inertia (singular configuration)"));
+                return false;
             };
             base_velocity = v;
-            put_motion(&mut self.gz, v);
-            self.gz[6..].copy_from_slice(&self.x);
-            let (mut change, mut scale): (f64, f64) = (0.0, 0.0);
-            for (g, z) in self.gz.iter().zip(&self.z) {
-                change = change.max((g - z).abs());
-                scale = scale.max(g.abs());
-            }
-            if change <= CONVERGED * (1.0 + scale) || !change.is_finite() {
-                break; // a non-finite velocity is caught by the check below
-            }
-            self.anderson.next(&mut self.z, &self.gz);
+            put_motion(image, v);
+            image[6..].copy_from_slice(&self.x);
+            true
+        });
+        if !self.settled(0, outcome) {
+            return Err(self.singular());
         }
-        // p½, then the drift, implicit in the posture: q⁺ = q + h/2 (q̇½(q) + q̇½(q⁺)) with
-        // q̇½(q) = M(q)⁻¹ p½; the unknown is q̇½(q⁺) (base velocity, joint velocities).
-        for k in first..n {
+        for k in s.first..n {
             if !self.prescribed[k] {
                 self.momenta[k] = self.rhs[k] - self.implicit[k] * self.x[k];
             }
         }
-        put_motion(&mut self.xa, base_velocity);
+        Ok(base_velocity)
+    }
+
+    /// The posture update of thesis 3.4's time integration, a drift implicit in the
+    /// posture: q⁺ = q + h/2 (q̇½(q) + q̇½(q⁺)) with
+    /// q̇½(q) = M(q)⁻¹ p½; the unknown is q̇½(q⁺) (base velocity, joint velocities),
+    /// iterated with Anderson acceleration. Leaves q⁺ in `q`, the mass matrix factored
+    /// at q⁺ in `data` and q̇½(q⁺) in `x`; returns the base's velocity and pose at q⁺,
+    /// or `None` when a DOF lost all its inertia.
+    fn drift(
+        &mut self,
+        s: &StepStart,
+        half_velocity: Motion,
+    ) -> Option<(Motion, Option<FloatingBase>)> {
+        let n = self.model.n;
+        let h = s.h;
+        let base = s.frame.base;
+        put_motion(&mut self.xa, half_velocity);
         self.xa[6..].copy_from_slice(&self.x);
-        self.z.copy_from_slice(&self.xa);
-        self.anderson.reset();
+        self.fixed_point.z.copy_from_slice(&self.xa);
         let mut candidate = base;
         let mut solved = None;
-        for _ in 0..MAX_ITERATIONS {
-            self.passes[1] += 1;
-            for k in first..n {
-                self.q[k] = self.q_prev[k] + 0.5 * h * (self.xa[6 + k] + self.z[6 + k]);
+        let outcome = self.fixed_point.solve(&mut self.passes[1], |z, image| {
+            for k in s.first..n {
+                self.q[k] = self.q_prev[k] + 0.5 * h * (self.xa[6 + k] + z[6 + k]);
             }
             if let (Some(b0), Some(c)) = (&base, &mut candidate) {
-                let (va, vb) = (get_motion(&self.xa), get_motion(&self.z));
+                let (va, vb) = (get_motion(&self.xa), get_motion(z));
                 let w = (va.w + vb.w) * 0.5;
                 let vp = (va.v + va.w.cross(b0.position) + vb.v + vb.w.cross(c.position)) * 0.5;
                 c.position = b0.position + vp * h;
@@ -713,7 +785,7 @@ impl Simulation {
                 };
             }
             model::kinematics(&self.model, &mut self.data, &self.q, candidate.as_ref());
-            self.x.copy_from_slice(&self.z[6..]);
+            self.x.copy_from_slice(&z[6..]);
             solved = aba::factor(
                 &self.model,
                 &mut self.data,
@@ -727,92 +799,109 @@ impl Simulation {
                     &mut self.data,
                     &self.momenta,
                     Some(&self.prescribed),
-                    candidate.as_ref().map(|b| (b, base_half)),
+                    candidate.as_ref().map(|b| (b, s.base_half)),
                     &mut self.x,
                 )
             });
-            let Some(v) = solved else { break };
-            put_motion(&mut self.gz, v);
-            self.gz[6..].copy_from_slice(&self.x);
-            let (mut change, mut scale): (f64, f64) = (0.0, 0.0);
-            for (g, z) in self.gz.iter().zip(&self.z) {
-                change = change.max((g - z).abs());
-                scale = scale.max(g.abs());
-            }
-            if change <= CONVERGED * (1.0 + scale) || !change.is_finite() {
-                break;
-            }
-            self.anderson.next(&mut self.z, &self.gz);
-        }
-        // The second half kick at q⁺ (the mass matrix factored there stays in `data`):
-        // p⁺ = p½ + h/2 (τ_held + ∂L/∂q(q⁺, q̇½) + Q_ext), then q̇⁺ = M(q⁺)⁻¹ p⁺.
-        let mut end_momentum = Force::ZERO;
-        let solved = solved.and_then(|v| {
-            let at = candidate.map(|mut c| {
-                c.velocity = v;
-                c
-            });
-            model::velocities(&self.model, &mut self.data, &self.x, at.as_ref());
-            model::subtree_wrenches(&self.model, &mut self.data, gravity);
-            model::subtree_momenta(&self.model, &mut self.data);
-            for k in first..n {
-                if !self.prescribed[k] {
-                    self.momenta[k] +=
-                        0.5 * h * (self.held[k] + model::momentum_rate(&self.data, k));
-                }
-            }
-            let base_end = base_half + self.data.w[b] * (0.5 * h);
-            end_momentum = base_end;
-            aba::solve(
-                &self.model,
-                &mut self.data,
-                &self.momenta,
-                Some(&self.prescribed),
-                at.as_ref().map(|b| (b, base_end)),
-                &mut self.x,
-            )
-            .map(|v| (v, at))
+            let Some(v) = solved else { return false };
+            put_motion(image, v);
+            image[6..].copy_from_slice(&self.x);
+            true
         });
-        let outcome = match solved {
-            Some((v, at)) => {
-                for k in first..n {
-                    if !self.prescribed[k] {
-                        self.qdd[k] = (self.x[k] - self.qd_prev[k]) / h;
-                        self.qd[k] = self.x[k];
-                    } else {
-                        self.qdd[k] = 0.0;
-                    }
-                }
-                if let Some(c) = at {
-                    // The centre of mass moves by exactly the mean momentum over the step
-                    // (linear in time under constant forces): translating the body by
-                    // the drift's O(h³) discrepancy keeps the world angular momentum
-                    // exact when taken back from the moving frame, whose contribution
-                    // M (c₁ − c₀ − h P̄/M) × u would otherwise accumulate.
-                    let m = self.model.total_mass;
-                    let com = model::center_of_mass(&self.model, &self.data);
-                    let mean = (start_momentum_linear + end_momentum.f) * (0.5 * h / m);
-                    let correction = start_com + mean - com;
-                    // Back to the world frame.
-                    let point = v.v + v.w.cross(c.position) + carry;
-                    let position = c.position + correction + shift + carry * h;
-                    self.base = Some(FloatingBase {
-                        position,
-                        rotation: c.rotation,
-                        velocity: Motion::new(v.w, point - v.w.cross(position)),
-                    });
-                }
-                self.sync_root();
-                self.check()
-            }
-            None => Err(self.diverged("a DOF lost all its inertia (singular configuration)")),
-        };
-        if outcome.is_err() {
-            self.q.copy_from_slice(&self.q_prev);
-            self.qd.copy_from_slice(&self.qd_prev);
-            self.base = base0;
+        if !self.settled(1, outcome) {
+            return None;
         }
-        outcome
+        solved.map(|v| (v, candidate))
+    }
+
+    /// The second half of thesis 3.4's time integration, a kick at q⁺ (on the mass
+    /// matrix the drift factored there):
+    /// p⁺ = p½ + h/2 (τ_held + ∂L/∂q(q⁺, q̇½) + Q_ext), then q̇⁺ = M(q⁺)⁻¹ p⁺ into `x`.
+    /// Returns the base's velocity and its row of p⁺, or `None` when a DOF lost all its
+    /// inertia.
+    fn second_kick(
+        &mut self,
+        s: &StepStart,
+        drift_velocity: Motion,
+        candidate: Option<FloatingBase>,
+    ) -> Option<(Motion, Force)> {
+        let n = self.model.n;
+        let h = s.h;
+        let at = candidate.map(|mut c| {
+            c.velocity = drift_velocity;
+            c
+        });
+        model::velocities(&self.model, &mut self.data, &self.x, at.as_ref());
+        model::subtree_wrenches(&self.model, &mut self.data, self.params.gravity);
+        model::subtree_momenta(&self.model, &mut self.data);
+        for k in s.first..n {
+            if !self.prescribed[k] {
+                self.momenta[k] += 0.5 * h * (self.held[k] + model::momentum_rate(&self.data, k));
+            }
+        }
+        let base_end = s.base_half + self.data.w[s.base_link] * (0.5 * h);
+        aba::solve(
+            &self.model,
+            &mut self.data,
+            &self.momenta,
+            Some(&self.prescribed),
+            at.as_ref().map(|b| (b, base_end)),
+            &mut self.x,
+        )
+        .map(|v| (v, base_end))
+    }
+
+    /// The end of thesis 3.4's outbound process, "updating the whole structure": writes
+    /// the new velocities and accelerations, takes the floating base back from the moving
+    /// frame to the world, updates the root's Euler DOFs and checks the state.
+    fn finish_step(
+        &mut self,
+        s: &StepStart,
+        velocity: Motion,
+        candidate: Option<FloatingBase>,
+        end_momentum: Force,
+    ) -> Result<()> {
+        let h = s.h;
+        for k in s.first..self.model.n {
+            if !self.prescribed[k] {
+                self.qdd[k] = (self.x[k] - self.qd_prev[k]) / h;
+                self.qd[k] = self.x[k];
+            } else {
+                self.qdd[k] = 0.0;
+            }
+        }
+        if let Some(c) = candidate {
+            // The centre of mass moves by exactly the mean momentum over the step
+            // (linear in time under constant forces): translating the body by the
+            // drift's O(h³) discrepancy keeps the world angular momentum exact when
+            // taken back from the moving frame, whose contribution
+            // M (c₁ − c₀ − h P̄/M) × u would otherwise accumulate.
+            let m = self.model.total_mass;
+            let com = model::center_of_mass(&self.model, &self.data);
+            let mean = (s.start_momentum_linear + end_momentum.f) * (0.5 * h / m);
+            let correction = s.start_com + mean - com;
+            // Back to the world frame.
+            let MovingFrame { shift, carry, .. } = s.frame;
+            let v = velocity;
+            let point = v.v + v.w.cross(c.position) + carry;
+            let position = c.position + correction + shift + carry * h;
+            self.base = Some(FloatingBase {
+                position,
+                rotation: c.rotation,
+                velocity: Motion::new(v.w, point - v.w.cross(position)),
+            });
+        }
+        self.sync_root();
+        self.check()
+    }
+
+    /// Counts a fixed-point solve of stage `stage` (0 velocity, 1 posture) that ran out of
+    /// passes; `false` when it could not be evaluated.
+    fn settled(&mut self, stage: usize, outcome: Outcome) -> bool {
+        if outcome == Outcome::Unconverged {
+            self.unconverged[stage] += 1;
+        }
+        outcome != Outcome::Failed
     }
 
     /// Loads the persistent forces, the push and (unless `without_contact`) the floor's
@@ -906,12 +995,46 @@ impl Simulation {
         Ok(())
     }
 
-    fn diverged(&self, what: &str) -> Error {
-        Error::Invalid(format!(
-            "dynamics: the simulation diverged at t = {:.3} s: {what}",
-            self.time
-        ))
+    fn singular(&self) -> Error {
+        self.diverged("a DOF lost all its inertia (singular configuration)")
     }
+
+    fn diverged(&self, what: &str) -> Error {
+        Error::Diverged {
+            time: self.time,
+            what: what.to_string(),
+        }
+    }
+}
+
+/// The inertial frame a floating base's step is taken in (see
+/// [`Simulation::enter_moving_frame`]).
+#[derive(Clone, Copy, Debug)]
+struct MovingFrame {
+    /// The floating base seen from the frame, if the root floats.
+    base: Option<FloatingBase>,
+    /// The frame's origin in the world: the base's position at the step's start.
+    shift: DVec3,
+    /// The frame's velocity in the world: the centre of mass's at the step's start.
+    carry: DVec3,
+}
+
+/// What the stages of one step share once its momenta are known.
+#[derive(Clone, Copy, Debug)]
+struct StepStart {
+    /// The step's length (s).
+    h: f64,
+    frame: MovingFrame,
+    /// The first DOF with a row of its own: past the root's when the base floats.
+    first: usize,
+    /// The link whose subtree momentum is the base's row (the root's last link).
+    base_link: usize,
+    /// The centre of mass at the step's start, in the moving frame.
+    start_com: DVec3,
+    /// The whole body's linear momentum at the step's start, in the moving frame.
+    start_momentum_linear: DVec3,
+    /// The base's row of the momenta after the first half kick.
+    base_half: Force,
 }
 
 /// Writes a spatial velocity into the first six entries of `z`.

@@ -531,3 +531,28 @@ fn whole_body_energy_and_momentum_are_conserved_in_free_fall() {
     // the falling COM keeps the integrator's O(h²) error.)
     assert!(dp < 1e-6 && dl < 1e-4, "{dp:e} {dl:e}");
 }
+
+#[test]
+fn steps_whose_fixed_points_run_out_of_passes_are_counted() {
+    let s = adult();
+    let n = s.dof_count();
+    // A head and a body spinning at `spin` rad/s for 0.1 s without a floor.
+    let unconverged = |spin: f64, small_time_step: f64| {
+        let mut qd = vec![0.0; n];
+        qd[s.dof("root_yaw").unwrap()] = spin;
+        qd[s.dof("skullbase_torsion").unwrap()] = spin;
+        let params = SimParams {
+            small_time_step,
+            time_step: small_time_step.max(1e-2),
+            floor: None,
+            ..SimParams::default()
+        };
+        let mut sim = Simulation::new(&s, &vec![0.0; n], &qd, &vec![true; n], params).unwrap();
+        sim.advance(0.1, &Control::Passive).unwrap();
+        sim.unconverged_steps()
+    };
+    assert_eq!(unconverged(2.0, 1e-3), [0, 0]);
+    // Ten times the default sub-step at 10 rad/s: the steps are taken, some unconverged.
+    let [velocity, posture] = unconverged(10.0, 1e-2);
+    assert!(velocity + posture > 0, "{velocity} {posture}");
+}

@@ -3,12 +3,12 @@
 
 use crate::error::{Error, Result};
 use crate::sequence::{Sequence, Track};
+use troupe_body::math::smoothstep;
 
 /// The ease-in/ease-out weight from 1 down to 0 as `u` goes from 0 to 1 (`1 − smoothstep`);
 /// its slope is zero at both ends, so a blend through it is continuous in slope.
 pub fn ease_out(u: f64) -> f64 {
-    let u = u.clamp(0.0, 1.0);
-    1.0 - u * u * (3.0 - 2.0 * u)
+    1.0 - smoothstep(u)
 }
 
 /// The derivative of [`ease_out`] with respect to `u`.
