@@ -46,12 +46,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let hand = reach.spec(&ann_body)?.effector;
     let generator = reach.reach(&ann_body)?;
     let scope = generator.dofs().iter().copied().collect();
-    scene.start_action(ann, ActionSpec::new(reach.kind(), scope), Box::new(generator))?;
+    scene.start_action(
+        ann,
+        ActionSpec::new(reach.kind(), scope),
+        Box::new(generator),
+    )?;
 
     // Bob nods: a sequence made in code, played by the keyframe action.
     let mut nod = Sequence::new("nod");
-    let keys = [(0.0, 0.0), (0.4, 0.35), (0.8, 0.0), (1.2, 0.35), (1.6, 0.0)]
-        .map(|(t, v)| Key::new(t, v));
+    let keys =
+        [(0.0, 0.0), (0.4, 0.35), (0.8, 0.0), (1.2, 0.35), (1.6, 0.0)].map(|(t, v)| Key::new(t, v));
     nod.add_track(Track::new("skullbase_flexion", keys.to_vec())?)?;
     let keyframe = KeyframeOptions::new(Arc::new(nod)).keyframe(&bob_body)?;
     let mut spec = ActionSpec::new("keyframe", keyframe.scope());
