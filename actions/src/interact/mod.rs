@@ -17,6 +17,7 @@
 //!   by IK every tick, extrapolating the active hand one tick ahead.
 //! - **shake hands**: hold hands, then the active hand moves up and down and both follow.
 
+pub mod device_hand;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;

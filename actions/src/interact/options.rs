@@ -1,10 +1,11 @@
 //! The options of the interactions: `give` (which starts the receiver's `receive` too),
 //! `receive`, and `hold_hand` / `shake_hands` (which start the other's `follow_hand`).
 
+use super::device_hand::{offer_to_hand, receive};
 use super::{FollowHand, Give, HoldHand};
 use crate::error::{ActionError, OptionError, Result};
 use crate::grasp::action::{check_duration, grasp_scope, holding_side, Grasp, Signal};
-use crate::grasp::handover::{offer_to_hand, receive, SharedHandBoard};
+use crate::grasp::handover::SharedHandBoard;
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use std::sync::Arc;
 use troupe_body::sensors::Side;

@@ -1,9 +1,12 @@
 //! The Lua API: the `troupe` table, actor, object, action and sequence values.
 
-use super::{BehaviorState, Stage};
+pub(crate) use crate::args::lua_err;
+pub use crate::args::lua_err_message;
 use crate::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
 use crate::error::Error;
+pub use crate::handles::{ActionRef, ActorRef, ObjectRef, Pins, SequenceRef};
 use crate::kinds::BuildContext;
+use crate::stage::{add_behavior, stage, BehaviorState};
 use glam::{DQuat, DVec3};
 use mlua::{
     AnyUserData, Function, Lua, MetaMethod, MultiValue, Table, UserData, UserDataFields,
@@ -17,79 +20,6 @@ use troupe_motion::sequence::{Key, Sequence, Track};
 use troupe_scene::action::ActionId;
 use troupe_scene::scene::ActorDesc;
 use troupe_scene::world::Object;
-
-/// A Lua handle on an actor.
-#[derive(Clone, Copy, Debug)]
-pub struct ActorRef(pub usize);
-/// A Lua handle on an object.
-#[derive(Clone, Copy, Debug)]
-pub struct ObjectRef(pub usize);
-/// A Lua handle on an action. While a handle is alive, the scene keeps the action's
-/// final record (see [`Pins`]).
-#[derive(Debug)]
-pub struct ActionRef(pub ActionId, Arc<Pins>);
-
-/// Counts the live Lua handles of each action, so that the records of ended actions no
-/// script can see any more can be forgotten.
-#[derive(Debug, Default)]
-pub struct Pins(std::sync::Mutex<std::collections::HashMap<ActionId, u32>>);
-
-impl Pins {
-    fn add(&self, id: ActionId) {
-        *self.lock().entry(id).or_insert(0) += 1;
-    }
-    fn release(&self, id: ActionId) {
-        let mut map = self.lock();
-        if let Some(n) = map.get_mut(&id) {
-            *n -= 1;
-            if *n == 0 {
-                map.remove(&id);
-            }
-        }
-    }
-    /// Whether a live handle refers to `id`.
-    pub fn is_pinned(&self, id: ActionId) -> bool {
-        self.lock().contains_key(&id)
-    }
-    fn lock(&self) -> std::sync::MutexGuard<'_, std::collections::HashMap<ActionId, u32>> {
-        self.0.lock().unwrap_or_else(|p| p.into_inner())
-    }
-}
-
-impl ActionRef {
-    /// A new handle on `id` (pinning its record).
-    pub fn new(lua: &Lua, id: ActionId) -> mlua::Result<ActionRef> {
-        let pins = lua
-            .app_data_ref::<Arc<Pins>>()
-            .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?
-            .clone();
-        pins.add(id);
-        Ok(ActionRef(id, pins))
-    }
-}
-
-impl Drop for ActionRef {
-    fn drop(&mut self) {
-        self.1.release(self.0);
-    }
-}
-/// A loaded sequence.
-#[derive(Clone, Debug)]
-pub struct SequenceRef(pub Arc<Sequence>);
-
-/// A Lua runtime error with this message.
-pub fn lua_err_message(e: impl std::fmt::Display) -> mlua::Error {
-    lua_err(e)
-}
-
-pub(crate) fn lua_err(e: impl std::fmt::Display) -> mlua::Error {
-    mlua::Error::runtime(e.to_string())
-}
-
-fn stage(lua: &Lua) -> mlua::Result<mlua::AppDataRefMut<'_, Stage>> {
-    lua.app_data_mut::<Stage>()
-        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))
-}
 
 impl UserData for ActorRef {
     fn add_fields<F: UserDataFields<Self>>(fields: &mut F) {
@@ -105,9 +35,9 @@ impl UserData for ActorRef {
     }
 
     fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
-        super::dynamics::add_actor_methods(methods);
+        crate::dynamics::add_actor_methods(methods);
         methods.add_method("behave", |lua, this, f: Function| {
-            super::add_behavior(lua, Some(this.0), f)
+            add_behavior(lua, Some(this.0), f)
         });
         methods.add_method("position", |lua, this, ()| {
             let p = {
@@ -172,7 +102,7 @@ impl UserData for ActorRef {
             st.scene.set_dofs(this.0, &set).map_err(lua_err)
         });
         methods.add_method("set", |lua, this, t: Table| {
-            super::settings::set(lua, this.0, &t)
+            crate::settings::set(lua, this.0, &t)
         });
         methods.add_method("on", |lua, this, (event, f): (String, Function)| {
             const EVENTS: [&str; 4] = [
@@ -216,10 +146,9 @@ impl UserData for ActorRef {
                 }))
         });
         methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
-            let kind = {
-                let st = stage(lua)?;
-                st.kinds.get(&key).copied()
-            };
+            let kind = lua
+                .app_data_ref::<crate::kinds::ActionKinds>()
+                .and_then(|kinds| kinds.get(&key).copied());
             match kind {
                 Some(kind) => {
                     let actor = this.0;
@@ -246,7 +175,7 @@ impl UserData for ActorRef {
 fn start_kind(
     lua: &Lua,
     actor: usize,
-    kind: super::kinds::ActionKind,
+    kind: crate::kinds::ActionKind,
     args: MultiValue,
 ) -> mlua::Result<ActionRef> {
     let ctx = {

@@ -5,11 +5,21 @@
 //! The action kinds of `troupe-actions` and the device functions of `troupe-drivers` read
 //! their arguments with these; a `lua.rs` of an action kind should need nothing else.
 
-use crate::api::{lua_err_message, ActorRef, ObjectRef};
-use crate::kinds::with_scene;
+use crate::handles::{ActorRef, ObjectRef};
+use crate::stage::with_scene;
 use glam::{DQuat, DVec3, EulerRot};
 use mlua::{Lua, MultiValue, Table, UserData, Value};
 use troupe_scene::scene::Scene;
+
+/// A Lua runtime error with this message.
+pub fn lua_err_message(e: impl std::fmt::Display) -> mlua::Error {
+    lua_err(e)
+}
+
+/// A Lua runtime error with this message (for the crate's own callbacks).
+pub(crate) fn lua_err(e: impl std::fmt::Display) -> mlua::Error {
+    mlua::Error::runtime(e.to_string())
+}
 
 /// A Lua runtime error `"{method}: {message}"`.
 pub fn err(method: &str, message: impl std::fmt::Display) -> mlua::Error {

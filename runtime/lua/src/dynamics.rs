@@ -1,9 +1,9 @@
 //! `actor:inverse_dynamics{…}` and `actor:forward_dynamics{…}`: plain functions (not
 //! actions) over tables keyed by DOF name.
 
-use super::api::ActorRef;
-use super::Stage;
 use crate::args::{check_keys, err, number, vec3};
+use crate::handles::ActorRef;
+use crate::stage::Stage;
 use mlua::{Lua, Table, UserDataMethods, Value};
 use troupe_body::dynamics::{check_state, Dynamics, ExternalForces};
 

@@ -30,7 +30,7 @@ impl BuildContext<'_> {
     pub fn with_scene<R>(&self, f: impl FnOnce(&Scene) -> R) -> mlua::Result<R> {
         let stage = self
             .lua
-            .app_data_ref::<super::Stage>()
+            .app_data_ref::<crate::stage::Stage>()
             .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
         Ok(f(&stage.scene))
     }
@@ -42,22 +42,7 @@ impl BuildContext<'_> {
     }
 }
 
-/// Reads the scene of the Lua state `lua` (for functions registered with
-/// [`ActionKinds::register_function`]). Do not call Lua from inside `f`.
-pub fn with_scene<R>(lua: &Lua, f: impl FnOnce(&Scene) -> R) -> mlua::Result<R> {
-    let stage = lua
-        .app_data_ref::<super::Stage>()
-        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
-    Ok(f(&stage.scene))
-}
-
-/// Changes the scene of the Lua state `lua`. Do not call Lua from inside `f`.
-pub fn with_scene_mut<R>(lua: &Lua, f: impl FnOnce(&mut Scene) -> R) -> mlua::Result<R> {
-    let mut stage = lua
-        .app_data_mut::<super::Stage>()
-        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
-    Ok(f(&mut stage.scene))
-}
+pub use crate::stage::{with_scene, with_scene_mut};
 
 /// Makes a function for the `troupe` table (e.g. `troupe.plan_grasp`).
 pub type MakeFunction = fn(&Lua) -> mlua::Result<mlua::Function>;

@@ -13,21 +13,25 @@ pub mod api;
 pub mod args;
 mod dynamics;
 pub mod error;
+mod handles;
 pub mod kinds;
 pub mod settings;
+mod stage;
 
+use crate::args::lua_err;
 pub use crate::error::{Error, Result};
-use api::{lua_err, ActionRef};
+use crate::handles::{ActionRef, Pins};
+pub use crate::stage::{actor_skeletons, scene_dir};
+use crate::stage::{add_behavior, BehaviorState, Stage, Wait};
 use kinds::ActionKinds;
 use mlua::{
-    FromLuaMulti, Function, HookTriggers, Lua, LuaOptions, MultiValue, StdLib, Table, Thread,
-    Value, VmState,
+    FromLuaMulti, Function, HookTriggers, Lua, LuaOptions, MultiValue, StdLib, Table, Value,
+    VmState,
 };
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
-use troupe_motion::sequence::Sequence;
 use troupe_scene::action::{ActionId, Event, Status};
 use troupe_scene::scene::{Scene, SceneConfig};
 use troupe_scene::session::{Script, Session};
@@ -48,64 +52,6 @@ impl Default for ScriptLimits {
             memory: 16 << 20,
         }
     }
-}
-
-/// What a behavior waits for.
-#[derive(Clone, Debug)]
-pub(crate) enum Wait {
-    /// Resume on the next tick (just created, or yielded without a condition).
-    NextTick,
-    /// Resume once scene time reaches this.
-    Time(f64),
-    /// Resume with the action's final status once it ends.
-    Action(ActionId),
-    /// Resume once all these have ended.
-    All(Vec<ActionId>),
-    /// Resume with the first of these that ends.
-    Any(Vec<ActionId>),
-    /// Resume with `true` once the predicate holds, `false` at the deadline.
-    Until(Function, Option<f64>),
-}
-
-/// Where a behavior is.
-#[derive(Clone, Debug)]
-pub(crate) enum BehaviorState {
-    Waiting(Wait),
-    Done,
-    Failed(String),
-}
-
-pub(crate) struct Behavior {
-    pub actor: Option<usize>,
-    pub thread: Thread,
-    pub state: BehaviorState,
-    /// Whether the coroutine has been resumed once (its first resume passes `self`).
-    pub started: bool,
-    /// Whether its wait on actions has been checked against the scene once; after that,
-    /// only an action ending can make it due (see [`Stage::ended_last_step`]).
-    pub checked: bool,
-}
-
-/// Everything Lua callbacks reach: kept in the Lua state's app data.
-pub(crate) struct Stage {
-    /// The session's scene while it is lent to the director (the script phase, loading a
-    /// file); an empty scene of the same configuration otherwise.
-    pub scene: Scene,
-    pub kinds: ActionKinds,
-    pub behaviors: Vec<Behavior>,
-    pub handlers: Vec<(usize, String, Function)>,
-    pub pending_events: Vec<Event>,
-    /// Actions that ended in the scene steps since the behaviors last ran. Every end of
-    /// an action is such an event, so a behavior waiting on actions needs looking at only
-    /// when one of its actions is here: with 1,000 behaviors, looking up every awaited
-    /// action on every tick cost 5 % of the tick in cache misses.
-    pub ended_last_step: HashSet<ActionId>,
-    pub base_dir: PathBuf,
-    pub current_actor: Option<usize>,
-    /// Loaded sequences by path (and skeleton, for retargeted BVH).
-    pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
-    pub tests: Vec<(String, Function)>,
-    pub handler_failures: Vec<(usize, String)>,
 }
 
 /// How a behavior ended, for summaries.
@@ -135,22 +81,6 @@ pub type LuaSession = Session<Director>;
 /// samples the session's input phase drained). The scene is the session's, lent for the
 /// phase. An error is logged and the phase goes on.
 pub type ScriptHook = Box<dyn FnMut(&Lua) -> mlua::Result<()> + Send>;
-
-pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<()> {
-    let thread = lua.create_thread(f.clone())?;
-    let mut st = lua
-        .app_data_mut::<Stage>()
-        .ok_or_else(|| lua_err("no scene"))?;
-    // The behavior receives its actor as `self`.
-    st.behaviors.push(Behavior {
-        actor,
-        thread,
-        state: BehaviorState::Waiting(Wait::NextTick),
-        started: false,
-        checked: false,
-    });
-    Ok(())
-}
 
 const SCRIPT_LIB: &str = "scripts/lib";
 /// Ended actions no handle refers to are forgotten this long after they ended.
@@ -184,10 +114,11 @@ impl Director {
         let lua = &self.lua;
         let functions = kinds.functions().to_vec();
         let seed = scene.config().seed;
-        lua.set_app_data(Arc::new(api::Pins::default()));
+        lua.set_app_data(Arc::new(Pins::default()));
+        // The kinds live apart from the stage: a method lookup needs nothing else.
+        lua.set_app_data(kinds);
         lua.set_app_data(Stage {
             scene,
-            kinds,
             behaviors: Vec::new(),
             handlers: Vec::new(),
             pending_events: Vec::new(),
@@ -675,24 +606,6 @@ impl Director {
             _ => Wait::NextTick,
         })
     }
-}
-
-/// Skeletons of the scene's actors, by index: for crates that extend the Lua API (e.g.
-/// performers) and need an actor's body while a script runs. `None` outside a director.
-pub fn actor_skeletons(lua: &Lua) -> Option<Vec<Arc<troupe_body::skeleton::Skeleton>>> {
-    let st = lua.app_data_ref::<Stage>()?;
-    Some(
-        st.scene
-            .actors()
-            .iter()
-            .map(|a| a.skeleton.clone())
-            .collect(),
-    )
-}
-
-/// The folder of the scene file being run (relative paths in scripts resolve against it).
-pub fn scene_dir(lua: &Lua) -> Option<PathBuf> {
-    Some(lua.app_data_ref::<Stage>()?.base_dir.clone())
 }
 
 /// A borrow of the scene lent to the director.

@@ -1,7 +1,7 @@
 //! Per-actor settings that scripts change with `actor:set{…}` and action builders read as
 //! defaults. Kept as Lua app data, so each scene (and each scenario test) starts afresh.
 
-use super::api::lua_err_message;
+use crate::args::lua_err_message;
 use mlua::{Lua, Table, Value};
 use std::collections::HashMap;
 
