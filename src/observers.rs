@@ -3,7 +3,7 @@
 //! recorder, the torque log, the timeline); writing files by format is the command line's.
 
 use std::path::{Path, PathBuf};
-use troupe_actions::dynamics::TorqueLog;
+use troupe_actions::dynamics::TorqueRecorder;
 use troupe_scene::record::PostureRecorder;
 use troupe_scene::timeline::TimelineRecorder;
 use troupe_scene::{Event, Observer, Result, Scene};
@@ -61,15 +61,15 @@ impl Observer for RecordFile {
 /// `--record-torques FILE.trk`: the joint torques of the dynamics actions, written at the
 /// end.
 pub struct TorqueFile {
-    log: TorqueLog,
+    log: TorqueRecorder,
     path: PathBuf,
 }
 
 impl TorqueFile {
-    /// Writes what `log` gathers to `path`.
-    pub fn new(log: TorqueLog, path: &Path) -> Self {
+    /// Writes the torques of the run to `path`.
+    pub fn new(path: &Path) -> Self {
         TorqueFile {
-            log,
+            log: TorqueRecorder::new(),
             path: path.to_path_buf(),
         }
     }
@@ -80,8 +80,8 @@ impl Observer for TorqueFile {
         format!("--record-torques {}", self.path.display())
     }
 
-    fn publish(&mut self, _scene: &Scene, _events: &[Event]) -> Result<()> {
-        Ok(())
+    fn publish(&mut self, scene: &Scene, events: &[Event]) -> Result<()> {
+        self.log.publish(scene, events)
     }
 
     fn finish(&mut self, scene: &Scene) -> Result<Option<String>> {

@@ -71,8 +71,9 @@ pub struct RunArgs {
     /// @YAW,PITCH[,DISTANCE]).
     #[arg(long, default_value = "fit")]
     pub camera: String,
-    /// Show the run in a window (needs a display) instead of running headless.
-    #[arg(long, conflicts_with_all = ["frames", "record", "record_torques", "trace", "realtime", "record_devices", "osc_out"])]
+    /// Show the run in a window (needs a display) instead of running headless; --record,
+    /// --trace, --osc-out and --record-devices work as in a headless run.
+    #[arg(long, conflicts_with_all = ["frames", "realtime"])]
     pub view: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
@@ -122,11 +123,6 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let (mut session, devices) =
         crate::devices::session(config, limits, args.record_devices.as_deref())?;
     session.scene_mut().set_chunk_size(args.chunk);
-    let torques = args.record_torques.as_ref().map(|_| {
-        let log = troupe_actions::dynamics::TorqueLog::new();
-        log.install(session.script().lua());
-        log
-    });
     let (director, scene) = session.script_and_scene();
     director
         .load_file(scene, &args.scene)
@@ -155,8 +151,8 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     if let Some(path) = &args.record {
         session.observe(RecordFile::new(path));
     }
-    if let (Some(path), Some(log)) = (&args.record_torques, torques) {
-        session.observe(TorqueFile::new(log, path));
+    if let Some(path) = &args.record_torques {
+        session.observe(TorqueFile::new(path));
     }
     if let Some(path) = &args.trace {
         session.observe(TraceFile::new(path));

@@ -9,6 +9,7 @@ use troupe_actions::{Walk, WalkOptions};
 use troupe_body::glam::DVec3;
 use troupe_body::template::{template, TemplateParams};
 use troupe_body::ActorState;
+use troupe_scene::Blackboard;
 use troupe_scene::{
     ActionSpec, ActorDesc, ActorInfo, DofWriter, Generator, GeneratorContext, Scene, SceneConfig,
     World,
@@ -37,6 +38,7 @@ fn generator_step(c: &mut Criterion) {
         states: &states,
         objects: &[],
         holders: &[],
+        board: &Blackboard::default(),
     };
     let mut walk = Walk::velocity(
         &skeleton,

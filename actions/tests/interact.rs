@@ -1,9 +1,8 @@
 //! Interaction end to end: a give between two actors, holding hands while the active
 //! actor moves, shaking hands, and manipulation of a held object.
 
-use std::sync::Arc;
 use troupe_actions::grasp::action::{grasp_scope, Grasp};
-use troupe_actions::grasp::{HandChoice, HandModel, PlanOptions, Signal};
+use troupe_actions::grasp::{HandChoice, HandModel, PlanOptions};
 use troupe_actions::interact::{FollowHand, Give, HoldHand};
 use troupe_actions::manipulate::{Manipulate, ObjectKey};
 use troupe_body::glam::DVec3;
@@ -11,7 +10,7 @@ use troupe_body::sensors::Side;
 use troupe_body::Shape;
 use troupe_scene::{
     ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Scene, SceneConfig,
-    Status, Step,
+    SignalId, Status, Step,
 };
 
 fn run_all(s: &mut Scene, ids: &[ActionId], max_ticks: usize) {
@@ -76,9 +75,9 @@ fn give_scene(threads: usize) -> (Scene, usize, ActionId, ActionId) {
     let id = grasp(&mut s, 0, c);
     run_all(&mut s, &[id], 400);
     assert_eq!(s.action(id).unwrap().status, Status::Completed);
-    let arrived = Arc::new(Signal::default());
+    let (arrived, ended) = (s.new_signal(), s.new_signal());
     let skel = s.actors()[0].skeleton.clone();
-    let give = Give::new(c, 1, Side::Right, arrived.clone());
+    let give = Give::new(c, 1, Side::Right, arrived, ended);
     let gid = s
         .start_action(
             0,
@@ -152,7 +151,8 @@ fn give_without_holding_fails() {
     .unwrap();
     let c = cup(&mut s, DVec3::new(-0.2, 1.05, 0.38));
     let skel = s.actors()[0].skeleton.clone();
-    let give = Give::new(c, 1, Side::Right, Arc::new(Signal::default()));
+    let (arrived, ended) = (s.new_signal(), s.new_signal());
+    let give = Give::new(c, 1, Side::Right, arrived, ended);
     let id = s
         .start_action(
             0,
@@ -203,7 +203,7 @@ fn palm(s: &Scene, actor: usize, side: Side) -> DVec3 {
     s.states()[actor].globals[m.sensors.wrist].transform_point(m.sensors.palm)
 }
 
-fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, Arc<Signal>) {
+fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, SignalId) {
     let mut s = Scene::new(SceneConfig::default()).unwrap();
     s.add_actor(&ActorDesc::new("alice")).unwrap();
     s.add_actor(&ActorDesc {
@@ -211,17 +211,9 @@ fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, Arc<Signal>) {
         ..ActorDesc::new("bob")
     })
     .unwrap();
-    let held = Arc::new(Signal::default());
-    let finished = Arc::new(Signal::default());
+    let (held, finished) = (s.new_signal(), s.new_signal());
     let skel = s.actors()[0].skeleton.clone();
-    let active = HoldHand::new(
-        1,
-        Side::Right,
-        Side::Left,
-        shake,
-        held.clone(),
-        finished.clone(),
-    );
+    let active = HoldHand::new(1, Side::Right, Side::Left, shake, held, finished);
     let aid = s
         .start_action(
             0,
@@ -230,7 +222,7 @@ fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, Arc<Signal>) {
         )
         .unwrap();
     let wrist = skel.joint("r_wrist").unwrap();
-    let follow = FollowHand::new(0, wrist, Side::Left, held.clone(), finished);
+    let follow = FollowHand::new(0, wrist, Side::Left, held, finished);
     let fid = s
         .start_action(
             1,
@@ -246,12 +238,12 @@ fn holding_hands_the_hands_stay_within_a_centimetre_while_the_active_actor_moves
     let (mut s, aid, fid, held) = hold_scene(false);
     for _ in 0..300 {
         s.step();
-        if held.before(s.tick()) {
+        if s.blackboard().before(held, s.tick()) {
             break;
         }
     }
     assert!(
-        held.before(s.tick()),
+        s.blackboard().before(held, s.tick()),
         "never held: {:?}",
         s.action(aid).unwrap().reason
     );

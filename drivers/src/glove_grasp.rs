@@ -13,7 +13,6 @@
 //! giver, is stamped by tick: the results are identical with any thread count.
 
 use std::sync::{Arc, Mutex};
-use troupe_actions::grasp::handover::SharedHandBoard;
 use troupe_actions::grasp::{GraspAutomaton, HandDecision, HandState};
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::sensors::Side;
@@ -33,7 +32,6 @@ pub struct HandStatus {
 /// The automaton of one performer's glove hand, with its buffers.
 pub struct GloveHand {
     side: Side,
-    board: SharedHandBoard,
     status: Arc<Mutex<HandStatus>>,
     automaton: Option<GraspAutomaton>,
     wrist: usize,
@@ -45,10 +43,9 @@ pub struct GloveHand {
 
 impl GloveHand {
     /// The glove hand `side`; `status` is where its state is published.
-    pub fn new(side: Side, board: SharedHandBoard, status: Arc<Mutex<HandStatus>>) -> GloveHand {
+    pub fn new(side: Side, status: Arc<Mutex<HandStatus>>) -> GloveHand {
         GloveHand {
             side,
-            board,
             status,
             automaton: None,
             wrist: 0,
@@ -136,16 +133,11 @@ impl GloveHand {
                 // to this performer (`give{to = performer}`); otherwise the scene ignores
                 // the request and the holder keeps it.
                 let from = match ctx.world.holder(o) {
-                    Some(h) if h.actor != ctx.actor => {
-                        let board = self
-                            .board
-                            .0
-                            .lock()
-                            .map_err(|_| "hand board lock poisoned".to_string())?;
-                        board
-                            .may_take(o, ctx.actor, h.actor, ctx.tick)
-                            .then_some(h.actor)
-                    }
+                    Some(h) if h.actor != ctx.actor => ctx
+                        .world
+                        .board
+                        .may_take(o, ctx.actor, h.actor, ctx.tick)
+                        .then_some(h.actor),
                     _ => None,
                 };
                 out.request(HoldRequest::Attach {

@@ -24,7 +24,6 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use troupe_actions::grasp::handover::SharedHandBoard;
 use troupe_actions::grasp::HandState;
 use troupe_body::ik::{IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::Effector;
@@ -34,7 +33,7 @@ use troupe_body::skeleton::{DofKind, Skeleton};
 use troupe_body::transform::Transform;
 use troupe_body::Scope;
 use troupe_lua::api::{lua_err_message, ActorRef};
-use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
+use troupe_lua::kinds::{with_scene_mut, ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_lua::LuaSession;
 use troupe_scene::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
 use troupe_scene::{Input, Scene};
@@ -807,12 +806,7 @@ fn build_capture(
             if spec.scope.intersection(&fingers).is_empty() {
                 None
             } else {
-                let board = ctx
-                    .lua
-                    .app_data_ref::<SharedHandBoard>()
-                    .map(|b| b.clone())
-                    .ok_or_else(|| lua_err_message("capture: no hand board in this run"))?;
-                Some(GloveHand::new(side, board, status))
+                Some(GloveHand::new(side, status))
             }
         }
         None => None,
@@ -891,10 +885,6 @@ pub fn install(
     let (director, _) = session.script_and_scene();
     let lua = director.lua();
     lua.set_app_data(shared.clone());
-    // Glove hands and offers to them, shared with `give` (troupe-actions).
-    if lua.app_data_ref::<SharedHandBoard>().is_none() {
-        lua.set_app_data(SharedHandBoard::default());
-    }
     install_lua(lua).map_err(|e| format!("installing the device functions: {e}"))?;
     let s = shared.clone();
     director.add_script_hook(Box::new(move |_lua: &Lua| {
@@ -1245,15 +1235,8 @@ fn lua_performer(lua: &Lua, t: Table) -> mlua::Result<Value> {
     let n = skeleton.dof_count();
     let hand = match &glove {
         Some(g) => {
-            let board = lua
-                .app_data_ref::<SharedHandBoard>()
-                .map(|b| b.clone())
-                .ok_or_else(|| err("performer: no hand board in this run"))?;
-            board
-                .0
-                .lock()
-                .map_err(|_| err("hand board lock poisoned"))?
-                .add_hand(actor, g.side);
+            // A giver brings objects into this hand rather than handing them over.
+            with_scene_mut(lua, |scene| scene.declare_device_hand(actor, g.side))?;
             Some(Arc::new(Mutex::new(HandStatus {
                 state: HandState::FreeHand,
                 side: g.side,

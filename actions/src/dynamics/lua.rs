@@ -2,8 +2,8 @@
 //! [`DynamicsOptions`]; and the torque log's place on a Lua state.
 
 use super::options::gains;
-use super::{Drive, DynamicsOptions, Push, ServoTarget, TorqueLog};
-use mlua::{Lua, MultiValue, Table, Value};
+use super::{Drive, DynamicsOptions, Push, ServoTarget};
+use mlua::{MultiValue, Table, Value};
 use troupe_body::dynamics::contact::ContactParams;
 use troupe_body::dynamics::SimParams;
 use troupe_body::glam::DVec3;
@@ -11,18 +11,6 @@ use troupe_lua::api::{load_sequence, ActorRef, SequenceRef};
 use troupe_lua::args::{err, opt_bool, opt_number, opt_table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
-
-impl TorqueLog {
-    /// Makes the dynamics actions built on `lua` log into this log.
-    pub fn install(&self, lua: &Lua) {
-        lua.set_app_data(self.clone());
-    }
-
-    /// The log installed on `lua`, if any.
-    fn installed(lua: &Lua) -> Option<TorqueLog> {
-        lua.app_data_ref::<TorqueLog>().map(|l| l.clone())
-    }
-}
 
 /// The simulation options every dynamics kind takes.
 const SIM_OPTIONS: [&str; 6] = [
@@ -80,8 +68,7 @@ fn build(
         .map_err(|e| err(m, e))?;
     let generator = options
         .generator(&ctx.skeleton, scope)
-        .map_err(|e| err(m, e))?
-        .log_torques(TorqueLog::installed(ctx.lua));
+        .map_err(|e| err(m, e))?;
     Ok((Box::new(generator), common.spec(m, scope)))
 }
 

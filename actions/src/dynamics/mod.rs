@@ -14,14 +14,14 @@ pub mod options;
 pub mod torque_log;
 
 pub use options::{DynamicsOptions, Push};
-pub use torque_log::TorqueLog;
+pub use torque_log::TorqueRecorder;
 
 use crate::error::Result;
 use std::sync::Arc;
 use troupe_body::dynamics::{Control, Gains, SimParams, Simulation};
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Note, Step};
 
 /// What a servo follows.
 #[derive(Clone, Debug, PartialEq)]
@@ -68,7 +68,6 @@ pub struct DynamicsGenerator {
     desired_qd: Vec<f64>,
     desired_qdd: Vec<f64>,
     at_rest_for: f64,
-    torques: Option<TorqueLog>,
 }
 
 impl DynamicsGenerator {
@@ -104,14 +103,7 @@ impl DynamicsGenerator {
             desired_qd: vec![0.0; n],
             desired_qdd: vec![0.0; n],
             at_rest_for: 0.0,
-            torques: None,
         })
-    }
-
-    /// Logs the joint torques of every tick into `log`.
-    pub fn log_torques(mut self, log: Option<TorqueLog>) -> DynamicsGenerator {
-        self.torques = log;
-        self
     }
 
     fn fill_desired(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
@@ -228,12 +220,15 @@ impl Generator for DynamicsGenerator {
                 out.set(k, q[k]);
             }
         }
-        if let Some(log) = &self.torques {
-            let tau = sim.mean_torques();
-            for k in self.scope.iter() {
-                if !sim.is_prescribed(k) {
-                    log.record(ctx.actor, k, ctx.tick, ctx.time, tau[k]);
-                }
+        // The joint forces applied over the tick (their mean over the sub-steps), for
+        // observers such as `troupe run --record-torques` (thesis fig. 3-9).
+        let tau = sim.mean_torques();
+        for k in self.scope.iter() {
+            if !sim.is_prescribed(k) {
+                out.post(Note::Torque {
+                    dof: k,
+                    torque: tau[k],
+                });
             }
         }
         match &self.drive {

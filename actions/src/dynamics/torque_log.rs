@@ -1,64 +1,57 @@
-//! The torque log: the joint torques the dynamics actions apply, tick by tick (thesis
+//! The torque recorder: the joint torques the dynamics actions apply, tick by tick (thesis
 //! fig. 3-9), kept for `troupe run --record-torques`.
 
 use std::collections::BTreeMap;
-use std::sync::{Arc, Mutex};
 use troupe_motion::sequence::{Key, Track as SeqTrack};
 use troupe_motion::Sequence;
-use troupe_scene::Scene;
+use troupe_scene::{Event, Observer, Result, Scene};
 
-/// Per-DOF joint torques of the dynamics actions, recorded tick by tick on request
-/// (`troupe run --record-torques FILE.trk`, thesis fig. 3-9). Install it on a director's
-/// Lua state before the scene starts its actions: every dynamics action built afterwards
-/// logs, each tick, the joint forces it applied over the tick (their mean over the
-/// sub-steps; see `Simulation::mean_torques`) on the DOFs it simulates. Thread-safe; the
-/// result does not depend on the scheduler's thread count (entries are keyed by actor,
-/// DOF and tick; when two dynamics actions drive one DOF in the same tick their torques
-/// add).
+/// Per-DOF joint torques of the dynamics actions, gathered from the scene's blackboard
+/// after every tick (`troupe run --record-torques FILE.trk`, thesis fig. 3-9): each
+/// dynamics action posts the joint forces it applied over the tick (their mean over the
+/// sub-steps; see `Simulation::mean_torques`) on the DOFs it simulates, and two actions
+/// on one DOF add up. The blackboard is filled serially in actor order, so the record does
+/// not depend on the scheduler's thread count.
 #[derive(Clone, Debug, Default)]
-pub struct TorqueLog(Arc<Mutex<TorqueEntries>>);
+pub struct TorqueRecorder {
+    entries: TorqueEntries,
+}
 
 /// Per (actor, DOF), per tick: (time, torque).
 type TorqueEntries = BTreeMap<(usize, usize), BTreeMap<u64, (f64, f64)>>;
 
-impl TorqueLog {
-    /// An empty log.
-    pub fn new() -> TorqueLog {
-        TorqueLog::default()
+impl TorqueRecorder {
+    /// An empty record.
+    pub fn new() -> TorqueRecorder {
+        TorqueRecorder::default()
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, TorqueEntries> {
-        // A panic while holding the lock leaves plain data: keep using it.
-        self.0.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    /// Adds `torque` (N·m, or N for a translation) on DOF `dof` of actor `actor` at tick
-    /// `tick` (scene time `time`).
-    pub fn record(&self, actor: usize, dof: usize, tick: u64, time: f64, torque: f64) {
-        let mut entries = self.lock();
-        let e = entries
-            .entry((actor, dof))
-            .or_default()
-            .entry(tick)
-            .or_insert((time, 0.0));
-        e.1 += torque;
+    /// Adds the torques of the tick `scene` has just stepped.
+    pub fn sample(&mut self, scene: &Scene) {
+        let (tick, time) = (scene.tick(), scene.time());
+        for t in scene.blackboard().torques() {
+            self.entries
+                .entry((t.actor, t.dof))
+                .or_default()
+                .insert(tick, (time, t.torque));
+        }
     }
 
     /// Whether nothing was logged.
     pub fn is_empty(&self) -> bool {
-        self.lock().is_empty()
+        self.entries.is_empty()
     }
 
     /// Number of (actor, DOF, tick) entries.
     pub fn len(&self) -> usize {
-        self.lock().values().map(|t| t.len()).sum()
+        self.entries.values().map(|t| t.len()).sum()
     }
 
     /// One sequence per actor that has torques (named after the actor, in actor order),
     /// one track per DOF named after it, one key per tick: values in N·m (N for a
     /// translation), `meta quantity torque`.
     pub fn sequences(&self, scene: &Scene) -> Vec<Sequence> {
-        let entries = self.lock();
+        let entries = &self.entries;
         let mut set: Vec<Sequence> = Vec::new();
         let mut current: Option<usize> = None;
         for (&(actor, dof), ticks) in entries.iter() {
@@ -88,5 +81,16 @@ impl TorqueLog {
             }
         }
         set
+    }
+}
+
+impl Observer for TorqueRecorder {
+    fn name(&self) -> String {
+        "torque recorder".into()
+    }
+
+    fn publish(&mut self, scene: &Scene, _events: &[Event]) -> Result<()> {
+        self.sample(scene);
+        Ok(())
     }
 }

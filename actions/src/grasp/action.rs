@@ -11,45 +11,16 @@ use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
 use crate::error::{OptionError, Result};
 use crate::reach::quintic;
-use std::sync::atomic::{AtomicU64, Ordering};
-use std::sync::Arc;
 use troupe_body::glam::DVec3;
 use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::holding::HoldRequest;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Scene, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Scene, SignalId, Step};
 
 /// Seconds the fingers take to close along a pattern.
 pub const CLOSE_SECONDS: f64 = 0.6;
 /// Seconds the fingers take to open.
 pub const OPEN_SECONDS: f64 = 0.4;
-/// A tick stamp that has not happened yet.
-const NEVER: u64 = u64::MAX;
-
-/// A one-way signal between two actors' generators (give, hold hands) that stays
-/// deterministic: the writer stamps the tick it happened, and a reader only believes a
-/// stamp from an earlier tick, so what it sees never depends on which thread ran first.
-#[derive(Debug)]
-pub struct Signal(AtomicU64);
-
-impl Default for Signal {
-    fn default() -> Self {
-        Signal(AtomicU64::new(NEVER))
-    }
-}
-
-impl Signal {
-    /// Records that the event happened at `tick` (the first stamp wins).
-    pub fn raise(&self, tick: u64) {
-        let _ = self
-            .0
-            .compare_exchange(NEVER, tick, Ordering::SeqCst, Ordering::SeqCst);
-    }
-    /// Whether the event happened before `tick`.
-    pub fn before(&self, tick: u64) -> bool {
-        self.0.load(Ordering::SeqCst) < tick
-    }
-}
 
 /// The DOFs a grasp with these hands drives: arms and hands.
 pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope> {
@@ -125,11 +96,11 @@ pub struct Grasp {
     globals: Vec<Transform>,
     samples: Vec<(usize, f64)>,
     /// Wait for this signal before planning (a receiver waits for the giver).
-    gate: Option<Arc<Signal>>,
+    gate: Option<SignalId>,
     /// Raised when the giver's action ended: a receiver still waiting fails.
-    abort: Option<Arc<Signal>>,
+    abort: Option<SignalId>,
     /// Raised when the object is held.
-    done: Option<Arc<Signal>>,
+    done: Option<SignalId>,
 }
 
 impl Grasp {
@@ -164,20 +135,20 @@ impl Grasp {
 
     /// Fails while still waiting for its gate once `abort` is raised (the giver's action
     /// ended without the object arriving).
-    pub fn abandoned_by(mut self, abort: Arc<Signal>) -> Self {
+    pub fn abandoned_by(mut self, abort: SignalId) -> Self {
         self.abort = Some(abort);
         self
     }
 
     /// Waits for `gate` before planning.
-    pub fn gated(mut self, gate: Arc<Signal>) -> Self {
+    pub fn gated(mut self, gate: SignalId) -> Self {
         self.gate = Some(gate);
         self.phase = Phase::Waiting;
         self
     }
 
     /// Raises `done` once the object is held.
-    pub fn signalling(mut self, done: Arc<Signal>) -> Self {
+    pub fn signalling(mut self, done: SignalId) -> Self {
         self.done = Some(done);
         self
     }
@@ -258,8 +229,9 @@ impl Generator for Grasp {
         match self.phase {
             Phase::Waiting => {
                 self.q.copy_from_slice(&ctx.posture.q);
-                let open = self.gate.as_ref().is_some_and(|g| g.before(ctx.tick));
-                if !open && self.abort.as_ref().is_some_and(|a| a.before(ctx.tick)) {
+                let board = ctx.world.board;
+                let open = self.gate.is_some_and(|g| board.before(g, ctx.tick));
+                if !open && self.abort.is_some_and(|a| board.before(a, ctx.tick)) {
                     return Step::Failed(
                         "the giver's action ended before the object reached the meeting point"
                             .into(),
@@ -357,8 +329,8 @@ impl Generator for Grasp {
                 self.q = q;
                 match ctx.world.holder(self.object) {
                     Some(h) if h.actor == ctx.actor => {
-                        if let Some(d) = &self.done {
-                            d.raise(ctx.tick);
+                        if let Some(d) = self.done {
+                            out.raise(d);
                         }
                         Step::Finished
                     }

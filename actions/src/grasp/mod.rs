@@ -13,7 +13,7 @@ pub mod options;
 pub mod pattern;
 pub mod plan;
 
-pub use action::{Grasp, Release, Signal};
+pub use action::{Grasp, Release};
 pub use automaton::{AutomatonOutput, GraspAutomaton, HandDecision, HandState};
 pub use close::HandModel;
 pub use decision::{decide, Decision, GraspType};

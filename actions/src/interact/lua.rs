@@ -2,7 +2,6 @@
 //! in Lua: reads [`GiveOptions`], [`ReceiveOptions`] and [`HoldHandOptions`].
 
 use super::options::{GiveOptions, HoldHandOptions, ReceiveOptions};
-use crate::grasp::handover::SharedHandBoard;
 use crate::grasp::lua::hand_choice;
 use mlua::{MultiValue, Table};
 use troupe_body::sensors::Side;
@@ -25,9 +24,8 @@ pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
         timeout: opt_number(&t, m, "timeout")?,
         hand: hand_choice(m, &t)?,
     };
-    let board = ctx.lua.app_data_ref::<SharedHandBoard>().map(|b| b.clone());
     let (generator, scope) = ctx
-        .with_scene_mut(|s| options.start(s, ctx.actor, common.delay, board.as_ref()))?
+        .with_scene_mut(|s| options.start(s, ctx.actor, common.delay))?
         .map_err(|e| err(m, e))?;
     let mut spec = common.spec(m, scope);
     spec.duration = None;

@@ -1,9 +1,9 @@
 //! Actor interaction by hands (thesis 4.5): giving an object, holding hands, shaking
 //! hands.
 //!
-//! Two actors' generators cooperate through [`Signal`]s: one raises a signal with the
-//! tick it happened, the other only believes stamps from earlier ticks, so the outcome
-//! does not depend on which thread stepped which actor first.
+//! Two actors' generators cooperate through signals on the scene's blackboard
+//! ([`troupe_scene::blackboard`]): one raises a signal, the other sees it from the next
+//! tick on, so the outcome does not depend on which thread stepped which actor first.
 //!
 //! - **give**: the giver carries the held object to a meeting point between the actors
 //!   (the object leads, the arm follows by IK as in 4.4), raises `arrived`; the receiver
@@ -24,7 +24,7 @@ pub mod options;
 
 pub use options::{GiveOptions, HoldHandOptions, ReceiveOptions};
 
-use crate::grasp::action::{Signal, CLOSE_SECONDS, OPEN_SECONDS};
+use crate::grasp::action::{CLOSE_SECONDS, OPEN_SECONDS};
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};
 use crate::grasp::plan::{
@@ -32,12 +32,11 @@ use crate::grasp::plan::{
 };
 use crate::grasp::GraspType;
 use crate::reach::quintic;
-use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::jacobian::rotation_error;
 use troupe_body::sensors::{solid_distance, Side};
 use troupe_body::{Scope, Transform};
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step, World};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Notes, SignalId, Step, World};
 
 /// The giver waits this long for the receiver to take the object.
 pub const GIVE_TIMEOUT: f64 = 10.0;
@@ -61,7 +60,7 @@ pub struct Give {
     object: usize,
     receiver: usize,
     sides: Vec<Side>,
-    arrived: Arc<Signal>,
+    arrived: SignalId,
     arm: Option<ArmIk>,
     start_q: Vec<f64>,
     goal_q: Vec<f64>,
@@ -75,24 +74,20 @@ pub struct Give {
     /// Bring the object into this hand of the receiver (a performer's glove hand) rather
     /// than to the point between the actors.
     receiver_hand: Option<Side>,
-    /// Raised when this action ends, however it ends (see the `Drop`).
-    ended: Arc<Signal>,
-    /// The last tick this generator started or stepped (0 before).
-    last_tick: u64,
-}
-
-impl Drop for Give {
-    /// The receiver waiting for the object learns that the give ended: the scheduler drops
-    /// a generator on the tick its action ends, one after its last step.
-    fn drop(&mut self) {
-        self.ended.raise(self.last_tick + 1);
-    }
+    /// Raised when this action ends, however it ends (see [`Generator::end`]).
+    ended: SignalId,
 }
 
 impl Give {
     /// `object` (held by the acting actor's hand `side`) goes to `receiver`; `arrived` is
-    /// raised when it is at the meeting point.
-    pub fn new(object: usize, receiver: usize, side: Side, arrived: Arc<Signal>) -> Give {
+    /// raised when it is at the meeting point, `ended` when the give ends in any way.
+    pub fn new(
+        object: usize,
+        receiver: usize,
+        side: Side,
+        arrived: SignalId,
+        ended: SignalId,
+    ) -> Give {
         Give {
             object,
             receiver,
@@ -108,8 +103,7 @@ impl Give {
             samples: Vec::new(),
             timeout: GIVE_TIMEOUT,
             receiver_hand: None,
-            ended: Arc::new(Signal::default()),
-            last_tick: 0,
+            ended,
         }
     }
 
@@ -143,14 +137,18 @@ pub fn meeting_point(world: &World, giver: usize, receiver: usize) -> Option<DVe
 
 impl Give {
     /// The signal raised when this give ends, for a receiver that waits for it.
-    pub fn ended(&self) -> Arc<Signal> {
-        self.ended.clone()
+    pub fn ended(&self) -> SignalId {
+        self.ended
     }
 }
 
 impl Generator for Give {
+    /// The receiver waiting for the object learns that the give ended.
+    fn end(&mut self, notes: &mut Notes) {
+        notes.raise(self.ended);
+    }
+
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
-        self.last_tick = ctx.tick;
         let w = ctx.world;
         let obj = w
             .objects
@@ -187,7 +185,6 @@ impl Generator for Give {
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        self.last_tick = ctx.tick;
         let Some(arm) = &self.arm else {
             return Step::Failed("give: not started".into());
         };
@@ -209,7 +206,7 @@ impl Generator for Give {
                     self.q[d] = self.goal_q[d];
                 }
                 // The arm is at the goal since the last tick: the object is there.
-                self.arrived.raise(ctx.tick);
+                out.raise(self.arrived);
                 match ctx.world.holder(self.object) {
                     Some(h) if h.actor == self.receiver => {
                         let mut open = match HandPattern::open(ctx.skeleton, self.sides[0]) {
@@ -271,8 +268,8 @@ pub struct HoldHand {
     other_side: Side,
     side: Side,
     shake: bool,
-    held: Arc<Signal>,
-    finished: Arc<Signal>,
+    held: SignalId,
+    finished: SignalId,
     model: Option<HandModel>,
     arm: Option<ArmIk>,
     wrist_goal: Transform,
@@ -286,20 +283,6 @@ pub struct HoldHand {
     q: Vec<f64>,
     globals: Vec<Transform>,
     samples: Vec<(usize, f64)>,
-    /// The last tick this generator stepped (0 before its first).
-    last_tick: u64,
-}
-
-impl Drop for HoldHand {
-    /// A hold that ends any other way (cancelled, pre-empted, its duration over, failed
-    /// to start) lets the follower go too: the scheduler drops the generator on the tick the action ends, one
-    /// after its last step, and the follower sees the signal from the next tick on, on
-    /// every thread count alike.
-    fn drop(&mut self) {
-        // A hold that never started (it failed to start, or was cancelled while pending)
-        // has `last_tick` 0: its follower is let go at once.
-        self.finished.raise(self.last_tick + 1);
-    }
 }
 
 impl HoldHand {
@@ -311,8 +294,8 @@ impl HoldHand {
         side: Side,
         other_side: Side,
         shake: bool,
-        held: Arc<Signal>,
-        finished: Arc<Signal>,
+        held: SignalId,
+        finished: SignalId,
     ) -> HoldHand {
         HoldHand {
             other,
@@ -329,7 +312,6 @@ impl HoldHand {
             pattern: None,
             blocked: Scope::EMPTY,
             s: 0.0,
-            last_tick: 0,
             phase: 0,
             phase_start: 0.0,
             q: Vec::new(),
@@ -356,8 +338,13 @@ fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
 }
 
 impl Generator for HoldHand {
+    /// A hold that ends any way (cancelled, pre-empted, its duration over, failed to
+    /// start, never admitted) lets the follower go too, from the next tick on.
+    fn end(&mut self, notes: &mut Notes) {
+        notes.raise(self.finished);
+    }
+
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
-        self.last_tick = ctx.tick;
         let w = ctx.world;
         let me = actor_name(w, ctx.actor);
         if self.other == ctx.actor || self.other >= w.actors.len() {
@@ -445,7 +432,6 @@ impl Generator for HoldHand {
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        self.last_tick = ctx.tick;
         let (Some(model), Some(arm)) = (&self.model, &mut self.arm) else {
             return Step::Failed("hold_hand: not started".into());
         };
@@ -486,7 +472,7 @@ impl Generator for HoldHand {
                     &field,
                 );
                 if self.s >= 1.0 {
-                    self.held.raise(ctx.tick);
+                    out.raise(self.held);
                     self.phase = 2;
                     self.phase_start = ctx.local_time;
                 }
@@ -533,7 +519,7 @@ impl Generator for HoldHand {
                     }
                 }
                 if s >= 1.0 {
-                    self.finished.raise(ctx.tick);
+                    out.raise(self.finished);
                     self.write(out);
                     return Step::Finished;
                 }
@@ -550,8 +536,8 @@ pub struct FollowHand {
     active: usize,
     active_wrist: usize,
     side: Side,
-    held: Arc<Signal>,
-    finished: Arc<Signal>,
+    held: SignalId,
+    finished: SignalId,
     arm: Option<ArmIk>,
     relative: Option<Transform>,
     last: Option<Transform>,
@@ -565,8 +551,8 @@ impl FollowHand {
         active: usize,
         active_wrist: usize,
         side: Side,
-        held: Arc<Signal>,
-        finished: Arc<Signal>,
+        held: SignalId,
+        finished: SignalId,
     ) -> FollowHand {
         FollowHand {
             active,
@@ -598,13 +584,13 @@ impl Generator for FollowHand {
         };
         let mine: Vec<(usize, f64)> = out.scope().iter().map(|d| (d, self.q[d])).collect();
         self.q.copy_from_slice(&ctx.posture.q);
-        if self.finished.before(ctx.tick) {
+        if ctx.world.board.before(self.finished, ctx.tick) {
             for d in out.scope().iter() {
                 out.set(d, self.q[d]);
             }
             return Step::Finished;
         }
-        if self.held.before(ctx.tick) {
+        if ctx.world.board.before(self.held, ctx.tick) {
             for (d, v) in mine {
                 self.q[d] = v;
             }

@@ -4,10 +4,8 @@
 use super::device_hand::{offer_to_hand, receive};
 use super::{FollowHand, Give, HoldHand};
 use crate::error::{ActionError, OptionError, Result};
-use crate::grasp::action::{check_duration, grasp_scope, holding_side, Grasp, Signal};
-use crate::grasp::handover::SharedHandBoard;
+use crate::grasp::action::{check_duration, grasp_scope, holding_side, Grasp};
 use crate::grasp::plan::{HandChoice, PlanOptions};
-use std::sync::Arc;
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
 use troupe_scene::{ActionSpec, Generator, Scene};
@@ -59,7 +57,8 @@ impl GiveOptions {
     }
 
     /// Makes `giver`'s action and the DOFs it drives. A receiver whose hand a person
-    /// drives (listed on `board`) takes the object when its glove closes; any other
+    /// drives (declared on the scene's blackboard) takes the object when its glove
+    /// closes; any other
     /// receiver gets a `receive` action started on `scene` now, `delay` seconds ahead
     /// like the give, which waits for the object to arrive.
     pub fn start(
@@ -67,34 +66,26 @@ impl GiveOptions {
         scene: &mut Scene,
         giver: usize,
         delay: f64,
-        board: Option<&SharedHandBoard>,
     ) -> Result<(Box<dyn Generator>, Scope)> {
         self.validate(giver)?;
         let side = holding_side(scene, giver, self.object).unwrap_or(Side::Right);
         let scope = grasp_scope(&scene.actors()[giver].skeleton, &[side])?;
         // Hands driven by a person (a performer's glove, 4.7) neither reach nor carry.
-        if let Some(board) = board {
-            let hands = board
-                .0
-                .lock()
-                .map_err(|_| ActionError::Poisoned("hand board"))?;
-            let (mine, theirs) = (hands.hand(giver), hands.hand(self.to));
-            drop(hands);
-            if mine.is_some() {
-                return Err(ActionError::Unfit(
-                    "a performer gives by holding the object out: let the receiver take it with \
-                     receiver:receive{object = …, from = performer}, then open the glove"
-                        .into(),
-                ));
-            }
-            if let Some(hand) = theirs {
-                let giver =
-                    offer_to_hand(board, self.object, giver, side, self.to, hand, self.timeout)?;
-                return Ok((Box::new(giver), scope));
-            }
+        let board = scene.blackboard();
+        let (mine, theirs) = (board.device_hand(giver), board.device_hand(self.to));
+        if mine.is_some() {
+            return Err(ActionError::Unfit(
+                "a performer gives by holding the object out: let the receiver take it with \
+                 receiver:receive{object = …, from = performer}, then open the glove"
+                    .into(),
+            ));
         }
-        let arrived = Arc::new(Signal::default());
-        let mut give = Give::new(self.object, self.to, side, arrived.clone());
+        if let Some(hand) = theirs {
+            let giver = offer_to_hand(scene, self.object, giver, side, self.to, hand, self.timeout);
+            return Ok((Box::new(giver), scope));
+        }
+        let (arrived, ended) = (scene.new_signal(), scene.new_signal());
+        let mut give = Give::new(self.object, self.to, side, arrived, ended);
         if let Some(t) = self.timeout {
             give = give.with_timeout(t);
         }
@@ -203,15 +194,14 @@ impl HoldHandOptions {
         duration: Option<f64>,
     ) -> Result<(HoldHand, Scope)> {
         self.validate(actor)?;
-        let held = Arc::new(Signal::default());
-        let finished = Arc::new(Signal::default());
+        let (held, finished) = (scene.new_signal(), scene.new_signal());
         let active = HoldHand::new(
             self.other,
             self.hand,
             self.other_hand,
             self.shake,
-            held.clone(),
-            finished.clone(),
+            held,
+            finished,
         );
         let skeleton = scene.actors()[actor].skeleton.clone();
         let scope = grasp_scope(&skeleton, &[self.hand])?;

@@ -4,6 +4,7 @@
 //! See [`crate::blend`] for how the contributions of concurrent actions are combined, and
 //! [`crate::scheduler`] for admission and status transitions.
 
+use crate::blackboard::{Note, Notes, SignalId};
 use crate::error::{Error, Result};
 use crate::world::World;
 use std::fmt;
@@ -241,6 +242,7 @@ pub struct DofWriter<'a> {
     written: Scope,
     refused: usize,
     requests: Vec<crate::holding::HoldRequest>,
+    notes: Notes,
 }
 
 impl<'a> DofWriter<'a> {
@@ -252,6 +254,7 @@ impl<'a> DofWriter<'a> {
             written: Scope::EMPTY,
             refused: 0,
             requests: Vec::new(),
+            notes: Notes::default(),
         }
     }
 
@@ -294,6 +297,22 @@ impl<'a> DofWriter<'a> {
     pub fn take_requests(&mut self) -> Vec<crate::holding::HoldRequest> {
         std::mem::take(&mut self.requests)
     }
+
+    /// Raises `signal` on the blackboard (every generator sees it from the next tick on;
+    /// see [`crate::blackboard`]).
+    pub fn raise(&mut self, signal: SignalId) {
+        self.notes.raise(signal);
+    }
+
+    /// Posts `note` on the blackboard, applied after this tick.
+    pub fn post(&mut self, note: Note) {
+        self.notes.post(note);
+    }
+
+    /// Takes the notes posted so far.
+    pub fn take_notes(&mut self) -> Vec<Note> {
+        self.notes.take()
+    }
 }
 
 /// A motion generator: each tick it reads the context and writes desired values for DOFs
@@ -306,6 +325,11 @@ pub trait Generator: Send {
 
     /// Produces this tick's desired values.
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step;
+
+    /// Called once when the action ends, however it ends (completed, failed, cancelled,
+    /// pre-empted, or never admitted): a partner waiting on this action learns it from the
+    /// notes posted here, applied after the tick like a step's.
+    fn end(&mut self, _notes: &mut Notes) {}
 }
 
 /// A snapshot of one action for queries and listings.

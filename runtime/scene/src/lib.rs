@@ -3,6 +3,7 @@
 //! the observers that record a run.
 
 pub mod action;
+pub mod blackboard;
 pub mod blend;
 pub mod error;
 pub mod holding;
@@ -21,6 +22,7 @@ pub use action::{
     ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode, Status,
     Step,
 };
+pub use blackboard::{Blackboard, Note, Notes, Offer, SignalId};
 pub use error::{Error, Result};
 pub use scene::{ActorDesc, Scene, SceneConfig};
 pub use session::{Input, NoScript, Observer, ObserverHandle, RunLimit, Script, Session};

@@ -1,6 +1,7 @@
 //! The scene: actors, objects and their actions, stepped tick by tick.
 
 use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
+use crate::blackboard::{Blackboard, Notes, Offer, SignalId};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
 use crate::parallel::WorkerPool;
@@ -12,6 +13,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
 use std::time::Instant;
+use troupe_body::sensors::Side;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::solid::Shape;
 use troupe_body::state::ActorState;
@@ -110,6 +112,7 @@ pub struct Scene {
     work: Vec<ActorWork>,
     objects: Vec<Object>,
     holders: Vec<Option<Holder>>,
+    board: Blackboard,
     next_action: u64,
     action_owner: IdMap<usize>,
     ended: IdMap<ActionInfo>,
@@ -145,6 +148,7 @@ impl Scene {
             work: Vec::new(),
             objects: Vec::new(),
             holders: Vec::new(),
+            board: Blackboard::default(),
             next_action: 1,
             action_owner: IdMap::default(),
             ended: IdMap::default(),
@@ -200,7 +204,34 @@ impl Scene {
             states: &self.states,
             objects: &self.objects,
             holders: &self.holders,
+            board: &self.board,
         }
+    }
+
+    /// What actions told one another and the observers (see [`crate::blackboard`]).
+    pub fn blackboard(&self) -> &Blackboard {
+        &self.board
+    }
+
+    /// A new signal for actions to raise and wait on (e.g. a give and its receive).
+    pub fn new_signal(&mut self) -> SignalId {
+        self.board.new_signal()
+    }
+
+    /// Raises `signal` between ticks: generators see it from the next tick on.
+    pub fn raise(&mut self, signal: SignalId) {
+        self.board.raise(signal, self.tick);
+    }
+
+    /// Declares that a device (a data glove) drives `actor`'s hand `side`: a giver brings
+    /// objects into that hand instead of handing them over.
+    pub fn declare_device_hand(&mut self, actor: usize, side: Side) {
+        self.board.add_device_hand(actor, side);
+    }
+
+    /// Opens an offer of an object to a device-driven hand (see [`Offer`]).
+    pub fn open_offer(&mut self, offer: Offer) {
+        self.board.open_offer(offer);
     }
 
     /// Who holds object `object`, if anyone.
@@ -368,22 +399,19 @@ impl Scene {
     }
 
     /// Creates an action for `actor`; it waits as `pending` until the scheduler admits it.
+    /// A refused action has ended before it began: its generator's end notes (a partner
+    /// waiting on it) are posted at once.
     pub fn start_action(
         &mut self,
         actor: usize,
         spec: ActionSpec,
-        generator: Box<dyn Generator>,
+        mut generator: Box<dyn Generator>,
     ) -> Result<ActionId> {
-        let info = self
-            .actors
-            .get(actor)
-            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
-        spec.validate()?;
-        if spec.scope.iter().any(|d| d >= info.skeleton.dof_count()) {
-            return Err(Error::Invalid(format!(
-                "{} action: scope names DOFs the actor `{}` does not have",
-                spec.kind, info.name
-            )));
+        if let Err(e) = self.check_action(actor, &spec) {
+            let mut notes = Notes::default();
+            generator.end(&mut notes);
+            self.board.apply(actor, self.tick, notes.take());
+            return Err(e);
         }
         let id = ActionId(self.next_action);
         self.next_action += 1;
@@ -403,6 +431,22 @@ impl Scene {
         });
         self.action_owner.insert(id, actor);
         Ok(id)
+    }
+
+    /// Whether `actor` may run an action of `spec`.
+    fn check_action(&self, actor: usize, spec: &ActionSpec) -> Result<()> {
+        let info = self
+            .actors
+            .get(actor)
+            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        spec.validate()?;
+        if spec.scope.iter().any(|d| d >= info.skeleton.dof_count()) {
+            return Err(Error::Invalid(format!(
+                "{} action: scope names DOFs the actor `{}` does not have",
+                spec.kind, info.name
+            )));
+        }
+        Ok(())
     }
 
     /// Asks an action to stop: a pending one is cancelled on the next tick, a running one
@@ -514,6 +558,7 @@ impl Scene {
             profile: self.profiling,
         };
         let started = self.profiling.then(Instant::now);
+        self.board.begin_tick();
         {
             let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
             let world = World {
@@ -522,6 +567,7 @@ impl Scene {
                 states: &self.states,
                 objects: &self.objects,
                 holders: &self.holders,
+                board: &self.board,
             };
             let actors = &self.actors;
             let states = &self.states;
@@ -553,6 +599,9 @@ impl Scene {
             for r in w.runtime.hold_requests.drain(..) {
                 holding::apply(i, r, &mut self.holders, &mut self.objects, &self.states);
             }
+            // The blackboard too: notes in actor order, seen by everyone next tick.
+            self.board
+                .apply(i, self.tick, std::mem::take(&mut w.runtime.notes));
         }
         holding::follow(&self.holders, &mut self.objects, &self.states);
         if let (Some(started), Some(joined), Some(published)) = (started, joined, published) {

@@ -30,6 +30,7 @@ use crate::action::{
     ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode, Status,
     Step,
 };
+use crate::blackboard::{Note, Notes};
 use crate::blend::{ease_factor, Accumulator};
 use crate::profile::{ActorPhases, PhaseClock};
 use crate::world::World;
@@ -83,6 +84,8 @@ pub struct ActorRuntime {
     pub(crate) phases: ActorPhases,
     /// Attach/release requests of the last tick, in emission order (see [`crate::holding`]).
     pub(crate) hold_requests: Vec<crate::holding::HoldRequest>,
+    /// Blackboard notes of the last tick, in emission order (see [`crate::blackboard`]).
+    pub(crate) notes: Vec<Note>,
     scratch: Vec<f64>,
     accumulator: Accumulator,
 }
@@ -163,6 +166,7 @@ impl ActorRuntime {
         self.events.clear();
         self.ended.clear();
         self.hold_requests.clear();
+        self.notes.clear();
         let mut tr = Transitions {
             actor,
             clock,
@@ -196,6 +200,8 @@ impl ActorRuntime {
             let step = action.generator.step(&ctx, &mut out);
             let (written, refused) = (out.written(), out.refused());
             let requests = out.take_requests();
+            // Notes stand even when the step fails: a signal raised is a fact.
+            self.notes.extend(out.take_notes());
             if refused > 0 {
                 if self.refused_writes == 0 {
                     tracing::warn!(actor, action = %action.id, kind = %action.spec.kind,
@@ -245,7 +251,10 @@ impl ActorRuntime {
         let mut i = 0;
         while i < self.actions.len() {
             if self.actions[i].status.is_final() {
-                let a = self.actions.remove(i);
+                let mut a = self.actions.remove(i);
+                let mut notes = Notes::default();
+                a.generator.end(&mut notes);
+                self.notes.extend(notes.take());
                 self.ended.push(a.info(actor));
             } else {
                 i += 1;
