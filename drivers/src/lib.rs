@@ -9,6 +9,8 @@
 //! reconnection), `emulator` (ptys and motion), `record` (`.rec` files), `osc`, and what
 //! the devices drive: `performer` actors and `space_move`'s objects.
 
+#![warn(missing_docs)]
+
 pub mod cyberglove;
 pub mod device;
 pub mod emulator;

@@ -6,6 +6,7 @@ pub(crate) mod capture;
 pub(crate) mod converter;
 pub(crate) mod glove_map;
 pub(crate) mod lua;
+pub(crate) mod options;
 pub(crate) mod registry;
 pub(crate) mod source;
 

@@ -1,7 +1,7 @@
 //! The Lua API of SpaceMouse movers: `troupe.devices.spacemouse{…}` makes one, and
 //! `troupe.devices.health` answers for it by name.
 
-use crate::device::thread::{self as driver, DriverOptions, Opener};
+use crate::device::thread::{spawn_with, DriverOptions, Opener};
 use crate::lua::args::{check_keys, resolve};
 use crate::lua::health::health_table;
 use crate::record::file::Recording;
@@ -203,7 +203,7 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
             o.stale_after = Duration::MAX;
             let opener: Opener =
                 Box::new(move |_o: &DriverOptions| open_spacemouse(path.as_deref()));
-            Source::Live(driver::spawn_with(
+            Source::Live(spawn_with(
                 o,
                 Box::new(SpaceMouseProtocol::default()),
                 recorder,
