@@ -81,6 +81,8 @@ pub struct HealthReport {
 }
 
 impl Health {
+    /// Zero counters, `reconnecting`: where a device thread starts before its first
+    /// connection.
     pub(crate) fn new() -> Health {
         Health {
             state: AtomicU8::new(3),
@@ -96,33 +98,25 @@ impl Health {
     /// A fresh health record in the given state (for sources other than serial drivers).
     pub fn new_state(state: HealthState) -> Health {
         let h = Health::new();
-        h.set(state);
+        h.set_state(state);
         h
     }
 
     /// Sets the state.
     pub fn set_state(&self, s: HealthState) {
-        self.set(s);
+        self.state.store(s as u8, Ordering::Release);
     }
 
     /// Records the last error.
     pub fn set_error(&self, e: String) {
-        self.error(e);
+        if let Ok(mut g) = self.last_error.lock() {
+            *g = Some(e);
+        }
     }
 
     /// Current state.
     pub fn state(&self) -> HealthState {
         HealthState::from_u8(self.state.load(Ordering::Acquire))
-    }
-
-    pub(crate) fn set(&self, s: HealthState) {
-        self.state.store(s as u8, Ordering::Release);
-    }
-
-    pub(crate) fn error(&self, e: String) {
-        if let Ok(mut g) = self.last_error.lock() {
-            *g = Some(e);
-        }
     }
 
     /// A snapshot of state and counters.

@@ -118,8 +118,8 @@ pub fn spawn_with(
         .spawn(move || run(options, protocol, recorder, opener, tx, h, s))
         .ok();
     if thread.is_none() {
-        health.set(HealthState::Failed);
-        health.error("could not start the device thread".into());
+        health.set_state(HealthState::Failed);
+        health.set_error("could not start the device thread".into());
     }
     DeviceHandle {
         samples: rx,
@@ -167,12 +167,12 @@ fn run(
             Err(e) => {
                 failures += 1;
                 tracing::debug!(device = %o.name, "connect attempt {failures} failed: {e}");
-                health.error(e.to_string());
+                health.set_error(e.to_string());
                 if o.max_attempts.is_some_and(|m| failures >= m) {
-                    health.set(HealthState::Failed);
+                    health.set_state(HealthState::Failed);
                     return;
                 }
-                health.set(HealthState::Reconnecting);
+                health.set_state(HealthState::Reconnecting);
                 sleep_unless_stopped(backoff, &stop);
                 backoff = (backoff * 2).min(o.backoff_max);
                 continue;
@@ -181,7 +181,7 @@ fn run(
         failures = 0;
         backoff = o.backoff_initial;
         health.connections.fetch_add(1, Ordering::Relaxed);
-        health.set(HealthState::Connected);
+        health.set_state(HealthState::Connected);
         let mut last_sample: Option<Instant> = None;
         let connected_at = Instant::now();
         let mut buf = [0u8; 512];
@@ -222,7 +222,7 @@ fn run(
                         .store(base_dropped + d, Ordering::Relaxed);
                     if produced {
                         last_sample = Some(now);
-                        health.set(HealthState::Streaming);
+                        health.set_state(HealthState::Streaming);
                     }
                 }
                 Err(e)
@@ -232,15 +232,15 @@ fn run(
             }
             let silent_since = last_sample.unwrap_or(connected_at);
             if silent_since.elapsed() > o.stale_after {
-                health.set(HealthState::Stale);
+                health.set_state(HealthState::Stale);
             }
         };
         let (r, d) = protocol.counters();
         base_resyncs += r;
         base_dropped += d;
         tracing::debug!(device = %o.name, "disconnected: {reason}");
-        health.error(reason);
-        health.set(HealthState::Reconnecting);
+        health.set_error(reason);
+        health.set_state(HealthState::Reconnecting);
         drop(port);
         sleep_unless_stopped(backoff, &stop);
     }
