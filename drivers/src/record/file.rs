@@ -1,4 +1,4 @@
-//! Recording and replaying device streams (`.rec` files).
+//! The `.rec` file format and reading it: device streams recorded as raw bytes.
 //!
 //! A `.rec` file keeps the raw bytes each device sent, with the time they arrived, rather than
 //! decoded samples: replay then runs the very decoder a live device runs (resyncs included),
