@@ -5,12 +5,10 @@ use clap::{Args, Subcommand, ValueEnum};
 use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
-use troupe_drivers::driver::{
-    self, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol, Mode, Reading,
-};
+use troupe_drivers::cyberglove::{GloveCalibration, GloveConfig, GloveLayout, GloveProtocol};
+use troupe_drivers::device::{self as driver, DriverOptions, Mode, Reading};
 use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions, Motion};
-use troupe_drivers::fob::{Hemisphere, OutputFormat, PositionRange};
-use troupe_drivers::glove::{GloveCalibration, GloveLayout};
+use troupe_drivers::fob::{FobConfig, FobProtocol, Hemisphere, OutputFormat, PositionRange};
 use troupe_drivers::record::Recording;
 
 /// Options of `troupe devices`.
@@ -155,14 +153,14 @@ pub fn run(args: DevicesArgs) -> Result<ExitCode> {
 }
 
 fn list(json: bool) -> Result<ExitCode> {
-    let serial = troupe_drivers::hid::serial_ports();
-    let hid = troupe_drivers::hid::hid_devices();
+    let serial = troupe_drivers::device::serial_ports();
+    let hid = troupe_drivers::spacemouse::hid_devices();
     if json {
         let v = serde_json::json!({
-            "serial": serial.as_ref().map_err(|e| e.clone()).ok(),
-            "serial_error": serial.as_ref().err(),
+            "serial": serial.as_ref().ok(),
+            "serial_error": serial.as_ref().err().map(|e| e.to_string()),
             "hid": hid.as_ref().ok(),
-            "hid_error": hid.as_ref().err(),
+            "hid_error": hid.as_ref().err().map(|e| e.to_string()),
         });
         println!("{v}");
         return Ok(ExitCode::SUCCESS);
@@ -199,8 +197,11 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
     let timeout = Duration::from_secs_f64(a.timeout.max(0.1));
     if a.kind == ProbeKind::Spacemouse {
         let json = a.json;
-        let (name, n) =
-            troupe_drivers::hid::read_spacemouse(a.port.as_deref(), a.samples, timeout, |s| {
+        let (name, n) = troupe_drivers::spacemouse::read_spacemouse(
+            a.port.as_deref(),
+            a.samples,
+            timeout,
+            |s| {
                 if json {
                     println!("{}", serde_json::to_string(s).unwrap_or_default());
                 } else {
@@ -215,8 +216,9 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
                         s.buttons
                     );
                 }
-            })
-            .map_err(|e| anyhow!(e))?;
+            },
+        )
+        .map_err(|e| anyhow!(e))?;
         eprintln!("{name}: {n} reports");
         return Ok(if n > 0 {
             ExitCode::SUCCESS
@@ -425,7 +427,7 @@ fn calibrate(c: CalibrateArgs) -> Result<ExitCode> {
         height: t.default_height,
         mass: t.default_mass,
     })?;
-    let names = troupe_drivers::glove::sensor_names(flat.len());
+    let names = troupe_drivers::cyberglove::sensor_names(flat.len());
     let fist_angles: Vec<f64> = names
         .iter()
         .map(|n| {
@@ -503,7 +505,7 @@ pub struct RunDevices {
     recorder: Option<std::sync::Arc<troupe_drivers::record::Recorder>>,
     record_path: Option<PathBuf>,
     /// SpaceMice moving objects (`troupe.devices.spacemouse`).
-    space: Option<troupe_drivers::space_move::SharedSpaceMice>,
+    space: troupe_drivers::space_move::SharedSpaceMice,
 }
 
 /// A Lua session with every action kind, `capture`, `troupe.performer` and the device
@@ -523,20 +525,14 @@ pub fn session(
         )),
         None => None,
     };
-    let performers = troupe_drivers::performer::install(&mut session, recorder.clone())
-        .map_err(|e| anyhow!(e))?;
-    let space = session
-        .script()
-        .lua()
-        .app_data_ref::<troupe_drivers::space_move::SharedSpaceMice>()
-        .map(|s| s.clone());
+    let devices = troupe_drivers::lua::install(&mut session, recorder.clone())?;
     Ok((
         session,
         RunDevices {
-            performers,
+            performers: devices.performers,
             recorder,
             record_path: record.map(|p| p.to_path_buf()),
-            space,
+            space: devices.space_mice,
         },
     ))
 }
@@ -581,7 +577,7 @@ impl troupe_scene::Observer for RunDevices {
                 ));
             }
         }
-        if let Some(Ok(s)) = self.space.as_ref().map(|s| s.0.lock()) {
+        if let Ok(s) = self.space.0.lock() {
             for (name, h) in s.live_health() {
                 lines.push(format!(
                     "  device {name} (spacemouse): {}, {} reports, {} bad reports{}",

@@ -4,11 +4,11 @@
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::collections::BTreeMap;
 use std::sync::Arc;
-use troupe_drivers::emulator::{pose_words, Motion};
+use troupe_drivers::cyberglove::{GloveDecoder, GloveLayout};
+use troupe_drivers::emulator::Motion;
 use troupe_drivers::fob::{
-    encode_record, OutputFormat, PositionRange, RecordDecoder, RecordLayout,
+    encode_record, pose_words, OutputFormat, PositionRange, RecordDecoder, RecordLayout,
 };
-use troupe_drivers::glove::{GloveDecoder, GloveLayout};
 use troupe_drivers::performer::{transmitter_to_world, AnatomicalConverter};
 
 fn fob_stream(format: OutputFormat, records: usize) -> (RecordLayout, Vec<u8>) {

@@ -25,7 +25,7 @@ fn scene(ball: bool) -> LuaSession {
     let mut kinds = troupe_actions::action_kinds();
     performer::register(&mut kinds);
     let mut d = Director::session(SceneConfig::default(), kinds, ScriptLimits::default()).unwrap();
-    performer::install(&mut d, None).unwrap();
+    troupe_drivers::lua::install(&mut d, None).unwrap();
     d.load_str(
         &format!(
             r#"pat = troupe.performer{{ name = "pat", devices = {{ glove = {{ replay = {:?} }} }} }}

@@ -8,7 +8,75 @@
 //! so the transition through intermediate postures does not fire spurious commands.
 
 use serde::{Deserialize, Serialize};
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+/// Gesture examples that cannot be trained, or a gesture file that cannot be read or
+/// written.
+#[derive(Debug, thiserror::Error)]
+pub enum GestureError {
+    /// No gesture at all.
+    #[error("no gesture examples")]
+    NoExamples,
+    /// Gestures, but no posture in any of them.
+    #[error("gesture examples are empty")]
+    EmptyExamples,
+    /// A gesture without a posture.
+    #[error("gesture '{0}' has no example")]
+    NoExample(String),
+    /// A posture with another sensor count than the first.
+    #[error("gesture '{gesture}': an example has {got} sensors, expected {expected}")]
+    SensorCount {
+        /// The gesture.
+        gesture: String,
+        /// Its example's sensors.
+        got: usize,
+        /// The first example's sensors.
+        expected: usize,
+    },
+    /// A gesture named twice.
+    #[error("gesture '{0}' is given twice")]
+    Twice(String),
+    /// The set could not be encoded as JSON.
+    #[error("{0}")]
+    Encode(#[source] serde_json::Error),
+    /// The file could not be written.
+    #[error("writing {}: {source}", path.display())]
+    Write {
+        /// The file.
+        path: PathBuf,
+        /// What the file system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file could not be read.
+    #[error("reading {}: {source}", path.display())]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// What the file system said.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file is not a gesture set's JSON.
+    #[error("{}: not a gesture set: {source}", path.display())]
+    NotAGestureSet {
+        /// The file.
+        path: PathBuf,
+        /// What the JSON parser said (with line and column).
+        #[source]
+        source: serde_json::Error,
+    },
+    /// The file's lists disagree in length.
+    #[error("{}: {names} names for {means} means", path.display())]
+    Lists {
+        /// The file.
+        path: PathBuf,
+        /// Gesture names.
+        names: usize,
+        /// Means.
+        means: usize,
+    },
+}
 
 /// A trained set of gestures.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -27,31 +95,32 @@ impl GestureSet {
     /// Trains from examples: for each gesture, one or more raw postures. Every example must
     /// have the same sensor count; the recognition radius is twice the largest spread of
     /// any gesture's examples around its mean, and at least 20 raw units.
-    pub fn train(examples: &[(String, Vec<Vec<u8>>)]) -> Result<GestureSet, String> {
+    pub fn train(examples: &[(String, Vec<Vec<u8>>)]) -> Result<GestureSet, GestureError> {
         if examples.is_empty() {
-            return Err("no gesture examples".into());
+            return Err(GestureError::NoExamples);
         }
         let n = examples
             .iter()
             .flat_map(|(_, v)| v.first())
             .map(|v| v.len())
             .next()
-            .ok_or("gesture examples are empty")?;
+            .ok_or(GestureError::EmptyExamples)?;
         let mut names = Vec::new();
         let mut means = Vec::new();
         let mut spread: f64 = 0.0;
         for (name, postures) in examples {
             if postures.is_empty() {
-                return Err(format!("gesture '{name}' has no example"));
+                return Err(GestureError::NoExample(name.clone()));
             }
             if let Some(bad) = postures.iter().find(|p| p.len() != n) {
-                return Err(format!(
-                    "gesture '{name}': an example has {} sensors, expected {n}",
-                    bad.len()
-                ));
+                return Err(GestureError::SensorCount {
+                    gesture: name.clone(),
+                    got: bad.len(),
+                    expected: n,
+                });
             }
             if names.contains(name) {
-                return Err(format!("gesture '{name}' is given twice"));
+                return Err(GestureError::Twice(name.clone()));
             }
             let mut mean = vec![0.0; n];
             for p in postures {
@@ -86,24 +155,31 @@ impl GestureSet {
     }
 
     /// Saves as JSON.
-    pub fn save(&self, path: &Path) -> Result<(), String> {
-        let text = serde_json::to_string_pretty(self).map_err(|e| e.to_string())?;
-        std::fs::write(path, text).map_err(|e| format!("writing {}: {e}", path.display()))
+    pub fn save(&self, path: &Path) -> Result<(), GestureError> {
+        let text = serde_json::to_string_pretty(self).map_err(GestureError::Encode)?;
+        std::fs::write(path, text).map_err(|source| GestureError::Write {
+            path: path.to_path_buf(),
+            source,
+        })
     }
 
     /// Loads a JSON gesture set.
-    pub fn load(path: &Path) -> Result<GestureSet, String> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| format!("reading {}: {e}", path.display()))?;
-        let g: GestureSet = serde_json::from_str(&text)
-            .map_err(|e| format!("{}: not a gesture set: {e}", path.display()))?;
+    pub fn load(path: &Path) -> Result<GestureSet, GestureError> {
+        let text = std::fs::read_to_string(path).map_err(|source| GestureError::Read {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let g: GestureSet =
+            serde_json::from_str(&text).map_err(|source| GestureError::NotAGestureSet {
+                path: path.to_path_buf(),
+                source,
+            })?;
         if g.names.len() != g.means.len() {
-            return Err(format!(
-                "{}: {} names for {} means",
-                path.display(),
-                g.names.len(),
-                g.means.len()
-            ));
+            return Err(GestureError::Lists {
+                path: path.to_path_buf(),
+                names: g.names.len(),
+                means: g.means.len(),
+            });
         }
         Ok(g)
     }
@@ -251,13 +327,15 @@ mod tests {
             ("a".into(), vec![vec![1; 18]]),
             ("b".into(), vec![vec![1; 22]]),
         ])
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("'b'") && e.contains("22"), "{e}");
         let e = GestureSet::train(&[
             ("a".into(), vec![vec![1; 18]]),
             ("a".into(), vec![vec![2; 18]]),
         ])
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("twice"));
     }
 }

@@ -12,6 +12,11 @@
 //! step (`troupe_scene::holding`), and the only cross-actor input, an offer from a
 //! giver, is stamped by tick: the results are identical with any thread count.
 
+use crate::cyberglove::decoder::{sensor_names, GloveLayout};
+use crate::cyberglove::protocol::GloveConfig;
+use crate::device::protocol::Mode;
+use crate::record::error::RecordError;
+use crate::record::writer::Recorder;
 use std::sync::{Arc, Mutex};
 use troupe_actions::grasp::{GraspAutomaton, HandDecision, HandState};
 use troupe_body::kinematics::forward_kinematics;
@@ -19,6 +24,45 @@ use troupe_body::sensors::Side;
 use troupe_body::{Scope, Transform};
 use troupe_scene::holding::HoldRequest;
 use troupe_scene::{DofWriter, GeneratorContext, Object};
+
+/// The glove hand cannot run this tick.
+#[derive(Debug, thiserror::Error)]
+pub enum GloveHandError {
+    /// `step` before `start`.
+    #[error("glove hand: not started")]
+    NotStarted,
+    /// The grasping automaton refused its input.
+    #[error("{0}")]
+    Automaton(String),
+}
+
+/// A glove script that cannot be written.
+#[derive(Debug, thiserror::Error)]
+pub enum GloveScriptError {
+    /// Neither 18 nor 22 sensors.
+    #[error("glove script: sensors must be 18 or 22, got {0}")]
+    Sensors(usize),
+    /// A rate that is not a positive number.
+    #[error("glove script: rate must be > 0 Hz, got {0}")]
+    Rate(f64),
+    /// No keys, or times that do not increase.
+    #[error("glove script: keys must be non-empty with increasing times")]
+    Times,
+    /// A key with a non-finite time or a closure outside 0…1.
+    #[error("glove script: key ({time}, {closure}) needs a finite time and a closure in 0…1")]
+    Key {
+        /// The key's time (s).
+        time: f64,
+        /// The key's closure.
+        closure: f64,
+    },
+    /// The glove settings could not be encoded.
+    #[error("{0}")]
+    Settings(#[from] serde_json::Error),
+    /// The recording could not be written.
+    #[error(transparent)]
+    Record(#[from] RecordError),
+}
 
 /// What Lua sees of a glove hand: the automaton's state and the object it concerns.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -57,8 +101,9 @@ impl GloveHand {
     }
 
     /// Builds the automaton from the posture the action starts in.
-    pub fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
-        let a = GraspAutomaton::new(ctx.skeleton, self.side, &ctx.posture.q)?;
+    pub fn start(&mut self, ctx: &GeneratorContext) -> Result<(), GloveHandError> {
+        let a = GraspAutomaton::new(ctx.skeleton, self.side, &ctx.posture.q)
+            .map_err(GloveHandError::Automaton)?;
         self.wrist = a.model().sensors.wrist;
         self.automaton = Some(a);
         Ok(())
@@ -81,9 +126,9 @@ impl GloveHand {
         target: &[f64],
         mask: &[bool],
         out: &mut DofWriter,
-    ) -> Result<(), String> {
+    ) -> Result<(), GloveHandError> {
         let Some(a) = self.automaton.as_mut() else {
-            return Err("glove hand: not started".into());
+            return Err(GloveHandError::NotStarted);
         };
         let sk = ctx.skeleton;
         let fingers = a.model().sensors.scope;
@@ -121,7 +166,9 @@ impl GloveHand {
                 }
             }
         }
-        let result = a.update(sk, &self.q, &self.globals, &self.desired, &self.objects)?;
+        let result = a
+            .update(sk, &self.q, &self.globals, &self.desired, &self.objects)
+            .map_err(GloveHandError::Automaton)?;
         for &(d, v) in &result.values {
             if scope.contains(d) {
                 out.set(d, v);
@@ -166,28 +213,21 @@ pub fn write_glove_script(
     sensors: usize,
     rate: f64,
     keys: &[(f64, f64)],
-) -> Result<(), String> {
-    use crate::driver::{GloveConfig, Mode};
-    use crate::glove::{sensor_names, GloveLayout};
+) -> Result<(), GloveScriptError> {
     if sensors != 18 && sensors != 22 {
-        return Err(format!(
-            "glove script: sensors must be 18 or 22, got {sensors}"
-        ));
+        return Err(GloveScriptError::Sensors(sensors));
     }
     if !(rate.is_finite() && rate > 0.0) {
-        return Err(format!("glove script: rate must be > 0 Hz, got {rate}"));
+        return Err(GloveScriptError::Rate(rate));
     }
     if keys.is_empty() || keys.windows(2).any(|w| w[1].0 <= w[0].0) {
-        return Err("glove script: keys must be non-empty with increasing times".into());
+        return Err(GloveScriptError::Times);
     }
-    if let Some(k) = keys
+    if let Some(&(time, closure)) = keys
         .iter()
         .find(|k| !(k.0.is_finite() && (0.0..=1.0).contains(&k.1)))
     {
-        return Err(format!(
-            "glove script: key ({}, {}) needs a finite time and a closure in 0…1",
-            k.0, k.1
-        ));
+        return Err(GloveScriptError::Key { time, closure });
     }
     let config = GloveConfig {
         layout: GloveLayout {
@@ -196,8 +236,8 @@ pub fn write_glove_script(
         },
         mode: Mode::Stream,
     };
-    let settings = serde_json::to_value(config).map_err(|e| e.to_string())?;
-    let rec = crate::record::Recorder::create(path)?;
+    let settings = serde_json::to_value(config)?;
+    let rec = Recorder::create(path)?;
     let stream = rec.add_stream("performer.glove", "cyberglove", settings);
     let names = sensor_names(sensors);
     let closure = |t: f64| {
@@ -228,5 +268,5 @@ pub fn write_glove_script(
         bytes.push(0);
         rec.data_at(stream, (t * 1e6).round() as u64, &bytes);
     }
-    rec.finish()
+    Ok(rec.finish()?)
 }

@@ -3,14 +3,21 @@
 //!
 //! Protocol facts are those of `shared/reference/devices.md`; thesis sections 2.7, 4.7 and
 //! 6.4.1 describe how the devices drive performer actors.
+//!
+//! One folder per device (`fob`, `cyberglove`, `spacemouse`: commands, decoder, protocol,
+//! emulator), the framework they share (`device`: the thread, its channel, health,
+//! reconnection), `emulator` (ptys and motion), `record` (`.rec` files), `osc`, and what
+//! the devices drive: `performer` actors and `space_move`'s objects.
 
-pub mod driver;
+#![warn(missing_docs)]
+
+pub mod cyberglove;
+pub mod device;
 pub mod emulator;
 pub mod fob;
 pub mod gesture;
-pub mod glove;
 pub mod glove_grasp;
-pub mod hid;
+pub mod lua;
 pub mod osc;
 pub mod performer;
 pub mod record;

@@ -24,7 +24,9 @@ fn director(threads: usize) -> (LuaSession, SharedPerformers) {
     let mut d = Director::session(config, kinds, ScriptLimits::default()).unwrap();
     // One actor per chunk: with two threads, even two actors are stepped on both.
     d.scene_mut().set_chunk_size(Some(1));
-    let shared = performer::install(&mut d, None).unwrap();
+    let shared = troupe_drivers::lua::install(&mut d, None)
+        .unwrap()
+        .performers;
     (d, shared)
 }
 
@@ -344,11 +346,17 @@ fn a_give_to_a_performer_who_never_closes_fails_after_the_timeout() {
 #[test]
 fn glove_scripts_reject_bad_keys() {
     let p = temp("bad.rec");
-    let e = write_glove_script(&p, 18, 100.0, &[(1.0, 0.0), (0.5, 1.0)]).unwrap_err();
+    let e = write_glove_script(&p, 18, 100.0, &[(1.0, 0.0), (0.5, 1.0)])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("increasing"), "{e}");
-    let e = write_glove_script(&p, 18, 100.0, &[(0.0, 1.5)]).unwrap_err();
+    let e = write_glove_script(&p, 18, 100.0, &[(0.0, 1.5)])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("closure in 0…1"), "{e}");
-    let e = write_glove_script(&p, 20, 100.0, &[(0.0, 0.0)]).unwrap_err();
+    let e = write_glove_script(&p, 20, 100.0, &[(0.0, 0.0)])
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("18 or 22"), "{e}");
 }
 

@@ -21,7 +21,9 @@ fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (LuaSession, Sha
     let mut d = Director::session(config, kinds, ScriptLimits::default()).unwrap();
     // One actor per chunk: with two threads, even two actors are stepped on both.
     d.scene_mut().set_chunk_size(Some(1));
-    let shared = performer::install(&mut d, recorder).unwrap();
+    let shared = troupe_drivers::lua::install(&mut d, recorder)
+        .unwrap()
+        .performers;
     (d, shared)
 }
 
@@ -283,12 +285,12 @@ fn health_is_visible_from_lua_and_a_missing_port_keeps_the_scene_ticking() {
 /// Writes a glove recording: each (value, count) posture held for `count` records at 100 Hz.
 fn glove_rec(path: &std::path::Path, postures: &[(u8, usize)]) {
     let r = Recorder::create(path).unwrap();
-    let config = troupe_drivers::driver::GloveConfig {
-        layout: troupe_drivers::glove::GloveLayout {
+    let config = troupe_drivers::cyberglove::GloveConfig {
+        layout: troupe_drivers::cyberglove::GloveLayout {
             sensors: 18,
             status_byte: false,
         },
-        mode: troupe_drivers::driver::Mode::Stream,
+        mode: troupe_drivers::device::Mode::Stream,
     };
     let s = r.add_stream("g", "cyberglove", serde_json::to_value(&config).unwrap());
     let mut k = 0u64;

@@ -2,13 +2,10 @@
 //! device, a port that vanishes and comes back, a full channel, record and replay.
 
 use std::time::{Duration, Instant};
-use troupe_drivers::driver::{
-    self, DeviceHandle, DriverOptions, FobConfig, FobProtocol, GloveConfig, GloveProtocol,
-    HealthState, Mode, Reading,
-};
+use troupe_drivers::cyberglove::{GloveConfig, GloveLayout, GloveProtocol};
+use troupe_drivers::device::{self, DeviceHandle, DriverOptions, HealthState, Mode, Reading};
 use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions};
-use troupe_drivers::fob::OutputFormat;
-use troupe_drivers::glove::GloveLayout;
+use troupe_drivers::fob::{FobConfig, FobProtocol, OutputFormat};
 use troupe_drivers::record::{Recorder, Recording};
 
 /// Waits (up to 10 s, generous for a loaded machine) until `f` holds.
@@ -26,7 +23,7 @@ fn wait_for(what: &str, mut f: impl FnMut() -> bool) {
 fn fob_driver(path: &str, birds: u8, format: OutputFormat) -> DeviceHandle {
     let mut o = DriverOptions::new("fob", path);
     o.backoff_max = Duration::from_millis(100);
-    driver::spawn(
+    device::spawn(
         o,
         Box::new(FobProtocol::new(FobConfig::new(birds, format))),
         None,
@@ -88,7 +85,7 @@ fn glove_polls_and_streams_through_a_pty() {
             },
             mode,
         };
-        let dev = driver::spawn(
+        let dev = device::spawn(
             DriverOptions::new("glove", &emu.path()),
             Box::new(GloveProtocol::new(config)),
             None,
@@ -123,7 +120,7 @@ fn a_glove_with_the_wrong_sensor_count_fails_with_a_clear_error() {
     let mut o = DriverOptions::new("glove", &emu.path());
     o.max_attempts = Some(2);
     o.backoff_initial = Duration::from_millis(5);
-    let dev = driver::spawn(o, Box::new(GloveProtocol::new(config)), None);
+    let dev = device::spawn(o, Box::new(GloveProtocol::new(config)), None);
     wait_for("failed state", || dev.health.state() == HealthState::Failed);
     let err = dev.health.report().last_error.unwrap();
     assert!(
@@ -173,7 +170,7 @@ fn a_full_channel_drops_and_counts_instead_of_blocking() {
     let emu = emulator::start(DeviceKind::Fob, EmulatorOptions::new(), None).unwrap();
     let mut o = DriverOptions::new("fob", &emu.path());
     o.capacity = 4;
-    let dev = driver::spawn(
+    let dev = device::spawn(
         o,
         Box::new(FobProtocol::new(FobConfig::new(1, OutputFormat::Position))),
         None,
@@ -199,7 +196,7 @@ fn recorded_streams_replay_identically() {
         None,
     )
     .unwrap();
-    let dev = driver::spawn(
+    let dev = device::spawn(
         DriverOptions::new("flock", &emu.path()),
         Box::new(FobProtocol::new(FobConfig::new(
             2,
@@ -244,7 +241,8 @@ fn recorded_streams_replay_identically() {
             })
             .collect();
         let t0 = of_bird[0].0;
-        let first = emulator::bird_pose(of_bird.iter().rev().find(|(t, _)| *t == t0).unwrap().1);
+        let first =
+            troupe_drivers::fob::bird_pose(of_bird.iter().rev().find(|(t, _)| *t == t0).unwrap().1);
         let (p, q) = motion.bird(0.0, usize::from(bird - 1));
         assert!(
             (p - first.0).length() < 1e-12 && (q - first.1).length() < 1e-12,
@@ -255,7 +253,7 @@ fn recorded_streams_replay_identically() {
     // A damaged file is an error naming the file.
     let bad = dir.join("bad.rec");
     std::fs::write(&bad, b"TROUPEREC1\nZ").unwrap();
-    let err = Recording::read(&bad).unwrap_err();
+    let err = Recording::read(&bad).unwrap_err().to_string();
     assert!(
         err.contains("bad.rec") && err.contains("unknown chunk tag"),
         "{err}"
@@ -264,7 +262,7 @@ fn recorded_streams_replay_identically() {
 
 #[test]
 fn emulator_answers_point_requests_with_the_motion_encoded_exactly() {
-    let mut e = emulator::FobEmulator::new(EmulatorOptions {
+    let mut e = troupe_drivers::fob::FobEmulator::new(EmulatorOptions {
         birds: 2,
         ..EmulatorOptions::new()
     });
@@ -280,7 +278,7 @@ fn emulator_answers_point_requests_with_the_motion_encoded_exactly() {
     let recs = troupe_drivers::fob::RecordDecoder::new(layout, 1).feed_collect(&reply);
     for (i, r) in recs.iter().enumerate() {
         let (p, q) = emulator::Motion::Synthetic.bird(1.25, i);
-        let (dp, dq) = emulator::bird_pose(r);
+        let (dp, dq) = troupe_drivers::fob::bird_pose(r);
         assert!((dp - p).length() < 2e-4, "bird {i}: {dp} vs {p}");
         assert!(dq.angle_between(q) < 1e-3, "bird {i}");
         assert_eq!(usize::from(r.address), i + 1);
@@ -292,7 +290,7 @@ fn flock_point_mode_answers_each_request() {
     let emu = emulator::start(DeviceKind::Fob, EmulatorOptions::new(), None).unwrap();
     let mut c = FobConfig::new(1, OutputFormat::Angles);
     c.mode = Mode::Point;
-    let dev = driver::spawn(
+    let dev = device::spawn(
         DriverOptions::new("fob", &emu.path()),
         Box::new(FobProtocol::new(c)),
         None,
@@ -365,13 +363,15 @@ Frame Time: 0.5
     // Errors name the joint and the file.
     let e = emulator::Motion::from_file(&path, "fob", &["tail".to_string()], 1, 0.01)
         .err()
-        .unwrap();
+        .unwrap()
+        .to_string();
     assert!(
         e.contains("no joint 'tail'") && e.contains("walk.bvh"),
         "{e}"
     );
     let e = emulator::Motion::from_file(&path, "fob", &[], 3, 0.01)
         .err()
-        .unwrap();
+        .unwrap()
+        .to_string();
     assert!(e.contains("2 joints for 3 birds"), "{e}");
 }

@@ -23,7 +23,7 @@ fn director(threads: usize) -> LuaSession {
         seed: 0,
     };
     let mut d = Director::session(config, kinds, ScriptLimits::default()).unwrap();
-    performer::install(&mut d, None).unwrap();
+    troupe_drivers::lua::install(&mut d, None).unwrap();
     d
 }
 
@@ -239,7 +239,7 @@ impl std::io::Write for FakeHid {
 
 #[test]
 fn live_reports_are_recorded_one_per_chunk_and_replay_to_the_same_states() {
-    use troupe_drivers::driver::{self, DriverOptions, Opener, Reading};
+    use troupe_drivers::device::{self, DeviceError, DriverOptions, Opener, Reading};
     use troupe_drivers::record::Recording;
     use troupe_drivers::spacemouse::SpaceMouseProtocol;
     let dir = std::env::temp_dir().join(format!("troupe-smrec-{}", std::process::id()));
@@ -255,12 +255,12 @@ fn live_reports_are_recorded_one_per_chunk_and_replay_to_the_same_states() {
     ];
     let mut queue = Some(reports.iter().cloned().collect());
     let opener: Opener = Box::new(move |_o: &DriverOptions| match queue.take() {
-        Some(q) => Ok(Box::new(FakeHid(q)) as Box<dyn driver::Port>),
-        None => Err("unplugged".into()),
+        Some(q) => Ok(Box::new(FakeHid(q)) as Box<dyn device::Port>),
+        None => Err(DeviceError::Closed),
     });
     let mut o = DriverOptions::new("nav", "");
     o.stale_after = Duration::MAX;
-    let dev = driver::spawn_with(
+    let dev = device::spawn_with(
         o,
         Box::new(SpaceMouseProtocol::default()),
         Some(recorder.clone()),

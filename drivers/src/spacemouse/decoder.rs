@@ -81,8 +81,29 @@ fn i16_at(r: &[u8], i: usize) -> i16 {
     i16::from_le_bytes([r[i], r[i + 1]])
 }
 
-/// Applies one HID report to the state; returns a description of what was wrong when the
-/// report is not one the layout knows (too short, unknown ID).
+/// A HID report the layout does not know.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum ReportError {
+    /// A read returned no bytes.
+    #[error("empty HID report")]
+    Empty,
+    /// The report ends before its last axis (byte 0 is the report ID).
+    #[error("HID report {id} has {len} bytes, expected {expected}")]
+    Short {
+        /// The report ID.
+        id: u8,
+        /// Bytes received.
+        len: usize,
+        /// Bytes the report ID needs.
+        expected: usize,
+    },
+    /// Byte 0 is no report ID the layout has.
+    #[error("unknown HID report ID {0}")]
+    UnknownId(u8),
+}
+
+/// Applies one HID report to the state; the error says what was wrong when the report is
+/// not one the layout knows (too short, unknown ID).
 ///
 /// Reference: wired devices send 7-byte reports, report ID first: ID 1 = translation X, Y, Z
 /// as int16 little-endian; ID 2 = rotation; ID 3 = buttons, bit n in byte 1 + n/8. Pro
@@ -91,16 +112,17 @@ pub fn apply_report(
     state: &mut SpaceMouseState,
     kind: ReportKind,
     report: &[u8],
-) -> Result<(), String> {
+) -> Result<(), ReportError> {
     let Some(&id) = report.first() else {
-        return Err("empty HID report".into());
+        return Err(ReportError::Empty);
     };
     let need = |n: usize| {
         if report.len() < n {
-            Err(format!(
-                "HID report {id} has {} bytes, expected {n}",
-                report.len()
-            ))
+            Err(ReportError::Short {
+                id,
+                len: report.len(),
+                expected: n,
+            })
         } else {
             Ok(())
         }
@@ -127,7 +149,7 @@ pub fn apply_report(
             }
             state.buttons = b;
         }
-        _ => return Err(format!("unknown HID report ID {id}")),
+        _ => return Err(ReportError::UnknownId(id)),
     }
     Ok(())
 }
@@ -143,73 +165,9 @@ pub fn kind_of_report(report: &[u8]) -> ReportKind {
     }
 }
 
-/// The SpaceMouse as a driver protocol: each read is one HID report; every report that
-/// decodes yields the accumulated state. Nothing is sent to the device.
-#[derive(Default)]
-pub struct SpaceMouseProtocol {
-    state: SpaceMouseState,
-    /// Reports that did not decode (too short, unknown ID), counted as resyncs.
-    bad_reports: u64,
-    /// Bytes of those reports.
-    bad_bytes: u64,
-}
-
-impl crate::driver::Protocol for SpaceMouseProtocol {
-    fn kind(&self) -> &'static str {
-        "spacemouse"
-    }
-
-    fn settings(&self) -> serde_json::Value {
-        // The layout is told by each report's length (see `kind_of_report`).
-        serde_json::json!({})
-    }
-
-    fn configure(&mut self, _port: &mut dyn crate::driver::Port) -> Result<(), String> {
-        // A fresh connection starts at rest: a cap let go while unplugged must not keep
-        // moving the object with the last axes seen.
-        self.state = SpaceMouseState::default();
-        Ok(())
-    }
-
-    fn decode(&mut self, bytes: &[u8], out: &mut dyn FnMut(crate::driver::Reading)) {
-        match apply_report(&mut self.state, kind_of_report(bytes), bytes) {
-            Ok(()) => out(crate::driver::Reading::SpaceMouse(self.state)),
-            Err(e) => {
-                tracing::debug!("spacemouse: {e}");
-                self.bad_reports += 1;
-                self.bad_bytes += bytes.len() as u64;
-            }
-        }
-    }
-
-    fn counters(&self) -> (u64, u64) {
-        (self.bad_reports, self.bad_bytes)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn protocol_tells_layout_by_length_and_counts_bad_reports() {
-        use crate::driver::{Protocol, Reading};
-        let mut p = SpaceMouseProtocol::default();
-        let mut got = Vec::new();
-        // Wired translation, then a Pro Wireless 13-byte report, then garbage.
-        p.decode(&[1, 10, 0, 0, 0, 0, 0], &mut |r| got.push(r));
-        p.decode(&[1, 1, 0, 2, 0, 3, 0, 4, 0, 5, 0, 6, 0], &mut |r| {
-            got.push(r)
-        });
-        p.decode(&[7, 1, 2], &mut |r| got.push(r));
-        assert_eq!(got.len(), 2);
-        let Reading::SpaceMouse(s) = &got[1] else {
-            panic!("expected a SpaceMouse reading, got {:?}", got[1]);
-        };
-        assert_eq!(s.translation, [1, 2, 3]);
-        assert_eq!(s.rotation, [4, 5, 6]);
-        assert_eq!(p.counters(), (1, 3));
-    }
 
     #[test]
     fn table_lookup() {
@@ -266,10 +224,12 @@ mod tests {
         assert!(
             apply_report(&mut s, ReportKind::Combined, &[1, 0, 0, 0, 0, 0, 0])
                 .unwrap_err()
+                .to_string()
                 .contains("expected 13")
         );
         assert!(apply_report(&mut s, ReportKind::Wired, &[9, 0])
             .unwrap_err()
+            .to_string()
             .contains("unknown"));
         assert_eq!(s, SpaceMouseState::default());
     }

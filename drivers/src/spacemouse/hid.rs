@@ -1,40 +1,11 @@
-//! Finding devices: serial ports and HID devices (SpaceMouse family marked), and reading a
-//! SpaceMouse through hidapi.
+//! SpaceMice through hidapi: listing HID devices (SpaceMouse family marked), reading a
+//! SpaceMouse directly, and opening one as a device-thread port.
 
-use crate::spacemouse::{self, ReportKind, SpaceMouseState};
+use crate::device::error::DeviceError;
+use crate::device::port::Port;
+use crate::spacemouse::decoder::{self as spacemouse, ReportKind, SpaceMouseState};
 use serde::Serialize;
 use std::time::{Duration, Instant};
-
-/// A serial port found on the system.
-#[derive(Clone, Debug, Serialize)]
-pub struct SerialInfo {
-    /// Device path.
-    pub path: String,
-    /// What kind of port (USB with vendor/product, PCI, Bluetooth, unknown).
-    pub kind: String,
-}
-
-/// Serial ports (scanned from sysfs; no libudev needed).
-pub fn serial_ports() -> Result<Vec<SerialInfo>, String> {
-    let ports = serialport::available_ports().map_err(|e| format!("listing serial ports: {e}"))?;
-    Ok(ports
-        .into_iter()
-        .map(|p| SerialInfo {
-            path: p.port_name,
-            kind: match p.port_type {
-                serialport::SerialPortType::UsbPort(u) => format!(
-                    "usb {:04x}:{:04x} {}",
-                    u.vid,
-                    u.pid,
-                    u.product.unwrap_or_default()
-                ),
-                serialport::SerialPortType::PciPort => "pci".into(),
-                serialport::SerialPortType::BluetoothPort => "bluetooth".into(),
-                serialport::SerialPortType::Unknown => "unknown".into(),
-            },
-        })
-        .collect())
-}
 
 /// A HID device found on the system.
 #[derive(Clone, Debug, Serialize)]
@@ -52,8 +23,8 @@ pub struct HidInfo {
 }
 
 /// HID devices (hidraw); an error when HID access is unavailable.
-pub fn hid_devices() -> Result<Vec<HidInfo>, String> {
-    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+pub fn hid_devices() -> Result<Vec<HidInfo>, DeviceError> {
+    let api = hidapi::HidApi::new()?;
     Ok(api
         .device_list()
         .map(|d| HidInfo {
@@ -75,14 +46,17 @@ pub fn read_spacemouse(
     count: usize,
     timeout: Duration,
     mut each: impl FnMut(&SpaceMouseState),
-) -> Result<(String, usize), String> {
-    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+) -> Result<(String, usize), DeviceError> {
+    let api = hidapi::HidApi::new()?;
     let info = find_spacemouse(&api, path)?;
     let (name, kind) = spacemouse::lookup(info.vendor_id(), info.product_id())
         .unwrap_or(("HID device", ReportKind::Wired));
     let dev = info
         .open_device(&api)
-        .map_err(|e| format!("opening {}: {e}", info.path().to_string_lossy()))?;
+        .map_err(|source| DeviceError::OpenHid {
+            path: info.path().to_string_lossy().into_owned(),
+            source,
+        })?;
     let mut state = SpaceMouseState::default();
     let mut buf = [0u8; 64];
     let mut n = 0;
@@ -90,7 +64,10 @@ pub fn read_spacemouse(
     while n < count {
         let k = dev
             .read_timeout(&mut buf, 50)
-            .map_err(|e| format!("reading {name}: {e}"))?;
+            .map_err(|source| DeviceError::ReadHid {
+                device: name.to_string(),
+                source,
+            })?;
         if k == 0 {
             if last.elapsed() > timeout {
                 break;
@@ -144,28 +121,31 @@ impl std::io::Write for HidPort {
 fn find_spacemouse<'a>(
     api: &'a hidapi::HidApi,
     path: Option<&str>,
-) -> Result<&'a hidapi::DeviceInfo, String> {
+) -> Result<&'a hidapi::DeviceInfo, DeviceError> {
     api.device_list()
         .find(|d| match path {
             Some(p) => d.path().to_string_lossy() == p,
             None => spacemouse::lookup(d.vendor_id(), d.product_id()).is_some(),
         })
         .ok_or_else(|| match path {
-            Some(p) => format!("no HID device at {p} (see `troupe devices`)"),
-            None => "no SpaceMouse found (vendors 046d/256f; see `troupe devices`)".to_string(),
+            Some(p) => DeviceError::NoHidDevice(p.to_string()),
+            None => DeviceError::NoSpaceMouse,
         })
 }
 
 /// Opens the SpaceMouse at hidraw `path`, or the first SpaceMouse found, as a driver port.
 /// The error says which device was missing or could not be opened.
-pub fn open_spacemouse(path: Option<&str>) -> Result<Box<dyn crate::driver::Port>, String> {
-    let api = hidapi::HidApi::new().map_err(|e| format!("HID: {e}"))?;
+pub fn open_spacemouse(path: Option<&str>) -> Result<Box<dyn Port>, DeviceError> {
+    let api = hidapi::HidApi::new()?;
     let info = find_spacemouse(&api, path)?;
     let name = spacemouse::lookup(info.vendor_id(), info.product_id())
         .map(|(n, _)| n.to_string())
         .unwrap_or_else(|| "HID device".into());
     let device = info
         .open_device(&api)
-        .map_err(|e| format!("opening {}: {e}", info.path().to_string_lossy()))?;
+        .map_err(|source| DeviceError::OpenHid {
+            path: info.path().to_string_lossy().into_owned(),
+            source,
+        })?;
     Ok(Box::new(HidPort { device, name }))
 }

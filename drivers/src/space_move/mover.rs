@@ -14,18 +14,13 @@
 //! user moves it along +Z, and twisting the cap counter-clockwise seen from above turns the
 //! object counter-clockwise about +Y. The same proper rotation maps the rotation axes.
 
-use crate::driver::{
-    self, DeviceHandle, DriverOptions, HealthReport, HealthState, Opener, Reading,
-};
-use crate::record::{Recorder, Recording};
-use crate::spacemouse::{SpaceMouseProtocol, SpaceMouseState};
+use crate::device::health::{HealthReport, HealthState};
+use crate::device::reading::Reading;
+use crate::device::thread::DeviceHandle;
+use crate::record::writer::Recorder;
+use crate::spacemouse::decoder::SpaceMouseState;
 use glam::{DQuat, DVec3};
-use mlua::{Lua, Table, Value};
-use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
-use troupe_lua::api::{lua_err_message, ObjectRef};
-use troupe_lua::LuaSession;
 use troupe_scene::{Input, Scene};
 
 /// How deflection becomes motion.
@@ -89,7 +84,7 @@ pub fn integrate(
 }
 
 /// Where a mover's readings come from.
-enum Source {
+pub(crate) enum Source {
     /// A live HID device thread.
     Live(DeviceHandle),
     /// A recording, delivered by scene time since the first scene step the mover took
@@ -103,12 +98,17 @@ enum Source {
 }
 
 /// One SpaceMouse moving one object.
-struct Mover {
-    name: String,
-    object: usize,
-    source: Source,
-    state: SpaceMouseState,
-    options: MoveOptions,
+pub(crate) struct Mover {
+    /// The mover's name (`troupe.devices.health` and recordings).
+    pub(crate) name: String,
+    /// Object index in the scene.
+    pub(crate) object: usize,
+    /// Where its readings come from.
+    pub(crate) source: Source,
+    /// The device's state after the latest reading.
+    pub(crate) state: SpaceMouseState,
+    /// How deflection becomes motion.
+    pub(crate) options: MoveOptions,
 }
 
 impl Mover {
@@ -156,8 +156,10 @@ impl Mover {
 /// Every SpaceMouse mover of a scene, and the recorder for live devices.
 #[derive(Default)]
 pub struct SpaceMice {
-    movers: Vec<Mover>,
-    recorder: Option<Arc<Recorder>>,
+    /// The movers, in creation order.
+    pub(crate) movers: Vec<Mover>,
+    /// Records live SpaceMouse reports.
+    pub(crate) recorder: Option<Arc<Recorder>>,
 }
 
 /// Lua app data: the shared movers.
@@ -209,7 +211,7 @@ impl SpaceMice {
 }
 
 /// Moves the objects of every SpaceMouse (the session's input phase).
-struct SpaceMouseInput(SharedSpaceMice);
+pub(crate) struct SpaceMouseInput(pub(crate) SharedSpaceMice);
 
 impl Input for SpaceMouseInput {
     fn name(&self) -> String {
@@ -227,222 +229,6 @@ impl Input for SpaceMouseInput {
             .step(scene);
         Ok(())
     }
-}
-
-/// Installs `troupe.devices.spacemouse` (and SpaceMouse names in `troupe.devices.health`)
-/// on the session's director and the input that moves the objects. Call after
-/// [`crate::performer::install`], which makes `troupe.devices`. `recorder` records live
-/// SpaceMouse reports.
-pub fn install(
-    session: &mut LuaSession,
-    recorder: Option<Arc<Recorder>>,
-) -> Result<SharedSpaceMice, String> {
-    let shared = SharedSpaceMice(Arc::new(Mutex::new(SpaceMice {
-        movers: Vec::new(),
-        recorder,
-    })));
-    let lua = session.script().lua();
-    lua.set_app_data(shared.clone());
-    install_lua(lua).map_err(|e| format!("installing troupe.devices.spacemouse: {e}"))?;
-    session.add_input(Box::new(SpaceMouseInput(shared.clone())));
-    Ok(shared)
-}
-
-fn err(e: impl std::fmt::Display) -> mlua::Error {
-    lua_err_message(e)
-}
-
-fn shared(lua: &Lua) -> mlua::Result<SharedSpaceMice> {
-    lua.app_data_ref::<SharedSpaceMice>()
-        .map(|s| s.clone())
-        .ok_or_else(|| err("devices are not enabled"))
-}
-
-fn resolve(lua: &Lua, p: &str) -> PathBuf {
-    let path = Path::new(p);
-    if path.is_absolute() {
-        path.to_path_buf()
-    } else {
-        troupe_lua::scene_dir(lua)
-            .unwrap_or_else(|| PathBuf::from("."))
-            .join(path)
-    }
-}
-
-const KEYS: [&str; 8] = [
-    "object", "name", "path", "replay", "stream", "speed", "turn", "deadzone",
-];
-
-fn install_lua(lua: &Lua) -> mlua::Result<()> {
-    let troupe: Table = lua.globals().get("troupe")?;
-    let devices: Table = match troupe.get::<Option<Table>>("devices")? {
-        Some(t) => t,
-        None => {
-            let t = lua.create_table()?;
-            troupe.set("devices", t.clone())?;
-            t
-        }
-    };
-    devices.set("spacemouse", lua.create_function(lua_spacemouse)?)?;
-    // `troupe.devices.health(name)` answers for a SpaceMouse name as it does for a
-    // performer, and passes anything else on to the performers' function.
-    let previous: Option<mlua::Function> = devices.get("health")?;
-    devices.set(
-        "health",
-        lua.create_function(move |lua, who: Value| {
-            if let Value::String(n) = &who {
-                let n = n.to_str()?.to_string();
-                let s = shared(lua)?;
-                let report =
-                    s.0.lock()
-                        .map_err(|_| err("spacemouse lock poisoned"))?
-                        .health(&n);
-                if let Some(report) = report {
-                    let t = crate::performer::health_table(lua, report)?;
-                    let out = lua.create_table()?;
-                    out.set("spacemouse", t)?;
-                    return Ok(Value::Table(out));
-                }
-            }
-            match &previous {
-                Some(f) => f.call::<Value>(who),
-                None => Err(err("health: no device of that name")),
-            }
-        })?,
-    )?;
-    Ok(())
-}
-
-fn number(t: &Table, key: &str, default: f64) -> mlua::Result<f64> {
-    let v: Option<f64> = t
-        .get(key)
-        .map_err(|_| err(format!("spacemouse: `{key}` must be a number")))?;
-    let v = v.unwrap_or(default);
-    if !v.is_finite() {
-        return Err(err(format!("spacemouse: `{key}` must be finite, got {v}")));
-    }
-    Ok(v)
-}
-
-/// `troupe.devices.spacemouse{ object=…, name="spacemouse", path=nil, replay=nil,
-/// stream=nil, speed=1.0, turn=90, deadzone=0.05 }` → the mover's name.
-fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
-    for pair in t.clone().pairs::<Value, Value>() {
-        let (k, _) = pair?;
-        let k = k.to_string()?;
-        if !KEYS.contains(&k.as_str()) {
-            return Err(err(format!(
-                "spacemouse: unknown option `{k}` (known: {})",
-                KEYS.join(", ")
-            )));
-        }
-    }
-    let object = match t.get::<Value>("object")? {
-        Value::UserData(u) => {
-            u.borrow::<ObjectRef>()
-                .map_err(|_| err("spacemouse: `object` must be an object or an object name"))?
-                .0
-        }
-        Value::String(n) => {
-            let n = n.to_str()?.to_string();
-            troupe_lua::kinds::with_scene(lua, |s| s.object_index(&n))?
-                .map_err(|e| err(format!("spacemouse: {e}")))?
-        }
-        Value::Nil => return Err(err("spacemouse: `object` is required")),
-        _ => {
-            return Err(err(
-                "spacemouse: `object` must be an object or an object name",
-            ))
-        }
-    };
-    let name: String = t
-        .get::<Option<String>>("name")?
-        .unwrap_or_else(|| "spacemouse".into());
-    let speed = number(&t, "speed", 1.0)?;
-    let turn = number(&t, "turn", 90.0)?;
-    let deadzone = number(&t, "deadzone", 0.05)?;
-    if speed < 0.0 || turn < 0.0 {
-        return Err(err("spacemouse: `speed` and `turn` must not be negative"));
-    }
-    if !(0.0..1.0).contains(&deadzone) {
-        return Err(err(format!(
-            "spacemouse: `deadzone` must be in [0, 1), got {deadzone}"
-        )));
-    }
-    let path: Option<String> = t.get("path")?;
-    let replay: Option<String> = t.get("replay")?;
-    let stream: Option<String> = t.get("stream")?;
-    let s = shared(lua)?;
-    let recorder = {
-        let g = s.0.lock().map_err(|_| err("spacemouse lock poisoned"))?;
-        if g.movers.iter().any(|m| m.name == name) {
-            return Err(err(format!(
-                "spacemouse: a SpaceMouse named '{name}' exists already (give another `name`)"
-            )));
-        }
-        g.recorder.clone()
-    };
-    let source = match replay {
-        Some(r) => {
-            if path.is_some() {
-                return Err(err("spacemouse: give `path` or `replay`, not both"));
-            }
-            let file = resolve(lua, &r);
-            let rec = Recording::read(&file).map_err(|e| err(format!("spacemouse: {e}")))?;
-            let i = rec
-                .find(stream.as_deref().unwrap_or("spacemouse"))
-                .ok_or_else(|| {
-                    err(format!(
-                        "spacemouse: {} has no single 'spacemouse' stream (name one with stream=…)",
-                        file.display()
-                    ))
-                })?;
-            if rec.streams[i].kind != "spacemouse" {
-                return Err(err(format!(
-                    "spacemouse: stream '{}' of {} is a {} stream",
-                    rec.streams[i].name,
-                    file.display(),
-                    rec.streams[i].kind
-                )));
-            }
-            let readings = rec
-                .readings(i)
-                .map_err(|e| err(format!("spacemouse: {e}")))?;
-            Source::Replay {
-                readings,
-                next: 0,
-                start: None,
-            }
-        }
-        None => {
-            let mut o = DriverOptions::new(&name, path.as_deref().unwrap_or(""));
-            // A SpaceMouse at rest sends nothing: silence is not staleness.
-            o.stale_after = Duration::MAX;
-            let opener: Opener =
-                Box::new(move |_o: &DriverOptions| crate::hid::open_spacemouse(path.as_deref()));
-            Source::Live(driver::spawn_with(
-                o,
-                Box::new(SpaceMouseProtocol::default()),
-                recorder,
-                opener,
-            ))
-        }
-    };
-    s.0.lock()
-        .map_err(|_| err("spacemouse lock poisoned"))?
-        .movers
-        .push(Mover {
-            name: name.clone(),
-            object,
-            source,
-            state: SpaceMouseState::default(),
-            options: MoveOptions {
-                speed,
-                turn: turn.to_radians(),
-                deadzone,
-            },
-        });
-    Ok(name)
 }
 
 #[cfg(test)]

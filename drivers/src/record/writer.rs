@@ -1,0 +1,111 @@
+//! Writing a `.rec` file while devices run: each device thread declares its stream and
+//! appends the bytes it reads, one whole chunk per call.
+
+use crate::record::error::RecordError;
+use crate::record::file::{StreamInfo, MAGIC};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+use std::time::Instant;
+
+/// Writes a `.rec` file; shared by the device threads (each call writes one whole chunk).
+pub struct Recorder {
+    inner: Mutex<RecorderInner>,
+    start: Instant,
+    path: PathBuf,
+}
+
+struct RecorderInner {
+    out: std::io::BufWriter<std::fs::File>,
+    streams: u16,
+    /// The first write error; later chunks are not written.
+    error: Option<std::io::Error>,
+}
+
+impl Recorder {
+    /// Creates the file and writes the magic.
+    pub fn create(path: &Path) -> Result<Recorder, RecordError> {
+        let file = std::fs::File::create(path).map_err(|source| RecordError::Create {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        let mut out = std::io::BufWriter::new(file);
+        out.write_all(MAGIC).map_err(|source| RecordError::Write {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Ok(Recorder {
+            inner: Mutex::new(RecorderInner {
+                out,
+                streams: 0,
+                error: None,
+            }),
+            start: Instant::now(),
+            path: path.to_path_buf(),
+        })
+    }
+
+    /// Declares a stream; returns its index.
+    pub fn add_stream(&self, name: &str, kind: &str, settings: serde_json::Value) -> u16 {
+        let info = StreamInfo {
+            name: name.into(),
+            kind: kind.into(),
+            settings,
+        };
+        let json = serde_json::to_vec(&info).unwrap_or_default();
+        let Ok(mut g) = self.inner.lock() else {
+            return 0;
+        };
+        let index = g.streams;
+        g.streams += 1;
+        let mut chunk = vec![b'H'];
+        chunk.extend_from_slice(&index.to_le_bytes());
+        chunk.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        chunk.extend_from_slice(&json);
+        g.write(&chunk);
+        index
+    }
+
+    /// Records bytes read from a stream now.
+    pub fn data(&self, stream: u16, bytes: &[u8]) {
+        let micros = self.start.elapsed().as_micros() as u64;
+        self.data_at(stream, micros, bytes);
+    }
+
+    /// Records bytes at a given time (microseconds since the start).
+    pub fn data_at(&self, stream: u16, micros: u64, bytes: &[u8]) {
+        let Ok(mut g) = self.inner.lock() else { return };
+        let mut chunk = Vec::with_capacity(15 + bytes.len());
+        chunk.push(b'D');
+        chunk.extend_from_slice(&stream.to_le_bytes());
+        chunk.extend_from_slice(&micros.to_le_bytes());
+        chunk.extend_from_slice(&(bytes.len() as u32).to_le_bytes());
+        chunk.extend_from_slice(bytes);
+        g.write(&chunk);
+    }
+
+    /// Flushes to disk; returns the first write error, if any (once: the error is taken).
+    pub fn finish(&self) -> Result<(), RecordError> {
+        let mut g = self.inner.lock().map_err(|_| RecordError::Poisoned)?;
+        if let Err(e) = g.out.flush() {
+            g.error.get_or_insert(e);
+        }
+        match g.error.take() {
+            Some(source) => Err(RecordError::Write {
+                path: self.path.clone(),
+                source,
+            }),
+            None => Ok(()),
+        }
+    }
+}
+
+impl RecorderInner {
+    fn write(&mut self, chunk: &[u8]) {
+        if self.error.is_none() {
+            if let Err(e) = self.out.write_all(chunk) {
+                self.error = Some(e);
+            }
+        }
+    }
+}
