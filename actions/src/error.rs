@@ -91,9 +91,14 @@ pub enum ActionError {
     /// performer's device-driven hand for a give), and why.
     #[error("{0}")]
     Unfit(String),
-    /// State shared between actors (the hand board) was left locked by a panic.
-    #[error("{0} lock poisoned")]
-    Poisoned(&'static str),
+}
+
+/// A generator whose action cannot be made for the body or the scene it meets at its
+/// start fails its action with the reason.
+impl From<ActionError> for troupe_scene::StartError {
+    fn from(e: ActionError) -> Self {
+        troupe_scene::StartError::new(e.to_string())
+    }
 }
 
 /// The result of making an action.

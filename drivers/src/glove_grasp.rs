@@ -32,8 +32,8 @@ pub enum GloveHandError {
     #[error("glove hand: not started")]
     NotStarted,
     /// The grasping automaton refused its input.
-    #[error("{0}")]
-    Automaton(String),
+    #[error(transparent)]
+    Automaton(#[from] troupe_actions::ActionError),
 }
 
 /// A glove script that cannot be written.
@@ -102,8 +102,7 @@ impl GloveHand {
 
     /// Builds the automaton from the posture the action starts in.
     pub fn start(&mut self, ctx: &GeneratorContext) -> Result<(), GloveHandError> {
-        let a = GraspAutomaton::new(ctx.skeleton, self.side, &ctx.posture.q)
-            .map_err(GloveHandError::Automaton)?;
+        let a = GraspAutomaton::new(ctx.skeleton, self.side, &ctx.posture.q)?;
         self.wrist = a.model().sensors.wrist;
         self.automaton = Some(a);
         Ok(())
@@ -166,9 +165,7 @@ impl GloveHand {
                 }
             }
         }
-        let result = a
-            .update(sk, &self.q, &self.globals, &self.desired, &self.objects)
-            .map_err(GloveHandError::Automaton)?;
+        let result = a.update(sk, &self.q, &self.globals, &self.desired, &self.objects)?;
         for &(d, v) in &result.values {
             if scope.contains(d) {
                 out.set(d, v);

@@ -95,7 +95,7 @@ fn grasp_run(threads: usize, rec: &Path, side: Side) -> Trace {
     .unwrap();
     let pat = d.scene().actor_index("pat").unwrap();
     let e = offer_point(&d.scene().world(), pat, Side::Right, 0).unwrap_err();
-    assert!(e.contains("no object"), "{e}");
+    assert!(e.to_string().contains("no object"), "{e}");
     // A probe of the ball's shape, far away, gives the point in the open hand.
     d.load_str(
         r#"troupe.object{ name = "probe", shape = "sphere", radius = 0.03, at = {0, 3, 5} }"#,

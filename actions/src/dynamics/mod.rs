@@ -21,7 +21,7 @@ use std::sync::Arc;
 use troupe_body::dynamics::{Control, Gains, SimParams, Simulation};
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Note, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Note, StartError, Step};
 
 /// What a servo follows.
 #[derive(Clone, Debug, PartialEq)]
@@ -151,7 +151,7 @@ impl DynamicsGenerator {
 }
 
 impl Generator for DynamicsGenerator {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let n = ctx.skeleton.dof_count();
         let root = ctx.skeleton.joints()[0].dofs.clone();
         let dynamic: Vec<bool> = (0..n)

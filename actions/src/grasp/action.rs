@@ -15,7 +15,7 @@ use troupe_body::glam::DVec3;
 use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::holding::HoldRequest;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Scene, SignalId, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, Scene, SignalId, StartError, Step};
 
 /// Seconds the fingers take to close along a pattern.
 pub const CLOSE_SECONDS: f64 = 0.6;
@@ -153,7 +153,7 @@ impl Grasp {
         self
     }
 
-    fn begin(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn begin(&mut self, ctx: &GeneratorContext) -> crate::error::Result<()> {
         // A hand-over: keep the palm away from the giver's palm.
         if let (Some(from), Some(h)) = (self.options.from, ctx.world.holder(self.object)) {
             if h.actor == from {
@@ -179,14 +179,14 @@ impl Grasp {
         )?;
         let planned: Vec<Side> = plan.hands.iter().map(|h| h.side).collect();
         if planned.iter().any(|s| !self.sides.contains(s)) {
-            return Err(format!(
+            return Err(crate::error::ActionError::Unfit(format!(
                 "the plan needs the {} hand(s), outside this action's scope",
                 planned
                     .iter()
                     .map(|s| s.name())
                     .collect::<Vec<_>>()
                     .join(" and ")
-            ));
+            )));
         }
         self.closing.clear();
         for h in &plan.hands {
@@ -214,9 +214,11 @@ impl Grasp {
 }
 
 impl Generator for Grasp {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         if ctx.world.objects.get(self.object).is_none() {
-            return Err(format!("no object #{}", self.object));
+            return Err(
+                crate::error::ActionError::Unfit(format!("no object #{}", self.object)).into(),
+            );
         }
         self.q = ctx.posture.q.clone();
         if self.gate.is_none() {
@@ -239,7 +241,7 @@ impl Generator for Grasp {
                 }
                 if open {
                     if let Err(e) = self.begin(ctx) {
-                        return Step::Failed(e);
+                        return Step::Failed(e.to_string());
                     }
                 } else {
                     let q = self.q.clone();
@@ -398,20 +400,24 @@ impl Release {
 }
 
 impl Generator for Release {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let name = ctx
             .world
             .objects
             .get(self.object)
             .map(|o| o.name.clone())
-            .ok_or_else(|| format!("no object #{}", self.object))?;
+            .ok_or_else(|| {
+                crate::error::ActionError::Unfit(format!("no object #{}", self.object))
+            })?;
         let me = &ctx.world.actors[ctx.actor].name;
         if ctx
             .world
             .holder(self.object)
             .is_none_or(|h| h.actor != ctx.actor)
         {
-            return Err(format!("`{me}` does not hold `{name}`"));
+            return Err(
+                crate::error::ActionError::Unfit(format!("`{me}` does not hold `{name}`")).into(),
+            );
         }
         self.q = ctx.posture.q.clone();
         self.start_q = ctx.posture.q.clone();
@@ -431,10 +437,10 @@ impl Generator for Release {
                 let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
                 let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
                 if miss > super::plan::REACH_TOLERANCE || angle > super::plan::REACH_ANGLE {
-                    return Err(format!(
+                    return Err(crate::error::ActionError::Unfit(format!(
                         "the place for `{name}` is out of reach of the {} hand (misses by {miss:.3} m)",
                         s.name()
-                    ));
+                    )).into());
                 }
                 self.arms.push((ik, wrist_goal));
             }

@@ -84,13 +84,13 @@ pub struct GraspAutomaton {
 
 impl GraspAutomaton {
     /// An automaton for `side`'s hand of `skeleton`, fingers starting at `q`'s values.
-    pub fn new(skeleton: &Skeleton, side: Side, q: &[f64]) -> Result<GraspAutomaton, String> {
+    pub fn new(skeleton: &Skeleton, side: Side, q: &[f64]) -> crate::error::Result<GraspAutomaton> {
         if q.len() != skeleton.dof_count() {
-            return Err(format!(
+            return Err(crate::error::ActionError::Unfit(format!(
                 "grasp automaton: posture has {} values, the skeleton {} DOFs",
                 q.len(),
                 skeleton.dof_count()
-            ));
+            )));
         }
         let model = HandModel::new(skeleton, side)?;
         let values = model.sensors.scope.iter().map(|d| (d, q[d])).collect();
@@ -126,23 +126,25 @@ impl GraspAutomaton {
         globals: &[Transform],
         desired: &[(usize, f64)],
         objects: &[Object],
-    ) -> Result<AutomatonOutput, String> {
+    ) -> crate::error::Result<AutomatonOutput> {
         if posture.len() != self.q.len() || globals.len() != skeleton.joints().len() {
-            return Err("grasp automaton: posture or globals do not match the skeleton".into());
+            return Err(crate::error::ActionError::Unfit(
+                "grasp automaton: posture or globals do not match the skeleton".into(),
+            ));
         }
         self.targets.clear();
         for &(d, v) in desired {
             if !self.model.sensors.scope.contains(d) {
-                return Err(format!(
+                return Err(crate::error::ActionError::Unfit(format!(
                     "grasp automaton: DOF #{d} is not a finger DOF of the {} hand",
                     self.model.sensors.side.name()
-                ));
+                )));
             }
             if !v.is_finite() {
-                return Err(format!(
+                return Err(crate::error::ActionError::Unfit(format!(
                     "grasp automaton: desired value of `{}` is not finite",
                     skeleton.dofs()[d].name
-                ));
+                )));
             }
             self.targets.push((d, skeleton.dofs()[d].clamp(v)));
         }
@@ -391,11 +393,14 @@ mod tests {
                 std::slice::from_ref(&ball),
             )
             .unwrap_err();
-        assert!(e.contains("not a finger DOF of the right hand"), "{e}");
+        assert!(
+            e.to_string().contains("not a finger DOF of the right hand"),
+            "{e}"
+        );
         let d = a.model().sensors.scope.iter().next().unwrap();
         let e = a
             .update(&skel, &state.q, &state.globals, &[(d, f64::NAN)], &[ball])
             .unwrap_err();
-        assert!(e.contains("not finite"), "{e}");
+        assert!(e.to_string().contains("not finite"), "{e}");
     }
 }

@@ -32,8 +32,8 @@ pub struct HandModel {
 
 impl HandModel {
     /// The model of `side`'s hand.
-    pub fn new(skeleton: &Skeleton, side: Side) -> Result<HandModel, String> {
-        let sensors = HandSensors::new(skeleton, side).map_err(|e| e.to_string())?;
+    pub fn new(skeleton: &Skeleton, side: Side) -> crate::error::Result<HandModel> {
+        let sensors = HandSensors::new(skeleton, side)?;
         let wrist = sensors.wrist;
         let all = skeleton.joints();
         let mut inside = vec![false; all.len()];
@@ -48,9 +48,7 @@ impl HandModel {
         let p = side.prefix();
         let mut length = DVec3::ZERO;
         for i in 0..=3 {
-            let j = skeleton
-                .joint(&format!("{p}middle{i}"))
-                .map_err(|e| e.to_string())?;
+            let j = skeleton.joint(&format!("{p}middle{i}"))?;
             length += all[j].offset;
             if i == 3 {
                 if let Some((_, o)) = skeleton.end_sites().iter().find(|(k, _)| *k == j) {

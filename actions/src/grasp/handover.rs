@@ -41,16 +41,15 @@ pub fn offer_point(
     receiver: usize,
     side: Side,
     object: usize,
-) -> Result<DVec3, String> {
-    let info = world
-        .actors
-        .get(receiver)
-        .ok_or_else(|| format!("no actor #{receiver} to give to"))?;
+) -> crate::error::Result<DVec3> {
+    let info = world.actors.get(receiver).ok_or_else(|| {
+        crate::error::ActionError::Unfit(format!("no actor #{receiver} to give to"))
+    })?;
     let obj = world
         .objects
         .get(object)
-        .ok_or_else(|| format!("no object #{object}"))?;
-    let hs = HandSensors::new(&info.skeleton, side).map_err(|e| e.to_string())?;
+        .ok_or_else(|| crate::error::ActionError::Unfit(format!("no object #{object}")))?;
+    let hs = HandSensors::new(&info.skeleton, side)?;
     let sk = &info.skeleton;
     let mut globals = vec![Transform::IDENTITY; sk.joints().len()];
     troupe_body::kinematics::forward_kinematics(sk, &vec![0.0; sk.dof_count()], &mut globals);

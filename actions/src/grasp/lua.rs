@@ -12,7 +12,7 @@ use troupe_lua::args::{
     actor_arg, err, euler_degrees, object_arg, opt_string, table_arg, vec3, vec3_table,
 };
 use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};
-use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// What a builder returns: the generator and its spec.
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
@@ -21,8 +21,8 @@ type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
 struct Refuse(String);
 
 impl Generator for Refuse {
-    fn start(&mut self, _: &GeneratorContext) -> Result<(), String> {
-        Err(self.0.clone())
+    fn start(&mut self, _: &GeneratorContext) -> Result<(), StartError> {
+        Err(self.0.clone().into())
     }
     fn step(&mut self, _: &GeneratorContext, _: &mut DofWriter) -> Step {
         Step::Failed(self.0.clone())
@@ -189,7 +189,7 @@ pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
                 }
                 Err(reason) => {
                     out.push_back(Value::Nil);
-                    out.push_back(Value::String(lua.create_string(&reason)?));
+                    out.push_back(Value::String(lua.create_string(reason.to_string())?));
                 }
             }
             Ok(out)

@@ -141,23 +141,26 @@ impl HandPattern {
     }
 
     /// An opening pattern: every finger DOF back to 0 over the whole window.
-    pub fn open(skeleton: &Skeleton, side: Side) -> Result<BoundPattern, String> {
-        let scope = skeleton
-            .scope(&format!("{}_hand", side.name()))
-            .map_err(|e| e.to_string())?;
+    pub fn open(skeleton: &Skeleton, side: Side) -> crate::error::Result<BoundPattern> {
+        let scope = skeleton.scope(&format!("{}_hand", side.name()))?;
         Ok(BoundPattern {
             tracks: scope.iter().map(|d| (d, 0.0, 1.0, 0.0, 0.0)).collect(),
         })
     }
 
     /// Resolves the pattern on `side`'s hand of `skeleton`, starting from posture `q`.
-    pub fn bind(&self, skeleton: &Skeleton, side: Side, q: &[f64]) -> Result<BoundPattern, String> {
+    pub fn bind(
+        &self,
+        skeleton: &Skeleton,
+        side: Side,
+        q: &[f64],
+    ) -> crate::error::Result<BoundPattern> {
         let mut tracks = Vec::with_capacity(self.tracks.len());
         for tr in &self.tracks {
             let name = format!("{}{}", side.prefix(), tr.dof);
-            let d = skeleton
-                .dof(&name)
-                .map_err(|e| format!("hand pattern {}: {e}", self.grasp.name()))?;
+            let d = skeleton.dof(&name).map_err(|e| {
+                crate::error::ActionError::Unfit(format!("hand pattern {}: {e}", self.grasp.name()))
+            })?;
             let dof = &skeleton.dofs()[d];
             let target = dof.clamp(tr.degrees.to_radians());
             tracks.push((d, tr.from, tr.to, q[d], target));

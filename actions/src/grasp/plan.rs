@@ -144,19 +144,15 @@ pub struct ArmIk {
 
 impl ArmIk {
     /// The arm of `side` (sternoclavicular to wrist DOFs).
-    pub fn new(skeleton: &Skeleton, side: Side, iterations: usize) -> Result<ArmIk, String> {
-        let wrist = skeleton
-            .joint(&format!("{}wrist", side.prefix()))
-            .map_err(|e| e.to_string())?;
-        let scope = skeleton
-            .scope(&format!("{}_arm", side.name()))
-            .map_err(|e| e.to_string())?;
+    pub fn new(skeleton: &Skeleton, side: Side, iterations: usize) -> crate::error::Result<ArmIk> {
+        let wrist = skeleton.joint(&format!("{}wrist", side.prefix()))?;
+        let scope = skeleton.scope(&format!("{}_arm", side.name()))?;
         let dofs = scope_dofs_moving(skeleton, &scope, wrist);
         let options = IkOptions {
             max_iterations: iterations,
             ..IkOptions::default()
         };
-        let solver = IkSolver::new(skeleton, dofs, options).map_err(|e| e.to_string())?;
+        let solver = IkSolver::new(skeleton, dofs, options)?;
         Ok(ArmIk {
             side,
             wrist,
@@ -176,7 +172,7 @@ impl ArmIk {
         skeleton: &Skeleton,
         q: &mut [f64],
         goal: &Transform,
-    ) -> Result<(f64, f64), String> {
+    ) -> crate::error::Result<(f64, f64)> {
         let task = IkTask {
             effector: Effector::at_joint(self.wrist),
             goal: Goal {
@@ -185,9 +181,7 @@ impl ArmIk {
             },
             priority: 0,
         };
-        self.solver
-            .solve(skeleton, q, &[task], None, None)
-            .map_err(|e| e.to_string())?;
+        self.solver.solve(skeleton, q, &[task], None, None)?;
         let g = self.solver.globals()[self.wrist];
         Ok((
             (g.translation - goal.translation).length(),
@@ -205,7 +199,7 @@ pub fn frame_rotation(n_l: DVec3, f_l: DVec3, n_w: DVec3, f_w: DVec3) -> DQuat {
 }
 
 /// The hand length of `skeleton`'s right hand (for the decision table).
-pub fn hand_length(skeleton: &Skeleton) -> Result<f64, String> {
+pub fn hand_length(skeleton: &Skeleton) -> crate::error::Result<f64> {
     Ok(HandModel::new(skeleton, Side::Right)?.length)
 }
 
@@ -302,14 +296,17 @@ pub fn plan_grasp(
     world: &World,
     object: usize,
     options: &PlanOptions,
-) -> Result<GraspPlan, String> {
+) -> crate::error::Result<GraspPlan> {
     let obj = world
         .objects
         .get(object)
-        .ok_or_else(|| format!("no object #{object}"))?;
+        .ok_or_else(|| crate::error::ActionError::Unfit(format!("no object #{object}")))?;
     if let Some(h) = world.holder(object) {
         if h.actor == actor {
-            return Err(format!("`{}` is already held by this actor", obj.name));
+            return Err(crate::error::ActionError::Unfit(format!(
+                "`{}` is already held by this actor",
+                obj.name
+            )));
         }
         if options.from != Some(h.actor) {
             let who = world
@@ -317,20 +314,18 @@ pub fn plan_grasp(
                 .get(h.actor)
                 .map(|a| a.name.as_str())
                 .unwrap_or("another actor");
-            return Err(format!(
+            return Err(crate::error::ActionError::Unfit(format!(
                 "`{}` is held by `{who}`: it must be handed over with {who}:give{{object=…, to=…}}",
                 obj.name
-            ));
+            )));
         }
     }
     let right = HandModel::new(skeleton, Side::Right)?;
     let decision = decide(&obj.shape, right.length);
     let grasp = options.grasp.unwrap_or(decision.grasp);
     let g = &posture.globals;
-    let shoulder = |side: Side| -> Result<DVec3, String> {
-        let j = skeleton
-            .joint(&format!("{}shoulder", side.prefix()))
-            .map_err(|e| e.to_string())?;
+    let shoulder = |side: Side| -> crate::error::Result<DVec3> {
+        let j = skeleton.joint(&format!("{}shoulder", side.prefix()))?;
         Ok(g[j].translation)
     };
     let sides: Vec<Side> = match options.hand {
@@ -364,7 +359,7 @@ pub fn plan_grasp(
     let mut first_error = None;
     for side in sides {
         // With `auto` and one hand, the nearer hand is tried first, then the other.
-        let result = (|| -> Result<HandPlan, String> {
+        let result = (|| -> crate::error::Result<HandPlan> {
             let model = if side == Side::Right {
                 right.clone()
             } else {
@@ -430,11 +425,11 @@ pub fn plan_grasp(
                 ranked.push((cost, wrist, origin));
             }
             if ranked.is_empty() {
-                return Err(format!(
+                return Err(crate::error::ActionError::Unfit(format!(
                     "no grasp frame for `{}` with the {} hand (every candidate hides the thumb, turns the palm outward or is blocked)",
                     obj.name,
                     side.name()
-                ));
+                )));
             }
             ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
             let mut ik = ArmIk::new(skeleton, side, 200)?;
@@ -458,12 +453,12 @@ pub fn plan_grasp(
             }
             match found {
                 Some(h) => Ok(h),
-                None => Err(format!(
+                None => Err(crate::error::ActionError::Unfit(format!(
                     "`{}` is out of reach of the {} hand: the best grasp misses by {:.3} m",
                     obj.name,
                     side.name(),
                     best_miss
-                )),
+                ))),
             }
         })();
         match result {
@@ -480,7 +475,8 @@ pub fn plan_grasp(
         }
     }
     if hands.is_empty() {
-        return Err(first_error.unwrap_or_else(|| "no hand to grasp with".into()));
+        return Err(first_error
+            .unwrap_or_else(|| crate::error::ActionError::Unfit("no hand to grasp with".into())));
     }
     Ok(GraspPlan {
         object,

@@ -8,7 +8,9 @@ use crate::grasp::action::{grasp_scope, Grasp};
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use crate::interact::Give;
 use troupe_body::sensors::Side;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Notes, Offer, Scene, SignalId, Step};
+use troupe_scene::{
+    DofWriter, Generator, GeneratorContext, Notes, Offer, Scene, SignalId, StartError, Step,
+};
 
 /// The giver's side of a give to a device-driven hand: a [`Give`] into the hand, and the
 /// offer closed when it ends in any way.
@@ -18,7 +20,7 @@ pub struct Offering {
 }
 
 impl Generator for Offering {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         self.give.start(ctx)
     }
 

@@ -36,7 +36,9 @@ use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::jacobian::rotation_error;
 use troupe_body::sensors::{solid_distance, Side};
 use troupe_body::{Scope, Transform};
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Notes, SignalId, Step, World};
+use troupe_scene::{
+    DofWriter, Generator, GeneratorContext, Notes, SignalId, StartError, Step, World,
+};
 
 /// The giver waits this long for the receiver to take the object.
 pub const GIVE_TIMEOUT: f64 = 10.0;
@@ -148,7 +150,7 @@ impl Generator for Give {
         notes.raise(self.ended);
     }
 
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let w = ctx.world;
         let obj = w
             .objects
@@ -156,10 +158,10 @@ impl Generator for Give {
             .ok_or_else(|| format!("no object #{}", self.object))?;
         let me = actor_name(w, ctx.actor);
         if self.receiver == ctx.actor {
-            return Err(format!("`{me}` cannot give `{}` to itself", obj.name));
+            return Err(format!("`{me}` cannot give `{}` to itself", obj.name).into());
         }
         if w.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
-            return Err(format!("`{me}` does not hold `{}`", obj.name));
+            return Err(format!("`{me}` does not hold `{}`", obj.name).into());
         }
         let goal = match self.receiver_hand {
             Some(side) => crate::grasp::handover::offer_point(w, self.receiver, side, self.object)?,
@@ -177,7 +179,8 @@ impl Generator for Give {
             return Err(format!(
                 "the meeting point with `{}` is out of reach of `{me}` (misses by {miss:.3} m)",
                 actor_name(w, self.receiver)
-            ));
+            )
+            .into());
         }
         self.arm = Some(ik);
         self.q = ctx.posture.q.clone();
@@ -211,7 +214,7 @@ impl Generator for Give {
                     Some(h) if h.actor == self.receiver => {
                         let mut open = match HandPattern::open(ctx.skeleton, self.sides[0]) {
                             Ok(p) => p,
-                            Err(e) => return Step::Failed(e),
+                            Err(e) => return Step::Failed(e.to_string()),
                         };
                         open.restart_from(&ctx.posture.q);
                         self.open = Some(open);
@@ -344,11 +347,11 @@ impl Generator for HoldHand {
         notes.raise(self.finished);
     }
 
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let w = ctx.world;
         let me = actor_name(w, ctx.actor);
         if self.other == ctx.actor || self.other >= w.actors.len() {
-            return Err(format!("`{me}` needs another actor to hold hands with"));
+            return Err(format!("`{me}` needs another actor to hold hands with").into());
         }
         let other = actor_name(w, self.other);
         let theirs = HandModel::new(&w.actors[self.other].skeleton, self.other_side)?;
@@ -428,7 +431,8 @@ impl Generator for HoldHand {
             "`{other}`'s {} hand is out of reach of `{me}`'s {} hand (misses by {best:.3} m)",
             self.other_side.name(),
             self.side.name()
-        ))
+        )
+        .into())
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
@@ -492,7 +496,7 @@ impl Generator for HoldHand {
                         self.wrist_goal.translation + DVec3::Y * dy,
                     );
                     if let Err(e) = arm.solve(ctx.skeleton, &mut self.q, &goal) {
-                        return Step::Failed(e);
+                        return Step::Failed(e.to_string());
                     }
                     if t + ctx.dt >= SHAKE_SECONDS {
                         self.phase = 3;
@@ -500,7 +504,7 @@ impl Generator for HoldHand {
                         if let Some(p) = &mut self.pattern {
                             *p = match HandPattern::open(ctx.skeleton, self.side) {
                                 Ok(p) => p,
-                                Err(e) => return Step::Failed(e),
+                                Err(e) => return Step::Failed(e.to_string()),
                             };
                             p.restart_from(&ctx.posture.q);
                         }
@@ -569,9 +573,9 @@ impl FollowHand {
 }
 
 impl Generator for FollowHand {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         if ctx.world.states.get(self.active).is_none() {
-            return Err(format!("no actor #{} to follow", self.active));
+            return Err(format!("no actor #{} to follow", self.active).into());
         }
         self.arm = Some(ArmIk::new(ctx.skeleton, self.side, 40)?);
         self.q = ctx.posture.q.clone();
@@ -609,7 +613,7 @@ impl Generator for FollowHand {
             self.last = Some(a);
             let goal = predicted.mul(&rel);
             if let Err(e) = arm.solve(ctx.skeleton, &mut self.q, &goal) {
-                return Step::Failed(e);
+                return Step::Failed(e.to_string());
             }
         }
         for d in out.scope().iter() {

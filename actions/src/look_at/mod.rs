@@ -18,7 +18,7 @@ use crate::reach::Target;
 use troupe_body::glam::DVec3;
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::{Skeleton, Transform};
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Seconds for the head to cover 63 % of the way to a new direction.
 pub const HEAD_TIME_CONSTANT: f64 = 0.15;
@@ -100,7 +100,7 @@ impl LookAt {
 }
 
 impl Generator for LookAt {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         self.target.position(ctx.world).map_err(|e| e.to_string())?;
         self.q = ctx.posture.q.clone();
         Ok(())

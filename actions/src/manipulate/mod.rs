@@ -18,7 +18,7 @@ use crate::grasp::plan::ArmIk;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::sensors::Side;
 use troupe_body::Transform;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// The arm must follow the last key within this distance (metres).
 pub const FOLLOW_TOLERANCE: f64 = 0.01;
@@ -94,7 +94,7 @@ impl Manipulate {
 }
 
 impl Generator for Manipulate {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let obj = ctx
             .world
             .objects
@@ -106,7 +106,7 @@ impl Generator for Manipulate {
             .holder(self.object)
             .is_none_or(|h| h.actor != ctx.actor)
         {
-            return Err(format!("`{me}` does not hold `{}`", obj.name));
+            return Err(format!("`{me}` does not hold `{}`", obj.name).into());
         }
         self.start = Transform::new(obj.rotation, obj.position);
         self.q = ctx.posture.q.clone();
@@ -134,7 +134,7 @@ impl Generator for Manipulate {
             let target = delta.mul(wrist);
             match ik.solve(ctx.skeleton, &mut self.q, &target) {
                 Ok((miss, _)) => worst = worst.max(miss),
-                Err(e) => return Step::Failed(e),
+                Err(e) => return Step::Failed(e.to_string()),
             }
         }
         for d in out.scope().iter() {

@@ -23,7 +23,7 @@ use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::Effector;
 use troupe_body::self_collision::{BodySensors, CollisionAvoidance};
 use troupe_body::Skeleton;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step, World};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step, World};
 
 /// A reach completes when the effector ends this close to its goal (metres).
 pub const POSITION_TOLERANCE: f64 = 1e-3;
@@ -244,7 +244,7 @@ impl Reach {
 }
 
 impl Generator for Reach {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let goal = self
             .spec
             .target
@@ -266,7 +266,7 @@ impl Generator for Reach {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         if !self.started {
             if let Err(e) = self.start(ctx) {
-                return Step::Failed(e);
+                return Step::Failed(e.to_string());
             }
         }
         let goal = match self.spec.target.position(ctx.world) {

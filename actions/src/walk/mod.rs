@@ -42,7 +42,7 @@ use troupe_body::glam::{DVec2, DVec3};
 use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
 /// body will be at that point of the support.
@@ -600,7 +600,7 @@ fn soft_min(x: [f64; 3], k: f64) -> f64 {
 }
 
 impl Generator for Walk {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let q = &ctx.posture.q;
         let rig = &self.rig;
         let start = DVec2::new(

@@ -11,6 +11,7 @@ use troupe_lua::api::lua_err_message;
 use troupe_lua::args;
 use troupe_lua::kinds::{ActionKind, ActionKinds, BuildContext, CommonOptions};
 use troupe_scene::action::{ActionSpec, DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::StartError;
 
 /// The `capture` generator: writes the performer's device-driven DOFs within its scope;
 /// the glove hand's fingers go through the grasping automaton ([`GloveHand`]).
@@ -20,9 +21,9 @@ pub struct Capture {
 }
 
 impl Generator for Capture {
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         match &mut self.hand {
-            Some(h) => h.start(ctx).map_err(|e| e.to_string()),
+            Some(h) => h.start(ctx).map_err(|e| StartError::new(e.to_string())),
             None => Ok(()),
         }
     }

@@ -315,11 +315,41 @@ impl<'a> DofWriter<'a> {
     }
 }
 
+/// Why a generator could not start (`the object is out of reach`, `` `bob` holds it ``):
+/// the action fails with this as its reason, which scripts read as `action.error`.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("{reason}")]
+pub struct StartError {
+    /// The reason, for people.
+    pub reason: String,
+}
+
+impl StartError {
+    /// A start refused for `reason`.
+    pub fn new(reason: impl Into<String>) -> Self {
+        StartError {
+            reason: reason.into(),
+        }
+    }
+}
+
+impl From<String> for StartError {
+    fn from(reason: String) -> Self {
+        StartError { reason }
+    }
+}
+
+impl From<&str> for StartError {
+    fn from(reason: &str) -> Self {
+        StartError::new(reason)
+    }
+}
+
 /// A motion generator: each tick it reads the context and writes desired values for DOFs
 /// of its scope. It never touches the actor directly.
 pub trait Generator: Send {
     /// Called once when the action is admitted; an error fails the action.
-    fn start(&mut self, _ctx: &GeneratorContext) -> Result<(), String> {
+    fn start(&mut self, _ctx: &GeneratorContext) -> Result<(), StartError> {
         Ok(())
     }
 

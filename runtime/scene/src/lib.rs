@@ -19,8 +19,8 @@ pub mod timeline;
 pub mod world;
 
 pub use action::{
-    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode, Status,
-    Step,
+    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode,
+    StartError, Status, Step,
 };
 pub use blackboard::{Blackboard, Note, Notes, Offer, SignalId};
 pub use error::{Error, Result};

@@ -334,8 +334,8 @@ fn admit(
             Status::Active
         };
         tr.set(action, first);
-        if let Err(reason) = action.generator.start(&ctx) {
-            action.reason = Some(reason);
+        if let Err(e) = action.generator.start(&ctx) {
+            action.reason = Some(e.reason);
             tr.set(action, Status::Failed);
         }
     }
