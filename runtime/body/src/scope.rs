@@ -20,6 +20,7 @@ impl Scope {
     pub const EMPTY: Scope = Scope { words: [0; WORDS] };
 
     /// A scope holding the DOF indices in `range`.
+    #[inline]
     pub fn range(range: std::ops::Range<usize>) -> Scope {
         let mut s = Scope::EMPTY;
         for i in range {
@@ -38,12 +39,14 @@ impl Scope {
     }
 
     /// Adds DOF `i`. Panics if `i >= MAX_DOFS` (skeletons are validated to stay below it).
+    #[inline]
     pub fn insert(&mut self, i: usize) {
         assert!(i < MAX_DOFS, "DOF index {i} exceeds MAX_DOFS");
         self.words[i / 64] |= 1 << (i % 64);
     }
 
     /// Removes DOF `i`.
+    #[inline]
     pub fn remove(&mut self, i: usize) {
         if i < MAX_DOFS {
             self.words[i / 64] &= !(1 << (i % 64));
@@ -57,26 +60,31 @@ impl Scope {
     }
 
     /// Whether the scope holds no DOF.
+    #[inline]
     pub fn is_empty(&self) -> bool {
         self.words.iter().all(|w| *w == 0)
     }
 
     /// The number of DOFs in the scope.
+    #[inline]
     pub fn len(&self) -> usize {
         self.words.iter().map(|w| w.count_ones() as usize).sum()
     }
 
     /// The DOFs in either scope.
+    #[inline]
     pub fn union(&self, other: &Scope) -> Scope {
         self.zip(other, |a, b| a | b)
     }
 
     /// The DOFs in both scopes.
+    #[inline]
     pub fn intersection(&self, other: &Scope) -> Scope {
         self.zip(other, |a, b| a & b)
     }
 
     /// The DOFs of `self` that are not in `other`.
+    #[inline]
     pub fn difference(&self, other: &Scope) -> Scope {
         self.zip(other, |a, b| a & !b)
     }
@@ -91,11 +99,13 @@ impl Scope {
     }
 
     /// Whether every DOF of `other` is in `self`.
+    #[inline]
     pub fn contains_all(&self, other: &Scope) -> bool {
         other.difference(self).is_empty()
     }
 
     /// The DOF indices in increasing order.
+    #[inline]
     pub fn iter(&self) -> ScopeIter {
         ScopeIter {
             words: self.words,
@@ -103,6 +113,7 @@ impl Scope {
         }
     }
 
+    #[inline]
     fn zip(&self, other: &Scope, f: impl Fn(u64, u64) -> u64) -> Scope {
         let mut words = [0; WORDS];
         for (i, w) in words.iter_mut().enumerate() {
@@ -120,6 +131,7 @@ pub struct ScopeIter {
 
 impl Iterator for ScopeIter {
     type Item = usize;
+    #[inline]
     fn next(&mut self) -> Option<usize> {
         while self.word < WORDS {
             let w = self.words[self.word];

@@ -72,42 +72,52 @@ pub struct Skeleton {
 
 impl Skeleton {
     /// The template instance's name (e.g. `adult`).
+    #[inline]
     pub fn name(&self) -> &str {
         &self.name
     }
     /// Joints in topological order (parents first).
+    #[inline]
     pub fn joints(&self) -> &[Joint] {
         &self.joints
     }
     /// All DOFs, grouped by joint in joint order.
+    #[inline]
     pub fn dofs(&self) -> &[Dof] {
         &self.dofs
     }
     /// The (min, max) limits of every DOF, packed for the blend loop.
+    #[inline]
     pub fn limits(&self) -> &[(f64, f64)] {
         &self.limits
     }
     /// Number of DOFs.
+    #[inline]
     pub fn dof_count(&self) -> usize {
         self.dofs.len()
     }
     /// Segment solids with the index of the joint each is attached to.
+    #[inline]
     pub fn solids(&self) -> &[(usize, Solid)] {
         &self.solids
     }
     /// End sites (finger tips, toe tips, head top) as (joint, offset in the joint frame).
+    #[inline]
     pub fn end_sites(&self) -> &[(usize, DVec3)] {
         &self.end_sites
     }
     /// Named scopes, sorted by name.
+    #[inline]
     pub fn scopes(&self) -> &BTreeMap<String, Scope> {
         &self.scopes
     }
     /// Total mass of the solids in kilograms.
+    #[inline]
     pub fn total_mass(&self) -> f64 {
         self.solids.iter().map(|(_, s)| s.mass).sum()
     }
     /// The scope holding every DOF.
+    #[inline]
     pub fn all(&self) -> Scope {
         Scope::range(0..self.dofs.len())
     }

@@ -25,6 +25,7 @@ impl Transform {
     };
 
     /// A pure translation.
+    #[inline]
     pub fn from_translation(translation: DVec3) -> Self {
         Transform {
             rotation: DQuat::IDENTITY,
@@ -33,6 +34,7 @@ impl Transform {
     }
 
     /// A rotation and a translation.
+    #[inline]
     pub fn new(rotation: DQuat, translation: DVec3) -> Self {
         Transform {
             rotation,
@@ -62,6 +64,7 @@ impl Transform {
     }
 
     /// The inverse transform (the "inv" of the DIT convention).
+    #[inline]
     pub fn inverse(&self) -> Transform {
         let rotation = self.rotation.inverse();
         Transform {
