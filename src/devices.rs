@@ -516,8 +516,7 @@ pub fn session(
     limits: troupe_lua::ScriptLimits,
     record: Option<&std::path::Path>,
 ) -> Result<(troupe_lua::LuaSession, RunDevices)> {
-    let mut kinds = troupe_actions::action_kinds();
-    troupe_drivers::performer::register(&mut kinds);
+    let kinds = troupe_actions::action_kinds();
     let mut session = troupe_lua::Director::session(config, kinds, limits)?;
     let recorder = match record {
         Some(p) => Some(std::sync::Arc::new(

@@ -39,6 +39,7 @@ fn generator_step(c: &mut Criterion) {
         objects: &[],
         holders: &[],
         board: &Blackboard::default(),
+        input_poses: &[],
     };
     let mut walk = Walk::velocity(
         &skeleton,

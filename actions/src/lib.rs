@@ -3,6 +3,7 @@
 //! [`registry`] lists every kind for the Lua director. Each generator writes only the
 //! DOFs of its action's scope.
 
+pub mod capture;
 pub mod dynamics;
 pub mod error;
 pub mod grasp;
@@ -15,6 +16,7 @@ pub mod reach;
 pub mod registry;
 pub mod walk;
 
+pub use capture::{Capture, CaptureOptions};
 pub use dynamics::{DynamicsGenerator, DynamicsOptions};
 pub use error::{ActionError, OptionError};
 pub use keyframe::{Keyframe, KeyframeOptions};

@@ -4,11 +4,11 @@
 //! `lua.rs` that reads those options); adding one means adding its folder, a line here
 //! and its section in `docs/lua-api.md`.
 
-use crate::{dynamics, grasp, interact, keyframe, look_at, manipulate, reach, walk};
+use crate::{capture, dynamics, grasp, interact, keyframe, look_at, manipulate, reach, walk};
 use troupe_lua::kinds::{ActionKind, ActionKinds, BuildFn, MakeFunction};
 
 /// Each actor method and the builder that reads its Lua arguments.
-const KINDS: [(&str, BuildFn); 16] = [
+const KINDS: [(&str, BuildFn); 17] = [
     ("play", keyframe::lua::build_play),
     ("simulate", dynamics::lua::build_simulate),
     ("servo", dynamics::lua::build_servo),
@@ -25,6 +25,7 @@ const KINDS: [(&str, BuildFn); 16] = [
     ("receive", interact::lua::build_receive),
     ("hold_hand", interact::lua::build_hold_hand),
     ("shake_hands", interact::lua::build_shake_hands),
+    ("capture", capture::lua::build_capture),
 ];
 
 /// The `troupe` functions that go with the kinds.

@@ -5,8 +5,7 @@
 use criterion::{criterion_group, criterion_main, Criterion};
 use troupe_actions::grasp::handover::offer_point;
 use troupe_body::sensors::Side;
-use troupe_drivers::glove_grasp::write_glove_script;
-use troupe_drivers::performer;
+use troupe_drivers::cyberglove::write_glove_script;
 use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
@@ -22,8 +21,7 @@ fn scene(ball: bool) -> LuaSession {
         &[(0.0, 0.0), (0.5, 0.0), (1.5, 1.0), (600.0, 1.0)],
     )
     .unwrap();
-    let mut kinds = troupe_actions::action_kinds();
-    performer::register(&mut kinds);
+    let kinds = troupe_actions::action_kinds();
     let mut d = Director::session(SceneConfig::default(), kinds, ScriptLimits::default()).unwrap();
     troupe_drivers::lua::install(&mut d, None).unwrap();
     d.load_str(

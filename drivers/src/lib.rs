@@ -16,7 +16,6 @@ pub mod device;
 pub mod emulator;
 pub mod fob;
 pub mod gesture;
-pub mod glove_grasp;
 pub mod lua;
 pub mod osc;
 pub mod performer;

@@ -8,14 +8,13 @@ use std::path::{Path, PathBuf};
 use troupe_actions::grasp::handover::offer_point;
 use troupe_actions::grasp::HandState;
 use troupe_body::sensors::{HandSensors, Side};
-use troupe_drivers::glove_grasp::write_glove_script;
-use troupe_drivers::performer::{self, SharedPerformers};
+use troupe_drivers::cyberglove::write_glove_script;
+use troupe_drivers::performer::SharedPerformers;
 use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
 fn director(threads: usize) -> (LuaSession, SharedPerformers) {
-    let mut kinds = troupe_actions::action_kinds();
-    performer::register(&mut kinds);
+    let kinds = troupe_actions::action_kinds();
     let config = SceneConfig {
         rate: 100.0,
         threads,
@@ -74,14 +73,16 @@ fn snapshot(d: &LuaSession) -> Vec<f64> {
     v
 }
 
-fn state(s: &SharedPerformers) -> HandState {
-    s.0.lock().unwrap().hand_state("pat").unwrap()
+/// Pat's glove hand state, as the capture posted it on the scene's blackboard.
+fn state(d: &LuaSession) -> HandState {
+    let pat = d.scene().actor_index("pat").unwrap();
+    d.scene().blackboard().hand_state(pat).unwrap().1
 }
 
 /// A ball put where the performer's open right hand can close on it; the glove closes,
 /// the arm lifts, the glove opens.
 fn grasp_run(threads: usize, rec: &Path, side: Side) -> Trace {
-    let (mut d, shared) = director(threads);
+    let (mut d, _shared) = director(threads);
     let (s, other) = (side.prefix(), side.other().name());
     d.load_str(
         &format!(
@@ -140,7 +141,7 @@ fn grasp_run(threads: usize, rec: &Path, side: Side) -> Trace {
         }
         d.tick().unwrap();
         trace.push(snapshot(&d));
-        let s = state(&shared);
+        let s = state(&d);
         if *states.last().unwrap() != s {
             states.push(s);
         }
@@ -237,7 +238,7 @@ fn a_left_glove_grasps_the_same_way() {
 
 /// Ann grasps a ball and gives it to pat, who holds out a hand and closes the glove.
 fn give_run(threads: usize, rec: &Path, close: bool) -> (Trace, String, Option<String>) {
-    let (mut d, shared) = director(threads);
+    let (mut d, _shared) = director(threads);
     d.load_str(
         r#"ann = troupe.actor{ name = "ann" }
            ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.03, at = {-0.2, 1.05, 0.38} }
@@ -302,7 +303,7 @@ fn give_run(threads: usize, rec: &Path, close: bool) -> (Trace, String, Option<S
             Some(pat),
             "pat holds the ball"
         );
-        assert_eq!(state(&shared), HandState::SecureGrasp(ball));
+        assert_eq!(state(&d), HandState::SecureGrasp(ball));
         let (name, object): (String, Option<String>) = d
             .eval(r#"return troupe.devices.hand_state(pat, "right")"#)
             .unwrap();
@@ -378,7 +379,7 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
         ],
     )
     .unwrap();
-    let (mut d, shared) = director(1);
+    let (mut d, _shared) = director(1);
     d.load_str(
         &format!(
             r#"ann = troupe.actor{{ name = "ann" }}
@@ -422,7 +423,7 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
         Some(pat),
         "pat holds the ball"
     );
-    assert_eq!(state(&shared), HandState::SecureGrasp(ball));
+    assert_eq!(state(&d), HandState::SecureGrasp(ball));
     // Ann cannot just grasp it out of pat's hand…
     d.load_str(r#"steal = ann:grasp{ object = ball }"#, "steal")
         .unwrap();
@@ -456,7 +457,7 @@ fn a_performer_hands_a_ball_to_a_synthetic_actor_who_receives_it() {
     while d.scene().time() < 7.0 {
         d.tick().unwrap();
     }
-    assert_eq!(state(&shared), HandState::FreeHand);
+    assert_eq!(state(&d), HandState::FreeHand);
     assert_eq!(
         d.scene().holder(ball).map(|h| h.actor),
         Some(ann),

@@ -4,15 +4,13 @@
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use troupe_drivers::emulator::{self, DeviceKind, EmulatorOptions};
-use troupe_drivers::performer::{self, median_p99, SharedPerformers};
+use troupe_drivers::performer::{median_p99, SharedPerformers};
 use troupe_drivers::record::Recorder;
-use troupe_lua::kinds::ActionKinds;
 use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
 fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> (LuaSession, SharedPerformers) {
-    let mut kinds = ActionKinds::default();
-    performer::register(&mut kinds);
+    let kinds = troupe_actions::action_kinds();
     let config = SceneConfig {
         rate: 100.0,
         threads,

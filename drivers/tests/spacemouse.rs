@@ -8,15 +8,12 @@
 use glam::{DQuat, DVec3};
 use std::path::Path;
 use std::time::{Duration, Instant};
-use troupe_drivers::performer;
 use troupe_drivers::record::Recorder;
-use troupe_lua::kinds::ActionKinds;
 use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
 fn director(threads: usize) -> LuaSession {
-    let mut kinds = ActionKinds::default();
-    performer::register(&mut kinds);
+    let kinds = troupe_actions::action_kinds();
     let config = SceneConfig {
         rate: 100.0,
         threads,

@@ -28,27 +28,8 @@ use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::Object;
 
-/// The automaton's states (4.7: pale skin, blue, green in the thesis' display).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum HandState {
-    /// Nothing touched.
-    FreeHand,
-    /// Some finger touches object `.0`, not yet a secure grasp.
-    GraspingInProgress(usize),
-    /// Thumb and another finger hold object `.0`: it is attached to the hand.
-    SecureGrasp(usize),
-}
-
-impl HandState {
-    /// `FREE_HAND`, `GRASPING_IN_PROGRESS` or `SECURE_GRASP`.
-    pub fn name(self) -> &'static str {
-        match self {
-            HandState::FreeHand => "FREE_HAND",
-            HandState::GraspingInProgress(_) => "GRASPING_IN_PROGRESS",
-            HandState::SecureGrasp(_) => "SECURE_GRASP",
-        }
-    }
-}
+/// The automaton's states: the scene's blackboard carries them for scripts and observers.
+pub use troupe_scene::HandState;
 
 /// What the caller should do with an object after an update.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

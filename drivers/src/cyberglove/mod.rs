@@ -6,6 +6,7 @@ pub(crate) mod decoder;
 pub(crate) mod emulator;
 pub(crate) mod protocol;
 pub(crate) mod query;
+pub(crate) mod script;
 
 pub use calibration::{CalibrationError, GloveCalibration};
 pub use decoder::{
@@ -15,3 +16,4 @@ pub use decoder::{
 pub use emulator::GloveEmulator;
 pub use protocol::{glove_query, GloveConfig, GloveProtocol};
 pub use query::{error_reply, parse_query_reply, GloveError, Query, QueryReply, ReplyError};
+pub use script::{write_glove_script, GloveScriptError};

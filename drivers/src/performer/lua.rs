@@ -12,7 +12,6 @@ use crate::record::file::Recording;
 use crate::record::writer::Recorder;
 use mlua::{Function, Lua, Table, Value};
 use std::sync::{Arc, Mutex};
-use troupe_actions::grasp::HandState;
 use troupe_body::sensors::Side;
 use troupe_lua::api::{lua_err_message, ActorRef};
 use troupe_lua::args;
@@ -159,10 +158,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             let p = &perf.list[i];
             let out = lua.create_table()?;
             let Some(g) = &p.glove else { return Ok(out) };
-            let t = p
-                .target
-                .lock()
-                .map_err(|_| lua_err_message("target lock poisoned"))?;
+            let t = &p.target;
             for d in g.map.all_dofs() {
                 if t.mask.get(d).copied().unwrap_or(false) {
                     out.set(p.skeleton.dofs()[d].name.as_str(), t.q[d])?;
@@ -176,42 +172,37 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
         lua.create_function(|lua, (who, hand): (Value, Option<String>)| {
             // The glove hand's grasping automaton (4.7): its state, and the object it
             // touches or holds (nil when free).
+            // The capture posts it on the scene's blackboard after every tick.
             let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            let p = &perf.list[i];
-            let status = p
-                .hand
-                .as_ref()
-                .and_then(|h| h.lock().ok().map(|h| *h))
-                .ok_or_else(|| args::err("hand_state", format!("`{}` has no glove", p.name)))?;
+            let (name, actor) = {
+                let s = shared(lua)?;
+                let perf =
+                    s.0.lock()
+                        .map_err(|_| lua_err_message("performer lock poisoned"))?;
+                (perf.list[i].name.clone(), perf.list[i].actor)
+            };
+            let (side, state, object) = troupe_lua::kinds::with_scene(lua, |sc| {
+                sc.blackboard().hand_state(actor).map(|(side, state)| {
+                    let object = state
+                        .object()
+                        .and_then(|o| sc.objects().get(o).map(|x| x.name.clone()));
+                    (side, state, object)
+                })
+            })?
+            .ok_or_else(|| args::err("hand_state", format!("`{name}` has no glove")))?;
             if let Some(h) = hand {
                 let want = Side::parse(&h).map_err(|e| args::err("hand_state", e))?;
-                if want != status.side {
+                if want != side {
                     return Err(args::err(
                         "hand_state",
                         format!(
-                            "`{}` wears the glove on the {} hand, not the {h}",
-                            p.name,
-                            status.side.name()
+                            "`{name}` wears the glove on the {} hand, not the {h}",
+                            side.name()
                         ),
                     ));
                 }
             }
-            let object = match status.state {
-                HandState::FreeHand => None,
-                HandState::GraspingInProgress(o) | HandState::SecureGrasp(o) => Some(o),
-            };
-            drop(perf);
-            let name = match object {
-                Some(o) => troupe_lua::kinds::with_scene(lua, |sc| {
-                    sc.objects().get(o).map(|x| x.name.clone())
-                })?,
-                None => None,
-            };
-            Ok((status.state.name(), name))
+            Ok((state.name(), object))
         })?,
     )?;
     devices.set(

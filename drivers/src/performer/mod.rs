@@ -1,8 +1,8 @@
 //! Performer actors: actors driven by a Flock of Birds (or OSC poses) and a CyberGlove
-//! through the anatomical converter of thesis 6.4.1, and the `capture` action that makes
-//! them follow their devices.
+//! through the anatomical converter of thesis 6.4.1. The session's input phase puts what
+//! their devices ask into the scene (`troupe_scene::InputPose`); the `capture` action of
+//! troupe-actions makes them follow it.
 
-pub(crate) mod capture;
 pub(crate) mod converter;
 pub(crate) mod glove_map;
 pub(crate) mod lua;
@@ -10,7 +10,6 @@ pub(crate) mod options;
 pub(crate) mod registry;
 pub(crate) mod source;
 
-pub use capture::{register, Capture};
 pub use converter::{transmitter_to_world, AnatomicalConverter, ConverterError};
 pub use glove_map::{glove_dof_names, nominal_glove_calibration, GloveMap};
 pub use registry::{median_p99, CaptureTarget, Performer, Performers, SharedPerformers};

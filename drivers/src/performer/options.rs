@@ -10,7 +10,6 @@ use crate::device::thread::{spawn, DeviceHandle, DriverOptions};
 use crate::fob::commands::{Hemisphere, OutputFormat, PositionRange};
 use crate::fob::protocol::{FobConfig, FobProtocol};
 use crate::gesture::{GestureSet, GestureTracker};
-use crate::glove_grasp::HandStatus;
 use crate::lua::args::{check_keys, resolve};
 use crate::osc::listener::OscListener;
 use crate::performer::converter::{transmitter_to_world, AnatomicalConverter};
@@ -21,12 +20,13 @@ use crate::record::writer::Recorder;
 use glam::DQuat;
 use mlua::{Function, Lua, Table, Value};
 use std::collections::BTreeMap;
-use std::sync::{Arc, Mutex};
-use troupe_actions::grasp::HandState;
+use std::sync::Arc;
 use troupe_body::sensors::Side;
 use troupe_body::skeleton::Skeleton;
+use troupe_body::Scope;
 use troupe_lua::api::{lua_err_message, ActorRef};
 use troupe_lua::args;
+use troupe_scene::InputPose;
 
 fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
     t.get::<Option<T>>(key)
@@ -128,19 +128,33 @@ pub(crate) fn new_performer(
         }
     }
     let n = skeleton.dof_count();
-    let hand = match &glove {
-        Some(g) => {
-            // A giver brings objects into this hand rather than handing them over.
-            troupe_lua::kinds::with_scene_mut(lua, |scene| {
-                scene.declare_device_hand(actor, g.side)
-            })?;
-            Some(Arc::new(Mutex::new(HandStatus {
-                state: HandState::FreeHand,
-                side: g.side,
-            })))
+    // Every DOF the devices can drive: the natural scope of the performer's `capture`.
+    let mut driven = Scope::EMPTY;
+    let converters = fob
+        .iter()
+        .map(|f| &f.converter)
+        .chain(osc.iter().map(|o| &o.converter));
+    for c in converters {
+        for d in c.driven_dofs() {
+            driven.insert(d);
         }
-        None => None,
-    };
+    }
+    if let Some(g) = &glove {
+        for d in g.map.all_dofs() {
+            driven.insert(d);
+        }
+    }
+    let glove_side = glove.as_ref().map(|g| g.side);
+    troupe_lua::kinds::with_scene_mut(lua, |scene| {
+        // Nothing asked until the first samples arrive.
+        scene.set_input_pose(actor, InputPose::new(n, driven))?;
+        if let Some(side) = glove_side {
+            // A giver brings objects into this hand rather than handing them over.
+            scene.declare_device_hand(actor, side);
+        }
+        Ok::<_, troupe_scene::Error>(())
+    })?
+    .map_err(|e| args::err("performer", e))?;
     let performer = Performer {
         name,
         actor,
@@ -150,14 +164,14 @@ pub(crate) fn new_performer(
         glove,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
-        target: Arc::new(Mutex::new(CaptureTarget {
+        target: CaptureTarget {
             q: vec![0.0; n],
             mask: vec![false; n],
             arrived: None,
             made: 0,
-        })),
+        },
+        driven,
         gesture_handlers: Vec::new(),
-        hand,
     };
     Ok((performer, actor_value))
 }

@@ -11,18 +11,18 @@ use crate::cyberglove::decoder::GloveRecord;
 use crate::device::health::HealthReport;
 use crate::device::reading::Reading;
 use crate::fob::pose::bird_pose;
-use crate::glove_grasp::HandStatus;
 use crate::osc::message::OscInput;
 use crate::performer::source::{FobInput, GloveInput, OscPoses};
 use crate::record::writer::Recorder;
 use mlua::Function;
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
-use troupe_actions::grasp::HandState;
 use troupe_body::skeleton::Skeleton;
-use troupe_scene::{Input, Scene};
+use troupe_body::Scope;
+use troupe_scene::{Input, InputPose, Scene};
 
-/// The target a performer's `capture` actions write.
+/// What a performer's devices asked last: kept for latency and for queries; the session's
+/// input phase copies it into the scene ([`InputPose`]), where `capture` reads it.
 #[derive(Clone, Debug, Default)]
 pub struct CaptureTarget {
     /// Target DOF values (whole actor).
@@ -53,12 +53,12 @@ pub struct Performer {
     pub(crate) auto_calibrate: bool,
     /// `troupe.devices.calibrate` asked for a calibration at the next sample.
     pub(crate) calibrate_requested: bool,
-    /// What the performer's `capture` actions write.
-    pub(crate) target: Arc<Mutex<CaptureTarget>>,
+    /// What the devices asked last.
+    pub(crate) target: CaptureTarget,
+    /// Every DOF the devices can drive (the natural scope of `capture`).
+    pub(crate) driven: Scope,
     /// `troupe.devices.on_gesture` handlers.
     pub(crate) gesture_handlers: Vec<Function>,
-    /// The glove hand's grasping-automaton state (4.7), when the performer has a glove.
-    pub(crate) hand: Option<Arc<Mutex<HandStatus>>>,
 }
 
 /// Every performer of a scene, the recorder, and latency measurements.
@@ -108,7 +108,7 @@ impl Performers {
     pub fn hand_target(&self, performer: &str) -> Option<Vec<(usize, f64)>> {
         let p = self.list.iter().find(|p| p.name == performer)?;
         let g = p.glove.as_ref()?;
-        let t = p.target.lock().ok()?;
+        let t = &p.target;
         Some(
             g.map
                 .all_dofs()
@@ -116,13 +116,6 @@ impl Performers {
                 .map(|d| (d, t.q[d]))
                 .collect(),
         )
-    }
-
-    /// The glove hand's grasping-automaton state of a performer (None without a glove).
-    pub fn hand_state(&self, performer: &str) -> Option<HandState> {
-        let p = self.list.iter().find(|p| p.name == performer)?;
-        let s = p.hand.as_ref()?.lock().ok()?.state;
-        Some(s)
     }
 
     /// The latest raw glove values of a performer.
@@ -138,7 +131,7 @@ impl Performers {
 
     /// A copy of performer `i`'s capture target.
     pub fn target(&self, i: usize) -> Option<CaptureTarget> {
-        self.list.get(i)?.target.lock().ok().map(|t| t.clone())
+        self.list.get(i).map(|p| p.target.clone())
     }
 
     /// Health of every live device: (performer, device, report).
@@ -160,7 +153,7 @@ impl Performers {
 
     /// The input phase: drain, convert, note gestures. Returns the gesture events
     /// (handlers, performer name, new, previous) for the script phase to call.
-    fn pre_tick(&mut self, scene: &Scene) -> Vec<GestureEvent> {
+    fn pre_tick(&mut self, scene: &mut Scene) -> Vec<GestureEvent> {
         self.ticks += 1;
         let mut events = Vec::new();
         let time = scene.time();
@@ -266,12 +259,19 @@ impl Performers {
                     g.map.apply(&p.skeleton, &angles, &mut q, &mut mask);
                 }
             }
-            if let Ok(mut t) = p.target.lock() {
-                t.q = q;
-                t.mask = mask;
-                t.arrived = newest.or(t.arrived);
-                t.made = self.ticks;
+            let pose = InputPose {
+                q: q.clone(),
+                mask: mask.clone(),
+                driven: p.driven,
+            };
+            if let Err(e) = scene.set_input_pose(p.actor, pose) {
+                tracing::error!(performer = %p.name, "{e}");
             }
+            let t = &mut p.target;
+            t.q = q;
+            t.mask = mask;
+            t.arrived = newest.or(t.arrived);
+            t.made = self.ticks;
             if let Some(a) = newest {
                 self.pending_latency.push(a);
             }

@@ -36,6 +36,37 @@ pub struct Offer {
     pub closed: SignalId,
 }
 
+/// The grasping automaton's states of a device-driven hand (thesis 4.7: pale skin, blue,
+/// green in the thesis' display).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum HandState {
+    /// Nothing touched.
+    FreeHand,
+    /// Some finger touches object `.0`, not yet a secure grasp.
+    GraspingInProgress(usize),
+    /// Thumb and another finger hold object `.0`: it is attached to the hand.
+    SecureGrasp(usize),
+}
+
+impl HandState {
+    /// `FREE_HAND`, `GRASPING_IN_PROGRESS` or `SECURE_GRASP`.
+    pub fn name(self) -> &'static str {
+        match self {
+            HandState::FreeHand => "FREE_HAND",
+            HandState::GraspingInProgress(_) => "GRASPING_IN_PROGRESS",
+            HandState::SecureGrasp(_) => "SECURE_GRASP",
+        }
+    }
+
+    /// The object touched or held, if any.
+    pub fn object(self) -> Option<usize> {
+        match self {
+            HandState::FreeHand => None,
+            HandState::GraspingInProgress(o) | HandState::SecureGrasp(o) => Some(o),
+        }
+    }
+}
+
 /// One joint torque of a tick, from a dynamics action.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Torque {
@@ -52,6 +83,9 @@ pub struct Torque {
 pub enum Note {
     /// Raises a signal (the first raise's tick stays).
     Raise(SignalId),
+    /// The grasping automaton's state of the posting actor's device-driven hand after
+    /// this tick (a performer's `capture`).
+    Hand(HandState),
     /// The posting actor's joint torque on `dof` this tick (N·m, or N for a translation).
     Torque {
         /// The DOF.
@@ -89,6 +123,7 @@ pub struct Blackboard {
     stamps: HashMap<SignalId, u64>,
     next_signal: u64,
     device_hands: Vec<(usize, Side)>,
+    hand_states: BTreeMap<usize, HandState>,
     offers: Vec<Offer>,
     torques: BTreeMap<(usize, usize), f64>,
 }
@@ -107,6 +142,18 @@ impl Blackboard {
     /// The device-driven hand of `actor` (a performer's glove), if it has one.
     pub fn device_hand(&self, actor: usize) -> Option<Side> {
         self.device_hands.iter().find(|h| h.0 == actor).map(|h| h.1)
+    }
+
+    /// The grasping automaton's state of `actor`'s device-driven hand after the last tick
+    /// (`FreeHand` until its `capture` reports), if it has one.
+    pub fn hand_state(&self, actor: usize) -> Option<(Side, HandState)> {
+        let side = self.device_hand(actor)?;
+        let state = self
+            .hand_states
+            .get(&actor)
+            .copied()
+            .unwrap_or(HandState::FreeHand);
+        Some((side, state))
     }
 
     /// Whether `receiver` may take `object` from `holder` at `tick`: `holder` offers it to
@@ -168,6 +215,9 @@ impl Blackboard {
         for note in notes {
             match note {
                 Note::Raise(signal) => self.raise(signal, tick),
+                Note::Hand(state) => {
+                    self.hand_states.insert(actor, state);
+                }
                 Note::Torque { dof, torque } => {
                     *self.torques.entry((actor, dof)).or_insert(0.0) += torque;
                 }

@@ -7,6 +7,7 @@ pub mod blackboard;
 pub mod blend;
 pub mod error;
 pub mod holding;
+pub mod input_pose;
 pub mod pacing;
 pub mod parallel;
 pub mod profile;
@@ -22,8 +23,9 @@ pub use action::{
     ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode,
     StartError, Status, Step,
 };
-pub use blackboard::{Blackboard, Note, Notes, Offer, SignalId};
+pub use blackboard::{Blackboard, HandState, Note, Notes, Offer, SignalId};
 pub use error::{Error, Result};
+pub use input_pose::InputPose;
 pub use scene::{ActorDesc, Scene, SceneConfig};
 pub use session::{Input, NoScript, Observer, ObserverHandle, RunLimit, Script, Session};
 pub use world::{ActorInfo, Object, World};

@@ -4,6 +4,7 @@ use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
 use crate::blackboard::{Blackboard, Notes, Offer, SignalId};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
+use crate::input_pose::InputPose;
 use crate::parallel::WorkerPool;
 use crate::profile::StepProfile;
 use crate::scheduler::{Action, ActorRuntime, TickClock};
@@ -113,6 +114,7 @@ pub struct Scene {
     objects: Vec<Object>,
     holders: Vec<Option<Holder>>,
     board: Blackboard,
+    input_poses: Vec<Option<InputPose>>,
     next_action: u64,
     action_owner: IdMap<usize>,
     ended: IdMap<ActionInfo>,
@@ -149,6 +151,7 @@ impl Scene {
             objects: Vec::new(),
             holders: Vec::new(),
             board: Blackboard::default(),
+            input_poses: Vec::new(),
             next_action: 1,
             action_owner: IdMap::default(),
             ended: IdMap::default(),
@@ -205,6 +208,7 @@ impl Scene {
             objects: &self.objects,
             holders: &self.holders,
             board: &self.board,
+            input_poses: &self.input_poses,
         }
     }
 
@@ -227,6 +231,34 @@ impl Scene {
     /// objects into that hand instead of handing them over.
     pub fn declare_device_hand(&mut self, actor: usize, side: Side) {
         self.board.add_device_hand(actor, side);
+    }
+
+    /// Sets what devices ask of `actor` (the session's input phase; a performer's
+    /// `capture` reads it through the world).
+    pub fn set_input_pose(&mut self, actor: usize, pose: InputPose) -> Result<()> {
+        let info = self
+            .actors
+            .get(actor)
+            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        let n = info.skeleton.dof_count();
+        if pose.q.len() != n || pose.mask.len() != n {
+            return Err(Error::Invalid(format!(
+                "input pose of `{}`: {} values and {} mask entries for {n} DOFs",
+                info.name,
+                pose.q.len(),
+                pose.mask.len()
+            )));
+        }
+        if self.input_poses.len() < self.actors.len() {
+            self.input_poses.resize(self.actors.len(), None);
+        }
+        self.input_poses[actor] = Some(pose);
+        Ok(())
+    }
+
+    /// What devices ask of `actor`, if a device drives it.
+    pub fn input_pose(&self, actor: usize) -> Option<&InputPose> {
+        self.input_poses.get(actor).and_then(Option::as_ref)
     }
 
     /// Opens an offer of an object to a device-driven hand (see [`Offer`]).
@@ -568,6 +600,7 @@ impl Scene {
                 objects: &self.objects,
                 holders: &self.holders,
                 board: &self.board,
+                input_poses: &self.input_poses,
             };
             let actors = &self.actors;
             let states = &self.states;

@@ -34,6 +34,9 @@ pub struct World<'a> {
     pub holders: &'a [Option<crate::holding::Holder>],
     /// What actions told one another up to the previous tick (see [`crate::blackboard`]).
     pub board: &'a crate::blackboard::Blackboard,
+    /// What devices ask of each actor this tick, by actor index (see
+    /// [`crate::input_pose`]); empty or `None` for actors no device drives.
+    pub input_poses: &'a [Option<crate::input_pose::InputPose>],
 }
 
 impl World<'_> {
@@ -45,6 +48,11 @@ impl World<'_> {
     /// The index of the object called `name`.
     pub fn object_index(&self, name: &str) -> Option<usize> {
         self.objects.iter().position(|o| o.name == name)
+    }
+
+    /// What devices ask of actor `actor`, if a device drives it.
+    pub fn input_pose(&self, actor: usize) -> Option<&crate::input_pose::InputPose> {
+        self.input_poses.get(actor).and_then(Option::as_ref)
     }
 
     /// Who holds object `object`, if anyone.

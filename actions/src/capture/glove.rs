@@ -9,74 +9,21 @@
 //! the wrist the fingers are checked against is the one the tick will show. Objects the
 //! performer holds are moved with that wrist before the check; others are at their last
 //! tick's pose. Hold requests go through the writer and are applied after the parallel
-//! step (`troupe_scene::holding`), and the only cross-actor input, an offer from a
-//! giver, is stamped by tick: the results are identical with any thread count.
+//! step (`troupe_scene::holding`); the only cross-actor input, an offer from a giver, and
+//! the automaton's state it reports are on the scene's blackboard: the results are
+//! identical with any thread count.
 
-use crate::cyberglove::decoder::{sensor_names, GloveLayout};
-use crate::cyberglove::protocol::GloveConfig;
-use crate::device::protocol::Mode;
-use crate::record::error::RecordError;
-use crate::record::writer::Recorder;
-use std::sync::{Arc, Mutex};
-use troupe_actions::grasp::{GraspAutomaton, HandDecision, HandState};
+use crate::error::{ActionError, Result};
+use crate::grasp::{GraspAutomaton, HandDecision};
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Transform};
 use troupe_scene::holding::HoldRequest;
-use troupe_scene::{DofWriter, GeneratorContext, Object};
-
-/// The glove hand cannot run this tick.
-#[derive(Debug, thiserror::Error)]
-pub enum GloveHandError {
-    /// `step` before `start`.
-    #[error("glove hand: not started")]
-    NotStarted,
-    /// The grasping automaton refused its input.
-    #[error(transparent)]
-    Automaton(#[from] troupe_actions::ActionError),
-}
-
-/// A glove script that cannot be written.
-#[derive(Debug, thiserror::Error)]
-pub enum GloveScriptError {
-    /// Neither 18 nor 22 sensors.
-    #[error("glove script: sensors must be 18 or 22, got {0}")]
-    Sensors(usize),
-    /// A rate that is not a positive number.
-    #[error("glove script: rate must be > 0 Hz, got {0}")]
-    Rate(f64),
-    /// No keys, or times that do not increase.
-    #[error("glove script: keys must be non-empty with increasing times")]
-    Times,
-    /// A key with a non-finite time or a closure outside 0…1.
-    #[error("glove script: key ({time}, {closure}) needs a finite time and a closure in 0…1")]
-    Key {
-        /// The key's time (s).
-        time: f64,
-        /// The key's closure.
-        closure: f64,
-    },
-    /// The glove settings could not be encoded.
-    #[error("{0}")]
-    Settings(#[from] serde_json::Error),
-    /// The recording could not be written.
-    #[error(transparent)]
-    Record(#[from] RecordError),
-}
-
-/// What Lua sees of a glove hand: the automaton's state and the object it concerns.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct HandStatus {
-    /// The automaton's state after the last tick.
-    pub state: HandState,
-    /// Which hand.
-    pub side: Side,
-}
+use troupe_scene::{DofWriter, GeneratorContext, Note, Object};
 
 /// The automaton of one performer's glove hand, with its buffers.
 pub struct GloveHand {
     side: Side,
-    status: Arc<Mutex<HandStatus>>,
     automaton: Option<GraspAutomaton>,
     wrist: usize,
     q: Vec<f64>,
@@ -86,11 +33,10 @@ pub struct GloveHand {
 }
 
 impl GloveHand {
-    /// The glove hand `side`; `status` is where its state is published.
-    pub fn new(side: Side, status: Arc<Mutex<HandStatus>>) -> GloveHand {
+    /// The glove hand `side`.
+    pub fn new(side: Side) -> GloveHand {
         GloveHand {
             side,
-            status,
             automaton: None,
             wrist: 0,
             q: Vec::new(),
@@ -101,7 +47,7 @@ impl GloveHand {
     }
 
     /// Builds the automaton from the posture the action starts in.
-    pub fn start(&mut self, ctx: &GeneratorContext) -> Result<(), GloveHandError> {
+    pub fn start(&mut self, ctx: &GeneratorContext) -> Result<()> {
         let a = GraspAutomaton::new(ctx.skeleton, self.side, &ctx.posture.q)?;
         self.wrist = a.model().sensors.wrist;
         self.automaton = Some(a);
@@ -118,16 +64,17 @@ impl GloveHand {
 
     /// One tick: `target`/`mask` are the device targets. Writes the corrected finger
     /// values within the writer's scope and turns the automaton's decisions into hold
-    /// requests. Returns an error on inconsistent input (never panics).
+    /// requests, and posts the automaton's state on the blackboard. Returns an error on
+    /// inconsistent input (never panics).
     pub fn step(
         &mut self,
         ctx: &GeneratorContext,
         target: &[f64],
         mask: &[bool],
         out: &mut DofWriter,
-    ) -> Result<(), GloveHandError> {
+    ) -> Result<()> {
         let Some(a) = self.automaton.as_mut() else {
-            return Err(GloveHandError::NotStarted);
+            return Err(ActionError::Unfit("glove hand: not started".into()));
         };
         let sk = ctx.skeleton;
         let fingers = a.model().sensors.scope;
@@ -193,77 +140,7 @@ impl GloveHand {
             Some(HandDecision::Release(o)) => out.request(HoldRequest::Release { object: o }),
             None => {}
         }
-        if let Ok(mut s) = self.status.lock() {
-            s.state = result.state;
-        }
+        out.post(Note::Hand(result.state));
         Ok(())
     }
-}
-
-/// Writes a `.rec` file with one 18- or 22-sensor CyberGlove stream (streaming mode) that
-/// opens and closes the hand along `keys`: (seconds, closure 0…1) pairs, interpolated
-/// linearly, sampled at `rate` Hz. Every finger and thumb sensor reads `1 + 254·closure`
-/// (0 to the DOF's upper limit through the nominal calibration); the wrist sensors stay
-/// at 1 (wrist straight). A glove performance without hardware, for tests and examples.
-pub fn write_glove_script(
-    path: &std::path::Path,
-    sensors: usize,
-    rate: f64,
-    keys: &[(f64, f64)],
-) -> Result<(), GloveScriptError> {
-    if sensors != 18 && sensors != 22 {
-        return Err(GloveScriptError::Sensors(sensors));
-    }
-    if !(rate.is_finite() && rate > 0.0) {
-        return Err(GloveScriptError::Rate(rate));
-    }
-    if keys.is_empty() || keys.windows(2).any(|w| w[1].0 <= w[0].0) {
-        return Err(GloveScriptError::Times);
-    }
-    if let Some(&(time, closure)) = keys
-        .iter()
-        .find(|k| !(k.0.is_finite() && (0.0..=1.0).contains(&k.1)))
-    {
-        return Err(GloveScriptError::Key { time, closure });
-    }
-    let config = GloveConfig {
-        layout: GloveLayout {
-            sensors,
-            status_byte: false,
-        },
-        mode: Mode::Stream,
-    };
-    let settings = serde_json::to_value(config)?;
-    let rec = Recorder::create(path)?;
-    let stream = rec.add_stream("performer.glove", "cyberglove", settings);
-    let names = sensor_names(sensors);
-    let closure = |t: f64| {
-        let i = keys.partition_point(|k| k.0 <= t);
-        match i {
-            0 => keys[0].1,
-            i if i == keys.len() => keys[i - 1].1,
-            i => {
-                let (a, b) = (keys[i - 1], keys[i]);
-                a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
-            }
-        }
-    };
-    let end = keys[keys.len() - 1].0;
-    let count = (end * rate).round() as u64;
-    for i in 0..=count {
-        let t = i as f64 / rate;
-        let k = closure(t);
-        let mut bytes = vec![b'S'];
-        for n in &names {
-            let v = if n.starts_with("wrist") {
-                1
-            } else {
-                (1.0 + 254.0 * k).round() as u8
-            };
-            bytes.push(v);
-        }
-        bytes.push(0);
-        rec.data_at(stream, (t * 1e6).round() as u64, &bytes);
-    }
-    Ok(rec.finish()?)
 }
