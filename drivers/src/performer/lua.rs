@@ -7,7 +7,7 @@ use crate::gesture::{GestureSet, GestureTracker};
 use crate::lua::args::resolve;
 use crate::lua::health::health_table;
 use crate::performer::options::new_performer;
-use crate::performer::registry::{PerformerInput, Performers, SharedPerformers};
+use crate::performer::registry::{Performer, PerformerInput, Performers, SharedPerformers};
 use crate::record::file::Recording;
 use crate::record::writer::Recorder;
 use mlua::{Function, Lua, Table, Value};
@@ -56,6 +56,21 @@ fn shared(lua: &Lua) -> mlua::Result<SharedPerformers> {
         .ok_or_else(|| lua_err_message("devices are not enabled"))
 }
 
+/// Runs `f` on the performer `who` (a name or an actor) names, under the performers'
+/// lock; `f` must not call Lua functions that reach the performers.
+fn with_performer<R>(
+    lua: &Lua,
+    who: &Value,
+    f: impl FnOnce(&mut Performer) -> mlua::Result<R>,
+) -> mlua::Result<R> {
+    let i = performer_index(lua, who)?;
+    let s = shared(lua)?;
+    let mut perf =
+        s.0.lock()
+            .map_err(|_| lua_err_message("performer lock poisoned"))?;
+    f(&mut perf.list[i])
+}
+
 fn performer_index(lua: &Lua, who: &Value) -> mlua::Result<usize> {
     let s = shared(lua)?;
     let perf =
@@ -98,73 +113,56 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "calibrate",
         lua.create_function(|lua, who: Value| {
-            let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let mut perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            perf.list[i].calibrate_requested = true;
-            Ok(())
+            with_performer(lua, &who, |p| {
+                p.calibrate_requested = true;
+                Ok(())
+            })
         })?,
     )?;
     devices.set(
         "is_calibrated",
         lua.create_function(|lua, who: Value| {
-            let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            Ok(perf.list[i]
-                .fob
-                .as_ref()
-                .is_none_or(|f| f.converter.is_calibrated()))
+            with_performer(lua, &who, |p| {
+                Ok(p.fob.as_ref().is_none_or(|f| f.converter.is_calibrated()))
+            })
         })?,
     )?;
     devices.set(
         "health",
         lua.create_function(|lua, who: Value| {
-            let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            let p = &perf.list[i];
-            let out = lua.create_table()?;
-            let reports = [
-                ("fob", p.fob.as_ref().map(|f| f.source.health())),
-                ("glove", p.glove.as_ref().map(|g| g.source.health())),
-                (
-                    "osc",
-                    p.osc.as_ref().map(|o| Some(o.listener.health.report())),
-                ),
-            ];
-            for (dev, report) in reports {
-                let Some(report) = report else { continue };
-                out.set(dev, health_table(lua, report)?)?;
-            }
-            Ok(out)
+            with_performer(lua, &who, |p| {
+                let out = lua.create_table()?;
+                let reports = [
+                    ("fob", p.fob.as_ref().map(|f| f.source.health())),
+                    ("glove", p.glove.as_ref().map(|g| g.source.health())),
+                    (
+                        "osc",
+                        p.osc.as_ref().map(|o| Some(o.listener.health.report())),
+                    ),
+                ];
+                for (dev, report) in reports {
+                    let Some(report) = report else { continue };
+                    out.set(dev, health_table(lua, report)?)?;
+                }
+                Ok(out)
+            })
         })?,
     )?;
     devices.set(
         "hand",
         lua.create_function(|lua, who: Value| {
             // The glove's hand DOF targets by name: what a grasp corrector would consume.
-            let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            let p = &perf.list[i];
-            let out = lua.create_table()?;
-            let Some(g) = &p.glove else { return Ok(out) };
-            let t = &p.target;
-            for d in g.map.all_dofs() {
-                if t.mask.get(d).copied().unwrap_or(false) {
-                    out.set(p.skeleton.dofs()[d].name.as_str(), t.q[d])?;
+            with_performer(lua, &who, |p| {
+                let out = lua.create_table()?;
+                let Some(g) = &p.glove else { return Ok(out) };
+                let t = &p.target;
+                for d in g.map.all_dofs() {
+                    if t.mask.get(d).copied().unwrap_or(false) {
+                        out.set(p.skeleton.dofs()[d].name.as_str(), t.q[d])?;
+                    }
                 }
-            }
-            Ok(out)
+                Ok(out)
+            })
         })?,
     )?;
     devices.set(
@@ -173,14 +171,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             // The glove hand's grasping automaton (4.7): its state, and the object it
             // touches or holds (nil when free).
             // The capture posts it on the scene's blackboard after every tick.
-            let i = performer_index(lua, &who)?;
-            let (name, actor) = {
-                let s = shared(lua)?;
-                let perf =
-                    s.0.lock()
-                        .map_err(|_| lua_err_message("performer lock poisoned"))?;
-                (perf.list[i].name.clone(), perf.list[i].actor)
-            };
+            let (name, actor) = with_performer(lua, &who, |p| Ok((p.name.clone(), p.actor)))?;
             let (side, state, object) = troupe_lua::kinds::with_scene(lua, |sc| {
                 sc.blackboard().hand_state(actor).map(|(side, state)| {
                     let object = state
@@ -208,12 +199,9 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "glove",
         lua.create_function(|lua, who: Value| {
-            let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            match perf.list[i].glove.as_ref().and_then(|g| g.latest.clone()) {
+            match with_performer(lua, &who, |p| {
+                Ok(p.glove.as_ref().and_then(|g| g.latest.clone()))
+            })? {
                 Some(raw) => Ok(Value::Table(lua.create_sequence_from(raw)?)),
                 None => Ok(Value::Nil),
             }
@@ -222,13 +210,10 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "on_gesture",
         lua.create_function(|lua, (who, f): (Value, Function)| {
-            let i = performer_index(lua, &who)?;
-            let s = shared(lua)?;
-            let mut perf =
-                s.0.lock()
-                    .map_err(|_| lua_err_message("performer lock poisoned"))?;
-            perf.list[i].gesture_handlers.push(f);
-            Ok(())
+            with_performer(lua, &who, |p| {
+                p.gesture_handlers.push(f);
+                Ok(())
+            })
         })?,
     )?;
     devices.set(
