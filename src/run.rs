@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use troupe_lua::{Director, LuaSession, ScriptLimits};
+use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::pacing::Pacer;
 use troupe_scene::tally::ActionTally;
 use troupe_scene::{ObserverHandle, RunLimit, SceneConfig};
@@ -120,13 +120,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
         }
     }
-    let (mut session, devices) =
-        crate::devices::session(config, limits, args.record_devices.as_deref())?;
-    session.scene_mut().set_chunk_size(args.chunk);
-    let (director, scene) = session.script_and_scene();
-    director
-        .load_file(scene, &args.scene)
-        .with_context(|| format!("loading {}", args.scene.display()))?;
+    // Everything that can be refused is checked before devices open and a scene loads.
     let dt = 1.0 / args.rate;
     let limit = RunLimit {
         ticks: match (args.ticks, args.seconds) {
@@ -141,12 +135,42 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         },
         until_idle: args.until_idle || (args.ticks.is_none() && args.seconds.is_none()),
     };
+    let size = troupe_viewer::parse_size(&args.size)?;
+    let camera: troupe_viewer::Camera = args.camera.parse()?;
+    if args.view && !crate::view::has_display() {
+        bail!("--view needs a display (DISPLAY or WAYLAND_DISPLAY); run headless with --frames DIR instead");
+    }
+    let osc_out = match &args.osc_out {
+        Some(target) => {
+            Some(troupe_drivers::osc::OscOut::new(target).map_err(|e| anyhow::anyhow!(e))?)
+        }
+        None => None,
+    };
+    let frames = match &args.frames {
+        Some(dir) => Some(troupe_viewer::FrameWriter::new(
+            dir,
+            size,
+            camera.clone(),
+            args.every,
+        )?),
+        None => None,
+    };
 
-    // What every run, headless or in a window, attaches to its session.
+    let (mut session, devices) =
+        crate::devices::session(config, limits, args.record_devices.as_deref())?;
+    session.scene_mut().set_chunk_size(args.chunk);
     let tally = session.observe(ActionTally::new());
     session.observe(devices);
-    if let Some(target) = &args.osc_out {
-        session.observe(troupe_drivers::osc::OscOut::new(target).map_err(|e| anyhow::anyhow!(e))?);
+    if let Err(e) = session.load_file(&args.scene) {
+        // Devices the scene opened before it failed still close and report.
+        for line in session.finish().unwrap_or_default() {
+            println!("{line}");
+        }
+        return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())));
+    }
+    // What every run, headless or in a window, attaches to its session.
+    if let Some(osc) = osc_out {
+        session.observe(osc);
     }
     if let Some(path) = &args.record {
         session.observe(RecordFile::new(path));
@@ -157,20 +181,15 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     if let Some(path) = &args.trace {
         session.observe(TraceFile::new(path));
     }
-    if args.view {
-        return view_run(session, tally, limit, &args);
-    }
-    if let Some(dir) = &args.frames {
-        session.observe(troupe_viewer::FrameWriter::new(
-            dir,
-            troupe_viewer::parse_size(&args.size)?,
-            args.camera.parse()?,
-            args.every,
-        )?);
+    if let Some(frames) = frames {
+        session.observe(frames);
     }
     // Pacing comes last: it waits once everything else has seen the tick.
     if args.realtime {
         session.observe(Pacer::new(Duration::from_secs_f64(dt)));
+    }
+    if args.view {
+        return view_run(session, tally, limit, size, camera, &args);
     }
     let started = Instant::now();
     let ran = session.run(limit);
@@ -235,15 +254,14 @@ fn view_run(
     session: LuaSession,
     tally: ObserverHandle<ActionTally>,
     limit: RunLimit,
+    size: (u32, u32),
+    camera: troupe_viewer::Camera,
     args: &RunArgs,
 ) -> Result<ExitCode> {
-    if !crate::view::has_display() {
-        bail!("--view needs a display (DISPLAY or WAYLAND_DISPLAY); run headless with --frames DIR instead");
-    }
     let options = troupe_viewer::WindowOptions {
         title: format!("troupe run {}", args.scene.display()),
-        size: troupe_viewer::parse_size(&args.size)?,
-        camera: args.camera.parse()?,
+        size,
+        camera,
         tick_seconds: 1.0 / args.rate,
         ..Default::default()
     };
@@ -335,9 +353,8 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         troupe_actions::action_kinds(),
         ScriptLimits::default(),
     )?;
-    let (director, scene) = session.script_and_scene();
-    director
-        .load_file(scene, &args.scene)
+    session
+        .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
     let ticks = (args.at * args.rate).round() as u64;
     session.run(RunLimit {

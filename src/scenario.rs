@@ -4,7 +4,7 @@ use anyhow::{Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use troupe_lua::{LuaSession, ScriptLimits};
+use troupe_lua::{LuaSession, LuaSessionExt, ScriptLimits};
 use troupe_scene::SceneConfig;
 
 /// Options of `troupe test`.
@@ -59,8 +59,7 @@ fn session(file: &Path, threads: usize, chunk: Option<usize>) -> Result<LuaSessi
     // Performers (troupe.performer, capture) are available to scenario tests too.
     let (mut session, _devices) = crate::devices::session(config, ScriptLimits::default(), None)?;
     session.scene_mut().set_chunk_size(chunk);
-    let (director, scene) = session.script_and_scene();
-    director.load_file(scene, file)?;
+    session.load_file(file)?;
     Ok(session)
 }
 

@@ -233,13 +233,15 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
 fn write_frames(mut session: Session, writer: FrameWriter, seconds: f64) -> Result<ExitCode> {
     let ticks = (seconds * session.scene().config().rate).ceil() as u64;
     session.observe(writer);
-    session.run(RunLimit {
+    let ran = session.run(RunLimit {
         ticks,
         until_idle: false,
-    })?;
+    });
+    // The frames written before an error stay, and are reported.
     for line in session.finish()? {
         println!("{line} over {seconds:.2} s");
     }
+    ran?;
     Ok(ExitCode::SUCCESS)
 }
 

@@ -418,7 +418,10 @@ fn the_viewer_builds_without_lua() {
         if !seen.insert(name.clone()) {
             continue;
         }
-        let manifest = repo().join(dirs[name.as_str()]).join("Cargo.toml");
+        let dir = dirs.get(name.as_str()).unwrap_or_else(|| {
+            panic!("the viewer now depends on {name}: add its folder to this test")
+        });
+        let manifest = repo().join(dir).join("Cargo.toml");
         let text = std::fs::read_to_string(&manifest).unwrap();
         assert!(
             !text.lines().any(|l| l.trim_start().starts_with("mlua")),

@@ -102,6 +102,10 @@ fn every_example_records_its_committed_postures() {
         );
         measured.insert(name, one);
     }
+    std::fs::remove_dir_all(
+        std::env::temp_dir().join(format!("troupe-golden-{}", std::process::id())),
+    )
+    .ok();
     if std::env::var_os("TROUPE_BLESS").is_some() {
         let mut text = format!(
             "# SHA-256 of each example's .trk recording: troupe run --seconds {SECONDS} --seed {SEED} --record\n"

@@ -3,6 +3,8 @@
 //! [`registry`] lists every kind for the Lua director. Each generator writes only the
 //! DOFs of its action's scope.
 
+#![warn(missing_docs)]
+
 pub mod capture;
 pub mod dynamics;
 pub mod error;

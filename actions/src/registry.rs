@@ -8,7 +8,7 @@ use crate::{capture, dynamics, grasp, interact, keyframe, look_at, manipulate, r
 use troupe_lua::kinds::{ActionKind, ActionKinds, BuildFn, MakeFunction};
 
 /// Each actor method and the builder that reads its Lua arguments.
-const KINDS: [(&str, BuildFn); 17] = [
+const KINDS: &[(&str, BuildFn)] = &[
     ("play", keyframe::lua::build_play),
     ("simulate", dynamics::lua::build_simulate),
     ("servo", dynamics::lua::build_servo),
@@ -35,7 +35,7 @@ const FUNCTIONS: [(&str, MakeFunction); 1] = [("plan_grasp", grasp::lua::make_pl
 /// ready for a [`troupe_lua::Director`].
 pub fn action_kinds() -> ActionKinds {
     let mut registry = ActionKinds::default();
-    for (method, build) in KINDS {
+    for &(method, build) in KINDS {
         registry.register(ActionKind { method, build });
     }
     for (name, make) in FUNCTIONS {
@@ -52,7 +52,7 @@ mod tests {
     fn every_kind_is_registered_once() {
         let registry = action_kinds();
         assert_eq!(registry.all().len(), KINDS.len());
-        for (method, _) in KINDS {
+        for &(method, _) in KINDS {
             assert!(registry.get(method).is_some(), "{method}");
         }
         assert_eq!(registry.functions().len(), 1);

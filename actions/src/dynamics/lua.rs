@@ -1,5 +1,5 @@
 //! `actor:simulate{…}`, `actor:servo{…}` and `actor:track{…}` in Lua: reads
-//! [`DynamicsOptions`]; and the torque log's place on a Lua state.
+//! [`DynamicsOptions`].
 
 use super::options::gains;
 use super::{Drive, DynamicsOptions, Push, ServoTarget};

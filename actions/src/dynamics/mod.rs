@@ -11,10 +11,10 @@
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
-pub mod torque_log;
+pub mod torque_recorder;
 
 pub use options::{DynamicsOptions, Push};
-pub use torque_log::TorqueRecorder;
+pub use torque_recorder::TorqueRecorder;
 
 use crate::error::Result;
 use std::sync::Arc;

@@ -58,9 +58,10 @@ impl GiveOptions {
 
     /// Makes `giver`'s action and the DOFs it drives. A receiver whose hand a person
     /// drives (declared on the scene's blackboard) takes the object when its glove
-    /// closes; any other
-    /// receiver gets a `receive` action started on `scene` now, `delay` seconds ahead
-    /// like the give, which waits for the object to arrive.
+    /// closes; any other receiver gets a `receive` action started on `scene` now, `delay`
+    /// seconds ahead like the give, which waits for the object to arrive. Pass the
+    /// returned generator to [`Scene::start_action`]: the receiver learns of the give's end
+    /// from it (also when `start_action` refuses it).
     pub fn start(
         &self,
         scene: &mut Scene,
@@ -68,6 +69,7 @@ impl GiveOptions {
         delay: f64,
     ) -> Result<(Box<dyn Generator>, Scope)> {
         self.validate(giver)?;
+        in_scene(scene, &[giver, self.to], &[self.object])?;
         let side = holding_side(scene, giver, self.object).unwrap_or(Side::Right);
         let scope = grasp_scope(&scene.actors()[giver].skeleton, &[side])?;
         // Hands driven by a person (a performer's glove, 4.7) neither reach nor carry.
@@ -194,6 +196,7 @@ impl HoldHandOptions {
         duration: Option<f64>,
     ) -> Result<(HoldHand, Scope)> {
         self.validate(actor)?;
+        in_scene(scene, &[actor, self.other], &[])?;
         let (held, finished) = (scene.new_signal(), scene.new_signal());
         let active = HoldHand::new(
             self.other,
@@ -216,6 +219,17 @@ impl HoldHandOptions {
         scene.start_action(self.other, follow_spec, Box::new(follow))?;
         Ok((active, scope))
     }
+}
+
+/// Refuses actor and object indices the scene does not have.
+fn in_scene(scene: &Scene, actors: &[usize], objects: &[usize]) -> Result<()> {
+    if let Some(a) = actors.iter().find(|&&a| a >= scene.actors().len()) {
+        return Err(troupe_scene::Error::UnknownActor(format!("#{a}")).into());
+    }
+    if let Some(o) = objects.iter().find(|&&o| o >= scene.objects().len()) {
+        return Err(troupe_scene::Error::UnknownObject(format!("#{o}")).into());
+    }
+    Ok(())
 }
 
 #[cfg(test)]

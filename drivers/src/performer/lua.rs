@@ -40,9 +40,11 @@ pub(crate) fn install(
                 .map_err(|_| lua_err_message("performer lock poisoned"))?
                 .gesture_events,
         );
+        // A failing handler is reported and the others still run.
         for (f, name, new, old) in events {
-            f.call::<()>((name.clone(), new, old))
-                .map_err(|e| lua_err_message(format!("gesture handler of '{name}': {e}")))?;
+            if let Err(e) = f.call::<()>((name.clone(), new, old)) {
+                tracing::error!(performer = %name, "gesture handler failed: {e}");
+            }
         }
         Ok(())
     }));

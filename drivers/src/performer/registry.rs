@@ -31,7 +31,7 @@ pub struct CaptureTarget {
     pub mask: Vec<bool>,
     /// Arrival of the newest sample used (live devices).
     pub arrived: Option<Instant>,
-    /// Tick counter of the pre-tick step that made it.
+    /// Tick counter of the input phase that made it.
     pub made: u64,
 }
 
@@ -153,7 +153,7 @@ impl Performers {
 
     /// The input phase: drain, convert, note gestures. Returns the gesture events
     /// (handlers, performer name, new, previous) for the script phase to call.
-    fn pre_tick(&mut self, scene: &mut Scene) -> Vec<GestureEvent> {
+    fn drain(&mut self, scene: &mut Scene) -> Vec<GestureEvent> {
         self.ticks += 1;
         let mut events = Vec::new();
         let time = scene.time();
@@ -306,7 +306,7 @@ impl Input for PerformerInput {
             input: "performers".into(),
             message: "lock poisoned by a panic".into(),
         })?;
-        let events = performers.pre_tick(scene);
+        let events = performers.drain(scene);
         performers.gesture_events.extend(events);
         Ok(())
     }

@@ -1,7 +1,7 @@
 //! Moving a scene object with a SpaceMouse (`troupe.devices.spacemouse{…}`).
 //!
-//! Each tick, in the scene step that runs right after the pre-tick steps and before the
-//! scripts, every SpaceMouse mover takes the readings that are due — from its device thread
+//! Each tick, in the session's input phase (after the performers' input, before the
+//! scripts), every SpaceMouse mover takes the readings that are due — from its device thread
 //! (never blocking: the thread's channel is drained with `try_recv`) or from a replayed
 //! recording by scene time (deterministic) — and moves its object for one tick: a linear
 //! velocity from the three translation axes and an angular velocity from the three rotation

@@ -8,8 +8,11 @@ pub enum Error {
     /// A numeric parameter outside its valid range.
     #[error("invalid {what}: {value} ({expected})")]
     InvalidValue {
+        /// The parameter.
         what: String,
+        /// The value given.
         value: f64,
+        /// What is accepted.
         expected: String,
     },
     /// Anything else a caller asked for that cannot be done, with the reason.
@@ -18,8 +21,11 @@ pub enum Error {
     /// A file that does not parse: names the file, the line and what was expected.
     #[error("{file}:{line}: {message}")]
     Parse {
+        /// The file.
         file: String,
+        /// The line (1-based; 0 when the file as a whole is wrong).
         line: usize,
+        /// What is wrong, or what was expected.
         message: String,
     },
     /// A rotation order that is not three distinct axes.
@@ -27,18 +33,38 @@ pub enum Error {
     RotationOrder(String),
     /// A retargeting map that cannot map a BVH onto a troupe body.
     #[error("retarget map `{map}`: {message}")]
-    Retarget { map: String, message: String },
+    Retarget {
+        /// See the variant.
+        map: String,
+        /// What is wrong, or what was expected.
+        message: String,
+    },
     /// A file whose extension names no motion format troupe reads or writes.
     #[error(
         "{path}: cannot read or write `{extension}` motion files (use .trk, .bvh, .gltf or .glb)"
     )]
-    UnknownFormat { path: String, extension: String },
+    UnknownFormat {
+        /// The path.
+        path: String,
+        /// See the variant.
+        extension: String,
+    },
     /// A file whose motion is bound to a body (BVH, glTF), loaded without one.
     #[error("{path}: a {format} motion plays on a body; give the skeleton to load it onto")]
-    NeedsBody { path: String, format: String },
+    NeedsBody {
+        /// The path.
+        path: String,
+        /// See the variant.
+        format: String,
+    },
     /// A file that could not be read or written.
     #[error("{path}: {message}")]
-    Io { path: String, message: String },
+    Io {
+        /// The path.
+        path: String,
+        /// What is wrong, or what was expected.
+        message: String,
+    },
     /// The body model refused what the file describes.
     #[error(transparent)]
     Body(#[from] troupe_body::Error),

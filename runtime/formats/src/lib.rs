@@ -5,6 +5,8 @@
 //! Callers that hold a path choose nothing themselves: [`load_sequences`] /
 //! [`load_sequence`] and [`save_sequences`] pick the format by extension ([`dispatch`]).
 
+#![warn(missing_docs)]
+
 pub mod bvh;
 pub mod dispatch;
 pub mod error;

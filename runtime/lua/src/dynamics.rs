@@ -3,7 +3,6 @@
 
 use crate::args::{check_keys, err, number, vec3};
 use crate::handles::ActorRef;
-use crate::stage::Stage;
 use mlua::{Lua, Table, UserDataMethods, Value};
 use troupe_body::dynamics::{check_state, Dynamics, ExternalForces};
 
@@ -66,9 +65,7 @@ fn call(lua: &Lua, actor: usize, t: &Table, inverse: bool) -> mlua::Result<Table
     let input = if inverse { "qdd" } else { "tau" };
     check_keys(t, method, &["q", "qd", input, "fixed_root", "gravity"])?;
     let (skeleton, posture) = {
-        let stage = lua
-            .app_data_ref::<Stage>()
-            .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
+        let stage = crate::stage::stage(lua)?;
         (
             stage.scene.actors()[actor].skeleton.clone(),
             stage.scene.states()[actor].q.clone(),

@@ -13,7 +13,12 @@ pub enum Error {
     Invalid(String),
     /// A file that could not be read.
     #[error("{path}: {message}")]
-    Io { path: String, message: String },
+    Io {
+        /// The path.
+        path: String,
+        /// What is wrong, or what was expected.
+        message: String,
+    },
     /// The scene refused what the script asked.
     #[error(transparent)]
     Scene(#[from] troupe_scene::Error),

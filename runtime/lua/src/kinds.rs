@@ -28,11 +28,7 @@ pub struct BuildContext<'a> {
 impl BuildContext<'_> {
     /// Reads the scene (as of the last tick). Do not call Lua from inside `f`.
     pub fn with_scene<R>(&self, f: impl FnOnce(&Scene) -> R) -> mlua::Result<R> {
-        let stage = self
-            .lua
-            .app_data_ref::<crate::stage::Stage>()
-            .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
-        Ok(f(&stage.scene))
+        crate::stage::with_scene(self.lua, f)
     }
 
     /// Changes the scene (e.g. to start a partner's action for an interaction). Do not

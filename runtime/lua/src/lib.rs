@@ -9,6 +9,8 @@
 //! behavior whose wait condition holds. Every resume runs under an instruction budget and
 //! a memory allowance; a behavior that errors or exceeds them fails alone.
 
+#![warn(missing_docs)]
+
 pub mod api;
 pub mod args;
 mod dynamics;
@@ -119,6 +121,7 @@ impl Director {
         lua.set_app_data(kinds);
         lua.set_app_data(Stage {
             scene,
+            lent: false,
             behaviors: Vec::new(),
             handlers: Vec::new(),
             pending_events: Vec::new(),
@@ -204,12 +207,32 @@ impl Director {
         Ok(Session::with_script(Scene::new(config)?, director))
     }
 
-    /// Lends `scene` to the Lua callbacks while `f` runs.
+    /// Lends `scene` to the Lua callbacks while `f` runs. The scene goes back to its
+    /// owner however `f` ends, a panic included.
     fn lend<R>(&mut self, scene: &mut Scene, f: impl FnOnce(&mut Director) -> R) -> R {
-        std::mem::swap(&mut self.stage_mut().scene, scene);
-        let result = f(self);
-        std::mem::swap(&mut self.stage_mut().scene, scene);
-        result
+        /// Gives the scene back when dropped.
+        struct Loan<'a> {
+            lua: Lua,
+            scene: &'a mut Scene,
+        }
+        impl Drop for Loan<'_> {
+            fn drop(&mut self) {
+                if let Some(mut stage) = self.lua.app_data_mut::<Stage>() {
+                    std::mem::swap(&mut stage.scene, self.scene);
+                    stage.lent = false;
+                }
+            }
+        }
+        {
+            let mut stage = self.stage_mut();
+            std::mem::swap(&mut stage.scene, scene);
+            stage.lent = true;
+        }
+        let _loan = Loan {
+            lua: self.lua.clone(),
+            scene,
+        };
+        f(self)
     }
 
     /// Runs a scene file on `scene`: it creates actors and objects and registers
@@ -752,5 +775,58 @@ impl LuaSessionExt for LuaSession {
 
     fn lua(&self) -> &Lua {
         self.script().lua()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn session() -> LuaSession {
+        Director::session(
+            SceneConfig::default(),
+            ActionKinds::default(),
+            ScriptLimits::default(),
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn the_scene_goes_back_to_the_session_when_a_script_fails_or_panics() {
+        let mut s = session();
+        let err = s
+            .load_str("troupe.actor{ name = 'ann' }\nerror('boom')", "t")
+            .unwrap_err();
+        assert!(err.to_string().contains("boom"), "{err}");
+        assert_eq!(
+            s.scene().actors().len(),
+            1,
+            "ann stays in the session's scene"
+        );
+        // A panic while the scene is lent (a bug in a callback) still gives it back.
+        let (director, scene) = s.script_and_scene();
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            director.lend(scene, |_| panic!("a callback bug"))
+        }));
+        assert!(caught.is_err());
+        assert_eq!(s.scene().actors().len(), 1);
+        assert_eq!(s.scene().actors()[0].name, "ann");
+    }
+
+    #[test]
+    fn outside_a_phase_the_api_refuses_to_touch_a_scene() {
+        let mut s = session();
+        s.load_str("troupe.actor{ name = 'ann' }", "t").unwrap();
+        let e = s
+            .lua()
+            .load("troupe.actor{ name = 'bob' }")
+            .exec()
+            .unwrap_err();
+        assert!(e.to_string().contains("no scene is lent"), "{e}");
+        assert_eq!(s.scene().actors().len(), 1);
+        assert!(actor_skeletons(s.lua()).is_none());
+        // Through the session it works.
+        s.eval::<()>("troupe.actor{ name = 'bob' }").unwrap();
+        assert_eq!(s.scene().actors().len(), 2);
     }
 }

@@ -50,6 +50,8 @@ pub(crate) struct Stage {
     /// The session's scene while it is lent to the director (the script phase, loading a
     /// file); an empty scene of the same configuration otherwise.
     pub scene: Scene,
+    /// Whether `scene` is the session's (lent for a load or a script phase).
+    pub lent: bool,
     pub behaviors: Vec<Behavior>,
     pub handlers: Vec<(usize, String, Function)>,
     pub pending_events: Vec<Event>,
@@ -68,8 +70,22 @@ pub(crate) struct Stage {
 
 /// The stage of the Lua state `lua`, mutably (for a callback; never across a Lua call).
 pub(crate) fn stage(lua: &Lua) -> mlua::Result<mlua::AppDataRefMut<'_, Stage>> {
-    lua.app_data_mut::<Stage>()
-        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))
+    let stage = lua
+        .app_data_mut::<Stage>()
+        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
+    if stage.lent {
+        Ok(stage)
+    } else {
+        Err(not_lent())
+    }
+}
+
+/// The error of a call that needs the scene while none is lent to the director.
+fn not_lent() -> mlua::Error {
+    mlua::Error::runtime(
+        "troupe: no scene is lent to the script (scene calls work while a scene loads and \
+         in a session's script phase)",
+    )
 }
 
 /// Adds a behavior: a coroutine of `f`, resumed on the next tick with its actor as `self`.
@@ -95,21 +111,22 @@ pub fn with_scene<R>(lua: &Lua, f: impl FnOnce(&Scene) -> R) -> mlua::Result<R> 
     let stage = lua
         .app_data_ref::<Stage>()
         .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
+    if !stage.lent {
+        return Err(not_lent());
+    }
     Ok(f(&stage.scene))
 }
 
 /// Changes the scene of the Lua state `lua`. Do not call Lua from inside `f`.
 pub fn with_scene_mut<R>(lua: &Lua, f: impl FnOnce(&mut Scene) -> R) -> mlua::Result<R> {
-    let mut stage = lua
-        .app_data_mut::<Stage>()
-        .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;
+    let mut stage = stage(lua)?;
     Ok(f(&mut stage.scene))
 }
 
 /// Skeletons of the scene's actors, by index: for crates that extend the Lua API (e.g.
 /// performers) and need an actor's body while a script runs. `None` outside a director.
 pub fn actor_skeletons(lua: &Lua) -> Option<Vec<Arc<troupe_body::skeleton::Skeleton>>> {
-    let st = lua.app_data_ref::<Stage>()?;
+    let st = lua.app_data_ref::<Stage>().filter(|st| st.lent)?;
     Some(
         st.scene
             .actors()

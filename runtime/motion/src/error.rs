@@ -7,12 +7,20 @@ use thiserror::Error;
 pub enum Error {
     /// A name used twice where names must be unique.
     #[error("{what} `{name}` already exists")]
-    Duplicate { what: &'static str, name: String },
+    Duplicate {
+        /// What kind of thing (`actor`, `object`, `track`).
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
     /// A numeric parameter outside its valid range.
     #[error("invalid {what}: {value} ({expected})")]
     InvalidValue {
+        /// The parameter.
         what: String,
+        /// The value given.
         value: f64,
+        /// What is accepted.
         expected: String,
     },
     /// Anything else a caller asked for that cannot be done, with the reason.

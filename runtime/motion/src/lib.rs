@@ -2,6 +2,8 @@
 //! keyframe action, and apart from them the offline tools of thesis chapter 5 that make
 //! and edit sequences ([`offline`]).
 
+#![warn(missing_docs)]
+
 pub mod error;
 pub mod offline;
 pub mod sequence;

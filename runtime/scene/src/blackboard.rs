@@ -168,12 +168,13 @@ impl Blackboard {
         })
     }
 
-    /// The open offers, oldest first.
+    /// The offers, oldest first (closed ones are forgotten when the next one opens).
     pub fn offers(&self) -> &[Offer] {
         &self.offers
     }
 
-    /// The torques the dynamics actions posted in the last tick, by actor then DOF.
+    /// The torques the dynamics actions posted in the last tick, by actor then DOF (what
+    /// observers read after the tick, and generators during the next).
     pub fn torques(&self) -> impl Iterator<Item = Torque> + '_ {
         self.torques
             .iter()
@@ -205,7 +206,7 @@ impl Blackboard {
         self.offers.push(offer);
     }
 
-    /// Starts a tick: the previous tick's torques have been published.
+    /// Starts applying a tick's notes: the previous tick's torques give way to this one's.
     pub(crate) fn begin_tick(&mut self) {
         self.torques.clear();
     }

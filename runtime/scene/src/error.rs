@@ -13,12 +13,20 @@ pub enum Error {
     UnknownObject(String),
     /// A name used twice where names must be unique.
     #[error("{what} `{name}` already exists")]
-    Duplicate { what: &'static str, name: String },
+    Duplicate {
+        /// What kind of thing (`actor`, `object`, `track`).
+        what: &'static str,
+        /// The name.
+        name: String,
+    },
     /// A numeric parameter outside its valid range.
     #[error("invalid {what}: {value} ({expected})")]
     InvalidValue {
+        /// The parameter.
         what: String,
+        /// The value given.
         value: f64,
+        /// What is accepted.
         expected: String,
     },
     /// Anything else a caller asked for that cannot be done, with the reason.
@@ -26,10 +34,20 @@ pub enum Error {
     Invalid(String),
     /// An observer of a session failed (a recording that could not be written).
     #[error("{observer}: {message}")]
-    Observer { observer: String, message: String },
+    Observer {
+        /// The observer (`--record out.trk`).
+        observer: String,
+        /// What is wrong, or what was expected.
+        message: String,
+    },
     /// An input of a session failed (a device that vanished, a malformed packet).
     #[error("{input}: {message}")]
-    Input { input: String, message: String },
+    Input {
+        /// The input.
+        input: String,
+        /// What is wrong, or what was expected.
+        message: String,
+    },
     /// The body model refused a value or a name.
     #[error(transparent)]
     Body(#[from] troupe_body::Error),

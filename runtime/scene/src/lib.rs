@@ -2,6 +2,8 @@
 //! steps and blends them tick by tick, the world snapshot generators read, holding, and
 //! the observers that record a run.
 
+#![warn(missing_docs)]
+
 pub mod action;
 pub mod blackboard;
 pub mod blend;

@@ -459,6 +459,7 @@ impl Scene {
             ending: Status::Completed,
             reason: None,
             cancel_requested: false,
+            last_run: 0,
             generator,
         });
         self.action_owner.insert(id, actor);
@@ -590,7 +591,6 @@ impl Scene {
             profile: self.profiling,
         };
         let started = self.profiling.then(Instant::now);
-        self.board.begin_tick();
         {
             let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
             let world = World {
@@ -628,6 +628,8 @@ impl Scene {
         let published = self.profiling.then(Instant::now);
         // Tick step 6 (DESIGN.md): attachments, after every actor's forward kinematics,
         // serially in actor order so the result is independent of the thread count.
+        // This tick's torques replace the last tick's on the board.
+        self.board.begin_tick();
         for (i, w) in self.work.iter_mut().enumerate() {
             for r in w.runtime.hold_requests.drain(..) {
                 holding::apply(i, r, &mut self.holders, &mut self.objects, &self.states);
@@ -635,6 +637,9 @@ impl Scene {
             // The blackboard too: notes in actor order, seen by everyone next tick.
             self.board
                 .apply(i, self.tick, std::mem::take(&mut w.runtime.notes));
+            for (stamp, note) in w.runtime.end_notes.drain(..) {
+                self.board.apply(i, stamp, vec![note]);
+            }
         }
         holding::follow(&self.holders, &mut self.objects, &self.states);
         if let (Some(started), Some(joined), Some(published)) = (started, joined, published) {

@@ -50,6 +50,8 @@ pub(crate) struct Action {
     pub ending: Status,
     pub reason: Option<String>,
     pub cancel_requested: bool,
+    /// The last tick the generator was started or stepped (0: never).
+    pub last_run: u64,
     pub generator: Box<dyn Generator>,
 }
 
@@ -86,6 +88,9 @@ pub struct ActorRuntime {
     pub(crate) hold_requests: Vec<crate::holding::HoldRequest>,
     /// Blackboard notes of the last tick, in emission order (see [`crate::blackboard`]).
     pub(crate) notes: Vec<Note>,
+    /// Notes of generators whose action ended in the last tick, with the tick each is
+    /// stamped with (see [`Generator::end`]).
+    pub(crate) end_notes: Vec<(u64, Note)>,
     scratch: Vec<f64>,
     accumulator: Accumulator,
 }
@@ -167,6 +172,7 @@ impl ActorRuntime {
         self.ended.clear();
         self.hold_requests.clear();
         self.notes.clear();
+        self.end_notes.clear();
         let mut tr = Transitions {
             actor,
             clock,
@@ -197,6 +203,7 @@ impl ActorRuntime {
                 scope: action.spec.scope,
             };
             let mut out = DofWriter::new(action.spec.scope, &mut self.scratch);
+            action.last_run = clock.tick;
             let step = action.generator.step(&ctx, &mut out);
             let (written, refused) = (out.written(), out.refused());
             let requests = out.take_requests();
@@ -254,7 +261,15 @@ impl ActorRuntime {
                 let mut a = self.actions.remove(i);
                 let mut notes = Notes::default();
                 a.generator.end(&mut notes);
-                self.notes.extend(notes.take());
+                // An end is stamped the tick after the generator last ran (its partner sees
+                // it the tick after that); an action that never ran ends now.
+                let stamp = if a.last_run > 0 {
+                    a.last_run + 1
+                } else {
+                    clock.tick
+                };
+                self.end_notes
+                    .extend(notes.take().into_iter().map(|n| (stamp, n)));
                 self.ended.push(a.info(actor));
             } else {
                 i += 1;
@@ -334,6 +349,7 @@ fn admit(
             Status::Active
         };
         tr.set(action, first);
+        action.last_run = tr.clock.tick;
         if let Err(e) = action.generator.start(&ctx) {
             action.reason = Some(e.reason);
             tr.set(action, Status::Failed);

@@ -94,6 +94,14 @@ pub struct RunLimit {
     pub until_idle: bool,
 }
 
+impl RunLimit {
+    /// Whether a run that has done `ticks` ticks, in a session that is `idle` or not,
+    /// stops here (a run always ticks once before it looks at idleness).
+    pub fn reached(&self, ticks: u64, idle: bool) -> bool {
+        ticks >= self.ticks || (self.until_idle && ticks > 0 && idle)
+    }
+}
+
 /// Wall-clock time spent in each phase since the last [`Session::take_phase_times`].
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct PhaseTimes {
@@ -117,6 +125,9 @@ pub struct Session<S: Script = NoScript> {
     input_failures: Vec<u64>,
     observers: Vec<Box<dyn Observer>>,
     started: bool,
+    finished: bool,
+    /// An observer added after the start that failed to start: reported by the next tick.
+    late_start_error: Option<Error>,
     timing: bool,
     times: PhaseTimes,
 }
@@ -138,6 +149,8 @@ impl<S: Script> Session<S> {
             input_failures: Vec::new(),
             observers: Vec::new(),
             started: false,
+            finished: false,
+            late_start_error: None,
             timing: false,
             times: PhaseTimes::default(),
         }
@@ -149,6 +162,8 @@ impl<S: Script> Session<S> {
     }
 
     /// The scene itself, between ticks (to add actors, start actions, configure it).
+    /// Step it through [`Session::tick`] only: a step behind the session's back is seen
+    /// by neither the script nor the observers.
     pub fn scene_mut(&mut self) -> &mut Scene {
         &mut self.scene
     }
@@ -180,8 +195,15 @@ impl<S: Script> Session<S> {
     }
 
     /// Adds an observer, published after those added before it; the handle reads it
-    /// back.
-    pub fn observe<T: Observer>(&mut self, observer: T) -> ObserverHandle<T> {
+    /// back. One added after the run started is started at once (an error is returned by
+    /// the next tick).
+    pub fn observe<T: Observer>(&mut self, mut observer: T) -> ObserverHandle<T> {
+        if self.started {
+            if let Err(e) = observer.start(&self.scene) {
+                let e = observer_error(&observer, e);
+                self.late_start_error.get_or_insert(e);
+            }
+        }
         self.observers.push(Box::new(observer));
         ObserverHandle {
             index: self.observers.len() - 1,
@@ -230,6 +252,9 @@ impl<S: Script> Session<S> {
     /// names the observer that failed (the tick itself has happened).
     pub fn tick(&mut self) -> Result<Vec<Event>> {
         self.start()?;
+        if let Some(e) = self.late_start_error.take() {
+            return Err(e);
+        }
         let t0 = self.timing.then(Instant::now);
         self.poll_inputs();
         let t1 = self.timing.then(Instant::now);
@@ -248,9 +273,8 @@ impl<S: Script> Session<S> {
         published.map(|()| events)
     }
 
-    /// Steps the scene alone (no input, script or publish phase), telling the script what
-    /// happened: for benchmarks that time the phases apart, and for tools.
-    pub fn step(&mut self) -> Vec<Event> {
+    /// The step phase: the scene advances, and the script sees what happened.
+    fn step(&mut self) -> Vec<Event> {
         let events = self.scene.step().to_vec();
         self.script.stepped(&mut self.scene, &events);
         events
@@ -262,12 +286,12 @@ impl<S: Script> Session<S> {
     }
 
     /// Ticks until `limit`; returns how many ran. Stops at the first observer error.
+    /// Observers are started even when no tick runs (a recording of 0 ticks holds the
+    /// starting postures).
     pub fn run(&mut self, limit: RunLimit) -> Result<u64> {
+        self.start()?;
         let mut ticks = 0;
-        while ticks < limit.ticks {
-            if limit.until_idle && ticks > 0 && self.is_idle() {
-                break;
-            }
+        while !limit.reached(ticks, self.is_idle()) {
             self.tick()?;
             ticks += 1;
         }
@@ -275,8 +299,14 @@ impl<S: Script> Session<S> {
     }
 
     /// Ends the run: every observer writes what it gathered, even when another fails.
-    /// Returns their messages for the user, or the first error.
+    /// Returns their messages for the user, or the first error. Observers that were
+    /// never started are started first; a second call does nothing.
     pub fn finish(&mut self) -> Result<Vec<String>> {
+        if self.finished {
+            return Ok(Vec::new());
+        }
+        let started = self.start();
+        self.finished = true;
         let mut lines = Vec::new();
         let mut first_error = None;
         for o in &mut self.observers {
@@ -290,7 +320,7 @@ impl<S: Script> Session<S> {
                 }
             }
         }
-        match first_error {
+        match started.err().or(first_error) {
             Some(e) => Err(e),
             None => Ok(lines),
         }
@@ -462,5 +492,42 @@ mod tests {
             session.finish().unwrap(),
             vec!["saw 3 ticks".to_string(), "saw 2 ticks".to_string()]
         );
+    }
+
+    #[test]
+    fn observers_start_without_a_tick_and_finish_once() {
+        let mut session = Session::new(scene());
+        let early = session.observe(Counter::default());
+        let ran = session
+            .run(RunLimit {
+                ticks: 0,
+                until_idle: false,
+            })
+            .unwrap();
+        assert_eq!(ran, 0);
+        assert_eq!(
+            session.observer(early).started,
+            1,
+            "a 0-tick run still starts"
+        );
+        // One added after the start is started at once.
+        let late = session.observe(Counter::default());
+        assert_eq!(session.observer(late).started, 1);
+        session.tick().unwrap();
+        assert_eq!(session.observer(early).started, 1);
+        assert_eq!(session.finish().unwrap().len(), 2);
+        assert!(session.finish().unwrap().is_empty(), "finished once");
+    }
+
+    #[test]
+    fn a_run_limit_ticks_once_before_it_looks_at_idleness() {
+        let limit = RunLimit {
+            ticks: 10,
+            until_idle: true,
+        };
+        assert!(!limit.reached(0, true));
+        assert!(limit.reached(1, true));
+        assert!(!limit.reached(9, false));
+        assert!(limit.reached(10, false));
     }
 }
