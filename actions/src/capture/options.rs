@@ -57,7 +57,7 @@ mod tests {
         let arm = skeleton.scope("right_arm").unwrap();
         let mut pose = InputPose::new(skeleton.dof_count(), arm);
         scene.set_input_pose(pat, pose.clone()).unwrap();
-        scene.declare_device_hand(pat, Side::Left);
+        scene.declare_device_hand(pat, Side::Left).unwrap();
         let (capture, scope) = CaptureOptions::default().capture(&scene, pat).unwrap();
         assert_eq!(scope, arm);
         assert!(

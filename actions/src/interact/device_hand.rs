@@ -45,7 +45,7 @@ pub fn offer_to_hand(
     receiver: usize,
     hand: Side,
     timeout: Option<f64>,
-) -> Offering {
+) -> crate::error::Result<Offering> {
     let (arrived, closed, ended) = (scene.new_signal(), scene.new_signal(), scene.new_signal());
     let mut give = Give::new(object, receiver, side, arrived, ended).into_hand(hand);
     if let Some(t) = timeout {
@@ -57,8 +57,8 @@ pub fn offer_to_hand(
         receiver,
         arrived,
         closed,
-    });
-    Offering { give, closed }
+    })?;
+    Ok(Offering { give, closed })
 }
 
 /// `actor:receive{object = OBJ, from = ACTOR, hand = …}`: a grasp allowed to take `object`

@@ -83,7 +83,8 @@ impl GiveOptions {
             ));
         }
         if let Some(hand) = theirs {
-            let giver = offer_to_hand(scene, self.object, giver, side, self.to, hand, self.timeout);
+            let giver =
+                offer_to_hand(scene, self.object, giver, side, self.to, hand, self.timeout)?;
             return Ok((Box::new(giver), scope));
         }
         let (arrived, ended) = (scene.new_signal(), scene.new_signal());

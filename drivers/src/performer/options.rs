@@ -150,7 +150,7 @@ pub(crate) fn new_performer(
         scene.set_input_pose(actor, InputPose::new(n, driven))?;
         if let Some(side) = glove_side {
             // A giver brings objects into this hand rather than handing them over.
-            scene.declare_device_hand(actor, side);
+            scene.declare_device_hand(actor, side)?;
         }
         Ok::<_, troupe_scene::Error>(())
     })?

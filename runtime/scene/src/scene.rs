@@ -1,7 +1,7 @@
 //! The scene: actors, objects and their actions, stepped tick by tick.
 
 use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
-use crate::blackboard::{Blackboard, Notes, Offer, SignalId};
+use crate::blackboard::{Blackboard, Note, Notes, Offer, SignalId};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
 use crate::input_pose::InputPose;
@@ -229,8 +229,10 @@ impl Scene {
 
     /// Declares that a device (a data glove) drives `actor`'s hand `side`: a giver brings
     /// objects into that hand instead of handing them over.
-    pub fn declare_device_hand(&mut self, actor: usize, side: Side) {
+    pub fn declare_device_hand(&mut self, actor: usize, side: Side) -> Result<()> {
+        self.actor_info(actor)?;
         self.board.add_device_hand(actor, side);
+        Ok(())
     }
 
     /// Sets what devices ask of `actor` (the session's input phase; a performer's
@@ -262,8 +264,21 @@ impl Scene {
     }
 
     /// Opens an offer of an object to a device-driven hand (see [`Offer`]).
-    pub fn open_offer(&mut self, offer: Offer) {
+    pub fn open_offer(&mut self, offer: Offer) -> Result<()> {
+        self.actor_info(offer.giver)?;
+        self.actor_info(offer.receiver)?;
+        if offer.object >= self.objects.len() {
+            return Err(Error::UnknownObject(format!("#{}", offer.object)));
+        }
         self.board.open_offer(offer);
+        Ok(())
+    }
+
+    /// Actor `actor`, or an error naming the index.
+    fn actor_info(&self, actor: usize) -> Result<&ActorInfo> {
+        self.actors
+            .get(actor)
+            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))
     }
 
     /// Who holds object `object`, if anyone.
@@ -442,7 +457,12 @@ impl Scene {
         if let Err(e) = self.check_action(actor, &spec) {
             let mut notes = Notes::default();
             generator.end(&mut notes);
-            self.board.apply(actor, self.tick, notes.take());
+            // Signals go out; notes about an actor that does not exist do not.
+            let mut notes = notes.take();
+            if actor >= self.actors.len() {
+                notes.retain(|n| matches!(n, Note::Raise(_)));
+            }
+            self.board.apply(actor, self.tick, notes);
             return Err(e);
         }
         let id = ActionId(self.next_action);
