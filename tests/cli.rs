@@ -359,3 +359,23 @@ fn run_records_joint_torques_that_seq_plot_draws() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains(".trk"));
 }
+
+#[test]
+fn a_zero_tick_run_records_the_starting_postures() {
+    let trk = temp("zero.trk");
+    let out = succeeds(
+        troupe()
+            .args([
+                "run",
+                "scripts/examples/greeting.lua",
+                "--ticks",
+                "0",
+                "--record",
+            ])
+            .arg(&trk),
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("recorded 1 ticks of postures"), "{text}");
+    let set = troupe_formats::trk::read_trk_set(&trk).unwrap();
+    assert_eq!(set.len(), 2, "ann and bob");
+}

@@ -3,8 +3,8 @@
 use troupe_body::Scope;
 use troupe_scene::blend::ease;
 use troupe_scene::{
-    ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Mode, Scene,
-    SceneConfig, Status, Step,
+    ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Mode, Notes, Scene,
+    SceneConfig, SignalId, Status, Step,
 };
 
 /// Writes one constant value on every DOF of its scope, forever (or fails, or finishes).
@@ -614,4 +614,106 @@ fn the_worked_example_of_docs_scheduling_md() {
     let info = s.action(wave).unwrap();
     assert_eq!(info.status, Status::Cancelled);
     assert_eq!(info.reason.as_deref(), Some("pre-empted by action #2"));
+}
+
+/// Raises `raise` at its local time `at`, then finishes `steps_after` ticks later; raises
+/// `ended` when its action ends (however it ends).
+struct Signaller {
+    raise: SignalId,
+    at: f64,
+    ended: SignalId,
+    finish_after: Option<f64>,
+}
+
+impl Generator for Signaller {
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        if ctx.local_time >= self.at - 1e-9 {
+            out.raise(self.raise);
+        }
+        match self.finish_after {
+            Some(t) if ctx.local_time >= t - 1e-9 => Step::Finished,
+            _ => Step::Running,
+        }
+    }
+
+    fn end(&mut self, notes: &mut Notes) {
+        notes.raise(self.ended);
+    }
+}
+
+/// The first tick at which the world shows each signal, read as a generator would.
+fn first_seen(scene: &mut Scene, signals: &[SignalId], ticks: u64) -> Vec<Option<u64>> {
+    let mut seen = vec![None; signals.len()];
+    for _ in 0..ticks {
+        scene.step();
+        // What a generator of the next tick reads.
+        let next = scene.tick() + 1;
+        for (s, slot) in signals.iter().zip(seen.iter_mut()) {
+            if slot.is_none() && scene.blackboard().before(*s, next) {
+                *slot = Some(next);
+            }
+        }
+    }
+    seen
+}
+
+#[test]
+fn a_signal_is_seen_the_tick_after_it_is_raised_and_an_end_the_tick_after_the_last_run() {
+    let (mut s, a) = scene();
+    let (raised, ended) = (s.new_signal(), s.new_signal());
+    let gen = Signaller {
+        raise: raised,
+        at: 0.05,
+        ended,
+        finish_after: Some(0.1),
+    };
+    // Admitted and first stepped at tick 1 (local time 0): raises at tick 6, finishes
+    // (last step) at tick 11 and, without ease-out, ends in that tick.
+    let id = s
+        .start_action(a, spec(&s, "right_arm", Mode::Weighted), Box::new(gen))
+        .unwrap();
+    let seen = first_seen(&mut s, &[raised, ended], 20);
+    assert_eq!(status(&s, id), Status::Completed);
+    assert_eq!(seen[0], Some(7), "raised at tick 6, seen from tick 7");
+    assert_eq!(
+        seen[1],
+        Some(13),
+        "last ran at tick 11: stamped 12, seen from 13 (as the Drop stamps were)"
+    );
+}
+
+#[test]
+fn an_action_that_never_ran_ends_at_once_for_its_partners() {
+    let (mut s, a) = scene();
+    let ended = s.new_signal();
+    let gen = Signaller {
+        raise: s.new_signal(),
+        at: 1.0,
+        ended,
+        finish_after: None,
+    };
+    let mut pending = spec(&s, "right_arm", Mode::Weighted);
+    pending.delay = 1.0;
+    let id = s.start_action(a, pending, Box::new(gen)).unwrap();
+    s.step();
+    s.cancel(id).unwrap();
+    let seen = first_seen(&mut s, &[ended], 5);
+    assert_eq!(status(&s, id), Status::Cancelled);
+    assert_eq!(
+        seen[0],
+        Some(3),
+        "cancelled while pending at tick 2, seen from 3"
+    );
+    // An action refused outright ends before it began: its partners learn it next tick.
+    let refused = s.new_signal();
+    let bad = Signaller {
+        raise: s.new_signal(),
+        at: 0.0,
+        ended: refused,
+        finish_after: None,
+    };
+    assert!(s
+        .start_action(7, spec(&s, "right_arm", Mode::Weighted), Box::new(bad))
+        .is_err());
+    assert!(s.blackboard().before(refused, s.tick() + 1));
 }
