@@ -77,12 +77,9 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
         d.tick().unwrap();
         let mut perf = shared.0.lock().unwrap();
         perf.end_tick();
-        let made_now = {
-            let target = performer_target(&perf, 0);
-            target.made
-        };
+        let made_now = perf.made(0).unwrap();
         let ticks = d.scene().tick();
-        let target = performer_target(&perf, 0);
+        let target = d.scene().input_pose(actor).unwrap().clone();
         drop(perf);
         // A target made at this tick's start is in this tick's posture: ≤ 1 tick latency.
         if made_now == ticks && target.mask[root_x] && target.mask[index] {
@@ -131,13 +128,6 @@ fn performer_follows_the_emulated_motion_within_one_tick_and_replays_identically
     assert_eq!(a, b);
     assert_eq!(a, c);
     assert!(a.first() != a.last(), "the replayed performer moves");
-}
-
-fn performer_target(
-    p: &troupe_drivers::performer::Performers,
-    i: usize,
-) -> troupe_drivers::performer::CaptureTarget {
-    p.target(i).unwrap()
 }
 
 #[test]
@@ -237,7 +227,7 @@ fn osc_poses_and_glove_values_drive_a_performer() {
             );
             let perf = _shared.0.lock().unwrap();
             assert_eq!(perf.glove_raw("oz"), Some(vec![255; 18]));
-            let hand = perf.hand_target("oz").unwrap();
+            let hand = perf.hand_target("oz", d.scene()).unwrap();
             assert!(hand.contains(&(index, sk.dofs()[index].max)));
             assert!(hand
                 .iter()

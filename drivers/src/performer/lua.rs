@@ -155,13 +155,15 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
         lua.create_function(|lua, who: Value| {
             // The glove's hand DOF targets by name: what a grasp corrector would consume.
             with_performer(lua, &who, |p| {
+                let hand = troupe_lua::kinds::with_scene(lua, |scene| {
+                    scene
+                        .input_pose(p.actor)
+                        .map(|pose| p.hand_target(pose))
+                        .unwrap_or_default()
+                })?;
                 let out = lua.create_table()?;
-                let Some(g) = &p.glove else { return Ok(out) };
-                let t = &p.target;
-                for d in g.map.all_dofs() {
-                    if t.mask.get(d).copied().unwrap_or(false) {
-                        out.set(p.skeleton.dofs()[d].name.as_str(), t.q[d])?;
-                    }
+                for (d, v) in hand {
+                    out.set(p.skeleton.dofs()[d].name.as_str(), v)?;
                 }
                 Ok(out)
             })

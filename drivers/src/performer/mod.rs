@@ -12,5 +12,5 @@ pub(crate) mod source;
 
 pub use converter::{transmitter_to_world, AnatomicalConverter, ConverterError};
 pub use glove_map::{glove_dof_names, nominal_glove_calibration, GloveMap};
-pub use registry::{median_p99, CaptureTarget, Performer, Performers, SharedPerformers};
+pub use registry::{median_p99, Performer, Performers, SharedPerformers};
 pub use source::SourceError;

@@ -14,7 +14,7 @@ use crate::lua::args::{check_keys, resolve};
 use crate::osc::listener::OscListener;
 use crate::performer::converter::{transmitter_to_world, AnatomicalConverter};
 use crate::performer::glove_map::{nominal_glove_calibration, GloveMap};
-use crate::performer::registry::{CaptureTarget, Performer};
+use crate::performer::registry::Performer;
 use crate::performer::source::{FobInput, GloveInput, OscPoses, Source};
 use crate::record::writer::Recorder;
 use glam::DQuat;
@@ -164,12 +164,7 @@ pub(crate) fn new_performer(
         glove,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
-        target: CaptureTarget {
-            q: vec![0.0; n],
-            mask: vec![false; n],
-            arrived: None,
-            made: 0,
-        },
+        made: 0,
         driven,
         gesture_handlers: Vec::new(),
     };

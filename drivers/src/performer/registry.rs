@@ -21,20 +21,6 @@ use troupe_body::skeleton::Skeleton;
 use troupe_body::Scope;
 use troupe_scene::{Input, InputPose, Scene};
 
-/// What a performer's devices asked last: kept for latency and for queries; the session's
-/// input phase copies it into the scene ([`InputPose`]), where `capture` reads it.
-#[derive(Clone, Debug, Default)]
-pub struct CaptureTarget {
-    /// Target DOF values (whole actor).
-    pub q: Vec<f64>,
-    /// Which DOFs the devices set.
-    pub mask: Vec<bool>,
-    /// Arrival of the newest sample used (live devices).
-    pub arrived: Option<Instant>,
-    /// Tick counter of the input phase that made it.
-    pub made: u64,
-}
-
 /// One performer.
 pub struct Performer {
     /// Name (the actor's).
@@ -53,12 +39,25 @@ pub struct Performer {
     pub(crate) auto_calibrate: bool,
     /// `troupe.devices.calibrate` asked for a calibration at the next sample.
     pub(crate) calibrate_requested: bool,
-    /// What the devices asked last.
-    pub(crate) target: CaptureTarget,
+    /// The input phase (by count) that last set the performer's pose in the scene.
+    pub(crate) made: u64,
     /// Every DOF the devices can drive (the natural scope of `capture`).
     pub(crate) driven: Scope,
     /// `troupe.devices.on_gesture` handlers.
     pub(crate) gesture_handlers: Vec<Function>,
+}
+
+impl Performer {
+    /// The glove's hand targets in `pose` as (DOF index, radians); none without a glove.
+    pub(crate) fn hand_target(&self, pose: &InputPose) -> Vec<(usize, f64)> {
+        let Some(g) = &self.glove else {
+            return Vec::new();
+        };
+        g.map
+            .all_dofs()
+            .filter_map(|d| pose.target(d).map(|v| (d, v)))
+            .collect()
+    }
 }
 
 /// Every performer of a scene, the recorder, and latency measurements.
@@ -103,19 +102,11 @@ impl Performers {
         }
     }
 
-    /// The glove's hand targets of a performer as (DOF index, radians): what a grasp
-    /// corrector takes instead of letting `capture` write the hand.
-    pub fn hand_target(&self, performer: &str) -> Option<Vec<(usize, f64)>> {
+    /// The glove's hand targets of a performer as (DOF index, radians), from its pose in
+    /// `scene`: what a grasp corrector takes instead of letting `capture` write the hand.
+    pub fn hand_target(&self, performer: &str, scene: &Scene) -> Option<Vec<(usize, f64)>> {
         let p = self.list.iter().find(|p| p.name == performer)?;
-        let g = p.glove.as_ref()?;
-        let t = &p.target;
-        Some(
-            g.map
-                .all_dofs()
-                .filter(|&d| t.mask.get(d).copied().unwrap_or(false))
-                .map(|d| (d, t.q[d]))
-                .collect(),
-        )
+        Some(p.hand_target(scene.input_pose(p.actor)?))
     }
 
     /// The latest raw glove values of a performer.
@@ -129,9 +120,10 @@ impl Performers {
             .clone()
     }
 
-    /// A copy of performer `i`'s capture target.
-    pub fn target(&self, i: usize) -> Option<CaptureTarget> {
-        self.list.get(i).map(|p| p.target.clone())
+    /// The input phase (counted from 1) that last set performer `i`'s pose in the scene
+    /// (0: none yet); compare with the scene's tick for latency.
+    pub fn made(&self, i: usize) -> Option<u64> {
+        self.list.get(i).map(|p| p.made)
     }
 
     /// Health of every live device: (performer, device, report).
@@ -260,18 +252,14 @@ impl Performers {
                 }
             }
             let pose = InputPose {
-                q: q.clone(),
-                mask: mask.clone(),
+                q,
+                mask,
                 driven: p.driven,
             };
             if let Err(e) = scene.set_input_pose(p.actor, pose) {
                 tracing::error!(performer = %p.name, "{e}");
             }
-            let t = &mut p.target;
-            t.q = q;
-            t.mask = mask;
-            t.arrived = newest.or(t.arrived);
-            t.made = self.ticks;
+            p.made = self.ticks;
             if let Some(a) = newest {
                 self.pending_latency.push(a);
             }
