@@ -238,10 +238,7 @@ impl Scene {
     /// Sets what devices ask of `actor` (the session's input phase; a performer's
     /// `capture` reads it through the world).
     pub fn set_input_pose(&mut self, actor: usize, pose: InputPose) -> Result<()> {
-        let info = self
-            .actors
-            .get(actor)
-            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        let info = self.actor_info(actor)?;
         let n = info.skeleton.dof_count();
         if pose.q.len() != n || pose.mask.len() != n {
             return Err(Error::Invalid(format!(
@@ -422,10 +419,7 @@ impl Scene {
     /// Sets DOFs of an actor directly (value and held value); an action driving them takes
     /// over on the next tick. Values are clamped to the DOF limits.
     pub fn set_dofs(&mut self, actor: usize, values: &[(usize, f64)]) -> Result<()> {
-        let info = self
-            .actors
-            .get(actor)
-            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        let info = self.actor_info(actor)?;
         let skeleton = info.skeleton.clone();
         let state = &mut self.states[actor];
         for &(d, v) in values {
@@ -488,10 +482,7 @@ impl Scene {
 
     /// Whether `actor` may run an action of `spec`.
     fn check_action(&self, actor: usize, spec: &ActionSpec) -> Result<()> {
-        let info = self
-            .actors
-            .get(actor)
-            .ok_or_else(|| Error::UnknownActor(format!("#{actor}")))?;
+        let info = self.actor_info(actor)?;
         spec.validate()?;
         if spec.scope.iter().any(|d| d >= info.skeleton.dof_count()) {
             return Err(Error::Invalid(format!(
