@@ -24,3 +24,15 @@ if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/packa
   npm install --prefix "$tools" --no-save --no-audit --no-fund "gltf-validator@$GLTF_VALIDATOR" >&2 ||
     echo "setup: could not install gltf-validator; its test will be skipped" >&2
 fi
+# VRPN: the tests in drivers/tests/vrpn_server.rs build the real VRPN server from
+# ../shared/vendor/vrpn-07.38.tar.gz (scripts/vrpn-server.sh) and need cmake and g++.
+vrpn_missing=()
+for pkg in cmake g++; do
+  dpkg -s "$pkg" >/dev/null 2>&1 || vrpn_missing+=("$pkg")
+done
+if ((${#vrpn_missing[@]})); then
+  echo "setup: installing ${vrpn_missing[*]} (to build the VRPN server for its tests)" >&2
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${vrpn_missing[@]}"
+fi
