@@ -74,6 +74,7 @@ impl VrpnPort {
                 source,
             })?;
         tcp.set_nodelay(true).map_err(io_err("TCP_NODELAY"))?;
+        reset_on_close(&tcp).map_err(io_err("SO_LINGER"))?;
         tcp.set_write_timeout(Some(timeout))
             .map_err(io_err("write timeout"))?;
         tcp.write_all(COOKIE)
@@ -239,6 +240,32 @@ impl Write for VrpnPort {
 
     fn flush(&mut self) -> io::Result<()> {
         self.tcp.flush()
+    }
+}
+
+/// Makes closing the socket reset the connection rather than end it gracefully. When the
+/// server goes away first, a graceful close would leave its side of the connection in
+/// TIME_WAIT for a minute, and VRPN's server (which does not set SO_REUSEADDR on Linux)
+/// could not listen on its port again when restarted; a reset frees the port at once.
+fn reset_on_close(tcp: &TcpStream) -> io::Result<()> {
+    let linger = libc::linger {
+        l_onoff: 1,
+        l_linger: 0,
+    };
+    // SAFETY: a valid socket, and a pointer to a `linger` of the size given.
+    let r = unsafe {
+        libc::setsockopt(
+            tcp.as_raw_fd(),
+            libc::SOL_SOCKET,
+            libc::SO_LINGER,
+            (&linger as *const libc::linger).cast(),
+            std::mem::size_of::<libc::linger>() as libc::socklen_t,
+        )
+    };
+    if r == 0 {
+        Ok(())
+    } else {
+        Err(io::Error::last_os_error())
     }
 }
 
