@@ -193,3 +193,154 @@ fn a_killed_and_restarted_server_is_reconnected_to() {
         back.as_secs_f64() * 1e3
     );
 }
+
+mod performer {
+    use super::server::{free_port, Server};
+    use std::sync::Arc;
+    use std::time::{Duration, Instant};
+    use troupe_drivers::record::Recorder;
+    use troupe_lua::{Director, LuaSession, LuaSessionExt, ScriptLimits};
+    use troupe_scene::SceneConfig;
+
+    fn director(threads: usize, recorder: Option<Arc<Recorder>>) -> LuaSession {
+        let config = SceneConfig {
+            rate: 100.0,
+            threads,
+            seed: 0,
+        };
+        let mut d = Director::session(
+            config,
+            troupe_actions::action_kinds(),
+            ScriptLimits::default(),
+        )
+        .unwrap();
+        d.scene_mut().set_chunk_size(Some(1));
+        troupe_drivers::lua::install(&mut d, recorder).unwrap();
+        d
+    }
+
+    fn scene(device: &str) -> String {
+        format!(
+            r#"
+            pat = troupe.performer{{ name = "pat", at = {{0, 0, 1}},
+              devices = {{ vrpn = {{ {device}, map = {{ pelvis = 0, skullbase = 1 }} }} }} }}
+            other = troupe.actor{{ name = "other", at = {{2, 0, 0}} }}
+            pat:capture{{}}
+            presses = {{}}
+            troupe.devices.on_button("Button0.*", function(name, down, who)
+              presses[#presses + 1] = string.format("%.2f %s %s %s", troupe.time(), who, name, tostring(down))
+            end)
+            function state() return troupe.devices.health(pat).vrpn.state end
+            function samples() return troupe.devices.health(pat).vrpn.samples end
+            "#
+        )
+    }
+
+    fn eval<T: mlua::FromLua>(d: &mut LuaSession, code: &str) -> T {
+        d.script_and_scene().0.lua().load(code).eval().unwrap()
+    }
+
+    #[test]
+    fn a_performer_rides_out_a_server_restart_while_the_scene_ticks_and_replays_identically() {
+        let port = free_port();
+        let config =
+            "vrpn_Tracker_Spin Spin0 2 100.0 0.0 1.0 0.0 0.5\nvrpn_Button_Example Button0 2 5.0\n";
+        let server = Server::start(port, config);
+        let dir = std::env::temp_dir().join(format!("troupe-vrpn-perf-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let rec_path = dir.join("pat.rec");
+        let recorder = Arc::new(Recorder::create(&rec_path).unwrap());
+        let mut d = director(1, Some(recorder.clone()));
+        d.load_str(
+            &scene(&format!(
+                r#"device = "Spin0@127.0.0.1:{port}", buttons = "Button0""#
+            )),
+            "live",
+        )
+        .unwrap();
+        let mut slowest_tick = Duration::ZERO;
+        let mut tick = |d: &mut LuaSession, n: usize| {
+            for _ in 0..n {
+                let t = Instant::now();
+                d.tick().unwrap();
+                slowest_tick = slowest_tick.max(t.elapsed());
+                std::thread::sleep(Duration::from_millis(10));
+            }
+        };
+        let until = |d: &mut LuaSession,
+                     tick: &mut dyn FnMut(&mut LuaSession, usize),
+                     what: &str,
+                     f: &dyn Fn(&mut LuaSession) -> bool| {
+            let start = Instant::now();
+            while !f(d) {
+                assert!(
+                    start.elapsed() < Duration::from_secs(10),
+                    "waiting for {what}"
+                );
+                tick(d, 1);
+            }
+        };
+        until(&mut d, &mut tick, "streaming", &|d| {
+            eval::<String>(d, "return state()") == "streaming"
+        });
+        tick(&mut d, 50);
+        let yaw_of = |d: &LuaSession| {
+            let sk = &d.scene().actors()[0].skeleton;
+            d.scene().states()[0].q[sk.dof("root_yaw").unwrap()]
+        };
+        let before_kill = yaw_of(&d);
+        server.kill();
+        let ticks_at_kill = d.scene().tick();
+        until(&mut d, &mut tick, "the loss", &|d| {
+            eval::<String>(d, "return state()") != "streaming"
+        });
+        let lost_state: String = eval(&mut d, "return state()");
+        // The scene keeps ticking without the server, the posture held.
+        tick(&mut d, 30);
+        assert!(d.scene().tick() >= ticks_at_kill + 30);
+        let held = yaw_of(&d);
+        tick(&mut d, 10);
+        assert_eq!(held, yaw_of(&d), "no samples, no motion");
+        let samples_before: u64 = eval(&mut d, "return samples()");
+        let _server = Server::start(port, config);
+        until(&mut d, &mut tick, "streaming again", &|d| {
+            eval::<String>(d, "return state()") == "streaming"
+                && eval::<u64>(d, "return samples()") > samples_before
+        });
+        tick(&mut d, 20);
+        assert_ne!(held, yaw_of(&d), "the spin drives the performer again");
+        assert_ne!(before_kill, held);
+        assert!(
+            ["stale", "reconnecting"].contains(&lost_state.as_str()),
+            "{lost_state}"
+        );
+        assert!(
+            slowest_tick < Duration::from_millis(100),
+            "a tick took {slowest_tick:?}"
+        );
+        let presses: Vec<String> = eval(&mut d, "return presses");
+        assert!(presses.len() >= 2, "{presses:?}");
+        drop(d);
+        recorder.finish().unwrap();
+
+        // The recording replays identically, postures and button events, on 1 and 2 threads.
+        let replay = format!(r#"replay = {:?}"#, rec_path.display().to_string());
+        let run = |threads: usize| {
+            let mut d = director(threads, None);
+            d.load_str(&scene(&replay), "replay").unwrap();
+            let mut postures = Vec::new();
+            for _ in 0..300 {
+                d.tick().unwrap();
+                postures.push(d.scene().states()[0].q.clone());
+            }
+            let presses: Vec<String> = eval(&mut d, "return presses");
+            (postures, presses)
+        };
+        let (a, pa) = run(1);
+        let (b, pb) = run(2);
+        assert!(a == b && pa == pb, "replay differs between 1 and 2 threads");
+        assert!(a.first() != a.last(), "the replayed performer moves");
+        assert!(!pa.is_empty(), "the replay has button events");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

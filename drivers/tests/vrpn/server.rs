@@ -41,8 +41,6 @@ pub fn free_port() -> u16 {
 /// A running `vrpn_server`.
 pub struct Server {
     child: Child,
-    /// Its port.
-    pub port: u16,
     config: PathBuf,
 }
 
@@ -67,11 +65,7 @@ impl Server {
             .stderr(Stdio::null())
             .spawn()
             .expect("starting vrpn_server");
-        let s = Server {
-            child,
-            port,
-            config: dir,
-        };
+        let s = Server { child, config: dir };
         let start = Instant::now();
         while std::net::TcpStream::connect(("127.0.0.1", port)).is_err() {
             assert!(
