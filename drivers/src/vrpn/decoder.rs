@@ -133,6 +133,40 @@ impl VrpnReading {
     }
 }
 
+/// One line for a console (`troupe devices probe vrpn`).
+impl std::fmt::Display for VrpnReading {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let v3 = |v: &[f64; 3]| format!("{:8.4} {:8.4} {:8.4}", v[0], v[1], v[2]);
+        let v4 = |q: &[f64; 4]| format!("{:7.4} {:7.4} {:7.4} {:7.4}", q[0], q[1], q[2], q[3]);
+        write!(f, "[{:.6}] {} ", self.time(), self.device())?;
+        match self {
+            VrpnReading::Tracker { sensor, position, quaternion, .. } => {
+                write!(f, "sensor {sensor} pos {} quat(xyzw) {}", v3(position), v4(quaternion))
+            }
+            VrpnReading::Velocity { sensor, velocity, quaternion, dt, .. } => write!(
+                f,
+                "sensor {sensor} vel {} turn {} over {dt} s",
+                v3(velocity),
+                v4(quaternion)
+            ),
+            VrpnReading::Acceleration { sensor, acceleration, quaternion, dt, .. } => write!(
+                f,
+                "sensor {sensor} acc {} turn {} over {dt} s",
+                v3(acceleration),
+                v4(quaternion)
+            ),
+            VrpnReading::Button { button, pressed, .. } => {
+                write!(f, "button {button} {}", if *pressed { "down" } else { "up" })
+            }
+            VrpnReading::Buttons { pressed, .. } => {
+                let s: String = pressed.iter().map(|&p| if p { '1' } else { '0' }).collect();
+                write!(f, "buttons {s}")
+            }
+            VrpnReading::Analog { channels, .. } => write!(f, "analog {channels:?}"),
+        }
+    }
+}
+
 /// Counts of messages the decoder could not use.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct DecodeCounters {
