@@ -344,8 +344,8 @@ fn probe_vrpn(a: &ProbeArgs, timeout: Duration) -> Result<ExitCode> {
     let mut o = DriverOptions::new("probe", &device);
     o.max_attempts = Some(3);
     let handshake = vrpn::HANDSHAKE_TIMEOUT.min(timeout / 2);
-    let dev = vrpn::spawn(VrpnConfig::new(&name, &a.also), o, handshake, None)
-        .map_err(|e| anyhow!(e))?;
+    let dev =
+        vrpn::spawn(VrpnConfig::new(&name, &a.also), o, handshake, None).map_err(|e| anyhow!(e))?;
     let start = Instant::now();
     let mut n = 0;
     while n < a.samples && start.elapsed() < timeout {

@@ -140,23 +140,51 @@ impl std::fmt::Display for VrpnReading {
         let v4 = |q: &[f64; 4]| format!("{:7.4} {:7.4} {:7.4} {:7.4}", q[0], q[1], q[2], q[3]);
         write!(f, "[{:.6}] {} ", self.time(), self.device())?;
         match self {
-            VrpnReading::Tracker { sensor, position, quaternion, .. } => {
-                write!(f, "sensor {sensor} pos {} quat(xyzw) {}", v3(position), v4(quaternion))
+            VrpnReading::Tracker {
+                sensor,
+                position,
+                quaternion,
+                ..
+            } => {
+                write!(
+                    f,
+                    "sensor {sensor} pos {} quat(xyzw) {}",
+                    v3(position),
+                    v4(quaternion)
+                )
             }
-            VrpnReading::Velocity { sensor, velocity, quaternion, dt, .. } => write!(
+            VrpnReading::Velocity {
+                sensor,
+                velocity,
+                quaternion,
+                dt,
+                ..
+            } => write!(
                 f,
                 "sensor {sensor} vel {} turn {} over {dt} s",
                 v3(velocity),
                 v4(quaternion)
             ),
-            VrpnReading::Acceleration { sensor, acceleration, quaternion, dt, .. } => write!(
+            VrpnReading::Acceleration {
+                sensor,
+                acceleration,
+                quaternion,
+                dt,
+                ..
+            } => write!(
                 f,
                 "sensor {sensor} acc {} turn {} over {dt} s",
                 v3(acceleration),
                 v4(quaternion)
             ),
-            VrpnReading::Button { button, pressed, .. } => {
-                write!(f, "button {button} {}", if *pressed { "down" } else { "up" })
+            VrpnReading::Button {
+                button, pressed, ..
+            } => {
+                write!(
+                    f,
+                    "button {button} {}",
+                    if *pressed { "down" } else { "up" }
+                )
             }
             VrpnReading::Buttons { pressed, .. } => {
                 let s: String = pressed.iter().map(|&p| if p { '1' } else { '0' }).collect();
