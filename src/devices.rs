@@ -341,7 +341,7 @@ fn probe_vrpn(a: &ProbeArgs, timeout: Duration) -> Result<ExitCode> {
         .clone()
         .ok_or_else(|| anyhow!("--device is required for vrpn (Tracker0@host[:port])"))?;
     let name = DeviceName::parse(&device).map_err(|e| anyhow!(e))?;
-    let mut o = DriverOptions::new("probe", &device);
+    let mut o = vrpn::driver_options("probe", &device);
     o.max_attempts = Some(3);
     let handshake = vrpn::HANDSHAKE_TIMEOUT.min(timeout / 2);
     let dev =

@@ -5,7 +5,6 @@
 //! connection become the performer's controls.
 
 use crate::device::reading::Reading;
-use crate::device::thread::DriverOptions;
 use crate::lua::args::{check_keys, resolve};
 use crate::performer::controls::Controls;
 use crate::performer::converter::AnatomicalConverter;
@@ -170,7 +169,7 @@ pub(crate) fn vrpn_input(
                     format!("timeout must be 0…60 s, got {timeout}"),
                 ));
             }
-            let options = DriverOptions::new(&format!("{name}.vrpn"), &d);
+            let options = vrpn::driver_options(&format!("{name}.vrpn"), &d);
             let h = vrpn::spawn(
                 VrpnConfig::new(&n, &extra),
                 options,

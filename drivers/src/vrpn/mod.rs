@@ -29,6 +29,19 @@ use std::time::Duration;
 /// the thread retries with backoff).
 pub const HANDSHAKE_TIMEOUT: Duration = Duration::from_secs(2);
 
+/// The longest wait between connection attempts: a refused TCP connection costs nothing,
+/// so a restarted server is found again within half a second.
+pub const BACKOFF_MAX: Duration = Duration::from_millis(500);
+
+/// A VRPN client's driver options: named `name` (logs and recordings), stale after 250 ms
+/// without a report, retrying every 50 ms doubling up to [`BACKOFF_MAX`], never giving up.
+pub fn driver_options(name: &str, device: &str) -> DriverOptions {
+    DriverOptions {
+        backoff_max: BACKOFF_MAX,
+        ..DriverOptions::new(name, device)
+    }
+}
+
 /// Starts a client thread for `config` (its device and other senders); `options` name it
 /// and set staleness and backoff; `handshake` bounds each connection attempt.
 pub fn spawn(
