@@ -16,7 +16,13 @@ const CONFIG: &str = "vrpn_Tracker_Spin Spin0 3 100.0 0.0 1.0 0.0 0.25\n";
 
 fn start(bin: &str, cfg: &std::path::Path, port: u16) -> (Child, Instant) {
     let child = Command::new(bin)
-        .args(["-f", cfg.to_str().unwrap(), "-millisleep", "1", &port.to_string()])
+        .args([
+            "-f",
+            cfg.to_str().unwrap(),
+            "-millisleep",
+            "1",
+            &port.to_string(),
+        ])
         .stdout(Stdio::null())
         .stderr(Stdio::null())
         .spawn()
@@ -41,9 +47,15 @@ fn main() {
         threads: 1,
         seed: 0,
     };
-    let mut d =
-        Director::session(config, troupe_actions::action_kinds(), ScriptLimits::default()).unwrap();
-    let perf = troupe_drivers::lua::install(&mut d, None).unwrap().performers;
+    let mut d = Director::session(
+        config,
+        troupe_actions::action_kinds(),
+        ScriptLimits::default(),
+    )
+    .unwrap();
+    let perf = troupe_drivers::lua::install(&mut d, None)
+        .unwrap()
+        .performers;
     d.load_str(
         &format!(
             r#"pat = troupe.performer{{ name = "pat", devices = {{ vrpn = {{

@@ -5,8 +5,9 @@
 //! performer standing at (−0.45, 0, 0.8) facing 180°, 50 reports a second for 12 s, each
 //! sensor's pose the forward kinematics of a scripted posture: standing for a second (the
 //! calibration), then raising the right forearm to hold the hand out from 1.5 s to 3 s, the
-//! left hand swinging a little. A button device `Wand0` whose button 0 goes down at 3.5 s
-//! and up at 3.7 s. The messages are encoded as the wire carries them, with sender and type
+//! left hand swinging a little. A wand `Wand0` whose button 0 goes down at 3.5 s and up
+//! at 3.7 s, and whose analog channel 0 (a trigger) rises from 0 to 1 over 3.0–3.5 s,
+//! reported ten times a second while it changes. The messages are encoded as the wire carries them, with sender and type
 //! descriptions first, so the replay runs the very decoder a live connection does.
 //!
 //! Run: `cargo run -p troupe-drivers --example vrpn_recording -- scripts/examples/performer_vrpn.rec`
@@ -54,7 +55,8 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         senders: vec!["Tracker0".into(), "Wand0".into()],
     };
     let s = rec.add_stream("pat.vrpn", "vrpn", serde_json::to_value(&config)?);
-    // Server ids: senders 0 Tracker0, 1 Wand0; types 0 Pos_Quat, 1 Button Change.
+    // Server ids: senders 0 Tracker0, 1 Wand0; types 0 Pos_Quat, 1 Button Change,
+    // 2 Analog Channel.
     let start_sec = 1_800_000_000u32;
     let descriptions = [
         encode(
@@ -84,6 +86,13 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             1,
             system::TYPE_DESCRIPTION,
             &name_payload(types::BUTTON_CHANGE),
+        ),
+        encode(
+            start_sec,
+            0,
+            2,
+            system::TYPE_DESCRIPTION,
+            &name_payload(types::ANALOG),
         ),
     ]
     .concat();
@@ -128,6 +137,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 1,
                 &[0, 0, 0, 0, 0, 0, 0, u8::from(want_down)],
             ));
+        }
+        // The trigger: a report every fifth frame while it moves (VRPN sends on change).
+        if frame % 5 == 0 && (2.9..3.6).contains(&t) {
+            let trigger = ramp(t, 3.0, 3.5);
+            let payload = [1.0f64.to_be_bytes(), trigger.to_be_bytes()].concat();
+            bytes.extend(encode(sec, usec, 1, 2, &payload));
         }
         rec.data_at(s, micros, &bytes);
     }

@@ -1,6 +1,7 @@
 -- A performer tracked over VRPN, replaying the example's recording (a tracker Tracker0 with
 -- the pelvis and both wrists as sensors 0–2, and the wand Wand0 whose button 0 is down
--- from 3.5 to 3.7 s; see scripts/examples/performer_vrpn.lua).
+-- from 3.5 to 3.7 s and whose trigger, analog channel 0, rises from 0 to 1 over 3–3.5 s;
+-- see scripts/examples/performer_vrpn.lua).
 
 local rec = "../examples/performer_vrpn.rec"
 local map = { pelvis = 0, r_wrist = 1, l_wrist = 2 }
@@ -37,7 +38,22 @@ test("buttons are values and events, matched by name patterns", function()
   expect(#events == 2, "two events: " .. table.concat(events, "; "))
   expect(events[1]:find("pat Wand0.0 true") ~= nil, events[1])
   expect(events[2]:find("pat Wand0.0 false") ~= nil, events[2])
-  expect(next(troupe.devices.analogs()) == nil, "this recording has no analog channels")
+end)
+
+test("analog channels are values and events", function()
+  local pat = troupe.performer{ name = "pat", devices = { vrpn = { replay = rec, map = map } } }
+  local seen = {}
+  troupe.devices.on_analog("Wand0.0", function(name, value, who)
+    seen[#seen + 1] = value
+    expect(name == "Wand0.0" and who == "pat", name .. " " .. who)
+  end)
+  run(2.8)
+  expect(next(troupe.devices.analogs()) == nil, "no channel reported yet")
+  run(1.0)
+  expect(troupe.devices.analogs("Wand0.*")["Wand0.0"] == 1, "the trigger is fully pulled: " .. tostring(troupe.devices.analogs()["Wand0.0"]))
+  expect(#seen >= 4, "an event per change: " .. #seen)
+  for i = 2, #seen do expect(seen[i] > seen[i - 1], "rising: " .. table.concat(seen, " ")) end
+  expect(seen[1] == 0, "from 0: " .. seen[1])
 end)
 
 test("bad VRPN options are clear errors", function()

@@ -12,7 +12,12 @@ use std::time::{Duration, Instant};
 pub fn server_binary() -> PathBuf {
     static BIN: OnceLock<PathBuf> = OnceLock::new();
     BIN.get_or_init(|| {
-        let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../scripts/vrpn-server.sh");
+        // The workspace root holds scripts/: the manifest's folder or one above it.
+        let script = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+            .ancestors()
+            .map(|d| d.join("scripts/vrpn-server.sh"))
+            .find(|p| p.exists())
+            .expect("scripts/vrpn-server.sh");
         let out = Command::new("bash")
             .arg(&script)
             .stderr(Stdio::inherit())
