@@ -112,5 +112,5 @@ pub enum DeviceError {
     },
     /// A VRPN server could not be reached or answered wrongly.
     #[error(transparent)]
-    Vrpn(crate::vrpn::VrpnError),
+    Vrpn(crate::vrpn::error::VrpnError),
 }

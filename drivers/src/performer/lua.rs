@@ -49,7 +49,7 @@ pub(crate) fn install(
         Ok(())
     }));
     // The VRPN controls' events, after the gestures'.
-    director.add_script_hook(Box::new(crate::performer::controls::call_handlers));
+    director.add_script_hook(Box::new(crate::performer::controls_api::call_handlers));
     session.add_input(Box::new(PerformerInput(shared.clone())));
     Ok(shared)
 }
@@ -262,7 +262,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             Ok(())
         })?,
     )?;
-    crate::performer::controls::install_lua(lua, &devices)?;
+    crate::performer::controls_api::install_lua(lua, &devices)?;
     troupe.set("devices", devices)?;
     Ok(())
 }

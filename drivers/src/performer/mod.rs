@@ -4,6 +4,7 @@
 //! troupe-actions makes them follow it.
 
 pub(crate) mod controls;
+pub(crate) mod controls_api;
 pub(crate) mod converter;
 pub(crate) mod glove_map;
 pub(crate) mod lua;
