@@ -170,3 +170,38 @@ fn probe_reports_a_server_that_never_answers_within_its_timeout() {
     assert!(err.contains("no VRPN cookie within 0.8 s"), "{err}");
     drop(hold);
 }
+
+/// `troupe run scripts/examples/performer_vrpn.lua` with `threads` threads: what the scene
+/// printed.
+fn run_example(threads: &str) -> Vec<String> {
+    let out = troupe()
+        .args([
+            "run",
+            "scripts/examples/performer_vrpn.lua",
+            "--seconds",
+            "12",
+        ])
+        .args(["--threads", threads, "--chunk", "1"])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(out.status.success(), "troupe run failed:\n{text}");
+    text.lines()
+        .filter_map(|l| l.split_once("lua: ").map(|(_, m)| m.to_string()))
+        .collect()
+}
+
+#[test]
+fn the_example_performer_tracked_over_vrpn_takes_the_cup() {
+    let lines = run_example("1");
+    assert!(lines.len() == 2, "{lines:?}");
+    assert!(
+        lines[0].starts_with("3.50 s: pat presses Wand0.0"),
+        "{lines:?}"
+    );
+    assert!(
+        lines[1].starts_with("give: completed, the cup is held by pat"),
+        "{lines:?}"
+    );
+    assert_eq!(lines, run_example("2"), "the same with 2 threads");
+}
