@@ -9,13 +9,16 @@ use troupe_drivers::device::{DeviceHandle, DriverOptions, HealthReport, HealthSt
 use troupe_drivers::vrpn::wire::{encode, name_payload, system, COOKIE};
 use troupe_drivers::vrpn::{self, DeviceName, VrpnConfig};
 
-/// A TCP peer on a loopback port that runs `serve` on each connection it accepts.
-fn peer(serve: impl Fn(std::net::TcpStream) + Send + 'static) -> u16 {
+/// A TCP peer on a loopback port that runs `serve` on each connection it accepts, each on
+/// its own thread.
+fn peer(serve: impl Fn(std::net::TcpStream) + Send + Sync + 'static) -> u16 {
     let l = TcpListener::bind("127.0.0.1:0").unwrap();
     let port = l.local_addr().unwrap().port();
+    let serve = std::sync::Arc::new(serve);
     std::thread::spawn(move || {
         for s in l.incoming().flatten() {
-            serve(s);
+            let serve = serve.clone();
+            std::thread::spawn(move || serve(s));
         }
     });
     port
@@ -61,6 +64,28 @@ fn a_server_that_never_answers_the_handshake_fails_within_the_timeout() {
         e.contains("no VRPN cookie within 0.3 s (got 0 of 24 bytes)"),
         "{e}"
     );
+}
+
+#[test]
+fn a_peer_that_falls_silent_after_the_handshake_is_dropped_and_retried() {
+    let port = peer(|mut s| {
+        let mut cookie = [0u8; 24];
+        if s.read_exact(&mut cookie).is_ok() {
+            let _ = s.write_all(COOKIE);
+            // Then nothing, not even pongs, with the connection open.
+            std::thread::sleep(Duration::from_secs(10));
+        }
+    });
+    let start = Instant::now();
+    let h = client(port, Duration::from_secs(1), None);
+    let r = wait_until(&h, |r| r.connections >= 2);
+    assert!(
+        start.elapsed() < Duration::from_secs(5),
+        "{:?}",
+        start.elapsed()
+    );
+    let e = r.last_error.unwrap();
+    assert!(e.contains("nothing from the server for 3 s"), "{e}");
 }
 
 #[test]

@@ -159,6 +159,23 @@ fn a_null_tracker_holds_the_identity() {
 }
 
 #[test]
+fn a_quiet_device_stays_connected_through_pings_and_pongs() {
+    // Buttons toggling every 10 s: after the states sent on connection, only the pongs
+    // to troupe's pings (one a second) keep the connection from looking dead (3 s).
+    let port = free_port();
+    let _server = Server::start(port, "vrpn_Button_Example Button0 2 0.1\n");
+    let h = client(&format!("Button0@127.0.0.1:{port}"), &[]);
+    let readings = collect(&h, Duration::from_millis(5000));
+    assert!(
+        matches!(readings.first(), Some(VrpnReading::Buttons { pressed, .. }) if pressed.len() == 2),
+        "{readings:?}"
+    );
+    let r = h.health.report();
+    assert_eq!(r.connections, 1, "{r:?}");
+    assert_eq!(r.last_error, None);
+}
+
+#[test]
 fn a_killed_and_restarted_server_is_reconnected_to() {
     let port = free_port();
     let config = "vrpn_Tracker_NULL Null0 1 100.0\n";

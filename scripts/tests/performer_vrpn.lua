@@ -21,6 +21,30 @@ test("the tracked wrist raises the performer's arm through the converter", funct
   expect(troupe.devices.health(pat).vrpn.state == "replay", "a replay has no connection")
 end)
 
+test("units and axes: the same stream read in millimetres or as Z up moves the wrist otherwise", function()
+  local function rise(opts)
+    local name = "p" .. tostring(opts.units) .. tostring(opts.axes)
+    local vrpn = { replay = rec, map = map, units = opts.units, axes = opts.axes }
+    local p = troupe.performer{ name = name, at = {-0.45, 0, 0.8}, facing = 180, devices = { vrpn = vrpn } }
+    local cap = p:capture{}
+    run(1.0)
+    local low = p:joint_position("r_wrist")
+    run(2.5)
+    local high = p:joint_position("r_wrist")
+    cap:cancel()
+    return high[2] - low[2], high[3] - low[3]
+  end
+  local up = rise{}
+  local up_mm = rise{ units = "mm" }
+  local up_z, forward_z = rise{ axes = "z-up" }
+  expect(up > 0.2, "metres: the wrist rises " .. up)
+  -- (In millimetres the positions shrink to nothing; what is left is the wrist sensor's
+  -- turn swinging its lever.)
+  expect(math.abs(up_mm) < up / 5, "millimetres: the same numbers barely move it: " .. up_mm)
+  expect(up_z < up / 2, "Z up: the data's up is the scene's -Z, not up: " .. up_z)
+  expect(math.abs(forward_z) > 0.1, "and the wrist moves along Z: " .. forward_z)
+end)
+
 test("buttons are values and events, matched by name patterns", function()
   local pat = troupe.performer{ name = "pat", devices = { vrpn = { replay = rec, map = map } } }
   local events = {}

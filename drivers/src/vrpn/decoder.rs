@@ -21,9 +21,9 @@ pub mod types {
     pub const BUTTON_STATES: &str = "vrpn_Button States";
     /// Every analog channel's value.
     pub const ANALOG: &str = "vrpn_Analog Channel";
-    /// The server's "are you there" to a client's device object.
+    /// A client's "are you there" to a device of the server.
     pub const PING: &str = "vrpn_Base ping_message";
-    /// The client's answer to a ping.
+    /// The device's answer to a ping.
     pub const PONG: &str = "vrpn_Base pong_message";
 }
 
@@ -214,8 +214,6 @@ pub struct Decoder {
     wanted: Vec<String>,
     senders: HashMap<i32, String>,
     types: HashMap<i32, String>,
-    /// Pings of wanted senders not yet answered, by sender name.
-    pings: Vec<String>,
     counters: DecodeCounters,
 }
 
@@ -250,7 +248,6 @@ impl Decoder {
             wanted,
             senders: HashMap::new(),
             types: HashMap::new(),
-            pings: Vec::new(),
             counters: DecodeCounters::default(),
         }
     }
@@ -259,17 +256,11 @@ impl Decoder {
     pub fn new_connection(&mut self) {
         self.senders.clear();
         self.types.clear();
-        self.pings.clear();
     }
 
     /// What could not be used so far.
     pub fn counters(&self) -> DecodeCounters {
         self.counters
-    }
-
-    /// Pings to answer (sender names), oldest first; taking them clears the list.
-    pub fn take_pings(&mut self) -> Vec<String> {
-        std::mem::take(&mut self.pings)
     }
 
     fn malformed(&mut self, m: &Message) {
@@ -383,13 +374,9 @@ impl Decoder {
                     time,
                 })
             })(),
-            types::PING => {
-                if !self.pings.contains(&device) {
-                    self.pings.push(device);
-                }
-                return;
-            }
-            _ => return, // Another device class's message (text, dial, …): not ours.
+            // Pongs (answers to troupe's pings), another device class's messages (text,
+            // dials, …): nothing to decode.
+            _ => return,
         };
         match reading {
             Some(r) => out(r),

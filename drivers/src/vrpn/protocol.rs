@@ -1,18 +1,27 @@
-//! VRPN as a device protocol: after each connection it describes troupe's own sender and
-//! type (to answer the server's pings), then decodes the stream of whole messages the
-//! connection reads — live, or from a `.rec` recording of that stream.
+//! VRPN as a device protocol: after each connection it describes troupe's own senders and
+//! its ping type, pings the device every second as VRPN's own clients do (the server
+//! answers with a pong), and drops a connection on which nothing at all has arrived for
+//! [`SILENCE_LIMIT`]; it decodes the stream of whole messages the connection reads — live,
+//! or from a `.rec` recording of that stream.
 
 use crate::device::error::DeviceError;
 use crate::device::port::{write_all, Port};
 use crate::device::protocol::Protocol;
 use crate::device::reading::Reading;
-use crate::vrpn::connection::{now, DatagramCounters};
+use crate::vrpn::connection::{now as now_timestamp, DatagramCounters};
 use crate::vrpn::decoder::{types, Decoder};
 use crate::vrpn::name::DeviceName;
 use crate::vrpn::wire::{encode, name_payload, system, Framer};
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// How often troupe pings the device.
+pub const PING_PERIOD: Duration = Duration::from_secs(1);
+/// A connection on which nothing (no report, no pong) arrived for this long is dropped and
+/// made again: the server is stalled, or its host is gone without closing the connection.
+pub const SILENCE_LIMIT: Duration = Duration::from_secs(3);
 
 /// What a VRPN stream needs to be decoded again: the device and the other senders read.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
@@ -50,10 +59,13 @@ pub struct VrpnProtocol {
     /// Streams that could not be framed (a recording whose lengths lie).
     framing_errors: u64,
     framing_bytes: u64,
+    /// When the last ping went out and the last message came in (live connections only).
+    last_ping: Option<Instant>,
+    last_heard: Option<Instant>,
 }
 
-/// troupe's type id for pongs, in its own descriptions.
-const PONG_TYPE: i32 = 0;
+/// troupe's type id for pings, in its own descriptions.
+const PING_TYPE: i32 = 0;
 
 impl VrpnProtocol {
     /// A protocol for `config`; `datagrams` are the counters its connections share.
@@ -65,6 +77,8 @@ impl VrpnProtocol {
             datagrams,
             framing_errors: 0,
             framing_bytes: 0,
+            last_ping: None,
+            last_heard: None,
         }
     }
 }
@@ -86,7 +100,7 @@ impl Protocol for VrpnProtocol {
         self.framing_bytes = 0;
         self.datagrams.dropped.store(0, Ordering::Relaxed);
         self.datagrams.dropped_bytes.store(0, Ordering::Relaxed);
-        let (sec, usec) = now();
+        let (sec, usec) = now_timestamp();
         let mut out = Vec::new();
         for (id, s) in self.config.senders.iter().enumerate() {
             out.extend(encode(
@@ -100,27 +114,41 @@ impl Protocol for VrpnProtocol {
         out.extend(encode(
             sec,
             usec,
-            PONG_TYPE,
+            PING_TYPE,
             system::TYPE_DESCRIPTION,
-            &name_payload(types::PONG),
+            &name_payload(types::PING),
         ));
+        self.last_ping = None;
+        self.last_heard = Some(Instant::now());
         write_all(port, &out)
     }
 
     fn before_read(&mut self, port: &mut dyn Port) -> std::io::Result<()> {
-        // The server pings each device's clients and warns on its console when a client
-        // stays silent: answer like VRPN's own remotes.
-        for sender in self.decoder.take_pings() {
-            if let Some(id) = self.config.senders.iter().position(|s| *s == sender) {
-                let (sec, usec) = now();
-                port.write_all(&encode(sec, usec, id as i32, PONG_TYPE, &[]))?;
-            }
+        let now = Instant::now();
+        if self.last_heard.is_some_and(|t| now - t > SILENCE_LIMIT) {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::TimedOut,
+                format!(
+                    "nothing from the server for {} s (not even a pong)",
+                    SILENCE_LIMIT.as_secs()
+                ),
+            ));
+        }
+        if self.last_ping.is_none_or(|t| now - t >= PING_PERIOD) {
+            // Sender 0 is the device (VrpnConfig::new puts it first): its server object
+            // answers.
+            let (sec, usec) = now_timestamp();
+            port.write_all(&encode(sec, usec, 0, PING_TYPE, &[]))?;
+            self.last_ping = Some(now);
         }
         Ok(())
     }
 
     fn decode(&mut self, bytes: &[u8], out: &mut dyn FnMut(Reading)) {
         self.framer.push(bytes);
+        if self.last_heard.is_some() && !bytes.is_empty() {
+            self.last_heard = Some(Instant::now());
+        }
         loop {
             match self.framer.next_message() {
                 Ok(Some(m)) => self.decoder.decode(&m, &mut |r| out(Reading::Vrpn(r))),
