@@ -41,6 +41,8 @@ pub struct VrpnPort {
     counters: Arc<DatagramCounters>,
     /// How long `read` waits for either socket.
     wait: Duration,
+    /// Receives one datagram (VRPN's largest message fits).
+    datagram: Vec<u8>,
 }
 
 impl VrpnPort {
@@ -115,6 +117,7 @@ impl VrpnPort {
             out_at: 0,
             counters,
             wait: Duration::from_millis(20),
+            datagram: vec![0; 65_536],
         })
     }
 
@@ -173,9 +176,8 @@ impl Read for VrpnPort {
             let (tcp, udp) = self.poll()?;
             if udp {
                 if let Some(sock) = &self.udp {
-                    let mut dgram = vec![0u8; 65_536];
-                    match sock.recv(&mut dgram) {
-                        Ok(n) => match split_datagram(&dgram[..n]) {
+                    match sock.recv(&mut self.datagram) {
+                        Ok(n) => match split_datagram(&self.datagram[..n]) {
                             Ok(messages) => {
                                 self.out = messages
                                     .iter()
