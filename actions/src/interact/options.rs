@@ -88,7 +88,8 @@ impl GiveOptions {
             return Ok((Box::new(giver), scope));
         }
         let (arrived, ended) = (scene.new_signal(), scene.new_signal());
-        let mut give = Give::new(self.object, self.to, side, arrived, ended);
+        let gave_up = scene.new_signal();
+        let mut give = Give::new(self.object, self.to, side, arrived, ended).watching(gave_up);
         if let Some(t) = self.timeout {
             give = give.with_timeout(t);
         }
@@ -103,7 +104,8 @@ impl GiveOptions {
         };
         let take = Grasp::new(self.object, plan, sides, 1.0)?
             .gated(arrived)
-            .abandoned_by(give.ended());
+            .abandoned_by(give.ended())
+            .reporting(gave_up);
         let mut rx_spec = ActionSpec::new("receive", rx_scope);
         rx_spec.delay = delay;
         scene.start_action(self.to, rx_spec, Box::new(take))?;

@@ -137,6 +137,14 @@ pub struct Walk {
     twist: [Option<f64>; 2],
     /// The cadence speed of this tick (see [`Walk::cadence_speed`]).
     cadence: f64,
+    /// Per arm (as in [`Rig::arms`]): the wrist height to keep while its hand carries
+    /// something (see [`Walk::carry`]).
+    carry: [Option<f64>; 2],
+    /// The wrist joint of each arm.
+    wrists: [usize; 2],
+    /// Scratch posture and transforms for the carrying arms' kinematics.
+    carry_q: Vec<f64>,
+    carry_globals: Vec<troupe_body::Transform>,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -175,6 +183,10 @@ impl Walk {
             last_miss: 0.0,
             twist: [None; 2],
             cadence: 0.0,
+            carry: [None; 2],
+            wrists: [skeleton.joint("l_wrist")?, skeleton.joint("r_wrist")?],
+            carry_q: Vec::new(),
+            carry_globals: Vec::new(),
         })
     }
 
@@ -231,6 +243,75 @@ impl Walk {
     /// The DOFs the walk drives, as a scope.
     pub fn scope(&self) -> Scope {
         self.dofs.iter().copied().collect()
+    }
+
+    /// The part of its scope the walk can give up and keep walking: the arm swing and the
+    /// spine's lean and counter-rotation. The root, pelvis and legs are essential.
+    pub fn yields(&self) -> Scope {
+        let rig = &self.rig;
+        let upper = rig.spine.iter().chain(rig.arms.iter().flatten()).copied();
+        upper.collect::<Scope>().intersection(&self.scope())
+    }
+
+    /// Keeps the wrist of each carrying arm at the height it had when the walk started:
+    /// the elbow takes up the pelvis' bounce and the spine's lean, so that a carried cup
+    /// stays level. `upper` are this tick's root, pelvis and spine values as written.
+    fn carry(&mut self, ctx: &GeneratorContext, upper: &[(usize, f64)], out: &mut DofWriter) {
+        if self.carry.iter().all(Option::is_none) {
+            return;
+        }
+        let sk = ctx.skeleton;
+        self.carry_q.clear();
+        self.carry_q.extend_from_slice(&ctx.posture.q);
+        for &(d, v) in upper {
+            self.carry_q[d] = v;
+        }
+        self.carry_globals
+            .resize(sk.joints().len(), troupe_body::Transform::IDENTITY);
+        for i in 0..2 {
+            let Some(target) = self.carry[i] else {
+                continue;
+            };
+            if !Walk::arm_holds(ctx, i) {
+                continue;
+            }
+            let elbow = self.rig.arms[i][2];
+            if !out.scope().contains(elbow) {
+                continue;
+            }
+            let (lo, hi) = sk.limits()[elbow];
+            // Newton on the elbow angle, with a numerical slope: the height is smooth and
+            // nearly linear over the few centimetres to take up.
+            let height = |q: &mut Vec<f64>, g: &mut Vec<troupe_body::Transform>| {
+                troupe_body::kinematics::forward_kinematics(sk, q, g);
+                g[self.wrists[i]].translation.y
+            };
+            for _ in 0..2 {
+                let e = self.carry_q[elbow];
+                let y = height(&mut self.carry_q, &mut self.carry_globals);
+                self.carry_q[elbow] = e + 1e-4;
+                let slope = (height(&mut self.carry_q, &mut self.carry_globals) - y) / 1e-4;
+                let step = if slope.abs() > 0.05 {
+                    (target - y) / slope
+                } else {
+                    0.0
+                };
+                self.carry_q[elbow] = (e + step.clamp(-0.3, 0.3)).clamp(lo, hi);
+            }
+            out.set(elbow, self.carry_q[elbow]);
+        }
+    }
+
+    /// The side whose arm index `i` is in [`Rig::arms`] (0 left, 1 right) holds an object.
+    fn arm_holds(ctx: &GeneratorContext, i: usize) -> bool {
+        let prefix = if i == 0 { "l_" } else { "r_" };
+        let joints = ctx.skeleton.joints();
+        ctx.world.holders.iter().flatten().any(|h| {
+            h.actor == ctx.actor
+                && joints
+                    .get(h.joint)
+                    .is_some_and(|j| j.name.starts_with(prefix))
+        })
     }
 
     /// The body model the walk uses (thigh height, DOFs, foot geometry).
@@ -630,10 +711,26 @@ impl Generator for Walk {
         self.lambda = [0.0, 0.5];
         self.t = 0.0;
         self.start_q = q.clone();
+        for i in 0..2 {
+            self.carry[i] =
+                Walk::arm_holds(ctx, i).then(|| ctx.posture.globals[self.wrists[i]].translation.y);
+        }
         self.settle_since = None;
         self.twist = [None; 2];
         self.plan = Some(plan);
         Ok(())
+    }
+
+    /// Slows down from now and stops with both feet side by side (the walk then reports
+    /// `Finished`, as on arrival).
+    fn stop(&mut self) -> bool {
+        match &mut self.plan {
+            Some(plan) => {
+                plan.stop_at(self.t);
+                true
+            }
+            None => false,
+        }
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
@@ -651,25 +748,34 @@ impl Generator for Walk {
         // The upper body blends in from the posture the actor had.
         let k = smoothstep(self.t / BLEND_IN_TIME);
         let start_q = &self.start_q;
-        let mut put = |dof: usize, v: f64| {
-            let v = if k < 1.0 {
-                let s = start_q[dof];
-                s + (v - s) * k
+        let blended = |dof: usize, v: f64| {
+            if k < 1.0 {
+                start_q[dof] + (v - start_q[dof]) * k
             } else {
                 v
-            };
-            out.set(dof, v);
+            }
         };
+        let mut upper: Vec<(usize, f64)> = Vec::with_capacity(13);
+        upper.extend(rig.root.iter().copied().zip(root));
+        upper.extend(rig.pelvis.iter().copied().zip(pelvis));
         for (&d, &v) in rig.spine.iter().zip(&spine) {
-            put(d, v);
+            let v = blended(d, v);
+            upper.push((d, v));
+            out.set(d, v);
         }
         if self.options.arms {
-            for (dofs, values) in rig.arms.iter().zip(&arms) {
+            for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {
+                // A hand that carries something keeps its arm out of the swing, which
+                // would lower the load to the thigh.
+                if Walk::arm_holds(ctx, i) {
+                    continue;
+                }
                 for (&d, &v) in dofs.iter().zip(values) {
-                    put(d, v);
+                    out.set(d, blended(d, v));
                 }
             }
         }
+        self.carry(ctx, &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
         if self.t >= plan.end_time {

@@ -3,8 +3,8 @@
 use troupe_body::Scope;
 use troupe_scene::blend::ease;
 use troupe_scene::{
-    ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Mode, Notes, Scene,
-    SceneConfig, SignalId, Status, Step,
+    ActionId, ActionSpec, ActorDesc, DofWriter, Ending, Generator, GeneratorContext, Mode, Notes,
+    Scene, SceneConfig, SignalId, Status, Step,
 };
 
 /// Writes one constant value on every DOF of its scope, forever (or fails, or finishes).
@@ -636,7 +636,7 @@ impl Generator for Signaller {
         }
     }
 
-    fn end(&mut self, notes: &mut Notes) {
+    fn end(&mut self, _ending: &Ending, notes: &mut Notes) {
         notes.raise(self.ended);
     }
 }

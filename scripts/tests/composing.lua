@@ -1,0 +1,215 @@
+-- Actions that compose: stopping well, partial pre-emption, carrying while walking, and
+-- hand-overs that fail fast (docs/scheduling.md, "Narrowing").
+
+local STANDING_ANKLE = nil
+
+local function done(a) return a.status == "completed" end
+
+-- A world point at (dx, y, dz) from the actor's floor position (actors here face +Z).
+local function near(actor, dx, y, dz)
+  local p = actor:position()
+  return { p[1] + dx, y, p[3] + dz }
+end
+
+-- Both ankles at their standing height (within 1 cm) and neither foot off the floor.
+local function feet_down(actor)
+  local l = actor:joint_position("l_ankle")[2]
+  local r = actor:joint_position("r_ankle")[2]
+  return math.abs(l - STANDING_ANKLE) < 0.01 and math.abs(r - STANDING_ANKLE) < 0.01, l, r
+end
+
+local function standing_ankle()
+  if not STANDING_ANKLE then
+    local probe = troupe.actor{ name = "probe", at = {50, 0, 50} }
+    STANDING_ANKLE = probe:joint_position("l_ankle")[2]
+  end
+  return STANDING_ANKLE
+end
+
+-- Runs `seconds`, checking every tick that the walk ends with both feet down for good.
+local function settles(ann, w, seconds)
+  expect(run_until(function() return w.status ~= "active" and w.status ~= "terminating" end, seconds),
+         "the walk ended: " .. w.status)
+  run(0.5)
+  local ok, l, r = feet_down(ann)
+  expect(ok, string.format("both feet down (ankles %.3f and %.3f m, standing %.3f m)", l, r, STANDING_ANKLE))
+end
+
+test("walk:stop() mid-stride decelerates and ends completed with both feet down", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2, ease_out = 0.5 }
+  run(2.17)
+  local z0 = ann:position()[3]
+  w:stop()
+  run(0.05)
+  expect(w.status == "terminating", "winding down: " .. w.status)
+  settles(ann, w, 4)
+  expect(w.status == "completed", "a stop completes: " .. w.status)
+  local slid = ann:position()[3] - z0
+  expect(slid > 0.2 and slid < 1.2, string.format("slowed down over %.2f m, not at once", slid))
+end)
+
+test("cancel of a velocity walk also stops well, and ends cancelled", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2, ease_out = 0.5 }
+  run(2.17)
+  w:cancel()
+  settles(ann, w, 4)
+  expect(w.status == "cancelled" and w.error == "cancelled", w.status .. " " .. tostring(w.error))
+end)
+
+test("a clearing action pre-empts a walk: it stops well and the arm is taken at once", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2 }
+  run(1.53)
+  local r = ann:reach{ hand = "right", target = near(ann, -0.25, 1.2, 0.45), mode = "clearing",
+                       duration = 0.8 }
+  run(0.02)
+  expect(r.status == "active", "the reach runs at once: " .. r.status)
+  expect(w.status == "terminating", "the walk winds down: " .. w.status)
+  settles(ann, w, 4)
+  expect(w.status == "cancelled" and w.error:find("pre%-empted") ~= nil, tostring(w.error))
+end)
+
+test("every priority mode against a walk's yieldable arm swing", function()
+  local cases = {
+    -- mode, does the walk keep walking, does the reach start at once
+    { "default", true, true },
+    { "exclusive", true, true },
+    { "weighted", true, true },
+    { "clearing", false, true },
+  }
+  for _, c in ipairs(cases) do
+    local mode, keeps = c[1], c[2]
+    local ann = troupe.actor{ name = "ann_" .. mode }
+    local w = ann:walk{ velocity = 1.0 }
+    local narrowed = 0
+    ann:on("action_narrowed", function(a) if a == w then narrowed = narrowed + 1 end end)
+    run(1.0)
+    local dofs = w.dofs
+    local r = ann:reach{ hand = "right", target = near(ann, -0.25, 1.2, 0.45), mode = mode,
+                         duration = 0.8, weight = 0.5 }
+    run(0.02)
+    expect(r.status == "active", mode .. ": the reach starts at once, " .. r.status)
+    if keeps then
+      expect(w.status == "active", mode .. ": the walk keeps walking, " .. w.status)
+    else
+      expect(w.status == "terminating", mode .. ": the walk stops, " .. w.status)
+    end
+    if mode == "weighted" then
+      expect(w.yielded == 0 and narrowed == 0, mode .. ": blends, takes nothing")
+    else
+      expect(w.yielded == 3 and w.dofs == dofs - 3,
+             string.format("%s: the walk yields the right arm's 3 swing DOFs (%d yielded, %d of %d left)",
+                           mode, w.yielded, w.dofs, dofs))
+      if keeps then expect(narrowed == 1, mode .. ": reported as action_narrowed once: " .. narrowed) end
+    end
+    w:cancel()
+  end
+end)
+
+test("an action that needs the legs waits (default) or stops the walk (exclusive)", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.0 }
+  run(1.0)
+  local kneel = troupe.sequence{ r_knee_flexion = { {0, 0}, {1, 0.5} } }
+  local k = ann:play(kneel, { scope = "r_knee" })
+  run(0.2)
+  expect(k.status == "pending" and w.status == "active", "default waits for an essential part: " .. k.status)
+  k:cancel()
+  local x = ann:play(kneel, { scope = "r_knee", mode = "exclusive" })
+  run(0.02)
+  expect(x.status == "active" and w.status == "terminating", "exclusive takes it: the walk stops, " .. w.status)
+  expect(w.yielded == 1, "and gives up the knee at once: " .. w.yielded)
+end)
+
+test("a grasp during a walk starts at once and the walk keeps walking", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {0, 0, 3}, speed = 0.6 }
+  run(0.5)
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, ann:position()[3] + 0.55} }
+  local g = ann:grasp{ object = cup, hand = "right", duration = 0.6 }
+  run(0.02)
+  expect(g.status == "active", "grasp runs at once: " .. g.status)
+  expect(w.status == "active", "walk goes on: " .. w.status)
+  expect(run_until(function() return g.status ~= "active" end, 4), "grasp ended")
+  expect(w.status == "active" or done(w), "the walk was never stopped: " .. w.status)
+end)
+
+test("carrying: a held cup stays at carrying height while walking, turning and stopping", function()
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local h0 = cup:position()[2]
+  local w = ann:walk{ path = {{0, 2}, {2, 3}, {2, 1}}, speed = 1.2 }
+  local lo, hi = h0, h0
+  local ok = run_until(function()
+    local y = cup:position()[2]
+    lo, hi = math.min(lo, y), math.max(hi, y)
+    return w.status == "completed"
+  end, 20)
+  expect(ok, "walked: " .. tostring(w.error))
+  expect(cup.holder == ann, "still holds it")
+  expect(h0 - lo < 0.05 and hi - h0 < 0.05,
+         string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
+end)
+
+test("look and reach run alongside a walk", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {2, 0, 2} }
+  local w = ann:walk{ velocity = 1.0, duration = 4 }
+  run(1.0)
+  local l = ann:look_at{ target = bob }
+  local r = ann:reach{ hand = "left", target = near(ann, 0.25, 1.3, 0.4), duration = 0.8 }
+  run(0.02)
+  expect(l.status ~= "pending" and r.status ~= "pending", "both start at once: " .. l.status .. " " .. r.status)
+  expect(w.status == "active", "the walk goes on: " .. w.status)
+  expect(run_until(function() return done(w) end, 6), "the walk completes: " .. w.status)
+end)
+
+test("a give fails within one tick of its receiver's failure, with the receiver's reason", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local give = ann:give{ object = cup, to = bob, timeout = 10 }
+  local receive = bob:actions()[1]
+  run(0.3)
+  receive:cancel()
+  local t0 = nil
+  expect(run_until(function()
+    if receive.status == "cancelled" and not t0 then t0 = troupe.time() end
+    return give.status == "failed"
+  end, 2), "the give failed: " .. give.status)
+  expect(troupe.time() - t0 <= 0.0101, string.format("%.3f s after the receive ended", troupe.time() - t0))
+  expect(give.error:find("bob") ~= nil and give.error:find("cancelled") ~= nil, give.error)
+end)
+
+test("a receive fails within one tick of its giver's failure, with the giver's reason", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local give = ann:give{ object = cup, to = bob, timeout = 10 }
+  local receive = bob:actions()[1]
+  -- The cup is at the meeting point and bob reaches for it: the giver gives up.
+  expect(run_until(function() return receive.status == "active" and troupe.time() > 0 end, 3), "receiving")
+  run(1.2)
+  expect(receive.status == "active", "bob still reaching: " .. receive.status)
+  give:cancel()
+  local t0 = nil
+  expect(run_until(function()
+    if give.status == "cancelled" and not t0 then t0 = troupe.time() end
+    return receive.status ~= "active"
+  end, 2), "the receive ended")
+  expect(receive.status == "failed", "failed: " .. receive.status)
+  expect(troupe.time() - t0 <= 0.0101, string.format("%.3f s after the give ended", troupe.time() - t0))
+  expect(receive.error:find("giver") ~= nil and receive.error:find("cancelled") ~= nil, receive.error)
+end)
