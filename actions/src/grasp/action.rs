@@ -6,6 +6,7 @@
 //! pattern until every finger DOF has stopped (4.3.4), asks the scene to attach the
 //! object to the first hand, and completes once the snapshot shows it holding it.
 
+use super::body::BodyReach;
 use super::close::HandModel;
 use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
@@ -33,6 +34,15 @@ pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope> {
         scope = scope.union(&e);
     }
     Ok(scope)
+}
+
+/// The DOFs a grasp or receive with the hands `sides` drives by default: the arms and
+/// hands, and the whole-body part it may need to reach ([`BodyReach::body_scope`]: the
+/// spine, the legs and `root_y`). Its spec yields that part: during a walk the grasp
+/// starts at once without the legs (see `docs/scheduling.md`).
+pub fn reach_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<(Scope, Scope)> {
+    let body = BodyReach::body_scope(skeleton)?;
+    Ok((grasp_scope(skeleton, sides)?.union(&body), body))
 }
 
 /// Refuses a place that is not finite or not reached in a positive time.
@@ -182,6 +192,11 @@ impl Grasp {
                 self.options.avoid = Some(palm);
             }
         }
+        // Lean and crouch with what the action's scope (as admitted) allows.
+        self.options.body = Some(
+            ctx.scope
+                .intersection(&BodyReach::body_scope(ctx.skeleton)?),
+        );
         let plan = plan_grasp(
             ctx.skeleton,
             ctx.posture,

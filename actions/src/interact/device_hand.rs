@@ -4,7 +4,7 @@
 //! object from such a hand only while its holder offers it ([`troupe_scene::Offer`] on the
 //! scene's blackboard).
 
-use crate::grasp::action::{grasp_scope, Grasp};
+use crate::grasp::action::{reach_scope, Grasp};
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use crate::interact::Give;
 use troupe_body::sensors::Side;
@@ -72,7 +72,7 @@ pub fn receive(
     sides: Vec<Side>,
     reach_seconds: f64,
 ) -> crate::error::Result<(Grasp, troupe_body::Scope)> {
-    let scope = grasp_scope(skeleton, &sides)?;
+    let (scope, _) = reach_scope(skeleton, &sides)?;
     let g = Grasp::new(
         object,
         PlanOptions {

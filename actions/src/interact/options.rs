@@ -4,7 +4,7 @@
 use super::device_hand::{offer_to_hand, receive};
 use super::{FollowHand, Give, HoldHand};
 use crate::error::{ActionError, OptionError, Result};
-use crate::grasp::action::{check_duration, grasp_scope, holding_side, Grasp};
+use crate::grasp::action::{check_duration, grasp_scope, holding_side, reach_scope, Grasp};
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
@@ -96,7 +96,7 @@ impl GiveOptions {
         // The receiver: a grasp that waits for the object to arrive and may take it from
         // the giver.
         let sides = self.hand.sides();
-        let rx_scope = grasp_scope(&scene.actors()[self.to].skeleton, &sides)?;
+        let (rx_scope, rx_body) = reach_scope(&scene.actors()[self.to].skeleton, &sides)?;
         let plan = PlanOptions {
             hand: self.hand,
             from: Some(giver),
@@ -107,6 +107,7 @@ impl GiveOptions {
             .abandoned_by(give.ended())
             .reporting(gave_up);
         let mut rx_spec = ActionSpec::new("receive", rx_scope);
+        rx_spec.yields = rx_body;
         rx_spec.delay = delay;
         scene.start_action(self.to, rx_spec, Box::new(take))?;
         Ok((Box::new(give), scope))

@@ -210,14 +210,17 @@ impl Transitions<'_> {
         }
     }
 
-    /// Takes `taken` out of `action`'s scope (it fades out over its `ease_out`); with
-    /// `report`, publishes the narrowing as an event.
+    /// Takes `taken` out of `action`'s scope (a running action's contribution there fades
+    /// out over its `ease_out`); with `report`, publishes the narrowing as an event.
     fn narrow(&mut self, action: &mut Action, taken: Scope, report: bool) {
         if taken.is_empty() {
             return;
         }
         action.spec.scope = action.spec.scope.difference(&taken);
-        action.releasing.push((taken, self.clock.time));
+        action.spec.yields = action.spec.yields.difference(&taken);
+        if action.status.is_running() {
+            action.releasing.push((taken, self.clock.time));
+        }
         if report {
             self.events.push(Event {
                 tick: self.clock.tick,
@@ -437,6 +440,27 @@ fn admit(
         }
         if actions[i].begin > time + 1e-9 {
             continue;
+        }
+        // An action being admitted first gives up the yieldable part of its own scope
+        // that others hold: the essential parts of running actions and, for a `default`
+        // one, whatever earlier pending actions wait for (a grasp's optional lean and
+        // crouch during a walk).
+        let mode = actions[i].spec.mode;
+        if mode != Mode::Clearing && !actions[i].spec.yields.is_empty() {
+            let held = actions.iter().enumerate().filter(|&(j, _)| j != i).fold(
+                Scope::EMPTY,
+                |held, (j, other)| {
+                    if other.status.is_running() {
+                        held.union(&other.spec.essential())
+                    } else if other.status == Status::Pending && j < i && mode == Mode::Default {
+                        held.union(&other.spec.scope)
+                    } else {
+                        held
+                    }
+                },
+            );
+            let own = actions[i].spec.yields.intersection(&held);
+            tr.narrow(&mut actions[i], own, true);
         }
         let scope = actions[i].spec.scope;
         let id = actions[i].id;
