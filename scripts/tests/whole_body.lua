@@ -104,3 +104,18 @@ test("out of reach still says so, naming what was tried", function()
   local plan, why = troupe.plan_grasp(ann, far)
   expect(plan == nil and why:find("out of reach") and why:find("leaning and crouching"), tostring(why))
 end)
+
+test("reach leans for a point the arm alone misses, and crouches for a low one", function()
+  local ann = troupe.actor{ name = "ann" }
+  local r = ann:reach{ hand = "right", target = {-0.2, 0.95, 0.55}, duration = 1 }
+  expect(r:wait() == "completed", "lean: " .. tostring(r.error))
+  local bob = troupe.actor{ name = "bob", at = {3, 0, 0} }
+  local low = bob:reach{ hand = "right", target = {2.8, 0.25, 0.35}, duration = 1.2 }
+  expect(low:wait() == "completed", "crouch: " .. tostring(low.error))
+  expect(bob:position()[2] < 0.9 and bob:dof("r_knee_flexion") > 0.3, "crouched: " .. bob:position()[2])
+  run(0.5)
+  expect(bob:position()[2] < 0.9, "the body holds the crouch after the reach")
+  local cal = troupe.actor{ name = "cal", at = {6, 0, 0} }
+  local fixed = cal:reach{ hand = "right", target = {5.8, 0.95, 0.55}, scope = "right_arm", duration = 1 }
+  expect(fixed:wait() == "failed", "right_arm only does not lean")
+end)

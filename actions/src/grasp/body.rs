@@ -115,6 +115,32 @@ impl<'a> BodyReach<'a> {
         stage: Stage,
     ) -> crate::error::Result<Result<Reached, Missed>> {
         let sk = self.skeleton;
+        let mut tasks = Vec::new();
+        for (side, goal) in goals {
+            let task = IkTask {
+                effector: Effector::at_joint(sk.joint(&format!("{}wrist", side.prefix()))?),
+                goal: Goal {
+                    position: goal.translation,
+                    orientation: Some(goal.rotation),
+                },
+                priority: 0,
+            };
+            tasks.push((task, sk.scope(&format!("{}_arm", side.name()))?));
+        }
+        self.reach_tasks(q0, &tasks, stage, (REACH_TOLERANCE, REACH_ANGLE))
+    }
+
+    /// Tries `stage` from posture `q0`: each task's effector to its goal, moving its
+    /// `arm` scope (and at later stages the spine, after crouching), within `tolerance`
+    /// (metres, radians).
+    pub fn reach_tasks(
+        &self,
+        q0: &[f64],
+        tasks: &[(IkTask, Scope)],
+        stage: Stage,
+        tolerance: (f64, f64),
+    ) -> crate::error::Result<Result<Reached, Missed>> {
+        let sk = self.skeleton;
         let mut q = q0.to_vec();
         let mut crouch = 0.0;
         if let Stage::Crouch(i) = stage {
@@ -124,37 +150,30 @@ impl<'a> BodyReach<'a> {
             }
         }
         let mut moving = Scope::EMPTY;
-        let mut tasks = Vec::new();
-        for (side, goal) in goals {
-            let wrist = sk.joint(&format!("{}wrist", side.prefix()))?;
-            let mut scope = sk.scope(&format!("{}_arm", side.name()))?;
+        for (task, arm) in tasks {
+            let mut scope = *arm;
             if stage != Stage::Arms {
                 scope = scope.union(&self.spine.intersection(&self.allowed));
             }
-            moving = moving.union(&scope_dofs_moving(sk, &scope, wrist).into_iter().collect());
-            tasks.push(IkTask {
-                effector: Effector::at_joint(wrist),
-                goal: Goal {
-                    position: goal.translation,
-                    orientation: Some(goal.rotation),
-                },
-                priority: 0,
-            });
+            let dofs = scope_dofs_moving(sk, &scope, task.effector.joint);
+            moving = moving.union(&dofs.into_iter().collect());
         }
         let options = IkOptions {
             max_iterations: 200,
             ..IkOptions::default()
         };
+        let tasks: Vec<IkTask> = tasks.iter().map(|(t, _)| *t).collect();
         let mut solver = IkSolver::new(sk, moving.iter().collect(), options)?;
         solver.solve(sk, &mut q, &tasks, Some(q0), None)?;
         let g = solver.globals();
         let (mut miss, mut angle) = (0.0f64, 0.0f64);
-        for (task, (_, goal)) in tasks.iter().zip(goals) {
-            let w = g[task.effector.joint];
-            miss = miss.max((w.translation - goal.translation).length());
-            angle = angle.max(rotation_error(w.rotation, goal.rotation).length());
+        for task in &tasks {
+            miss = miss.max((task.effector.position(g) - task.goal.position).length());
+            if let Some(r) = task.goal.orientation {
+                angle = angle.max(rotation_error(task.effector.rotation(g), r).length());
+            }
         }
-        if miss > REACH_TOLERANCE || angle > REACH_ANGLE {
+        if miss > tolerance.0 || angle > tolerance.1 {
             return Ok(Err(Missed::By(miss, angle)));
         }
         let mut globals = vec![Transform::IDENTITY; sk.joints().len()];
