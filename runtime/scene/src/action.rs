@@ -241,7 +241,8 @@ pub struct GeneratorContext<'a> {
     pub posture: &'a ActorState,
     /// The whole scene at the end of the previous tick.
     pub world: &'a World<'a>,
-    /// The action's own scope.
+    /// The action's own scope (narrowed when others took parts of it; the parts it is
+    /// still fading out of count until they have faded).
     pub scope: Scope,
 }
 

@@ -294,6 +294,8 @@ impl ActorRuntime {
                 continue;
             }
             let start = action.started_at.unwrap_or(clock.time);
+            // What it may write: its scope and what it is still fading out of.
+            let writable = action.writable();
             let ctx = GeneratorContext {
                 time: clock.time,
                 dt: clock.dt,
@@ -303,9 +305,8 @@ impl ActorRuntime {
                 skeleton,
                 posture: previous,
                 world,
-                scope: action.spec.scope,
+                scope: writable,
             };
-            let writable = action.writable();
             let mut out = DofWriter::narrowed(
                 writable,
                 action.original.difference(&writable),
@@ -442,16 +443,16 @@ fn admit(
             continue;
         }
         // An action being admitted first gives up the yieldable part of its own scope
-        // that others hold: the essential parts of running actions and, for a `default`
-        // one, whatever earlier pending actions wait for (a grasp's optional lean and
-        // crouch during a walk).
+        // that others hold: whatever running actions drive and, for a `default` one,
+        // whatever earlier pending actions wait for (a grasp's optional lean and crouch
+        // during a walk: the walk keeps its legs and its spine).
         let mode = actions[i].spec.mode;
-        if mode != Mode::Clearing && !actions[i].spec.yields.is_empty() {
+        if !actions[i].spec.yields.is_empty() {
             let held = actions.iter().enumerate().filter(|&(j, _)| j != i).fold(
                 Scope::EMPTY,
                 |held, (j, other)| {
                     if other.status.is_running() {
-                        held.union(&other.spec.essential())
+                        held.union(&other.spec.scope)
                     } else if other.status == Status::Pending && j < i && mode == Mode::Default {
                         held.union(&other.spec.scope)
                     } else {
