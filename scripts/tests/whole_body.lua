@@ -23,12 +23,18 @@ local function ankles_stay(ann, before)
   end
 end
 
+-- A cup standing on a 0.9 m table top, 0.30 m in front of `actor`'s right wrist.
+local function cup_before_wrist(actor, name)
+  local w = actor:joint_position("r_wrist")
+  return troupe.object{ name = name, shape = "cylinder", radius = 0.035, height = 0.1,
+                        at = {w[1], 0.95, w[3] + 0.30} }
+end
+
 test("a cup on a 0.9 m table 0.30 m in front of the wrist: leans", function()
   local ann = troupe.actor{ name = "ann" }
   local w = ann:joint_position("r_wrist")
   troupe.object{ name = "table", shape = "box", size = {0.6, 0.9, 0.5}, at = {w[1], 0.45, w[3] + 0.5} }
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
-                             at = {w[1], 0.95, w[3] + 0.30} }
+  local cup = cup_before_wrist(ann, "cup")
   local arm_only, why = troupe.plan_grasp(ann, cup, { hand = "right", scope = "right_arm+right_hand" })
   expect(arm_only == nil and why:find("out of reach") ~= nil, "the arm alone cannot: " .. tostring(why))
   local plan = troupe.plan_grasp(ann, cup, { hand = "right" })
@@ -40,14 +46,11 @@ end)
 
 test("the scope is honoured: right_arm+right_hand+spine leans, right_arm+right_hand does not", function()
   local ann = troupe.actor{ name = "ann" }
-  local w = ann:joint_position("r_wrist")
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
-                             at = {w[1], 0.95, w[3] + 0.30} }
+  local cup = cup_before_wrist(ann, "cup")
   local g = ann:grasp{ object = cup, hand = "right", scope = "right_arm+right_hand+spine" }
   expect(g:wait() == "completed", "with the spine: " .. tostring(g.error))
   local bob = troupe.actor{ name = "bob", at = {3, 0, 0} }
-  local cup2 = troupe.object{ name = "cup2", shape = "cylinder", radius = 0.035, height = 0.1,
-                              at = {3 + w[1], 0.95, w[3] + 0.30} }
+  local cup2 = cup_before_wrist(bob, "cup2")
   local arm = bob:grasp{ object = cup2, hand = "right", scope = "right_arm+right_hand" }
   expect(arm:wait() == "failed" and arm.error:find("out of reach") ~= nil, "arm only: " .. tostring(arm.error))
 end)

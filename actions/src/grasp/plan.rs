@@ -368,9 +368,9 @@ pub fn plan_grasp(
     let one_of = options.hand == HandChoice::Auto && !two;
     let mut first_error = None;
     // Each hand's grasp frames, cheapest first.
-    let mut frames: Vec<(Side, Vec<(f64, Transform, DVec3)>)> = Vec::new();
+    let mut frames: Vec<(Side, Vec<Frame>)> = Vec::new();
     for side in sides {
-        let result = (|| -> crate::error::Result<Vec<(f64, Transform, DVec3)>> {
+        let result = (|| -> crate::error::Result<Vec<Frame>> {
             let model = if side == Side::Right {
                 right.clone()
             } else {
@@ -393,7 +393,7 @@ pub fn plan_grasp(
                 Side::Right => -actor_left,
                 Side::Left => actor_left,
             };
-            let mut ranked: Vec<(f64, Transform, DVec3)> = Vec::new();
+            let mut ranked: Vec<Frame> = Vec::new();
             for (a, f) in candidates(obj, grasp, side, two, from_shoulder, actor_left) {
                 let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
                 // The palm must not face the exterior side of the body.
@@ -548,6 +548,9 @@ pub fn plan_grasp(
         ),
     }))
 }
+
+/// A candidate grasp frame: its cost, the wrist's goal pose and the palm centre's goal.
+type Frame = (f64, Transform, DVec3);
 
 /// The frames of each hand tried by the arm and the lean.
 const MAX_FRAMES: usize = 8;

@@ -493,16 +493,7 @@ impl Scene {
     /// winds down if its generator can (a walk stops well, see [`Scene::stop`]) or eases
     /// out, and ends `cancelled`. Cancelling an ended action does nothing.
     pub fn cancel(&mut self, id: ActionId) -> Result<()> {
-        let actor = *self
-            .action_owner
-            .get(&id)
-            .ok_or_else(|| Error::Invalid(format!("no action {id}")))?;
-        if let Some(a) = self.work[actor]
-            .runtime
-            .actions
-            .iter_mut()
-            .find(|a| a.id == id)
-        {
+        if let Some(a) = self.unfinished_action(id)? {
             a.cancel_requested = true;
         }
         Ok(())
@@ -513,19 +504,24 @@ impl Scene {
     /// weight, any other eases out; either ends `completed`. A pending one is cancelled on
     /// the next tick. Stopping an ended action does nothing.
     pub fn stop(&mut self, id: ActionId) -> Result<()> {
+        if let Some(a) = self.unfinished_action(id)? {
+            a.stop_requested = true;
+        }
+        Ok(())
+    }
+
+    /// A known action that has not ended (`None` once it has), or an error for an id the
+    /// scene never made.
+    fn unfinished_action(&mut self, id: ActionId) -> Result<Option<&mut Action>> {
         let actor = *self
             .action_owner
             .get(&id)
             .ok_or_else(|| Error::Invalid(format!("no action {id}")))?;
-        if let Some(a) = self.work[actor]
+        Ok(self.work[actor]
             .runtime
             .actions
             .iter_mut()
-            .find(|a| a.id == id)
-        {
-            a.stop_requested = true;
-        }
-        Ok(())
+            .find(|a| a.id == id))
     }
 
     /// The status of an action, without copying its record (for wait conditions checked

@@ -173,19 +173,25 @@ impl Transitions<'_> {
         if status.is_final() {
             action.ended_at = Some(self.clock.time);
         }
+        let reason = if status.is_final() {
+            action.reason.clone()
+        } else {
+            None
+        };
+        self.event(action, reason, None);
+    }
+
+    /// Publishes `action`'s current status (with `reason`), or its narrowing by `narrowed`.
+    fn event(&mut self, action: &Action, reason: Option<String>, narrowed: Option<Scope>) {
         self.events.push(Event {
             tick: self.clock.tick,
             time: self.clock.time,
             actor: self.actor,
             action: action.id,
             kind: action.spec.kind.clone(),
-            status,
-            reason: if status.is_final() {
-                action.reason.clone()
-            } else {
-                None
-            },
-            narrowed: None,
+            status: action.status,
+            reason,
+            narrowed,
         });
     }
 
@@ -222,16 +228,7 @@ impl Transitions<'_> {
             action.releasing.push((taken, self.clock.time));
         }
         if report {
-            self.events.push(Event {
-                tick: self.clock.tick,
-                time: self.clock.time,
-                actor: self.actor,
-                action: action.id,
-                kind: action.spec.kind.clone(),
-                status: action.status,
-                reason: None,
-                narrowed: Some(taken),
-            });
+            self.event(action, None, Some(taken));
         }
     }
 
@@ -448,18 +445,17 @@ fn admit(
         // during a walk: the walk keeps its legs and its spine).
         let mode = actions[i].spec.mode;
         if !actions[i].spec.yields.is_empty() {
-            let held = actions.iter().enumerate().filter(|&(j, _)| j != i).fold(
-                Scope::EMPTY,
-                |held, (j, other)| {
-                    if other.status.is_running() {
-                        held.union(&other.spec.scope)
-                    } else if other.status == Status::Pending && j < i && mode == Mode::Default {
-                        held.union(&other.spec.scope)
-                    } else {
-                        held
-                    }
-                },
-            );
+            let held = actions
+                .iter()
+                .enumerate()
+                .filter(|&(j, other)| {
+                    j != i
+                        && (other.status.is_running()
+                            || (other.status == Status::Pending && j < i && mode == Mode::Default))
+                })
+                .fold(Scope::EMPTY, |held, (_, other)| {
+                    held.union(&other.spec.scope)
+                });
             let own = actions[i].spec.yields.intersection(&held);
             tr.narrow(&mut actions[i], own, true);
         }
