@@ -7,7 +7,6 @@
 //! scope); a posture counts only if the wrists reach their goals and the centre of mass,
 //! projected on the floor, stays within the feet's support rectangle.
 
-use super::plan::{REACH_ANGLE, REACH_TOLERANCE};
 use crate::walk::Rig;
 use troupe_body::glam::DVec3;
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
@@ -16,6 +15,10 @@ use troupe_body::kinematics::{center_of_mass, forward_kinematics};
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton, Transform};
 
+/// A planned hand pose must be reachable within this distance (metres)…
+pub const REACH_TOLERANCE: f64 = 0.005;
+/// … and this angle (radians, 3°).
+pub const REACH_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
 /// Depths (metres) the pelvis is lowered to, in turn, for a target the standing body
 /// cannot reach.
 pub const CROUCH_DEPTHS: [f64; 6] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];

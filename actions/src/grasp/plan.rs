@@ -32,10 +32,7 @@ pub const ROTATION_WEIGHT: f64 = 0.15;
 pub const CLEARANCE: f64 = 0.003;
 /// Step of the origin search toward the border (metres).
 pub const SEARCH_STEP: f64 = 0.002;
-/// A planned hand pose must be reachable within this distance (metres)…
-pub const REACH_TOLERANCE: f64 = 0.005;
-/// … and this angle (radians, 3°).
-pub const REACH_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
+pub use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 
 /// A receiving palm stays this far from the giving palm (metres).
 pub const AVOID_DISTANCE: f64 = 0.08;
