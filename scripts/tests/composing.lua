@@ -159,6 +159,47 @@ test("carrying: a held cup stays at carrying height while walking, turning and s
          string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
 end)
 
+test("carrying: the cup stays at carrying height when the walk is stopped mid-stride", function()
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local h0 = cup:position()[2]
+  local w = ann:walk{ velocity = 1.3 }
+  local lo, hi = h0, h0
+  local function track()
+    local y = cup:position()[2]
+    lo, hi = math.min(lo, y), math.max(hi, y)
+  end
+  run_until(function() track(); return troupe.time() > 4.37 end, 5)
+  w:stop()
+  expect(run_until(function() track(); return w.status == "completed" end, 4), "stopped: " .. w.status)
+  expect(h0 - lo < 0.05 and hi - h0 < 0.05,
+         string.format("carrying height %.3f m, between %.3f and %.3f", h0, lo, hi))
+end)
+
+test("give and receive start at once during walks, which go on narrowed", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  -- Both turn on the spot (a walk to where they stand, facing a new heading)…
+  local wa = ann:walk{ to = {0, 0, 0}, heading = 10, speed = 0.5 }
+  local wb = bob:walk{ to = {0, 0, 0.9}, heading = 170, speed = 0.5 }
+  run(0.05)
+  -- … and hand the cup over meanwhile.
+  local give = ann:give{ object = cup, to = bob }
+  local receive = bob:actions()[#bob:actions()]
+  run(0.02)
+  expect(give.status == "active" and receive.kind == "receive" and receive.status == "active",
+         "both start at once: " .. give.status .. " " .. receive.status)
+  expect(wa.status == "active" and wa.yielded > 0, "ann's walk goes on narrowed: " .. wa.status)
+  expect(wb.status == "active" and wb.yielded > 0, "bob's walk goes on narrowed: " .. wb.status)
+  expect(give:wait() == "completed", "handed over: " .. tostring(give.error) .. " / " .. tostring(receive.error))
+  expect(cup.holder == bob, "bob holds it")
+end)
+
 test("look and reach run alongside a walk", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {2, 0, 2} }
