@@ -78,6 +78,20 @@ test("a ball on the floor 0.4 m ahead: bends the knees, heels down", function()
   expect(ann:position()[2] < 0.9, "the pelvis went down: " .. ann:position()[2])
   expect(ann:dof("l_knee_flexion") > 0.3, "knees bent: " .. ann:dof("l_knee_flexion"))
   ankles_stay(ann, ankles)
+  -- Walking off with the ball, the body rises smoothly and the feet stay on the floor.
+  local w = ann:walk{ to = {0, 0, 1.5}, speed = 0.8 }
+  local y, jump, lowest = ann:position()[2], 0, 1
+  expect(run_until(function()
+    local now = ann:position()[2]
+    jump = math.max(jump, math.abs(now - y))
+    y = now
+    lowest = math.min(lowest, ann:joint_position("l_ankle")[2], ann:joint_position("r_ankle")[2])
+    return w.status ~= "active"
+  end, 8), "walked")
+  expect(w.status == "completed", "walk: " .. w.status .. " " .. tostring(w.error))
+  expect(jump < 0.03, string.format("the pelvis rose by at most %.3f m a tick", jump))
+  expect(lowest > 0.05, "no ankle went into the floor: " .. lowest)
+  expect(ball.holder == ann, "still holds the ball")
 end)
 
 test("a 0.4 m ball at 1.0 m, 0.45 m ahead, with both hands", function()

@@ -634,7 +634,10 @@ impl Walk {
             let horizontal = DVec2::new(hip.x - ankle.x, hip.z - ankle.z).length();
             highest[leg + 1] = ankle.y + (l * l - horizontal * horizontal).max(0.0).sqrt() - hip.y;
         }
-        let root_y = soft_min(highest, 0.006 * a);
+        // A body that starts lowered (crouched to pick something up) rises to the gait's
+        // height as the pelvis blends in, rather than jumping up.
+        let crouched = self.start_q[rig.root[1]];
+        let root_y = soft_min(highest, 0.006 * a) + crouched.min(0.0) * (1.0 - k);
         let root = root0 + DVec3::Y * root_y;
         let root_vals = [
             floor.x - rig.root_rest.x,
