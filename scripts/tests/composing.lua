@@ -60,6 +60,14 @@ test("cancel of a velocity walk also stops well, and ends cancelled", function()
   expect(w.status == "cancelled" and w.error == "cancelled", w.status .. " " .. tostring(w.error))
 end)
 
+test("a velocity walk with a duration ends with both feet down", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2, duration = 3.3 }
+  settles(ann, w, 6)
+  expect(w.status == "completed", w.status)
+end)
+
 test("a clearing action pre-empts a walk: it stops well and the arm is taken at once", function()
   standing_ankle()
   local ann = troupe.actor{ name = "ann" }

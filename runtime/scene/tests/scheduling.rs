@@ -982,3 +982,38 @@ fn narrowing_is_the_same_on_one_and_two_threads() {
     };
     assert_eq!(run(1), run(2));
 }
+
+#[test]
+fn a_narrowing_is_an_event_and_an_instant_in_the_timeline() {
+    let (mut s, a) = scene();
+    let mut timeline = troupe_scene::timeline::TimelineRecorder::new();
+    let walk = s
+        .start_action(a, yielding_spec(&s), winds_down(0.3, 0.05))
+        .unwrap();
+    let events = s.step().to_vec();
+    timeline.record(&s, &events);
+    s.start_action(a, spec(&s, "left_arm", Mode::Default), constant(1.0))
+        .unwrap();
+    let events = s.step().to_vec();
+    timeline.record(&s, &events);
+    let narrowed: Vec<_> = events.iter().filter(|e| e.narrowed.is_some()).collect();
+    assert_eq!(narrowed.len(), 1);
+    assert_eq!(narrowed[0].action, walk);
+    assert_eq!(
+        narrowed[0].status,
+        Status::Active,
+        "its status is unchanged"
+    );
+    assert_eq!(narrowed[0].narrowed, Some(scope(&s, "left_arm")));
+    let trace = timeline.to_json(&s);
+    let instants: Vec<_> = trace["traceEvents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["ph"] == "i")
+        .collect();
+    assert_eq!(instants.len(), 1);
+    assert_eq!(instants[0]["name"], "test narrowed");
+    assert_eq!(instants[0]["args"]["yielded"], "left_arm");
+    assert_eq!(instants[0]["args"]["action"], walk.0);
+}
