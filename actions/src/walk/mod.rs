@@ -758,12 +758,19 @@ impl Generator for Walk {
                 v
             }
         };
-        let mut upper: Vec<(usize, f64)> = Vec::with_capacity(13);
-        upper.extend(rig.root.iter().copied().zip(root));
-        upper.extend(rig.pelvis.iter().copied().zip(pelvis));
-        for (&d, &v) in rig.spine.iter().zip(&spine) {
+        // This tick's root, pelvis and spine values, for the carrying arms' kinematics.
+        let mut upper = [(0usize, 0.0f64); 13];
+        for (slot, (&d, &v)) in upper.iter_mut().zip(
+            rig.root
+                .iter()
+                .chain(&rig.pelvis)
+                .zip(root.iter().chain(&pelvis)),
+        ) {
+            *slot = (d, v);
+        }
+        for (i, (&d, &v)) in rig.spine.iter().zip(&spine).enumerate() {
             let v = blended(d, v);
-            upper.push((d, v));
+            upper[9 + i] = (d, v);
             out.set(d, v);
         }
         if self.options.arms {
