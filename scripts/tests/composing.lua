@@ -163,6 +163,7 @@ test("carrying: a held cup stays at carrying height while walking, turning and s
   end, 20)
   expect(ok, "walked: " .. tostring(w.error))
   expect(cup.holder == ann, "still holds it")
+  print(string.format("carrying along a turning path: %+.3f to %+.3f m from %.3f m", lo - h0, hi - h0, h0))
   expect(h0 - lo < 0.05 and hi - h0 < 0.05,
          string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
 end)
@@ -182,6 +183,7 @@ test("carrying: the cup stays at carrying height when the walk is stopped mid-st
   run_until(function() track(); return troupe.time() > 4.37 end, 5)
   w:stop()
   expect(run_until(function() track(); return w.status == "completed" end, 4), "stopped: " .. w.status)
+  print(string.format("carrying, stopped mid-stride: %+.3f to %+.3f m from %.3f m", lo - h0, hi - h0, h0))
   expect(h0 - lo < 0.05 and hi - h0 < 0.05,
          string.format("carrying height %.3f m, between %.3f and %.3f", h0, lo, hi))
 end)

@@ -42,6 +42,7 @@ use troupe_body::glam::{DVec2, DVec3};
 use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
+use troupe_scene::holding::Holder;
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
@@ -137,11 +138,10 @@ pub struct Walk {
     twist: [Option<f64>; 2],
     /// The cadence speed of this tick (see [`Walk::cadence_speed`]).
     cadence: f64,
-    /// Per arm (as in [`Rig::arms`]): the wrist height to keep while its hand carries
-    /// something (see [`Walk::carry`]).
-    carry: [Option<f64>; 2],
-    /// The wrist joint of each arm.
-    wrists: [usize; 2],
+    /// Per arm (as in [`Rig::arms`]): the height to keep while its hand carries something,
+    /// the joint that holds it and the carried object's centre in that joint's frame (see
+    /// [`Walk::carry`]).
+    carry: [Option<(f64, usize, DVec3)>; 2],
     /// Scratch posture and transforms for the carrying arms' kinematics.
     carry_q: Vec<f64>,
     carry_globals: Vec<troupe_body::Transform>,
@@ -184,7 +184,6 @@ impl Walk {
             twist: [None; 2],
             cadence: 0.0,
             carry: [None; 2],
-            wrists: [skeleton.joint("l_wrist")?, skeleton.joint("r_wrist")?],
             carry_q: Vec::new(),
             carry_globals: Vec::new(),
         })
@@ -253,9 +252,9 @@ impl Walk {
         upper.collect::<Scope>().intersection(&self.scope())
     }
 
-    /// Keeps the wrist of each carrying arm at the height it had when the walk started:
-    /// the elbow takes up the pelvis' bounce and the spine's lean, so that a carried cup
-    /// stays level. `upper` are this tick's root, pelvis and spine values as written.
+    /// Keeps what each carrying arm holds at the height it had when the walk started: the
+    /// elbow takes up the pelvis' bounce and the spine's lean, so that a carried cup stays
+    /// level. `upper` are this tick's root, pelvis and spine values as written.
     fn carry(&mut self, ctx: &GeneratorContext, upper: &[(usize, f64)], out: &mut DofWriter) {
         if self.carry.iter().all(Option::is_none) {
             return;
@@ -269,10 +268,10 @@ impl Walk {
         self.carry_globals
             .resize(sk.joints().len(), troupe_body::Transform::IDENTITY);
         for i in 0..2 {
-            let Some(target) = self.carry[i] else {
+            let Some((target, joint, point)) = self.carry[i] else {
                 continue;
             };
-            if !Walk::arm_holds(ctx, i) {
+            if Walk::held_by_arm(ctx, i).is_none() {
                 continue;
             }
             let elbow = self.rig.arms[i][2];
@@ -284,7 +283,7 @@ impl Walk {
             // nearly linear over the few centimetres to take up.
             let height = |q: &mut Vec<f64>, g: &mut Vec<troupe_body::Transform>| {
                 troupe_body::kinematics::forward_kinematics(sk, q, g);
-                g[self.wrists[i]].translation.y
+                g[joint].transform_point(point).y
             };
             for _ in 0..2 {
                 let e = self.carry_q[elbow];
@@ -302,11 +301,12 @@ impl Walk {
         }
     }
 
-    /// The side whose arm index `i` is in [`Rig::arms`] (0 left, 1 right) holds an object.
-    fn arm_holds(ctx: &GeneratorContext, i: usize) -> bool {
+    /// What the hand of arm `i` in [`Rig::arms`] (0 left, 1 right) holds, if anything:
+    /// the first holding of the actor on a joint of that side.
+    fn held_by_arm(ctx: &GeneratorContext, i: usize) -> Option<Holder> {
         let prefix = if i == 0 { "l_" } else { "r_" };
         let joints = ctx.skeleton.joints();
-        ctx.world.holders.iter().flatten().any(|h| {
+        ctx.world.holders.iter().flatten().copied().find(|h| {
             h.actor == ctx.actor
                 && joints
                     .get(h.joint)
@@ -715,8 +715,10 @@ impl Generator for Walk {
         self.t = 0.0;
         self.start_q = q.clone();
         for i in 0..2 {
-            self.carry[i] =
-                Walk::arm_holds(ctx, i).then(|| ctx.posture.globals[self.wrists[i]].translation.y);
+            self.carry[i] = Walk::held_by_arm(ctx, i).map(|h| {
+                let at = ctx.posture.globals[h.joint].transform_point(h.grip.translation);
+                (at.y, h.joint, h.grip.translation)
+            });
         }
         self.settle_since = None;
         self.twist = [None; 2];
@@ -777,7 +779,7 @@ impl Generator for Walk {
             for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {
                 // A hand that carries something keeps its arm out of the swing, which
                 // would lower the load to the thigh.
-                if Walk::arm_holds(ctx, i) {
+                if Walk::held_by_arm(ctx, i).is_some() {
                     continue;
                 }
                 for (&d, &v) in dofs.iter().zip(values) {
