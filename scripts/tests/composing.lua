@@ -148,44 +148,42 @@ test("a grasp during a walk starts at once and the walk keeps walking", function
   expect(w.status == "active" or done(w), "the walk was never stopped: " .. w.status)
 end)
 
-test("carrying: a held cup stays at carrying height while walking, turning and stopping", function()
+-- Ann grasps a cup, then `walk(ann)` starts a walk and `until_done(w, track)` runs it
+-- (calling `track` every tick) until it has ended; the cup's height range is checked.
+local function carries(what, walk, until_done)
   local ann = troupe.actor{ name = "ann" }
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
                              at = {-0.2, 1.05, 0.38} }
   expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
   local h0 = cup:position()[2]
-  local w = ann:walk{ path = {{0, 2}, {2, 3}, {2, 1}}, speed = 1.2 }
-  local lo, hi = h0, h0
-  local ok = run_until(function()
-    local y = cup:position()[2]
-    lo, hi = math.min(lo, y), math.max(hi, y)
-    return w.status == "completed"
-  end, 20)
-  expect(ok, "walked: " .. tostring(w.error))
-  expect(cup.holder == ann, "still holds it")
-  print(string.format("carrying along a turning path: %+.3f to %+.3f m from %.3f m", lo - h0, hi - h0, h0))
-  expect(h0 - lo < 0.05 and hi - h0 < 0.05,
-         string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
-end)
-
-test("carrying: the cup stays at carrying height when the walk is stopped mid-stride", function()
-  local ann = troupe.actor{ name = "ann" }
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
-                             at = {-0.2, 1.05, 0.38} }
-  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
-  local h0 = cup:position()[2]
-  local w = ann:walk{ velocity = 1.3 }
   local lo, hi = h0, h0
   local function track()
     local y = cup:position()[2]
     lo, hi = math.min(lo, y), math.max(hi, y)
   end
-  run_until(function() track(); return troupe.time() > 4.37 end, 5)
-  w:stop()
-  expect(run_until(function() track(); return w.status == "completed" end, 4), "stopped: " .. w.status)
-  print(string.format("carrying, stopped mid-stride: %+.3f to %+.3f m from %.3f m", lo - h0, hi - h0, h0))
+  local w = walk(ann)
+  until_done(w, track)
+  expect(w.status == "completed", "walked: " .. w.status .. " " .. tostring(w.error))
+  expect(cup.holder == ann, "still holds it")
+  print(string.format("carrying, %s: %+.3f to %+.3f m from %.3f m", what, lo - h0, hi - h0, h0))
   expect(h0 - lo < 0.05 and hi - h0 < 0.05,
-         string.format("carrying height %.3f m, between %.3f and %.3f", h0, lo, hi))
+         string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
+end
+
+test("carrying: a held cup stays at carrying height while walking, turning and stopping", function()
+  carries("along a turning path",
+          function(ann) return ann:walk{ path = {{0, 2}, {2, 3}, {2, 1}}, speed = 1.2 } end,
+          function(w, track) run_until(function() track(); return w.status == "completed" end, 20) end)
+end)
+
+test("carrying: the cup stays at carrying height when the walk is stopped mid-stride", function()
+  carries("stopped mid-stride",
+          function(ann) return ann:walk{ velocity = 1.3 } end,
+          function(w, track)
+            run_until(function() track(); return troupe.time() > 4.37 end, 5)
+            w:stop()
+            run_until(function() track(); return w.status == "completed" end, 4)
+          end)
 end)
 
 test("give and receive start at once during walks, which go on narrowed", function()
