@@ -105,11 +105,12 @@ impl UserData for ActorRef {
             crate::settings::set(lua, this.0, &t)
         });
         methods.add_method("on", |lua, this, (event, f): (String, Function)| {
-            const EVENTS: [&str; 4] = [
+            const EVENTS: [&str; 5] = [
                 "action_started",
                 "action_completed",
                 "action_failed",
                 "action_cancelled",
+                "action_narrowed",
             ];
             if !EVENTS.contains(&event.as_str()) {
                 return Err(lua_err(format!(
@@ -236,6 +237,9 @@ impl UserData for ActionRef {
         methods.add_method("cancel", |lua, this, ()| {
             stage(lua)?.scene.cancel(this.0).map_err(lua_err)
         });
+        methods.add_method("stop", |lua, this, ()| {
+            stage(lua)?.scene.stop(this.0).map_err(lua_err)
+        });
         methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
             if key == "wait" {
                 return lua
@@ -252,6 +256,8 @@ impl UserData for ActionRef {
                 "kind" => Value::String(lua.create_string(&info.kind)?),
                 "mode" => Value::String(lua.create_string(info.mode.name())?),
                 "weight" => Value::Number(info.weight),
+                "dofs" => Value::Integer(info.scope.len() as i64),
+                "yielded" => Value::Integer(info.yielded.len() as i64),
                 "error" => match info.reason {
                     Some(r) if info.status != troupe_scene::action::Status::Completed => {
                         Value::String(lua.create_string(&r)?)

@@ -22,7 +22,7 @@ pub mod timeline;
 pub mod world;
 
 pub use action::{
-    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode,
+    ActionId, ActionInfo, ActionSpec, DofWriter, Ending, Event, Generator, GeneratorContext, Mode,
     StartError, Status, Step,
 };
 pub use blackboard::{Blackboard, HandState, Note, Notes, Offer, SignalId};
