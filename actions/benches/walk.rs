@@ -40,6 +40,8 @@ fn generator_step(c: &mut Criterion) {
         holders: &[],
         board: &Blackboard::default(),
         input_poses: &[],
+        space: &Default::default(),
+        obstacle_flags: &[],
     };
     let mut walk = Walk::velocity(
         &skeleton,

@@ -23,6 +23,7 @@
 //! finishes once the body stands.
 
 pub mod cycle;
+pub mod goal;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
@@ -30,6 +31,7 @@ pub mod rig;
 pub mod route;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
+pub use goal::Goal;
 pub use options::WalkOptions;
 pub use rig::Rig;
 pub use route::{Plan, RootSample, Route, Speed};
@@ -145,6 +147,11 @@ pub struct Walk {
     /// Scratch posture and transforms for the carrying arms' kinematics.
     carry_q: Vec<f64>,
     carry_globals: Vec<troupe_body::Transform>,
+    /// Where a planned walk goes: the route is planned around the obstacles when it
+    /// starts. `None` walks the route as given.
+    goal: Option<Goal>,
+    /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
+    radius: f64,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -186,7 +193,31 @@ impl Walk {
             carry: [None; 2],
             carry_q: Vec::new(),
             carry_globals: Vec::new(),
+            goal: None,
+            radius: troupe_scene::space::body_radius(skeleton),
         })
+    }
+
+    /// A walk to `goal`, planned around the obstacles when it starts (an unreachable goal
+    /// fails the action with the reason).
+    pub fn navigate(skeleton: &Skeleton, goal: Goal, options: WalkOptions) -> Result<Walk> {
+        if let Goal::Through(points) = &goal {
+            if points.is_empty() {
+                return Err(OptionError::refused("path", "the path is empty").into());
+            }
+        }
+        let placeholder = match &goal {
+            Goal::Through(points) => points.clone(),
+            _ => vec![DVec2::ZERO],
+        };
+        let mut walk = Walk::path(skeleton, placeholder, options)?;
+        walk.goal = Some(goal);
+        Ok(walk)
+    }
+
+    /// The body radius the walk plans with (m).
+    pub fn radius(&self) -> f64 {
+        self.radius
     }
 
     /// A walk to floor point `goal` (its y must be the floor, 0) at `options.speed`.
@@ -694,6 +725,14 @@ impl Generator for Walk {
         let heading = q[rig.root[3]];
         self.yaw = heading;
         self.heading = heading;
+        if let Some(goal) = &self.goal {
+            let planned = goal.plan(ctx, start, self.radius)?;
+            self.route = Route::Path {
+                points: planned.points,
+                heading: planned.heading.or(self.options.heading),
+                speed: self.options.speed,
+            };
+        }
         let plan = Plan::new(&self.route, start, heading);
         // Both feet start planted where they are, flat.
         for leg in 0..2 {

@@ -2,7 +2,7 @@
 
 pub(crate) use crate::args::lua_err;
 pub use crate::args::lua_err_message;
-use crate::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
+use crate::args::{check_keys, euler_degrees, opt_bool, opt_number, opt_string, vec3, vec3_table};
 use crate::error::Error;
 pub use crate::handles::{ActionRef, ActorRef, ObjectRef, Pins, SequenceRef};
 use crate::kinds::BuildContext;
@@ -483,6 +483,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
                     "at",
                     "mass",
                     "rotation",
+                    "obstacle",
                 ],
             )?;
             let name = opt_string(&t, "object", "name")?
@@ -506,9 +507,15 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
                 rotation,
                 mass: opt_number(&t, "object", "mass")?.unwrap_or(1.0),
             };
-            let index = stage(lua)?
+            let obstacle = opt_bool(&t, "object", "obstacle")?;
+            let mut stage = stage(lua)?;
+            let index = stage
                 .scene
                 .add_object(object)
+                .map_err(|e| lua_err(format!("object: {e}")))?;
+            stage
+                .scene
+                .set_obstacle(index, obstacle)
                 .map_err(|e| lua_err(format!("object: {e}")))?;
             Ok(ObjectRef(index))
         })?,
@@ -561,6 +568,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
             Ok(ObjectRef(i))
         })?,
     )?;
+    crate::space::install(lua, &troupe)?;
     lua.globals().set("troupe", troupe)?;
     Ok(())
 }

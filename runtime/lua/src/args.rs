@@ -7,7 +7,7 @@
 
 use crate::handles::{ActorRef, ObjectRef};
 use crate::stage::with_scene;
-use glam::{DQuat, DVec3, EulerRot};
+use glam::{DQuat, DVec2, DVec3, EulerRot};
 use mlua::{Lua, MultiValue, Table, UserData, Value};
 use troupe_scene::scene::Scene;
 
@@ -143,6 +143,56 @@ pub fn vec3(value: &Value, what: &str) -> mlua::Result<DVec3> {
         }
     };
     Ok(DVec3::new(get(1, "x")?, get(2, "y")?, get(3, "z")?))
+}
+
+/// Reads a floor point for `method`: `{x, z}`, `{x, y, z}` (y must be the floor) or `{x=…, z=…}`.
+pub fn floor_point(v: &Value, method: &str, what: &str) -> mlua::Result<DVec2> {
+    let Value::Table(t) = v else {
+        return Err(err(
+            method,
+            format!(
+                "{what} must be a point {{x, z}} or {{x, 0, z}}, got {}",
+                v.type_name()
+            ),
+        ));
+    };
+    let items: Vec<Value> = t
+        .clone()
+        .sequence_values::<Value>()
+        .collect::<mlua::Result<_>>()?;
+    let nums: Vec<Option<f64>> = items.iter().map(number).collect();
+    let (x, y, z) = match nums.as_slice() {
+        [Some(x), Some(z)] => (*x, 0.0, *z),
+        [Some(x), Some(y), Some(z)] => (*x, *y, *z),
+        [] => {
+            let x = number(&t.get::<Value>("x")?);
+            let z = number(&t.get::<Value>("z")?);
+            let y = number(&t.get::<Value>("y")?).unwrap_or(0.0);
+            match (x, z) {
+                (Some(x), Some(z)) => (x, y, z),
+                _ => {
+                    return Err(err(
+                        method,
+                        format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
+                    ))
+                }
+            }
+        }
+        _ => {
+            return Err(err(
+                method,
+                format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
+            ))
+        }
+    };
+    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+        return Err(err(method, format!("{what} ({x}, {y}, {z}) is not finite")));
+    }
+    if y.abs() > 0.05 {
+        return Err(err(method, format!("{what} ({x}, {y}, {z}) is unreachable by walking: it is {y:.2} m off the floor (y must be 0)"
+        )));
+    }
+    Ok(DVec2::new(x, z))
 }
 
 /// A new Lua table `{x, y, z}`.

@@ -18,6 +18,7 @@ pub mod error;
 mod handles;
 pub mod kinds;
 pub mod settings;
+mod space;
 mod stage;
 
 use crate::args::lua_err;

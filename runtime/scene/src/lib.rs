@@ -17,6 +17,7 @@ pub mod record;
 pub mod scene;
 pub mod scheduler;
 pub mod session;
+pub mod space;
 pub mod tally;
 pub mod timeline;
 pub mod world;

@@ -123,6 +123,8 @@ pub struct Scene {
     profiling: bool,
     profile: StepProfile,
     skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
+    space: crate::space::Space,
+    obstacle_flags: Vec<Option<bool>>,
 }
 
 impl Scene {
@@ -160,6 +162,8 @@ impl Scene {
             profiling: false,
             profile: StepProfile::default(),
             skeleton_cache: Vec::new(),
+            space: crate::space::Space::default(),
+            obstacle_flags: Vec::new(),
         })
     }
 
@@ -195,6 +199,21 @@ impl Scene {
     pub fn objects_mut(&mut self) -> &mut [Object] {
         &mut self.objects
     }
+    /// The shared space: walls and the walkable floor (see [`crate::space`]).
+    pub fn space(&self) -> &crate::space::Space {
+        &self.space
+    }
+
+    /// The shared space, to change.
+    pub(crate) fn space_mut(&mut self) -> &mut crate::space::Space {
+        &mut self.space
+    }
+
+    /// Per object: forced obstacle or not, or `None` for "when it stands on the floor".
+    pub(crate) fn obstacle_flags_mut(&mut self) -> &mut [Option<bool>] {
+        &mut self.obstacle_flags
+    }
+
     /// Status changes of the last tick, in actor order then occurrence order.
     pub fn events(&self) -> &[Event] {
         &self.events
@@ -209,6 +228,8 @@ impl Scene {
             holders: &self.holders,
             board: &self.board,
             input_poses: &self.input_poses,
+            space: &self.space,
+            obstacle_flags: &self.obstacle_flags,
         }
     }
 
@@ -402,6 +423,7 @@ impl Scene {
         }
         self.objects.push(object);
         self.holders.push(None);
+        self.obstacle_flags.push(None);
         Ok(self.objects.len() - 1)
     }
 
@@ -625,6 +647,8 @@ impl Scene {
                 holders: &self.holders,
                 board: &self.board,
                 input_poses: &self.input_poses,
+                space: &self.space,
+                obstacle_flags: &self.obstacle_flags,
             };
             let actors = &self.actors;
             let states = &self.states;

@@ -37,6 +37,10 @@ pub struct World<'a> {
     /// What devices ask of each actor this tick, by actor index (see
     /// [`crate::input_pose`]); empty or `None` for actors no device drives.
     pub input_poses: &'a [Option<crate::input_pose::InputPose>],
+    /// Walls and the walkable floor (see [`crate::space`]).
+    pub space: &'a crate::space::Space,
+    /// Per object: forced obstacle or not, `None` for "when it stands on the floor".
+    pub obstacle_flags: &'a [Option<bool>],
 }
 
 impl World<'_> {
