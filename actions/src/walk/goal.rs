@@ -38,8 +38,9 @@ pub enum Goal {
 
 /// A planned route: the floor points after the start, and the heading to end with.
 pub struct Planned {
-    /// Points to walk through, ending at the goal.
-    pub points: Vec<DVec2>,
+    /// Points to walk through, ending at the goal; each says whether the planner put it
+    /// there (a corner around an obstacle) rather than the script.
+    pub points: Vec<(DVec2, bool)>,
     /// Heading to face on arrival (radians about +Y), when the goal asks for one.
     pub heading: Option<f64>,
 }
@@ -58,7 +59,9 @@ impl Goal {
                 let mut route = Vec::new();
                 let mut from = start;
                 for p in points {
-                    route.extend(world.path(from, *p, radius).map_err(|e| e.to_string())?);
+                    let leg = world.path(from, *p, radius).map_err(|e| e.to_string())?;
+                    let n = leg.len();
+                    route.extend(leg.into_iter().enumerate().map(|(i, q)| (q, i + 1 < n)));
                     from = *p;
                 }
                 Planned {
@@ -120,10 +123,15 @@ fn stand_near(
                 }
                 match ctx.world.space.path(&obstacles, start, stand, radius) {
                     Ok(points) => {
+                        let n = points.len();
                         return Ok(Planned {
-                            points,
+                            points: points
+                                .into_iter()
+                                .enumerate()
+                                .map(|(i, q)| (q, i + 1 < n))
+                                .collect(),
                             heading: Some(dir.x.atan2(dir.y)),
-                        })
+                        });
                     }
                     Err(e) => last = e.to_string(),
                 }
@@ -133,23 +141,25 @@ fn stand_near(
     Err(last)
 }
 
-/// `points` with extra points [`CORNER_PIN`] before and after each corner, so that the
-/// walk rounds a corner only that close to it.
-fn pin_corners(start: DVec2, points: &[DVec2]) -> Vec<DVec2> {
+/// `points` with extra points [`CORNER_PIN`] before and after each corner the planner
+/// made, so that the walk rounds such a corner only that close to it (the script's own
+/// points are rounded as the walk always did).
+fn pin_corners(start: DVec2, points: &[(DVec2, bool)]) -> Vec<(DVec2, bool)> {
     let mut out = Vec::with_capacity(points.len() * 3);
     let mut prev = start;
-    for (i, &p) in points.iter().enumerate() {
-        let Some(&next) = points.get(i + 1) else {
-            out.push(p);
-            break;
-        };
-        let (before, after) = (p - prev, next - p);
-        if before.length() > 2.0 * CORNER_PIN {
-            out.push(p - before.normalize() * CORNER_PIN);
-        }
-        out.push(p);
-        if after.length() > 2.0 * CORNER_PIN {
-            out.push(p + after.normalize() * CORNER_PIN);
+    for (i, &(p, planned)) in points.iter().enumerate() {
+        match points.get(i + 1) {
+            Some(&(next, _)) if planned => {
+                let (before, after) = (p - prev, next - p);
+                if before.length() > 2.0 * CORNER_PIN {
+                    out.push((p - before.normalize() * CORNER_PIN, true));
+                }
+                out.push((p, true));
+                if after.length() > 2.0 * CORNER_PIN {
+                    out.push((p + after.normalize() * CORNER_PIN, true));
+                }
+            }
+            _ => out.push((p, planned)),
         }
         prev = p;
     }

@@ -728,7 +728,7 @@ impl Generator for Walk {
         if let Some(goal) = &self.goal {
             let planned = goal.plan(ctx, start, self.radius)?;
             self.route = Route::Path {
-                points: planned.points,
+                points: planned.points.into_iter().map(|(p, _)| p).collect(),
                 heading: planned.heading.or(self.options.heading),
                 speed: self.options.speed,
             };

@@ -123,7 +123,7 @@ pub struct Scene {
     profiling: bool,
     profile: StepProfile,
     skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
-    space: crate::space::Space,
+    space: troupe_nav::Space,
     obstacle_flags: Vec<Option<bool>>,
 }
 
@@ -162,7 +162,7 @@ impl Scene {
             profiling: false,
             profile: StepProfile::default(),
             skeleton_cache: Vec::new(),
-            space: crate::space::Space::default(),
+            space: troupe_nav::Space::default(),
             obstacle_flags: Vec::new(),
         })
     }
@@ -200,12 +200,12 @@ impl Scene {
         &mut self.objects
     }
     /// The shared space: walls and the walkable floor (see [`crate::space`]).
-    pub fn space(&self) -> &crate::space::Space {
+    pub fn space(&self) -> &troupe_nav::Space {
         &self.space
     }
 
     /// The shared space, to change.
-    pub(crate) fn space_mut(&mut self) -> &mut crate::space::Space {
+    pub(crate) fn space_mut(&mut self) -> &mut troupe_nav::Space {
         &mut self.space
     }
 

@@ -38,7 +38,7 @@ pub struct World<'a> {
     /// [`crate::input_pose`]); empty or `None` for actors no device drives.
     pub input_poses: &'a [Option<crate::input_pose::InputPose>],
     /// Walls and the walkable floor (see [`crate::space`]).
-    pub space: &'a crate::space::Space,
+    pub space: &'a troupe_nav::Space,
     /// Per object: forced obstacle or not, `None` for "when it stands on the floor".
     pub obstacle_flags: &'a [Option<bool>],
 }
