@@ -42,6 +42,7 @@ fn generator_step(c: &mut Criterion) {
         input_poses: &[],
         space: &Default::default(),
         obstacle_flags: &[],
+        crowd: &Default::default(),
     };
     let mut walk = Walk::velocity(
         &skeleton,

@@ -29,6 +29,7 @@ pub(crate) mod lua;
 pub mod options;
 pub mod rig;
 pub mod route;
+pub mod steer;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
 pub use goal::Goal;
@@ -152,6 +153,10 @@ pub struct Walk {
     goal: Option<Goal>,
     /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
     radius: f64,
+    /// How the body departs from the plan to avoid others (see [`steer`]).
+    steer: steer::Steer,
+    /// Scratch: the actors near this one.
+    near: Vec<usize>,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -195,6 +200,8 @@ impl Walk {
             carry_globals: Vec::new(),
             goal: None,
             radius: troupe_scene::space::body_radius(skeleton),
+            steer: steer::Steer::default(),
+            near: Vec::new(),
         })
     }
 
@@ -213,6 +220,15 @@ impl Walk {
         let mut walk = Walk::path(skeleton, placeholder, options)?;
         walk.goal = Some(goal);
         Ok(walk)
+    }
+
+    /// Where the body ends: the plan's end, with the steering's offset.
+    fn end_sample(&self, plan: &Plan) -> RootSample {
+        let mut end = plan.sample(plan.end_time, self.heading);
+        if self.steer.engaged {
+            end.position += self.steer.offset;
+        }
+        end
     }
 
     /// The body radius the walk plans with (m).
@@ -377,9 +393,10 @@ impl Walk {
     /// the feet have caught up with the body, so that no support lasts longer than the
     /// legs can reach. At constant speed it is the speed, as eq. 2-5 wants.
     fn cadence_speed(&self, plan: &Plan, t: f64) -> f64 {
-        let now = plan.speed(t);
-        let ahead = plan.speed(t + CADENCE_LOOKAHEAD);
-        let behind = plan.speed((t - CADENCE_LOOKBACK).max(0.0));
+        let speed = |t: f64| self.steer.speed(plan, t, self.t);
+        let now = speed(t);
+        let ahead = speed(t + CADENCE_LOOKAHEAD);
+        let behind = speed((t - CADENCE_LOOKBACK).max(0.0));
         now.max(ahead).max(behind)
     }
 
@@ -416,11 +433,13 @@ impl Walk {
         let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
-        let end = plan.end_time;
-        let (sample, width) = if t_mid >= end {
-            (plan.sample(end, self.heading), 1.0)
+        let (sample, width) = if self.steer.plan_time(t_mid, self.t) >= plan.end_time {
+            (self.end_sample(plan), 1.0)
         } else {
-            (plan.sample(t_mid, self.heading), self.options.step_width)
+            (
+                self.steer.sample(plan, t_mid, self.t, self.heading),
+                self.options.step_width,
+            )
         };
         let plant = self.spot(leg, &sample, width);
         let step = (plant - from).length();
@@ -506,7 +525,7 @@ impl Walk {
                     let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height)
                         * (1.0 + self.options.run);
                     let swing_time = (1.0 - sigma) * self.cycle(self.cadence).cycle;
-                    let body = plan.speed(self.t);
+                    let body = self.steer.speed(plan, self.t, self.t);
                     let start_rate = if step > 1e-6 {
                         (body * swing_time / step).clamp(0.0, 1.5)
                     } else {
@@ -625,7 +644,7 @@ impl Walk {
 
     /// Computes the whole pose for this tick and writes it.
     fn pose(&mut self, plan: &Plan, out: &mut DofWriter) -> UpperValues {
-        let sample = plan.sample(self.t, self.heading);
+        let sample = self.steer.sample(plan, self.t, self.t, self.heading);
         self.heading = sample.heading;
         let v = sample.speed;
         let a = self.activity(v);
@@ -761,6 +780,7 @@ impl Generator for Walk {
         }
         self.settle_since = None;
         self.twist = [None; 2];
+        self.steer = steer::Steer::default();
         self.plan = Some(plan);
         Ok(())
     }
@@ -770,7 +790,7 @@ impl Generator for Walk {
     fn stop(&mut self) -> bool {
         match &mut self.plan {
             Some(plan) => {
-                plan.stop_at(self.t);
+                plan.stop_at(self.steer.plan_time(self.t, self.t));
                 true
             }
             None => false,
@@ -781,6 +801,9 @@ impl Generator for Walk {
         let Some(plan) = self.plan.take() else {
             return Step::Failed("walk: stepped before it started".into());
         };
+        if matches!(self.route, Route::Path { .. }) {
+            self.steer.decide(ctx, &plan, self.t, &mut self.near);
+        }
         let (root, pelvis, spine, arms) = self.pose(&plan, out);
         let rig = &self.rig;
         for (&d, &v) in rig.root.iter().zip(&root) {
@@ -829,8 +852,8 @@ impl Generator for Walk {
         self.carry(ctx, &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
-        if self.t >= plan.end_time {
-            let end = plan.sample(plan.end_time, self.heading);
+        if self.steer.plan_time(self.t, self.t) >= plan.end_time {
+            let end = self.end_sample(&plan);
             let settled = (0..2).all(|leg| match self.feet[leg] {
                 Foot::Stance { plant, .. } => {
                     (plant - self.spot(leg, &end, 1.0)).length() < 0.01
@@ -847,6 +870,7 @@ impl Generator for Walk {
         }
         // Advance the clock and the phase (dφ = dt / Dc, eq. 2-5).
         self.phase += ctx.dt / self.cycle(self.cadence).cycle;
+        self.steer.advance(ctx.dt);
         self.t += ctx.dt;
         self.plan = Some(plan);
         if done {

@@ -8,10 +8,14 @@
 
 #![warn(missing_docs)]
 
+pub mod avoid;
+pub mod crowd;
 pub mod footprint;
 pub mod radius;
 pub mod space;
 
+pub use avoid::{choose_velocity, Agent};
+pub use crowd::Crowd;
 pub use footprint::Footprint;
 pub use radius::body_radius;
 pub use space::{Floor, NoPath, Space, Wall, CLEARANCE};

@@ -9,7 +9,7 @@ use crate::parallel::WorkerPool;
 use crate::profile::StepProfile;
 use crate::scheduler::{Action, ActorRuntime, TickClock};
 use crate::world::{ActorInfo, Object, World};
-use glam::{DQuat, DVec3};
+use glam::{DQuat, DVec2, DVec3};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
@@ -125,6 +125,9 @@ pub struct Scene {
     skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
     space: troupe_nav::Space,
     obstacle_flags: Vec<Option<bool>>,
+    crowd: troupe_nav::Crowd,
+    /// Per actor: the DOF indices of root_x and root_z.
+    root_dofs: Vec<(usize, usize)>,
 }
 
 impl Scene {
@@ -164,6 +167,8 @@ impl Scene {
             skeleton_cache: Vec::new(),
             space: troupe_nav::Space::default(),
             obstacle_flags: Vec::new(),
+            crowd: troupe_nav::Crowd::default(),
+            root_dofs: Vec::new(),
         })
     }
 
@@ -209,6 +214,28 @@ impl Scene {
         &mut self.space
     }
 
+    /// Where every actor stands and goes, and the obstacles' footprints, from the end of
+    /// the previous tick: what walkers avoid (see [`troupe_nav::Crowd`]).
+    fn update_crowd(&mut self) {
+        let _span = tracing::trace_span!("crowd", tick = self.tick).entered();
+        let footprints = self.world().obstacles();
+        let crowd = &mut self.crowd;
+        crowd.positions.clear();
+        crowd.velocities.clear();
+        for (state, &(x, z)) in self.states.iter().zip(&self.root_dofs) {
+            let root = state.globals[0].translation;
+            crowd.positions.push(DVec2::new(root.x, root.z));
+            crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
+        }
+        crowd.index();
+        crowd.set_footprints(footprints);
+    }
+
+    /// The crowd as of the last tick (see [`troupe_nav::Crowd`]).
+    pub fn crowd(&self) -> &troupe_nav::Crowd {
+        &self.crowd
+    }
+
     /// Per object: forced obstacle or not, or `None` for "when it stands on the floor".
     pub(crate) fn obstacle_flags_mut(&mut self) -> &mut [Option<bool>] {
         &mut self.obstacle_flags
@@ -230,6 +257,7 @@ impl Scene {
             input_poses: &self.input_poses,
             space: &self.space,
             obstacle_flags: &self.obstacle_flags,
+            crowd: &self.crowd,
         }
     }
 
@@ -381,6 +409,9 @@ impl Scene {
         q[skeleton.dof("root_x")?] = desc.at.x;
         q[skeleton.dof("root_z")?] = desc.at.z;
         q[skeleton.dof("root_yaw")?] = desc.facing_degrees.to_radians();
+        self.root_dofs
+            .push((skeleton.dof("root_x")?, skeleton.dof("root_z")?));
+        self.crowd.radii.push(troupe_nav::body_radius(&skeleton));
         let state = ActorState::new(&skeleton, q);
         self.work.push(ActorWork {
             runtime: ActorRuntime::default(),
@@ -637,6 +668,7 @@ impl Scene {
             profile: self.profiling,
         };
         let started = self.profiling.then(Instant::now);
+        self.update_crowd();
         {
             let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
             let world = World {
@@ -649,6 +681,7 @@ impl Scene {
                 input_poses: &self.input_poses,
                 space: &self.space,
                 obstacle_flags: &self.obstacle_flags,
+                crowd: &self.crowd,
             };
             let actors = &self.actors;
             let states = &self.states;

@@ -8,8 +8,10 @@
 use crate::world::World;
 use crate::{Error, Result, Scene};
 use troupe_body::glam::DVec2;
+pub use troupe_nav::avoid::{choose_velocity, Agent};
+pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
 pub use troupe_nav::footprint::ON_FLOOR;
-pub use troupe_nav::{body_radius, Floor, Footprint, NoPath, Space, Wall, CLEARANCE};
+pub use troupe_nav::{body_radius, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE};
 
 impl World<'_> {
     /// Whether object `index` is an obstacle now (see the module docs).

@@ -41,6 +41,9 @@ pub struct World<'a> {
     pub space: &'a troupe_nav::Space,
     /// Per object: forced obstacle or not, `None` for "when it stands on the floor".
     pub obstacle_flags: &'a [Option<bool>],
+    /// Every actor's floor position, velocity and radius, and the obstacles' footprints,
+    /// as of the previous tick (see [`troupe_nav::Crowd`]).
+    pub crowd: &'a troupe_nav::Crowd,
 }
 
 impl World<'_> {
