@@ -780,7 +780,7 @@ impl Generator for Walk {
         }
         self.settle_since = None;
         self.twist = [None; 2];
-        self.steer = steer::Steer::default();
+        self.steer = steer::Steer::start(ctx);
         self.plan = Some(plan);
         Ok(())
     }

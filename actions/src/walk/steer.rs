@@ -11,7 +11,7 @@
 
 use super::route::{direction, Plan, RootSample};
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{choose_velocity, Agent, Footprint, NEIGHBOUR_RANGE};
+use troupe_scene::space::{choose_velocity, Agent, Footprint, GAP, NEIGHBOUR_RANGE};
 use troupe_scene::GeneratorContext;
 
 /// Largest change of the plan's clock rate per second (1 → 0 in 0.8 s).
@@ -28,7 +28,7 @@ const END_RETURN: f64 = 2.0;
 const OBSTACLE_RANGE: f64 = 2.0;
 
 /// How a walk currently departs from its plan.
-#[derive(Clone, Copy, Debug, Default)]
+#[derive(Clone, Debug, Default)]
 pub struct Steer {
     /// Whether avoidance has acted yet; until then the plan's time is the walk's time.
     pub engaged: bool,
@@ -40,6 +40,9 @@ pub struct Steer {
     pub offset: DVec2,
     /// The offset's velocity.
     pub drift: DVec2,
+    /// Actors whose bodies already touched this one's when the walk started (a hand
+    /// held, a group walking together): they are not avoided.
+    pub companions: Vec<usize>,
 }
 
 impl Steer {
@@ -69,6 +72,24 @@ impl Steer {
             self.sample(plan, t, now, 0.0).speed
         } else {
             plan.speed(t)
+        }
+    }
+
+    /// A fresh steering for a walk starting now: notes the companions (see
+    /// [`Steer::companions`]).
+    pub fn start(ctx: &GeneratorContext) -> Steer {
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        let mut companions = Vec::new();
+        if let (Some(&p), Some(&r)) = (crowd.positions.get(me), crowd.radii.get(me)) {
+            crowd.near(p, &mut companions);
+            companions.retain(|&j| {
+                j != me && (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP
+            });
+        }
+        Steer {
+            companions,
+            ..Steer::default()
         }
     }
 
@@ -126,7 +147,7 @@ impl Steer {
         crowd.near(position, others);
         let agents: Vec<Agent> = others
             .iter()
-            .filter(|&&j| j != me)
+            .filter(|&&j| j != me && !self.companions.contains(&j))
             .map(|&j| Agent {
                 position: crowd.positions[j],
                 velocity: crowd.velocities[j],
@@ -158,6 +179,7 @@ impl Steer {
                 rate: 1.0,
                 offset: DVec2::ZERO,
                 drift: DVec2::ZERO,
+                companions: std::mem::take(&mut self.companions),
             };
         }
         let speed = planned.length();

@@ -8,7 +8,7 @@
 use crate::world::World;
 use crate::{Error, Result, Scene};
 use troupe_body::glam::DVec2;
-pub use troupe_nav::avoid::{choose_velocity, Agent};
+pub use troupe_nav::avoid::{choose_velocity, Agent, GAP};
 pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
 pub use troupe_nav::footprint::ON_FLOOR;
 pub use troupe_nav::{body_radius, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE};
