@@ -87,3 +87,14 @@ test("two actors head-on in a 1.2 m corridor pass each other", function()
   expect(deepest <= 0.01, string.format("bodies interpenetrated %.3f m", deepest))
   expect(frozen <= 3, string.format("someone stood still %.1f s", frozen))
 end)
+
+test("troupe.deepest_overlap measures the two most overlapping body discs", function()
+  troupe.actor{ name = "ann" }
+  troupe.actor{ name = "bob", at = {3, 0, 0} }
+  local d, a, b = troupe.deepest_overlap()
+  expect(d == 0 and a == nil and b == nil, "no overlap yet: " .. d)
+  troupe.actor{ name = "cid", at = {0.3, 0, 0} }
+  d, a, b = troupe.deepest_overlap()
+  expect(math.abs(d - (2 * RADIUS - 0.3)) < 0.005 and a == "ann" and b == "cid",
+    string.format("%.3f between %s and %s", d, tostring(a), tostring(b)))
+end)

@@ -75,6 +75,19 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
         })?,
     )?;
     troupe.set(
+        "deepest_overlap",
+        lua.create_function(|lua, ()| {
+            let stage = stage(lua)?;
+            match stage.scene.deepest_overlap() {
+                Some((depth, i, j)) => {
+                    let names = stage.scene.actors();
+                    Ok((depth, Some(names[i].name.clone()), Some(names[j].name.clone())))
+                }
+                None => Ok((0.0, None, None)),
+            }
+        })?,
+    )?;
+    troupe.set(
         "path",
         lua.create_function(|lua, (from, to, options): (Value, Value, Option<Table>)| {
             let from = floor_point(&from, "path", "`from`")?;

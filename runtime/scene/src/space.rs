@@ -88,6 +88,29 @@ impl Scene {
         Ok(())
     }
 
+    /// The two actors whose body discs (radius [`body_radius`] about the root) overlap
+    /// most now, and by how much (m); `None` when no two overlap. A measure for tests
+    /// and reports: the discs hold the bodies standing, so no overlap means no solids
+    /// meet (an arm swung out may reach past its disc).
+    pub fn deepest_overlap(&self) -> Option<(f64, usize, usize)> {
+        let radii = &self.crowd().radii;
+        let at: Vec<DVec2> = self
+            .states()
+            .iter()
+            .map(|s| DVec2::new(s.globals[0].translation.x, s.globals[0].translation.z))
+            .collect();
+        let mut deepest = None;
+        for i in 0..at.len() {
+            for j in i + 1..at.len() {
+                let depth = radii[i] + radii[j] - (at[i] - at[j]).length();
+                if depth > 0.0 && deepest.is_none_or(|(d, _, _)| depth > d) {
+                    deepest = Some((depth, i, j));
+                }
+            }
+        }
+        deepest
+    }
+
     /// Makes object `index` an obstacle (`Some(true)`), never one (`Some(false)`), or one
     /// when it stands on the floor (`None`, the default).
     pub fn set_obstacle(&mut self, index: usize, obstacle: Option<bool>) -> Result<()> {
