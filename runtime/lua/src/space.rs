@@ -81,7 +81,11 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
             match stage.scene.deepest_overlap() {
                 Some((depth, i, j)) => {
                     let names = stage.scene.actors();
-                    Ok((depth, Some(names[i].name.clone()), Some(names[j].name.clone())))
+                    Ok((
+                        depth,
+                        Some(names[i].name.clone()),
+                        Some(names[j].name.clone()),
+                    ))
                 }
                 None => Ok((0.0, None, None)),
             }
