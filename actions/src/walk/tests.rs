@@ -554,7 +554,11 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
     let feet = soles(&skeleton, &rig);
     let mut frames = Vec::new();
     let mut sideways: f64 = 0.0;
-    while scene.time() < 20.0 && !ids.iter().all(|id| scene.action(*id).unwrap().status.is_final()) {
+    while scene.time() < 20.0
+        && !ids
+            .iter()
+            .all(|id| scene.action(*id).unwrap().status.is_final())
+    {
         scene.step();
         let st = &scene.states()[a];
         sideways = sideways.max(st.globals[0].translation.x.abs());

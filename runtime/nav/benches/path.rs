@@ -29,7 +29,7 @@ fn obstacles(rng: &mut Rng) -> Vec<Footprint> {
             let (w, d, a) = (
                 0.4 + rng.next() * 1.6,
                 0.4 + rng.next() * 1.6,
-                rng.next() * 3.14,
+                rng.next() * std::f64::consts::PI,
             );
             let (s, k) = f64::sin_cos(a);
             let corner = |x: f64, z: f64| c + DVec2::new(x * k - z * s, x * s + z * k);
