@@ -1,7 +1,7 @@
 //! The native `.trk` track format: versioned text, one or more sequences of Hermite keys.
 //!
 //! ```text
-//! troupe-trk 1
+//! troupe-trk 2
 //! # comments and blank lines are ignored
 //! sequence wave            # starts a sequence (optional before the first one)
 //! loop true                # optional, default false
@@ -10,7 +10,16 @@
 //! 0 0                      # time value            (default slope)
 //! 0.5 1.2 0                # time value slope
 //! end
+//! track r_wrist_flexion linear   # version 2: an interpolation after the DOF name
+//! 0 0
+//! 1 0.4
+//! end
 //! ```
+//!
+//! A track's interpolation is `cubic` (the default, monotone: it never overshoots its
+//! keys where slopes are not given), `hermite`, `linear` or `step` (see
+//! [`Interpolation`]). Version 1 files have no interpolation word; their tracks are read
+//! as `hermite`, the interpolation they were written for, so an old file plays as it did.
 //!
 //! Numbers are written in Rust's shortest round-trip form, so a sequence read back from
 //! its own output is identical bit for bit.
@@ -18,10 +27,20 @@
 use crate::error::{Error, Result};
 use std::fmt::Write as _;
 use std::path::Path;
-use troupe_motion::sequence::{Key, Sequence, Track};
+use troupe_motion::sequence::{Interpolation, Key, Sequence, Track};
 
 /// The version this build writes; it reads every version up to it.
-pub const TRK_VERSION: u32 = 1;
+pub const TRK_VERSION: u32 = 2;
+
+/// The interpolation of a track that names none in a file of `version`: version 1 meant
+/// the thesis's Hermite slopes.
+fn default_interpolation(version: u32) -> Interpolation {
+    if version == 1 {
+        Interpolation::Hermite
+    } else {
+        Interpolation::Cubic
+    }
+}
 
 /// Reads a file holding exactly one sequence.
 pub fn read_trk(path: impl AsRef<Path>) -> Result<Sequence> {
@@ -85,13 +104,16 @@ pub fn parse_trk(text: &str, file: &str) -> Result<Vec<Sequence>> {
 
     let mut set: Vec<Sequence> = Vec::new();
     let mut current: Option<Sequence> = None;
-    let mut track: Option<(usize, String, Vec<Key>)> = None;
+    let mut track: Option<(usize, String, Interpolation, Vec<Key>)> = None;
     for (n, line) in lines {
-        if let Some((start, dof, keys)) = track.as_mut() {
+        if let Some((start, dof, interpolation, keys)) = track.as_mut() {
             if line == "end" {
                 let (start, dof, keys) = (*start, std::mem::take(dof), std::mem::take(keys));
+                let interpolation = *interpolation;
                 track = None;
-                let t = Track::new(dof, keys).map_err(|e| err(start, e.to_string()))?;
+                let t = Track::new(dof, keys)
+                    .map_err(|e| err(start, e.to_string()))?
+                    .with_interpolation(interpolation);
                 let seq = current.get_or_insert_with(Sequence::default);
                 seq.add_track(t).map_err(|e| err(start, e.to_string()))?;
                 continue;
@@ -147,10 +169,28 @@ pub fn parse_trk(text: &str, file: &str) -> Result<Vec<Sequence>> {
                     .insert(key.to_string(), value.trim().to_string());
             }
             "track" => {
-                if rest.is_empty() || rest.contains(char::is_whitespace) {
-                    return Err(err(n, format!("expected `track DOF_NAME`, found `{line}`")));
-                }
-                track = Some((n, rest.to_string(), Vec::new()));
+                let words: Vec<&str> = rest.split_whitespace().collect();
+                let interpolation = match words[..] {
+                    [_] => default_interpolation(version),
+                    [_, name] if version >= 2 => {
+                        Interpolation::from_name(name).ok_or_else(|| {
+                            err(
+                                n,
+                                format!(
+                                    "unknown interpolation `{name}` (expected cubic, hermite, linear or step)"
+                                ),
+                            )
+                        })?
+                    }
+                    _ if version >= 2 => {
+                        return Err(err(
+                            n,
+                            format!("expected `track DOF_NAME [INTERPOLATION]`, found `{line}`"),
+                        ))
+                    }
+                    _ => return Err(err(n, format!("expected `track DOF_NAME`, found `{line}`"))),
+                };
+                track = Some((n, words[0].to_string(), interpolation, Vec::new()));
             }
             _ => {
                 return Err(err(
@@ -160,7 +200,7 @@ pub fn parse_trk(text: &str, file: &str) -> Result<Vec<Sequence>> {
             }
         }
     }
-    if let Some((start, dof, _)) = track {
+    if let Some((start, dof, _, _)) = track {
         return Err(err(start, format!("track `{dof}` is not closed by `end`")));
     }
     if let Some(seq) = current {
@@ -185,7 +225,14 @@ pub fn format_trk(set: &[Sequence]) -> String {
             let _ = writeln!(out, "meta {k} {v}");
         }
         for track in seq.tracks() {
-            let _ = writeln!(out, "track {}", track.dof());
+            match track.interpolation() {
+                Interpolation::Cubic => {
+                    let _ = writeln!(out, "track {}", track.dof());
+                }
+                other => {
+                    let _ = writeln!(out, "track {} {}", track.dof(), other.name());
+                }
+            }
             for key in track.keys() {
                 match key.slope {
                     Some(s) => {
@@ -214,7 +261,7 @@ mod tests {
     use crate::error::assert_parse_error;
     use proptest::prelude::*;
 
-    const WAVE: &str = "troupe-trk 1\n# a wave\nsequence wave\nloop true\nmeta rate 100\ntrack r_shoulder_abduction\n0 0\n0.5 1.2 0\n1 0\nend\n";
+    const WAVE: &str = "troupe-trk 2\n# a wave\nsequence wave\nloop true\nmeta rate 100\ntrack r_shoulder_abduction\n0 0\n0.5 1.2 0\n1 0\nend\n";
 
     #[test]
     fn parses_and_round_trips() {
@@ -233,6 +280,21 @@ mod tests {
         let cases = [
             ("", 1, "empty file"),
             ("troupe-trk 9\n", 1, "unsupported"),
+            (
+                "troupe-trk 2\ntrack x spline\n0 1\nend\n",
+                2,
+                "unknown interpolation `spline`",
+            ),
+            (
+                "troupe-trk 1\ntrack x linear\n0 1\nend\n",
+                2,
+                "expected `track DOF_NAME`",
+            ),
+            (
+                "troupe-trk 2\ntrack x linear y\n0 1\nend\n",
+                2,
+                "[INTERPOLATION]",
+            ),
             ("troupe-trk 1\ntrack x\n0 zero\nend\n", 3, "value `zero`"),
             ("troupe-trk 1\ntrack x\n0 1\n", 2, "not closed"),
             (
@@ -248,20 +310,44 @@ mod tests {
         }
     }
 
+    #[test]
+    fn interpolation_is_per_track_and_version_1_reads_as_hermite() {
+        let v2 = "troupe-trk 2\ntrack a\n0 0\n1 1\n2 1\nend\ntrack b step\n0 0\n1 1\nend\n";
+        let set = parse_trk(v2, "v2.trk").unwrap();
+        let (a, b) = (&set[0].tracks()[0], &set[0].tracks()[1]);
+        assert_eq!(a.interpolation(), Interpolation::Cubic);
+        assert_eq!(b.interpolation(), Interpolation::Step);
+        assert_eq!(b.value(0.99), 0.0);
+        assert_eq!(parse_trk(&format_trk(&set), "again").unwrap(), set);
+        assert!(format_trk(&set).contains("track b step\n"));
+        // The same keys in a version-1 file keep the overshoot they were written with.
+        let v1 = parse_trk(
+            &v2.replace("troupe-trk 2", "troupe-trk 1")
+                .replace(" step", ""),
+            "v1.trk",
+        )
+        .unwrap();
+        assert_eq!(v1[0].tracks()[0].interpolation(), Interpolation::Hermite);
+        assert!(v1[0].tracks()[0].value(1.5) > 1.0);
+        assert_eq!(a.value(1.5), 1.0);
+    }
+
     proptest! {
         #[test]
         fn any_sequence_round_trips_exactly(
             tracks in proptest::collection::vec(
                 proptest::collection::vec((0.001f64..10.0, -1e6f64..1e6, proptest::option::of(-1e3f64..1e3)), 1..20),
                 1..5),
-            looping in any::<bool>())
+            looping in any::<bool>(),
+            interpolation in proptest::sample::select(Interpolation::ALL.to_vec()))
         {
             let mut seq = Sequence::new("s");
             seq.looping = looping;
             for (i, keys) in tracks.iter().enumerate() {
                 let mut t = 0.0;
                 let keys = keys.iter().map(|(dt, v, s)| { t += dt; Key { time: t, value: *v, slope: *s } }).collect();
-                seq.add_track(Track::new(format!("dof{i}"), keys).unwrap()).unwrap();
+                let track = Track::new(format!("dof{i}"), keys).unwrap();
+                seq.add_track(track.with_interpolation(interpolation)).unwrap();
             }
             let set = vec![seq];
             prop_assert_eq!(parse_trk(&format_trk(&set), "p").unwrap(), set);

@@ -9,4 +9,4 @@ pub mod offline;
 pub mod sequence;
 
 pub use error::{Error, Result};
-pub use sequence::{Key, Sequence, Track};
+pub use sequence::{Interpolation, Key, Sequence, Track};
