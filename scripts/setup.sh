@@ -24,3 +24,14 @@ if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/packa
   npm install --prefix "$tools" --no-save --no-audit --no-fund "gltf-validator@$GLTF_VALIDATOR" >&2 ||
     echo "setup: could not install gltf-validator; its test will be skipped" >&2
 fi
+# Pinocchio (the PyPI package `pin`), for the test that checks troupe's dynamics against
+# an independent RNEA on its own URDF export (runtime/formats/tests/pinocchio_dynamics.rs,
+# skipped with a note without it). Installed from PyPI only, into a venv in .tools/python,
+# once.
+PIN_VERSION=4.1.0
+python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
+if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio" >/dev/null 2>&1; then
+  echo "setup: installing pin==$PIN_VERSION (Pinocchio) into $python_tools" >&2
+  { python3 -m venv "$python_tools" && "$python_tools/bin/pip" install -q "pin==$PIN_VERSION"; } >&2 ||
+    echo "setup: could not install Pinocchio; its test will be skipped" >&2
+fi
