@@ -62,7 +62,20 @@ pub fn read_trk(path: impl AsRef<Path>) -> Result<Sequence> {
 /// Reads every sequence of a file (its objects, if any, are left out: see
 /// [`read_trk_file`]).
 pub fn read_trk_set(path: impl AsRef<Path>) -> Result<Vec<Sequence>> {
-    read_trk_file(path).map(|f| f.sequences)
+    let path = path.as_ref();
+    sequences_only(read_trk_file(path)?, &path.display().to_string())
+}
+
+/// The sequences of a parsed file; a file of objects only is an error naming `file`.
+fn sequences_only(parsed: TrkFile, file: &str) -> Result<Vec<Sequence>> {
+    if parsed.sequences.is_empty() {
+        return Err(Error::Parse {
+            file: file.to_string(),
+            line: 1,
+            message: "no sequence in file (it holds objects only)".into(),
+        });
+    }
+    Ok(parsed.sequences)
 }
 
 /// Reads a whole file: its sequences and its objects.
@@ -92,7 +105,7 @@ pub struct TrkFile {
 /// Parses `.trk` text into its sequences (objects left out); `file` names the source in
 /// errors.
 pub fn parse_trk(text: &str, file: &str) -> Result<Vec<Sequence>> {
-    parse_trk_file(text, file).map(|f| f.sequences)
+    sequences_only(parse_trk_file(text, file)?, file)
 }
 
 /// An object block being read.
@@ -567,8 +580,21 @@ mod tests {
             parse_trk_file(&format_trk_file(&file), "again").unwrap(),
             file
         );
-        // Readers of sequences only see the actors.
+        // Readers of sequences only see the actors, and refuse a file of objects only.
         assert_eq!(parse_trk(WITH_OBJECT, "rec.trk").unwrap(), file.sequences);
+        let objects_only =
+            WITH_OBJECT.replace("sequence ann\ntrack r_elbow_flexion\n0 0\n1 1\nend\n", "");
+        assert_eq!(
+            parse_trk_file(&objects_only, "o.trk").unwrap().objects,
+            file.objects
+        );
+        assert_parse_error(
+            parse_trk(&objects_only, "o.trk"),
+            &objects_only,
+            "o.trk",
+            1,
+            "objects only",
+        );
         // Every shape round-trips.
         for shape in [
             Shape::Box {
