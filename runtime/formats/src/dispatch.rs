@@ -328,7 +328,7 @@ mod tests {
         save_recording(&trk, std::slice::from_ref(&actor), &objects, actors).unwrap();
         let back = crate::trk::read_trk_file(&trk).unwrap();
         assert_eq!(back.objects, objects);
-        assert_eq!(back.sequences, [actor.clone()]);
+        assert_eq!(back.sequences, std::slice::from_ref(&actor));
         // glTF: an animated node with the holders in its extras; the actor still reads back.
         for ext in ["gltf", "glb"] {
             let path = dir.join(format!("rec.{ext}"));
