@@ -1,6 +1,7 @@
 //! Writing a rig as glTF 2.0 with `gltf-json`'s typed structures: a `.gltf` (JSON) with a
 //! `.bin` buffer beside it, or one binary `.glb`.
 
+use super::objects::object_node;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
 use ::gltf::binary::{Glb, Header};
@@ -16,16 +17,16 @@ use troupe_motion::object_motion::ObjectMotion;
 
 /// A growing binary buffer and the document whose buffer views and accessors point into
 /// it.
-pub(crate) struct Builder {
-    pub(crate) root: Root,
-    pub(crate) bytes: Vec<u8>,
+struct Builder {
+    root: Root,
+    bytes: Vec<u8>,
 }
 
 impl Builder {
     /// Adds `count` elements of `type_` from f32 `data` as one view and one accessor; with
     /// `bounds`, the accessor carries its min and max (glTF requires them on animation
     /// inputs).
-    pub(crate) fn floats(
+    fn floats(
         &mut self,
         data: &[f32],
         type_: Type,
@@ -75,7 +76,7 @@ impl Builder {
 
     /// Adds one `LINEAR` sampler from `input` to `output` and a channel driving `path` of
     /// `node`.
-    pub(crate) fn channel(
+    fn channel(
         &mut self,
         animation: &mut json::Animation,
         input: Index<json::Accessor>,
@@ -214,12 +215,7 @@ pub fn to_gltf_with_objects(
             let output = b.floats(&data, Type::Vec3, frames, false);
             b.channel(&mut animation, input, output, j, Property::Translation);
         }
-        roots.extend(super::objects::add_object_nodes(
-            &mut b,
-            &mut animation,
-            input,
-            objects,
-        ));
+        roots.extend(add_object_nodes(&mut b, &mut animation, input, objects));
     }
     pad_to_four(&mut b.bytes);
     let skin = json::Skin {
@@ -249,6 +245,35 @@ pub fn to_gltf_with_objects(
         b.root.push(animation);
     }
     (b.root, b.bytes)
+}
+
+/// Adds a node per recorded object (see [`super::objects`]) and its translation and
+/// rotation channels on the frames whose times accessor is `input`; returns the nodes,
+/// to list among the scene's roots.
+fn add_object_nodes(
+    b: &mut Builder,
+    animation: &mut json::Animation,
+    input: Index<json::Accessor>,
+    objects: &[(&ObjectMotion, Rig)],
+) -> Vec<Index<json::Node>> {
+    let mut nodes = Vec::new();
+    for (object, rig) in objects {
+        let frames = rig.times.len();
+        let added = object_node(object, rig);
+        let node = b.root.push(added.node);
+        let output = b.floats(&added.translations, Type::Vec3, frames, false);
+        b.channel(
+            animation,
+            input,
+            output,
+            node.value(),
+            Property::Translation,
+        );
+        let output = b.floats(&added.rotations, Type::Vec4, frames, false);
+        b.channel(animation, input, output, node.value(), Property::Rotation);
+        nodes.push(node);
+    }
+    nodes
 }
 
 /// Writes `rig` as `path` (`.gltf`) and a `.bin` of the same stem beside it.
