@@ -185,6 +185,13 @@ pub fn save_recording<'a>(
         let times: Vec<f64> = (0..frames).map(|k| k as f64 * frame_time).collect();
         for object in objects {
             let out = beside(&object.name);
+            if written.contains(&out) {
+                return Err(Error::Invalid(format!(
+                    "{}: object `{}` has an actor's name, so its BVH file would replace the actor's",
+                    out.display(),
+                    object.name
+                )));
+            }
             let rig = Rig::from_object(object, start, &times);
             save_rig(&out, &rig, &object.name, frame_time)?;
             written.push(out);
@@ -368,6 +375,12 @@ mod tests {
         let k = 10; // 0.5 s at 20 frames per second
         let p = b.joint_positions(k)[0] / BVH_UNITS_PER_METRE;
         assert!((p - DVec3::new(0.5, 1.0, 0.5)).length() < 1e-9, "{p}");
+        // An object named like one of several actors would overwrite its file: refused.
+        let mut ann = objects[0].clone();
+        ann.name = "bob".into();
+        let two = [actor.clone(), actor.clone()];
+        let err = save_recording(&bvh, &two, &[ann], [("ann", &skel), ("bob", &skel)]);
+        assert!(err.unwrap_err().to_string().contains("has an actor's name"));
         std::fs::remove_dir_all(dir).ok();
     }
 }
