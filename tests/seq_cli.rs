@@ -101,3 +101,21 @@ fn info_prints_positions_as_json() {
     assert_eq!(v["positions"].as_array().unwrap().len(), 4);
     assert_eq!(v["positions"][0]["position"][0], 12.0);
 }
+
+#[test]
+fn info_names_each_tracks_interpolation() {
+    let file = temp("interpolations.trk");
+    std::fs::write(
+        &file,
+        "troupe-trk 2\ntrack a\n0 0\n1 1\nend\ntrack b step\n0 0\n1 1\nend\n",
+    )
+    .unwrap();
+    let path = file.display().to_string();
+    let v: serde_json::Value =
+        serde_json::from_str(&troupe(&["seq", "info", &path, "--json"])).unwrap();
+    let tracks = &v["sequences"][0]["tracks"];
+    assert_eq!(tracks[0]["interpolation"], "cubic");
+    assert_eq!(tracks[1]["interpolation"], "step");
+    let text = troupe(&["seq", "info", &path]);
+    assert!(text.contains("2 keys, step"), "{text}");
+}

@@ -16,7 +16,7 @@ use std::path::Path;
 use std::sync::Arc;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::solid::Shape;
-use troupe_motion::sequence::{Key, Sequence, Track};
+use troupe_motion::sequence::{Interpolation, Key, Sequence, Track};
 use troupe_scene::action::ActionId;
 use troupe_scene::scene::ActorDesc;
 use troupe_scene::world::Object;
@@ -286,7 +286,23 @@ impl UserData for SequenceRef {
         methods.add_method("dofs", |lua, this, ()| {
             lua.create_sequence_from(this.0.tracks().iter().map(|t| t.dof().to_string()))
         });
+        methods.add_method("value", |_, this, (dof, time): (String, f64)| {
+            Ok(sequence_track(&this.0, &dof)?.value(time))
+        });
+        methods.add_method("interpolation", |_, this, dof: String| {
+            Ok(sequence_track(&this.0, &dof)?.interpolation().name())
+        });
     }
+}
+
+/// The track of `dof` in `seq`, or an error naming both.
+fn sequence_track<'a>(seq: &'a Sequence, dof: &str) -> mlua::Result<&'a Track> {
+    seq.track(dof).ok_or_else(|| {
+        lua_err(format!(
+            "sequence `{}` has no track for `{dof}` (see seq:dofs())",
+            seq.name
+        ))
+    })
 }
 
 /// Resolves a path from a script: as given if it exists, else relative to the scene file.
@@ -335,9 +351,24 @@ pub fn load_sequence(
     Ok(seq)
 }
 
-/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = … }`.
+/// The `interpolation` option of `troupe.sequence`, if given.
+fn sequence_interpolation(t: &Table) -> mlua::Result<Option<Interpolation>> {
+    opt_string(t, "sequence", "interpolation")?
+        .map(|name| {
+            Interpolation::from_name(&name).ok_or_else(|| {
+                lua_err(format!(
+                    "sequence: unknown interpolation `{name}` (expected cubic, hermite, linear or step)"
+                ))
+            })
+        })
+        .transpose()
+}
+
+/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = …,
+/// interpolation = … }`.
 fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
     let mut seq = Sequence::new(opt_string(t, "sequence", "name")?.unwrap_or_default());
+    let interpolation = sequence_interpolation(t)?.unwrap_or_default();
     let mut tracks = Vec::new();
     for pair in t.pairs::<String, Value>() {
         let (dof, keys) = pair?;
@@ -346,7 +377,7 @@ fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
                 seq.looping = matches!(keys, Value::Boolean(true));
                 continue;
             }
-            "name" => continue,
+            "name" | "interpolation" => continue,
             _ => {}
         }
         let Value::Table(keys) = keys else {
@@ -386,7 +417,8 @@ fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
                 slope: n(3)?,
             });
         }
-        tracks.push(Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?);
+        let track = Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?;
+        tracks.push(track.with_interpolation(interpolation));
     }
     // Table iteration order is not stable across runs: sort for determinism.
     tracks.sort_by(|a, b| a.dof().cmp(b.dof()));
@@ -531,8 +563,26 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     )?;
     troupe.set(
         "sequence",
-        lua.create_function(|lua, v: Value| match v {
-            Value::String(s) => Ok(SequenceRef(load_sequence(lua, &s.to_str()?, None)?)),
+        lua.create_function(|lua, (v, options): (Value, Option<Table>)| match v {
+            Value::String(s) => {
+                let loaded = load_sequence(lua, &s.to_str()?, None)?;
+                let interpolation = match &options {
+                    Some(o) => {
+                        check_keys(o, "sequence", &["interpolation"])?;
+                        sequence_interpolation(o)?
+                    }
+                    None => None,
+                };
+                Ok(SequenceRef(match interpolation {
+                    // The loaded file stays cached as written; this copy interpolates anew.
+                    Some(i) => {
+                        let mut seq = (*loaded).clone();
+                        seq.set_interpolation(i);
+                        Arc::new(seq)
+                    }
+                    None => loaded,
+                }))
+            }
             Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(&t)?))),
             other => Err(lua_err(format!(
                 "sequence: expects a file path or a table of tracks, got {}",
