@@ -50,13 +50,13 @@ pub fn run(args: ExportArgs) -> Result<ExitCode> {
                 height: a.height.unwrap_or(d.height),
                 mass: a.mass.unwrap_or(d.mass),
             })?;
-            let text = troupe_formats::urdf::urdf(&skeleton, a.fixed_root);
+            let text = troupe_formats::urdf::urdf(&skeleton, a.fixed_root)?;
             std::fs::write(&a.out, &text)
                 .with_context(|| format!("writing {}", a.out.display()))?;
             eprintln!(
                 "wrote {} ({} joints, {} links)",
                 a.out.display(),
-                text.matches("<joint ").count(),
+                text.matches("\n  <joint ").count(),
                 text.matches("<link ").count()
             );
             Ok(ExitCode::SUCCESS)

@@ -5,10 +5,12 @@ Usage: urdf_dynamics.py CASE.json
 
 CASE.json (written by runtime/formats/tests/pinocchio_dynamics.rs) names a URDF file
 (`troupe export urdf` output), whether its root is fixed, the DOF names in troupe's
-order, troupe's armature per DOF, and states {q, qd, qdd, tau} with troupe's torques.
-For each state this script runs Pinocchio's RNEA on the URDF, with troupe's armature (a
-rotor inertia that URDF cannot express) set on Pinocchio's model, and ABA with troupe's
-torques.
+order, and states {q, qd, qdd, tau} with troupe's torques. Everything about the body
+comes from the URDF file alone: Pinocchio reads links and joints; troupe's armature (a
+rotor inertia that core URDF cannot express) is read here from the file's transmissions,
+where the export writes it as Drake's `drake:rotor_inertia` (gear ratio 1), and set on
+Pinocchio's model. For each state this script runs Pinocchio's RNEA, and ABA with
+troupe's torques.
 It prints one JSON object: the largest torque difference (absolute, and relative to the
 state's largest torque) and the DOF where it occurs; the same without the armature;
 whether ABA returned finite accelerations with and without the armature; and how far
@@ -16,9 +18,26 @@ ABA's accelerations (with it) are from the state's qdd.
 """
 import json
 import sys
+import xml.etree.ElementTree as ET
 
 import numpy as np
 import pinocchio as pin
+
+
+DRAKE = "{http://drake.mit.edu}"
+
+
+def urdf_armature(path):
+    """Reflected inertia per joint name from the URDF's transmissions (Drake's convention:
+    rotor inertia times the gear ratio squared)."""
+    armature = {}
+    for t in ET.parse(path).getroot().iter("transmission"):
+        joint = t.find("joint").get("name")
+        actuator = t.find("actuator")
+        rotor = float(actuator.find(DRAKE + "rotor_inertia").get("value"))
+        ratio = float(actuator.find(DRAKE + "gear_ratio").get("value"))
+        armature[joint] = rotor * ratio * ratio
+    return armature
 
 
 def main(path):
@@ -29,7 +48,7 @@ def main(path):
     # URDF is Z up (troupe's Y up is written as Z): gravity along -Z.
     model.gravity = pin.Motion(np.array([0.0, 0.0, -case["gravity"], 0.0, 0.0, 0.0]))
     names = case["dofs"]
-    armature = np.array(case["armature"])
+    armature = urdf_armature(case["urdf"])
     fixed = case["fixed_root"]
     # Which troupe DOFs the URDF has (a fixed root drops the root's six) and where
     # Pinocchio keeps them.
@@ -41,12 +60,12 @@ def main(path):
     for i, n in enumerate(names):
         if i not in used and not fixed:
             raise SystemExit(f"DOF {n} is missing from the URDF")
-    # troupe's armature (rotor inertia on each DOF, which URDF cannot express) goes on
+    # troupe's armature (from the file's transmissions) goes on
     # Pinocchio's model, whose RNEA adds armature * qdd and whose ABA adds it to the
     # articulated inertia.
     arm = np.zeros(model.nv)
     for i, k in zip(used, index):
-        arm[k] = armature[i]
+        arm[k] = armature.get(names[i], 0.0)
     model.armature = arm
     worst = {"relative": 0.0, "absolute": 0.0, "dof": None}
     aba_worst = 0.0

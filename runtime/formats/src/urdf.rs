@@ -12,10 +12,14 @@
 //!   to its joint; every other moving link carries troupe's nominal body (a 1 g bead, see
 //!   [`troupe_body::dynamics::NOMINAL_LINK_MASS`]), as troupe's dynamics model does, so
 //!   that forward-dynamics tools have an inertia on every joint and agree with troupe.
+//! * troupe's armature (the rotor inertia its dynamics adds on each non-root DOF, which
+//!   core URDF cannot express) is written as a `<transmission>` per DOF whose actuator
+//!   carries Drake's `drake:rotor_inertia` with `drake:gear_ratio` 1 (reflected inertia
+//!   = rotor inertia × ratio², Drake's convention); other URDF readers ignore it.
 
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
-use troupe_body::dynamics::{nominal_link_inertia, nominal_links, NOMINAL_LINK_MASS};
+use troupe_body::dynamics::{nominal_link_inertia, nominal_links, Model, NOMINAL_LINK_MASS};
 use troupe_body::skeleton::{DofKind, Skeleton};
 
 /// Troupe's Y-up frame to URDF's Z-up frame: `(x, y, z) ↦ (z, x, y)`.
@@ -71,9 +75,14 @@ pub const NOMINAL_EFFORT: f64 = 1000.0;
 /// Nominal velocity limit written for every moving joint.
 pub const NOMINAL_VELOCITY: f64 = 100.0;
 
+/// Drake's XML namespace, for the `drake:` elements that carry the armature.
+pub const DRAKE_NAMESPACE: &str = "http://drake.mit.edu";
+
 /// The URDF text of `skeleton`; with `fixed_root`, the root joint is attached to
-/// `base_link` by a fixed joint instead of its DOFs.
-pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
+/// `base_link` by a fixed joint instead of its DOFs. Fails when troupe's dynamics model
+/// of the skeleton cannot be built (the armature comes from it).
+pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> Result<String, crate::Error> {
+    let armature = Model::new(skeleton)?.armature().to_vec();
     let c = z_up_matrix();
     let mut s = String::new();
     let _ = writeln!(s, "<?xml version=\"1.0\"?>");
@@ -86,7 +95,11 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
         nominal.iter().filter(|&&b| b).count(),
         NOMINAL_LINK_MASS
     );
-    let _ = writeln!(s, "<robot name=\"{}\">", skeleton.name());
+    let _ = writeln!(
+        s,
+        "<robot name=\"{}\" xmlns:drake=\"{DRAKE_NAMESPACE}\">",
+        skeleton.name()
+    );
     let _ = writeln!(s, "  <link name=\"base_link\"/>");
     for (j, joint) in skeleton.joints().iter().enumerate() {
         // The segment link, with the solids attached to this joint.
@@ -192,11 +205,36 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
                 }
             }
             let _ = writeln!(s, "  </joint>");
+            if armature[d] > 0.0 {
+                transmission(&mut s, &dof.name, armature[d]);
+            }
             from = child;
         }
     }
     let _ = writeln!(s, "</robot>");
-    s
+    Ok(s)
+}
+
+/// Writes the transmission of DOF `name` whose actuator carries troupe's armature as
+/// Drake's rotor inertia (gear ratio 1, so the reflected inertia is the armature).
+fn transmission(s: &mut String, name: &str, armature: f64) {
+    let _ = writeln!(s, "  <transmission name=\"{name}_transmission\">");
+    let _ = writeln!(
+        s,
+        "    <type>transmission_interface/SimpleTransmission</type>"
+    );
+    let _ = writeln!(s, "    <joint name=\"{name}\">");
+    let _ = writeln!(
+        s,
+        "      <hardwareInterface>hardware_interface/EffortJointInterface</hardwareInterface>"
+    );
+    let _ = writeln!(s, "    </joint>");
+    let _ = writeln!(s, "    <actuator name=\"{name}_armature\">");
+    let _ = writeln!(s, "      <mechanicalReduction>1</mechanicalReduction>");
+    let _ = writeln!(s, "      <drake:rotor_inertia value=\"{armature}\"/>");
+    let _ = writeln!(s, "      <drake:gear_ratio value=\"1\"/>");
+    let _ = writeln!(s, "    </actuator>");
+    let _ = writeln!(s, "  </transmission>");
 }
 
 #[cfg(test)]
@@ -318,7 +356,7 @@ mod tests {
         for (name, fixed) in [("adult", false), ("child", false), ("adult", true)] {
             let t = template(name).unwrap();
             let s = t.instantiate(t.default_params()).unwrap();
-            let text = urdf(&s, fixed);
+            let text = urdf(&s, fixed).unwrap();
             let (joints, masses) = parse(&text);
             // Every DOF is a joint named as the DOF, with its limits.
             for (i, d) in s.dofs().iter().enumerate() {
@@ -369,6 +407,50 @@ mod tests {
                         joint.name,
                         g[j].translation
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_moving_dof_carries_troupe_armature_as_drake_rotor_inertia() {
+        for name in ["adult", "child"] {
+            let t = template(name).unwrap();
+            let s = t.instantiate(t.default_params()).unwrap();
+            let model = Model::new(&s).unwrap();
+            for fixed in [true, false] {
+                let text = urdf(&s, fixed).unwrap();
+                let doc = roxmltree::Document::parse(&text).unwrap();
+                let mut written = HashMap::new();
+                for t in doc.descendants().filter(|n| n.has_tag_name("transmission")) {
+                    let joint = t.children().find(|c| c.has_tag_name("joint")).unwrap();
+                    let value = |tag: &str| -> f64 {
+                        t.descendants()
+                            .find(|c| c.has_tag_name((DRAKE_NAMESPACE, tag)))
+                            .and_then(|c| c.attribute("value"))
+                            .unwrap()
+                            .parse()
+                            .unwrap()
+                    };
+                    assert_eq!(value("gear_ratio"), 1.0);
+                    written.insert(joint.attribute("name").unwrap(), value("rotor_inertia"));
+                }
+                let root = model.root_dofs();
+                for (k, d) in s.dofs().iter().enumerate() {
+                    if root.contains(&k) {
+                        assert!(
+                            !written.contains_key(d.name.as_str()),
+                            "{name}: root {}",
+                            d.name
+                        );
+                    } else {
+                        assert_eq!(
+                            written.get(d.name.as_str()),
+                            Some(&model.armature()[k]),
+                            "{name}: {}",
+                            d.name
+                        );
+                    }
                 }
             }
         }

@@ -41,7 +41,7 @@ fn compare(python: &Path, template_name: &str, fixed_root: bool, dir: &Path) -> 
         if fixed_root { "fixed" } else { "free" }
     );
     let urdf_path = dir.join(format!("{tag}.urdf"));
-    std::fs::write(&urdf_path, urdf(&skeleton, fixed_root)).unwrap();
+    std::fs::write(&urdf_path, urdf(&skeleton, fixed_root).unwrap()).unwrap();
     let model = Model::new(&skeleton).unwrap();
     let n = skeleton.dof_count();
     let root = model.root_dofs();
@@ -72,7 +72,6 @@ fn compare(python: &Path, template_name: &str, fixed_root: bool, dir: &Path) -> 
         "fixed_root": fixed_root,
         "gravity": -GRAVITY.y,
         "dofs": skeleton.dofs().iter().map(|d| d.name.clone()).collect::<Vec<_>>(),
-        "armature": model.armature(),
         "states": states,
     });
     let case_path = dir.join(format!("{tag}.json"));
