@@ -22,3 +22,4 @@ pub mod performer;
 pub mod record;
 pub mod space_move;
 pub mod spacemouse;
+pub mod vmc;

@@ -95,8 +95,9 @@ pub(crate) fn new_performer(
     let mut fob = None;
     let mut osc = None;
     let mut glove = None;
+    let mut vmc = None;
     if let Some(d) = &devices {
-        check_keys(d, "performer.devices", &["fob", "glove", "osc"])?;
+        check_keys(d, "performer.devices", &["fob", "glove", "osc", "vmc"])?;
         if let Some(f) = opt::<Table>(d, "fob")? {
             fob = Some(fob_input(
                 lua,
@@ -115,6 +116,31 @@ pub(crate) fn new_performer(
                 ));
             }
             osc = Some(osc_input(&o, &skeleton)?);
+        }
+        if let Some(v) = opt::<Table>(d, "vmc")? {
+            if fob.is_some() || osc.is_some() {
+                return Err(args::err(
+                    "performer.devices",
+                    "give one source of body poses: `fob`, `osc` or `vmc`",
+                ));
+            }
+            let place = troupe_lua::kinds::with_scene(lua, |scene| {
+                let (sk, q) = (&scene.actors()[actor].skeleton, &scene.states()[actor].q);
+                let dof = |n: &str| sk.dof(n).map(|d| q[d]).unwrap_or(0.0);
+                (
+                    glam::DVec3::new(dof("root_x"), 0.0, dof("root_z")),
+                    dof("root_yaw"),
+                )
+            })?;
+            vmc = Some(crate::vmc::lua::vmc_input(
+                lua,
+                &v,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+                place,
+            )?);
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
@@ -144,6 +170,11 @@ pub(crate) fn new_performer(
             driven.insert(d);
         }
     }
+    if let Some(v) = &vmc {
+        for d in v.rig.dofs() {
+            driven.insert(d);
+        }
+    }
     let glove_side = glove.as_ref().map(|g| g.side);
     troupe_lua::kinds::with_scene_mut(lua, |scene| {
         // Nothing asked until the first samples arrive.
@@ -162,6 +193,7 @@ pub(crate) fn new_performer(
         fob,
         osc,
         glove,
+        vmc,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
         made: 0,

@@ -35,6 +35,8 @@ pub struct Performer {
     pub(crate) osc: Option<OscPoses>,
     /// The glove hand.
     pub(crate) glove: Option<GloveInput>,
+    /// Body poses from a VMC sender.
+    pub(crate) vmc: Option<crate::vmc::VmcInput>,
     /// Calibrate as soon as every bird has a sample.
     pub(crate) auto_calibrate: bool,
     /// `troupe.devices.calibrate` asked for a calibration at the next sample.
@@ -139,6 +141,9 @@ impl Performers {
             if let Some(o) = &p.osc {
                 v.push((p.name.clone(), "osc", o.listener.health.report()));
             }
+            if let Some(h) = p.vmc.as_ref().and_then(|m| m.health()) {
+                v.push((p.name.clone(), "vmc", h));
+            }
         }
         v
     }
@@ -210,6 +215,13 @@ impl Performers {
                     o.converter.calibrate_direct(&base_posture(scene, p.actor));
                 }
             }
+            if let Some(v) = &mut p.vmc {
+                let now = &scene.states()[p.actor].q;
+                if let Some(played) = v.poll(time, now) {
+                    changed = true;
+                    newest = newest.max(played.arrived);
+                }
+            }
             if let Some(g) = &mut p.glove {
                 let mut readings = g.source.take(time);
                 readings.extend(osc_glove);
@@ -244,6 +256,9 @@ impl Performers {
             }
             if let Some(o) = &mut p.osc {
                 o.converter.convert(&o.latest, &mut q, &mut mask);
+            }
+            if let Some(v) = &p.vmc {
+                v.apply(&mut q, &mut mask);
             }
             if let Some(g) = &p.glove {
                 if let Some(raw) = &g.latest {
