@@ -24,3 +24,13 @@ if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/packa
   npm install --prefix "$tools" --no-save --no-audit --no-fund "gltf-validator@$GLTF_VALIDATOR" >&2 ||
     echo "setup: could not install gltf-validator; its test will be skipped" >&2
 fi
+# python-osc, an OSC implementation troupe does not use, for the VMC compatibility check
+# (scripts/vmc/compat.py, run by tests/vmc.rs, which is skipped with a note without it).
+# Installed from PyPI only, into .tools/python, once.
+PYTHON_OSC=1.10.2
+pytools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
+if command -v python3 >/dev/null && [ ! -d "$pytools/pythonosc" ]; then
+  echo "setup: installing python-osc==$PYTHON_OSC into $pytools" >&2
+  python3 -m pip install --quiet --disable-pip-version-check --target "$pytools" "python-osc==$PYTHON_OSC" >&2 ||
+    echo "setup: could not install python-osc; the VMC compatibility test will be skipped" >&2
+fi
