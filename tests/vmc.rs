@@ -68,7 +68,11 @@ fn wait_for(d: &troupe_drivers::lua::Devices, count: u64) {
     while received(d) < count && start.elapsed() < Duration::from_secs(10) {
         std::thread::sleep(Duration::from_millis(1));
     }
-    assert!(received(d) >= count, "the listener got {} of {count} datagrams", received(d));
+    assert!(
+        received(d) >= count,
+        "the listener got {} of {count} datagrams",
+        received(d)
+    );
 }
 
 fn health(s: &mut LuaSession, field: &str) -> String {
@@ -93,7 +97,10 @@ fn a_round_trip_puts_every_mapped_joint_within_a_centimetre() {
            end)"#
     ));
     let sk = tx.scene().actors()[0].skeleton.clone();
-    let joints: Vec<usize> = VRM_BONES.iter().map(|b| sk.joint(b.joint).unwrap()).collect();
+    let joints: Vec<usize> = VRM_BONES
+        .iter()
+        .map(|b| sk.joint(b.joint).unwrap())
+        .collect();
     let mut worst = (0.0f64, 0, "");
     for tick in 1..=200 {
         tx.tick().unwrap();
@@ -102,7 +109,10 @@ fn a_round_trip_puts_every_mapped_joint_within_a_centimetre() {
         if tick < 3 {
             continue; // the capture starts on the first tick with a pose
         }
-        let (a, b) = (&tx.scene().states()[0].globals, &rx.scene().states()[0].globals);
+        let (a, b) = (
+            &tx.scene().states()[0].globals,
+            &rx.scene().states()[0].globals,
+        );
         for (bone, &j) in VRM_BONES.iter().zip(&joints) {
             let e = (a[j].translation - b[j].translation).length();
             if e > worst.0 {
@@ -112,8 +122,19 @@ fn a_round_trip_puts_every_mapped_joint_within_a_centimetre() {
     }
     let moved = tx.scene().states()[0].globals[0].translation;
     assert!(moved.z > 0.8, "ann walked ({moved})");
-    assert!(worst.0 < 0.01, "{} off by {:.4} m at tick {}", worst.2, worst.0, worst.1);
-    println!("round trip: worst joint {:.3} mm ({} at tick {})", worst.0 * 1e3, worst.2, worst.1);
+    assert!(
+        worst.0 < 0.01,
+        "{} off by {:.4} m at tick {}",
+        worst.2,
+        worst.0,
+        worst.1
+    );
+    println!(
+        "round trip: worst joint {:.3} mm ({} at tick {})",
+        worst.0 * 1e3,
+        worst.2,
+        worst.1
+    );
 }
 
 fn bone(name: &str, v: [f32; 7]) -> OscPacket {
@@ -169,8 +190,13 @@ fn bad_input_and_bursts_are_counted_and_skipped() {
     assert_eq!(health(&mut rx, "invalid"), "3");
     assert_eq!(health(&mut rx, "unknown_bones"), "1");
     assert_eq!(health(&mut rx, "unknown"), "1");
-    let elbow: f64 = rx.eval("return troupe.get_actor('pat'):dof('r_elbow_flexion')").unwrap();
-    assert!((elbow - std::f64::consts::FRAC_PI_2).abs() < 1e-3, "elbow {elbow}");
+    let elbow: f64 = rx
+        .eval("return troupe.get_actor('pat'):dof('r_elbow_flexion')")
+        .unwrap();
+    assert!(
+        (elbow - std::f64::consts::FRAC_PI_2).abs() < 1e-3,
+        "elbow {elbow}"
+    );
     // A burst of 5000 datagrams: the queue keeps what fits, the rest is counted, and the
     // next tick reads what waits without stalling.
     for _ in 0..5000 {
@@ -183,7 +209,10 @@ fn bad_input_and_bursts_are_counted_and_skipped() {
     let packets: u64 = health(&mut rx, "packets").parse().unwrap();
     let dropped: u64 = health(&mut rx, "dropped_samples").parse().unwrap();
     assert!(packets > 100, "{packets} datagrams read");
-    assert!(packets + dropped <= 5000 + 8 && packets <= 8 + 1024 + 1024, "{packets}, {dropped}");
+    assert!(
+        packets + dropped <= 5000 + 8 && packets <= 8 + 1024 + 1024,
+        "{packets}, {dropped}"
+    );
     assert_eq!(rx.scene().tick(), 5);
 }
 
@@ -224,7 +253,14 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
     )
     .unwrap();
     let mut emu = troupe()
-        .args(["emulate", "vmc", "--from", "scripts/examples/wave.trk", "--seconds", "4"])
+        .args([
+            "emulate",
+            "vmc",
+            "--from",
+            "scripts/examples/wave.trk",
+            "--seconds",
+            "4",
+        ])
         .arg("--to")
         .arg(format!("127.0.0.1:{port}"))
         .stderr(Stdio::null())
@@ -239,7 +275,11 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
     let _ = emu.kill();
     let _ = emu.wait();
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(out.status.success(), "{text}{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let samples: u64 = text
         .split("device pat.vmc: streaming, ")
         .nth(1)
@@ -268,10 +308,17 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
             .arg(&replay)
             .output()
             .unwrap();
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         hashes.push(std::fs::read(&trk).unwrap());
     }
-    assert_eq!(hashes[0], hashes[1], "replays differ between 1 and 2 threads");
+    assert_eq!(
+        hashes[0], hashes[1],
+        "replays differ between 1 and 2 threads"
+    );
 }
 
 #[test]

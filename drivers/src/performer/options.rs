@@ -96,6 +96,7 @@ pub(crate) fn new_performer(
     let mut osc = None;
     let mut glove = None;
     let mut vmc = None;
+    let mut vmc_hand = None;
     if let Some(d) = &devices {
         check_keys(d, "performer.devices", &["fob", "glove", "osc", "vmc"])?;
         if let Some(f) = opt::<Table>(d, "fob")? {
@@ -132,7 +133,7 @@ pub(crate) fn new_performer(
                     dof("root_yaw"),
                 )
             })?;
-            vmc = Some(crate::vmc::lua::vmc_input(
+            let (input, hand) = crate::vmc::lua::vmc_input(
                 lua,
                 &v,
                 &skeleton,
@@ -140,7 +141,9 @@ pub(crate) fn new_performer(
                 recorder.clone(),
                 scene_time,
                 place,
-            )?);
+            )?;
+            vmc = Some(input);
+            vmc_hand = hand;
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
@@ -175,7 +178,7 @@ pub(crate) fn new_performer(
             driven.insert(d);
         }
     }
-    let glove_side = glove.as_ref().map(|g| g.side);
+    let glove_side = glove.as_ref().map(|g| g.side).or(vmc_hand);
     troupe_lua::kinds::with_scene_mut(lua, |scene| {
         // Nothing asked until the first samples arrive.
         scene.set_input_pose(actor, InputPose::new(n, driven))?;

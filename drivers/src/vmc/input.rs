@@ -103,10 +103,16 @@ impl VmcInput {
         }
     }
 
-    /// The listener's health; `None` for a replay.
+    /// The listener's health, with every refused datagram or message counted as a resync
+    /// (what `troupe run` prints); `None` for a replay.
     pub fn health(&self) -> Option<HealthReport> {
         match &self.source {
-            VmcSource::Live(l) => Some(l.health.report()),
+            VmcSource::Live(l) => {
+                let mut h = l.health.report();
+                let c = &self.counters;
+                h.resyncs += c.malformed + c.unknown + c.invalid + c.unknown_bones;
+                Some(h)
+            }
             VmcSource::Replay { .. } => None,
         }
     }

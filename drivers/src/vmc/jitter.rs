@@ -22,6 +22,8 @@ struct Frame {
     pose: VmcPose,
     /// When it arrived (live only): for the latency measurement.
     arrived: Option<Instant>,
+    /// Whether it has been played at full weight.
+    shown: bool,
 }
 
 /// Frames in due order, played `latency` seconds late and interpolated.
@@ -42,7 +44,8 @@ pub struct Playout {
     pub pose: VmcPose,
     /// The sender's time of the newer frame used.
     pub source_time: Option<f64>,
-    /// When the newer frame used arrived (live only).
+    /// When the frame this playout reaches for the first time (at full weight) arrived
+    /// (live only): its sample-to-posture latency ends with this tick.
     pub arrived: Option<Instant>,
 }
 
@@ -89,6 +92,7 @@ impl JitterBuffer {
             source_time,
             pose: self.merged.clone(),
             arrived,
+            shown: false,
         };
         // Keep due order (a late datagram of an older frame slots in).
         let at = self.frames.partition_point(|f| f.due <= due);
@@ -103,23 +107,26 @@ impl JitterBuffer {
         while self.frames.len() >= 2 && self.frames[1].due <= t {
             self.frames.pop_front();
         }
-        let a = self.frames.front()?;
+        let a = self.frames.front_mut()?;
         if a.due > t {
             return None;
         }
+        let arrived = if a.shown { None } else { a.arrived };
+        a.shown = true;
+        let a = &self.frames[0];
         match self.frames.get(1) {
             Some(b) if b.due > a.due => {
                 let u = ((t - a.due) / (b.due - a.due)).clamp(0.0, 1.0);
                 Some(Playout {
                     pose: a.pose.lerp(&b.pose, u),
-                    source_time: b.source_time.or(a.source_time),
-                    arrived: b.arrived.or(a.arrived),
+                    source_time: a.source_time,
+                    arrived,
                 })
             }
             _ => Some(Playout {
                 pose: a.pose.clone(),
                 source_time: a.source_time,
-                arrived: a.arrived,
+                arrived,
             }),
         }
     }

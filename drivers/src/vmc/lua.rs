@@ -10,6 +10,7 @@ use crate::vmc::rig::VmcRig;
 use glam::{DQuat, DVec3};
 use mlua::{Lua, Table, Value};
 use std::sync::Arc;
+use troupe_body::sensors::Side;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::transform::Transform;
 use troupe_lua::api::{lua_err_message, ActorRef};
@@ -35,7 +36,16 @@ pub(crate) fn install(session: &mut LuaSession) -> mlua::Result<()> {
                 .ok_or_else(|| args::err("vmc_out", "`to` (host:port) is required"))?;
             let actor = match t.get::<Value>("actor")? {
                 Value::Nil => None,
-                Value::String(n) => Some(n.to_str()?.to_string()),
+                Value::String(n) => {
+                    let n = n.to_str()?.to_string();
+                    let known = troupe_lua::kinds::with_scene(lua, |sc| {
+                        sc.actors().iter().any(|a| a.name == n)
+                    })?;
+                    if !known {
+                        return Err(args::err("vmc_out", format!("no actor named '{n}'")));
+                    }
+                    Some(n)
+                }
                 Value::UserData(u) => {
                     let i = u.borrow::<ActorRef>()?.0;
                     Some(
@@ -61,7 +71,9 @@ pub(crate) fn install(session: &mut LuaSession) -> mlua::Result<()> {
 }
 
 /// Reads `performer.devices.vmc` into the performer's VMC input for `skeleton`, whose
-/// actor stands at `at` facing `yaw` (the sender's origin is put there).
+/// actor stands at `at` facing `yaw` (the sender's origin is put there), and the hand
+/// whose fingers grasp (`hand = "right"|"left"`: the grasping automaton runs on the
+/// sender's finger bones, as on a glove's).
 pub(crate) fn vmc_input(
     lua: &Lua,
     t: &Table,
@@ -70,9 +82,13 @@ pub(crate) fn vmc_input(
     recorder: Option<Arc<Recorder>>,
     scene_time: f64,
     place: (DVec3, f64),
-) -> mlua::Result<VmcInput> {
+) -> mlua::Result<(VmcInput, Option<Side>)> {
     const WHAT: &str = "performer.devices.vmc";
-    check_keys(t, WHAT, &["listen", "replay", "stream", "latency"])?;
+    check_keys(t, WHAT, &["listen", "replay", "stream", "latency", "hand"])?;
+    let hand = match t.get::<Option<String>>("hand")? {
+        Some(h) => Some(Side::parse(&h).map_err(|e| args::err(WHAT, e))?),
+        None => None,
+    };
     let listen: Option<String> = t.get("listen")?;
     let replay: Option<String> = t.get("replay")?;
     let source = match (listen, replay) {
@@ -112,7 +128,7 @@ pub(crate) fn vmc_input(
     let rig = VmcRig::new(skeleton.clone()).map_err(|e| args::err(WHAT, e))?;
     let (at, yaw) = place;
     let place = Transform::new(DQuat::from_rotation_y(yaw), DVec3::new(at.x, 0.0, at.z));
-    Ok(VmcInput::new(source, rig, place, latency))
+    Ok((VmcInput::new(source, rig, place, latency), hand))
 }
 
 /// A VMC input's health for `troupe.devices.health`: the listener's state and counters

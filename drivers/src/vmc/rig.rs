@@ -285,19 +285,14 @@ impl VmcRig {
     /// length ratio when it sends the shank and foot offsets (its proportions).
     pub fn retarget(&self, pose: &VmcPose, place: &Transform, q: &mut [f64], mask: &mut [bool]) {
         let sk = &self.skeleton;
-        let mut g = vec![Transform::IDENTITY; sk.joints().len()];
-        forward_kinematics(sk, q, &mut g);
         let root = place.mul(&mirror(pose.root.unwrap_or(Transform::IDENTITY)));
         let scale = self.proportions(pose);
-        // Each bone's rotation since the T-pose: received, or the actor's own.
-        let mut since_rest: Vec<DQuat> = self
-            .joints
-            .iter()
-            .zip(&self.rest)
-            .map(|(&j, r)| g[j].rotation * r.inverse())
-            .collect();
+        // Each bone's rotation since the T-pose, parents first: received, or the actor's
+        // own under what was received above it (a bone not sent keeps its local pose).
+        let mut since_rest = vec![DQuat::IDENTITY; self.joints.len()];
         for (i, bone) in pose.bones.iter().enumerate() {
             let Some(local) = bone.map(mirror) else {
+                since_rest[i] = global_rotation(sk, self.joints[i], q) * self.rest[i].inverse();
                 continue;
             };
             let parent = match self.parents[i] {
@@ -314,13 +309,12 @@ impl VmcRig {
                 let top = self.chains[i].first().map(|&d| sk.dofs()[d].joint);
                 let above = top
                     .and_then(|j| sk.joints()[j].parent)
-                    .map(|p| g[p].rotation)
+                    .map(|p| global_rotation(sk, p, q))
                     .unwrap_or(DQuat::IDENTITY);
                 let offset = self.parents[i].map(|p| self.rest[p].inverse() * local.translation);
                 self.solve_bone(i, above.inverse() * wanted, offset, q);
                 self.chains[i].iter().for_each(|&d| mask[d] = true);
             }
-            forward_kinematics(sk, q, &mut g);
         }
     }
 
@@ -413,6 +407,26 @@ impl VmcRig {
 fn swing(from: DVec3, to: DVec3) -> Option<DQuat> {
     let (a, b) = (from.length(), to.length());
     ((a - b).abs() < 1e-3 && a > 1e-6).then(|| DQuat::from_rotation_arc(from / a, to / b))
+}
+
+/// Joint `j`'s global rotation at `q` (joint offsets carry no rotation: the product of
+/// the rotation DOFs from the root down).
+fn global_rotation(skeleton: &Skeleton, j: usize, q: &[f64]) -> DQuat {
+    let mut path = Vec::new();
+    let mut a = Some(j);
+    while let Some(k) = a {
+        path.push(k);
+        a = skeleton.joints()[k].parent;
+    }
+    path.iter().rev().fold(DQuat::IDENTITY, |r, &k| {
+        skeleton.joints()[k].dofs.clone().fold(r, |r, d| {
+            let dof = &skeleton.dofs()[d];
+            match dof.kind {
+                DofKind::Rotation => r * DQuat::from_axis_angle(dof.axis, q[d]),
+                DofKind::Translation => r,
+            }
+        })
+    })
 }
 
 /// The product of the rotations of `dofs` at `q`, in order.
