@@ -472,8 +472,16 @@ pub fn solve_chain(skeleton: &Skeleton, dofs: &[usize], target: DQuat, q: &mut [
             jjt += DMat3::from_cols(*a * a.x, *a * a.y, *a * a.z);
         }
         let y = jjt.inverse() * e;
+        let mut step = 0.0f64;
         for (&d, a) in dofs.iter().zip(&axes) {
-            q[d] += a.dot(y);
+            let delta = a.dot(y);
+            q[d] += delta;
+            step = step.max(delta.abs());
+        }
+        // A target the axes cannot reach exactly (a float32 rotation for a 1-DOF joint)
+        // leaves an error no step reduces: stop when the steps vanish.
+        if step < 1e-12 {
+            break;
         }
     }
 }
