@@ -16,8 +16,8 @@ use troupe_motion::Sequence;
 /// A motion that cannot be loaded or sent.
 #[derive(Debug, thiserror::Error)]
 pub enum VmcEmulatorError {
-    /// The motion file cannot be read.
-    #[error("{path}: {message}")]
+    /// The motion file cannot be read (the message names the file).
+    #[error("{message}")]
     Motion {
         /// The file.
         path: String,
@@ -47,7 +47,8 @@ impl VmcMotion {
             message,
         };
         let skeleton = Arc::new(
-            troupe_body::template::default_skeleton("adult").map_err(|e| err(e.to_string()))?,
+            troupe_body::template::default_skeleton("adult")
+                .map_err(|e| err(format!("{}: {e}", path.display())))?,
         );
         let is_bvh = path
             .extension()
@@ -61,9 +62,14 @@ impl VmcMotion {
         let dofs = sequence
             .tracks()
             .iter()
-            .map(|t| skeleton.dof(t.dof()).map_err(|e| err(e.to_string())))
+            .map(|t| {
+                skeleton
+                    .dof(t.dof())
+                    .map_err(|e| err(format!("{}: {e}", path.display())))
+            })
             .collect::<Result<Vec<_>, _>>()?;
-        let rig = VmcRig::new(skeleton.clone()).map_err(|e| err(e.to_string()))?;
+        let rig =
+            VmcRig::new(skeleton.clone()).map_err(|e| err(format!("{}: {e}", path.display())))?;
         Ok(VmcMotion {
             skeleton,
             rig,
