@@ -36,14 +36,17 @@ if ((${#vrpn_missing[@]})); then
   $SUDO apt-get update -qq
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${vrpn_missing[@]}"
 fi
-# Pinocchio (the PyPI package `pin`), for the test that checks troupe's dynamics against
-# an independent RNEA on its own URDF export (runtime/formats/tests/pinocchio_dynamics.rs,
-# skipped with a note without it). Installed from PyPI only, into a venv in .tools/python,
-# once.
+# Python tools from PyPI, into one venv in .tools/python, once: Pinocchio (`pin`), for the
+# test that checks troupe's dynamics against an independent RNEA on its own URDF export
+# (runtime/formats/tests/pinocchio_dynamics.rs), and python-osc, an OSC implementation
+# troupe does not use, for the VMC compatibility check (scripts/vmc/compat.py, run by
+# tests/vmc.rs). Each test is skipped with a note when its package is missing.
 PIN_VERSION=4.1.0
+PYTHON_OSC=1.10.2
 python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
-if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio" >/dev/null 2>&1; then
-  echo "setup: installing pin==$PIN_VERSION (Pinocchio) into $python_tools" >&2
-  { python3 -m venv "$python_tools" && "$python_tools/bin/pip" install -q "pin==$PIN_VERSION"; } >&2 ||
-    echo "setup: could not install Pinocchio; its test will be skipped" >&2
+if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio, pythonosc" >/dev/null 2>&1; then
+  echo "setup: installing pin==$PIN_VERSION and python-osc==$PYTHON_OSC into $python_tools" >&2
+  { [ -x "$python_tools/bin/pip" ] || python3 -m venv "$python_tools"; } >&2 &&
+    "$python_tools/bin/pip" install -q --disable-pip-version-check "pin==$PIN_VERSION" "python-osc==$PYTHON_OSC" >&2 ||
+    echo "setup: could not install the Python test tools; their tests will be skipped" >&2
 fi

@@ -88,6 +88,13 @@ pub struct RunArgs {
     /// each tick (addresses in docs/devices.md).
     #[arg(long, value_name = "HOST:PORT")]
     pub osc_out: Option<String>,
+    /// Send an actor (default: the first) as a VMC stream to a Marionette at HOST:PORT
+    /// (default port 39539); repeatable (docs/devices.md, "VMC").
+    #[arg(long, value_name = "HOST:PORT[=ACTOR]")]
+    pub vmc_out: Vec<String>,
+    /// Frames per second of scene time of every --vmc-out stream.
+    #[arg(long, default_value_t = troupe_drivers::vmc::output::DEFAULT_RATE, value_name = "HZ")]
+    pub vmc_rate: f64,
 }
 
 /// Runs the scene and prints the summary.
@@ -146,6 +153,13 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         None => None,
     };
+    let mut vmc_out = troupe_drivers::vmc::VmcOut::default();
+    for spec in &args.vmc_out {
+        vmc_out.streams.push(
+            troupe_drivers::vmc::VmcStream::parse(spec, args.vmc_rate)
+                .map_err(|e| anyhow::anyhow!("--vmc-out {spec}: {e}"))?,
+        );
+    }
     let frames = match &args.frames {
         Some(dir) => Some(troupe_viewer::FrameWriter::new(
             dir,
@@ -171,6 +185,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     // What every run, headless or in a window, attaches to its session.
     if let Some(osc) = osc_out {
         session.observe(osc);
+    }
+    if !vmc_out.streams.is_empty() {
+        session.observe(vmc_out);
     }
     if let Some(path) = &args.record {
         session.observe(RecordFile::new(path));

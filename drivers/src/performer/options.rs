@@ -97,8 +97,14 @@ pub(crate) fn new_performer(
     let mut osc = None;
     let mut glove = None;
     let mut vrpn = None;
+    let mut vmc = None;
+    let mut vmc_hand = None;
     if let Some(d) = &devices {
-        check_keys(d, "performer.devices", &["fob", "glove", "osc", "vrpn"])?;
+        check_keys(
+            d,
+            "performer.devices",
+            &["fob", "glove", "osc", "vmc", "vrpn"],
+        )?;
         if let Some(f) = opt::<Table>(d, "fob")? {
             fob = Some(fob_input(
                 lua,
@@ -118,12 +124,16 @@ pub(crate) fn new_performer(
             }
             osc = Some(osc_input(&o, &skeleton)?);
         }
+        // One source of body poses: they would fight over the same DOFs.
+        let one_body_source = || {
+            args::err(
+                "performer.devices",
+                "give one source of body poses: `fob`, `osc`, `vmc` or `vrpn`",
+            )
+        };
         if let Some(v) = opt::<Table>(d, "vrpn")? {
             if fob.is_some() || osc.is_some() {
-                return Err(args::err(
-                    "performer.devices",
-                    "give one of `fob`, `osc` or `vrpn` for the body",
-                ));
+                return Err(one_body_source());
             }
             vrpn = Some(vrpn_input(
                 lua,
@@ -133,6 +143,30 @@ pub(crate) fn new_performer(
                 recorder.clone(),
                 scene_time,
             )?);
+        }
+        if let Some(v) = opt::<Table>(d, "vmc")? {
+            if fob.is_some() || osc.is_some() || vrpn.is_some() {
+                return Err(one_body_source());
+            }
+            let place = troupe_lua::kinds::with_scene(lua, |scene| {
+                let (sk, q) = (&scene.actors()[actor].skeleton, &scene.states()[actor].q);
+                let dof = |n: &str| sk.dof(n).map(|d| q[d]).unwrap_or(0.0);
+                (
+                    glam::DVec3::new(dof("root_x"), 0.0, dof("root_z")),
+                    dof("root_yaw"),
+                )
+            })?;
+            let (input, hand) = crate::vmc::lua::vmc_input(
+                lua,
+                &v,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+                place,
+            )?;
+            vmc = Some(input);
+            vmc_hand = hand;
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
@@ -163,7 +197,12 @@ pub(crate) fn new_performer(
             driven.insert(d);
         }
     }
-    let glove_side = glove.as_ref().map(|g| g.side);
+    if let Some(v) = &vmc {
+        for d in v.rig.dofs() {
+            driven.insert(d);
+        }
+    }
+    let glove_side = glove.as_ref().map(|g| g.side).or(vmc_hand);
     troupe_lua::kinds::with_scene_mut(lua, |scene| {
         // Nothing asked until the first samples arrive.
         scene.set_input_pose(actor, InputPose::new(n, driven))?;
@@ -182,6 +221,7 @@ pub(crate) fn new_performer(
         osc,
         vrpn,
         glove,
+        vmc,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
         made: 0,
