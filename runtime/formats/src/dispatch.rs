@@ -12,7 +12,10 @@
 
 use crate::bvh::{from_rig, write_bvh, Axis, RotationOrder};
 use crate::error::{Error, Result};
-use crate::gltf::{read_gltf_motion, write_glb, write_gltf};
+use crate::gltf::{
+    read_gltf_motion, write_glb, write_glb_skinned, write_gltf, write_gltf_skinned,
+};
+use troupe_body::Skin;
 use crate::retarget::load_sequence_for;
 use crate::rig::Rig;
 use crate::trk::{read_trk, read_trk_set, write_trk};
@@ -132,10 +135,37 @@ pub fn save_sequences<'a>(
             path.with_file_name(format!("{stem}.{actor}.{ext}"))
         };
         let rig = Rig::from_sequence(skeleton, seq)?;
-        save_rig(&out, &rig, actor, seq.frame_time())?;
+        match Format::of(&out)? {
+            // A glTF file of a troupe body carries its skin; a skeleton that is not a
+            // troupe template's is written with bones only.
+            Format::Gltf | Format::Glb => {
+                let skin = match Skin::build(skeleton) {
+                    Ok(skin) => Some(skin),
+                    Err(e) => {
+                        tracing::warn!("{}: written without a skin: {e}", out.display());
+                        None
+                    }
+                };
+                save_skinned(&out, &rig, skin.as_ref(), actor)?
+            }
+            _ => save_rig(&out, &rig, actor, seq.frame_time())?,
+        }
         written.push(out);
     }
     Ok(written)
+}
+
+/// Saves a rig and the skin of its skeleton as glTF (`.gltf` or `.glb` by `path`'s
+/// extension), the scene named `name`.
+pub fn save_skinned(path: &Path, rig: &Rig, skin: Option<&Skin>, name: &str) -> Result<()> {
+    match Format::of(path)? {
+        Format::Gltf => write_gltf_skinned(path, rig, skin, name),
+        Format::Glb => write_glb_skinned(path, rig, skin, name),
+        _ => Err(Error::Invalid(format!(
+            "{}: a skinned character is written as .gltf or .glb",
+            path.display()
+        ))),
+    }
 }
 
 /// Saves a rig's motion to a one-actor format by `path`'s extension: glTF names its scene

@@ -3,6 +3,8 @@
 
 use crate::error::{Error, Result};
 use crate::rig::Rig;
+use super::skin::add_skin;
+use troupe_body::Skin;
 use ::gltf::binary::{Glb, Header};
 use glam::{DMat4, DQuat};
 use gltf_json as json;
@@ -234,13 +236,27 @@ pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) 
 
 /// Writes `rig` as `path` (`.gltf`) and a `.bin` of the same stem beside it.
 pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
+    write_gltf_skinned(path, rig, None, name)
+}
+
+/// Writes `rig` as `path` (`.gltf`) and a `.bin` beside it, with `skin` (made for the
+/// skeleton the rig comes from) as its skinned mesh.
+pub fn write_gltf_skinned(
+    path: impl AsRef<Path>,
+    rig: &Rig,
+    skin: Option<&Skin>,
+    name: &str,
+) -> Result<()> {
     let path = path.as_ref();
     let bin = path.with_extension("bin");
     let uri = bin
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "motion.bin".into());
-    let (root, bytes) = to_gltf(rig, name, Some(&uri));
+    let (mut root, mut bytes) = to_gltf(rig, name, Some(&uri));
+    if let Some(skin) = skin {
+        add_skin(&mut root, &mut bytes, skin, name);
+    }
     let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
     std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
     std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
@@ -248,8 +264,22 @@ pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
 
 /// Writes `rig` as one binary glTF file `path` (`.glb`): a JSON chunk and a binary chunk.
 pub fn write_glb(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
+    write_glb_skinned(path, rig, None, name)
+}
+
+/// Writes `rig` as one binary glTF file `path` (`.glb`) with `skin` (made for the
+/// skeleton the rig comes from) as its skinned mesh.
+pub fn write_glb_skinned(
+    path: impl AsRef<Path>,
+    rig: &Rig,
+    skin: Option<&Skin>,
+    name: &str,
+) -> Result<()> {
     let path = path.as_ref();
-    let (root, bytes) = to_gltf(rig, name, None);
+    let (mut root, mut bytes) = to_gltf(rig, name, None);
+    if let Some(skin) = skin {
+        add_skin(&mut root, &mut bytes, skin, name);
+    }
     let glb = Glb {
         header: Header {
             magic: *b"glTF",
