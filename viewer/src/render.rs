@@ -820,7 +820,7 @@ impl SceneRenderer {
 
     /// Fills the instance list and the skinned actors' blocks; fingers of actors too far
     /// away to show them (under about 6 pixels long) are left out to spare CPU adapters,
-    /// and skins under about 250 pixels tall use their coarse mesh.
+    /// and skins under about 360 pixels tall use their coarse mesh.
     fn build_instances(&mut self, gpu: &Gpu, frame: &Frame, eye: Vec3, pixels_per_metre: f32) {
         self.scratch.clear();
         self.skin_draws.clear();
@@ -840,7 +840,7 @@ impl SceneRenderer {
                         self.skin_data.extend_from_slice(bytemuck::bytes_of(&block));
                         self.skin_data
                             .resize(self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize, 0);
-                        let far = 1.8 * pixels_per_metre / distance < 250.0;
+                        let far = 1.8 * pixels_per_metre / distance < 360.0;
                         self.skin_draws.push((actor.skeleton.clone(), far));
                         continue;
                     }

@@ -126,6 +126,8 @@ pub fn save_sequences<'a>(
         return Ok(vec![path.to_path_buf()]);
     }
     let mut written = Vec::new();
+    // Skins by skeleton: actors of one body share theirs.
+    let mut skins: Vec<(*const Skeleton, Option<Skin>)> = Vec::new();
     for (seq, (actor, skeleton)) in sequences.iter().zip(actors) {
         let out = if sequences.len() == 1 {
             path.to_path_buf()
@@ -139,14 +141,19 @@ pub fn save_sequences<'a>(
             // A glTF file of a troupe body carries its skin; a skeleton that is not a
             // troupe template's is written with bones only.
             Format::Gltf | Format::Glb => {
-                let skin = match Skin::build(skeleton) {
-                    Ok(skin) => Some(skin),
-                    Err(e) => {
-                        tracing::warn!("{}: written without a skin: {e}", out.display());
-                        None
-                    }
-                };
-                save_skinned(&out, &rig, skin.as_ref(), actor)?
+                let key: *const Skeleton = skeleton;
+                if !skins.iter().any(|(k, _)| *k == key) {
+                    let skin = match Skin::build(skeleton) {
+                        Ok(skin) => Some(skin),
+                        Err(e) => {
+                            tracing::warn!("{}: written without a skin: {e}", out.display());
+                            None
+                        }
+                    };
+                    skins.push((key, skin));
+                }
+                let skin = skins.iter().find(|(k, _)| *k == key).and_then(|(_, s)| s.as_ref());
+                save_skinned(&out, &rig, skin, actor)?
             }
             _ => save_rig(&out, &rig, actor, seq.frame_time())?,
         }
@@ -239,6 +246,22 @@ mod tests {
                     dir.join(format!("rec.bob.{ext}"))
                 ]
             );
+            if ext == "gltf" {
+                // A troupe body's glTF carries its skin: one mesh on a root node.
+                let text = std::fs::read_to_string(&written[0]).unwrap();
+                let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+                assert_eq!(doc["meshes"].as_array().map(Vec::len), Some(1));
+                let skinned = doc["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .position(|n| n.get("skin").is_some() && n.get("mesh").is_some())
+                    .unwrap();
+                assert!(doc["scenes"][0]["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .contains(&serde_json::Value::from(skinned)));
+            }
             for (want, got) in both.iter().zip(&loaded) {
                 let time = 0.25;
                 let p = fk_positions(&skel, &posture(&skel, want, time));

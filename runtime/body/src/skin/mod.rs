@@ -32,7 +32,7 @@ use volumes::{Join, Volume};
 /// The most triangles a skin has at full detail.
 pub const MAX_TRIANGLES: usize = 24_000;
 /// Triangles of the coarse level of detail.
-pub const FAR_TRIANGLES: usize = 4_000;
+pub const FAR_TRIANGLES: usize = 6_000;
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -254,13 +254,13 @@ fn vertex_normals(positions: &[DVec3], indices: &[u32]) -> Vec<[f32; 3]> {
         .collect()
 }
 
-/// What covers the skin at `p`: the region of the nearest volume; the front of an
-/// eyeball is its pupil.
+/// What covers the skin at `p`: the region of the volume whose surface is nearest; the
+/// front of an eyeball is its pupil.
 fn region_at(p: DVec3, volumes: &[Volume]) -> Region {
     let nearest = volumes
         .iter()
         .filter(|v| v.join != Join::Carve)
-        .min_by(|a, b| a.form.distance(p).total_cmp(&b.form.distance(p)))
+        .min_by(|a, b| a.form.distance(p).abs().total_cmp(&b.form.distance(p).abs()))
         .expect("a body has volumes");
     match (nearest.region, nearest.form) {
         (Region::Eye, volumes::Form::Ellipsoid { center, radii, .. }) if p.z - center.z > 0.75 * radii.z => {

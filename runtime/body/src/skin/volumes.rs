@@ -234,11 +234,11 @@ impl<'a> Layout<'a> {
         let (vl5, vt12, vt6, vt1) = (self.at("vl5")?, self.at("vt12")?, self.at("vt6")?, self.at("vt1")?);
         let r = self.frustum_radii("up_torso")?.0 / h;
         let stack = [
-            ("sacroiliac", Region::Trousers, DVec3::new(0.0, hip + 0.012 * h, -0.006 * h), DVec3::new(r * 1.1, 0.065, r * 0.78)),
-            ("vl5", Region::Shirt, y(vl5) + DVec3::new(0.0, 0.035 * h, 0.004 * h), DVec3::new(r * 0.98, 0.065, r * 0.7)),
-            ("vt12", Region::Shirt, y(vt12) + DVec3::new(0.0, 0.02 * h, 0.012 * h), DVec3::new(r * 1.02, 0.06, r * 0.72)),
-            ("vt6", Region::Shirt, y(vt6) + DVec3::new(0.0, 0.012 * h, 0.014 * h), DVec3::new(r * 1.12, 0.065, r * 0.76)),
-            ("vt1", Region::Shirt, y(vt1) + DVec3::new(0.0, -0.012 * h, 0.004 * h), DVec3::new(r * 1.2, 0.032, r * 0.6)),
+            ("sacroiliac", Region::Trousers, DVec3::new(0.0, hip + 0.012 * h, -0.006 * h), DVec3::new(r * 1.1, 0.075, r * 0.78)),
+            ("vl5", Region::Shirt, y(vl5) + DVec3::new(0.0, 0.035 * h, 0.004 * h), DVec3::new(r * 0.98, 0.075, r * 0.7)),
+            ("vt12", Region::Shirt, y(vt12) + DVec3::new(0.0, 0.02 * h, 0.012 * h), DVec3::new(r * 1.02, 0.072, r * 0.72)),
+            ("vt6", Region::Shirt, y(vt6) + DVec3::new(0.0, 0.012 * h, 0.014 * h), DVec3::new(r * 1.12, 0.075, r * 0.76)),
+            ("vt1", Region::Shirt, y(vt1) + DVec3::new(0.0, -0.012 * h, 0.004 * h), DVec3::new(r * 1.2, 0.04, r * 0.6)),
         ];
         for (joint, region, center, radii) in stack {
             self.ellipsoid(joint, region, center, radii, 0.03, 0.07)?;

@@ -19,7 +19,9 @@ pub(crate) fn influences(p: DVec3, volumes: &[Volume], neighbours: &impl Fn(usiz
         .map(|v| match v.join {
             // A carved volume moves nothing; the skin it leaves follows the head.
             Join::Carve => f64::INFINITY,
-            _ => v.form.distance(p),
+            // Unsigned: a vertex on an eyeball lies inside the head's ellipsoid, and
+            // belongs to the eyeball, whose surface it is on.
+            _ => v.form.distance(p).abs(),
         })
         .collect();
     let owner = (0..volumes.len())
