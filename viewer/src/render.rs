@@ -489,19 +489,22 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
-        let skin_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-            label: Some("actor skin block"),
-            entries: &[wgpu::BindGroupLayoutEntry {
-                binding: 0,
-                visibility: wgpu::ShaderStages::VERTEX,
-                ty: wgpu::BindingType::Buffer {
-                    ty: wgpu::BufferBindingType::Uniform,
-                    has_dynamic_offset: true,
-                    min_binding_size: wgpu::BufferSize::new(std::mem::size_of::<SkinBlock>() as u64),
-                },
-                count: None,
-            }],
-        });
+        let skin_layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("actor skin block"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(
+                            std::mem::size_of::<SkinBlock>() as u64
+                        ),
+                    },
+                    count: None,
+                }],
+            });
         let skin_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
             label: Some("skin"),
             bind_group_layouts: &[Some(&layout), Some(&skin_layout)],
@@ -752,7 +755,11 @@ impl SceneRenderer {
                 } else {
                     (&skin.indices, skin.count)
                 };
-                pass.set_bind_group(1, &self.skin_bind_group, &[(i as u64 * BLOCK_STRIDE) as u32]);
+                pass.set_bind_group(
+                    1,
+                    &self.skin_bind_group,
+                    &[(i as u64 * BLOCK_STRIDE) as u32],
+                );
                 pass.set_vertex_buffer(0, skin.vertices.slice(..));
                 pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..count, 0, 0..1);
@@ -814,7 +821,8 @@ impl SceneRenderer {
                 Self::skin_buffer(&gpu.device, &self.skin_layout, self.skin_capacity);
         }
         if !self.skin_data.is_empty() {
-            gpu.queue.write_buffer(&self.skin_blocks, 0, &self.skin_data);
+            gpu.queue
+                .write_buffer(&self.skin_blocks, 0, &self.skin_data);
         }
     }
 
@@ -838,8 +846,10 @@ impl SceneRenderer {
                     Some(skin) => {
                         let block = skinned::block(&skin.skin, actor, colors.slots());
                         self.skin_data.extend_from_slice(bytemuck::bytes_of(&block));
-                        self.skin_data
-                            .resize(self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize, 0);
+                        self.skin_data.resize(
+                            self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize,
+                            0,
+                        );
                         let far = 1.8 * pixels_per_metre / distance < 360.0;
                         self.skin_draws.push((actor.skeleton.clone(), far));
                         continue;

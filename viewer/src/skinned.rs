@@ -93,7 +93,10 @@ impl SkinCache {
 /// The colour slot of each vertex: its region, or a hand for bare skin moved mostly by a
 /// joint at or below a wrist (so grasp states can tint the hands).
 fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
-    let wrists = [skeleton.joint("l_wrist").ok(), skeleton.joint("r_wrist").ok()];
+    let wrists = [
+        skeleton.joint("l_wrist").ok(),
+        skeleton.joint("r_wrist").ok(),
+    ];
     let mut hand_of: Vec<Option<u32>> = vec![None; skeleton.joints().len()];
     for (j, joint) in skeleton.joints().iter().enumerate() {
         hand_of[j] = match wrists.iter().position(|w| *w == Some(j)) {
@@ -104,10 +107,12 @@ fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
     skin.regions
         .iter()
         .zip(&skin.joints)
-        .map(|(&region, joints)| match (region, hand_of[joints[0] as usize]) {
-            (Region::Skin, Some(hand)) => hand,
-            _ => region as u32,
-        })
+        .map(
+            |(&region, joints)| match (region, hand_of[joints[0] as usize]) {
+                (Region::Skin, Some(hand)) => hand,
+                _ => region as u32,
+            },
+        )
         .collect()
 }
 
@@ -131,10 +136,22 @@ fn upload(gpu: &Gpu, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSkin {
             })
     };
     GpuSkin {
-        vertices: buffer("skin vertices", bytemuck::cast_slice(&vertices), wgpu::BufferUsages::VERTEX),
-        indices: buffer("skin triangles", bytemuck::cast_slice(&skin.indices), wgpu::BufferUsages::INDEX),
+        vertices: buffer(
+            "skin vertices",
+            bytemuck::cast_slice(&vertices),
+            wgpu::BufferUsages::VERTEX,
+        ),
+        indices: buffer(
+            "skin triangles",
+            bytemuck::cast_slice(&skin.indices),
+            wgpu::BufferUsages::INDEX,
+        ),
         count: skin.indices.len() as u32,
-        far_indices: buffer("skin far triangles", bytemuck::cast_slice(&skin.far_indices), wgpu::BufferUsages::INDEX),
+        far_indices: buffer(
+            "skin far triangles",
+            bytemuck::cast_slice(&skin.far_indices),
+            wgpu::BufferUsages::INDEX,
+        ),
         far_count: skin.far_indices.len() as u32,
         skin,
     }
@@ -157,7 +174,8 @@ pub(crate) fn block(skin: &Skin, actor: &ActorFrame, colors: [[f32; 4]; COLORS])
         .iter_mut()
         .zip(skin.skinning_transforms(&actor.globals))
     {
-        let m = glam::Mat4::from_rotation_translation(t.rotation.as_quat(), t.translation.as_vec3());
+        let m =
+            glam::Mat4::from_rotation_translation(t.rotation.as_quat(), t.translation.as_vec3());
         *slot = m.to_cols_array_2d();
     }
     block

@@ -61,7 +61,11 @@ fn distance_to_bones(
         .iter()
         .zip(weights)
         .filter(|(_, &w)| w > 0.0)
-        .flat_map(|(&j, _)| segs[j as usize].iter().map(move |&s| segment_distance(p, s)))
+        .flat_map(|(&j, _)| {
+            segs[j as usize]
+                .iter()
+                .map(move |&s| segment_distance(p, s))
+        })
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -69,11 +73,21 @@ fn check(skeleton: &Skeleton, label: &str) {
     let started = std::time::Instant::now();
     let skin = Skin::build(skeleton).unwrap();
     let built = started.elapsed();
-    let h = skin.positions.iter().map(|p| p[1] as f64).fold(0.0, f64::max);
+    let h = skin
+        .positions
+        .iter()
+        .map(|p| p[1] as f64)
+        .fold(0.0, f64::max);
     let n = skin.positions.len();
     let tris = skin.triangle_count();
-    eprintln!("{label}: {n} vertices, {tris} triangles (far {}), built in {built:?}", skin.far_indices.len() / 3);
-    assert!(tris <= MAX_TRIANGLES && tris > 5_000, "{label}: {tris} triangles");
+    eprintln!(
+        "{label}: {n} vertices, {tris} triangles (far {}), built in {built:?}",
+        skin.far_indices.len() / 3
+    );
+    assert!(
+        tris <= MAX_TRIANGLES && tris > 5_000,
+        "{label}: {tris} triangles"
+    );
 
     // Closed: every directed edge appears once, and its reverse once.
     let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
@@ -83,7 +97,10 @@ fn check(skeleton: &Skeleton, label: &str) {
         }
     }
     for (&(a, b), &count) in &edges {
-        assert_eq!(count, 1, "{label}: edge {a}-{b} used {count} times the same way");
+        assert_eq!(
+            count, 1,
+            "{label}: edge {a}-{b} used {count} times the same way"
+        );
         assert_eq!(
             edges.get(&(b, a)),
             Some(&1),
@@ -113,8 +130,14 @@ fn check(skeleton: &Skeleton, label: &str) {
     // Weights: at most four, each in [0, 1], summing to one; joints exist.
     for (js, ws) in skin.joints.iter().zip(&skin.weights) {
         let sum: f32 = ws.iter().sum();
-        assert!((sum - 1.0).abs() < 1e-6, "{label}: weights {ws:?} sum to {sum}");
-        assert!(ws.iter().all(|w| (0.0..=1.0).contains(w)), "{label}: weights {ws:?}");
+        assert!(
+            (sum - 1.0).abs() < 1e-6,
+            "{label}: weights {ws:?} sum to {sum}"
+        );
+        assert!(
+            ws.iter().all(|w| (0.0..=1.0).contains(w)),
+            "{label}: weights {ws:?}"
+        );
         assert!(js.iter().all(|&j| (j as usize) < skeleton.joints().len()));
     }
 
@@ -169,7 +192,8 @@ fn check(skeleton: &Skeleton, label: &str) {
             for v in [a, b, c] {
                 for (&j, &w) in skin.joints[v].iter().zip(&skin.weights[v]) {
                     let j = j as usize;
-                    turned += globals[j].rotation * skin.rest[j].rotation.inverse() * rest_n * w as f64;
+                    turned +=
+                        globals[j].rotation * skin.rest[j].rotation.inverse() * rest_n * w as f64;
                 }
             }
             if posed_n.dot(turned) <= 0.0 {

@@ -12,15 +12,13 @@
 
 use crate::bvh::{from_rig, write_bvh, Axis, RotationOrder};
 use crate::error::{Error, Result};
-use crate::gltf::{
-    read_gltf_motion, write_glb, write_glb_skinned, write_gltf, write_gltf_skinned,
-};
-use troupe_body::Skin;
+use crate::gltf::{read_gltf_motion, write_glb, write_glb_skinned, write_gltf, write_gltf_skinned};
 use crate::retarget::load_sequence_for;
 use crate::rig::Rig;
 use crate::trk::{read_trk, read_trk_set, write_trk};
 use std::path::{Path, PathBuf};
 use troupe_body::skeleton::Skeleton;
+use troupe_body::Skin;
 use troupe_motion::sequence::Sequence;
 
 /// The rotation order of the BVH files troupe writes from a body's motion.
@@ -152,7 +150,10 @@ pub fn save_sequences<'a>(
                     };
                     skins.push((key, skin));
                 }
-                let skin = skins.iter().find(|(k, _)| *k == key).and_then(|(_, s)| s.as_ref());
+                let skin = skins
+                    .iter()
+                    .find(|(k, _)| *k == key)
+                    .and_then(|(_, s)| s.as_ref());
                 save_skinned(&out, &rig, skin, actor)?
             }
             _ => save_rig(&out, &rig, actor, seq.frame_time())?,

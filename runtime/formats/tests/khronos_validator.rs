@@ -10,8 +10,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use troupe_body::template::template;
-use troupe_formats::bvh::read_bvh;
 use troupe_body::{Skeleton, Skin};
+use troupe_formats::bvh::read_bvh;
 use troupe_formats::gltf::{write_glb, write_glb_skinned, write_gltf, write_gltf_skinned};
 use troupe_formats::Rig;
 use troupe_motion::sequence::{Key, Sequence, Track};

@@ -49,9 +49,14 @@ pub(crate) fn flip_slivers(positions: &[DVec3], indices: &mut [u32], poor: f64) 
                         .total_cmp(&(p(s[1]) - p(s[0])).length_squared())
                 })
                 .expect("three rotations");
-            let Some(&u) = edges.get(&(b, a)) else { continue };
+            let Some(&u) = edges.get(&(b, a)) else {
+                continue;
+            };
             let ut = tri(indices, u);
-            let d = ut.into_iter().find(|&v| v != a && v != b).expect("a triangle has a third vertex");
+            let d = ut
+                .into_iter()
+                .find(|&v| v != a && v != b)
+                .expect("a triangle has a third vertex");
             if c == d || edges.contains_key(&(c, d)) || edges.contains_key(&(d, c)) {
                 continue;
             }

@@ -72,9 +72,14 @@ impl Skin {
         let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, &neighbours);
         let (dense_positions, dense_indices) = field.triangulate();
         if dense_indices.is_empty() {
-            return Err(Error::Invalid("skin: the body's volumes enclose nothing".into()));
+            return Err(Error::Invalid(
+                "skin: the body's volumes enclose nothing".into(),
+            ));
         }
-        let points: Vec<[f32; 3]> = dense_positions.iter().map(|p| p.as_vec3().to_array()).collect();
+        let points: Vec<[f32; 3]> = dense_positions
+            .iter()
+            .map(|p| p.as_vec3().to_array())
+            .collect();
         let adapter = meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&points), 12, 0)
             .map_err(|e| Error::Invalid(format!("skin: {e}")))?;
         let full = simplify_closed(&dense_indices, &adapter, height)?;
@@ -195,7 +200,12 @@ fn simplify_closed(
                 if !lock[v as usize] {
                     lock[v as usize] = true;
                 }
-                next.extend(rings[v as usize].iter().copied().filter(|&n| !lock[n as usize]));
+                next.extend(
+                    rings[v as usize]
+                        .iter()
+                        .copied()
+                        .filter(|&n| !lock[n as usize]),
+                );
             }
             frontier = next;
         }
@@ -204,7 +214,8 @@ fn simplify_closed(
         }
     }
     Err(Error::Invalid(
-        "skin: the simplified surface stayed pinched (an edge shared by more than two triangles)".into(),
+        "skin: the simplified surface stayed pinched (an edge shared by more than two triangles)"
+            .into(),
     ))
 }
 
@@ -260,10 +271,17 @@ fn region_at(p: DVec3, volumes: &[Volume]) -> Region {
     let nearest = volumes
         .iter()
         .filter(|v| v.join != Join::Carve)
-        .min_by(|a, b| a.form.distance(p).abs().total_cmp(&b.form.distance(p).abs()))
+        .min_by(|a, b| {
+            a.form
+                .distance(p)
+                .abs()
+                .total_cmp(&b.form.distance(p).abs())
+        })
         .expect("a body has volumes");
     match (nearest.region, nearest.form) {
-        (Region::Eye, volumes::Form::Ellipsoid { center, radii, .. }) if p.z - center.z > 0.75 * radii.z => {
+        (Region::Eye, volumes::Form::Ellipsoid { center, radii, .. })
+            if p.z - center.z > 0.75 * radii.z =>
+        {
             Region::Pupil
         }
         (region, _) => region,
@@ -298,4 +316,3 @@ fn neighbour_test(skeleton: &Skeleton, volumes: &[Volume]) -> impl Fn(usize, usi
             || (fleshy_parent[a].is_none() && fleshy_parent[b].is_none())
     }
 }
-

@@ -32,7 +32,11 @@ impl Field {
     /// Samples the union of `volumes` with cells of `cell` metres. Two volumes blend
     /// smoothly only when `neighbours` says their joints are adjacent: an arm hanging
     /// beside the torso stays apart from it, while the shoulder blends into the chest.
-    pub fn sample(volumes: &[Volume], cell: f64, neighbours: impl Fn(usize, usize) -> bool) -> Field {
+    pub fn sample(
+        volumes: &[Volume],
+        cell: f64,
+        neighbours: impl Fn(usize, usize) -> bool,
+    ) -> Field {
         let margin = cell * 3.0;
         let (mut lo, mut hi) = (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY));
         for v in volumes {
@@ -53,7 +57,9 @@ impl Field {
             for (vi, v) in volumes.iter().enumerate().filter(|(_, v)| v.join == join) {
                 let (a, b) = v.form.bounds();
                 let reach = margin + v.blend;
-                let from = ((a - DVec3::splat(reach) - origin) / cell).floor().max(DVec3::ZERO);
+                let from = ((a - DVec3::splat(reach) - origin) / cell)
+                    .floor()
+                    .max(DVec3::ZERO);
                 let to = ((b + DVec3::splat(reach) - origin) / cell).ceil();
                 for k in from.z as usize..=(to.z as usize).min(dims[2] - 1) {
                     for j in from.y as usize..=(to.y as usize).min(dims[1] - 1) {
@@ -65,7 +71,9 @@ impl Field {
                             let new = match join {
                                 Join::Add => {
                                     let o = owner[at];
-                                    let k = if o != u16::MAX && neighbours(volumes[o as usize].joint, v.joint) {
+                                    let k = if o != u16::MAX
+                                        && neighbours(volumes[o as usize].joint, v.joint)
+                                    {
                                         v.blend.max(volumes[o as usize].blend)
                                     } else {
                                         0.0
@@ -121,7 +129,11 @@ impl Field {
         let mut indices = Vec::new();
         let mut on_edge: HashMap<(u32, u32), u32> = HashMap::new();
         let mut crossing = |a: usize, b: usize, vertices: &mut Vec<DVec3>| -> u32 {
-            let key = if a < b { (a as u32, b as u32) } else { (b as u32, a as u32) };
+            let key = if a < b {
+                (a as u32, b as u32)
+            } else {
+                (b as u32, a as u32)
+            };
             *on_edge.entry(key).or_insert_with(|| {
                 let (va, vb) = (value(a) as f64, value(b) as f64);
                 let t = va / (va - vb);
@@ -152,10 +164,15 @@ impl Field {
                     }
                     for tet in TETS {
                         let t = tet.map(|c| corners[c]);
-                        let (ins, outs): (Vec<usize>, Vec<usize>) = t.iter().partition(|&&c| value(c) < 0.0);
+                        let (ins, outs): (Vec<usize>, Vec<usize>) =
+                            t.iter().partition(|&&c| value(c) < 0.0);
                         let tris: Vec<[u32; 3]> = match (ins.len(), outs.len()) {
                             (1, 3) | (3, 1) => {
-                                let (one, three) = if ins.len() == 1 { (&ins, &outs) } else { (&outs, &ins) };
+                                let (one, three) = if ins.len() == 1 {
+                                    (&ins, &outs)
+                                } else {
+                                    (&outs, &ins)
+                                };
                                 vec![[0, 1, 2].map(|m| crossing(one[0], three[m], &mut vertices))]
                             }
                             (2, 2) => {
@@ -169,10 +186,16 @@ impl Field {
                         };
                         // Orient each triangle so that its normal points from the inside
                         // corners to the outside ones.
-                        let centroid = |cs: &[usize]| cs.iter().map(|&c| position(c)).sum::<DVec3>() / cs.len() as f64;
+                        let centroid = |cs: &[usize]| {
+                            cs.iter().map(|&c| position(c)).sum::<DVec3>() / cs.len() as f64
+                        };
                         let outward = centroid(&outs) - centroid(&ins);
                         for [a, b, c] in tris {
-                            let (pa, pb, pc) = (vertices[a as usize], vertices[b as usize], vertices[c as usize]);
+                            let (pa, pb, pc) = (
+                                vertices[a as usize],
+                                vertices[b as usize],
+                                vertices[c as usize],
+                            );
                             if (pb - pa).cross(pc - pa).dot(outward) >= 0.0 {
                                 indices.extend_from_slice(&[a, b, c]);
                             } else {

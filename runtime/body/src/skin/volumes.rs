@@ -33,7 +33,12 @@ pub enum Region {
 #[derive(Clone, Copy, Debug)]
 pub(crate) enum Form {
     /// A capsule whose radius goes linearly from `ra` at `a` to `rb` at `b`.
-    Cone { a: DVec3, b: DVec3, ra: f64, rb: f64 },
+    Cone {
+        a: DVec3,
+        b: DVec3,
+        ra: f64,
+        rb: f64,
+    },
     /// An ellipsoid with semi-axes `radii` in the frame turned by `rotation`.
     Ellipsoid {
         center: DVec3,
@@ -107,7 +112,6 @@ impl Form {
             }
         }
     }
-
 }
 
 /// The rest-pose joint frames of `skeleton` (every DOF at zero).
@@ -140,7 +144,11 @@ impl<'a> Layout<'a> {
             .iter()
             .find(|(j, _)| *j == skull)
             .map(|(_, off)| rest[skull].transform_point(*off))
-            .ok_or_else(|| Error::Invalid("skin: the skullbase joint has no end site (the top of the head)".into()))?;
+            .ok_or_else(|| {
+                Error::Invalid(
+                    "skin: the skullbase joint has no end site (the top of the head)".into(),
+                )
+            })?;
         Ok(Layout {
             skeleton,
             rest,
@@ -190,7 +198,14 @@ impl<'a> Layout<'a> {
         }
     }
 
-    fn push(&mut self, joint: &str, region: Region, form: Form, blend: f64, reach: f64) -> Result<()> {
+    fn push(
+        &mut self,
+        joint: &str,
+        region: Region,
+        form: Form,
+        blend: f64,
+        reach: f64,
+    ) -> Result<()> {
         let joint = self.skeleton.joint(joint)?;
         self.out.push(Volume {
             form,
@@ -203,11 +218,15 @@ impl<'a> Layout<'a> {
         Ok(())
     }
 
-    fn cone(&mut self, joint: &str, region: Region, a: DVec3, b: DVec3, ra: f64, rb: f64, blend: f64, reach: f64) -> Result<()> {
-        self.push(joint, region, Form::Cone { a, b, ra, rb }, blend, reach)
-    }
-
-    fn ellipsoid(&mut self, joint: &str, region: Region, center: DVec3, radii: DVec3, blend: f64, reach: f64) -> Result<()> {
+    fn ellipsoid(
+        &mut self,
+        joint: &str,
+        region: Region,
+        center: DVec3,
+        radii: DVec3,
+        blend: f64,
+        reach: f64,
+    ) -> Result<()> {
         let form = Form::Ellipsoid {
             center,
             radii: radii * self.h,
@@ -231,14 +250,44 @@ impl<'a> Layout<'a> {
         let h = self.h;
         let y = |v: DVec3| DVec3::new(0.0, v.y, v.z);
         let hip = self.at("l_hip")?.y;
-        let (vl5, vt12, vt6, vt1) = (self.at("vl5")?, self.at("vt12")?, self.at("vt6")?, self.at("vt1")?);
+        let (vl5, vt12, vt6, vt1) = (
+            self.at("vl5")?,
+            self.at("vt12")?,
+            self.at("vt6")?,
+            self.at("vt1")?,
+        );
         let r = self.frustum_radii("up_torso")?.0 / h;
         let stack = [
-            ("sacroiliac", Region::Trousers, DVec3::new(0.0, hip + 0.012 * h, -0.006 * h), DVec3::new(r * 1.1, 0.075, r * 0.78)),
-            ("vl5", Region::Shirt, y(vl5) + DVec3::new(0.0, 0.035 * h, 0.004 * h), DVec3::new(r * 0.98, 0.075, r * 0.7)),
-            ("vt12", Region::Shirt, y(vt12) + DVec3::new(0.0, 0.02 * h, 0.012 * h), DVec3::new(r * 1.02, 0.072, r * 0.72)),
-            ("vt6", Region::Shirt, y(vt6) + DVec3::new(0.0, 0.012 * h, 0.014 * h), DVec3::new(r * 1.12, 0.075, r * 0.76)),
-            ("vt1", Region::Shirt, y(vt1) + DVec3::new(0.0, -0.012 * h, 0.004 * h), DVec3::new(r * 1.2, 0.04, r * 0.6)),
+            (
+                "sacroiliac",
+                Region::Trousers,
+                DVec3::new(0.0, hip + 0.012 * h, -0.006 * h),
+                DVec3::new(r * 1.1, 0.075, r * 0.78),
+            ),
+            (
+                "vl5",
+                Region::Shirt,
+                y(vl5) + DVec3::new(0.0, 0.035 * h, 0.004 * h),
+                DVec3::new(r * 0.98, 0.075, r * 0.7),
+            ),
+            (
+                "vt12",
+                Region::Shirt,
+                y(vt12) + DVec3::new(0.0, 0.02 * h, 0.012 * h),
+                DVec3::new(r * 1.02, 0.072, r * 0.72),
+            ),
+            (
+                "vt6",
+                Region::Shirt,
+                y(vt6) + DVec3::new(0.0, 0.012 * h, 0.014 * h),
+                DVec3::new(r * 1.12, 0.075, r * 0.76),
+            ),
+            (
+                "vt1",
+                Region::Shirt,
+                y(vt1) + DVec3::new(0.0, -0.012 * h, 0.004 * h),
+                DVec3::new(r * 1.2, 0.04, r * 0.6),
+            ),
         ];
         for (joint, region, center, radii) in stack {
             self.ellipsoid(joint, region, center, radii, 0.03, 0.07)?;
@@ -250,28 +299,80 @@ impl<'a> Layout<'a> {
         let h = self.h;
         let vt1 = self.at("vt1")?;
         let skull = self.at("skullbase")?;
-        self.cone("vc4", Region::Skin, vt1 + DVec3::new(0.0, 0.01 * h, 0.0), skull + DVec3::new(0.0, 0.012 * h, 0.0), 0.030 * h, 0.026 * h, 0.02, 0.04)?;
+        self.push(
+            "vc4",
+            Region::Skin,
+            Form::Cone {
+                a: vt1 + DVec3::new(0.0, 0.01 * h, 0.0),
+                b: skull + DVec3::new(0.0, 0.012 * h, 0.0),
+                ra: 0.030 * h,
+                rb: 0.026 * h,
+            },
+            0.02,
+            0.04,
+        )?;
         let (shape, center) = self.solid("head_neck")?;
         let Shape::Ellipsoid { radii } = shape else {
-            return Err(Error::Invalid("skin: the head_neck solid is not an ellipsoid".into()));
+            return Err(Error::Invalid(
+                "skin: the head_neck solid is not an ellipsoid".into(),
+            ));
         };
         let r = radii / h;
         self.ellipsoid("skullbase", Region::Skin, center, r, 0.015, 0.03)?;
         // Jaw and chin: a smaller ellipsoid low and forward.
         let jaw = center + DVec3::new(0.0, -0.5 * radii.y, 0.3 * radii.z);
-        self.ellipsoid("skullbase", Region::Skin, jaw, r * DVec3::new(0.75, 0.5, 0.6), 0.012, 0.03)?;
+        self.ellipsoid(
+            "skullbase",
+            Region::Skin,
+            jaw,
+            r * DVec3::new(0.75, 0.5, 0.6),
+            0.012,
+            0.03,
+        )?;
         let eye_l = self.at("l_eyeball_joint")?;
-        let front = |x: f64, y: f64| center.z + radii.z * (1.0 - (x / radii.x).powi(2) - ((y - center.y) / radii.y).powi(2)).max(0.0).sqrt();
+        let front = |x: f64, y: f64| {
+            center.z
+                + radii.z
+                    * (1.0 - (x / radii.x).powi(2) - ((y - center.y) / radii.y).powi(2))
+                        .max(0.0)
+                        .sqrt()
+        };
         // Nose: from between the eyes down and out.
         let root = DVec3::new(0.0, eye_l.y - 0.004 * h, front(0.0, eye_l.y) - 0.006 * h);
-        let tip = DVec3::new(0.0, eye_l.y - 0.024 * h, front(0.0, eye_l.y - 0.024 * h) + 0.009 * h);
-        self.cone("skullbase", Region::Skin, root, tip, 0.0035 * h, 0.0065 * h, 0.006, 0.02)?;
+        let tip = DVec3::new(
+            0.0,
+            eye_l.y - 0.024 * h,
+            front(0.0, eye_l.y - 0.024 * h) + 0.009 * h,
+        );
+        self.push(
+            "skullbase",
+            Region::Skin,
+            Form::Cone {
+                a: root,
+                b: tip,
+                ra: 0.0035 * h,
+                rb: 0.0065 * h,
+            },
+            0.006,
+            0.02,
+        )?;
         for s in ["l_", "r_"] {
             let eye = self.at(&format!("{s}eyeball_joint"))?;
             let side = eye.x.signum();
             // Ears: flat ellipsoids on the sides, at eye height, a little behind centre.
-            let ear = DVec3::new(side * (radii.x + 0.002 * h), eye.y - 0.006 * h, center.z - 0.012 * h);
-            self.ellipsoid("skullbase", Region::Skin, ear, DVec3::new(0.006, 0.018, 0.011), 0.006, 0.02)?;
+            let ear = DVec3::new(
+                side * (radii.x + 0.002 * h),
+                eye.y - 0.006 * h,
+                center.z - 0.012 * h,
+            );
+            self.ellipsoid(
+                "skullbase",
+                Region::Skin,
+                ear,
+                DVec3::new(0.006, 0.018, 0.011),
+                0.006,
+                0.02,
+            )?;
             // The socket is carved where the eyeball sits, the eyeball set in afterwards.
             let socket_joint = self.skeleton.joint("skullbase")?;
             let eyeball_z = front(eye.x, eye.y) - 0.009 * h;
@@ -306,15 +407,60 @@ impl<'a> Layout<'a> {
     fn arm(&mut self, s: &str) -> Result<()> {
         let h = self.h;
         let j = |n: &str| format!("{s}{n}");
-        let (clavicle, shoulder, elbow, wrist) = (self.at(&j("sternoclavicular"))?, self.at(&j("shoulder"))?, self.at(&j("elbow"))?, self.at(&j("wrist"))?);
+        let (clavicle, shoulder, elbow, wrist) = (
+            self.at(&j("sternoclavicular"))?,
+            self.at(&j("shoulder"))?,
+            self.at(&j("elbow"))?,
+            self.at(&j("wrist"))?,
+        );
         let (ue, us) = self.frustum_radii(&j("upper_arm"))?;
         let (fw, fe) = self.frustum_radii(&j("forearm"))?;
         // Trapezius from the base of the neck to the shoulder, the deltoid capping it.
         let neck = DVec3::new(clavicle.x * 0.3, clavicle.y + 0.012 * h, -0.01 * h);
-        self.cone(&j("sternoclavicular"), Region::Shirt, neck, shoulder + DVec3::new(0.0, 0.004 * h, -0.004 * h), 0.03 * h, 0.024 * h, 0.02, 0.04)?;
-        self.ellipsoid(&j("shoulder"), Region::Shirt, shoulder + DVec3::new(0.0, -0.02 * h, 0.0), DVec3::new(0.03, 0.045, 0.031), 0.02, 0.05)?;
-        self.cone(&j("shoulder"), Region::Shirt, shoulder, elbow, us, ue, 0.02, 0.05)?;
-        self.cone(&j("elbow"), Region::Skin, elbow, wrist, fe, fw, 0.015, 0.05)?;
+        self.push(
+            &j("sternoclavicular"),
+            Region::Shirt,
+            Form::Cone {
+                a: neck,
+                b: shoulder + DVec3::new(0.0, 0.004 * h, -0.004 * h),
+                ra: 0.03 * h,
+                rb: 0.024 * h,
+            },
+            0.02,
+            0.04,
+        )?;
+        self.ellipsoid(
+            &j("shoulder"),
+            Region::Shirt,
+            shoulder + DVec3::new(0.0, -0.02 * h, 0.0),
+            DVec3::new(0.03, 0.045, 0.031),
+            0.02,
+            0.05,
+        )?;
+        self.push(
+            &j("shoulder"),
+            Region::Shirt,
+            Form::Cone {
+                a: shoulder,
+                b: elbow,
+                ra: us,
+                rb: ue,
+            },
+            0.02,
+            0.05,
+        )?;
+        self.push(
+            &j("elbow"),
+            Region::Skin,
+            Form::Cone {
+                a: elbow,
+                b: wrist,
+                ra: fe,
+                rb: fw,
+            },
+            0.015,
+            0.05,
+        )?;
         Ok(())
     }
 
@@ -333,7 +479,11 @@ impl<'a> Layout<'a> {
         let rotation = DQuat::from_rotation_arc(DVec3::Y, -along.normalize());
         let palm = Form::Ellipsoid {
             center: wrist + along * 0.55,
-            radii: DVec3::new(0.55 * finger_r * 2.4, along.length() * 0.62, across.length() * 0.5 + finger_r * 1.1),
+            radii: DVec3::new(
+                0.55 * finger_r * 2.4,
+                along.length() * 0.62,
+                across.length() * 0.5 + finger_r * 1.1,
+            ),
             rotation,
         };
         let joint = self.skeleton.joint(&j("wrist"))?;
@@ -346,19 +496,49 @@ impl<'a> Layout<'a> {
             reach: 0.02 * h,
         });
         let r = finger_r / h;
-        for (finger, scale) in [("index", 1.0), ("middle", 1.04), ("ring", 0.97), ("pinky", 0.86)] {
-            let pts = [self.at(&j(&format!("{finger}1")))?, self.at(&j(&format!("{finger}2")))?, self.at(&j(&format!("{finger}3")))?, self.end(&j(&format!("{finger}3")))?];
+        for (finger, scale) in [
+            ("index", 1.0),
+            ("middle", 1.04),
+            ("ring", 0.97),
+            ("pinky", 0.86),
+        ] {
             let radii = [1.0, 0.93, 0.86, 0.78].map(|k| k * r * scale * h);
-            for i in 0..3 {
-                let tip = if i == 2 { pts[3] - (pts[3] - pts[2]).normalize() * radii[3] } else { pts[i + 1] };
-                self.cone(&j(&format!("{finger}{}", i + 1)), Region::Skin, pts[i], tip, radii[i], radii[i + 1], 0.002, 0.007)?;
-            }
+            self.digit(&j(finger), radii, 0.002, 0.007)?;
         }
-        let pts = [self.at(&j("thumb1"))?, self.at(&j("thumb2"))?, self.at(&j("thumb3"))?, self.end(&j("thumb3"))?];
         let radii = [1.5, 1.15, 1.05, 0.9].map(|k| k * r * h);
+        self.digit(&j("thumb"), radii, 0.004, 0.01)?;
+        Ok(())
+    }
+
+    /// A finger or thumb `digit` (e.g. `l_index`): a rounded cone per phalanx, from the
+    /// joints `digit1` to `digit3` to the end site, radii tapering as given, the tip
+    /// rounded within the end site.
+    fn digit(&mut self, digit: &str, radii: [f64; 4], blend: f64, reach: f64) -> Result<()> {
+        let pts = [
+            self.at(&format!("{digit}1"))?,
+            self.at(&format!("{digit}2"))?,
+            self.at(&format!("{digit}3"))?,
+            self.end(&format!("{digit}3"))?,
+        ];
         for i in 0..3 {
-            let tip = if i == 2 { pts[3] - (pts[3] - pts[2]).normalize() * radii[3] } else { pts[i + 1] };
-            self.cone(&j(&format!("thumb{}", i + 1)), Region::Skin, pts[i], tip, radii[i], radii[i + 1], 0.004, 0.01)?;
+            let tip = if i == 2 {
+                pts[3] - (pts[3] - pts[2]).normalize() * radii[3]
+            } else {
+                pts[i + 1]
+            };
+            let form = Form::Cone {
+                a: pts[i],
+                b: tip,
+                ra: radii[i],
+                rb: radii[i + 1],
+            };
+            self.push(
+                &format!("{digit}{}", i + 1),
+                Region::Skin,
+                form,
+                blend,
+                reach,
+            )?;
         }
         Ok(())
     }
@@ -366,22 +546,66 @@ impl<'a> Layout<'a> {
     fn leg(&mut self, s: &str) -> Result<()> {
         let h = self.h;
         let j = |n: &str| format!("{s}{n}");
-        let (hip, knee, ankle) = (self.at(&j("hip"))?, self.at(&j("knee"))?, self.at(&j("ankle"))?);
+        let (hip, knee, ankle) = (
+            self.at(&j("hip"))?,
+            self.at(&j("knee"))?,
+            self.at(&j("ankle"))?,
+        );
         let (tk, th) = self.frustum_radii(&j("thigh"))?;
         let (la, lk) = self.frustum_radii(&j("leg"))?;
-        self.cone(&j("hip"), Region::Trousers, hip + DVec3::new(0.0, 0.01 * h, -0.004 * h), knee, th, tk, 0.025, 0.06)?;
-        self.cone(&j("knee"), Region::Trousers, knee, ankle + DVec3::new(0.0, 0.012 * h, 0.0), lk, la, 0.02, 0.05)?;
+        self.push(
+            &j("hip"),
+            Region::Trousers,
+            Form::Cone {
+                a: hip + DVec3::new(0.0, 0.01 * h, -0.004 * h),
+                b: knee,
+                ra: th,
+                rb: tk,
+            },
+            0.025,
+            0.06,
+        )?;
+        self.push(
+            &j("knee"),
+            Region::Trousers,
+            Form::Cone {
+                a: knee,
+                b: ankle + DVec3::new(0.0, 0.012 * h, 0.0),
+                ra: lk,
+                rb: la,
+            },
+            0.02,
+            0.05,
+        )?;
         // The foot: a heel-to-ball ellipsoid whose sole touches the floor, and the toes.
         let ball = self.at(&j("metatarsal"))?;
         let toe = self.end(&j("metatarsal"))?;
         let (_, foot_center) = self.solid(&j("foot"))?;
         let heel_z = foot_center.z - (ball.z - foot_center.z) * 0.75;
         let sole = 0.022 * h;
-        let center = DVec3::new(ankle.x + (ball.x - ankle.x) * 0.5, sole, (heel_z + ball.z) * 0.5);
+        let center = DVec3::new(
+            ankle.x + (ball.x - ankle.x) * 0.5,
+            sole,
+            (heel_z + ball.z) * 0.5,
+        );
         let half = (ball.z - heel_z) * 0.5 / h;
-        self.ellipsoid(&j("subtalar"), Region::Shoes, center, DVec3::new(0.024, 0.022, half * 1.1), 0.015, 0.04)?;
+        self.ellipsoid(
+            &j("subtalar"),
+            Region::Shoes,
+            center,
+            DVec3::new(0.024, 0.022, half * 1.1),
+            0.015,
+            0.04,
+        )?;
         let toes = DVec3::new(ball.x, 0.013 * h, (ball.z + toe.z) * 0.5);
-        self.ellipsoid(&j("metatarsal"), Region::Shoes, toes, DVec3::new(0.025, 0.013, (toe.z - ball.z) / h * 0.75 + 0.01), 0.012, 0.03)?;
+        self.ellipsoid(
+            &j("metatarsal"),
+            Region::Shoes,
+            toes,
+            DVec3::new(0.025, 0.013, (toe.z - ball.z) / h * 0.75 + 0.01),
+            0.012,
+            0.03,
+        )?;
         Ok(())
     }
 }

@@ -13,7 +13,11 @@ use glam::DVec3;
 pub type Influences = ([u16; 4], [f32; 4]);
 
 /// The weights of a vertex at rest position `p`.
-pub(crate) fn influences(p: DVec3, volumes: &[Volume], neighbours: &impl Fn(usize, usize) -> bool) -> Influences {
+pub(crate) fn influences(
+    p: DVec3,
+    volumes: &[Volume],
+    neighbours: &impl Fn(usize, usize) -> bool,
+) -> Influences {
     let distances: Vec<f64> = volumes
         .iter()
         .map(|v| match v.join {

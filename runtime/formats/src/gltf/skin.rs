@@ -121,7 +121,16 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
         .flatten()
         .flat_map(|j| j.to_le_bytes())
         .collect();
-    let joints = accessor(root, bytes, &joints, ComponentType::U16, Type::Vec4, n, array, None);
+    let joints = accessor(
+        root,
+        bytes,
+        &joints,
+        ComponentType::U16,
+        Type::Vec4,
+        n,
+        array,
+        None,
+    );
     let weights = accessor(
         root,
         bytes,

@@ -1,10 +1,9 @@
 //! Writing a rig as glTF 2.0 with `gltf-json`'s typed structures: a `.gltf` (JSON) with a
 //! `.bin` buffer beside it, or one binary `.glb`.
 
+use super::skin::add_skin;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
-use super::skin::add_skin;
-use troupe_body::Skin;
 use ::gltf::binary::{Glb, Header};
 use glam::{DMat4, DQuat};
 use gltf_json as json;
@@ -14,6 +13,7 @@ use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::borrow::Cow;
 use std::path::Path;
+use troupe_body::Skin;
 
 /// A growing binary buffer and the document whose buffer views and accessors point into
 /// it.
