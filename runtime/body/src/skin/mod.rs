@@ -64,12 +64,23 @@ impl Skin {
     pub fn build(skeleton: &Skeleton) -> Result<Skin> {
         let rest = rest_globals(skeleton);
         let volumes = volumes::body_volumes(skeleton)?;
-        let neighbours = neighbour_test(skeleton, &volumes);
+        let neighbours = neighbour_test(skeleton, &volumes, 1);
+        // Surfaces blend a generation further along the trunk, so that its stacked
+        // volumes (on a chain of joints) round into one another; elsewhere a wider blend
+        // would close loops (a thumb onto the palm, an arm onto the chest).
+        let trunk: Vec<bool> = skeleton
+            .joints()
+            .iter()
+            .map(|j| ["sacroiliac", "vl5", "vt12", "vt6", "vt1"].contains(&j.name.as_str()))
+            .collect();
+        let further = neighbour_test(skeleton, &volumes, 2);
+        let blends =
+            |a: usize, b: usize| neighbours(a, b) || (trunk[a] && trunk[b] && further(a, b));
         let height = volumes
             .iter()
             .map(|v| v.form.bounds().1.y)
             .fold(0.0f64, f64::max);
-        let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, &neighbours);
+        let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, &blends);
         let (dense_positions, dense_indices) = field.triangulate();
         if dense_indices.is_empty() {
             return Err(Error::Invalid(
@@ -82,7 +93,14 @@ impl Skin {
             .collect();
         let adapter = meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&points), 12, 0)
             .map_err(|e| Error::Invalid(format!("skin: {e}")))?;
-        let full = simplify_closed(&dense_indices, &adapter, height)?;
+        // Regions are decided on the dense surface and carried through simplification as
+        // attributes, so that collapses keep the edges between them (sleeves, collar,
+        // waistband) along rows of vertices.
+        let dense_regions: Vec<Region> = dense_positions
+            .iter()
+            .map(|&p| region_at(p, &volumes))
+            .collect();
+        let full = simplify_closed(&dense_indices, &adapter, &dense_regions, height)?;
         let far = meshopt::simplify(
             &full,
             &adapter,
@@ -94,24 +112,25 @@ impl Skin {
         // Keep only the vertices the full mesh uses, in first-use order.
         let mut remap = vec![u32::MAX; points.len()];
         let mut positions = Vec::new();
+        let mut regions = Vec::new();
         for &i in &full {
             if remap[i as usize] == u32::MAX {
                 remap[i as usize] = positions.len() as u32;
                 positions.push(dense_positions[i as usize]);
+                regions.push(dense_regions[i as usize]);
             }
         }
         let mut indices: Vec<u32> = full.iter().map(|&i| remap[i as usize]).collect();
         flips::flip_slivers(&positions, &mut indices, 0.05);
         let far_indices: Vec<u32> = far.iter().map(|&i| remap[i as usize]).collect();
+        smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
         let mut joints = Vec::with_capacity(positions.len());
         let mut weights = Vec::with_capacity(positions.len());
-        let mut regions = Vec::with_capacity(positions.len());
         for &p in &positions {
             let (j, w) = weights::influences(p, &volumes, &neighbours);
             joints.push(j);
             weights.push(w);
-            regions.push(region_at(p, &volumes));
         }
         Ok(Skin {
             positions: positions.iter().map(|p| p.as_vec3().to_array()).collect(),
@@ -173,14 +192,27 @@ impl Skin {
 fn simplify_closed(
     dense: &[u32],
     adapter: &meshopt::VertexDataAdapter<'_>,
+    regions: &[Region],
     height: f64,
 ) -> Result<Vec<u32>> {
+    // One attribute per region, 1 where the vertex has it: changing region along a
+    // collapse costs as much as moving the surface by REGION_WEIGHT × height.
+    const REGIONS: usize = 6;
+    const REGION_WEIGHT: f64 = 0.01;
+    let mut attributes = vec![0.0f32; regions.len() * REGIONS];
+    for (v, &r) in regions.iter().enumerate() {
+        attributes[v * REGIONS + r as usize] = 1.0;
+    }
+    let weights = [(REGION_WEIGHT * height) as f32; REGIONS];
     let mut lock = vec![false; adapter.vertex_count];
     let mut rings: Option<Vec<Vec<u32>>> = None;
     for _ in 0..12 {
-        let full = meshopt::simplify_with_locks(
+        let full = meshopt::simplify_with_attributes_and_locks(
             dense,
             adapter,
+            &attributes,
+            &weights,
+            REGIONS * std::mem::size_of::<f32>(),
             &lock,
             MAX_TRIANGLES * 3,
             (0.004 * height) as f32,
@@ -249,6 +281,41 @@ fn neighbours_of(indices: &[u32], count: usize) -> Vec<Vec<u32>> {
     out
 }
 
+/// Evens out the edges between clothes and skin: a vertex whose neighbours mostly wear
+/// another region (a tooth sticking out of a sleeve or a waistband) takes theirs. Eyes
+/// and pupils are left as they are.
+fn smooth_regions(regions: &mut [Region], indices: &[u32]) {
+    let neighbours = neighbours_of(indices, regions.len());
+    for _ in 0..2 {
+        let before = regions.to_vec();
+        for (v, around) in neighbours.iter().enumerate() {
+            if matches!(before[v], Region::Eye | Region::Pupil) {
+                continue;
+            }
+            let mut counts = [0usize; 6];
+            for &n in around {
+                counts[before[n as usize] as usize] += 1;
+            }
+            let (best, &count) = counts
+                .iter()
+                .enumerate()
+                .max_by_key(|&(r, &c)| (c, std::cmp::Reverse(r)))
+                .expect("six regions");
+            let region = [
+                Region::Skin,
+                Region::Shirt,
+                Region::Trousers,
+                Region::Shoes,
+                Region::Eye,
+                Region::Pupil,
+            ][best];
+            if count * 2 > around.len() && !matches!(region, Region::Eye | Region::Pupil) {
+                regions[v] = region;
+            }
+        }
+    }
+}
+
 /// Area-weighted vertex normals.
 fn vertex_normals(positions: &[DVec3], indices: &[u32]) -> Vec<[f32; 3]> {
     let mut normals = vec![DVec3::ZERO; positions.len()];
@@ -271,12 +338,9 @@ fn region_at(p: DVec3, volumes: &[Volume]) -> Region {
     let nearest = volumes
         .iter()
         .filter(|v| v.join != Join::Carve)
-        .min_by(|a, b| {
-            a.form
-                .distance(p)
-                .abs()
-                .total_cmp(&b.form.distance(p).abs())
-        })
+        .map(|v| (v.form.distance(p).abs(), v))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, v)| v)
         .expect("a body has volumes");
     match (nearest.region, nearest.form) {
         (Region::Eye, volumes::Form::Ellipsoid { center, radii, .. })
@@ -288,10 +352,14 @@ fn region_at(p: DVec3, volumes: &[Volume]) -> Region {
     }
 }
 
-/// Whether the volumes of two joints blend and share weights: the same joint, or one the
-/// nearest ancestor with volumes of the other (the two joints under the root, pelvis and
-/// spine, count as neighbours).
-fn neighbour_test(skeleton: &Skeleton, volumes: &[Volume]) -> impl Fn(usize, usize) -> bool {
+/// Whether the volumes of two joints blend (or share weights): the same joint, or one
+/// an ancestor of the other at most `generations` steps up, counting only joints with
+/// volumes (the two joints under the root, pelvis and spine, count as neighbours).
+fn neighbour_test(
+    skeleton: &Skeleton,
+    volumes: &[Volume],
+    generations: usize,
+) -> impl Fn(usize, usize) -> bool {
     let joints = skeleton.joints();
     let mut has = vec![false; joints.len()];
     for v in volumes {
@@ -310,9 +378,16 @@ fn neighbour_test(skeleton: &Skeleton, volumes: &[Volume]) -> impl Fn(usize, usi
         })
         .collect();
     move |a: usize, b: usize| {
+        let within = |a: usize, b: usize| {
+            let mut up = Some(a);
+            (0..generations).any(|_| {
+                up = up.and_then(|j| fleshy_parent[j]);
+                up == Some(b)
+            })
+        };
         a == b
-            || fleshy_parent[a] == Some(b)
-            || fleshy_parent[b] == Some(a)
+            || within(a, b)
+            || within(b, a)
             || (fleshy_parent[a].is_none() && fleshy_parent[b].is_none())
     }
 }

@@ -248,7 +248,6 @@ impl<'a> Layout<'a> {
 
     fn torso(&mut self) -> Result<()> {
         let h = self.h;
-        let y = |v: DVec3| DVec3::new(0.0, v.y, v.z);
         let hip = self.at("l_hip")?.y;
         let (vl5, vt12, vt6, vt1) = (
             self.at("vl5")?,
@@ -257,36 +256,39 @@ impl<'a> Layout<'a> {
             self.at("vt1")?,
         );
         let r = self.frustum_radii("up_torso")?.0 / h;
+        // Centres on one vertical line and radii that change slowly from one to the
+        // next, so that the smooth unions bulge evenly instead of leaving rings.
+        let at = |y: f64| DVec3::new(0.0, y, 0.0);
         let stack = [
             (
                 "sacroiliac",
                 Region::Trousers,
-                DVec3::new(0.0, hip + 0.012 * h, -0.006 * h),
-                DVec3::new(r * 1.1, 0.075, r * 0.78),
+                at(hip + 0.012 * h),
+                DVec3::new(r * 1.08, 0.08, r * 0.76),
             ),
             (
                 "vl5",
                 Region::Shirt,
-                y(vl5) + DVec3::new(0.0, 0.035 * h, 0.004 * h),
-                DVec3::new(r * 0.98, 0.075, r * 0.7),
+                at(vl5.y + 0.035 * h),
+                DVec3::new(r * 1.0, 0.09, r * 0.72),
             ),
             (
                 "vt12",
                 Region::Shirt,
-                y(vt12) + DVec3::new(0.0, 0.02 * h, 0.012 * h),
-                DVec3::new(r * 1.02, 0.072, r * 0.72),
+                at(vt12.y + 0.02 * h),
+                DVec3::new(r * 1.04, 0.09, r * 0.74),
             ),
             (
                 "vt6",
                 Region::Shirt,
-                y(vt6) + DVec3::new(0.0, 0.012 * h, 0.014 * h),
-                DVec3::new(r * 1.12, 0.075, r * 0.76),
+                at(vt6.y + 0.012 * h),
+                DVec3::new(r * 1.1, 0.085, r * 0.76),
             ),
             (
                 "vt1",
                 Region::Shirt,
-                y(vt1) + DVec3::new(0.0, -0.012 * h, 0.004 * h),
-                DVec3::new(r * 1.2, 0.04, r * 0.6),
+                at(vt1.y - 0.012 * h),
+                DVec3::new(r * 1.18, 0.045, r * 0.62),
             ),
         ];
         for (joint, region, center, radii) in stack {
@@ -433,7 +435,7 @@ impl<'a> Layout<'a> {
             &j("shoulder"),
             Region::Shirt,
             shoulder + DVec3::new(0.0, -0.02 * h, 0.0),
-            DVec3::new(0.03, 0.045, 0.031),
+            DVec3::new(0.026, 0.04, 0.027),
             0.02,
             0.05,
         )?;

@@ -39,9 +39,11 @@ pub(crate) fn influences(
         if !d.is_finite() || !neighbours(home, v.joint) {
             continue;
         }
-        let reach = v.reach.max(volumes[owner].reach.min(v.reach * 2.0));
-        let x = ((d - nearest) / reach).clamp(0.0, 1.0);
-        let w = (1.0 - x) * (1.0 - x) * (1.0 + 2.0 * x) * if v.joint == home { 1.0 } else { 0.5 };
+        // A smooth step of the distance beyond the nearest volume's: it depends on the
+        // vertex's position only (not on which volume owns it), so neighbouring vertices
+        // get neighbouring weights and the skin does not crease where ownership changes.
+        let x = ((d - nearest) / v.reach).clamp(0.0, 1.0);
+        let w = (1.0 - x) * (1.0 - x) * (1.0 + 2.0 * x);
         if w <= 0.0 {
             continue;
         }
