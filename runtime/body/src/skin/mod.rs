@@ -80,7 +80,7 @@ impl Skin {
             .iter()
             .map(|v| v.form.bounds().1.y)
             .fold(0.0f64, f64::max);
-        let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, &blends);
+        let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, blends);
         let (dense_positions, dense_indices) = field.triangulate();
         if dense_indices.is_empty() {
             return Err(Error::Invalid(
