@@ -747,7 +747,7 @@ impl SceneRenderer {
         if !self.skin_draws.is_empty() {
             pass.set_pipeline(&self.skin_pipeline);
             for (i, (skeleton, far)) in self.skin_draws.iter().enumerate() {
-                let Some(skin) = self.skins.get(gpu, skeleton) else {
+                let Some(skin) = self.skins.get(&gpu.device, skeleton) else {
                     continue;
                 };
                 let (indices, count) = if *far {
@@ -842,7 +842,7 @@ impl SceneRenderer {
                 .map_or(Vec3::ZERO, |t| t.translation.as_vec3());
             let distance = (root - eye).length().max(0.05);
             let style = match self.options.style {
-                BodyStyle::Skin => match self.skins.get(gpu, &actor.skeleton) {
+                BodyStyle::Skin => match self.skins.get(&gpu.device, &actor.skeleton) {
                     Some(skin) => {
                         let block = skinned::block(&skin.skin, actor, colors.slots());
                         self.skin_data.extend_from_slice(bytemuck::bytes_of(&block));

@@ -9,7 +9,6 @@
 //! joint, which keeps LBS's volume loss small at elbows and knees.
 
 use crate::frame::ActorFrame;
-use crate::render::Gpu;
 use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -65,7 +64,7 @@ pub(crate) struct SkinCache {
 impl SkinCache {
     /// The GPU skin of `skeleton`, built on first use; `None` when the skeleton cannot
     /// be skinned (not a troupe template, or too many joints): it is drawn as solids.
-    pub fn get(&mut self, gpu: &Gpu, skeleton: &Arc<Skeleton>) -> Option<&GpuSkin> {
+    pub fn get(&mut self, device: &wgpu::Device, skeleton: &Arc<Skeleton>) -> Option<&GpuSkin> {
         let key = Arc::as_ptr(skeleton) as usize;
         let entry = self.skins.entry(key).or_insert_with(|| {
             let skin = if skeleton.joints().len() > MAX_JOINTS {
@@ -77,7 +76,7 @@ impl SkinCache {
                 None
             } else {
                 match Skin::build(skeleton) {
-                    Ok(skin) => Some(upload(gpu, Arc::new(skin), skeleton)),
+                    Ok(skin) => Some(upload(device, Arc::new(skin), skeleton)),
                     Err(e) => {
                         tracing::warn!("no skin for skeleton `{}` ({e}): drawing solids", skeleton.name());
                         None
@@ -116,7 +115,7 @@ fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
         .collect()
 }
 
-fn upload(gpu: &Gpu, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSkin {
+fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSkin {
     let parts = parts(&skin, skeleton);
     let vertices: Vec<SkinVertex> = (0..skin.positions.len())
         .map(|i| SkinVertex {
@@ -128,12 +127,11 @@ fn upload(gpu: &Gpu, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSkin {
         })
         .collect();
     let buffer = |label, contents: &[u8], usage| {
-        gpu.device
-            .create_buffer_init(&wgpu::util::BufferInitDescriptor {
-                label: Some(label),
-                contents,
-                usage,
-            })
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
     };
     GpuSkin {
         vertices: buffer(
