@@ -348,7 +348,10 @@ pub struct RenderArgs {
     /// Do not draw names and action labels above the heads.
     #[arg(long)]
     pub no_labels: bool,
-    /// Draw actors as bones instead of solids.
+    /// How actors are drawn: the generated skin, the body solids, or bones.
+    #[arg(long, value_enum, default_value_t = crate::view::Look::Skin)]
+    pub look: crate::view::Look,
+    /// Same as `--look bones`.
     #[arg(long)]
     pub bones: bool,
 }
@@ -384,11 +387,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     let mut renderer = troupe_viewer::OffscreenRenderer::new(size.0, size.1)?;
     renderer.set_options(troupe_viewer::RenderOptions {
         labels: !args.no_labels,
-        style: if args.bones {
-            troupe_viewer::BodyStyle::Bones
-        } else {
-            troupe_viewer::BodyStyle::Solids
-        },
+        style: crate::view::body_style(args.look, args.bones),
         ..Default::default()
     });
     let frame = troupe_viewer::Frame::from_scene(session.scene());

@@ -23,7 +23,7 @@ use troupe_viewer::{
     long_about = "Play a recording (.trk, .bvh, .gltf, .glb) on actors. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
-        actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
+        actor, 0 frames all, b cycles skin/solids/bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
@@ -47,7 +47,10 @@ pub struct ViewArgs {
     /// fits several.
     #[arg(long)]
     camera: Option<String>,
-    /// Draw the actor as bones instead of solids.
+    /// How actors are drawn: the generated skin, the body solids, or bones.
+    #[arg(long, value_enum, default_value_t = Look::Skin)]
+    look: Look,
+    /// Same as `--look bones`.
     #[arg(long)]
     bones: bool,
     /// Do not draw names and action labels above the heads.
@@ -90,7 +93,10 @@ pub struct SnapshotArgs {
     /// @YAW,PITCH[,DISTANCE].
     #[arg(long, default_value = "fit")]
     camera: String,
-    /// Draw actors as bones instead of solids.
+    /// How actors are drawn: the generated skin, the body solids, or bones.
+    #[arg(long, value_enum, default_value_t = Look::Skin)]
+    look: Look,
+    /// Same as `--look bones`.
     #[arg(long)]
     bones: bool,
     /// Do not draw names above the heads.
@@ -142,14 +148,31 @@ pub(crate) fn has_display() -> bool {
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
 }
 
-fn render_options(bones: bool, labels: bool) -> RenderOptions {
+/// How actors are drawn (`--look`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Look {
+    /// The generated skin: a smooth body with hands and a face.
+    #[default]
+    Skin,
+    /// The body solids (thesis 3.1).
+    Solids,
+    /// A stick figure.
+    Bones,
+}
+
+/// The viewer's body style for `--look`; `--bones` (kept for old command lines) wins.
+pub(crate) fn body_style(look: Look, bones: bool) -> BodyStyle {
+    match (look, bones) {
+        (_, true) | (Look::Bones, _) => BodyStyle::Bones,
+        (Look::Solids, _) => BodyStyle::Solids,
+        (Look::Skin, _) => BodyStyle::Skin,
+    }
+}
+
+fn render_options(look: Look, bones: bool, labels: bool) -> RenderOptions {
     RenderOptions {
         labels,
-        style: if bones {
-            BodyStyle::Bones
-        } else {
-            BodyStyle::Solids
-        },
+        style: body_style(look, bones),
         ..RenderOptions::default()
     }
 }
@@ -214,7 +237,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     };
     if let Some(dir) = headless_dir {
         let seconds = args.seconds.unwrap_or(length).max(0.0);
-        let options = render_options(args.bones, !args.no_labels);
+        let options = render_options(args.look, args.bones, !args.no_labels);
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer.renderer_mut().set_options(options);
         writer.renderer_mut().set_multisampling(!args.no_msaa);
@@ -224,7 +247,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         title: format!("troupe view {}", args.file.display()),
         size,
         camera: camera.clone(),
-        render: render_options(args.bones, !args.no_labels),
+        render: render_options(args.look, args.bones, !args.no_labels),
         tick_seconds: scene.dt(),
         close_after_frames: None,
     };
@@ -369,7 +392,7 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         }
     }
     let mut renderer = OffscreenRenderer::new(size.0, size.1)?;
-    renderer.set_options(render_options(args.bones, !args.no_labels));
+    renderer.set_options(render_options(args.look, args.bones, !args.no_labels));
     renderer.save_png(&frame, &camera, &args.out)?;
     println!(
         "wrote {} ({}x{}, {} actor{}) on {}",

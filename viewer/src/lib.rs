@@ -22,6 +22,7 @@ mod frame;
 mod mesh;
 mod offscreen;
 mod render;
+mod skinned;
 mod text;
 mod window;
 

@@ -12,14 +12,13 @@
 
 use crate::bvh::{from_rig, write_bvh, Axis, RotationOrder};
 use crate::error::{Error, Result};
-use crate::gltf::{
-    read_gltf_motion, write_glb, write_glb_with_objects, write_gltf, write_gltf_with_objects,
-};
+use crate::gltf::{read_gltf_motion, write_glb, write_glb_with, write_gltf, write_gltf_with};
 use crate::retarget::load_sequence_for;
 use crate::rig::Rig;
 use crate::trk::{read_trk, read_trk_set, write_trk_file, TrkFile};
 use std::path::{Path, PathBuf};
 use troupe_body::skeleton::Skeleton;
+use troupe_body::Skin;
 use troupe_motion::object_motion::ObjectMotion;
 use troupe_motion::sequence::Sequence;
 
@@ -149,6 +148,8 @@ pub fn save_recording<'a>(
         path.with_file_name(format!("{stem}.{name}.{ext}"))
     };
     let mut written = Vec::new();
+    // Skins by skeleton: actors of one body share theirs.
+    let mut skins: Vec<(*const Skeleton, Option<Skin>)> = Vec::new();
     for (seq, (actor, skeleton)) in sequences.iter().zip(actors) {
         let out = if sequences.len() == 1 {
             path.to_path_buf()
@@ -157,15 +158,32 @@ pub fn save_recording<'a>(
         };
         let rig = Rig::from_sequence(skeleton, seq)?;
         match format {
+            // A glTF file of a troupe body carries its skin (a skeleton that is not a
+            // troupe template's is written with bones only) and every object.
             Format::Gltf | Format::Glb => {
+                let key: *const Skeleton = skeleton;
+                if !skins.iter().any(|(k, _)| *k == key) {
+                    let skin = match Skin::build(skeleton) {
+                        Ok(skin) => Some(skin),
+                        Err(e) => {
+                            tracing::warn!("{}: written without a skin: {e}", out.display());
+                            None
+                        }
+                    };
+                    skins.push((key, skin));
+                }
+                let skin = skins
+                    .iter()
+                    .find(|(k, _)| *k == key)
+                    .and_then(|(_, s)| s.as_ref());
                 let with: Vec<(&ObjectMotion, Rig)> = objects
                     .iter()
                     .map(|o| (o, Rig::from_object(o, seq.start(), &rig.times)))
                     .collect();
                 if format == Format::Gltf {
-                    write_gltf_with_objects(&out, &rig, &with, actor)?;
+                    write_gltf_with(&out, &rig, skin, &with, actor)?;
                 } else {
-                    write_glb_with_objects(&out, &rig, &with, actor)?;
+                    write_glb_with(&out, &rig, skin, &with, actor)?;
                 }
             }
             _ => save_rig(&out, &rig, actor, seq.frame_time())?,
@@ -198,6 +216,19 @@ pub fn save_recording<'a>(
         }
     }
     Ok(written)
+}
+
+/// Saves a rig and the skin of its skeleton as glTF (`.gltf` or `.glb` by `path`'s
+/// extension), the scene named `name`.
+pub fn save_skinned(path: &Path, rig: &Rig, skin: Option<&Skin>, name: &str) -> Result<()> {
+    match Format::of(path)? {
+        Format::Gltf => write_gltf_with(path, rig, skin, &[], name),
+        Format::Glb => write_glb_with(path, rig, skin, &[], name),
+        _ => Err(Error::Invalid(format!(
+            "{}: a skinned character is written as .gltf or .glb",
+            path.display()
+        ))),
+    }
 }
 
 /// Saves a rig's motion to a one-actor format by `path`'s extension: glTF names its scene
@@ -271,6 +302,22 @@ mod tests {
                     dir.join(format!("rec.bob.{ext}"))
                 ]
             );
+            if ext == "gltf" {
+                // A troupe body's glTF carries its skin: one mesh on a root node.
+                let text = std::fs::read_to_string(&written[0]).unwrap();
+                let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+                assert_eq!(doc["meshes"].as_array().map(Vec::len), Some(1));
+                let skinned = doc["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .position(|n| n.get("skin").is_some() && n.get("mesh").is_some())
+                    .unwrap();
+                assert!(doc["scenes"][0]["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .contains(&serde_json::Value::from(skinned)));
+            }
             for (want, got) in both.iter().zip(&loaded) {
                 let time = 0.25;
                 let p = fk_positions(&skel, &posture(&skel, want, time));

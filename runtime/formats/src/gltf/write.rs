@@ -2,6 +2,7 @@
 //! `.bin` buffer beside it, or one binary `.glb`.
 
 use super::objects::object_node;
+use super::skin::add_skin;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
 use ::gltf::binary::{Glb, Header};
@@ -13,6 +14,7 @@ use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::borrow::Cow;
 use std::path::Path;
+use troupe_body::Skin;
 use troupe_motion::object_motion::ObjectMotion;
 
 /// A growing binary buffer and the document whose buffer views and accessors point into
@@ -278,13 +280,16 @@ fn add_object_nodes(
 
 /// Writes `rig` as `path` (`.gltf`) and a `.bin` of the same stem beside it.
 pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
-    write_gltf_with_objects(path, rig, &[], name)
+    write_gltf_with(path, rig, None, &[], name)
 }
 
-/// [`write_gltf`] with recorded objects (see [`to_gltf_with_objects`]).
-pub fn write_gltf_with_objects(
+/// Writes `rig` as `path` (`.gltf`) and a `.bin` beside it, with `skin` (made for the
+/// skeleton the rig comes from) as its skinned mesh and recorded `objects` as animated
+/// nodes (see [`to_gltf_with_objects`]).
+pub fn write_gltf_with(
     path: impl AsRef<Path>,
     rig: &Rig,
+    skin: Option<&Skin>,
     objects: &[(&ObjectMotion, Rig)],
     name: &str,
 ) -> Result<()> {
@@ -294,7 +299,10 @@ pub fn write_gltf_with_objects(
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "motion.bin".into());
-    let (root, bytes) = to_gltf_with_objects(rig, objects, name, Some(&uri));
+    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, Some(&uri));
+    if let Some(skin) = skin {
+        add_skin(&mut root, &mut bytes, skin, name);
+    }
     let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
     std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
     std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
@@ -302,18 +310,24 @@ pub fn write_gltf_with_objects(
 
 /// Writes `rig` as one binary glTF file `path` (`.glb`): a JSON chunk and a binary chunk.
 pub fn write_glb(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
-    write_glb_with_objects(path, rig, &[], name)
+    write_glb_with(path, rig, None, &[], name)
 }
 
-/// [`write_glb`] with recorded objects (see [`to_gltf_with_objects`]).
-pub fn write_glb_with_objects(
+/// Writes `rig` as one binary glTF file `path` (`.glb`) with `skin` (made for the
+/// skeleton the rig comes from) as its skinned mesh and recorded `objects` as animated
+/// nodes (see [`to_gltf_with_objects`]).
+pub fn write_glb_with(
     path: impl AsRef<Path>,
     rig: &Rig,
+    skin: Option<&Skin>,
     objects: &[(&ObjectMotion, Rig)],
     name: &str,
 ) -> Result<()> {
     let path = path.as_ref();
-    let (root, bytes) = to_gltf_with_objects(rig, objects, name, None);
+    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, None);
+    if let Some(skin) = skin {
+        add_skin(&mut root, &mut bytes, skin, name);
+    }
     let glb = Glb {
         header: Header {
             magic: *b"glTF",
