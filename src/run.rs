@@ -81,6 +81,9 @@ pub struct RunArgs {
     /// Bytes one script resume may add to the Lua heap.
     #[arg(long, default_value_t = ScriptLimits::default().memory)]
     pub memory_limit: usize,
+    /// Bytes the scene's whole Lua heap may hold (all behaviors, handlers and globals).
+    #[arg(long, default_value_t = ScriptLimits::default().heap)]
+    pub lua_memory: usize,
     /// Record every live device stream (timestamps + raw bytes) to FILE.rec.
     #[arg(long, value_name = "FILE.rec")]
     pub record_devices: Option<PathBuf>,
@@ -100,6 +103,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let limits = ScriptLimits {
         instructions: args.instruction_budget,
         memory: args.memory_limit,
+        heap: args.lua_memory,
     };
     if let Some(path) = &args.record_torques {
         if !path
@@ -168,6 +172,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())));
     }
+    warn_of_tests(&session, &args.scene);
     // What every run, headless or in a window, attaches to its session.
     if let Some(osc) = osc_out {
         session.observe(osc);
@@ -205,6 +210,23 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         if args.threads == 1 { "" } else { "s" }
     );
     report(session, tally, limit, ran.map(drop))
+}
+
+/// A scene that registers tests is probably meant for `troupe test`: say so, since `run`
+/// does not run them.
+fn warn_of_tests(session: &LuaSession, scene: &std::path::Path) {
+    let names = session.script().test_names();
+    if !names.is_empty() {
+        eprintln!(
+            "troupe: warning: {} defines {} test(s) (\"{}\"{}); `troupe run` does not run \
+             tests: use `troupe test {}`",
+            scene.display(),
+            names.len(),
+            names[0],
+            if names.len() > 1 { ", …" } else { "" },
+            scene.display()
+        );
+    }
 }
 
 /// Prints what a run did, lets every observer write its output (even after an error, so

@@ -2,11 +2,15 @@
 
 pub(crate) use crate::args::lua_err;
 pub use crate::args::lua_err_message;
-use crate::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
+use crate::args::{
+    bad_arg, check_keys, dot_call_hint, euler_degrees, opt_number, opt_string, vec3, vec3_table,
+};
 use crate::error::Error;
-pub use crate::handles::{ActionRef, ActorRef, ObjectRef, Pins, SequenceRef};
+pub use crate::handles::{
+    ActionRef, ActorRef, BehaviorRef, HandlerRef, ObjectRef, Pins, SequenceRef,
+};
 use crate::kinds::BuildContext;
-use crate::stage::{add_behavior, stage, BehaviorState};
+use crate::stage::{add_behavior, stage, BehaviorState, Handler};
 use glam::{DQuat, DVec3};
 use mlua::{
     AnyUserData, Function, Lua, MetaMethod, MultiValue, Table, UserData, UserDataFields,
@@ -36,8 +40,11 @@ impl UserData for ActorRef {
 
     fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
         crate::dynamics::add_actor_methods(methods);
-        methods.add_method("behave", |lua, this, f: Function| {
-            add_behavior(lua, Some(this.0), f)
+        methods.add_method("behave", |lua, this, f: Value| {
+            let Value::Function(f) = f else {
+                return Err(bad_arg("behave", "the argument", "a function", &f));
+            };
+            add_behavior(lua, Some(this.0), f).map(BehaviorRef)
         });
         methods.add_method("position", |lua, this, ()| {
             let p = {
@@ -104,35 +111,49 @@ impl UserData for ActorRef {
         methods.add_method("set", |lua, this, t: Table| {
             crate::settings::set(lua, this.0, &t)
         });
-        methods.add_method("on", |lua, this, (event, f): (String, Function)| {
-            const EVENTS: [&str; 4] = [
-                "action_started",
-                "action_completed",
-                "action_failed",
-                "action_cancelled",
-            ];
-            if !EVENTS.contains(&event.as_str()) {
+        methods.add_method("on", |lua, this, (event, f): (Value, Value)| {
+            let name = match &event {
+                Value::String(s) => s.to_str()?.to_string(),
+                other => return Err(bad_arg("on", "the event", "a string", other)),
+            };
+            if !EVENTS.contains(&name.as_str()) {
                 return Err(lua_err(format!(
-                    "on: unknown event `{event}` (known: {})",
+                    "on: unknown event `{name}` (known: {})",
                     EVENTS.join(", ")
                 )));
             }
-            stage(lua)?.handlers.push((this.0, event, f));
-            Ok(())
+            let Value::Function(function) = f else {
+                return Err(bad_arg("on", "the handler", "a function", &f));
+            };
+            let mut st = stage(lua)?;
+            let id = st.next_handler;
+            st.next_handler += 1;
+            st.handlers.push(Handler {
+                id,
+                actor: this.0,
+                event: name,
+                function,
+            });
+            Ok(HandlerRef(id))
         });
         methods.add_method("behavior_status", |lua, this, ()| {
+            // Running while any of its behaviors runs; then failed if one failed.
             let st = stage(lua)?;
-            let mut status = "none";
-            for b in st.behaviors.iter().filter(|b| b.actor == Some(this.0)) {
-                status = match (&b.state, status) {
-                    (BehaviorState::Failed(_), _) => "failed",
-                    (_, "failed") => "failed",
-                    (BehaviorState::Waiting(_), _) => "running",
-                    (BehaviorState::Done, "running") => "running",
-                    (BehaviorState::Done, _) => "done",
-                };
-            }
-            Ok(status)
+            let states: Vec<&BehaviorState> = st
+                .behaviors
+                .iter()
+                .filter(|b| b.actor == Some(this.0))
+                .map(|b| &b.state)
+                .collect();
+            Ok(if states.is_empty() {
+                "none"
+            } else if states.iter().any(|s| matches!(s, BehaviorState::Waiting(_))) {
+                "running"
+            } else if states.iter().any(|s| matches!(s, BehaviorState::Failed(_))) {
+                "failed"
+            } else {
+                "done"
+            })
         });
         methods.add_method("behavior_error", |lua, this, ()| {
             let st = stage(lua)?;
@@ -155,7 +176,11 @@ impl UserData for ActorRef {
                     let f = lua.create_function(move |lua, args: MultiValue| {
                         let mut args = args.into_iter();
                         // Method call: the first argument is the actor itself.
-                        args.next();
+                        let is_self = matches!(args.next(),
+                            Some(Value::UserData(u)) if u.borrow::<ActorRef>().is_ok());
+                        if !is_self {
+                            return Err(lua_err(dot_call_hint(kind.method)));
+                        }
                         start_kind(lua, actor, kind, args.collect())
                     })?;
                     Ok(Value::Function(f))
@@ -266,6 +291,78 @@ impl UserData for ActionRef {
         });
         methods.add_meta_method(MetaMethod::Eq, |_, this, other: AnyUserData| {
             Ok(other.borrow::<ActionRef>().is_ok_and(|o| o.0 == this.0))
+        });
+    }
+}
+
+/// The events `actor:on` accepts.
+pub const EVENTS: [&str; 4] = [
+    "action_started",
+    "action_completed",
+    "action_failed",
+    "action_cancelled",
+];
+
+impl UserData for BehaviorRef {
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("stop", |lua, this, ()| {
+            let mut st = stage(lua)?;
+            let b = &mut st.behaviors[this.0];
+            if matches!(b.state, BehaviorState::Waiting(_)) {
+                b.state = BehaviorState::Stopped;
+                b.thread = None;
+            }
+            Ok(())
+        });
+        methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
+            if key == "wait" {
+                return lua
+                    .named_registry_value::<Function>("troupe.behavior_wait")
+                    .map(Value::Function);
+            }
+            let st = stage(lua)?;
+            let b = &st.behaviors[this.0];
+            Ok(match key.as_str() {
+                "status" => Value::String(lua.create_string(b.state.name())?),
+                "error" => match b.state.error() {
+                    Some(e) => Value::String(lua.create_string(e)?),
+                    None => Value::Nil,
+                },
+                "actor" => match b.actor {
+                    Some(a) => Value::UserData(lua.create_userdata(ActorRef(a))?),
+                    None => Value::Nil,
+                },
+                _ => {
+                    return Err(lua_err(format!(
+                        "behavior has no field `{key}` (known: status, error, actor, stop, wait)"
+                    )))
+                }
+            })
+        });
+        methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
+            let st = stage(lua)?;
+            let who = st.behaviors[this.0]
+                .actor
+                .map(|a| st.scene.actors()[a].name.clone())
+                .unwrap_or_else(|| "test".into());
+            Ok(format!("behavior {} of {who}", this.0))
+        });
+        methods.add_meta_method(MetaMethod::Eq, |_, this, other: AnyUserData| {
+            Ok(other.borrow::<BehaviorRef>().is_ok_and(|o| o.0 == this.0))
+        });
+    }
+}
+
+impl UserData for HandlerRef {
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("off", |lua, this, ()| {
+            let mut st = stage(lua)?;
+            let before = st.handlers.len();
+            st.handlers.retain(|h| h.id != this.0);
+            Ok(st.handlers.len() < before)
+        });
+        methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
+            Ok(format!("handler {}", this.0))
         });
     }
 }
