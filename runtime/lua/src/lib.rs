@@ -811,6 +811,55 @@ mod tests {
         assert_eq!(s.scene().actors()[0].name, "ann");
     }
 
+    fn session_with(limits: ScriptLimits) -> LuaSession {
+        Director::session(SceneConfig::default(), ActionKinds::default(), limits).unwrap()
+    }
+
+    #[test]
+    fn a_runaway_top_level_or_handler_is_stopped_even_under_pcall() {
+        let mut s = session();
+        let err = s
+            .load_str("while true do pcall(function() while true do end end) end", "top")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("top:1: instruction budget exceeded"), "{err}");
+        let err = s
+            .eval::<()>("local ok = pcall(string.rep, 'x', 1 << 30); return ok")
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains("memory limit exceeded"), "{err}");
+    }
+
+    #[test]
+    fn a_slow_leak_fills_the_scene_heap_and_fails_while_the_scene_goes_on() {
+        let mut s = session_with(ScriptLimits {
+            heap: 8 << 20,
+            ..ScriptLimits::default()
+        });
+        s.load_str(
+            "keep = {}
+             troupe.actor{ name = 'leak' }:behave(function()
+               while true do keep[#keep + 1] = string.rep('x', 256 * 1024) .. troupe.tick(); wait(0) end
+             end)
+             ticks = 0
+             troupe.actor{ name = 'calm' }:behave(function()
+               while true do ticks = ticks + 1; wait(0) end
+             end)",
+            "leak",
+        )
+        .unwrap();
+        for _ in 0..100 {
+            s.tick().unwrap();
+        }
+        let reports = s.behaviors();
+        let leak = reports[0].error.clone().expect("the leak failed");
+        assert!(leak.contains("Lua heap full"), "{leak}");
+        assert!(leak.contains("--lua-memory"), "{leak}");
+        // The leak kept its memory in a global: the calm behavior may fail too once the
+        // heap is full, but the scene itself ticks on.
+        assert_eq!(s.scene().tick(), 100);
+    }
+
     #[test]
     fn outside_a_phase_the_api_refuses_to_touch_a_scene() {
         let mut s = session();

@@ -1,0 +1,127 @@
+//! `troupe test` as CI uses it: failures it must not miss, selection, sharding, JUnit,
+//! and `troupe run`'s warning about tests.
+
+use std::process::{Command, Output};
+
+fn troupe(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_troupe"))
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+const FIXTURES: &str = "tests/fixtures/runner";
+
+#[test]
+fn a_behavior_error_fails_the_test_with_its_place() {
+    let out = troupe(&["test", "tests/fixtures/runner/behavior_error.lua"]);
+    assert!(!out.status.success(), "{}", stdout(&out));
+    let text = stdout(&out);
+    assert!(text.contains("0 passed, 1 failed"), "{text}");
+    assert!(
+        text.contains("behavior of a failed: tests/fixtures/runner/behavior_error.lua:4: boom"),
+        "{text}"
+    );
+}
+
+#[test]
+fn a_handler_error_fails_the_test() {
+    let out = troupe(&["test", "tests/fixtures/runner/handler_error.lua"]);
+    assert!(!out.status.success());
+    let text = stdout(&out);
+    assert!(text.contains("in an event handler"), "{text}");
+    assert!(text.contains("handler_error.lua:4: handler boom"), "{text}");
+}
+
+#[test]
+fn filter_and_list_select_tests_and_an_empty_selection_is_an_error() {
+    let many = format!("{FIXTURES}/many.lua");
+    let out = troupe(&["test", &many, "--list"]);
+    assert!(out.status.success());
+    assert_eq!(stdout(&out).lines().count(), 5, "{}", stdout(&out));
+    let out = troupe(&["test", &many, "--filter", "case 3"]);
+    assert!(out.status.success());
+    let text = stdout(&out);
+    assert!(text.contains("case 3") && !text.contains("case 2"), "{text}");
+    assert!(text.contains("1 passed, 0 failed"), "{text}");
+    let out = troupe(&["test", &many, "--filter", "no such test"]);
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("no tests selected"), "{}", stderr(&out));
+}
+
+#[test]
+fn shards_split_the_tests_once_and_deterministically() {
+    let many = format!("{FIXTURES}/many.lua");
+    let mut seen = Vec::new();
+    for shard in ["1/2", "2/2"] {
+        let out = troupe(&["test", &many, "--list", "--shard", shard]);
+        assert!(out.status.success());
+        let names: Vec<String> = stdout(&out)
+            .lines()
+            .filter(|l| l.contains('›'))
+            .map(String::from)
+            .collect();
+        let again = troupe(&["test", &many, "--list", "--shard", shard]);
+        assert_eq!(stdout(&out), stdout(&again), "the same slice every time");
+        seen.extend(names);
+    }
+    seen.sort();
+    assert_eq!(seen.len(), 5, "{seen:?}");
+    seen.dedup();
+    assert_eq!(seen.len(), 5, "each test in one shard only");
+    for bad in ["0/2", "3/2", "x"] {
+        let out = troupe(&["test", &many, "--shard", bad]);
+        assert!(!out.status.success(), "--shard {bad} refused");
+    }
+}
+
+#[test]
+fn junit_xml_names_every_test_and_failure() {
+    let dir = std::env::temp_dir().join(format!("troupe-junit-{}", std::process::id()));
+    let path = dir.join("report.xml");
+    let out = troupe(&[
+        "test",
+        &format!("{FIXTURES}/many.lua"),
+        &format!("{FIXTURES}/behavior_error.lua"),
+        "--junit",
+        path.to_str().unwrap(),
+    ]);
+    assert!(!out.status.success());
+    let xml = std::fs::read_to_string(&path).unwrap();
+    let doc = roxmltree::Document::parse(&xml).expect("well-formed XML");
+    let cases: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("testcase"))
+        .collect();
+    assert_eq!(cases.len(), 6, "{xml}");
+    let failures: Vec<_> = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("failure"))
+        .collect();
+    assert_eq!(failures.len(), 1, "{xml}");
+    assert!(failures[0].attribute("message").unwrap().contains("boom"));
+    let suites = doc
+        .descendants()
+        .filter(|n| n.has_tag_name("testsuite"))
+        .count();
+    assert_eq!(suites, 2, "one suite per file");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn run_warns_when_a_scene_defines_tests() {
+    let out = troupe(&["run", &format!("{FIXTURES}/many.lua"), "--seconds", "0.1"]);
+    assert!(out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains("defines 5 test(s)"), "{err}");
+    assert!(err.contains("troupe test"), "{err}");
+}
