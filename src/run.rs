@@ -173,6 +173,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())));
     }
     warn_of_tests(&session, &args.scene);
+    check_camera(&camera, &session)?;
     // What every run, headless or in a window, attaches to its session.
     if let Some(osc) = osc_out {
         session.observe(osc);
@@ -210,6 +211,64 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         if args.threads == 1 { "" } else { "s" }
     );
     report(session, tally, limit, ran.map(drop))
+}
+
+/// What kept an `--until-idle` run from ending before `--max-seconds`: the behaviors
+/// still running and every action not yet ended, with its actor and since when.
+fn print_still_running(session: &LuaSession, reports: &[troupe_lua::BehaviorReport]) {
+    let scene = session.scene();
+    let behaviors: Vec<&str> = reports
+        .iter()
+        .filter(|r| r.status == "running")
+        .map(|r| r.actor.as_str())
+        .collect();
+    let actions: Vec<String> = (0..scene.actors().len())
+        .flat_map(|a| scene.actions_of(a))
+        .filter(|a| !a.status.is_final())
+        .map(|a| {
+            format!(
+                "{} of {} ({}{})",
+                a.kind,
+                scene.actors()[a.actor].name,
+                a.status.name(),
+                a.started_at
+                    .map(|t| format!(" since {t:.2} s"))
+                    .unwrap_or_default()
+            )
+        })
+        .collect();
+    println!(
+        "  stopped at --max-seconds ({:.2} s) before the scene was idle:",
+        scene.time()
+    );
+    if !behaviors.is_empty() {
+        println!(
+            "    {} behavior(s) still running: {}",
+            behaviors.len(),
+            behaviors.join(", ")
+        );
+    }
+    if !actions.is_empty() {
+        println!("    {} action(s) still running:", actions.len());
+        for a in actions {
+            println!("      {a}");
+        }
+    }
+}
+
+/// A camera that follows an actor the scene lacks is refused, naming the actors there are.
+fn check_camera(camera: &troupe_viewer::Camera, session: &LuaSession) -> Result<()> {
+    if let troupe_viewer::Focus::Actor(name) = &camera.focus {
+        let actors = session.scene().actors();
+        if !actors.iter().any(|a| a.name == *name) {
+            let names: Vec<&str> = actors.iter().map(|a| a.name.as_str()).collect();
+            bail!(
+                "--camera follow:{name}: the scene has no actor `{name}` (actors: {})",
+                if names.is_empty() { "none".into() } else { names.join(", ") }
+            );
+        }
+    }
+    Ok(())
 }
 
 /// A scene that registers tests is probably meant for `troupe test`: say so, since `run`
@@ -253,9 +312,8 @@ fn report(
             }
         }
     }
-    let still = reports.iter().filter(|r| r.status == "running").count();
-    if limit.until_idle && still > 0 {
-        println!("  stopped at --max-seconds with {still} behavior(s) still running");
+    if limit.until_idle && !session.is_idle() {
+        print_still_running(&session, &reports);
     }
     let finished = session.finish();
     for line in finished.iter().flatten() {
@@ -378,6 +436,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     session
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
+    check_camera(&camera, &session)?;
     let ticks = (args.at * args.rate).round() as u64;
     session.run(RunLimit {
         ticks,

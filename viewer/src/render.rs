@@ -692,6 +692,11 @@ impl SceneRenderer {
                 }
                 BodyStyle::Bones => self.bones(actor, &colors, false),
             }
+            for f in crate::face::features(actor, SKIN) {
+                let color = linear_rgba(f.color);
+                let instance = Instance::new(f.rotation, f.center, f.radii, color);
+                self.scratch.push((MeshKey::SphereLow, instance));
+            }
         }
         for o in &frame.objects {
             let (key, scale) = mesh::shape_mesh(&o.shape);

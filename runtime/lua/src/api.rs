@@ -380,14 +380,27 @@ impl UserData for SequenceRef {
     }
 }
 
-/// Resolves a path from a script: as given if it exists, else relative to the scene file.
-pub fn resolve_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
+/// Resolves a path from a script: as given if it exists, else relative to the scene
+/// file. A file found in neither place is an error that lists both.
+pub fn resolve_path(base_dir: &Path, path: &str) -> mlua::Result<std::path::PathBuf> {
     let p = Path::new(path);
     if p.is_absolute() || p.exists() {
-        p.to_path_buf()
-    } else {
-        base_dir.join(p)
+        return Ok(p.to_path_buf());
     }
+    let beside = base_dir.join(p);
+    if beside.exists() {
+        return Ok(beside);
+    }
+    let tried = if p.is_absolute() {
+        crate::modules::shown(p)
+    } else {
+        format!(
+            "{} and, beside the scene, {}",
+            crate::modules::shown(p),
+            crate::modules::shown(&beside)
+        )
+    };
+    Err(lua_err(format!("file `{path}` not found; looked for {tried}")))
 }
 
 /// Loads a sequence file once per path (and per skeleton for BVH and glTF) with
@@ -398,7 +411,8 @@ pub fn load_sequence(
     path: &str,
     skeleton: Option<&Arc<Skeleton>>,
 ) -> mlua::Result<Arc<Sequence>> {
-    let full = resolve_path(&stage(lua)?.base_dir, path);
+    let base = stage(lua)?.base_dir.clone();
+    let full = resolve_path(&base, path)?;
     // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
     // cache key names the body (none: a .trk, or the default adult).
     let bound_to_body = troupe_formats::Format::of(&full)
@@ -426,18 +440,25 @@ pub fn load_sequence(
     Ok(seq)
 }
 
-/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = … }`.
-fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
-    let mut seq = Sequence::new(opt_string(t, "sequence", "name")?.unwrap_or_default());
+/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = … }`;
+/// without a name, it is named after the place that made it (`sequence@scene.lua:12`).
+fn inline_sequence(lua: &Lua, t: &Table) -> mlua::Result<Sequence> {
+    let name = match opt_string(t, "sequence", "name")? {
+        Some(n) => n,
+        None => lua
+            .inspect_stack(1, |d| {
+                let src = d.source().short_src.map(|s| s.to_string()).unwrap_or_default();
+                format!("sequence@{src}:{}", d.current_line().unwrap_or(0))
+            })
+            .unwrap_or_else(|| "sequence@?".into()),
+    };
+    let mut seq = Sequence::new(name);
+    seq.looping = crate::args::opt_bool(t, "sequence", "loop")?.unwrap_or(false);
     let mut tracks = Vec::new();
     for pair in t.pairs::<String, Value>() {
         let (dof, keys) = pair?;
         match dof.as_str() {
-            "loop" => {
-                seq.looping = matches!(keys, Value::Boolean(true));
-                continue;
-            }
-            "name" => continue,
+            "loop" | "name" => continue,
             _ => {}
         }
         let Value::Table(keys) = keys else {
@@ -623,8 +644,11 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     troupe.set(
         "sequence",
         lua.create_function(|lua, v: Value| match v {
-            Value::String(s) => Ok(SequenceRef(load_sequence(lua, &s.to_str()?, None)?)),
-            Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(&t)?))),
+            Value::String(s) => Ok(SequenceRef(
+                load_sequence(lua, &s.to_str()?, None)
+                    .map_err(|e| lua_err(format!("sequence: {}", crate::args::error_text(&e))))?,
+            )),
+            Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(lua, &t)?))),
             other => Err(lua_err(format!(
                 "sequence: expects a file path or a table of tracks, got {}",
                 other.type_name()
@@ -640,16 +664,24 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     )?;
     troupe.set(
         "get_actor",
-        lua.create_function(|lua, name: String| {
-            let i = stage(lua)?.scene.actor_index(&name).map_err(lua_err)?;
-            Ok(ActorRef(i))
+        lua.create_function(|lua, name: Value| {
+            let Value::String(name) = &name else {
+                return Err(bad_arg("get_actor", "the name", "a string", &name));
+            };
+            // Finding by name answers nil for a name the scene lacks (the one exception
+            // to the unknown-names rule of docs/lua-api.md).
+            let i = stage(lua)?.scene.actor_index(&name.to_str()?).ok();
+            Ok(i.map(ActorRef))
         })?,
     )?;
     troupe.set(
         "get_object",
-        lua.create_function(|lua, name: String| {
-            let i = stage(lua)?.scene.object_index(&name).map_err(lua_err)?;
-            Ok(ObjectRef(i))
+        lua.create_function(|lua, name: Value| {
+            let Value::String(name) = &name else {
+                return Err(bad_arg("get_object", "the name", "a string", &name));
+            };
+            let i = stage(lua)?.scene.object_index(&name.to_str()?).ok();
+            Ok(i.map(ObjectRef))
         })?,
     )?;
     lua.globals().set("troupe", troupe)?;

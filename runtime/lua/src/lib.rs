@@ -17,6 +17,7 @@ mod dynamics;
 pub mod error;
 mod handles;
 pub mod kinds;
+pub mod modules;
 mod sandbox;
 pub mod settings;
 mod stage;
@@ -30,7 +31,7 @@ pub use crate::stage::{actor_skeletons, scene_dir};
 use crate::stage::{add_behavior, BehaviorState, Stage, Wait};
 use kinds::ActionKinds;
 use mlua::{
-    FromLuaMulti, Function, Lua, LuaOptions, MultiValue, StdLib, Table, Value,
+    FromLuaMulti, Function, Lua, LuaOptions, MultiValue, StdLib, Value,
 };
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -68,7 +69,6 @@ pub type LuaSession = Session<Director>;
 /// phase. An error is logged and the phase goes on.
 pub type ScriptHook = Box<dyn FnMut(&Lua) -> mlua::Result<()> + Send>;
 
-const SCRIPT_LIB: &str = "scripts/lib";
 /// Ended actions no handle refers to are forgotten this long after they ended.
 const ENDED_RETENTION_SECONDS: f64 = 10.0;
 /// How often (in ticks) forgotten actions are pruned.
@@ -141,7 +141,7 @@ impl Director {
                 Ok(())
             })?,
         )?;
-        globals.set("require", lua.create_function(require)?)?;
+        globals.set("require", lua.create_function(modules::require)?)?;
         globals.set(
             "test",
             lua.create_function(|lua, (name, f): (String, Function)| {
@@ -229,7 +229,7 @@ impl Director {
         self.lend(scene, |d| {
             let chunk = d.lua.load(code).set_name(format!("@{name}"));
             d.guarded(|| chunk.exec())
-                .map_err(|e| Error::Script(format!("{name}: {}", e.message())))
+                .map_err(|e| Error::Script(e.message()))
         })
     }
 
@@ -660,56 +660,6 @@ impl std::ops::Deref for SceneRef<'_> {
 enum Resume {
     Start,
     With(MultiValue),
-}
-
-/// `require(name)`: loads `name.lua` from the scene's folder or from `scripts/lib/`, once.
-fn require(lua: &Lua, name: String) -> mlua::Result<Value> {
-    if name.is_empty()
-        || !name
-            .chars()
-            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '.' || c == '-')
-    {
-        return Err(lua_err(format!("require: invalid module name `{name}`")));
-    }
-    let modules: Table = lua.named_registry_value("troupe.modules")?;
-    if let Some(v) = modules.get::<Option<Value>>(name.as_str())? {
-        return Ok(v);
-    }
-    let rel = format!("{}.lua", name.replace('.', "/"));
-    let base = lua
-        .app_data_ref::<Stage>()
-        .map(|st| st.base_dir.clone())
-        .unwrap_or_default();
-    // The scene's own folder, then the `scripts/lib/` of the project the scene belongs to
-    // (the nearest enclosing `scripts` folder), then `scripts/lib/` of the working folder.
-    let mut candidates = vec![base.join(&rel)];
-    if let Ok(abs) = base.canonicalize() {
-        if let Some(scripts) = abs
-            .ancestors()
-            .find(|a| a.file_name().is_some_and(|n| n == "scripts"))
-        {
-            candidates.push(scripts.join("lib").join(&rel));
-        }
-    }
-    candidates.push(Path::new(SCRIPT_LIB).join(&rel));
-    let path = candidates.iter().find(|p| p.is_file()).ok_or_else(|| {
-        lua_err(format!(
-            "require: module `{name}` not found in the scene's folder or {SCRIPT_LIB}/"
-        ))
-    })?;
-    let code = std::fs::read_to_string(path)
-        .map_err(|e| lua_err(format!("require: {}: {e}", path.display())))?;
-    let value: Value = lua
-        .load(code)
-        .set_name(format!("@{}", path.display()))
-        .call(())?;
-    let value = if value.is_nil() {
-        Value::Boolean(true)
-    } else {
-        value
-    };
-    modules.set(name.as_str(), value.clone())?;
-    Ok(value)
 }
 
 impl Script for Director {

@@ -243,7 +243,28 @@ fn root(e: &mlua::Error) -> &mlua::Error {
 /// mlua's `runtime error:` prefix or the traceback (which stays in the error a failed
 /// behavior reports).
 pub(crate) fn clean_message(e: &mlua::Error) -> String {
-    crate::args::error_text(e)
+    match e {
+        mlua::Error::CallbackError { traceback, cause } => {
+            format!("{}{}", caller_place(traceback), crate::args::error_text(cause))
+        }
+        other => crate::args::error_text(other),
+    }
+}
+
+/// `file:line: ` of the script line that called a Rust function, read from the traceback
+/// of its error (the first frame of a script; the prelude's wrappers are skipped), so that
+/// a refused call names its place as Lua's own errors do.
+fn caller_place(traceback: &str) -> String {
+    traceback
+        .lines()
+        .map(str::trim)
+        .filter(|l| !l.starts_with("[C]") && !l.starts_with("prelude:"))
+        .find_map(|l| {
+            let (place, _) = l.split_once(": in ")?;
+            place.rsplit_once(':')?.1.parse::<u32>().ok()?;
+            Some(format!("{place}: "))
+        })
+        .unwrap_or_default()
 }
 
 /// A readable error: the message in troupe's wording, then the traceback when there is
@@ -251,7 +272,7 @@ pub(crate) fn clean_message(e: &mlua::Error) -> String {
 pub(crate) fn describe(e: &mlua::Error) -> String {
     match e {
         mlua::Error::CallbackError { traceback, cause } => {
-            format!("{}\n{traceback}", describe(cause))
+            format!("{}{}\n{traceback}", caller_place(traceback), describe(cause))
         }
         mlua::Error::WithContext { context, cause } => {
             format!("{context}: {}", describe(cause))
