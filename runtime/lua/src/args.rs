@@ -67,6 +67,9 @@ pub(crate) fn error_text(e: &mlua::Error) -> String {
             if name.as_deref() == Some("self") {
                 return dot_call_hint(method);
             }
+            // A method's arguments are counted after `self`, as the script writes them.
+            let is_method = to.as_deref().is_some_and(|t| t.contains('.'));
+            let pos = if is_method { pos.saturating_sub(1) } else { *pos };
             let what = match name {
                 Some(n) => format!("argument {pos} (`{n}`)"),
                 None => format!("argument {pos}"),
