@@ -9,6 +9,7 @@ mod scenario;
 mod seq;
 mod templates;
 mod view;
+mod watch;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

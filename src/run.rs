@@ -75,6 +75,10 @@ pub struct RunArgs {
     /// --trace, --osc-out and --record-devices work as in a headless run.
     #[arg(long, conflicts_with_all = ["frames", "realtime"])]
     pub view: bool,
+    /// With --view: reload the scene when it, or a file it read, changes, and run it back
+    /// to the same simulated time; a broken edit shows its error over the last good scene.
+    #[arg(long, requires = "view", conflicts_with_all = ["record", "record_torques", "trace", "record_devices", "osc_out"])]
+    pub watch: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
     pub instruction_budget: u64,
@@ -160,6 +164,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         None => None,
     };
 
+    if args.watch {
+        return crate::watch::view(&args, config, limits, size, camera);
+    }
     let (mut session, devices) =
         crate::devices::session(config, limits, args.record_devices.as_deref())?;
     session.scene_mut().set_chunk_size(args.chunk);

@@ -413,6 +413,7 @@ pub fn load_sequence(
 ) -> mlua::Result<Arc<Sequence>> {
     let base = stage(lua)?.base_dir.clone();
     let full = resolve_path(&base, path)?;
+    stage(lua)?.loaded_files.push(full.clone());
     // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
     // cache key names the body (none: a .trk, or the default adult).
     let bound_to_body = troupe_formats::Format::of(&full)

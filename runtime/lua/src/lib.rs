@@ -115,6 +115,7 @@ impl Director {
             sequences: HashMap::new(),
             tests: Vec::new(),
             handler_failures: Vec::new(),
+            loaded_files: Vec::new(),
         });
         let globals = lua.globals();
         for name in ["dofile", "loadfile", "load", "require", "collectgarbage"] {
@@ -220,7 +221,11 @@ impl Director {
         } else {
             dir
         };
-        self.stage_mut().base_dir = dir;
+        {
+            let mut st = self.stage_mut();
+            st.base_dir = dir;
+            st.loaded_files.push(path.to_path_buf());
+        }
         self.load_str(scene, &code, &path.display().to_string())
     }
 
@@ -267,6 +272,12 @@ impl Director {
     /// The Lua state (for tests and embedding).
     pub fn lua(&self) -> &Lua {
         &self.lua
+    }
+
+    /// Every file the scene has read so far: the scene file, the modules it required from
+    /// its folder, the motion files it loaded (what a hot reload watches).
+    pub fn loaded_files(&self) -> Vec<PathBuf> {
+        self.stage_mut().loaded_files.clone()
     }
 
     /// The tests registered by `test(name, fn)` calls so far.

@@ -40,6 +40,9 @@ pub(crate) fn require(lua: &Lua, name: Value) -> mlua::Result<Value> {
     let (code, chunk) = if local.is_file() {
         let code = std::fs::read_to_string(&local)
             .map_err(|e| lua_err(format!("require: {}: {e}", local.display())))?;
+        if let Some(mut st) = lua.app_data_mut::<Stage>() {
+            st.loaded_files.push(local.clone());
+        }
         (code, format!("@{}", local.display()))
     } else if let Some((_, code)) = STANDARD_LIBRARY.iter().find(|(n, _)| *n == name) {
         (code.to_string(), format!("@[troupe]/{name}.lua"))

@@ -108,6 +108,8 @@ pub(crate) struct Stage {
     pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
     pub tests: Vec<(String, Function)>,
     pub handler_failures: Vec<(usize, String)>,
+    /// Every file the scene read (the scene, its modules, its motion files), in order.
+    pub loaded_files: Vec<PathBuf>,
 }
 
 /// The stage of the Lua state `lua`, mutably (for a callback; never across a Lua call).
