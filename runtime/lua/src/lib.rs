@@ -18,6 +18,7 @@ pub mod error;
 mod handles;
 pub mod kinds;
 pub mod modules;
+pub mod reference;
 mod sandbox;
 pub mod settings;
 mod stage;

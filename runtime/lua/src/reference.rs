@@ -1,0 +1,267 @@
+//! The API reference as data: every global, `troupe` function, handle method and field a
+//! script can use, with its parameters, result and one-line doc. `troupe lua-defs` turns
+//! it into an EmmyLua / LuaLS `---@meta` file for editors and `emmylua_check`, and tests
+//! hold it to the live API both ways (every entry resolves in a real Lua state, every
+//! live global, `troupe` function and action kind has an entry), so it cannot drift.
+
+/// What an entry is.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Item {
+    /// A function (`wait`, `troupe.actor`), called with `.`.
+    Function,
+    /// A method of a handle (`actor:behave`), called with `:`.
+    Method,
+    /// A field of a handle (`action.status`), of this EmmyLua type.
+    Field(&'static str),
+}
+
+/// One documented name.
+#[derive(Clone, Copy, Debug)]
+pub struct Entry {
+    /// Where it lives: `""` (a global), `troupe`, `troupe.devices`, or a handle class
+    /// (`Actor`, `Action`, `Behavior`, `Handler`, `Object`, `Sequence`).
+    pub owner: &'static str,
+    /// Its name.
+    pub name: &'static str,
+    /// Function, method or field.
+    pub item: Item,
+    /// Parameters as `name: type` (EmmyLua types; `name?` is optional).
+    pub params: &'static [&'static str],
+    /// The result's EmmyLua type (empty: none).
+    pub returns: &'static str,
+    /// One line of documentation.
+    pub doc: &'static str,
+}
+
+const fn f(
+    owner: &'static str,
+    name: &'static str,
+    params: &'static [&'static str],
+    returns: &'static str,
+    doc: &'static str,
+) -> Entry {
+    Entry {
+        owner,
+        name,
+        item: Item::Function,
+        params,
+        returns,
+        doc,
+    }
+}
+
+const fn m(
+    owner: &'static str,
+    name: &'static str,
+    params: &'static [&'static str],
+    returns: &'static str,
+    doc: &'static str,
+) -> Entry {
+    Entry {
+        owner,
+        name,
+        item: Item::Method,
+        params,
+        returns,
+        doc,
+    }
+}
+
+const fn field(owner: &'static str, name: &'static str, ty: &'static str, doc: &'static str) -> Entry {
+    Entry {
+        owner,
+        name,
+        item: Item::Field(ty),
+        params: &[],
+        returns: "",
+        doc,
+    }
+}
+
+/// The handle classes, with their one-line docs.
+pub const CLASSES: &[(&str, &str)] = &[
+    ("Actor", "An articulated human in the scene (`troupe.actor`)."),
+    ("Action", "A running or ended action (what an action method returns)."),
+    ("Behavior", "A behavior (what `actor:behave` returns)."),
+    ("Handler", "An event handler (what `actor:on` returns)."),
+    ("Object", "A rigid object in the scene (`troupe.object`)."),
+    ("Sequence", "A motion sequence (`troupe.sequence`)."),
+];
+
+/// Every documented name of the API.
+pub const API: &[Entry] = &[
+    // Globals (the prelude and the sandbox's additions).
+    f("", "wait", &["seconds?: number"], "", "Yields until `seconds` of simulated time have passed (none or 0: the next tick)."),
+    f("", "wait_until", &["fn: fun(): any", "timeout?: number"], "boolean", "Yields until `fn()` is true (returns true) or `timeout` seconds passed (returns false)."),
+    f("", "wait_all", &["...: Action|Action[]"], "", "Yields until every one of the actions has ended."),
+    f("", "wait_any", &["...: Action|Action[]"], "Action", "Yields until one of the actions ends; returns it."),
+    f("", "run", &["seconds: number"], "", "In a test: advances the simulation by `seconds`."),
+    f("", "run_until", &["fn: fun(): any", "timeout?: number"], "boolean", "In a test: advances until `fn()` is true (false at the timeout)."),
+    f("", "expect", &["cond: any", "message?: string"], "any", "Fails the test (or behavior) with `message` when `cond` is false or nil."),
+    f("", "test", &["name: string", "fn: fun()"], "", "Registers a scenario test (`troupe test`)."),
+    f("", "require", &["name: string"], "any", "Loads a module from the scene's folder, else troupe's standard library (once)."),
+    f("", "print", &["...: any"], "", "Logs the values with the actor's name."),
+    // The troupe table.
+    f("troupe", "actor", &["opts: ActorOptions"], "Actor", "Creates an actor: `name` (required), `template`, `height`, `mass`, `at`, `facing`."),
+    f("troupe", "object", &["opts: ObjectOptions"], "Object", "Creates a rigid object: `name`, `shape` and its sizes, `at`, `rotation`, `mass`."),
+    f("troupe", "time", &[], "number", "Scene time in seconds."),
+    f("troupe", "tick", &[], "integer", "Ticks done."),
+    f("troupe", "seed", &[], "integer", "The run's seed (`--seed`); `math.random` is seeded from it."),
+    f("troupe", "rate", &[], "number", "Ticks per second."),
+    f("troupe", "sequence", &["source: string|table"], "Sequence", "Loads a sequence file (.trk, .bvh, .gltf) or builds one from `{ [dof] = {{t, v}, …}, loop, name }`."),
+    f("troupe", "actors", &[], "Actor[]", "Every actor, in creation order."),
+    f("troupe", "get_actor", &["name: string"], "Actor?", "The actor called `name`, or nil."),
+    f("troupe", "get_object", &["name: string"], "Object?", "The object called `name`, or nil."),
+    f("troupe", "plan_grasp", &["actor: Actor|string", "object: Object|string", "opts?: table"], "table?", "How `actor` would grasp `object` (hand, pattern, …), or nil when it cannot."),
+    f("troupe", "performer", &["opts: table"], "Actor", "An actor driven live by motion-capture devices (docs/devices.md)."),
+    f("troupe.devices", "spacemouse", &["opts: table"], "string", "Moves an object with a SpaceMouse (live or replayed); returns the device's name."),
+    f("troupe.devices", "glove", &["performer: Actor|string"], "integer[]?", "The latest raw glove sensor values, or nil."),
+    f("troupe.devices", "hand", &["performer: Actor|string"], "table<string, number>", "The glove's hand targets by DOF name."),
+    f("troupe.devices", "hand_state", &["performer: Actor|string", "hand?: string"], "string, string?", "The gloved hand's grasp state and the object it holds."),
+    f("troupe.devices", "health", &["name: Actor|string"], "table", "A device's state and counters."),
+    f("troupe.devices", "calibrate", &["performer: Actor|string"], "", "Recalibrates a performer at the start of the next tick."),
+    f("troupe.devices", "is_calibrated", &["performer: Actor|string"], "boolean", "Whether a performer is calibrated."),
+    f("troupe.devices", "on_gesture", &["performer: Actor|string", "fn: fun(performer: Actor, gesture: string, previous: string?)"], "", "Calls `fn` when the performer's held gesture changes."),
+    f("troupe.devices", "train_gestures", &["performer: Actor|string", "examples: table<string, string>"], "", "Trains the gesture recogniser from recorded glove examples."),
+    // Actors.
+    field("Actor", "name", "string", "The actor's unique name."),
+    field("Actor", "template", "string", "Its body template (`adult`, `child`)."),
+    field("Actor", "height", "number", "Its standing height in metres."),
+    m("Actor", "behave", &["fn: fun(self: Actor)"], "Behavior", "Gives the actor a behavior (a coroutine started on the next tick); returns its handle."),
+    m("Actor", "on", &["event: ActionEvent", "fn: fun(action: Action)"], "Handler", "Calls `fn` on the tick after one of the actor's action events; returns its handle."),
+    m("Actor", "position", &[], "number[]", "`{x, y, z}` of the actor's root (HumanoidRoot)."),
+    m("Actor", "joint_position", &["joint: string"], "number[]", "`{x, y, z}` of a joint."),
+    m("Actor", "dof", &["name: string"], "number", "A DOF's value."),
+    m("Actor", "dofs", &["scope: string"], "string[]", "The DOF names of a scope, in order."),
+    m("Actor", "holding", &[], "Object[]", "The objects the actor holds."),
+    m("Actor", "actions", &[], "Action[]", "The actor's actions that have not ended."),
+    m("Actor", "pose", &["values: table<string, number>"], "", "Sets DOFs directly (clamped to their limits)."),
+    m("Actor", "set", &["settings: { self_collision?: boolean }"], "", "Changes the actor's settings."),
+    m("Actor", "behavior_status", &[], "string", "`running` while any behavior runs, then `failed` if one failed, else `done`; `none`."),
+    m("Actor", "behavior_error", &[], "string?", "The first failure message of its behaviors, or nil."),
+    m("Actor", "inverse_dynamics", &["opts: table"], "table", "Joint torques for a motion (q, qd, qdd)."),
+    m("Actor", "forward_dynamics", &["opts: table"], "table", "Accelerations for torques (q, qd, tau)."),
+    m("Actor", "play", &["sequence: Sequence|string", "opts?: ActionOptions"], "Action", "Plays a sequence (or a motion file) on the actor."),
+    m("Actor", "simulate", &["opts?: ActionOptions"], "Action", "Physically simulates the actor's scope (falls, pushes)."),
+    m("Actor", "servo", &["opts: ActionOptions"], "Action", "Holds a posture with PD control under gravity."),
+    m("Actor", "track", &["opts: ActionOptions"], "Action", "Follows a sequence with PD control under gravity."),
+    m("Actor", "reach", &["opts: ActionOptions"], "Action", "Reaches a hand to a target (point, object, joint)."),
+    m("Actor", "ik", &["opts: ActionOptions"], "Action", "Moves any effector to a point by inverse kinematics."),
+    m("Actor", "look_at", &["opts: ActionOptions"], "Action", "Turns the eyes, head and neck toward a target."),
+    m("Actor", "walk", &["opts: ActionOptions"], "Action", "Walks to a point, along a path, at a velocity, or following an actor."),
+    m("Actor", "grasp", &["opts: ActionOptions"], "Action", "Grasps an object."),
+    m("Actor", "release", &["opts: ActionOptions"], "Action", "Releases a held object."),
+    m("Actor", "place", &["opts: ActionOptions"], "Action", "Puts a held object down at a place."),
+    m("Actor", "manipulate", &["opts: ActionOptions"], "Action", "Moves a held object through keyed poses."),
+    m("Actor", "give", &["opts: ActionOptions"], "Action", "Hands an object to another actor."),
+    m("Actor", "receive", &["opts: ActionOptions"], "Action", "Takes an object another actor offers."),
+    m("Actor", "hold_hand", &["opts: ActionOptions"], "Action", "Holds another actor's hand."),
+    m("Actor", "shake_hands", &["opts: ActionOptions"], "Action", "Shakes hands with another actor."),
+    m("Actor", "capture", &["opts: ActionOptions"], "Action", "Drives the actor from a performer's live capture."),
+    // Actions.
+    field("Action", "id", "integer", "The action's number."),
+    field("Action", "status", "ActionStatus", "Where it is in its life (changes when the scene steps)."),
+    field("Action", "kind", "string", "The kind of motion (`keyframe`, `walk`, …)."),
+    field("Action", "mode", "string", "Its priority mode."),
+    field("Action", "weight", "number", "Its weight."),
+    field("Action", "error", "string?", "Why it was cancelled or failed, else nil."),
+    m("Action", "wait", &[], "ActionStatus", "Yields until the action ends; returns its final status."),
+    m("Action", "cancel", &[], "", "Cancels the action (a running one eases out)."),
+    // Behaviors and handlers.
+    field("Behavior", "status", "BehaviorStatus", "`running`, `done`, `failed` or `stopped`."),
+    field("Behavior", "error", "string?", "The failure message with its file:line, else nil."),
+    field("Behavior", "actor", "Actor?", "The actor it belongs to (nil for a test)."),
+    m("Behavior", "stop", &[], "", "Stops the behavior: it is not resumed again and ends `stopped`."),
+    m("Behavior", "wait", &[], "BehaviorStatus, string?", "Yields until the behavior has ended; returns its status and error."),
+    m("Handler", "off", &[], "boolean", "Removes the handler; false when it was already off."),
+    // Objects and sequences.
+    field("Object", "name", "string", "The object's unique name."),
+    field("Object", "shape", "string", "`box`, `sphere`, `cylinder`, `frustum` or `ellipsoid`."),
+    field("Object", "mass", "number", "Its mass in kg."),
+    field("Object", "holder", "Actor?", "The actor holding it, or nil."),
+    m("Object", "position", &[], "number[]", "`{x, y, z}` of its centre."),
+    field("Sequence", "name", "string", "Its name (`sequence@file:line` when made inline without one)."),
+    field("Sequence", "duration", "number", "Its length in seconds."),
+    field("Sequence", "loop", "boolean", "Whether it loops."),
+    m("Sequence", "dofs", &[], "string[]", "The DOFs it drives."),
+];
+
+/// Aliases and option classes the entries name.
+const TYPES: &str = r#"---@alias Vec3 number[]|{x: number, y: number, z: number}
+---@alias ActionEvent "action_started"|"action_completed"|"action_failed"|"action_cancelled"
+---@alias ActionStatus "pending"|"initiating"|"active"|"terminating"|"completed"|"cancelled"|"failed"
+---@alias BehaviorStatus "running"|"done"|"failed"|"stopped"
+
+---The options of `troupe.actor`.
+---@class ActorOptions
+---@field name string
+---@field template? string
+---@field height? number
+---@field mass? number
+---@field at? Vec3
+---@field facing? number
+
+---The options of `troupe.object`.
+---@class ObjectOptions
+---@field name string
+---@field shape? "box"|"sphere"|"cylinder"|"frustum"|"ellipsoid"
+---@field size? Vec3
+---@field radius? number
+---@field height? number
+---@field bottom_radius? number
+---@field top_radius? number
+---@field radii? Vec3
+---@field at? Vec3
+---@field rotation? Vec3
+---@field mass? number
+
+---The options of an action method: the common ones, and those of the kind (docs/lua-api.md).
+---@class ActionOptions: table
+---@field scope? string
+---@field mode? "default"|"exclusive"|"weighted"|"background"
+---@field weight? number
+---@field ease_in? number
+---@field ease_out? number
+---@field delay? number
+---@field duration? number
+"#;
+
+/// The EmmyLua / LuaLS `---@meta` definition file of the whole API.
+pub fn lua_defs() -> String {
+    let mut out = String::from(
+        "---@meta troupe\n-- The troupe Lua API, generated by `troupe lua-defs` from the API registry \
+         (runtime/lua/src/reference.rs); do not edit.\n\n",
+    );
+    out.push_str(TYPES);
+    out.push('\n');
+    for (class, doc) in CLASSES {
+        out.push_str(&format!("---{doc}\n---@class {class}\n"));
+        for e in API.iter().filter(|e| e.owner == *class) {
+            if let Item::Field(ty) = e.item {
+                out.push_str(&format!("---@field {} {ty} {}\n", e.name, e.doc));
+            }
+        }
+        out.push_str(&format!("local {class} = {{}}\n\n"));
+    }
+    out.push_str("---The troupe API.\ntroupe = {}\n\n---Live devices and performers.\ntroupe.devices = {}\n\n");
+    for e in API.iter().filter(|e| !matches!(e.item, Item::Field(_))) {
+        out.push_str(&format!("---{}\n", e.doc));
+        let mut names = Vec::new();
+        for p in e.params {
+            let (name, ty) = p.split_once(": ").unwrap_or((p, "any"));
+            out.push_str(&format!("---@param {name} {ty}\n"));
+            names.push(name.trim_end_matches('?'));
+        }
+        if !e.returns.is_empty() {
+            out.push_str(&format!("---@return {}\n", e.returns));
+        }
+        let sep = if e.item == Item::Method { ":" } else { "." };
+        let path = if e.owner.is_empty() {
+            e.name.to_string()
+        } else {
+            format!("{}{sep}{}", e.owner, e.name)
+        };
+        out.push_str(&format!("function {path}({}) end\n\n", names.join(", ")));
+    }
+    out
+}
