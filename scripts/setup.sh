@@ -24,3 +24,13 @@ if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/packa
   npm install --prefix "$tools" --no-save --no-audit --no-fund "gltf-validator@$GLTF_VALIDATOR" >&2 ||
     echo "setup: could not install gltf-validator; its test will be skipped" >&2
 fi
+# emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
+# the API's definitions (`troupe lua-defs`). Built once (about EMMYLUA_MINUTES minutes on 2
+# cores) into a folder outside the clone, so that later clones and CI runs on the same
+# machine reuse it: $TROUPE_TOOLS, default ~/.cache/troupe-tools.
+EMMYLUA_CHECK=0.25.1
+troupe_tools="${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}"
+if ! "$troupe_tools/bin/emmylua_check" --version 2>/dev/null | grep -q "$EMMYLUA_CHECK"; then
+  echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; several minutes)" >&2
+  cargo install --locked --quiet emmylua_check --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
+fi
