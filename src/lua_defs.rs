@@ -38,8 +38,7 @@ mod tests {
     /// A session with the whole API: the runtime's, the action kinds', the devices'.
     fn session() -> LuaSession {
         let (session, _devices) =
-            crate::devices::session(SceneConfig::default(), ScriptLimits::default(), None)
-                .unwrap();
+            crate::devices::session(SceneConfig::default(), ScriptLimits::default(), None).unwrap();
         session
     }
 
@@ -53,9 +52,24 @@ mod tests {
             ))
             .unwrap();
         const LUA_OWN: &[&str] = &[
-            "assert", "error", "getmetatable", "ipairs", "next", "pairs", "pcall", "rawequal",
-            "rawget", "rawlen", "rawset", "select", "setmetatable", "tonumber", "tostring",
-            "type", "warn", "xpcall",
+            "assert",
+            "error",
+            "getmetatable",
+            "ipairs",
+            "next",
+            "pairs",
+            "pcall",
+            "rawequal",
+            "rawget",
+            "rawlen",
+            "rawset",
+            "select",
+            "setmetatable",
+            "tonumber",
+            "tostring",
+            "type",
+            "warn",
+            "xpcall",
         ];
         names
             .into_iter()
@@ -118,7 +132,11 @@ mod tests {
                         e.name
                     ))
                     .unwrap();
-                assert!(found, "{class}.{} is documented but does not resolve", e.name);
+                assert!(
+                    found,
+                    "{class}.{} is documented but does not resolve",
+                    e.name
+                );
             }
         }
     }

@@ -271,7 +271,11 @@ fn check_camera(camera: &troupe_viewer::Camera, session: &LuaSession) -> Result<
             let names: Vec<&str> = actors.iter().map(|a| a.name.as_str()).collect();
             bail!(
                 "--camera follow:{name}: the scene has no actor `{name}` (actors: {})",
-                if names.is_empty() { "none".into() } else { names.join(", ") }
+                if names.is_empty() {
+                    "none".into()
+                } else {
+                    names.join(", ")
+                }
             );
         }
     }

@@ -136,17 +136,13 @@ pub fn run(args: TestArgs) -> Result<ExitCode> {
     let mut broken = Vec::new();
     for file in files {
         match session(&file, args.threads, args.chunk) {
-            Ok(s) => selected.extend(
-                s.script()
-                    .test_names()
-                    .into_iter()
-                    .enumerate()
-                    .map(|(index, name)| TestId {
-                        file: file.clone(),
-                        index,
-                        name,
-                    }),
-            ),
+            Ok(s) => selected.extend(s.script().test_names().into_iter().enumerate().map(
+                |(index, name)| TestId {
+                    file: file.clone(),
+                    index,
+                    name,
+                },
+            )),
             Err(e) => broken.push((file, format!("{e:#}"))),
         }
     }
@@ -266,7 +262,8 @@ fn write_junit(path: &Path, results: &[(TestId, Outcome, Duration)]) -> Result<(
     if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     }
-    let file = std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
+    let file =
+        std::fs::File::create(path).with_context(|| format!("writing {}", path.display()))?;
     report
         .serialize(std::io::BufWriter::new(file))
         .with_context(|| format!("writing {}", path.display()))
@@ -304,7 +301,10 @@ fn run_one(
                 format!("behavior of {} failed: {error}", failure.actor)
             });
         }
-        if reports.iter().any(|b| b.actor == "test" && b.status == "done") {
+        if reports
+            .iter()
+            .any(|b| b.actor == "test" && b.status == "done")
+        {
             return Ok(s.scene().time());
         }
     }

@@ -173,7 +173,11 @@ pub fn view(
             if w.reloader.changed() {
                 match w.reloader.reload(&w.session) {
                     Some(fresh) => {
-                        println!("reloaded {} at t = {:.2} s", args_scene(&fresh), fresh.scene().time());
+                        println!(
+                            "reloaded {} at t = {:.2} s",
+                            args_scene(&fresh),
+                            fresh.scene().time()
+                        );
                         w.session = fresh;
                     }
                     None => eprintln!(
@@ -253,7 +257,10 @@ mod tests {
 
     fn elbow(s: &LuaSession) -> f64 {
         let ann = s.scene().actor_index("ann").unwrap();
-        let d = s.scene().actors()[ann].skeleton.dof("r_elbow_flexion").unwrap();
+        let d = s.scene().actors()[ann]
+            .skeleton
+            .dof("r_elbow_flexion")
+            .unwrap();
         s.scene().states()[ann].q[d]
     }
 
@@ -270,7 +277,12 @@ mod tests {
         write(&module, "return 1.0\n");
         let (mut reloader, mut session) = Reloader::start(scene.clone(), make).unwrap();
         assert_eq!(reloader.files(), vec![scene.clone(), module.clone()]);
-        session.run(RunLimit { ticks: 50, until_idle: false }).unwrap();
+        session
+            .run(RunLimit {
+                ticks: 50,
+                until_idle: false,
+            })
+            .unwrap();
         assert!(!reloader.changed());
 
         // An edit of a module the scene required: reloaded at tick 50.
@@ -282,9 +294,17 @@ mod tests {
         assert!(!reloader.changed());
         // The same as a fresh run of the edited scene to that time, bit for bit.
         let (_, mut fresh) = Reloader::start(scene.clone(), make).unwrap();
-        fresh.run(RunLimit { ticks: 50, until_idle: false }).unwrap();
+        fresh
+            .run(RunLimit {
+                ticks: 50,
+                until_idle: false,
+            })
+            .unwrap();
         assert_eq!(elbow(&reloaded).to_bits(), elbow(&fresh).to_bits());
-        assert!((elbow(&reloaded) - 2.0 * elbow(&session)).abs() < 1e-9, "the new bend");
+        assert!(
+            (elbow(&reloaded) - 2.0 * elbow(&session)).abs() < 1e-9,
+            "the new bend"
+        );
         std::fs::remove_dir_all(&dir).ok();
     }
 
@@ -295,17 +315,29 @@ mod tests {
         write(&scene, "local ann = troupe.actor{ name = 'ann' }\n");
         write(&dir.join("bend.lua"), "return 1.0\n");
         let (mut reloader, mut session) = Reloader::start(scene.clone(), make).unwrap();
-        session.run(RunLimit { ticks: 10, until_idle: false }).unwrap();
+        session
+            .run(RunLimit {
+                ticks: 10,
+                until_idle: false,
+            })
+            .unwrap();
 
         write(&scene, "local ann = troupe.actor{ name = 'ann' \n");
-        assert!(reloader.reload(&session).is_none(), "a syntax error does not reload");
+        assert!(
+            reloader.reload(&session).is_none(),
+            "a syntax error does not reload"
+        );
         let error = reloader.error().expect("the error is kept").to_string();
         assert!(error.contains("scene.lua:"), "{error}");
         assert!(!reloader.changed(), "not retried until the next edit");
         let frame = reloader.frame(&session);
         assert_eq!(frame.actors.len(), 1, "the last good scene");
         assert!(frame.notice[0].contains("reload of"), "{:?}", frame.notice);
-        assert!(frame.notice.iter().any(|l| l.contains("scene.lua:")), "{:?}", frame.notice);
+        assert!(
+            frame.notice.iter().any(|l| l.contains("scene.lua:")),
+            "{:?}",
+            frame.notice
+        );
         // The notice is drawn: a red panel in the top-left corner.
         let mut renderer = troupe_viewer::OffscreenRenderer::new(320, 200).unwrap();
         let camera = troupe_viewer::Camera::fit();

@@ -51,11 +51,18 @@ fn filter_and_list_select_tests_and_an_empty_selection_is_an_error() {
     let out = troupe(&["test", &many, "--filter", "case 3"]);
     assert!(out.status.success());
     let text = stdout(&out);
-    assert!(text.contains("case 3") && !text.contains("case 2"), "{text}");
+    assert!(
+        text.contains("case 3") && !text.contains("case 2"),
+        "{text}"
+    );
     assert!(text.contains("1 passed, 0 failed"), "{text}");
     let out = troupe(&["test", &many, "--filter", "no such test"]);
     assert!(!out.status.success());
-    assert!(stderr(&out).contains("no tests selected"), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("no tests selected"),
+        "{}",
+        stderr(&out)
+    );
 }
 
 #[test]

@@ -46,9 +46,28 @@ fn the_tutorial_runs_as_written() {
     std::fs::write(dir.join("greet.lua"), format!("{}{}", blocks[1], blocks[2])).unwrap();
     let out = troupe(&dir, &["run", "greet.lua"]);
     let text = String::from_utf8_lossy(&out.stdout);
-    assert!(text.contains("ann          actions: 2 completed, 1 cancelled, 0 failed"), "{text}");
-    assert!(text.contains("bob          actions: 1 completed"), "bob nodded: {text}");
-    troupe(&dir, &["render", "greet.lua", "ann.png", "--at", "4", "--camera", "fit", "--size", "320x180"]);
+    assert!(
+        text.contains("ann          actions: 2 completed, 1 cancelled, 0 failed"),
+        "{text}"
+    );
+    assert!(
+        text.contains("bob          actions: 1 completed"),
+        "bob nodded: {text}"
+    );
+    troupe(
+        &dir,
+        &[
+            "render",
+            "greet.lua",
+            "ann.png",
+            "--at",
+            "4",
+            "--camera",
+            "fit",
+            "--size",
+            "320x180",
+        ],
+    );
     assert!(dir.join("ann.png").is_file());
 
     std::fs::write(dir.join("greet_test.lua"), &blocks[3]).unwrap();

@@ -41,7 +41,9 @@ pub(crate) fn features(actor: &ActorFrame, skin: [f32; 3]) -> Vec<Feature> {
             continue;
         };
         out.push(Feature {
-            center: e.transform_point(DVec3::new(0.0, 0.0, radii.z * 0.25)).as_vec3(),
+            center: e
+                .transform_point(DVec3::new(0.0, 0.0, radii.z * 0.25))
+                .as_vec3(),
             rotation: e.rotation.as_quat(),
             radii: Vec3::splat((radii.x * 0.2) as f32),
             color: EYE,

@@ -147,7 +147,10 @@ impl UserData for ActorRef {
                 .collect();
             Ok(if states.is_empty() {
                 "none"
-            } else if states.iter().any(|s| matches!(s, BehaviorState::Waiting(_))) {
+            } else if states
+                .iter()
+                .any(|s| matches!(s, BehaviorState::Waiting(_)))
+            {
                 "running"
             } else if states.iter().any(|s| matches!(s, BehaviorState::Failed(_))) {
                 "failed"
@@ -400,7 +403,9 @@ pub fn resolve_path(base_dir: &Path, path: &str) -> mlua::Result<std::path::Path
             crate::modules::shown(&beside)
         )
     };
-    Err(lua_err(format!("file `{path}` not found; looked for {tried}")))
+    Err(lua_err(format!(
+        "file `{path}` not found; looked for {tried}"
+    )))
 }
 
 /// Loads a sequence file once per path (and per skeleton for BVH and glTF) with
@@ -448,7 +453,11 @@ fn inline_sequence(lua: &Lua, t: &Table) -> mlua::Result<Sequence> {
         Some(n) => n,
         None => lua
             .inspect_stack(1, |d| {
-                let src = d.source().short_src.map(|s| s.to_string()).unwrap_or_default();
+                let src = d
+                    .source()
+                    .short_src
+                    .map(|s| s.to_string())
+                    .unwrap_or_default();
                 format!("sequence@{src}:{}", d.current_line().unwrap_or(0))
             })
             .unwrap_or_else(|| "sequence@?".into()),

@@ -31,9 +31,7 @@ pub fn err(method: &str, message: impl std::fmt::Display) -> mlua::Error {
 pub fn value_name(v: &Value) -> String {
     match v {
         Value::Number(n) if n.is_nan() => "nan".into(),
-        Value::Number(n) if n.is_infinite() => {
-            if *n > 0.0 { "inf" } else { "-inf" }.into()
-        }
+        Value::Number(n) if n.is_infinite() => if *n > 0.0 { "inf" } else { "-inf" }.into(),
         other => other.type_name().into(),
     }
 }
@@ -57,7 +55,10 @@ pub fn dot_call_hint(method: &str) -> String {
 pub(crate) fn error_text(e: &mlua::Error) -> String {
     match e {
         mlua::Error::BadArgument {
-            to, pos, name, cause,
+            to,
+            pos,
+            name,
+            cause,
         } => {
             // mlua names a method `Type.method`.
             let method = to
@@ -69,16 +70,19 @@ pub(crate) fn error_text(e: &mlua::Error) -> String {
             }
             // A method's arguments are counted after `self`, as the script writes them.
             let is_method = to.as_deref().is_some_and(|t| t.contains('.'));
-            let pos = if is_method { pos.saturating_sub(1) } else { *pos };
+            let pos = if is_method {
+                pos.saturating_sub(1)
+            } else {
+                *pos
+            };
             let what = match name {
                 Some(n) => format!("argument {pos} (`{n}`)"),
                 None => format!("argument {pos}"),
             };
             match &**cause {
-                mlua::Error::FromLuaConversionError { from, to, .. } => format!(
-                    "{method}: {what} must be {}, got {from}",
-                    lua_type_of(to)
-                ),
+                mlua::Error::FromLuaConversionError { from, to, .. } => {
+                    format!("{method}: {what} must be {}, got {from}", lua_type_of(to))
+                }
                 other => format!("{method}: {what}: {}", error_text(other)),
             }
         }
@@ -166,7 +170,10 @@ pub fn opt_string(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<
         Value::String(s) => Ok(Some(s.to_str()?.to_string())),
         other => Err(err(
             method,
-            format!("option `{key}` must be a string, got {}", value_name(&other)),
+            format!(
+                "option `{key}` must be a string, got {}",
+                value_name(&other)
+            ),
         )),
     }
 }
@@ -179,11 +186,17 @@ pub fn opt_number(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<
         (Some(n), _) if n.is_finite() => Ok(Some(n)),
         (Some(_), other) => Err(err(
             method,
-            format!("option `{key}` must be a finite number, got {}", value_name(&other)),
+            format!(
+                "option `{key}` must be a finite number, got {}",
+                value_name(&other)
+            ),
         )),
         (None, other) => Err(err(
             method,
-            format!("option `{key}` must be a number, got {}", value_name(&other)),
+            format!(
+                "option `{key}` must be a number, got {}",
+                value_name(&other)
+            ),
         )),
     }
 }

@@ -25,15 +25,13 @@ mod stage;
 
 use crate::args::lua_err;
 pub use crate::error::{Error, Result};
-use crate::sandbox::{clean_message, thread_location, Failure, Sandbox};
-pub use crate::sandbox::ScriptLimits;
 use crate::handles::{ActionRef, Pins};
+pub use crate::sandbox::ScriptLimits;
+use crate::sandbox::{clean_message, thread_location, Failure, Sandbox};
 pub use crate::stage::{actor_skeletons, scene_dir};
 use crate::stage::{add_behavior, BehaviorState, Stage, Wait};
 use kinds::ActionKinds;
-use mlua::{
-    FromLuaMulti, Function, Lua, LuaOptions, MultiValue, StdLib, Value,
-};
+use mlua::{FromLuaMulti, Function, Lua, LuaOptions, MultiValue, StdLib, Value};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -513,7 +511,10 @@ impl Director {
                     if matches!(other, BehaviorState::Waiting(_)) {
                         return None;
                     }
-                    Some(Ready::Behavior(other.name(), other.error().map(String::from)))
+                    Some(Ready::Behavior(
+                        other.name(),
+                        other.error().map(String::from),
+                    ))
                 }
                 _ => None,
             };
@@ -591,10 +592,7 @@ impl Director {
                     )),
                     Ok(_) => None,
                     Err(e) => {
-                        self.fail(
-                            i,
-                            format!("in a wait_until condition: {}", e.message()),
-                        );
+                        self.fail(i, format!("in a wait_until condition: {}", e.message()));
                         None
                     }
                 }
@@ -781,7 +779,10 @@ mod tests {
     fn a_runaway_top_level_or_handler_is_stopped_even_under_pcall() {
         let mut s = session();
         let err = s
-            .load_str("while true do pcall(function() while true do end end) end", "top")
+            .load_str(
+                "while true do pcall(function() while true do end end) end",
+                "top",
+            )
             .unwrap_err()
             .to_string();
         assert!(err.contains("top:1: instruction budget exceeded"), "{err}");

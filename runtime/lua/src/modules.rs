@@ -17,7 +17,14 @@ pub const STANDARD_LIBRARY: &[(&str, &str)] = &[(
 pub(crate) fn require(lua: &Lua, name: Value) -> mlua::Result<Value> {
     let name = match &name {
         Value::String(s) => s.to_str()?.to_string(),
-        other => return Err(crate::args::bad_arg("require", "the module name", "a string", other)),
+        other => {
+            return Err(crate::args::bad_arg(
+                "require",
+                "the module name",
+                "a string",
+                other,
+            ))
+        }
     };
     if name.is_empty()
         || !name

@@ -67,7 +67,12 @@ const fn m(
     }
 }
 
-const fn field(owner: &'static str, name: &'static str, ty: &'static str, doc: &'static str) -> Entry {
+const fn field(
+    owner: &'static str,
+    name: &'static str,
+    ty: &'static str,
+    doc: &'static str,
+) -> Entry {
     Entry {
         owner,
         name,
@@ -80,8 +85,14 @@ const fn field(owner: &'static str, name: &'static str, ty: &'static str, doc: &
 
 /// The handle classes, with their one-line docs.
 pub const CLASSES: &[(&str, &str)] = &[
-    ("Actor", "An articulated human in the scene (`troupe.actor`)."),
-    ("Action", "A running or ended action (what an action method returns)."),
+    (
+        "Actor",
+        "An articulated human in the scene (`troupe.actor`).",
+    ),
+    (
+        "Action",
+        "A running or ended action (what an action method returns).",
+    ),
     ("Behavior", "A behavior (what `actor:behave` returns)."),
     ("Handler", "An event handler (what `actor:on` returns)."),
     ("Object", "A rigid object in the scene (`troupe.object`)."),

@@ -120,7 +120,10 @@ impl Sandbox {
     }
 
     fn tripped(&self) -> Option<String> {
-        self.tripped.lock().unwrap_or_else(|p| p.into_inner()).clone()
+        self.tripped
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .clone()
     }
 
     /// Records the first limit hit in this resume, and returns its message.
@@ -245,7 +248,11 @@ fn root(e: &mlua::Error) -> &mlua::Error {
 pub(crate) fn clean_message(e: &mlua::Error) -> String {
     match e {
         mlua::Error::CallbackError { traceback, cause } => {
-            format!("{}{}", caller_place(traceback), crate::args::error_text(cause))
+            format!(
+                "{}{}",
+                caller_place(traceback),
+                crate::args::error_text(cause)
+            )
         }
         other => crate::args::error_text(other),
     }
@@ -272,7 +279,11 @@ fn caller_place(traceback: &str) -> String {
 pub(crate) fn describe(e: &mlua::Error) -> String {
     match e {
         mlua::Error::CallbackError { traceback, cause } => {
-            format!("{}{}\n{traceback}", caller_place(traceback), describe(cause))
+            format!(
+                "{}{}\n{traceback}",
+                caller_place(traceback),
+                describe(cause)
+            )
         }
         mlua::Error::WithContext { context, cause } => {
             format!("{context}: {}", describe(cause))
