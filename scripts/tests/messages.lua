@@ -90,3 +90,13 @@ test("limits name the limit and the place", function()
   local _, err = b:wait()
   expect(err:find("^[^\n]*messages%.lua:%d+: instruction budget exceeded"), err)
 end)
+
+test("device options have the same wording and types", function()
+  troupe.object{ name = "crate", shape = "box", size = {0.3, 0.3, 0.3}, at = {0, 0.15, 1} }
+  says(function() troupe.devices.spacemouse{ object = "crate", speed = "fast" } end,
+    "spacemouse: option `speed` must be a number, got string")
+  says(function() troupe.devices.spacemouse{ object = "crate", turn = 0 / 0 } end,
+    "spacemouse: option `turn` must be a finite number, got nan")
+  says(function() troupe.performer{ name = "pat", calibrate = {} } end,
+    "performer: option `calibrate` must be a string, got table")
+end)
