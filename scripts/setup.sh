@@ -25,7 +25,7 @@ if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/packa
     echo "setup: could not install gltf-validator; its test will be skipped" >&2
 fi
 # emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
-# the API's definitions (`troupe lua-defs`). Built once (about EMMYLUA_MINUTES minutes on 2
+# the API's definitions (`troupe lua-defs`). Built once (about 45 minutes at one job on a busy 2-core machine; see docs/PERFORMANCE.md) on 2
 # cores) into a folder outside the clone, so that later clones and CI runs on the same
 # machine reuse it: $TROUPE_TOOLS, default ~/.cache/troupe-tools.
 EMMYLUA_CHECK=0.25.1

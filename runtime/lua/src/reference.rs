@@ -229,7 +229,7 @@ const TYPES: &str = r#"---@alias Vec3 number[]|{x: number, y: number, z: number}
 ---The options of an action method: the common ones, and those of the kind (docs/lua-api.md).
 ---@class ActionOptions: table
 ---@field scope? string
----@field mode? "default"|"exclusive"|"weighted"|"background"
+---@field mode? string
 ---@field weight? number
 ---@field ease_in? number
 ---@field ease_out? number
