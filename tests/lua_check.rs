@@ -19,7 +19,9 @@ fn run(cmd: &mut Command) -> Output {
 }
 
 fn defs(out: &Path) {
-    let o = run(Command::new(env!("CARGO_BIN_EXE_troupe")).arg("lua-defs").arg(out));
+    let o = run(Command::new(env!("CARGO_BIN_EXE_troupe"))
+        .arg("lua-defs")
+        .arg(out));
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
@@ -33,7 +35,11 @@ fn the_repository_lua_checks_without_errors() {
     defs(&root.join(".tools/lua/troupe.d.lua"));
     let o = run(Command::new(bin).arg(".").current_dir(root));
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(o.status.success(), "{text}{}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "{text}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let errors: Vec<&str> = text.lines().filter(|l| l.starts_with("error")).collect();
     assert!(errors.is_empty(), "{errors:?}");
 }

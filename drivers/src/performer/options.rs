@@ -46,7 +46,10 @@ fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
     let refused = || {
         args::err(
             "performer",
-            format!("option `{key}` must be {expected}, got {}", args::value_name(&v)),
+            format!(
+                "option `{key}` must be {expected}, got {}",
+                args::value_name(&v)
+            ),
         )
     };
     if rust == "bool" && !matches!(v, Value::Boolean(_)) {
