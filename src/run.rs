@@ -165,7 +165,12 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     };
 
     if args.watch {
-        return crate::watch::view(&args, config, limits, size, camera);
+        let run = crate::watch::WatchedRun {
+            scene: args.scene.clone(),
+            chunk: args.chunk,
+            ticks: limit.ticks,
+        };
+        return crate::watch::view(run, config, limits, size, camera);
     }
     let (mut session, devices) =
         crate::devices::session(config, limits, args.record_devices.as_deref())?;

@@ -115,10 +115,20 @@ impl<F: FnMut() -> Result<LuaSession>> Reloader<F> {
     }
 }
 
+/// What a watched run needs of `troupe run`'s options.
+pub struct WatchedRun {
+    /// The scene file.
+    pub scene: PathBuf,
+    /// `--chunk`.
+    pub chunk: Option<usize>,
+    /// How many ticks the run may go (`--ticks`, `--seconds` or `--max-seconds`).
+    pub ticks: u64,
+}
+
 /// `troupe run SCENE --view --watch`: the window shows the scene; every 300 ms of wall time
 /// its files are looked at, and a change reloads it (see [`Reloader`]).
 pub fn view(
-    args: &crate::run::RunArgs,
+    run: WatchedRun,
     config: troupe_scene::SceneConfig,
     limits: troupe_lua::ScriptLimits,
     size: (u32, u32),
@@ -126,14 +136,14 @@ pub fn view(
 ) -> Result<std::process::ExitCode> {
     use std::sync::{Arc, Mutex};
     use std::time::{Duration, Instant};
-    let chunk = args.chunk;
+    let chunk = run.chunk;
     let make = move || -> Result<LuaSession> {
         let (mut session, devices) = crate::devices::session(config, limits, None)?;
         session.scene_mut().set_chunk_size(chunk);
         session.observe(devices);
         Ok(session)
     };
-    let (reloader, session) = Reloader::start(args.scene.clone(), make)?;
+    let (reloader, session) = Reloader::start(run.scene.clone(), make)?;
     println!(
         "watching {} for changes",
         reloader
@@ -143,10 +153,7 @@ pub fn view(
             .collect::<Vec<_>>()
             .join(", ")
     );
-    let max_ticks = args
-        .ticks
-        .or(args.seconds.map(|s| (s * args.rate).round() as u64))
-        .unwrap_or((args.max_seconds * args.rate).ceil() as u64);
+    let max_ticks = run.ticks;
     struct Watched<F: FnMut() -> Result<LuaSession>> {
         reloader: Reloader<F>,
         session: LuaSession,
@@ -159,10 +166,10 @@ pub fn view(
     }));
     let sim = shared.clone();
     let options = troupe_viewer::WindowOptions {
-        title: format!("troupe run {} (watching)", args.scene.display()),
+        title: format!("troupe run {} (watching)", run.scene.display()),
         size,
         camera,
-        tick_seconds: 1.0 / args.rate,
+        tick_seconds: 1.0 / config.rate,
         ..Default::default()
     };
     let shown = troupe_viewer::run_window(options, move || {
