@@ -110,6 +110,46 @@ mod tests {
     }
 
     #[test]
+    fn every_action_kinds_options_are_documented_and_accepted() {
+        use troupe_lua::kinds::COMMON_OPTIONS;
+        use troupe_lua::reference::KIND_OPTIONS;
+        let mut s = session();
+        s.eval::<()>("ANN = troupe.actor{ name = 'ann' }").unwrap();
+        let kinds = troupe_actions::action_kinds();
+        assert_eq!(
+            KIND_OPTIONS.len(),
+            kinds.all().len(),
+            "one option class per kind"
+        );
+        for (kind, _, fields) in KIND_OPTIONS {
+            // An unknown option's error lists the options the builder knows.
+            let call = if *kind == "play" {
+                "ANN:play(troupe.sequence{ r_elbow_flexion = {{0, 0}, {1, 1}} }, { __probe = 1 })"
+                    .to_string()
+            } else {
+                format!("ANN:{kind}{{ __probe = 1 }}")
+            };
+            let err: String = s
+                .eval(&format!(
+                    "local ok, e = pcall(function() return {call} end) return tostring(e)"
+                ))
+                .unwrap();
+            let known = err
+                .split("(known: ")
+                .nth(1)
+                .and_then(|k| k.split(')').next())
+                .unwrap_or_else(|| panic!("{kind}: {err}"));
+            let accepted: BTreeSet<&str> = known.split(", ").collect();
+            let documented: BTreeSet<&str> = COMMON_OPTIONS
+                .iter()
+                .copied()
+                .chain(fields.iter().map(|(n, _)| *n))
+                .collect();
+            assert_eq!(accepted, documented, "the options of actor:{kind}");
+        }
+    }
+
+    #[test]
     fn every_documented_method_and_field_resolves_on_a_live_handle() {
         let mut s = session();
         s.eval::<()>(

@@ -152,23 +152,23 @@ pub const API: &[Entry] = &[
     m("Actor", "behavior_error", &[], "string?", "The first failure message of its behaviors, or nil."),
     m("Actor", "inverse_dynamics", &["opts: table"], "table", "Joint torques for a motion (q, qd, qdd)."),
     m("Actor", "forward_dynamics", &["opts: table"], "table", "Accelerations for torques (q, qd, tau)."),
-    m("Actor", "play", &["sequence: Sequence|string", "opts?: ActionOptions"], "Action", "Plays a sequence (or a motion file) on the actor."),
-    m("Actor", "simulate", &["opts?: ActionOptions"], "Action", "Physically simulates the actor's scope (falls, pushes)."),
-    m("Actor", "servo", &["opts: ActionOptions"], "Action", "Holds a posture with PD control under gravity."),
-    m("Actor", "track", &["opts: ActionOptions"], "Action", "Follows a sequence with PD control under gravity."),
-    m("Actor", "reach", &["opts: ActionOptions"], "Action", "Reaches a hand to a target (point, object, joint)."),
-    m("Actor", "ik", &["opts: ActionOptions"], "Action", "Moves any effector to a point by inverse kinematics."),
-    m("Actor", "look_at", &["opts: ActionOptions"], "Action", "Turns the eyes, head and neck toward a target."),
-    m("Actor", "walk", &["opts: ActionOptions"], "Action", "Walks to a point, along a path, at a velocity, or following an actor."),
-    m("Actor", "grasp", &["opts: ActionOptions"], "Action", "Grasps an object."),
-    m("Actor", "release", &["opts: ActionOptions"], "Action", "Releases a held object."),
-    m("Actor", "place", &["opts: ActionOptions"], "Action", "Puts a held object down at a place."),
-    m("Actor", "manipulate", &["opts: ActionOptions"], "Action", "Moves a held object through keyed poses."),
-    m("Actor", "give", &["opts: ActionOptions"], "Action", "Hands an object to another actor."),
-    m("Actor", "receive", &["opts: ActionOptions"], "Action", "Takes an object another actor offers."),
-    m("Actor", "hold_hand", &["opts: ActionOptions"], "Action", "Holds another actor's hand."),
-    m("Actor", "shake_hands", &["opts: ActionOptions"], "Action", "Shakes hands with another actor."),
-    m("Actor", "capture", &["opts: ActionOptions"], "Action", "Drives the actor from a performer's live capture."),
+    m("Actor", "play", &["sequence: Sequence|string", "opts?: PlayOptions"], "Action", "Plays a sequence (or a motion file) on the actor."),
+    m("Actor", "simulate", &["opts?: SimulateOptions"], "Action", "Physically simulates the actor's scope (falls, pushes)."),
+    m("Actor", "servo", &["opts: ServoOptions"], "Action", "Holds a posture with PD control under gravity."),
+    m("Actor", "track", &["opts: TrackOptions"], "Action", "Follows a sequence with PD control under gravity."),
+    m("Actor", "reach", &["opts: ReachOptions"], "Action", "Reaches a hand to a target (point, object, joint)."),
+    m("Actor", "ik", &["opts: IkOptions"], "Action", "Moves any effector to a point by inverse kinematics."),
+    m("Actor", "look_at", &["opts: LookAtOptions"], "Action", "Turns the eyes, head and neck toward a target."),
+    m("Actor", "walk", &["opts: WalkOptions"], "Action", "Walks to a point, along a path, at a velocity, or following an actor."),
+    m("Actor", "grasp", &["opts: GraspOptions"], "Action", "Grasps an object."),
+    m("Actor", "release", &["opts: ReleaseOptions"], "Action", "Releases a held object."),
+    m("Actor", "place", &["opts: PlaceOptions"], "Action", "Puts a held object down at a place."),
+    m("Actor", "manipulate", &["opts: ManipulateOptions"], "Action", "Moves a held object through keyed poses."),
+    m("Actor", "give", &["opts: GiveOptions"], "Action", "Hands an object to another actor."),
+    m("Actor", "receive", &["opts: ReceiveOptions"], "Action", "Takes an object another actor offers."),
+    m("Actor", "hold_hand", &["opts: HoldHandOptions"], "Action", "Holds another actor's hand."),
+    m("Actor", "shake_hands", &["opts: ShakeHandsOptions"], "Action", "Shakes hands with another actor."),
+    m("Actor", "capture", &["opts: CaptureOptions"], "Action", "Drives the actor from a performer's live capture."),
     // Actions.
     field("Action", "id", "integer", "The action's number."),
     field("Action", "status", "ActionStatus", "Where it is in its life (changes when the scene steps)."),
@@ -195,6 +195,165 @@ pub const API: &[Entry] = &[
     field("Sequence", "duration", "number", "Its length in seconds."),
     field("Sequence", "loop", "boolean", "Whether it loops."),
     m("Sequence", "dofs", &[], "string[]", "The DOFs it drives."),
+];
+
+/// The options of each action method beyond the common ones (`ActionOptions`): the kind,
+/// its option class, and each option's name and EmmyLua type. A test holds them to the
+/// options each builder accepts (the list its "unknown option" error gives).
+pub const KIND_OPTIONS: &[(&str, &str, &[(&str, &str)])] = &[
+    ("play", "PlayOptions", &[("loop", "boolean")]),
+    (
+        "simulate",
+        "SimulateOptions",
+        &[
+            ("gravity", "Vec3"),
+            ("floor", "boolean"),
+            ("damping", "number"),
+            ("small_time_step", "number"),
+            ("time_step", "number"),
+            ("limits", "boolean"),
+            ("push", "any"),
+        ],
+    ),
+    (
+        "servo",
+        "ServoOptions",
+        &[
+            ("gravity", "Vec3"),
+            ("floor", "boolean"),
+            ("damping", "number"),
+            ("small_time_step", "number"),
+            ("time_step", "number"),
+            ("limits", "boolean"),
+            ("target", "any"),
+            ("kp", "number"),
+            ("kd", "number"),
+            ("gravity_compensation", "boolean"),
+        ],
+    ),
+    (
+        "track",
+        "TrackOptions",
+        &[
+            ("gravity", "Vec3"),
+            ("floor", "boolean"),
+            ("damping", "number"),
+            ("small_time_step", "number"),
+            ("time_step", "number"),
+            ("limits", "boolean"),
+            ("sequence", "Sequence|string"),
+            ("kp", "number"),
+            ("kd", "number"),
+        ],
+    ),
+    (
+        "reach",
+        "ReachOptions",
+        &[
+            ("hand", "string"),
+            ("target", "any"),
+            ("orientation", "Vec3"),
+            ("via", "any"),
+            ("self_collision", "boolean"),
+        ],
+    ),
+    (
+        "ik",
+        "IkOptions",
+        &[
+            ("effector", "string"),
+            ("point", "Vec3"),
+            ("target", "any"),
+            ("orientation", "Vec3"),
+            ("via", "any"),
+            ("self_collision", "boolean"),
+        ],
+    ),
+    ("look_at", "LookAtOptions", &[("target", "any")]),
+    (
+        "walk",
+        "WalkOptions",
+        &[
+            ("to", "Vec3"),
+            ("path", "any"),
+            ("velocity", "any"),
+            ("follow", "Actor|string"),
+            ("speed", "number"),
+            ("heading", "any"),
+            ("step_length", "number"),
+            ("step_width", "number"),
+            ("pelvis", "any"),
+            ("arm_swing", "any"),
+            ("bounce", "any"),
+            ("run", "any"),
+            ("arms", "any"),
+        ],
+    ),
+    (
+        "grasp",
+        "GraspOptions",
+        &[
+            ("object", "Object|string"),
+            ("hand", "string"),
+            ("pattern", "string"),
+        ],
+    ),
+    ("release", "ReleaseOptions", &[("object", "Object|string")]),
+    (
+        "place",
+        "PlaceOptions",
+        &[
+            ("object", "Object|string"),
+            ("at", "Vec3"),
+            ("rotation", "Vec3"),
+        ],
+    ),
+    (
+        "manipulate",
+        "ManipulateOptions",
+        &[
+            ("object", "Object|string"),
+            ("keys", "table|fun(t: number): any"),
+        ],
+    ),
+    (
+        "give",
+        "GiveOptions",
+        &[
+            ("object", "Object|string"),
+            ("to", "Actor|string"),
+            ("hand", "string"),
+            ("timeout", "number"),
+        ],
+    ),
+    (
+        "receive",
+        "ReceiveOptions",
+        &[
+            ("object", "Object|string"),
+            ("from", "Actor|string"),
+            ("hand", "string"),
+        ],
+    ),
+    (
+        "hold_hand",
+        "HoldHandOptions",
+        &[
+            ("other", "Actor|string"),
+            ("hand", "string"),
+            ("other_hand", "string"),
+        ],
+    ),
+    (
+        "shake_hands",
+        "ShakeHandsOptions",
+        &[
+            ("other", "Actor|string"),
+            ("hand", "string"),
+            ("other_hand", "string"),
+        ],
+    ),
+    ("capture", "CaptureOptions", &[]),
 ];
 
 /// Aliases and option classes the entries name.
@@ -226,8 +385,8 @@ const TYPES: &str = r#"---@alias Vec3 number[]|{x: number, y: number, z: number}
 ---@field rotation? Vec3
 ---@field mass? number
 
----The options of an action method: the common ones, and those of the kind (docs/lua-api.md).
----@class ActionOptions: table
+---The options every action method takes (docs/lua-api.md, "Actions").
+---@class ActionOptions
 ---@field scope? string
 ---@field mode? string
 ---@field weight? number
@@ -245,6 +404,15 @@ pub fn lua_defs() -> String {
     );
     out.push_str(TYPES);
     out.push('\n');
+    for (kind, class, fields) in KIND_OPTIONS {
+        out.push_str(&format!(
+            "---The options of `actor:{kind}`.\n---@class {class}: ActionOptions\n"
+        ));
+        for (name, ty) in *fields {
+            out.push_str(&format!("---@field {name}? {ty}\n"));
+        }
+        out.push('\n');
+    }
     for (class, doc) in CLASSES {
         out.push_str(&format!("---{doc}\n---@class {class}\n"));
         for e in API.iter().filter(|e| e.owner == *class) {
