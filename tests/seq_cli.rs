@@ -130,7 +130,9 @@ fn a_trk_converts_to_bvh_and_gltf_on_a_template_and_back() {
     let again = &troupe_formats::load_sequences(&back, None).unwrap()[0];
     // At the BVH's frames (the .trk's key times) every driven DOF comes back.
     for track in original.tracks() {
-        let other = again.track(track.dof()).expect(track.dof());
+        let other = again
+            .track(track.dof())
+            .unwrap_or_else(|| panic!("{} came back", track.dof()));
         for key in track.keys() {
             let (a, b) = (track.value(key.time), other.value(key.time));
             assert!(

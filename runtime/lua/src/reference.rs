@@ -197,10 +197,17 @@ pub const API: &[Entry] = &[
     m("Sequence", "dofs", &[], "string[]", "The DOFs it drives."),
 ];
 
+/// An action kind's method, its option class, and each option's name and EmmyLua type.
+pub type KindOptions = (
+    &'static str,
+    &'static str,
+    &'static [(&'static str, &'static str)],
+);
+
 /// The options of each action method beyond the common ones (`ActionOptions`): the kind,
 /// its option class, and each option's name and EmmyLua type. A test holds them to the
 /// options each builder accepts (the list its "unknown option" error gives).
-pub const KIND_OPTIONS: &[(&str, &str, &[(&str, &str)])] = &[
+pub const KIND_OPTIONS: &[KindOptions] = &[
     ("play", "PlayOptions", &[("loop", "boolean")]),
     (
         "simulate",
