@@ -69,3 +69,25 @@ test("on returns a handle whose off removes the handler", function()
   run(0.05)
   expect(calls == 1, "not called after off")
 end)
+
+test("a behavior that stops itself ends at its next wait", function()
+  local ann = troupe.actor{ name = "ann" }
+  local after = false
+  local me
+  me = ann:behave(function()
+    me:stop()
+    wait(0.1)
+    after = true
+  end)
+  expect(me:wait() == "stopped", "stopped")
+  run(0.2)
+  expect(not after, "not resumed after its wait")
+end)
+
+test("a behavior cannot wait for itself", function()
+  local ann = troupe.actor{ name = "ann" }
+  local me
+  me = ann:behave(function() me:wait() end)
+  local status, err = me:wait()
+  expect(status == "failed" and err:find("cannot wait for itself", 1, true), tostring(err))
+end)
