@@ -34,3 +34,12 @@ if ! "$troupe_tools/bin/emmylua_check" --version 2>/dev/null | grep -q "$EMMYLUA
   echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; several minutes)" >&2
   cargo install --locked --quiet emmylua_check --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
 fi
+# junitparser (PyPI), an independent JUnit XML reader, for the test of `troupe test
+# --junit` (tests/test_runner.rs, which skips that check with a note without it).
+JUNITPARSER=3.2.0
+python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
+if command -v python3 >/dev/null && [ ! -d "$python_tools/junitparser-$JUNITPARSER.dist-info" ]; then
+  echo "setup: installing junitparser==$JUNITPARSER into $python_tools" >&2
+  python3 -m pip install --quiet --disable-pip-version-check --target "$python_tools" \
+    "junitparser==$JUNITPARSER" >&2 || echo "setup: could not install junitparser" >&2
+fi

@@ -121,7 +121,35 @@ fn junit_xml_names_every_test_and_failure() {
         .filter(|n| n.has_tag_name("testsuite"))
         .count();
     assert_eq!(suites, 2, "one suite per file");
+    read_by_junitparser(&path);
     std::fs::remove_dir_all(&dir).ok();
+}
+
+/// The report as an independent JUnit reader (junitparser, from PyPI) sees it: two suites,
+/// six cases, one failure. Skipped with a note when scripts/setup.sh has not installed it.
+fn read_by_junitparser(path: &std::path::Path) {
+    let tools = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".tools/python");
+    if !tools.join("junitparser").is_dir() {
+        eprintln!("junitparser is not installed (scripts/setup.sh installs it): skipped");
+        return;
+    }
+    let script = "import sys\n\
+        from junitparser import JUnitXml, Failure\n\
+        xml = JUnitXml.fromfile(sys.argv[1])\n\
+        suites = list(xml)\n\
+        cases = [c for s in suites for c in s]\n\
+        failed = [c for c in cases if any(isinstance(r, Failure) for r in c.result)]\n\
+        print(len(suites), len(cases), len(failed), failed[0].name)\n";
+    let out = Command::new("python3")
+        .env("PYTHONPATH", &tools)
+        .arg("-c")
+        .arg(script)
+        .arg(path)
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(text.trim(), "2 6 1 a failing behavior fails its test");
 }
 
 #[test]
