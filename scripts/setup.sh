@@ -24,22 +24,46 @@ if command -v npm >/dev/null && [ ! -f "$tools/node_modules/gltf-validator/packa
   npm install --prefix "$tools" --no-save --no-audit --no-fund "gltf-validator@$GLTF_VALIDATOR" >&2 ||
     echo "setup: could not install gltf-validator; its test will be skipped" >&2
 fi
+# VRPN: the tests in drivers/tests/vrpn_server.rs build the real VRPN server from
+# ../shared/vendor/vrpn-07.38.tar.gz (scripts/vrpn-server.sh) and need cmake and g++.
+vrpn_missing=()
+for pkg in cmake g++; do
+  dpkg -s "$pkg" >/dev/null 2>&1 || vrpn_missing+=("$pkg")
+done
+if ((${#vrpn_missing[@]})); then
+  echo "setup: installing ${vrpn_missing[*]} (to build the VRPN server for its tests)" >&2
+  SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
+  $SUDO apt-get update -qq
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${vrpn_missing[@]}"
+fi
+# Pinocchio (the PyPI package `pin`), for the test that checks troupe's dynamics against
+# an independent RNEA on its own URDF export (runtime/formats/tests/pinocchio_dynamics.rs,
+# skipped with a note without it). Installed from PyPI only, into a venv in .tools/python,
+# once.
+PIN_VERSION=4.1.0
+python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
+if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio" >/dev/null 2>&1; then
+  echo "setup: installing pin==$PIN_VERSION (Pinocchio) into $python_tools" >&2
+  { python3 -m venv "$python_tools" && "$python_tools/bin/pip" install -q "pin==$PIN_VERSION"; } >&2 ||
+    echo "setup: could not install Pinocchio; its test will be skipped" >&2
+fi
 # emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
-# the API's definitions (`troupe lua-defs`). Built once (about 45 minutes at one job on a busy 2-core machine; see docs/PERFORMANCE.md) on 2
-# cores) into a folder outside the clone, so that later clones and CI runs on the same
-# machine reuse it: $TROUPE_TOOLS, default ~/.cache/troupe-tools.
+# the API's definitions (`troupe lua-defs`). Built once (43 minutes measured at one job on
+# a busy 2-core machine, see docs/PERFORMANCE.md) into a folder outside the clone, so that
+# later clones and CI runs on the same machine reuse it: $TROUPE_TOOLS, default
+# ~/.cache/troupe-tools.
 EMMYLUA_CHECK=0.25.1
 troupe_tools="${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}"
 if ! "$troupe_tools/bin/emmylua_check" --version 2>/dev/null | grep -q "$EMMYLUA_CHECK"; then
-  echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; several minutes)" >&2
+  echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; long)" >&2
   cargo install --locked --quiet emmylua_check --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
 fi
 # junitparser (PyPI), an independent JUnit XML reader, for the test of `troupe test
-# --junit` (tests/test_runner.rs, which skips that check with a note without it).
+# --junit` (tests/test_runner.rs, which skips that check with a note without it), in the
+# same venv.
 JUNITPARSER=3.2.0
-python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
-if command -v python3 >/dev/null && [ ! -d "$python_tools/junitparser-$JUNITPARSER.dist-info" ]; then
+if [ -x "$python_tools/bin/python" ] && ! "$python_tools/bin/python" -c "import junitparser" >/dev/null 2>&1; then
   echo "setup: installing junitparser==$JUNITPARSER into $python_tools" >&2
-  python3 -m pip install --quiet --disable-pip-version-check --target "$python_tools" \
-    "junitparser==$JUNITPARSER" >&2 || echo "setup: could not install junitparser" >&2
+  "$python_tools/bin/pip" install -q "junitparser==$JUNITPARSER" >&2 ||
+    echo "setup: could not install junitparser; its check will be skipped" >&2
 fi

@@ -34,6 +34,7 @@ enum ProbeKind {
     Fob,
     Cyberglove,
     Spacemouse,
+    Vrpn,
 }
 
 #[derive(Args)]
@@ -43,6 +44,12 @@ struct ProbeArgs {
     /// Serial port (FoB, CyberGlove) or hidraw path (SpaceMouse; default: the first found).
     #[arg(long)]
     port: Option<String>,
+    /// VRPN device: Tracker0@host[:port] or Tracker0@tcp://host:port.
+    #[arg(long)]
+    device: Option<String>,
+    /// VRPN: also read these button or analog devices of the same server (comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    also: Vec<String>,
     /// FoB output format: position, angles, matrix, quaternion, position-angles,
     /// position-matrix, position-quaternion.
     #[arg(long, default_value = "position-angles")]
@@ -226,6 +233,9 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
             ExitCode::FAILURE
         });
     }
+    if a.kind == ProbeKind::Vrpn {
+        return probe_vrpn(&a, timeout);
+    }
     let port = a.port.clone().ok_or_else(|| {
         anyhow!(
             "--port is required for {}",
@@ -321,6 +331,55 @@ fn probe(a: ProbeArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `troupe devices probe vrpn --device Tracker0@host`: connects (each attempt bounded by
+/// half the timeout, so a server that never answers is reported within it) and prints
+/// the decoded reports.
+fn probe_vrpn(a: &ProbeArgs, timeout: Duration) -> Result<ExitCode> {
+    use troupe_drivers::vrpn::{self, DeviceName, VrpnConfig};
+    let device = a
+        .device
+        .clone()
+        .ok_or_else(|| anyhow!("--device is required for vrpn (Tracker0@host[:port])"))?;
+    let name = DeviceName::parse(&device).map_err(|e| anyhow!(e))?;
+    let mut o = vrpn::driver_options("probe", &device);
+    o.max_attempts = Some(3);
+    let handshake = vrpn::HANDSHAKE_TIMEOUT.min(timeout / 2);
+    let dev =
+        vrpn::spawn(VrpnConfig::new(&name, &a.also), o, handshake, None).map_err(|e| anyhow!(e))?;
+    let start = Instant::now();
+    let mut n = 0;
+    while n < a.samples && start.elapsed() < timeout {
+        if dev.health.state() == driver::HealthState::Failed {
+            break;
+        }
+        if let Ok(s) = dev.samples.recv_timeout(Duration::from_millis(50)) {
+            print_sample(&s, None, a.json);
+            n += 1;
+        }
+    }
+    let h = dev.health.report();
+    dev.stop();
+    eprintln!(
+        "{}: {} reports, {} unusable messages{}",
+        h.state.name(),
+        h.samples,
+        h.resyncs,
+        h.last_error
+            .as_ref()
+            .map(|e| format!("; last error: {e}"))
+            .unwrap_or_default()
+    );
+    if n < a.samples {
+        bail!(
+            "got {n} of {} reports from {device} within {:.1} s{}",
+            a.samples,
+            a.timeout,
+            h.last_error.map(|e| format!(" ({e})")).unwrap_or_default()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) {
     if json {
         let mut v = serde_json::json!({ "seq": s.seq, "time": s.time, "reading": &s.reading });
@@ -371,6 +430,7 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
             "{:8.3}s spacemouse t {:?} r {:?} buttons {:#x}",
             s.time, m.translation, m.rotation, m.buttons
         ),
+        Reading::Vrpn(v) => println!("{:8.3}s vrpn {v}", s.time),
     }
 }
 

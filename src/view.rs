@@ -8,7 +8,8 @@ use std::process::ExitCode;
 use troupe_actions::Keyframe;
 use troupe_body::glam::DVec3;
 use troupe_body::DofKind;
-use troupe_motion::Sequence;
+use troupe_motion::{ObjectMotion, Sequence};
+use troupe_scene::playback::ObjectPlayback;
 use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
 use troupe_viewer::{
     parse_size, run_window, BodyStyle, Camera, Frame, FrameWriter, Hand, HandState,
@@ -153,14 +154,27 @@ fn render_options(bones: bool, labels: bool) -> RenderOptions {
     }
 }
 
+/// The objects of a recording: those a `.trk` holds (`troupe run --record` keeps them);
+/// other formats bring none.
+fn load_objects(path: &Path) -> Result<Vec<ObjectMotion>> {
+    match troupe_formats::Format::of(path)? {
+        troupe_formats::Format::Trk => Ok(troupe_formats::trk::read_trk_file(path)?.objects),
+        _ => Ok(Vec::new()),
+    }
+}
+
 /// Runs `troupe view`.
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
     let size = parse_size(&args.size)?;
     let performers = load_recording(&args.file, &args.actor_template)?;
+    let objects = load_objects(&args.file)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,
         ..SceneConfig::default()
     })?;
+    let object_length = objects.iter().map(|o| o.pose.end()).fold(0.0, f64::max);
+    let playback = ObjectPlayback::install(&mut scene, objects)
+        .with_context(|| format!("{}: recorded objects", args.file.display()))?;
     let mut length: f64 = 0.0;
     for p in &performers {
         let desc = ActorDesc {
@@ -183,6 +197,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         let spec = ActionSpec::new("keyframe", keyframe.scope());
         scene.start_action(actor, spec, Box::new(keyframe))?;
     }
+    length = length.max(object_length);
     let camera: Camera = match &args.camera {
         Some(c) => c.parse()?,
         None if performers.len() == 1 => format!("follow:{}", performers[0].name).parse()?,
@@ -203,7 +218,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer.renderer_mut().set_options(options);
         writer.renderer_mut().set_multisampling(!args.no_msaa);
-        return write_frames(Session::new(scene), writer, seconds);
+        return write_frames(with_objects(Session::new(scene), playback), writer, seconds);
     }
     let options = WindowOptions {
         title: format!("troupe view {}", args.file.display()),
@@ -214,7 +229,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         close_after_frames: None,
     };
     // The session moves to the simulation thread; keep nothing else that needs it.
-    let mut session = Session::new(scene);
+    let mut session = with_objects(Session::new(scene), playback);
     let result = run_window(options, move || {
         // No observer can fail here; a tick always happens.
         let _ = session.tick();
@@ -227,6 +242,14 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         }
         Err(e) => Err(e.into()),
     }
+}
+
+/// The session with the recorded objects moving, if there are any.
+fn with_objects(mut session: Session, playback: ObjectPlayback) -> Session {
+    if !playback.is_empty() {
+        session.add_input(Box::new(playback));
+    }
+    session
 }
 
 /// Plays the session headless for `seconds`, writing pictures.

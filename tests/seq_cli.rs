@@ -144,3 +144,21 @@ fn a_trk_converts_to_bvh_and_gltf_on_a_template_and_back() {
         }
     }
 }
+
+#[test]
+fn info_names_each_tracks_interpolation() {
+    let file = temp("interpolations.trk");
+    std::fs::write(
+        &file,
+        "troupe-trk 2\ntrack a\n0 0\n1 1\nend\ntrack b step\n0 0\n1 1\nend\n",
+    )
+    .unwrap();
+    let path = file.display().to_string();
+    let v: serde_json::Value =
+        serde_json::from_str(&troupe(&["seq", "info", &path, "--json"])).unwrap();
+    let tracks = &v["sequences"][0]["tracks"];
+    assert_eq!(tracks[0]["interpolation"], "cubic");
+    assert_eq!(tracks[1]["interpolation"], "step");
+    let text = troupe(&["seq", "info", &path]);
+    assert!(text.contains("2 keys, step"), "{text}");
+}

@@ -128,8 +128,12 @@ fn junit_xml_names_every_test_and_failure() {
 /// The report as an independent JUnit reader (junitparser, from PyPI) sees it: two suites,
 /// six cases, one failure. Skipped with a note when scripts/setup.sh has not installed it.
 fn read_by_junitparser(path: &std::path::Path) {
-    let tools = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".tools/python");
-    if !tools.join("junitparser").is_dir() {
+    let python = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".tools/python/bin/python");
+    let available = Command::new(&python)
+        .args(["-c", "import junitparser"])
+        .output()
+        .is_ok_and(|o| o.status.success());
+    if !available {
         eprintln!("junitparser is not installed (scripts/setup.sh installs it): skipped");
         return;
     }
@@ -140,8 +144,7 @@ fn read_by_junitparser(path: &std::path::Path) {
         cases = [c for s in suites for c in s]\n\
         failed = [c for c in cases if any(isinstance(r, Failure) for r in c.result)]\n\
         print(len(suites), len(cases), len(failed), failed[0].name)\n";
-    let out = Command::new("python3")
-        .env("PYTHONPATH", &tools)
+    let out = Command::new(&python)
         .arg("-c")
         .arg(script)
         .arg(path)

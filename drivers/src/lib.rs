@@ -1,5 +1,5 @@
 //! Device drivers for troupe: Flock of Birds and CyberGlove over serial ports, SpaceMouse
-//! over HID, emulators on pseudo-terminals, and record/replay of device streams.
+//! over HID, VRPN servers over the network, emulators on pseudo-terminals, and record/replay of device streams.
 //!
 //! Protocol facts are those of `shared/reference/devices.md`; thesis sections 2.7, 4.7 and
 //! 6.4.1 describe how the devices drive performer actors.
@@ -22,3 +22,4 @@ pub mod performer;
 pub mod record;
 pub mod space_move;
 pub mod spacemouse;
+pub mod vrpn;

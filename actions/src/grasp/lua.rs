@@ -31,6 +31,12 @@ fn pattern(method: &str, t: &Table) -> mlua::Result<Option<GraspType>> {
         .transpose()
 }
 
+/// `spec`, yielding the part of `body` (the whole-body part of a reach) in its scope.
+pub(crate) fn yielding(mut spec: ActionSpec, body: troupe_body::Scope) -> ActionSpec {
+    spec.yields = body.intersection(&spec.scope);
+    spec
+}
+
 /// Makes a spec for a hand action that decides itself when it is done.
 fn open_ended(common: &CommonOptions, kind: &str, scope: troupe_body::Scope) -> ActionSpec {
     let mut spec = common.spec(kind, scope);
@@ -53,10 +59,13 @@ pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
         pattern: pattern(m, &t)?,
         duration: common.duration.unwrap_or(1.0),
     };
-    let scope = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
+    let (scope, body) = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
     let grasp = options.grasp().map_err(|e| err(m, e))?;
     // The generator decides when it is done; `duration` is the reach time.
-    Ok((Box::new(grasp), open_ended(&common, m, scope)))
+    Ok((
+        Box::new(grasp),
+        yielding(open_ended(&common, m, scope), body),
+    ))
 }
 
 /// Makes a release (or, with `place`, a place) of `t`'s `object`.
@@ -116,12 +125,18 @@ pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
             let actor = actor_arg(lua, m, "actor", actor)?;
             let object = object_arg(lua, m, "object", object)?;
             let mut options = PlanOptions::default();
+            let mut scope = None;
             if let Some(t) = &opts {
                 options.hand = hand_choice(m, t)?;
                 options.grasp = pattern(m, t)?;
+                scope = opt_string(t, m, "scope")?;
             }
             let result = with_scene(lua, |s| {
                 let skel = s.actors()[actor].skeleton.clone();
+                if let Some(expr) = &scope {
+                    let body = super::body::BodyReach::body_scope(&skel)?;
+                    options.body = Some(skel.scope(expr)?.intersection(&body));
+                }
                 plan_grasp(
                     &skel,
                     &s.states()[actor],
@@ -138,6 +153,8 @@ pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
                     t.set("type", plan.grasp.name())?;
                     t.set("decided", plan.decision.grasp.name())?;
                     t.set("hand_count", plan.hands.len())?;
+                    t.set("lean", plan.lean)?;
+                    t.set("crouch", plan.crouch)?;
                     let hands = lua.create_table()?;
                     for (i, h) in plan.hands.iter().enumerate() {
                         let ht = lua.create_table()?;

@@ -236,6 +236,7 @@ pub fn build_walk(
     };
     let walk = Walk::new(&ctx.skeleton, route, options).map_err(|e| err("walk", e))?;
     let mut spec = common.spec("walk", walk.scope());
+    spec.yields = walk.yields().intersection(&spec.scope);
     // The walk decides when it has arrived (and a velocity walk's duration is its route's).
     spec.duration = None;
     Ok((Box::new(walk), spec))

@@ -110,4 +110,7 @@ pub enum DeviceError {
         /// Sensors of the configured layout.
         configured: usize,
     },
+    /// A VRPN server could not be reached or answered wrongly.
+    #[error(transparent)]
+    Vrpn(crate::vrpn::error::VrpnError),
 }

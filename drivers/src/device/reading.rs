@@ -3,6 +3,7 @@
 use crate::cyberglove::decoder::GloveRecord;
 use crate::fob::decoder::BirdRecord;
 use crate::spacemouse::decoder::SpaceMouseState;
+use crate::vrpn::decoder::VrpnReading;
 use serde::Serialize;
 use std::time::Instant;
 
@@ -17,6 +18,8 @@ pub enum Reading {
     /// The state of a SpaceMouse after one HID report.
     #[serde(rename = "spacemouse")]
     SpaceMouse(SpaceMouseState),
+    /// A report of a device on a VRPN server.
+    Vrpn(VrpnReading),
 }
 
 /// A timestamped reading.

@@ -48,6 +48,8 @@ pub(crate) fn install(
         }
         Ok(())
     }));
+    // The VRPN controls' events, after the gestures'.
+    director.add_script_hook(Box::new(crate::performer::controls_api::call_handlers));
     session.add_input(Box::new(PerformerInput(shared.clone())));
     Ok(shared)
 }
@@ -125,7 +127,8 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
         "is_calibrated",
         lua.create_function(|lua, who: Value| {
             with_performer(lua, &who, |p| {
-                Ok(p.fob.as_ref().is_none_or(|f| f.converter.is_calibrated()))
+                Ok(p.fob.as_ref().is_none_or(|f| f.converter.is_calibrated())
+                    && p.vrpn.as_ref().is_none_or(|v| v.converter.is_calibrated()))
             })
         })?,
     )?;
@@ -141,6 +144,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
                         "osc",
                         p.osc.as_ref().map(|o| Some(o.listener.health.report())),
                     ),
+                    ("vrpn", p.vrpn.as_ref().map(|v| v.source.health())),
                 ];
                 for (dev, report) in reports {
                     let Some(report) = report else { continue };
@@ -258,6 +262,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             Ok(())
         })?,
     )?;
+    crate::performer::controls_api::install_lua(lua, &devices)?;
     troupe.set("devices", devices)?;
     Ok(())
 }

@@ -16,6 +16,7 @@ use crate::performer::converter::{transmitter_to_world, AnatomicalConverter};
 use crate::performer::glove_map::{nominal_glove_calibration, GloveMap};
 use crate::performer::registry::Performer;
 use crate::performer::source::{FobInput, GloveInput, OscPoses, Source};
+use crate::performer::vrpn::vrpn_input;
 use crate::record::writer::Recorder;
 use glam::DQuat;
 use mlua::{Function, Lua, Table, Value};
@@ -59,7 +60,7 @@ fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
 }
 
 /// `troupe.performer{ name=…, template=…, at=…, facing=…, calibrate="auto"|"manual",
-/// devices = { fob = {…}, osc = {…}, glove = {…} } }`: makes the actor (with
+/// devices = { fob = {…} | osc = {…} | vrpn = {…}, glove = {…} } }`: makes the actor (with
 /// `troupe.actor`) and its devices; returns the performer and the actor's handle.
 /// `recorder` records its live device streams.
 pub(crate) fn new_performer(
@@ -121,8 +122,9 @@ pub(crate) fn new_performer(
     let mut fob = None;
     let mut osc = None;
     let mut glove = None;
+    let mut vrpn = None;
     if let Some(d) = &devices {
-        check_keys(d, "performer.devices", &["fob", "glove", "osc"])?;
+        check_keys(d, "performer.devices", &["fob", "glove", "osc", "vrpn"])?;
         if let Some(f) = opt::<Table>(d, "fob")? {
             fob = Some(fob_input(
                 lua,
@@ -142,6 +144,22 @@ pub(crate) fn new_performer(
             }
             osc = Some(osc_input(&o, &skeleton)?);
         }
+        if let Some(v) = opt::<Table>(d, "vrpn")? {
+            if fob.is_some() || osc.is_some() {
+                return Err(args::err(
+                    "performer.devices",
+                    "give one of `fob`, `osc` or `vrpn` for the body",
+                ));
+            }
+            vrpn = Some(vrpn_input(
+                lua,
+                &v,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+            )?);
+        }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
                 lua,
@@ -159,7 +177,8 @@ pub(crate) fn new_performer(
     let converters = fob
         .iter()
         .map(|f| &f.converter)
-        .chain(osc.iter().map(|o| &o.converter));
+        .chain(osc.iter().map(|o| &o.converter))
+        .chain(vrpn.iter().map(|v| &v.converter));
     for c in converters {
         for d in c.driven_dofs() {
             driven.insert(d);
@@ -187,6 +206,7 @@ pub(crate) fn new_performer(
         skeleton,
         fob,
         osc,
+        vrpn,
         glove,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,

@@ -13,6 +13,7 @@ use crate::device::reading::Reading;
 use crate::fob::pose::bird_pose;
 use crate::osc::message::OscInput;
 use crate::performer::source::{FobInput, GloveInput, OscPoses};
+use crate::performer::vrpn::VrpnInput;
 use crate::record::writer::Recorder;
 use mlua::Function;
 use std::sync::{Arc, Mutex};
@@ -33,6 +34,8 @@ pub struct Performer {
     pub(crate) fob: Option<FobInput>,
     /// Body poses over OSC.
     pub(crate) osc: Option<OscPoses>,
+    /// Body poses (and controls) from a VRPN tracker.
+    pub(crate) vrpn: Option<VrpnInput>,
     /// The glove hand.
     pub(crate) glove: Option<GloveInput>,
     /// Calibrate as soon as every bird has a sample.
@@ -139,6 +142,9 @@ impl Performers {
             if let Some(o) = &p.osc {
                 v.push((p.name.clone(), "osc", o.listener.health.report()));
             }
+            if let Some(h) = p.vrpn.as_ref().and_then(|v| v.source.health()) {
+                v.push((p.name.clone(), "vrpn", h));
+            }
         }
         v
     }
@@ -172,6 +178,21 @@ impl Performers {
                 {
                     let base = base_posture(scene, p.actor);
                     if let Err(e) = f.converter.calibrate(&base, &f.latest) {
+                        tracing::warn!(performer = %p.name, "{e}");
+                    }
+                    p.calibrate_requested = false;
+                }
+            }
+            if let Some(v) = &mut p.vrpn {
+                let (got, at) = v.take(time);
+                changed |= got;
+                newest = newest.max(at);
+                let all = v.converter.birds().iter().all(|a| v.latest.contains_key(a));
+                if all
+                    && (p.calibrate_requested || (p.auto_calibrate && !v.converter.is_calibrated()))
+                {
+                    let base = base_posture(scene, p.actor);
+                    if let Err(e) = v.converter.calibrate(&base, &v.latest) {
                         tracing::warn!(performer = %p.name, "{e}");
                     }
                     p.calibrate_requested = false;
@@ -244,6 +265,9 @@ impl Performers {
             }
             if let Some(o) = &mut p.osc {
                 o.converter.convert(&o.latest, &mut q, &mut mask);
+            }
+            if let Some(v) = &mut p.vrpn {
+                v.converter.convert(&v.latest, &mut q, &mut mask);
             }
             if let Some(g) = &p.glove {
                 if let Some(raw) = &g.latest {

@@ -109,6 +109,6 @@ pub enum KindError {
     #[error("{0}")]
     Settings(#[from] serde_json::Error),
     /// No driver has this kind.
-    #[error("unknown device kind '{0}' (expected fob, cyberglove or spacemouse)")]
+    #[error("unknown device kind '{0}' (expected fob, cyberglove, spacemouse or vrpn)")]
     Unknown(String),
 }

@@ -25,7 +25,7 @@ pub const MAGIC: &[u8; 11] = b"TROUPEREC1\n";
 pub struct StreamInfo {
     /// Device name.
     pub name: String,
-    /// Device kind: `fob`, `cyberglove` or `spacemouse`.
+    /// Device kind: `fob`, `cyberglove`, `spacemouse` or `vrpn`.
     pub kind: String,
     /// The driver settings needed to decode it.
     pub settings: serde_json::Value,

@@ -8,6 +8,7 @@ use crate::fob::protocol::{FobConfig, FobProtocol};
 use crate::record::error::{KindError, RecordError};
 use crate::record::file::Recording;
 use crate::spacemouse::protocol::SpaceMouseProtocol;
+use crate::vrpn::{VrpnConfig, VrpnProtocol};
 
 impl Recording {
     /// A decoder for a stream, built from its recorded settings.
@@ -55,6 +56,10 @@ pub fn protocol_from_settings(
             Ok(Box::new(GloveProtocol::new(c)))
         }
         "spacemouse" => Ok(Box::new(SpaceMouseProtocol::default())),
+        "vrpn" => {
+            let c: VrpnConfig = serde_json::from_value(settings.clone())?;
+            Ok(Box::new(VrpnProtocol::new(c, Default::default())))
+        }
         other => Err(KindError::Unknown(other.to_string())),
     }
 }

@@ -9,10 +9,13 @@
 //! * limits in radians / metres; unlimited rotations are `continuous`; the root's
 //!   translations are `prismatic` within ±1000 m;
 //! * each segment link carries the mass, centre of mass and inertia of the solids attached
-//!   to its joint.
+//!   to its joint; every other moving link carries troupe's nominal body (a 1 g bead, see
+//!   [`troupe_body::dynamics::NOMINAL_LINK_MASS`]), as troupe's dynamics model does, so
+//!   that forward-dynamics tools have an inertia on every joint and agree with troupe.
 
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
+use troupe_body::dynamics::{nominal_link_inertia, nominal_links, NOMINAL_LINK_MASS};
 use troupe_body::skeleton::{DofKind, Skeleton};
 
 /// Troupe's Y-up frame to URDF's Z-up frame: `(x, y, z) ↦ (z, x, y)`.
@@ -30,6 +33,37 @@ fn xyz(v: DVec3) -> String {
     format!("{} {} {}", v.x, v.y, v.z)
 }
 
+/// Writes a link named `name` with an `<inertial>` of `mass` at `com` (URDF axes) with
+/// `inertia` about the centre of mass (URDF axes), or without one when `mass` is zero.
+fn link(s: &mut String, name: &str, mass: f64, com: DVec3, inertia: DMat3) {
+    if mass <= 0.0 {
+        let _ = writeln!(s, "  <link name=\"{name}\"/>");
+        return;
+    }
+    let i = inertia;
+    let _ = writeln!(s, "  <link name=\"{name}\">");
+    let _ = writeln!(s, "    <inertial>");
+    let _ = writeln!(s, "      <origin xyz=\"{}\" rpy=\"0 0 0\"/>", xyz(com));
+    let _ = writeln!(s, "      <mass value=\"{mass}\"/>");
+    let _ = writeln!(
+        s,
+        "      <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>",
+        i.x_axis.x, i.y_axis.x, i.z_axis.x, i.y_axis.y, i.z_axis.y, i.z_axis.z
+    );
+    let _ = writeln!(s, "    </inertial>");
+    let _ = writeln!(s, "  </link>");
+}
+
+/// Writes the link of DOF `dof` named `name`: with troupe's nominal body when `nominal`.
+fn dof_link(s: &mut String, name: &str, nominal: bool) {
+    if nominal {
+        let inertia = DMat3::from_diagonal(DVec3::splat(nominal_link_inertia()));
+        link(s, name, NOMINAL_LINK_MASS, DVec3::ZERO, inertia);
+    } else {
+        link(s, name, 0.0, DVec3::ZERO, DMat3::ZERO);
+    }
+}
+
 /// Half-range of the root's prismatic joints in the file (URDF needs finite limits).
 pub const PRISMATIC_RANGE: f64 = 1000.0;
 /// Nominal effort limit written for every moving joint (troupe has no actuator model).
@@ -43,11 +77,14 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
     let c = z_up_matrix();
     let mut s = String::new();
     let _ = writeln!(s, "<?xml version=\"1.0\"?>");
+    let nominal = nominal_links(skeleton);
     let _ = writeln!(
         s,
-        "<!-- troupe body template `{}` ({:.3} kg): Z up, one joint per DOF; see docs/formats.md -->",
+        "<!-- troupe body template `{}` ({:.3} kg of solids, {} nominal links of {} kg): Z up, one joint per DOF; see docs/formats.md -->",
         skeleton.name(),
-        skeleton.total_mass()
+        skeleton.total_mass(),
+        nominal.iter().filter(|&&b| b).count(),
+        NOMINAL_LINK_MASS
     );
     let _ = writeln!(s, "<robot name=\"{}\">", skeleton.name());
     let _ = writeln!(s, "  <link name=\"base_link\"/>");
@@ -60,37 +97,33 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
             .map(|(_, s)| s)
             .collect();
         let mass: f64 = solids.iter().map(|s| s.mass).sum();
+        let mut com = DVec3::ZERO;
+        let mut inertia = DMat3::ZERO;
         if mass > 0.0 {
-            let com = solids
+            com = solids
                 .iter()
                 .map(|s| s.center_of_mass * s.mass)
                 .sum::<DVec3>()
                 / mass;
-            let mut inertia = DMat3::ZERO;
             for sol in &solids {
                 let r = sol.center_of_mass - com;
                 let shift = DMat3::from_diagonal(DVec3::splat(r.dot(r)))
                     - DMat3::from_cols(r * r.x, r * r.y, r * r.z);
                 inertia += sol.inertia + shift * sol.mass;
             }
-            let i = c * inertia * c.transpose();
-            let _ = writeln!(s, "  <link name=\"{}\">", joint.name);
-            let _ = writeln!(s, "    <inertial>");
-            let _ = writeln!(
-                s,
-                "      <origin xyz=\"{}\" rpy=\"0 0 0\"/>",
-                xyz(z_up(com))
+        }
+        let last = (!joint.dofs.is_empty()).then(|| joint.dofs.end - 1);
+        if mass > 0.0 {
+            link(
+                &mut s,
+                &joint.name,
+                mass,
+                z_up(com),
+                c * inertia * c.transpose(),
             );
-            let _ = writeln!(s, "      <mass value=\"{mass}\"/>");
-            let _ = writeln!(
-                s,
-                "      <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>",
-                i.x_axis.x, i.y_axis.x, i.z_axis.x, i.y_axis.y, i.z_axis.y, i.z_axis.z
-            );
-            let _ = writeln!(s, "    </inertial>");
-            let _ = writeln!(s, "  </link>");
         } else {
-            let _ = writeln!(s, "  <link name=\"{}\"/>", joint.name);
+            // A joint's own link is its last DOF's link: it may carry the nominal body.
+            dof_link(&mut s, &joint.name, last.is_some_and(|k| nominal[k]));
         }
         let parent = match joint.parent {
             Some(p) => skeleton.joints()[p].name.clone(),
@@ -117,7 +150,7 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
                 joint.name.clone()
             } else {
                 let name = format!("{}_link", dof.name);
-                let _ = writeln!(s, "  <link name=\"{name}\"/>");
+                dof_link(&mut s, &name, nominal[d]);
                 name
             };
             let (kind, limits) = match dof.kind {
@@ -298,8 +331,12 @@ mod tests {
                     assert_eq!(j.limits, Some((d.min, d.max)), "{}", d.name);
                 }
             }
+            // The solids' masses, plus troupe's nominal body on every other moving link.
             let total: f64 = masses.values().sum();
-            assert!((total - s.total_mass()).abs() < 1e-9);
+            let beads = nominal_links(&s).iter().filter(|&&b| b).count();
+            assert!(beads > 0);
+            let expected = s.total_mass() + beads as f64 * NOMINAL_LINK_MASS;
+            assert!((total - expected).abs() < 1e-9, "{total} vs {expected}");
             // Random postures: every troupe joint's link lands where troupe's FK puts it.
             let mut seed = 99u64;
             for _ in 0..50 {

@@ -1,6 +1,6 @@
 //! The glTF files troupe writes pass the Khronos glTF validator with no error and no
-//! warning: a troupe body's motion and a BVH on its own hierarchy, as `.gltf` + `.bin` and
-//! as `.glb`.
+//! warning: a troupe body's motion, with and without a recorded object, and a BVH on its
+//! own hierarchy, as `.gltf` + `.bin` and as `.glb`.
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
 //! into `.tools/node`; without node or without that package the test prints why and
@@ -8,10 +8,15 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::solid::Shape;
 use troupe_body::template::template;
 use troupe_formats::bvh::read_bvh;
-use troupe_formats::gltf::{write_glb, write_gltf};
+use troupe_formats::gltf::{
+    write_glb, write_glb_with_objects, write_gltf, write_gltf_with_objects,
+};
 use troupe_formats::Rig;
+use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
 
 fn repo() -> PathBuf {
@@ -63,6 +68,25 @@ fn written_gltf_files_pass_the_khronos_validator() {
         write_glb(&glb, &rig, name).unwrap();
         files.extend([gltf, glb]);
     }
+    // A recording with an object: one more animated node, with extras.
+    let rig = troupe_rig();
+    let times = [0.0, 0.5, 1.0];
+    let poses = times.map(|t| (DVec3::new(0.3, 1.0 + t, 0.2), DQuat::from_rotation_x(t)));
+    let mut ball =
+        ObjectMotion::from_samples("ball", Shape::Sphere { radius: 0.1 }, 0.4, &times, &poses)
+            .unwrap();
+    ball.holds.push(Hold {
+        from: 0.2,
+        to: 0.8,
+        actor: "wave".into(),
+        joint: "r_wrist".into(),
+    });
+    let objects = [(&ball, Rig::from_object(&ball, 0.0, &rig.times))];
+    let gltf = dir.join("carry.gltf");
+    let glb = dir.join("carry.glb");
+    write_gltf_with_objects(&gltf, &rig, &objects, "carry").unwrap();
+    write_glb_with_objects(&glb, &rig, &objects, "carry").unwrap();
+    files.extend([gltf, glb]);
     let out = Command::new("node")
         .arg(repo().join("scripts/validate-gltf.js"))
         .args(&files)

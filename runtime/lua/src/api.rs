@@ -20,7 +20,7 @@ use std::path::Path;
 use std::sync::Arc;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::solid::Shape;
-use troupe_motion::sequence::{Key, Sequence, Track};
+use troupe_motion::sequence::{Interpolation, Key, Sequence, Track};
 use troupe_scene::action::ActionId;
 use troupe_scene::scene::ActorDesc;
 use troupe_scene::world::Object;
@@ -264,6 +264,9 @@ impl UserData for ActionRef {
         methods.add_method("cancel", |lua, this, ()| {
             stage(lua)?.scene.cancel(this.0).map_err(lua_err)
         });
+        methods.add_method("stop", |lua, this, ()| {
+            stage(lua)?.scene.stop(this.0).map_err(lua_err)
+        });
         methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
             if key == "wait" {
                 return lua
@@ -280,6 +283,8 @@ impl UserData for ActionRef {
                 "kind" => Value::String(lua.create_string(&info.kind)?),
                 "mode" => Value::String(lua.create_string(info.mode.name())?),
                 "weight" => Value::Number(info.weight),
+                "dofs" => Value::Integer(info.scope.len() as i64),
+                "yielded" => Value::Integer(info.yielded.len() as i64),
                 "error" => match info.reason {
                     Some(r) if info.status != troupe_scene::action::Status::Completed => {
                         Value::String(lua.create_string(&r)?)
@@ -299,11 +304,12 @@ impl UserData for ActionRef {
 }
 
 /// The events `actor:on` accepts.
-pub const EVENTS: [&str; 4] = [
+pub const EVENTS: [&str; 5] = [
     "action_started",
     "action_completed",
     "action_failed",
     "action_cancelled",
+    "action_narrowed",
 ];
 
 impl UserData for BehaviorRef {
@@ -380,7 +386,23 @@ impl UserData for SequenceRef {
         methods.add_method("dofs", |lua, this, ()| {
             lua.create_sequence_from(this.0.tracks().iter().map(|t| t.dof().to_string()))
         });
+        methods.add_method("value", |_, this, (dof, time): (String, f64)| {
+            Ok(sequence_track(&this.0, &dof)?.value(time))
+        });
+        methods.add_method("interpolation", |_, this, dof: String| {
+            Ok(sequence_track(&this.0, &dof)?.interpolation().name())
+        });
     }
+}
+
+/// The track of `dof` in `seq`, or an error naming both.
+fn sequence_track<'a>(seq: &'a Sequence, dof: &str) -> mlua::Result<&'a Track> {
+    seq.track(dof).ok_or_else(|| {
+        lua_err(format!(
+            "sequence `{}` has no track for `{dof}` (see seq:dofs())",
+            seq.name
+        ))
+    })
 }
 
 /// Resolves a path from a script: as given if it exists, else relative to the scene
@@ -446,8 +468,22 @@ pub fn load_sequence(
     Ok(seq)
 }
 
-/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = … }`;
-/// without a name, it is named after the place that made it (`sequence@scene.lua:12`).
+/// The `interpolation` option of `troupe.sequence`, if given.
+fn sequence_interpolation(t: &Table) -> mlua::Result<Option<Interpolation>> {
+    opt_string(t, "sequence", "interpolation")?
+        .map(|name| {
+            Interpolation::from_name(&name).ok_or_else(|| {
+                lua_err(format!(
+                    "sequence: unknown interpolation `{name}` (expected cubic, hermite, linear or step)"
+                ))
+            })
+        })
+        .transpose()
+}
+
+/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = …,
+/// interpolation = … }`; without a name, it is named after the place that made it
+/// (`sequence@scene.lua:12`).
 fn inline_sequence(lua: &Lua, t: &Table) -> mlua::Result<Sequence> {
     let name = match opt_string(t, "sequence", "name")? {
         Some(n) => n,
@@ -464,11 +500,12 @@ fn inline_sequence(lua: &Lua, t: &Table) -> mlua::Result<Sequence> {
     };
     let mut seq = Sequence::new(name);
     seq.looping = crate::args::opt_bool(t, "sequence", "loop")?.unwrap_or(false);
+    let interpolation = sequence_interpolation(t)?.unwrap_or_default();
     let mut tracks = Vec::new();
     for pair in t.pairs::<String, Value>() {
         let (dof, keys) = pair?;
         match dof.as_str() {
-            "loop" | "name" => continue,
+            "loop" | "name" | "interpolation" => continue,
             _ => {}
         }
         let Value::Table(keys) = keys else {
@@ -508,7 +545,8 @@ fn inline_sequence(lua: &Lua, t: &Table) -> mlua::Result<Sequence> {
                 slope: n(3)?,
             });
         }
-        tracks.push(Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?);
+        let track = Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?;
+        tracks.push(track.with_interpolation(interpolation));
     }
     // Table iteration order is not stable across runs: sort for determinism.
     tracks.sort_by(|a, b| a.dof().cmp(b.dof()));
@@ -653,11 +691,27 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     )?;
     troupe.set(
         "sequence",
-        lua.create_function(|lua, v: Value| match v {
-            Value::String(s) => Ok(SequenceRef(
-                load_sequence(lua, &s.to_str()?, None)
-                    .map_err(|e| lua_err(format!("sequence: {}", crate::args::error_text(&e))))?,
-            )),
+        lua.create_function(|lua, (v, options): (Value, Option<Table>)| match v {
+            Value::String(s) => {
+                let loaded = load_sequence(lua, &s.to_str()?, None)
+                    .map_err(|e| lua_err(format!("sequence: {}", crate::args::error_text(&e))))?;
+                let interpolation = match &options {
+                    Some(o) => {
+                        check_keys(o, "sequence", &["interpolation"])?;
+                        sequence_interpolation(o)?
+                    }
+                    None => None,
+                };
+                Ok(SequenceRef(match interpolation {
+                    // The loaded file stays cached as written; this copy interpolates anew.
+                    Some(i) => {
+                        let mut seq = (*loaded).clone();
+                        seq.set_interpolation(i);
+                        Arc::new(seq)
+                    }
+                    None => loaded,
+                }))
+            }
             Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(lua, &t)?))),
             other => Err(lua_err(format!(
                 "sequence: expects a file path or a table of tracks, got {}",

@@ -373,6 +373,7 @@ impl Director {
         };
         for event in events {
             let name = match event.status {
+                _ if event.narrowed.is_some() => "action_narrowed",
                 Status::Completed => "action_completed",
                 Status::Failed => "action_failed",
                 Status::Cancelled => "action_cancelled",

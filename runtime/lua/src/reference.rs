@@ -119,7 +119,7 @@ pub const API: &[Entry] = &[
     f("troupe", "tick", &[], "integer", "Ticks done."),
     f("troupe", "seed", &[], "integer", "The run's seed (`--seed`); `math.random` is seeded from it."),
     f("troupe", "rate", &[], "number", "Ticks per second."),
-    f("troupe", "sequence", &["source: string|table"], "Sequence", "Loads a sequence file (.trk, .bvh, .gltf) or builds one from `{ [dof] = {{t, v}, …}, loop, name }`."),
+    f("troupe", "sequence", &["source: string|table", "options?: { interpolation?: string }"], "Sequence", "Loads a sequence file (.trk, .bvh, .gltf) or builds one from `{ [dof] = {{t, v}, …}, loop, name, interpolation }`."),
     f("troupe", "actors", &[], "Actor[]", "Every actor, in creation order."),
     f("troupe", "get_actor", &["name: string"], "Actor?", "The actor called `name`, or nil."),
     f("troupe", "get_object", &["name: string"], "Object?", "The object called `name`, or nil."),
@@ -133,6 +133,10 @@ pub const API: &[Entry] = &[
     f("troupe.devices", "calibrate", &["performer: Actor|string"], "", "Recalibrates a performer at the start of the next tick."),
     f("troupe.devices", "is_calibrated", &["performer: Actor|string"], "boolean", "Whether a performer is calibrated."),
     f("troupe.devices", "on_gesture", &["performer: Actor|string", "fn: fun(performer: Actor, gesture: string, previous: string?)"], "", "Calls `fn` when the performer's held gesture changes."),
+    f("troupe.devices", "buttons", &["pattern?: string"], "table<string, boolean>", "The latest state of every matching button (`Wand0.*`), down = true."),
+    f("troupe.devices", "analogs", &["pattern?: string"], "table<string, number>", "The latest value of every matching analog channel."),
+    f("troupe.devices", "on_button", &["pattern: string?", "fn: fun(name: string, down: boolean, performer: Actor)"], "", "Calls `fn` for each change of a matching button."),
+    f("troupe.devices", "on_analog", &["pattern: string?", "fn: fun(name: string, value: number, performer: Actor)"], "", "Calls `fn` for each new value of a matching analog channel."),
     f("troupe.devices", "train_gestures", &["performer: Actor|string", "examples: table<string, string>"], "", "Trains the gesture recogniser from recorded glove examples."),
     // Actors.
     field("Actor", "name", "string", "The actor's unique name."),
@@ -176,6 +180,9 @@ pub const API: &[Entry] = &[
     field("Action", "mode", "string", "Its priority mode."),
     field("Action", "weight", "number", "Its weight."),
     field("Action", "error", "string?", "Why it was cancelled or failed, else nil."),
+    field("Action", "dofs", "integer", "How many DOFs its scope holds."),
+    field("Action", "yielded", "integer", "How many DOFs of its scope it gave up to others (`action_narrowed`)."),
+    m("Action", "stop", &[], "", "Ends the action gracefully (a walk comes to a stop); it completes."),
     m("Action", "wait", &[], "ActionStatus", "Yields until the action ends; returns its final status."),
     m("Action", "cancel", &[], "", "Cancels the action (a running one eases out)."),
     // Behaviors and handlers.
@@ -195,6 +202,8 @@ pub const API: &[Entry] = &[
     field("Sequence", "duration", "number", "Its length in seconds."),
     field("Sequence", "loop", "boolean", "Whether it loops."),
     m("Sequence", "dofs", &[], "string[]", "The DOFs it drives."),
+    m("Sequence", "value", &["dof: string", "time: number"], "number", "A track's value at `time`."),
+    m("Sequence", "interpolation", &["dof: string"], "string", "How a track interpolates: cubic, hermite, linear or step."),
 ];
 
 /// An action kind's method, its option class, and each option's name and EmmyLua type.
@@ -365,7 +374,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
 
 /// Aliases and option classes the entries name.
 const TYPES: &str = r#"---@alias Vec3 number[]|{x: number, y: number, z: number}
----@alias ActionEvent "action_started"|"action_completed"|"action_failed"|"action_cancelled"
+---@alias ActionEvent "action_started"|"action_completed"|"action_failed"|"action_cancelled"|"action_narrowed"
 ---@alias ActionStatus "pending"|"initiating"|"active"|"terminating"|"completed"|"cancelled"|"failed"
 ---@alias BehaviorStatus "running"|"done"|"failed"|"stopped"
 

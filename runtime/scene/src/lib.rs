@@ -12,6 +12,7 @@ pub mod holding;
 pub mod input_pose;
 pub mod pacing;
 pub mod parallel;
+pub mod playback;
 pub mod profile;
 pub mod record;
 pub mod scene;
@@ -22,7 +23,7 @@ pub mod timeline;
 pub mod world;
 
 pub use action::{
-    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode,
+    ActionId, ActionInfo, ActionSpec, DofWriter, Ending, Event, Generator, GeneratorContext, Mode,
     StartError, Status, Step,
 };
 pub use blackboard::{Blackboard, HandState, Note, Notes, Offer, SignalId};

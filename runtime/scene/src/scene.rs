@@ -1,6 +1,6 @@
 //! The scene: actors, objects and their actions, stepped tick by tick.
 
-use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
+use crate::action::{ActionId, ActionInfo, ActionSpec, Ending, Event, Generator, Status};
 use crate::blackboard::{Blackboard, Note, Notes, Offer, SignalId};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
@@ -450,7 +450,14 @@ impl Scene {
     ) -> Result<ActionId> {
         if let Err(e) = self.check_action(actor, &spec) {
             let mut notes = Notes::default();
-            generator.end(&mut notes);
+            let reason = e.to_string();
+            generator.end(
+                &Ending {
+                    status: Status::Failed,
+                    reason: Some(&reason),
+                },
+                &mut notes,
+            );
             // Signals go out; notes about an actor that does not exist do not.
             let mut notes = notes.take();
             if actor >= self.actors.len() {
@@ -462,20 +469,9 @@ impl Scene {
         let id = ActionId(self.next_action);
         self.next_action += 1;
         let begin = self.time() + spec.delay;
-        self.work[actor].runtime.push(Action {
-            id,
-            spec,
-            status: Status::Pending,
-            begin,
-            started_at: None,
-            terminate_at: None,
-            ended_at: None,
-            ending: Status::Completed,
-            reason: None,
-            cancel_requested: false,
-            last_run: 0,
-            generator,
-        });
+        self.work[actor]
+            .runtime
+            .push(Action::new(id, spec, begin, generator));
         self.action_owner.insert(id, actor);
         Ok(id)
     }
@@ -494,21 +490,38 @@ impl Scene {
     }
 
     /// Asks an action to stop: a pending one is cancelled on the next tick, a running one
-    /// eases out and ends `cancelled`. Cancelling an ended action does nothing.
+    /// winds down if its generator can (a walk stops well, see [`Scene::stop`]) or eases
+    /// out, and ends `cancelled`. Cancelling an ended action does nothing.
     pub fn cancel(&mut self, id: ActionId) -> Result<()> {
+        if let Some(a) = self.unfinished_action(id)? {
+            a.cancel_requested = true;
+        }
+        Ok(())
+    }
+
+    /// Asks an action to finish gracefully: a running one whose generator can end its
+    /// motion by itself (a walk slows down and puts both feet down) does so at full
+    /// weight, any other eases out; either ends `completed`. A pending one is cancelled on
+    /// the next tick. Stopping an ended action does nothing.
+    pub fn stop(&mut self, id: ActionId) -> Result<()> {
+        if let Some(a) = self.unfinished_action(id)? {
+            a.stop_requested = true;
+        }
+        Ok(())
+    }
+
+    /// A known action that has not ended (`None` once it has), or an error for an id the
+    /// scene never made.
+    fn unfinished_action(&mut self, id: ActionId) -> Result<Option<&mut Action>> {
         let actor = *self
             .action_owner
             .get(&id)
             .ok_or_else(|| Error::Invalid(format!("no action {id}")))?;
-        if let Some(a) = self.work[actor]
+        Ok(self.work[actor]
             .runtime
             .actions
             .iter_mut()
-            .find(|a| a.id == id)
-        {
-            a.cancel_requested = true;
-        }
-        Ok(())
+            .find(|a| a.id == id))
     }
 
     /// The status of an action, without copying its record (for wait conditions checked
