@@ -75,12 +75,19 @@ pub struct RunArgs {
     /// --trace, --osc-out and --record-devices work as in a headless run.
     #[arg(long, conflicts_with_all = ["frames", "realtime"])]
     pub view: bool,
+    /// With --view: reload the scene when it, or a file it read, changes, and run it back
+    /// to the same simulated time; a broken edit shows its error over the last good scene.
+    #[arg(long, requires = "view", conflicts_with_all = ["record", "record_torques", "trace", "record_devices", "osc_out"])]
+    pub watch: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
     pub instruction_budget: u64,
     /// Bytes one script resume may add to the Lua heap.
     #[arg(long, default_value_t = ScriptLimits::default().memory)]
     pub memory_limit: usize,
+    /// Bytes the scene's whole Lua heap may hold (all behaviors, handlers and globals).
+    #[arg(long, default_value_t = ScriptLimits::default().heap)]
+    pub lua_memory: usize,
     /// Record every live device stream (timestamps + raw bytes) to FILE.rec.
     #[arg(long, value_name = "FILE.rec")]
     pub record_devices: Option<PathBuf>,
@@ -107,6 +114,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let limits = ScriptLimits {
         instructions: args.instruction_budget,
         memory: args.memory_limit,
+        heap: args.lua_memory,
     };
     if let Some(path) = &args.record_torques {
         if !path
@@ -170,6 +178,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         None => None,
     };
 
+    if args.watch {
+        let run = crate::watch::WatchedRun {
+            scene: args.scene.clone(),
+            chunk: args.chunk,
+            ticks: limit.ticks,
+        };
+        return crate::watch::view(run, config, limits, size, camera);
+    }
     let (mut session, devices) =
         crate::devices::session(config, limits, args.record_devices.as_deref())?;
     session.scene_mut().set_chunk_size(args.chunk);
@@ -182,6 +198,8 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())));
     }
+    warn_of_tests(&session, &args.scene);
+    check_camera(&camera, &session)?;
     // What every run, headless or in a window, attaches to its session.
     if let Some(osc) = osc_out {
         session.observe(osc);
@@ -224,6 +242,85 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     report(session, tally, limit, ran.map(drop))
 }
 
+/// What kept an `--until-idle` run from ending before `--max-seconds`: the behaviors
+/// still running and every action not yet ended, with its actor and since when.
+fn print_still_running(session: &LuaSession, reports: &[troupe_lua::BehaviorReport]) {
+    let scene = session.scene();
+    let behaviors: Vec<&str> = reports
+        .iter()
+        .filter(|r| r.status == "running")
+        .map(|r| r.actor.as_str())
+        .collect();
+    let actions: Vec<String> = (0..scene.actors().len())
+        .flat_map(|a| scene.actions_of(a))
+        .filter(|a| !a.status.is_final())
+        .map(|a| {
+            format!(
+                "{} of {} ({}{})",
+                a.kind,
+                scene.actors()[a.actor].name,
+                a.status.name(),
+                a.started_at
+                    .map(|t| format!(" since {t:.2} s"))
+                    .unwrap_or_default()
+            )
+        })
+        .collect();
+    println!(
+        "  stopped at --max-seconds ({:.2} s) before the scene was idle:",
+        scene.time()
+    );
+    if !behaviors.is_empty() {
+        println!(
+            "    {} behavior(s) still running: {}",
+            behaviors.len(),
+            behaviors.join(", ")
+        );
+    }
+    if !actions.is_empty() {
+        println!("    {} action(s) still running:", actions.len());
+        for a in actions {
+            println!("      {a}");
+        }
+    }
+}
+
+/// A camera that follows an actor the scene lacks is refused, naming the actors there are.
+fn check_camera(camera: &troupe_viewer::Camera, session: &LuaSession) -> Result<()> {
+    if let troupe_viewer::Focus::Actor(name) = &camera.focus {
+        let actors = session.scene().actors();
+        if !actors.iter().any(|a| a.name == *name) {
+            let names: Vec<&str> = actors.iter().map(|a| a.name.as_str()).collect();
+            bail!(
+                "--camera follow:{name}: the scene has no actor `{name}` (actors: {})",
+                if names.is_empty() {
+                    "none".into()
+                } else {
+                    names.join(", ")
+                }
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A scene that registers tests is probably meant for `troupe test`: say so, since `run`
+/// does not run them.
+fn warn_of_tests(session: &LuaSession, scene: &std::path::Path) {
+    let names = session.script().test_names();
+    if !names.is_empty() {
+        eprintln!(
+            "troupe: warning: {} defines {} test(s) (\"{}\"{}); `troupe run` does not run \
+             tests: use `troupe test {}`",
+            scene.display(),
+            names.len(),
+            names[0],
+            if names.len() > 1 { ", …" } else { "" },
+            scene.display()
+        );
+    }
+}
+
 /// Prints what a run did, lets every observer write its output (even after an error, so
 /// nothing recorded is lost), and returns the exit code.
 fn report(
@@ -248,9 +345,8 @@ fn report(
             }
         }
     }
-    let still = reports.iter().filter(|r| r.status == "running").count();
-    if limit.until_idle && still > 0 {
-        println!("  stopped at --max-seconds with {still} behavior(s) still running");
+    if limit.until_idle && !session.is_idle() {
+        print_still_running(&session, &reports);
     }
     let finished = session.finish();
     for line in finished.iter().flatten() {
@@ -376,6 +472,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     session
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
+    check_camera(&camera, &session)?;
     let ticks = (args.at * args.rate).round() as u64;
     session.run(RunLimit {
         ticks,

@@ -18,6 +18,7 @@
 #![warn(missing_docs)]
 
 mod camera;
+mod face;
 mod frame;
 mod mesh;
 mod offscreen;

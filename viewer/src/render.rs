@@ -77,6 +77,8 @@ impl Default for RenderOptions {
 
 /// Default background colour (sRGB).
 pub const BACKGROUND: [f32; 3] = [0.80, 0.84, 0.88];
+/// The panel behind a frame's notice (linear RGBA).
+const NOTICE_PANEL: [f32; 4] = [0.45, 0.02, 0.02, 0.85];
 const FLOOR: [f32; 3] = [0.90, 0.91, 0.92];
 const GRID: [f32; 3] = [0.62, 0.65, 0.70];
 
@@ -604,15 +606,28 @@ impl SceneRenderer {
     /// Lays out every actor's name and labels above its head.
     fn build_labels(&mut self, frame: &Frame, view_proj: Mat4, width: u32, height: u32) {
         self.rects.clear();
-        if !self.options.labels {
-            return;
-        }
         let scale = if height >= 400 { 2.0 } else { 1.0 };
         let line_height = text::CELL.1 as f32 * scale;
         let pad = 2.0 * scale;
         let panel = [0.02, 0.02, 0.03, 0.55];
         let ink = [1.0, 1.0, 1.0, 1.0];
         let mut glyphs = Vec::new();
+        // The notice: a dark red panel in the top-left corner, one line per line.
+        for (i, line) in frame.notice.iter().enumerate() {
+            let (x, y) = (4.0 * scale, 4.0 * scale + i as f32 * (line_height + pad));
+            let (w, h) = text::size(line, scale);
+            self.rects.push(RectInstance {
+                rect: [x - pad, y - pad, w + 2.0 * pad, h + 2.0 * pad],
+                color: NOTICE_PANEL,
+            });
+            glyphs.clear();
+            text::layout(line, x, y, scale, &mut glyphs);
+            self.rects
+                .extend(glyphs.iter().map(|&rect| RectInstance { rect, color: ink }));
+        }
+        if !self.options.labels {
+            return;
+        }
         for actor in &frame.actors {
             let Some(anchor) = actor.label_anchor() else {
                 continue;
@@ -867,6 +882,11 @@ impl SceneRenderer {
                     }
                 }
                 BodyStyle::Bones => self.bones(actor, &colors, false),
+            }
+            for f in crate::face::features(actor, SKIN) {
+                let color = linear_rgba(f.color);
+                let instance = Instance::new(f.rotation, f.center, f.radii, color);
+                self.scratch.push((MeshKey::SphereLow, instance));
             }
         }
         for o in &frame.objects {

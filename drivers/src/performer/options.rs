@@ -29,8 +29,34 @@ use troupe_lua::api::{lua_err_message, ActorRef};
 use troupe_lua::args;
 use troupe_scene::InputPose;
 
+/// An optional option of `troupe.performer`, in troupe's wording when it has the wrong
+/// type (a boolean must be a boolean: `osc = "no"` is refused, not taken as true).
 fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
-    t.get::<Option<T>>(key)
+    let v: Value = t.get(key)?;
+    if v.is_nil() {
+        return Ok(None);
+    }
+    let rust = std::any::type_name::<T>();
+    let expected = match rust {
+        "bool" => "a boolean",
+        "alloc::string::String" => "a string",
+        "mlua::table::Table" => "a table",
+        r if r.starts_with("alloc::vec::Vec") => "a list",
+        _ => "a number",
+    };
+    let refused = || {
+        args::err(
+            "performer",
+            format!(
+                "option `{key}` must be {expected}, got {}",
+                args::value_name(&v)
+            ),
+        )
+    };
+    if rust == "bool" && !matches!(v, Value::Boolean(_)) {
+        return Err(refused());
+    }
+    t.get::<T>(key).map(Some).map_err(|_| refused())
 }
 
 /// `troupe.performer{ name=…, template=…, at=…, facing=…, calibrate="auto"|"manual",
