@@ -51,13 +51,15 @@ if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pino
     echo "setup: could not install the Python test tools; their tests will be skipped" >&2
 fi
 # emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
-# the API's definitions (`troupe lua-defs`). Built once (43 minutes measured at one job on
-# a busy 2-core machine, see docs/PERFORMANCE.md) into a folder outside the clone, so that
-# later clones and CI runs on the same machine reuse it: $TROUPE_TOOLS, default
-# ~/.cache/troupe-tools.
+# the API's definitions (`troupe lua-defs`). Built once, unoptimised and without debug
+# information (12 minutes against 43 for a release build on a busy 2-core machine, see
+# docs/PERFORMANCE.md; it checks the repository in about a second either way), into a
+# folder outside the clone, so that later clones and CI runs on the same machine reuse it:
+# $TROUPE_TOOLS, default ~/.cache/troupe-tools.
 EMMYLUA_CHECK=0.25.1
 troupe_tools="${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}"
 if ! "$troupe_tools/bin/emmylua_check" --version 2>/dev/null | grep -q "$EMMYLUA_CHECK"; then
   echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; long)" >&2
-  cargo install --locked --quiet emmylua_check --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
+  CARGO_PROFILE_DEV_DEBUG=0 cargo install --locked --quiet --debug emmylua_check \
+    --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
 fi

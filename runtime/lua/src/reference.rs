@@ -125,6 +125,7 @@ pub const API: &[Entry] = &[
     f("troupe", "get_object", &["name: string"], "Object?", "The object called `name`, or nil."),
     f("troupe", "plan_grasp", &["actor: Actor|string", "object: Object|string", "opts?: table"], "table?", "How `actor` would grasp `object` (hand, pattern, …), or nil when it cannot."),
     f("troupe", "performer", &["opts: table"], "Actor", "An actor driven live by motion-capture devices (docs/devices.md)."),
+    f("troupe", "vmc_out", &["opts: { actor?: Actor|string, to: string, rate?: number }"], "", "Streams an actor's motion over VMC to `to` (host:port) at `rate` frames per second of scene time (docs/devices.md, \"VMC\")."),
     f("troupe.devices", "spacemouse", &["opts: table"], "string", "Moves an object with a SpaceMouse (live or replayed); returns the device's name."),
     f("troupe.devices", "glove", &["performer: Actor|string"], "integer[]?", "The latest raw glove sensor values, or nil."),
     f("troupe.devices", "hand", &["performer: Actor|string"], "table<string, number>", "The glove's hand targets by DOF name."),
