@@ -10,7 +10,7 @@ if ((${#missing[@]})); then
   echo "setup: installing ${missing[*]}" >&2
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -qq
-  $SUDO DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
 fi
 command -v cargo >/dev/null || { echo "setup: Rust (cargo) is required: https://rustup.rs" >&2; exit 1; }
 # The Khronos glTF validator, for the test that checks the glTF files troupe writes
@@ -35,4 +35,31 @@ if ((${#vrpn_missing[@]})); then
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -qq
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${vrpn_missing[@]}"
+fi
+# Python tools from PyPI, into one venv in .tools/python, once, each for a test that checks
+# troupe against an implementation it does not use (the test is skipped with a note when
+# its package is missing): Pinocchio (`pin`), an independent RNEA on troupe's own URDF
+# export (runtime/formats/tests/pinocchio_dynamics.rs); python-osc, the VMC compatibility
+# check (scripts/vmc/compat.py, run by tests/vmc.rs); junitparser, a JUnit XML reader for
+# `troupe test --junit` (tests/test_runner.rs).
+PYTHON_TOOLS=("pin==4.1.0" "python-osc==1.10.2" "junitparser==3.2.0")
+python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
+if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio, pythonosc, junitparser" >/dev/null 2>&1; then
+  echo "setup: installing ${PYTHON_TOOLS[*]} into $python_tools" >&2
+  { [ -x "$python_tools/bin/pip" ] || python3 -m venv "$python_tools"; } >&2 &&
+    "$python_tools/bin/pip" install -q --disable-pip-version-check "${PYTHON_TOOLS[@]}" >&2 ||
+    echo "setup: could not install the Python test tools; their tests will be skipped" >&2
+fi
+# emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
+# the API's definitions (`troupe lua-defs`). Built once, unoptimised and without debug
+# information (12 minutes against 43 for a release build on a busy 2-core machine, see
+# docs/PERFORMANCE.md; it checks the repository in about a second either way), into a
+# folder outside the clone, so that later clones and CI runs on the same machine reuse it:
+# $TROUPE_TOOLS, default ~/.cache/troupe-tools.
+EMMYLUA_CHECK=0.25.1
+troupe_tools="${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}"
+if ! "$troupe_tools/bin/emmylua_check" --version 2>/dev/null | grep -q "$EMMYLUA_CHECK"; then
+  echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; long)" >&2
+  CARGO_PROFILE_DEV_DEBUG=0 cargo install --locked --quiet --debug emmylua_check \
+    --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
 fi

@@ -7,6 +7,9 @@ scripts/setup.sh
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets -- -D warnings
 cargo test --workspace
+# Every Lua file of the repository, checked against the API's definitions (docs/editor.md).
+cargo run -q -- lua-defs .tools/lua/troupe.d.lua
+"${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}/bin/emmylua_check" .
 cargo run -q -- test
 # Again with two threads stepping even the smallest scenes (one actor per chunk).
 cargo run -q -- test --threads 2 --chunk 1

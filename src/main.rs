@@ -3,12 +3,14 @@
 mod bench;
 mod devices;
 mod export;
+mod lua_defs;
 mod observers;
 mod run;
 mod scenario;
 mod seq;
 mod templates;
 mod view;
+mod watch;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -50,6 +52,8 @@ enum Command {
     Devices(devices::DevicesArgs),
     /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
     Emulate(devices::EmulateArgs),
+    /// Write the EmmyLua / LuaLS definition file of the Lua API (for editors and checkers).
+    LuaDefs(lua_defs::LuaDefsArgs),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +89,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Devices(args) => devices::run(args),
         Command::Emulate(args) => devices::emulate(args),
+        Command::LuaDefs(args) => lua_defs::run(args),
     };
     match result {
         Ok(code) => code,

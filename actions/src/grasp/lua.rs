@@ -2,7 +2,6 @@
 //! Lua: reads [`GraspOptions`] and [`ReleaseOptions`], and the hand and pattern names
 //! that `give` and `receive` share.
 
-use super::action::grasp_scope;
 use super::decision::GraspType;
 use super::options::{GraspOptions, Place, ReleaseOptions};
 use super::plan::{plan_grasp, HandChoice, PlanOptions};
@@ -12,22 +11,10 @@ use troupe_lua::args::{
     actor_arg, err, euler_degrees, object_arg, opt_string, table_arg, vec3, vec3_table,
 };
 use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};
-use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, StartError, Step};
+use troupe_scene::{ActionSpec, Generator};
 
 /// What a builder returns: the generator and its spec.
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
-
-/// An action that fails at its start with a reason (e.g. an unknown object's name).
-struct Refuse(String);
-
-impl Generator for Refuse {
-    fn start(&mut self, _: &GeneratorContext) -> Result<(), StartError> {
-        Err(self.0.clone().into())
-    }
-    fn step(&mut self, _: &GeneratorContext, _: &mut DofWriter) -> Step {
-        Step::Failed(self.0.clone())
-    }
-}
 
 /// Reads `hand = "right"|"left"|"both"|"auto"` (default `auto`).
 pub(crate) fn hand_choice(method: &str, t: &Table) -> mlua::Result<HandChoice> {
@@ -64,24 +51,8 @@ pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
     let hand = hand_choice(m, &t)?;
-    let object = match t.get::<Value>("object")? {
-        // An unknown name is bad scene data, not a script error: the action fails with
-        // the reason, like an unreachable or held object.
-        Value::String(name) => {
-            let name = name.to_str()?.to_string();
-            match with_scene(ctx.lua, |s| s.object_index(&name))? {
-                Ok(i) => i,
-                Err(e) => {
-                    let scope = grasp_scope(&ctx.skeleton, &hand.sides()).map_err(|e| err(m, e))?;
-                    return Ok((
-                        Box::new(Refuse(e.to_string())),
-                        open_ended(&common, m, scope),
-                    ));
-                }
-            }
-        }
-        other => object_arg(ctx.lua, m, "object", other)?,
-    };
+    // An unknown name is a Lua error, as everywhere (docs/lua-api.md, "Unknown names").
+    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let options = GraspOptions {
         object,
         hand,

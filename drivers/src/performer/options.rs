@@ -29,8 +29,34 @@ use troupe_lua::api::{lua_err_message, ActorRef};
 use troupe_lua::args;
 use troupe_scene::InputPose;
 
+/// An optional option of `troupe.performer`, in troupe's wording when it has the wrong
+/// type (a boolean must be a boolean: `osc = "no"` is refused, not taken as true).
 fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
-    t.get::<Option<T>>(key)
+    let v: Value = t.get(key)?;
+    if v.is_nil() {
+        return Ok(None);
+    }
+    let rust = std::any::type_name::<T>();
+    let expected = match rust {
+        "bool" => "a boolean",
+        "alloc::string::String" => "a string",
+        "mlua::table::Table" => "a table",
+        r if r.starts_with("alloc::vec::Vec") => "a list",
+        _ => "a number",
+    };
+    let refused = || {
+        args::err(
+            "performer",
+            format!(
+                "option `{key}` must be {expected}, got {}",
+                args::value_name(&v)
+            ),
+        )
+    };
+    if rust == "bool" && !matches!(v, Value::Boolean(_)) {
+        return Err(refused());
+    }
+    t.get::<T>(key).map(Some).map_err(|_| refused())
 }
 
 /// `troupe.performer{ name=…, template=…, at=…, facing=…, calibrate="auto"|"manual",
@@ -97,8 +123,14 @@ pub(crate) fn new_performer(
     let mut osc = None;
     let mut glove = None;
     let mut vrpn = None;
+    let mut vmc = None;
+    let mut vmc_hand = None;
     if let Some(d) = &devices {
-        check_keys(d, "performer.devices", &["fob", "glove", "osc", "vrpn"])?;
+        check_keys(
+            d,
+            "performer.devices",
+            &["fob", "glove", "osc", "vmc", "vrpn"],
+        )?;
         if let Some(f) = opt::<Table>(d, "fob")? {
             fob = Some(fob_input(
                 lua,
@@ -118,12 +150,16 @@ pub(crate) fn new_performer(
             }
             osc = Some(osc_input(&o, &skeleton)?);
         }
+        // One source of body poses: they would fight over the same DOFs.
+        let one_body_source = || {
+            args::err(
+                "performer.devices",
+                "give one source of body poses: `fob`, `osc`, `vmc` or `vrpn`",
+            )
+        };
         if let Some(v) = opt::<Table>(d, "vrpn")? {
             if fob.is_some() || osc.is_some() {
-                return Err(args::err(
-                    "performer.devices",
-                    "give one of `fob`, `osc` or `vrpn` for the body",
-                ));
+                return Err(one_body_source());
             }
             vrpn = Some(vrpn_input(
                 lua,
@@ -133,6 +169,30 @@ pub(crate) fn new_performer(
                 recorder.clone(),
                 scene_time,
             )?);
+        }
+        if let Some(v) = opt::<Table>(d, "vmc")? {
+            if fob.is_some() || osc.is_some() || vrpn.is_some() {
+                return Err(one_body_source());
+            }
+            let place = troupe_lua::kinds::with_scene(lua, |scene| {
+                let (sk, q) = (&scene.actors()[actor].skeleton, &scene.states()[actor].q);
+                let dof = |n: &str| sk.dof(n).map(|d| q[d]).unwrap_or(0.0);
+                (
+                    glam::DVec3::new(dof("root_x"), 0.0, dof("root_z")),
+                    dof("root_yaw"),
+                )
+            })?;
+            let (input, hand) = crate::vmc::lua::vmc_input(
+                lua,
+                &v,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+                place,
+            )?;
+            vmc = Some(input);
+            vmc_hand = hand;
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
@@ -163,7 +223,12 @@ pub(crate) fn new_performer(
             driven.insert(d);
         }
     }
-    let glove_side = glove.as_ref().map(|g| g.side);
+    if let Some(v) = &vmc {
+        for d in v.rig.dofs() {
+            driven.insert(d);
+        }
+    }
+    let glove_side = glove.as_ref().map(|g| g.side).or(vmc_hand);
     troupe_lua::kinds::with_scene_mut(lua, |scene| {
         // Nothing asked until the first samples arrive.
         scene.set_input_pose(actor, InputPose::new(n, driven))?;
@@ -182,6 +247,7 @@ pub(crate) fn new_performer(
         osc,
         vrpn,
         glove,
+        vmc,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
         made: 0,

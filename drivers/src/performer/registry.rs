@@ -38,6 +38,8 @@ pub struct Performer {
     pub(crate) vrpn: Option<VrpnInput>,
     /// The glove hand.
     pub(crate) glove: Option<GloveInput>,
+    /// Body poses from a VMC sender.
+    pub(crate) vmc: Option<crate::vmc::VmcInput>,
     /// Calibrate as soon as every bird has a sample.
     pub(crate) auto_calibrate: bool,
     /// `troupe.devices.calibrate` asked for a calibration at the next sample.
@@ -145,6 +147,9 @@ impl Performers {
             if let Some(h) = p.vrpn.as_ref().and_then(|v| v.source.health()) {
                 v.push((p.name.clone(), "vrpn", h));
             }
+            if let Some(h) = p.vmc.as_ref().and_then(|m| m.health()) {
+                v.push((p.name.clone(), "vmc", h));
+            }
         }
         v
     }
@@ -231,6 +236,13 @@ impl Performers {
                     o.converter.calibrate_direct(&base_posture(scene, p.actor));
                 }
             }
+            if let Some(v) = &mut p.vmc {
+                let now = &scene.states()[p.actor].q;
+                if let Some(played) = v.poll(time, now) {
+                    changed = true;
+                    newest = newest.max(played.arrived);
+                }
+            }
             if let Some(g) = &mut p.glove {
                 let mut readings = g.source.take(time);
                 readings.extend(osc_glove);
@@ -268,6 +280,9 @@ impl Performers {
             }
             if let Some(v) = &mut p.vrpn {
                 v.converter.convert(&v.latest, &mut q, &mut mask);
+            }
+            if let Some(v) = &p.vmc {
+                v.apply(&mut q, &mut mask);
             }
             if let Some(g) = &p.glove {
                 if let Some(raw) = &g.latest {

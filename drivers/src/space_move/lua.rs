@@ -89,17 +89,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
 }
 
 fn number(t: &Table, key: &str, default: f64) -> mlua::Result<f64> {
-    let v: Option<f64> = t
-        .get(key)
-        .map_err(|_| args::err("spacemouse", format!("`{key}` must be a number")))?;
-    let v = v.unwrap_or(default);
-    if !v.is_finite() {
-        return Err(args::err(
-            "spacemouse",
-            format!("`{key}` must be finite, got {v}"),
-        ));
-    }
-    Ok(v)
+    Ok(args::opt_number(t, "spacemouse", key)?.unwrap_or(default))
 }
 
 /// `troupe.devices.spacemouse{ object=…, name="spacemouse", path=nil, replay=nil,
@@ -127,9 +117,7 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
             ))
         }
     };
-    let name: String = t
-        .get::<Option<String>>("name")?
-        .unwrap_or_else(|| "spacemouse".into());
+    let name = args::opt_string(&t, "spacemouse", "name")?.unwrap_or_else(|| "spacemouse".into());
     let speed = number(&t, "speed", 1.0)?;
     let turn = number(&t, "turn", 90.0)?;
     let deadzone = number(&t, "deadzone", 0.05)?;

@@ -12,6 +12,7 @@ pub mod holding;
 pub mod input_pose;
 pub mod pacing;
 pub mod parallel;
+pub mod playback;
 pub mod profile;
 pub mod record;
 pub mod scene;
