@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Installs the system packages troupe needs, only when something is missing (idempotent).
-# Headless rendering uses Mesa's llvmpipe through EGL: libegl1, libegl-mesa0, libgl1-mesa-dri.
+# Installs what troupe needs, only when something is missing (idempotent).
+# `scripts/setup.sh`: what running troupe needs (headless rendering uses Mesa's llvmpipe
+# through EGL: libegl1, libegl-mesa0, libgl1-mesa-dri).
+# `scripts/setup.sh --tests` (scripts/test.sh): also the tools the tests check troupe with.
 set -euo pipefail
 missing=()
 for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri; do
@@ -13,6 +15,7 @@ if ((${#missing[@]})); then
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
 fi
 command -v cargo >/dev/null || { echo "setup: Rust (cargo) is required: https://rustup.rs" >&2; exit 1; }
+[ "${1:-}" = "--tests" ] || exit 0
 # The Khronos glTF validator, for the test that checks the glTF files troupe writes
 # (runtime/formats/tests/khronos_validator.rs, which is skipped with a note without it).
 # Installed from the npm registry only, into .tools/node, once.
