@@ -55,7 +55,7 @@ if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pino
 fi
 # emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
 # the API's definitions (`troupe lua-defs`). Built once, unoptimised and without debug
-# information (12 minutes against 43 for a release build on a busy 2-core machine, see
+# information (about 2 minutes on 2 free cores; a release build took 43 on a busy machine, see
 # docs/PERFORMANCE.md; it checks the repository in about a second either way), into a
 # folder outside the clone, so that later clones and CI runs on the same machine reuse it:
 # $TROUPE_TOOLS, default ~/.cache/troupe-tools.
