@@ -278,6 +278,22 @@ fn add_object_nodes(
     nodes
 }
 
+/// The document and binary buffer of a file: [`to_gltf_with_objects`], plus `skin` as the
+/// body's skinned mesh when there is one.
+fn document(
+    rig: &Rig,
+    skin: Option<&Skin>,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+    uri: Option<&str>,
+) -> (Root, Vec<u8>) {
+    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, uri);
+    if let Some(skin) = skin {
+        add_skin(&mut root, &mut bytes, skin, name);
+    }
+    (root, bytes)
+}
+
 /// Writes `rig` as `path` (`.gltf`) and a `.bin` of the same stem beside it.
 pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
     write_gltf_with(path, rig, None, &[], name)
@@ -299,10 +315,7 @@ pub fn write_gltf_with(
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "motion.bin".into());
-    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, Some(&uri));
-    if let Some(skin) = skin {
-        add_skin(&mut root, &mut bytes, skin, name);
-    }
+    let (root, bytes) = document(rig, skin, objects, name, Some(&uri));
     let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
     std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
     std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
@@ -324,10 +337,7 @@ pub fn write_glb_with(
     name: &str,
 ) -> Result<()> {
     let path = path.as_ref();
-    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, None);
-    if let Some(skin) = skin {
-        add_skin(&mut root, &mut bytes, skin, name);
-    }
+    let (root, bytes) = document(rig, skin, objects, name, None);
     let glb = Glb {
         header: Header {
             magic: *b"glTF",
