@@ -48,23 +48,26 @@ pub fn choose_velocity(
 ) -> (DVec2, bool) {
     let speed = preferred.length();
     let forward = preferred.try_normalize().unwrap_or(DVec2::ZERO);
+    // How far each obstacle is now: the same for every candidate, so found once.
+    let now: Vec<f64> = obstacles.iter().map(|f| f.distance(me.position)).collect();
     let mut best = (
         preferred,
-        penalty(me, preferred, preferred, others, obstacles),
+        penalty(me, preferred, preferred, others, obstacles, &now),
     );
     if best.1 <= 0.0 {
         return (preferred, true);
     }
     // Standing still is always a candidate, then the fan of directions and speeds.
-    let still = penalty(me, DVec2::ZERO, preferred, others, obstacles);
+    let still = penalty(me, DVec2::ZERO, preferred, others, obstacles, &now);
     if still < best.1 {
         best = (DVec2::ZERO, still);
     }
     let base = if speed > 1e-6 { speed } else { 0.5 };
     let forward = if speed > 1e-6 { forward } else { DVec2::Y };
+    // The fan's turns are the same at every speed: their sines and cosines, once.
+    let fan = TURNS.map(|turn| turn.to_radians().sin_cos());
     for k in SPEEDS {
-        for turn in TURNS {
-            let (s, c) = turn.to_radians().sin_cos();
+        for &(s, c) in &fan {
             // A positive turn is counter-clockwise seen from above (x, z): to the left of
             // a walker facing +z is +x.
             let dir = DVec2::new(
@@ -72,7 +75,7 @@ pub fn choose_velocity(
                 -forward.x * s + forward.y * c,
             );
             let v = dir * base * k;
-            let p = penalty(me, v, preferred, others, obstacles);
+            let p = penalty(me, v, preferred, others, obstacles, &now);
             if p < best.1 {
                 best = (v, p);
             }
@@ -82,13 +85,15 @@ pub fn choose_velocity(
 }
 
 /// Deviation from `preferred` plus urgency over the time to the first collision of
-/// candidate `v`; 0 when `v` is `preferred` and nothing is hit within [`HORIZON`].
+/// candidate `v` (`now`: each obstacle's present distance); 0 when `v` is `preferred` and
+/// nothing is hit within [`HORIZON`].
 fn penalty(
     me: &Agent,
     v: DVec2,
     preferred: DVec2,
     others: &[Agent],
     obstacles: &[&Footprint],
+    now: &[f64],
 ) -> f64 {
     let mut ttc = f64::INFINITY;
     for o in others {
@@ -112,8 +117,7 @@ fn penalty(
         }
         ttc = ttc.min(ray_disc(d, rel, reach));
     }
-    for f in obstacles {
-        let now = f.distance(me.position);
+    for (f, &now) in obstacles.iter().zip(now) {
         // Obstacles stand still: only the next moments matter, or a slow sidestep towards
         // a wall would count as a collision long before it could be one.
         for step in 1..=3 {
