@@ -593,3 +593,42 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
     assert!(slide <= 0.0067, "a planted foot slid {slide} m");
     assert!(lowest >= -1e-3, "a foot went {lowest} m below the floor");
 }
+
+#[test]
+fn a_walk_reports_its_plan_ahead_and_its_avoidance_for_drawing() {
+    let mut scene = adult_scene(100.0, 1);
+    let a = scene.add_actor(&ActorDesc::new("a")).unwrap();
+    let b = scene
+        .add_actor(&ActorDesc {
+            at: DVec3::new(0.0, 0.0, 8.0),
+            facing_degrees: 180.0,
+            ..ActorDesc::new("b")
+        })
+        .unwrap();
+    let skeleton = scene.actors()[a].skeleton.clone();
+    // Nothing is reported before a walk starts.
+    assert!(scene.navigation().is_empty());
+    for (actor, goal) in [(a, DVec2::new(0.0, 8.0)), (b, DVec2::ZERO)] {
+        let walk =
+            Walk::navigate(&skeleton, Goal::Through(vec![goal]), WalkOptions::default()).unwrap();
+        let spec = ActionSpec::new("walk", walk.scope());
+        scene.start_action(actor, spec, Box::new(walk)).unwrap();
+    }
+    let mut swerved = false;
+    let mut first_length = None;
+    for _ in 0..400 {
+        scene.step();
+        let nav = scene.navigation();
+        assert_eq!(nav.iter().map(|(i, _)| *i).collect::<Vec<_>>(), vec![a, b]);
+        let (_, mine) = &nav[0];
+        assert_eq!(mine.goal, DVec2::new(0.0, 8.0));
+        assert_eq!(*mine.path.last().unwrap(), mine.goal);
+        // The path ahead shrinks as the plan is walked.
+        let length: f64 = mine.path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        assert!(length <= *first_length.get_or_insert(length) + 1e-9);
+        let (preferred, chosen) = mine.velocities.expect("a decision every tick");
+        swerved |= (preferred - chosen).length() > 0.05;
+    }
+    assert!(first_length.unwrap() > 7.5, "{first_length:?}");
+    assert!(swerved, "avoidance chose another velocity than the plan's");
+}
