@@ -3,6 +3,7 @@
 
 use crate::camera::Camera;
 use crate::frame::{ActorFrame, Frame, HandState, IK_TARGET, SENSOR_IDLE, SENSOR_TOUCHING, SKIN};
+use crate::lines::LineRenderer;
 use crate::mesh::{self, MeshKey, Vertex};
 use crate::skinned::{self, SkinBlock, SkinCache, SkinVertex, BLOCK_STRIDE};
 use crate::text;
@@ -105,7 +106,7 @@ fn linear(c: f32) -> f32 {
     }
 }
 
-fn linear_rgba(c: [f32; 3]) -> [f32; 4] {
+pub(crate) fn linear_rgba(c: [f32; 3]) -> [f32; 4] {
     [linear(c[0]), linear(c[1]), linear(c[2]), 1.0]
 }
 
@@ -338,6 +339,8 @@ pub(crate) struct SceneRenderer {
     /// This frame's skinned actors: skeleton key, whether far (coarse mesh).
     skin_draws: Vec<(std::sync::Arc<troupe_body::Skeleton>, bool)>,
     skin_data: Vec<u8>,
+    /// Debug lines (the navigation view).
+    lines: LineRenderer,
 }
 
 impl SceneRenderer {
@@ -537,10 +540,12 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
+        let lines = LineRenderer::new(device, &shader, &pipeline_layout, format, samples);
         let skin_capacity = 4;
         let (skin_blocks, skin_bind_group) = Self::skin_buffer(device, &skin_layout, skin_capacity);
         let capacity = 1024;
         SceneRenderer {
+            lines,
             skin_pipeline,
             skin_layout,
             skin_blocks,
@@ -705,6 +710,11 @@ impl SceneRenderer {
         self.upload(gpu);
         self.upload_skins(gpu);
         self.build_labels(frame, view_proj, targets.width, targets.height);
+        self.lines.segments.clear();
+        if let Some(nav) = frame.nav.as_ref().filter(|_| self.options.overlays) {
+            nav.segments(&mut self.lines.segments);
+        }
+        self.lines.upload(&gpu.device, &gpu.queue);
         if self.rects.len() > self.rect_capacity {
             self.rect_capacity = self.rects.len().next_power_of_two();
             self.rect_buffer = Self::rect_buffer(&gpu.device, self.rect_capacity);
@@ -780,6 +790,7 @@ impl SceneRenderer {
                 pass.draw_indexed(0..count, 0, 0..1);
             }
         }
+        self.lines.draw(&mut pass);
         if !self.rects.is_empty() {
             pass.set_pipeline(&self.rect_pipeline);
             pass.set_vertex_buffer(0, self.rect_buffer.slice(..));
