@@ -2,7 +2,8 @@
 -- with four planters in it, as in plaza.lua (four streams of 50) but small enough to
 -- render on a CPU. Rendered with the navigation debug view:
 --   troupe render scripts/bench/plaza_picture.lua docs/images/plaza.png --at 5.5 \
---     --debug nav --size 1200x800 --camera fixed:0,14,13:0,0,-0.5 --no-labels
+--     --debug nav --size 1000x660 --camera fixed:0,13,11:0,0,-0.3 --no-labels
+-- Like plaza.lua, the streams jam in the middle (docs/navigation.md, Limits).
 for i, c in ipairs({ {-2.5, -2.5}, {2.5, -2.5}, {2.5, 2.5}, {-2.5, 2.5} }) do
   troupe.object{ name = "planter" .. i, shape = "box", size = {1.2, 0.7, 1.2}, at = {c[1], 0.35, c[2]}, mass = 200 }
 end
