@@ -531,9 +531,9 @@ fn a_walk_to_where_the_actor_stands_finishes_without_stepping() {
     assert!(r.frames.last().unwrap().t < 1.0);
 }
 
-#[test]
-fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
-    let mut scene = adult_scene(200.0, 1);
+/// Adds actor `a` at the origin and `b` 8 m ahead facing it, and starts each walking to
+/// where the other stands: the walks' ids.
+fn two_walkers_head_on(scene: &mut Scene) -> Vec<troupe_scene::ActionId> {
     let a = scene.add_actor(&ActorDesc::new("a")).unwrap();
     let b = scene
         .add_actor(&ActorDesc {
@@ -550,6 +550,15 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
         let spec = ActionSpec::new("walk", walk.scope());
         ids.push(scene.start_action(actor, spec, Box::new(walk)).unwrap());
     }
+    ids
+}
+
+#[test]
+fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
+    let mut scene = adult_scene(200.0, 1);
+    let ids = two_walkers_head_on(&mut scene);
+    let a = 0;
+    let skeleton = scene.actors()[a].skeleton.clone();
     let rig = Rig::new(&skeleton).unwrap();
     let feet = soles(&skeleton, &rig);
     let mut frames = Vec::new();
@@ -597,23 +606,10 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
 #[test]
 fn a_walk_reports_its_plan_ahead_and_its_avoidance_for_drawing() {
     let mut scene = adult_scene(100.0, 1);
-    let a = scene.add_actor(&ActorDesc::new("a")).unwrap();
-    let b = scene
-        .add_actor(&ActorDesc {
-            at: DVec3::new(0.0, 0.0, 8.0),
-            facing_degrees: 180.0,
-            ..ActorDesc::new("b")
-        })
-        .unwrap();
-    let skeleton = scene.actors()[a].skeleton.clone();
-    // Nothing is reported before a walk starts.
+    two_walkers_head_on(&mut scene);
+    // Nothing is reported before the walks start (on the first step).
     assert!(scene.navigation().is_empty());
-    for (actor, goal) in [(a, DVec2::new(0.0, 8.0)), (b, DVec2::ZERO)] {
-        let walk =
-            Walk::navigate(&skeleton, Goal::Through(vec![goal]), WalkOptions::default()).unwrap();
-        let spec = ActionSpec::new("walk", walk.scope());
-        scene.start_action(actor, spec, Box::new(walk)).unwrap();
-    }
+    let (a, b) = (0, 1);
     let mut swerved = false;
     let mut first_length = None;
     for _ in 0..400 {
