@@ -18,6 +18,7 @@
 #![warn(missing_docs)]
 
 mod camera;
+mod color;
 mod face;
 mod frame;
 mod lines;

@@ -7,7 +7,7 @@
 //! 720-pixel-high picture, scaled with the picture. wgpu's own line primitive is one
 //! pixel wide on every backend, too thin to read in a large picture.
 
-use crate::render::{linear_rgba, DEPTH_FORMAT};
+use crate::color::linear_rgba;
 use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
@@ -44,13 +44,13 @@ pub(crate) struct LineRenderer {
 }
 
 impl LineRenderer {
-    /// The pipeline for `format` and `samples`, sharing the scene's globals `layout`
-    /// (`shader` holds `vs_line` and `fs_line`).
+    /// The pipeline for the colour and depth `formats` and `samples`, sharing the
+    /// scene's globals `layout` (`shader` holds `vs_line` and `fs_line`).
     pub fn new(
         device: &wgpu::Device,
         shader: &wgpu::ShaderModule,
         layout: &wgpu::PipelineLayout,
-        format: wgpu::TextureFormat,
+        (format, depth_format): (wgpu::TextureFormat, wgpu::TextureFormat),
         samples: u32,
     ) -> LineRenderer {
         let attributes = wgpu::vertex_attr_array![0 => Float32x4, 1 => Float32x4, 2 => Float32x4];
@@ -71,7 +71,7 @@ impl LineRenderer {
             // Tested against the floor and bodies, but not written: lines that cross do
             // not cut one another.
             depth_stencil: Some(wgpu::DepthStencilState {
-                format: DEPTH_FORMAT,
+                format: depth_format,
                 depth_write_enabled: Some(false),
                 depth_compare: Some(wgpu::CompareFunction::LessEqual),
                 stencil: wgpu::StencilState::default(),

@@ -2,6 +2,7 @@
 //! set-up with clear errors, pipelines, the mesh cache and per-frame instance building.
 
 use crate::camera::Camera;
+use crate::color::linear_rgba;
 use crate::frame::{ActorFrame, Frame, HandState, IK_TARGET, SENSOR_IDLE, SENSOR_TOUCHING, SKIN};
 use crate::lines::LineRenderer;
 use crate::mesh::{self, MeshKey, Vertex};
@@ -96,19 +97,6 @@ const TROUSERS: [[f32; 3]; 3] = [[0.22, 0.24, 0.32], [0.30, 0.26, 0.22], [0.34, 
 const SHOES: [f32; 3] = [0.14, 0.12, 0.11];
 const EYE_WHITE: [f32; 3] = [0.94, 0.93, 0.90];
 const PUPIL: [f32; 3] = [0.10, 0.07, 0.05];
-
-/// sRGB → linear for one channel.
-fn linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-pub(crate) fn linear_rgba(c: [f32; 3]) -> [f32; 4] {
-    [linear(c[0]), linear(c[1]), linear(c[2]), 1.0]
-}
 
 /// The wgpu objects that outlive any one target.
 pub(crate) struct Gpu {
@@ -540,7 +528,13 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
-        let lines = LineRenderer::new(device, &shader, &pipeline_layout, format, samples);
+        let lines = LineRenderer::new(
+            device,
+            &shader,
+            &pipeline_layout,
+            (format, DEPTH_FORMAT),
+            samples,
+        );
         let skin_capacity = 4;
         let (skin_blocks, skin_bind_group) = Self::skin_buffer(device, &skin_layout, skin_capacity);
         let capacity = 1024;
