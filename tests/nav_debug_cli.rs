@@ -128,3 +128,39 @@ fn an_unknown_debug_channel_is_refused_by_name() {
         );
     }
 }
+
+#[test]
+fn the_navigation_view_is_the_same_with_one_and_two_threads() {
+    let overlay = |threads: usize| {
+        let config = SceneConfig {
+            threads,
+            seed: 7,
+            ..SceneConfig::default()
+        };
+        let mut session = Director::session(
+            config,
+            troupe_actions::action_kinds(),
+            ScriptLimits::default(),
+        )
+        .unwrap();
+        session.scene_mut().set_chunk_size(Some(1));
+        let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scripts/examples/shared_space.lua");
+        session.load_file(&scene).unwrap();
+        session
+            .run(RunLimit {
+                ticks: 300,
+                until_idle: false,
+            })
+            .unwrap();
+        troupe_viewer::NavOverlay::from_scene(session.scene())
+    };
+    let one = overlay(1);
+    // Six walkers swap across a circle and one walks to a greeting: all of them plan,
+    // and some of them are avoiding one another at 3 s.
+    assert!(one.walkers.len() >= 6, "{}", one.walkers.len());
+    assert!(one
+        .walkers
+        .iter()
+        .any(|w| w.velocities.is_some_and(|(p, c)| (p - c).length() > 0.05)));
+    assert!(one == overlay(2), "the view differs with two threads");
+}
