@@ -102,6 +102,10 @@ pub struct RunArgs {
     /// Frames per second of scene time of every --vmc-out stream.
     #[arg(long, default_value_t = troupe_drivers::vmc::output::DEFAULT_RATE, value_name = "HZ")]
     pub vmc_rate: f64,
+    /// Debug drawing in --frames and --view: `nav` draws the navigation mesh, the
+    /// obstacles' footprints, each walker's planned path and its avoidance velocities.
+    #[arg(long, value_name = "CHANNEL", value_parser = crate::view::parse_debug)]
+    pub debug: Option<troupe_viewer::DebugView>,
 }
 
 /// Runs the scene and prints the summary.
@@ -168,13 +172,14 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
                 .map_err(|e| anyhow::anyhow!("--vmc-out {spec}: {e}"))?,
         );
     }
+    let debug = args.debug.unwrap_or_default();
     let frames = match &args.frames {
-        Some(dir) => Some(troupe_viewer::FrameWriter::new(
-            dir,
-            size,
-            camera.clone(),
-            args.every,
-        )?),
+        Some(dir) => {
+            let mut writer =
+                troupe_viewer::FrameWriter::new(dir, size, camera.clone(), args.every)?;
+            writer.set_debug(debug);
+            Some(writer)
+        }
         None => None,
     };
 
@@ -183,6 +188,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
             scene: args.scene.clone(),
             chunk: args.chunk,
             ticks: limit.ticks,
+            debug,
         };
         return crate::watch::view(run, config, limits, size, camera);
     }
@@ -392,6 +398,7 @@ fn view_run(
         outcome: Ok(()),
     }));
     let sim = shared.clone();
+    let debug = args.debug.unwrap_or_default();
     let shown = troupe_viewer::run_window(options, move || {
         let mut w = sim.lock().unwrap_or_else(|e| e.into_inner());
         let over =
@@ -400,7 +407,7 @@ fn view_run(
             w.outcome = w.session.tick().map(drop);
             w.ticks += 1;
         }
-        troupe_viewer::Frame::from_scene(w.session.scene())
+        troupe_viewer::Frame::from_scene(w.session.scene()).with_debug(w.session.scene(), debug)
     });
     let Windowed {
         session, outcome, ..
@@ -450,6 +457,10 @@ pub struct RenderArgs {
     /// Same as `--look bones`.
     #[arg(long)]
     pub bones: bool,
+    /// Debug drawing: `nav` draws the navigation mesh, the obstacles' footprints, each
+    /// walker's planned path and its avoidance velocities.
+    #[arg(long, value_name = "CHANNEL", value_parser = crate::view::parse_debug)]
+    pub debug: Option<troupe_viewer::DebugView>,
 }
 
 /// `troupe render`: runs a scene headless up to `--at` and writes one picture.
@@ -487,7 +498,8 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
         style: crate::view::body_style(args.look, args.bones),
         ..Default::default()
     });
-    let frame = troupe_viewer::Frame::from_scene(session.scene());
+    let frame = troupe_viewer::Frame::from_scene(session.scene())
+        .with_debug(session.scene(), args.debug.unwrap_or_default());
     renderer.save_png(&frame, &camera, &args.out)?;
     println!(
         "rendered {} at t = {:.2} s to {}",

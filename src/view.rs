@@ -12,7 +12,7 @@ use troupe_motion::{ObjectMotion, Sequence};
 use troupe_scene::playback::ObjectPlayback;
 use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
 use troupe_viewer::{
-    parse_size, run_window, BodyStyle, Camera, Frame, FrameWriter, Hand, HandState,
+    parse_size, run_window, BodyStyle, Camera, DebugView, Frame, FrameWriter, Hand, HandState,
     OffscreenRenderer, RenderOptions, ViewerError, WindowOptions,
 };
 
@@ -65,6 +65,10 @@ pub struct ViewArgs {
     /// Simulation ticks per second.
     #[arg(long, default_value_t = 100.0)]
     rate: f64,
+    /// Debug drawing: `nav` draws the navigation mesh and the obstacles' footprints of
+    /// the recorded objects (a recording holds no walls, plans or avoidance).
+    #[arg(long, value_name = "CHANNEL", value_parser = parse_debug)]
+    debug: Option<DebugView>,
 }
 
 /// Options of `troupe snapshot`.
@@ -140,6 +144,11 @@ fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
             sequence,
         })
         .collect())
+}
+
+/// Parses `--debug CHANNEL[,CHANNEL]` (channels: `nav`).
+pub(crate) fn parse_debug(list: &str) -> Result<DebugView, ViewerError> {
+    DebugView::parse(list)
 }
 
 pub(crate) fn has_display() -> bool {
@@ -241,6 +250,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer.renderer_mut().set_options(options);
         writer.renderer_mut().set_multisampling(!args.no_msaa);
+        writer.set_debug(args.debug.unwrap_or_default());
         return write_frames(with_objects(Session::new(scene), playback), writer, seconds);
     }
     let options = WindowOptions {
@@ -253,10 +263,11 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     };
     // The session moves to the simulation thread; keep nothing else that needs it.
     let mut session = with_objects(Session::new(scene), playback);
+    let debug = args.debug.unwrap_or_default();
     let result = run_window(options, move || {
         // No observer can fail here; a tick always happens.
         let _ = session.tick();
-        Frame::from_scene(session.scene())
+        Frame::from_scene(session.scene()).with_debug(session.scene(), debug)
     });
     match result {
         Ok(()) => Ok(ExitCode::SUCCESS),

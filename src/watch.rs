@@ -123,6 +123,8 @@ pub struct WatchedRun {
     pub chunk: Option<usize>,
     /// How many ticks the run may go (`--ticks`, `--seconds` or `--max-seconds`).
     pub ticks: u64,
+    /// `--debug`: the debug views to draw.
+    pub debug: troupe_viewer::DebugView,
 }
 
 /// `troupe run SCENE --view --watch`: the window shows the scene; every 300 ms of wall time
@@ -154,6 +156,7 @@ pub fn view(
             .join(", ")
     );
     let max_ticks = run.ticks;
+    let debug = run.debug;
     struct Watched<F: FnMut() -> Result<LuaSession>> {
         reloader: Reloader<F>,
         session: LuaSession,
@@ -199,7 +202,9 @@ pub fn view(
                 eprintln!("troupe: {e}");
             }
         }
-        w.reloader.frame(&w.session)
+        w.reloader
+            .frame(&w.session)
+            .with_debug(w.session.scene(), debug)
     });
     shown?;
     Ok(std::process::ExitCode::SUCCESS)

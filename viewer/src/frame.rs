@@ -1,6 +1,8 @@
 //! [`Frame`]: an owned snapshot of a scene plus the overlays to draw on it. The simulation
 //! builds one per published tick and hands it to a renderer on another thread.
 
+use crate::nav::NavOverlay;
+use crate::ViewerError;
 use glam::{Quat, Vec3};
 use std::sync::Arc;
 use troupe_body::{Shape, Skeleton, Transform};
@@ -164,6 +166,8 @@ pub struct Frame {
     /// Lines of text shown in the top-left corner whatever the options (e.g. the error
     /// of a scene that failed to reload, over the last good one).
     pub notice: Vec<String>,
+    /// The navigation debug view to draw (`--debug nav`), if asked for.
+    pub nav: Option<NavOverlay>,
 }
 
 impl Frame {
@@ -206,7 +210,16 @@ impl Frame {
             sensors: Vec::new(),
             ik_targets: Vec::new(),
             notice: Vec::new(),
+            nav: None,
         }
+    }
+
+    /// Adds what `debug` asks for, gathered from `scene` (the scene this frame shows).
+    pub fn with_debug(mut self, scene: &Scene, debug: DebugView) -> Frame {
+        if debug.nav {
+            self.nav = Some(NavOverlay::from_scene(scene));
+        }
+        self
     }
 
     /// The actor called `name`.
@@ -230,5 +243,40 @@ impl Frame {
             .peekable();
         let first = *pts.peek()?;
         Some(pts.fold((first, first), |(lo, hi), p| (lo.min(p), hi.max(p))))
+    }
+}
+
+/// The debug drawings a frame can carry, by channel (`--debug CHANNEL`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DebugView {
+    /// `nav`: the navigation mesh, footprints, planned paths and avoidance velocities.
+    pub nav: bool,
+}
+
+impl DebugView {
+    /// The debug channels' names, as `--debug` takes them.
+    pub const CHANNELS: [&str; 1] = ["nav"];
+
+    /// Turns on the channel called `name`, or says which ones there are.
+    pub fn enable(&mut self, name: &str) -> Result<(), ViewerError> {
+        match name.trim() {
+            "nav" => self.nav = true,
+            other => {
+                return Err(ViewerError::Invalid(format!(
+                    "unknown debug channel `{other}` (known: {})",
+                    Self::CHANNELS.join(", ")
+                )))
+            }
+        }
+        Ok(())
+    }
+
+    /// The channels named in `list`, comma-separated (e.g. `nav`).
+    pub fn parse(list: &str) -> Result<DebugView, ViewerError> {
+        let mut debug = DebugView::default();
+        for name in list.split(',') {
+            debug.enable(name)?;
+        }
+        Ok(debug)
     }
 }

@@ -18,9 +18,12 @@
 #![warn(missing_docs)]
 
 mod camera;
+mod color;
 mod face;
 mod frame;
+mod lines;
 mod mesh;
+mod nav;
 mod offscreen;
 mod render;
 mod skinned;
@@ -29,10 +32,15 @@ mod window;
 
 pub use camera::{Camera, Focus};
 pub use frame::{
-    ActorFrame, Frame, Hand, HandState, ObjectFrame, Sensor, IK_TARGET, OBJECT, SENSOR_IDLE,
-    SENSOR_TOUCHING, SKIN,
+    ActorFrame, DebugView, Frame, Hand, HandState, ObjectFrame, Sensor, IK_TARGET, OBJECT,
+    SENSOR_IDLE, SENSOR_TOUCHING, SKIN,
 };
 pub use image::RgbaImage;
+pub use lines::Segment;
+pub use nav::{
+    NavOverlay, NavWalker, NAV_CHOSEN, NAV_FOOTPRINT, NAV_INFLATED, NAV_MESH, NAV_PATH,
+    NAV_PREFERRED,
+};
 pub use offscreen::{save_png, AdapterDescription, OffscreenRenderer};
 pub use render::{BodyStyle, RenderOptions, BACKGROUND};
 pub use wgpu::Backends;
@@ -140,6 +148,7 @@ pub struct FrameWriter {
     every: u64,
     calls: u64,
     written: u64,
+    debug: DebugView,
 }
 
 impl FrameWriter {
@@ -165,12 +174,18 @@ impl FrameWriter {
             every,
             calls: 0,
             written: 0,
+            debug: DebugView::default(),
         })
     }
 
     /// The renderer (to change options or query the adapter).
     pub fn renderer_mut(&mut self) -> &mut OffscreenRenderer {
         &mut self.renderer
+    }
+
+    /// Draws the debug views `debug` asks for in the following pictures.
+    pub fn set_debug(&mut self, debug: DebugView) {
+        self.debug = debug;
     }
 
     /// Counts one tick; on every N-th (the first included) renders `scene` and writes the
@@ -181,7 +196,8 @@ impl FrameWriter {
         if !due {
             return Ok(None);
         }
-        self.write(&Frame::from_scene(scene)).map(Some)
+        self.write(&Frame::from_scene(scene).with_debug(scene, self.debug))
+            .map(Some)
     }
 
     /// Renders `frame` (with any overlays the caller added) as the next numbered PNG.

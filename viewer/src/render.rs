@@ -2,7 +2,9 @@
 //! set-up with clear errors, pipelines, the mesh cache and per-frame instance building.
 
 use crate::camera::Camera;
+use crate::color::linear_rgba;
 use crate::frame::{ActorFrame, Frame, HandState, IK_TARGET, SENSOR_IDLE, SENSOR_TOUCHING, SKIN};
+use crate::lines::LineRenderer;
 use crate::mesh::{self, MeshKey, Vertex};
 use crate::skinned::{self, SkinBlock, SkinCache, SkinVertex, BLOCK_STRIDE};
 use crate::text;
@@ -95,19 +97,6 @@ const TROUSERS: [[f32; 3]; 3] = [[0.22, 0.24, 0.32], [0.30, 0.26, 0.22], [0.34, 
 const SHOES: [f32; 3] = [0.14, 0.12, 0.11];
 const EYE_WHITE: [f32; 3] = [0.94, 0.93, 0.90];
 const PUPIL: [f32; 3] = [0.10, 0.07, 0.05];
-
-/// sRGB → linear for one channel.
-fn linear(c: f32) -> f32 {
-    if c <= 0.04045 {
-        c / 12.92
-    } else {
-        ((c + 0.055) / 1.055).powf(2.4)
-    }
-}
-
-fn linear_rgba(c: [f32; 3]) -> [f32; 4] {
-    [linear(c[0]), linear(c[1]), linear(c[2]), 1.0]
-}
 
 /// The wgpu objects that outlive any one target.
 pub(crate) struct Gpu {
@@ -338,6 +327,8 @@ pub(crate) struct SceneRenderer {
     /// This frame's skinned actors: skeleton key, whether far (coarse mesh).
     skin_draws: Vec<(std::sync::Arc<troupe_body::Skeleton>, bool)>,
     skin_data: Vec<u8>,
+    /// Debug lines (the navigation view).
+    lines: LineRenderer,
 }
 
 impl SceneRenderer {
@@ -537,10 +528,18 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
+        let lines = LineRenderer::new(
+            device,
+            &shader,
+            &pipeline_layout,
+            (format, DEPTH_FORMAT),
+            samples,
+        );
         let skin_capacity = 4;
         let (skin_blocks, skin_bind_group) = Self::skin_buffer(device, &skin_layout, skin_capacity);
         let capacity = 1024;
         SceneRenderer {
+            lines,
             skin_pipeline,
             skin_layout,
             skin_blocks,
@@ -705,6 +704,11 @@ impl SceneRenderer {
         self.upload(gpu);
         self.upload_skins(gpu);
         self.build_labels(frame, view_proj, targets.width, targets.height);
+        self.lines.segments.clear();
+        if let Some(nav) = frame.nav.as_ref().filter(|_| self.options.overlays) {
+            nav.segments(&mut self.lines.segments);
+        }
+        self.lines.upload(&gpu.device, &gpu.queue);
         if self.rects.len() > self.rect_capacity {
             self.rect_capacity = self.rects.len().next_power_of_two();
             self.rect_buffer = Self::rect_buffer(&gpu.device, self.rect_capacity);
@@ -780,6 +784,7 @@ impl SceneRenderer {
                 pass.draw_indexed(0..count, 0, 0..1);
             }
         }
+        self.lines.draw(&mut pass);
         if !self.rects.is_empty() {
             pass.set_pipeline(&self.rect_pipeline);
             pass.set_vertex_buffer(0, self.rect_buffer.slice(..));

@@ -154,3 +154,63 @@ fn vs_skin(
     out.color = skin.colors[part];
     return out;
 }
+
+// Debug lines: a segment per instance, widened into a screen-space quad of `a.w` pixels
+// (of a 720-pixel-high picture) around the projected segment, with square caps.
+struct LineOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) color: vec4<f32>,
+};
+
+@vertex
+fn vs_line(
+    @builtin(vertex_index) i: u32,
+    @location(0) a: vec4<f32>,
+    @location(1) b: vec4<f32>,
+    @location(2) color: vec4<f32>,
+) -> LineOut {
+    var out: LineOut;
+    out.color = color;
+    var ca = globals.view_proj * vec4<f32>(a.xyz, 1.0);
+    var cb = globals.view_proj * vec4<f32>(b.xyz, 1.0);
+    // Cut the segment at the near plane (depth 0, where clip z = 0) so that an end
+    // behind the eye does not flip the quad.
+    if (ca.z < 0.0 && cb.z < 0.0) {
+        out.clip = vec4<f32>(0.0, 0.0, -1.0, 1.0);
+        return out;
+    }
+    if (ca.z < 0.0) {
+        ca = mix(ca, cb, ca.z / (ca.z - cb.z));
+    } else if (cb.z < 0.0) {
+        cb = mix(cb, ca, cb.z / (cb.z - ca.z));
+    }
+    let half_size = globals.viewport.xy * 0.5;
+    let sa = ca.xy / ca.w * half_size;
+    let sb = cb.xy / cb.w * half_size;
+    var along = sb - sa;
+    if (dot(along, along) < 1e-8) {
+        along = vec2<f32>(1.0, 0.0);
+    }
+    along = normalize(along);
+    let across = vec2<f32>(-along.y, along.x);
+    var corners = array<vec2<f32>, 6>(
+        vec2<f32>(0.0, -1.0), vec2<f32>(1.0, -1.0), vec2<f32>(1.0, 1.0),
+        vec2<f32>(0.0, -1.0), vec2<f32>(1.0, 1.0), vec2<f32>(0.0, 1.0),
+    );
+    let corner = corners[i];
+    let half_width = 0.5 * a.w * globals.viewport.y / 720.0;
+    var c = ca;
+    var cap = -1.0;
+    if (corner.x > 0.5) {
+        c = cb;
+        cap = 1.0;
+    }
+    let offset = (across * corner.y + along * cap) * half_width / half_size;
+    out.clip = vec4<f32>(c.xy + offset * c.w, c.z, c.w);
+    return out;
+}
+
+@fragment
+fn fs_line(in: LineOut) -> @location(0) vec4<f32> {
+    return in.color;
+}

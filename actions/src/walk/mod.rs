@@ -46,6 +46,7 @@ use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
+use troupe_scene::space::Navigation;
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
@@ -69,6 +70,9 @@ pub const BLEND_IN_TIME: f64 = 0.4;
 pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
 pub const CADENCE_LOOKBACK: f64 = 0.6;
+
+/// Seconds of plan between two points of the path a walk reports for drawing.
+const NAVIGATION_SAMPLE: f64 = 0.1;
 
 /// Where a swinging foot will land.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -878,6 +882,28 @@ impl Generator for Walk {
         } else {
             Step::Running
         }
+    }
+
+    /// The plan ahead, sampled every [`NAVIGATION_SAMPLE`] seconds from where its clock
+    /// is now, and the last avoidance decision; walks along a path only (`to`, `path`).
+    fn navigation(&self) -> Option<Navigation> {
+        let plan = self.plan.as_ref()?;
+        if !matches!(self.route, Route::Path { .. }) || !plan.end_time.is_finite() {
+            return None;
+        }
+        let now = self.steer.plan_time(self.t, self.t).min(plan.end_time);
+        let samples = (((plan.end_time - now) / NAVIGATION_SAMPLE).ceil() as usize).min(10_000);
+        let at = |t: f64| plan.sample(t, self.heading).position;
+        let mut path: Vec<DVec2> = (0..samples)
+            .map(|k| at(now + k as f64 * NAVIGATION_SAMPLE))
+            .collect();
+        let goal = at(plan.end_time);
+        path.push(goal);
+        Some(Navigation {
+            path,
+            goal,
+            velocities: self.steer.decision,
+        })
     }
 }
 

@@ -43,6 +43,9 @@ pub struct Steer {
     /// Actors whose bodies already touched this one's when the walk started (a hand
     /// held, a group walking together): they are not avoided.
     pub companions: Vec<usize>,
+    /// The last decision's preferred and chosen velocities (x, z), for the debug view;
+    /// `None` before the first and once the plan has ended.
+    pub decision: Option<(DVec2, DVec2)>,
 }
 
 impl Steer {
@@ -130,6 +133,7 @@ impl Steer {
                 back
             };
             self.drift += (back - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+            self.decision = None;
             return;
         }
         let here = plan.sample(pt, 0.0);
@@ -156,6 +160,7 @@ impl Steer {
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
         if agents.is_empty() && !self.engaged {
+            self.decision = Some((preferred, preferred));
             return;
         }
         let obstacles: Vec<&Footprint> = if self.engaged {
@@ -169,6 +174,7 @@ impl Steer {
             radius,
         };
         let (v, free) = choose_velocity(&body, preferred, &agents, &obstacles);
+        self.decision = Some((preferred, v));
         if free && !self.engaged {
             return;
         }
@@ -180,6 +186,7 @@ impl Steer {
                 offset: DVec2::ZERO,
                 drift: DVec2::ZERO,
                 companions: std::mem::take(&mut self.companions),
+                decision: self.decision,
             };
         }
         let speed = planned.length();

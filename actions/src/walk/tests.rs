@@ -531,9 +531,9 @@ fn a_walk_to_where_the_actor_stands_finishes_without_stepping() {
     assert!(r.frames.last().unwrap().t < 1.0);
 }
 
-#[test]
-fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
-    let mut scene = adult_scene(200.0, 1);
+/// Adds actor `a` at the origin and `b` 8 m ahead facing it, and starts each walking to
+/// where the other stands: the walks' ids.
+fn two_walkers_head_on(scene: &mut Scene) -> Vec<troupe_scene::ActionId> {
     let a = scene.add_actor(&ActorDesc::new("a")).unwrap();
     let b = scene
         .add_actor(&ActorDesc {
@@ -550,6 +550,15 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
         let spec = ActionSpec::new("walk", walk.scope());
         ids.push(scene.start_action(actor, spec, Box::new(walk)).unwrap());
     }
+    ids
+}
+
+#[test]
+fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
+    let mut scene = adult_scene(200.0, 1);
+    let ids = two_walkers_head_on(&mut scene);
+    let a = 0;
+    let skeleton = scene.actors()[a].skeleton.clone();
     let rig = Rig::new(&skeleton).unwrap();
     let feet = soles(&skeleton, &rig);
     let mut frames = Vec::new();
@@ -592,4 +601,30 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
     assert!(sideways > 0.2, "the walkers did not sidestep: {sideways}");
     assert!(slide <= 0.0067, "a planted foot slid {slide} m");
     assert!(lowest >= -1e-3, "a foot went {lowest} m below the floor");
+}
+
+#[test]
+fn a_walk_reports_its_plan_ahead_and_its_avoidance_for_drawing() {
+    let mut scene = adult_scene(100.0, 1);
+    two_walkers_head_on(&mut scene);
+    // Nothing is reported before the walks start (on the first step).
+    assert!(scene.navigation().is_empty());
+    let (a, b) = (0, 1);
+    let mut swerved = false;
+    let mut first_length = None;
+    for _ in 0..400 {
+        scene.step();
+        let nav = scene.navigation();
+        assert_eq!(nav.iter().map(|(i, _)| *i).collect::<Vec<_>>(), vec![a, b]);
+        let (_, mine) = &nav[0];
+        assert_eq!(mine.goal, DVec2::new(0.0, 8.0));
+        assert_eq!(*mine.path.last().unwrap(), mine.goal);
+        // The path ahead shrinks as the plan is walked.
+        let length: f64 = mine.path.windows(2).map(|w| (w[1] - w[0]).length()).sum();
+        assert!(length <= *first_length.get_or_insert(length) + 1e-9);
+        let (preferred, chosen) = mine.velocities.expect("a decision every tick");
+        swerved |= (preferred - chosen).length() > 0.05;
+    }
+    assert!(first_length.unwrap() > 7.5, "{first_length:?}");
+    assert!(swerved, "avoidance chose another velocity than the plan's");
 }

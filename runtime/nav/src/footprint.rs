@@ -78,6 +78,43 @@ impl Footprint {
     }
 }
 
+impl Footprint {
+    /// The outline of the floor kept clear of this footprint by a body of `radius`: the
+    /// polygon grown by `radius`, its corners rounded by arcs of at most 15° (for drawing
+    /// what the navigation mesh cuts out, `--debug nav`).
+    pub fn inflated(&self, radius: f64) -> Vec<DVec2> {
+        let n = self.outline.len();
+        if n < 3 {
+            // A point or a segment grows into a disc or a stadium: its hull's circle.
+            let c = self.centre();
+            let reach = self
+                .outline
+                .iter()
+                .map(|p| (*p - c).length())
+                .fold(0.0, f64::max);
+            return circle(reach + radius).map(|p| c + p).collect();
+        }
+        let normal = |i: usize| -> DVec2 {
+            let (a, b) = (self.outline[i], self.outline[(i + 1) % n]);
+            // Counter-clockwise about +Y: the outward normal is to the right of a → b.
+            -(b - a).perp().normalize_or_zero()
+        };
+        let mut out = Vec::new();
+        for i in 0..n {
+            let (from, to) = (normal((i + n - 1) % n), normal(i));
+            // The normals turn counter-clockwise round a convex, counter-clockwise outline.
+            let turn = from.perp_dot(to).atan2(from.dot(to)).max(0.0);
+            let steps = (turn / 15f64.to_radians()).ceil().max(1.0) as usize;
+            let start = from.y.atan2(from.x);
+            for k in 0..=steps {
+                let a = start + turn * k as f64 / steps as f64;
+                out.push(self.outline[i] + DVec2::new(a.cos(), a.sin()) * radius);
+            }
+        }
+        out
+    }
+}
+
 /// Distance from `p` to the segment `a`–`b`.
 pub fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
     let ab = b - a;
@@ -205,5 +242,30 @@ mod tests {
             assert!(f.contains(DVec2::new(1.0 + 0.3 * a.cos(), 1.0 + 0.3 * a.sin())));
         }
         assert!(f.distance(DVec2::new(1.0, 1.4)) < 0.1);
+    }
+
+    #[test]
+    fn an_inflated_outline_keeps_the_radius_all_round() {
+        let table = Footprint::hull(
+            "table",
+            &[
+                DVec2::new(-1.0, -0.5),
+                DVec2::new(1.0, -0.5),
+                DVec2::new(1.0, 0.5),
+                DVec2::new(-1.0, 0.5),
+            ],
+        );
+        let grown = table.inflated(0.3);
+        // Four corners, each rounded by a 90° arc in 15° steps (7 points).
+        assert_eq!(grown.len(), 28);
+        for p in &grown {
+            assert!((table.distance(*p) - 0.3).abs() < 1e-9, "{p}");
+        }
+        // Round the outline once, counter-clockwise like the footprint.
+        let area: f64 = (0..grown.len())
+            .map(|i| grown[i].perp_dot(grown[(i + 1) % grown.len()]))
+            .sum::<f64>()
+            / 2.0;
+        assert!(area > 2.0 + 2.0 * 0.3 * 3.0, "{area}");
     }
 }

@@ -216,6 +216,38 @@ impl Space {
         mesh
     }
 
+    /// The edges of the navigation mesh for a body of `radius` among `obstacles` (the
+    /// mesh [`Space::path`] searches, built now or reused), each once, as pairs of floor
+    /// points (x, z): what `--debug nav` draws.
+    pub fn mesh_edges(&self, obstacles: &[Footprint], radius: f64) -> Vec<[DVec2; 2]> {
+        let mesh = self.mesh(obstacles, radius);
+        let mut edges: Vec<(u32, u32)> = Vec::new();
+        let mut corners: Vec<DVec2> = Vec::new();
+        for layer in &mesh.layers {
+            let base = corners.len() as u32;
+            corners.extend(
+                layer
+                    .vertices
+                    .iter()
+                    .map(|v| DVec2::new(v.coords.x as f64, v.coords.y as f64)),
+            );
+            for polygon in &layer.polygons {
+                let n = polygon.vertices.len();
+                for i in 0..n {
+                    let (a, b) = (polygon.vertices[i], polygon.vertices[(i + 1) % n]);
+                    edges.push((base + a.min(b), base + a.max(b)));
+                }
+            }
+        }
+        // An edge between two polygons is listed by both.
+        edges.sort_unstable();
+        edges.dedup();
+        edges
+            .into_iter()
+            .filter_map(|(a, b)| Some([*corners.get(a as usize)?, *corners.get(b as usize)?]))
+            .collect()
+    }
+
     /// The shortest path from `from` to `to` (x, z) for a body of `radius` among
     /// `obstacles`: the points after `from`, ending at `to`; or why there is none. A start
     /// too close to an obstacle first steps out to the nearest free point.
@@ -380,6 +412,36 @@ mod tests {
             .map(|w| (w[1] - w[0]).length())
             .sum();
         assert!(length < 5.4, "{length}");
+    }
+
+    #[test]
+    fn the_mesh_edges_surround_the_inflated_table_once_each() {
+        let space = Space::default();
+        let edges = space.mesh_edges(&[table()], 0.3);
+        assert!(edges.len() >= 8, "{}", edges.len());
+        let inflated = 0.3 + CLEARANCE;
+        for [a, b] in &edges {
+            assert!(a != b);
+            // No edge runs through the table's inflated footprint (but for the chords of
+            // the crate's polygonal corners, a centimetre or two inside the arc).
+            for k in 0..=20 {
+                let p = a.lerp(*b, k as f64 / 20.0);
+                assert!(table().distance(p) >= inflated - 0.025, "{a} {b}");
+            }
+        }
+        let mut sorted = edges.clone();
+        sorted.sort_by(|x, y| {
+            (x[0].x, x[0].y, x[1].x, x[1].y)
+                .partial_cmp(&(y[0].x, y[0].y, y[1].x, y[1].y))
+                .unwrap()
+        });
+        sorted.dedup();
+        assert_eq!(sorted.len(), edges.len());
+        // Some edge ends on the inflated table's outline: the mesh is cut round it.
+        assert!(edges
+            .iter()
+            .flatten()
+            .any(|p| (table().distance(*p) - inflated).abs() < 0.02));
     }
 
     #[test]

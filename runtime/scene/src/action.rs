@@ -395,6 +395,12 @@ pub trait Generator: Send {
     /// learns it (and why) from the notes posted here, applied after the tick like a
     /// step's.
     fn end(&mut self, _ending: &Ending, _notes: &mut Notes) {}
+
+    /// What a walking generator plans and chose on its last tick, for drawing it
+    /// (`--debug nav`); read-only, it changes nothing. The default has none.
+    fn navigation(&self) -> Option<crate::space::Navigation> {
+        None
+    }
 }
 
 /// How an action ended, as its generator's [`Generator::end`] learns it.

@@ -614,6 +614,22 @@ impl Scene {
             .unwrap_or_default()
     }
 
+    /// Every running action's plan and avoidance, as its generator reports it (walks
+    /// do, see [`crate::Generator::navigation`]), with the actor's index, in actor order.
+    pub fn navigation(&self) -> Vec<(usize, crate::space::Navigation)> {
+        self.work
+            .iter()
+            .enumerate()
+            .flat_map(|(actor, w)| {
+                w.runtime
+                    .actions
+                    .iter()
+                    .filter(|a| a.status.is_running())
+                    .filter_map(move |a| Some((actor, a.generator.navigation()?)))
+            })
+            .collect()
+    }
+
     /// Forgets the records of actions that ended before `before` (scene time) unless
     /// `keep(id)` says someone still refers to them; returns how many were forgotten.
     /// Long runs start many actions: this keeps memory bounded.

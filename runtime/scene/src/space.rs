@@ -13,6 +13,20 @@ pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
 pub use troupe_nav::footprint::ON_FLOOR;
 pub use troupe_nav::{body_radius, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE};
 
+/// A walker's plan and its last avoidance decision, as a walking generator reports it
+/// ([`crate::Generator::navigation`]) for the debug view.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Navigation {
+    /// The planned path ahead (x, z): from where the plan is now to its end, with its
+    /// rounded corners, without the sidestep avoidance adds.
+    pub path: Vec<DVec2>,
+    /// Where the walk ends (x, z).
+    pub goal: DVec2,
+    /// The velocities (x, z, m/s) of the last avoidance decision: the one the walker
+    /// preferred (along its plan) and the one it chose. `None` once the plan has ended.
+    pub velocities: Option<(DVec2, DVec2)>,
+}
+
 impl World<'_> {
     /// Whether object `index` is an obstacle now (see the module docs).
     pub fn is_obstacle(&self, index: usize) -> bool {
