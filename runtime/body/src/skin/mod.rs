@@ -125,13 +125,9 @@ impl Skin {
         let far_indices: Vec<u32> = far.iter().map(|&i| remap[i as usize]).collect();
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
-        let mut joints = Vec::with_capacity(positions.len());
-        let mut weights = Vec::with_capacity(positions.len());
-        for &p in &positions {
-            let (j, w) = weights::influences(p, &volumes, &neighbours);
-            joints.push(j);
-            weights.push(w);
-        }
+        let (joints, weights) = weights::skin_weights(&positions, &indices, &volumes, &neighbours)
+            .into_iter()
+            .unzip();
         Ok(Skin {
             positions: positions.iter().map(|p| p.as_vec3().to_array()).collect(),
             normals,
