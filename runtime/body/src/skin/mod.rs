@@ -10,7 +10,8 @@
 //!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
 //!    (meshoptimizer's quadric edge collapse) to at most [`MAX_TRIANGLES`] triangles, and
 //!    once more into a coarse level of detail for actors far from the camera;
-//! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint.
+//! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
+//!    and smoothed over the surface so that they change continuously from vertex to vertex.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
