@@ -5,8 +5,8 @@
 //!
 //! Linear blend skinning rather than dual quaternions: it is what glTF files and every
 //! glTF viewer use, so the window, the PNG frames and an exported `.glb` show the same
-//! deformation; the skin's weights are blended over a few centimetres on each side of a
-//! joint, which keeps LBS's volume loss small at elbows and knees.
+//! deformation; with the skin's weights (smoothed over the surface across each joint)
+//! dual quaternions turned more triangles over, not fewer (measured in docs/viewer.md).
 
 use crate::frame::ActorFrame;
 use bytemuck::{Pod, Zeroable};

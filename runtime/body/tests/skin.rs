@@ -1,7 +1,8 @@
 //! The generated skin, for every template at several sizes: a closed surface without
 //! degenerate triangles, normalised weights of at most four joints, and at 50 random
-//! postures within the joint limits no vertex far from its bones and no triangle turned
-//! inside out.
+//! postures within the joint limits no vertex far from its bones and only a bounded few
+//! triangles turned inside out, at the creases of strongly bent joints (the issue asked for
+//! none; linear blend skinning does not get there, see the bound at the end of `check`).
 
 use std::collections::HashMap;
 use troupe_body::glam::DVec3;
@@ -50,23 +51,23 @@ fn segment_distance(p: DVec3, (a, b): (DVec3, DVec3)) -> f64 {
     (p - (a + ab * t)).length()
 }
 
-/// Distance from `p` to the nearest bone of the joints that move it.
-fn distance_to_bones(
+/// Distance from `p` to each joint's nearest bone, for the joints that move it.
+fn distances_to_bones(
     p: DVec3,
     joints: &[u16; 4],
     weights: &[f32; 4],
     segs: &[Vec<(DVec3, DVec3)>],
-) -> f64 {
-    joints
-        .iter()
-        .zip(weights)
-        .filter(|(_, &w)| w > 0.0)
-        .flat_map(|(&j, _)| {
-            segs[j as usize]
+) -> [f64; 4] {
+    let mut out = [0.0; 4];
+    for ((d, &j), &w) in out.iter_mut().zip(joints).zip(weights) {
+        if w > 0.0 {
+            *d = segs[j as usize]
                 .iter()
-                .map(move |&s| segment_distance(p, s))
-        })
-        .fold(f64::INFINITY, f64::min)
+                .map(|&s| segment_distance(p, s))
+                .fold(f64::INFINITY, f64::min);
+        }
+    }
+    out
 }
 
 fn check(skeleton: &Skeleton, label: &str) {
@@ -145,8 +146,8 @@ fn check(skeleton: &Skeleton, label: &str) {
     let rest_segs: Vec<_> = (0..skeleton.joints().len())
         .map(|j| bones(skeleton, &skin.rest, j))
         .collect();
-    let rest_distance: Vec<f64> = (0..n)
-        .map(|v| distance_to_bones(pos(v as u32), &skin.joints[v], &skin.weights[v], &rest_segs))
+    let rest_distance: Vec<[f64; 4]> = (0..n)
+        .map(|v| distances_to_bones(pos(v as u32), &skin.joints[v], &skin.weights[v], &rest_segs))
         .collect();
     let slack = 0.05 * h;
 
@@ -175,14 +176,20 @@ fn check(skeleton: &Skeleton, label: &str) {
             .map(|j| bones(skeleton, &globals, j))
             .collect();
         for v in 0..n {
-            let d = distance_to_bones(posed[v], &skin.joints[v], &skin.weights[v], &segs);
-            let excess = d - rest_distance[v];
+            // How much further the vertex is from its bones than at rest, each bone's
+            // share by its weight: a vertex moved 2 % by the upper arm does not stray
+            // when the arm is raised away from it, one pulled from all its bones does.
+            let d = distances_to_bones(posed[v], &skin.joints[v], &skin.weights[v], &segs);
+            let excess: f64 = (0..4)
+                .map(|k| (d[k] - rest_distance[v][k]) * skin.weights[v][k] as f64)
+                .sum();
             if excess > worst_excess.0 {
                 worst_excess = (excess, posture, v);
             }
         }
-        // Inverted triangles: a triangle whose normal turns against the rotation its
-        // vertices' joints give it, blended by their weights.
+        // Inverted triangles: a triangle whose skinned normal points against its rest
+        // normal turned by the rotations of its three vertices' joints, blended by their
+        // weights (the rotation skinning gives the triangle), beyond 90°.
         let mut inverted = 0;
         for t in skin.indices.chunks_exact(3) {
             let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
@@ -222,12 +229,16 @@ fn check(skeleton: &Skeleton, label: &str) {
             .map(|(&j, w)| (skeleton.joints()[j as usize].name.as_str(), w))
             .collect::<Vec<_>>(),
     );
-    // Linear blend skinning folds the inner side of a strongly bent joint (the crease of
-    // an elbow, a knee, a hip flexed with the spine bent): triangles there turn over, as
-    // in any LBS rig. The bound keeps that to the creases.
+    // Linear blend skinning folds the inner side of a strongly bent joint, and no band of
+    // weights prevents it near a joint's limit (at a bend of θ the band must be longer
+    // than cot(θ/2) / 2 of the skin's distance from the joint: over 30 cm at a hip flexed
+    // by 125°, more than the pelvis is long). What is left after smoothing the weights
+    // over the surface: about 1.3-1.7 % of the triangles at the worst of the full-range
+    // postures, 0.2-0.3 % at half ranges, most of them at the shoulder and armpit and in
+    // the groin. These bounds keep it there.
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
-        fraction(worst_inverted) <= 0.03 && fraction(moderate_inverted) <= 0.02,
+        fraction(worst_inverted) <= 0.018 && fraction(moderate_inverted) <= 0.003,
         "{label}: {worst_inverted} triangles turned inside out at full joint ranges, {moderate_inverted} at half ranges"
     );
 }

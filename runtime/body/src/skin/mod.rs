@@ -10,7 +10,8 @@
 //!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
 //!    (meshoptimizer's quadric edge collapse) to at most [`MAX_TRIANGLES`] triangles, and
 //!    once more into a coarse level of detail for actors far from the camera;
-//! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint.
+//! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
+//!    and smoothed over the surface so that they change continuously from vertex to vertex.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
@@ -125,13 +126,9 @@ impl Skin {
         let far_indices: Vec<u32> = far.iter().map(|&i| remap[i as usize]).collect();
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
-        let mut joints = Vec::with_capacity(positions.len());
-        let mut weights = Vec::with_capacity(positions.len());
-        for &p in &positions {
-            let (j, w) = weights::influences(p, &volumes, &neighbours);
-            joints.push(j);
-            weights.push(w);
-        }
+        let (joints, weights) = weights::skin_weights(&positions, &indices, &volumes, &neighbours)
+            .into_iter()
+            .unzip();
         Ok(Skin {
             positions: positions.iter().map(|p| p.as_vec3().to_array()).collect(),
             normals,
