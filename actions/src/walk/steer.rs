@@ -42,8 +42,9 @@ pub struct Steer {
     /// Actors whose bodies already touched this one's when the walk started (a hand
     /// held, a group walking together): they are not avoided.
     pub companions: Vec<usize>,
-    /// The velocity (x, z) avoidance chose this tick, where the rate and the drift head
-    /// for (the preferred velocity while the way is clear).
+    /// The velocity (x, z) avoidance chose at its latest decision (every tick while the
+    /// plan runs), where the rate and the drift head for; the preferred velocity while the
+    /// way is clear.
     pub chosen: DVec2,
     /// The rate and drift that velocity asks for.
     target: (f64, DVec2),
