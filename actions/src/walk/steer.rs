@@ -26,7 +26,6 @@ const RETURN: f64 = 0.8;
 const END_RETURN: f64 = 2.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
-
 /// How a walk currently departs from its plan.
 #[derive(Clone, Debug, Default)]
 pub struct Steer {
@@ -43,9 +42,12 @@ pub struct Steer {
     /// Actors whose bodies already touched this one's when the walk started (a hand
     /// held, a group walking together): they are not avoided.
     pub companions: Vec<usize>,
-    /// The last decision's preferred and chosen velocities (x, z), for the debug view;
-    /// `None` before the first and once the plan has ended.
+    /// The last decision's preferred and chosen velocities (x, z): the rate and the drift
+    /// head for the chosen one (the preferred one while the way is clear). For the debug
+    /// view; `None` before the first and once the plan has ended.
     pub decision: Option<(DVec2, DVec2)>,
+    /// The rate and drift that velocity asks for.
+    target: (f64, DVec2),
 }
 
 impl Steer {
@@ -147,6 +149,36 @@ impl Steer {
             let cap = planned.length().max(0.3);
             preferred = preferred.clamp_length_max(cap);
         }
+        let body = Agent {
+            position,
+            velocity,
+            radius,
+        };
+        let along = planned.try_normalize().unwrap_or(direction(here.heading));
+        self.decide_now(ctx, &body, preferred, (planned, along), now, others);
+        if !self.engaged {
+            return;
+        }
+        let (rate, drift) = self.target;
+        self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
+        self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+    }
+
+    /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,
+    /// and turns it into the rate and drift to head for along the plan (`planned`
+    /// velocity, in direction `along`).
+    fn decide_now(
+        &mut self,
+        ctx: &GeneratorContext,
+        body: &Agent,
+        preferred: DVec2,
+        (planned, along): (DVec2, DVec2),
+        now: f64,
+        others: &mut Vec<usize>,
+    ) {
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        let position = body.position;
         others.clear();
         crowd.near(position, others);
         let agents: Vec<Agent> = others
@@ -168,12 +200,7 @@ impl Steer {
         } else {
             Vec::new()
         };
-        let body = Agent {
-            position,
-            velocity,
-            radius,
-        };
-        let (v, free) = choose_velocity(&body, preferred, &agents, &obstacles);
+        let (v, free) = choose_velocity(body, preferred, &agents, &obstacles);
         self.decision = Some((preferred, v));
         if free && !self.engaged {
             return;
@@ -187,18 +214,17 @@ impl Steer {
                 drift: DVec2::ZERO,
                 companions: std::mem::take(&mut self.companions),
                 decision: self.decision,
+                target: (1.0, DVec2::ZERO),
             };
         }
         let speed = planned.length();
-        let along = planned.try_normalize().unwrap_or(direction(here.heading));
         let side = along.perp();
         let rate = if speed > 0.05 {
             (v.dot(along) / speed).clamp(0.0, 1.0)
         } else {
             1.0
         };
-        self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
-        self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+        self.target = (rate, drift);
     }
 }

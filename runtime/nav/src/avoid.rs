@@ -47,27 +47,23 @@ pub fn choose_velocity(
     obstacles: &[&Footprint],
 ) -> (DVec2, bool) {
     let speed = preferred.length();
-    let forward = preferred.try_normalize().unwrap_or(DVec2::ZERO);
-    // How far each obstacle is now: the same for every candidate, so found once.
-    let now: Vec<f64> = obstacles.iter().map(|f| f.distance(me.position)).collect();
-    let mut best = (
-        preferred,
-        penalty(me, preferred, preferred, others, obstacles, &now),
-    );
+    let base = if speed > 1e-6 { speed } else { 0.5 };
+    let forward = match preferred.try_normalize() {
+        Some(forward) if speed > 1e-6 => forward,
+        _ => DVec2::Y,
+    };
+    let world = Surroundings::new(me, preferred, base, others, obstacles);
+    let mut best = (preferred, world.penalty(preferred, f64::INFINITY));
     if best.1 <= 0.0 {
         return (preferred, true);
     }
     // Standing still is always a candidate, then the fan of directions and speeds.
-    let still = penalty(me, DVec2::ZERO, preferred, others, obstacles, &now);
+    let still = world.penalty(DVec2::ZERO, best.1);
     if still < best.1 {
         best = (DVec2::ZERO, still);
     }
-    let base = if speed > 1e-6 { speed } else { 0.5 };
-    let forward = if speed > 1e-6 { forward } else { DVec2::Y };
-    // The fan's turns are the same at every speed: their sines and cosines, once.
-    let fan = TURNS.map(|turn| turn.to_radians().sin_cos());
     for k in SPEEDS {
-        for &(s, c) in &fan {
+        for &(s, c) in FAN.iter() {
             // A positive turn is counter-clockwise seen from above (x, z): to the left of
             // a walker facing +z is +x.
             let dir = DVec2::new(
@@ -75,7 +71,7 @@ pub fn choose_velocity(
                 -forward.x * s + forward.y * c,
             );
             let v = dir * base * k;
-            let p = penalty(me, v, preferred, others, obstacles, &now);
+            let p = world.penalty(v, best.1);
             if p < best.1 {
                 best = (v, p);
             }
@@ -84,69 +80,183 @@ pub fn choose_velocity(
     (best.0, false)
 }
 
-/// Deviation from `preferred` plus urgency over the time to the first collision of
-/// candidate `v` (`now`: each obstacle's present distance); 0 when `v` is `preferred` and
-/// nothing is hit within [`HORIZON`].
-fn penalty(
-    me: &Agent,
-    v: DVec2,
+/// The sines and cosines of [`TURNS`].
+static FAN: std::sync::LazyLock<[(f64, f64); TURNS.len()]> =
+    std::sync::LazyLock::new(|| TURNS.map(|turn| turn.to_radians().sin_cos()));
+
+/// A neighbour as one decision sees it: what every candidate velocity shares, found once.
+struct Neighbour {
+    /// From me to them.
+    offset: DVec2,
+    /// Its length.
+    distance: f64,
+    /// Their velocity.
+    velocity: DVec2,
+    /// Whether our discs (with the gap) already touch.
+    touching: bool,
+    /// The candidate's share of the relative velocity: 2 when they take half the
+    /// avoiding, 1 when they stand.
+    share: f64,
+    /// What the relative velocity loses to their motion (and mine, when reciprocal).
+    shift: DVec2,
+    /// `|offset|² − reach²` of the ray–disc test.
+    clearance: f64,
+}
+
+/// An obstacle near enough to matter to some candidate within [`OBSTACLE_LOOKAHEAD`].
+struct Near<'a> {
+    /// Its footprint.
+    footprint: &'a Footprint,
+    /// The centre and radius of a circle around it, for a quick "too far to touch".
+    centre: DVec2,
+    /// That circle's radius.
+    bound: f64,
+    /// How far it is now.
+    now: f64,
+}
+
+/// Seconds ahead an obstacle matters, in steps of a quarter second.
+const OBSTACLE_LOOKAHEAD: f64 = 0.75;
+
+/// Everything one decision reads, prepared once for all its candidates.
+struct Surroundings<'a> {
+    /// Where I stand.
+    position: DVec2,
+    /// My radius.
+    radius: f64,
+    /// The velocity I would like.
     preferred: DVec2,
-    others: &[Agent],
-    obstacles: &[&Footprint],
-    now: &[f64],
-) -> f64 {
-    let mut ttc = f64::INFINITY;
-    for o in others {
-        let d = o.position - me.position;
-        let reach = me.radius + o.radius + GAP;
-        // Reciprocal: I take half the change and they are assumed to take the other half,
-        // unless they stand still: then I go round them alone.
-        let rel = if o.velocity.length() > STANDING {
-            2.0 * v - me.velocity - o.velocity
-        } else {
-            v - o.velocity
+    /// The walkers and standers near me.
+    neighbours: Vec<Neighbour>,
+    /// The obstacles some candidate could reach.
+    obstacles: Vec<Near<'a>>,
+}
+
+impl<'a> Surroundings<'a> {
+    /// What `me` sees, for candidates no faster than `fastest`.
+    fn new(
+        me: &Agent,
+        preferred: DVec2,
+        fastest: f64,
+        others: &[Agent],
+        obstacles: &[&'a Footprint],
+    ) -> Surroundings<'a> {
+        let neighbours = others
+            .iter()
+            .map(|o| {
+                let offset = o.position - me.position;
+                let reach = me.radius + o.radius + GAP;
+                // Reciprocal: I take half the change and they are assumed to take the
+                // other half, unless they stand still: then I go round them alone.
+                let (share, shift) = if o.velocity.length() > STANDING {
+                    (2.0, me.velocity + o.velocity)
+                } else {
+                    (1.0, o.velocity)
+                };
+                Neighbour {
+                    offset,
+                    distance: offset.length(),
+                    velocity: o.velocity,
+                    touching: offset.length() < reach,
+                    share,
+                    shift,
+                    clearance: offset.length_squared() - reach * reach,
+                }
+            })
+            .collect();
+        let reach = me.radius + fastest * OBSTACLE_LOOKAHEAD;
+        let obstacles = obstacles
+            .iter()
+            .filter_map(|&footprint| {
+                let (centre, bound) = footprint.bounding_circle();
+                // No candidate comes within my radius of it in time: leave it out.
+                if (centre - me.position).length() - bound >= reach {
+                    return None;
+                }
+                Some(Near {
+                    footprint,
+                    centre,
+                    bound,
+                    now: footprint.distance(me.position),
+                })
+            })
+            .collect();
+        Surroundings {
+            position: me.position,
+            radius: me.radius,
+            preferred,
+            neighbours,
+            obstacles,
+        }
+    }
+
+    /// Deviation from the preferred velocity plus urgency over the time to the first
+    /// collision of candidate `v`; 0 when `v` is the preferred velocity and nothing is hit
+    /// within [`HORIZON`]. The search stops as soon as the penalty reaches `bound` (the
+    /// best so far): it only grows, so the candidate has lost, and the value returned is
+    /// then some number at least `bound`.
+    fn penalty(&self, v: DVec2, bound: f64) -> f64 {
+        let deviation = (v - self.preferred).length();
+        if deviation >= bound {
+            return deviation;
+        }
+        let with = |ttc: f64| {
+            if ttc > HORIZON {
+                deviation
+            } else {
+                deviation + URGENCY / ttc.max(1e-3)
+            }
         };
-        if d.length() < reach {
-            // Already too close: only moving apart (or not closer) is acceptable, whatever
-            // the other does.
-            let closing = (v - o.velocity).dot(d) / d.length().max(1e-9);
-            if closing > 0.0 {
-                return 1e9 + closing;
+        let mut ttc = f64::INFINITY;
+        for n in &self.neighbours {
+            if n.touching {
+                // Already too close: only moving apart (or not closer) is acceptable,
+                // whatever the other does.
+                let closing = (v - n.velocity).dot(n.offset) / n.distance.max(1e-9);
+                if closing > 0.0 {
+                    return 1e9 + closing;
+                }
+                continue;
             }
-            continue;
-        }
-        ttc = ttc.min(ray_disc(d, rel, reach));
-    }
-    for (f, &now) in obstacles.iter().zip(now) {
-        // Obstacles stand still: only the next moments matter, or a slow sidestep towards
-        // a wall would count as a collision long before it could be one.
-        for step in 1..=3 {
-            let t = step as f64 * 0.25;
-            let gap = f.distance(me.position + v * t);
-            if gap < me.radius && gap < now {
-                ttc = ttc.min(t);
-                break;
+            let t = ray_disc(n.offset, n.share * v - n.shift, n.clearance);
+            if t < ttc {
+                ttc = t;
+                if with(ttc) >= bound {
+                    return with(ttc);
+                }
             }
         }
-    }
-    let deviation = (v - preferred).length();
-    if ttc > HORIZON {
-        deviation
-    } else {
-        deviation + URGENCY / ttc.max(1e-3)
+        for o in &self.obstacles {
+            // Obstacles stand still: only the next moments matter, or a slow sidestep
+            // towards a wall would count as a collision long before it could be one.
+            for step in 1..=3 {
+                let t = step as f64 * 0.25;
+                let at = self.position + v * t;
+                // Outside the circle round it by my radius: no need to measure closer.
+                if (at - o.centre).length() - o.bound >= self.radius {
+                    continue;
+                }
+                let gap = o.footprint.distance(at);
+                if gap < self.radius && gap < o.now {
+                    ttc = ttc.min(t);
+                    break;
+                }
+            }
+        }
+        with(ttc)
     }
 }
 
-/// When a point leaving the origin at velocity `v` first comes within `reach` of `d`.
-fn ray_disc(d: DVec2, v: DVec2, reach: f64) -> f64 {
-    let a = v.length_squared();
-    if a < 1e-12 {
+/// When a point leaving the origin at velocity `v` first comes within reach of `d`
+/// (`clearance`: `|d|² − reach²`).
+fn ray_disc(d: DVec2, v: DVec2, clearance: f64) -> f64 {
+    let b = v.dot(d);
+    if b <= 0.0 {
         return f64::INFINITY;
     }
-    let b = v.dot(d);
-    let c = d.length_squared() - reach * reach;
-    let disc = b * b - a * c;
-    if b <= 0.0 || disc < 0.0 {
+    let a = v.length_squared();
+    let disc = b * b - a * clearance;
+    if a < 1e-12 || disc < 0.0 {
         return f64::INFINITY;
     }
     (b - disc.sqrt()) / a

@@ -54,13 +54,35 @@ impl Footprint {
 
     /// Distance from `p` to the polygon: 0 inside.
     pub fn distance(&self, p: DVec2) -> f64 {
-        if self.contains(p) {
-            return 0.0;
-        }
+        // One pass: inside while left of every edge; the square root once, of the least
+        // squared distance to an edge (the same number as the least distance).
         let n = self.outline.len();
-        (0..n)
-            .map(|i| segment_distance(p, self.outline[i], self.outline[(i + 1) % n]))
-            .fold(f64::INFINITY, f64::min)
+        let mut inside = n >= 3;
+        let mut nearest = f64::INFINITY;
+        for (i, &a) in self.outline.iter().enumerate() {
+            let b = self.outline[(i + 1) % n];
+            let (ab, ap) = (b - a, p - a);
+            inside &= ab.perp_dot(ap) >= 0.0;
+            nearest = nearest.min(segment_distance_squared(ap, ab));
+        }
+        if inside {
+            0.0
+        } else {
+            nearest.sqrt()
+        }
+    }
+
+    /// A circle that holds the polygon: the centre of its corners and the farthest
+    /// corner's distance from it.
+    pub fn bounding_circle(&self) -> (DVec2, f64) {
+        let c = self.centre();
+        let r = self
+            .outline
+            .iter()
+            .map(|p| (*p - c).length_squared())
+            .fold(0.0, f64::max)
+            .sqrt();
+        (c, r)
     }
 
     /// The centre of the polygon's corners.
@@ -117,13 +139,18 @@ impl Footprint {
 
 /// Distance from `p` to the segment `a`–`b`.
 pub fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
-    let ab = b - a;
+    segment_distance_squared(p - a, b - a).sqrt()
+}
+
+/// Squared distance from a point to a segment, both relative to the segment's start:
+/// `ap` to the point, `ab` to the segment's end.
+fn segment_distance_squared(ap: DVec2, ab: DVec2) -> f64 {
     let t = if ab.length_squared() > 0.0 {
-        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+        (ap.dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
     } else {
         0.0
     };
-    (a + ab * t - p).length()
+    (ab * t - ap).length_squared()
 }
 
 /// Corners of a polygon that contains the circle of `radius` about the origin.

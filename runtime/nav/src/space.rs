@@ -277,7 +277,7 @@ impl Space {
         let mut points = Vec::new();
         let mut start = from;
         if !mesh.point_in_mesh(v2(from)) {
-            if let Some(free) = nearest_free(&mesh, from) {
+            if let Some(free) = nearest_free(&mesh, obstacles, from, inflated) {
                 points.push(free);
                 start = free;
             }
@@ -316,14 +316,34 @@ impl Space {
     }
 }
 
-/// The nearest point of the mesh to `p`, searched on rings 2 cm apart up to 1.5 m.
-fn nearest_free(mesh: &Mesh, p: DVec2) -> Option<DVec2> {
-    for ring in 1..=75 {
+/// How far (m) [`nearest_free`] looks.
+const FREE_SEARCH: f64 = 1.5;
+
+/// The nearest point of the mesh to `p` (a body inflated by `inflated` among
+/// `obstacles`), searched on rings 2 cm apart up to [`FREE_SEARCH`].
+fn nearest_free(mesh: &Mesh, obstacles: &[Footprint], p: DVec2, inflated: f64) -> Option<DVec2> {
+    // Asking the mesh about a point off it is slow (it searches round the point), so the
+    // points within the inflated footprints near by are passed over first; the mesh's
+    // inflation is polygonal, not exactly ours, hence the plain search if that finds none.
+    let near: Vec<&Footprint> = obstacles
+        .iter()
+        .filter(|o| o.distance(p) < inflated + FREE_SEARCH)
+        .collect();
+    let clear = |q: DVec2| near.iter().all(|o| o.distance(q) >= inflated);
+    on_rings(p, |q| clear(q) && mesh.point_in_mesh(v2(q)))
+        .or_else(|| on_rings(p, |q| mesh.point_in_mesh(v2(q))))
+}
+
+/// The first point around `p` that is `free`, on rings 2 cm apart up to [`FREE_SEARCH`],
+/// 32 points a ring.
+fn on_rings(p: DVec2, free: impl Fn(DVec2) -> bool) -> Option<DVec2> {
+    let rings = (FREE_SEARCH / 0.02).round() as usize;
+    for ring in 1..=rings {
         let r = ring as f64 * 0.02;
         for k in 0..32 {
             let a = k as f64 * std::f64::consts::TAU / 32.0;
             let q = p + DVec2::new(a.cos(), a.sin()) * r;
-            if mesh.point_in_mesh(v2(q)) {
+            if free(q) {
                 return Some(q);
             }
         }

@@ -30,24 +30,24 @@ pub struct Navigation {
 impl World<'_> {
     /// Whether object `index` is an obstacle now (see the module docs).
     pub fn is_obstacle(&self, index: usize) -> bool {
+        self.obstacle_footprint(index).is_some()
+    }
+
+    /// Object `index`'s footprint if it is an obstacle now.
+    fn obstacle_footprint(&self, index: usize) -> Option<Footprint> {
         if self.holder(index).is_some() {
-            return false;
+            return None;
         }
-        match self.obstacle_flags.get(index).copied().flatten() {
-            Some(forced) => forced,
-            None => Footprint::of_object(&self.objects[index]).1 <= ON_FLOOR,
-        }
+        let (footprint, lowest) = Footprint::of_object(&self.objects[index]);
+        let forced = self.obstacle_flags.get(index).copied().flatten();
+        forced.unwrap_or(lowest <= ON_FLOOR).then_some(footprint)
     }
 
     /// Every obstacle's footprint now: walls first (in the order added), then objects (in
     /// the order added).
     pub fn obstacles(&self) -> Vec<Footprint> {
         let mut all: Vec<Footprint> = self.space.wall_footprints().collect();
-        all.extend(
-            (0..self.objects.len())
-                .filter(|&i| self.is_obstacle(i))
-                .map(|i| Footprint::of_object(&self.objects[i]).0),
-        );
+        all.extend((0..self.objects.len()).filter_map(|i| self.obstacle_footprint(i)));
         all
     }
 
