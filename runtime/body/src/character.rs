@@ -7,16 +7,19 @@
 //! the troupe joint it follows (from a name map; `formats::character` reads files).
 //! [`Character::dress`] fits it to one skeleton and height, giving a [`Dressing`]:
 //!
-//! 1. **Placement**: the character is turned so that its head is up (+Y) and its left
-//!    side is +X (troupe's frame: facing +Z), scaled to the actor's height (its mesh's
+//! 1. **Placement**: the character is turned so that its hips-to-head line and its
+//!    left-right axis lie along those of troupe's rest posture (so it faces +Z, troupe's
+//!    front, whatever axes the file used), scaled to the actor's height (its mesh's
 //!    extent along up), its lowest vertex put on the floor and its hips over troupe's.
 //! 2. **Rest poses reconciled**: each mapped bone gets a constant rotation `A`, the
 //!    shortest arc from its direction in the bind pose (towards the centroid of the
 //!    nearest mapped bones below it) to the direction from where it stands in troupe's
-//!    rest posture to troupe's rest joints of those bones. So a character bound in
-//!    T-pose hangs its arms as troupe's rest posture does, and a narrow-shouldered one
-//!    still puts its hands by troupe's hands. The topmost mapped bone (the hips) keeps
-//!    its orientation; a mapped bone with no mapped bone below it keeps its parent's `A`.
+//!    rest posture to troupe's rest joints of those bones; an upper arm or a thigh aims
+//!    at the end of its limb (the wrist, the foot), so the limb hangs straight. So a
+//!    character bound in T-pose hangs its arms as troupe's rest posture does, and a
+//!    narrow-shouldered one still puts its hands by troupe's hands. The topmost mapped
+//!    bone (the hips) keeps its orientation; a mapped bone with no mapped bone below it
+//!    keeps its parent's `A`.
 //! 3. **Posing**: a mapped bone takes the world rotation its troupe joint has made since
 //!    rest, `R(q) = Rⱼ(q)·Rⱼ(0)⁻¹·A·R_bind`; its position follows the character's own
 //!    bone chain (the character keeps its proportions), and the topmost mapped bone is
@@ -44,6 +47,10 @@ pub const REQUIRED_JOINTS: [&str; 6] = [
     "l_shoulder",
     "r_shoulder",
 ];
+
+/// Troupe joints (without their `l_`/`r_`) at the root of a limb: their bones aim at the
+/// limb's end when rest poses are reconciled.
+const LIMB_ROOTS: [&str; 2] = ["shoulder", "hip"];
 
 /// One bone of a character, in the file's space.
 #[derive(Clone, Debug, PartialEq)]
@@ -166,18 +173,21 @@ impl Character {
             )));
         }
         let at = |name: &str| bone_of(name).map(|b| self.bones[b].bind.translation);
-        let pair = |l: &str, r: &str| at(l).unwrap_or_default() - at(r).unwrap_or_default();
-        // The character's own frame: up from hips to head, left from its right side.
-        let up = (at("skullbase").unwrap_or_default() - at("sacroiliac").unwrap_or_default())
-            .try_normalize()
-            .ok_or_else(|| invalid("its head bone sits on its hips bone".into()))?;
-        let lateral = pair("l_hip", "r_hip") + pair("l_shoulder", "r_shoulder");
-        let left = (lateral - up * lateral.dot(up))
-            .try_normalize()
-            .ok_or_else(|| invalid("its left and right bones do not stand apart".into()))?;
-        let front = left.cross(up);
-        let turn =
-            DQuat::from_mat3(&glam::DMat3::from_cols(left, up, front).transpose()).normalize();
+        let rest = rest_globals(skeleton);
+        let troupe_at = |name: &str| skeleton.joint(name).ok().map(|j| rest[j].translation);
+        // The character's frame (up from hips to head, left from its right side) is
+        // turned onto the same frame of troupe's rest posture: a head carried a little
+        // forward of the hips stays so.
+        let character_frame = frame(&at).ok_or_else(|| {
+            invalid("its hips, head and left and right bones do not span a body".into())
+        })?;
+        let troupe_frame = frame(&troupe_at).ok_or_else(|| {
+            invalid(format!(
+                "skeleton `{}` has no hips, head or sides",
+                skeleton.name()
+            ))
+        })?;
+        let turn = DQuat::from_mat3(&(troupe_frame * character_frame.transpose())).normalize();
         let turned: Vec<DVec3> = self
             .positions
             .iter()
@@ -190,7 +200,6 @@ impl Character {
             return Err(invalid("its mesh has no height".into()));
         }
         let scale = height / (high - low);
-        let rest = rest_globals(skeleton);
         let hips_bone = bone_of("sacroiliac").unwrap_or(0);
         let hips = rest[joint_of[hips_bone].unwrap_or(0)].translation;
         let hips_char = turn * self.bones[hips_bone].bind.translation * scale;
@@ -231,9 +240,23 @@ impl Character {
             let (Some(j), Some(_)) = (joint_of[b], mapped_above[b]) else {
                 continue; // the topmost mapped bone keeps its orientation
             };
-            let below: Vec<usize> = (0..self.bones.len())
-                .filter(|&c| mapped_above[c] == Some(b) && joint_of[c].is_some())
-                .collect();
+            let mapped_below = |b: usize| -> Vec<usize> {
+                (0..self.bones.len())
+                    .filter(|&c| mapped_above[c] == Some(b) && joint_of[c].is_some())
+                    .collect()
+            };
+            let mut below = mapped_below(b);
+            // An upper arm or thigh aims at the end of its limb (the wrist, the foot),
+            // so the limb hangs straight as troupe's does at rest.
+            let name = &skeleton.joints()[j].name;
+            if LIMB_ROOTS.contains(&name.trim_start_matches(['l', 'r']).trim_start_matches('_'))
+                && below.len() == 1
+            {
+                let further = mapped_below(below[0]);
+                if further.len() == 1 {
+                    below = further;
+                }
+            }
             if below.is_empty() {
                 continue;
             }
@@ -342,6 +365,24 @@ impl Dressing {
         self.slot_bones.len()
     }
 
+    /// The troupe joint whose motion moves each skinning slot.
+    pub fn slot_joints(&self) -> Vec<usize> {
+        self.slot_bones
+            .iter()
+            .map(|&b| self.slot_joint_of(b))
+            .collect()
+    }
+
+    /// The troupe joint that moves bone `b`: its own, or its nearest moving ancestor's.
+    fn slot_joint_of(&self, mut b: usize) -> usize {
+        loop {
+            match self.bones[b].rule {
+                Rule::Carried { joint, .. } | Rule::Mapped { joint, .. } => return joint,
+                Rule::Follows { parent } => b = parent,
+            }
+        }
+    }
+
     /// Every bone's world frame for troupe joint frames `globals`.
     pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
         let mut frames: Vec<Transform> = Vec::with_capacity(self.bones.len());
@@ -402,11 +443,118 @@ impl Dressing {
     }
 }
 
+/// The body frame of joint positions `at` (by troupe joint name): columns left (+X in
+/// troupe), up from hips to head, front; `None` when they do not span one.
+fn frame(at: &dyn Fn(&str) -> Option<DVec3>) -> Option<glam::DMat3> {
+    let pair = |l: &str, r: &str| Some(at(l)? - at(r)?);
+    let up = pair("skullbase", "sacroiliac")?.try_normalize()?;
+    let lateral = pair("l_hip", "r_hip")? + pair("l_shoulder", "r_shoulder")?;
+    let left = (lateral - up * lateral.dot(up)).try_normalize()?;
+    Some(glam::DMat3::from_cols(left, up, left.cross(up)))
+}
+
 /// The rotation taking direction `from` onto `to` by the shortest arc (identity when
 /// either has no direction).
 fn arc(from: DVec3, to: DVec3) -> DQuat {
     match (from.try_normalize(), to.try_normalize()) {
         (Some(a), Some(b)) => DQuat::from_rotation_arc(a, b),
         _ => DQuat::IDENTITY,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::forward_kinematics;
+    use crate::template::default_skeleton;
+
+    /// A character made of troupe's own skeleton: one bone per joint at its rest frame,
+    /// one vertex on each joint (moved by it alone), and two on the floor and the crown.
+    fn troupe_shaped(skeleton: &Skeleton, height: f64) -> Character {
+        let rest = rest_globals(skeleton);
+        let joints = skeleton.joints();
+        let mut positions: Vec<[f32; 3]> = rest
+            .iter()
+            .map(|t| t.translation.as_vec3().to_array())
+            .collect();
+        let mut bone_of: Vec<u16> = (0..joints.len() as u16).collect();
+        positions.push([0.0, 0.0, 0.0]);
+        positions.push([0.0, height as f32, 0.0]);
+        bone_of.extend([0, skeleton.joint("skullbase").unwrap() as u16]);
+        let n = positions.len();
+        Character {
+            source: "troupe-shaped".into(),
+            bones: joints
+                .iter()
+                .zip(&rest)
+                .map(|(j, t)| Bone {
+                    name: j.name.clone(),
+                    parent: j.parent,
+                    bind: Transform::new(DQuat::IDENTITY, t.translation),
+                    joint: Some(j.name.clone()),
+                })
+                .collect(),
+            normals: vec![[0.0, 1.0, 0.0]; n],
+            colors: vec![[1.0; 3]; n],
+            joints: bone_of.iter().map(|&b| [b, 0, 0, 0]).collect(),
+            weights: vec![[1.0, 0.0, 0.0, 0.0]; n],
+            indices: vec![0, 1, 2],
+            positions,
+        }
+    }
+
+    #[test]
+    fn a_character_shaped_like_troupe_follows_its_joints_exactly() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let character = troupe_shaped(&skeleton, 1.75);
+        let dressing = character.dress(&skeleton, 1.75).unwrap();
+        let mut q = vec![0.0; skeleton.dof_count()];
+        for (d, v) in q.iter_mut().enumerate() {
+            // Every DOF moved, each by its own amount.
+            *v = 0.3 * ((d * 7919 % 13) as f64 / 13.0 - 0.5);
+        }
+        let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
+        forward_kinematics(&skeleton, &q, &mut globals);
+        let posed = dressing.deform(&globals);
+        for (j, g) in globals.iter().enumerate() {
+            assert!(
+                (posed[j] - g.translation).length() < 1e-4,
+                "{}: {} vs {}",
+                skeleton.joints()[j].name,
+                posed[j],
+                g.translation
+            );
+        }
+        // Folded joints: with only the required bones mapped, a fingertip follows the
+        // wrist's nearest mapped ancestor rigidly, never tearing away from it.
+        let mut sparse = character.clone();
+        for bone in &mut sparse.bones {
+            if !REQUIRED_JOINTS.contains(&bone.joint.as_deref().unwrap()) {
+                bone.joint = None;
+            }
+        }
+        let dressing = sparse.dress(&skeleton, 1.75).unwrap();
+        assert!(dressing.slot_count() <= REQUIRED_JOINTS.len() + 1);
+        let posed = dressing.deform(&globals);
+        assert!(posed.iter().all(|p| p.is_finite()));
+    }
+
+    #[test]
+    fn missing_required_bones_and_unknown_joints_are_named() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let mut character = troupe_shaped(&skeleton, 1.75);
+        for bone in &mut character.bones {
+            if bone.name.ends_with("_hip") {
+                bone.joint = None;
+            }
+        }
+        let err = character.dress(&skeleton, 1.75).unwrap_err().to_string();
+        assert!(err.contains("l_hip, r_hip"), "{err}");
+        character.bones[3].joint = Some("tail".into());
+        let err = character.dress(&skeleton, 1.75).unwrap_err().to_string();
+        assert!(err.contains("mapped to `tail`"), "{err}");
+        assert!(troupe_shaped(&skeleton, 1.75)
+            .dress(&skeleton, f64::NAN)
+            .is_err());
     }
 }

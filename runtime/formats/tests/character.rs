@@ -156,12 +156,15 @@ fn cesium_man_follows_troupe_postures() {
                 );
             }
         }
-        // Its hands stay by troupe's wrists: CesiumMan's arms are longer than troupe's
-        // and its hands are big mittens, hence the bound.
-        for (hand, joint) in [(&left_hand, "l_wrist"), (&right_hand, "r_wrist")] {
+        // Its hands stay by troupe's (the knuckles of the middle finger): close at rest;
+        // posed, further, as CesiumMan is a cartoon: its head is a quarter of its height,
+        // so its shoulders are 18 cm lower than troupe's and 12 cm narrower, and its hands
+        // are big mittens.
+        let bound = if dofs.is_empty() { 0.15 } else { 0.45 };
+        for (hand, joint) in [(&left_hand, "l_middle1"), (&right_hand, "r_middle1")] {
             let off = (centroid(&posed, hand) - at_joint(&g, joint)).length();
             assert!(
-                off < 0.3,
+                off < bound,
                 "{dofs:?}: {joint}'s hand is {off:.3} m from troupe's {joint}"
             );
         }
