@@ -523,7 +523,7 @@ fn strongest_four(mut influences: Vec<(u16, f64)>) -> Option<([u16; 4], [f32; 4]
     influences.sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
     influences.truncate(4);
     let sum: f64 = influences.iter().map(|(_, w)| w).sum();
-    if !(sum > 0.0) {
+    if sum <= 0.0 {
         return None;
     }
     let mut joints = [0u16; 4];
