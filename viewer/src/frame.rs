@@ -5,7 +5,7 @@ use crate::nav::NavOverlay;
 use crate::ViewerError;
 use glam::{Quat, Vec3};
 use std::sync::Arc;
-use troupe_body::{Shape, Skeleton, Transform};
+use troupe_body::{Dressing, Shape, Skeleton, Transform};
 use troupe_scene::{Scene, Status};
 
 /// The grasp state of one hand (thesis 4.7), shown by tinting the hand solid.
@@ -76,6 +76,9 @@ pub struct ActorFrame {
     /// Text labels (e.g. running actions), drawn under the name above the head (printable
     /// ASCII; other characters show as `?`).
     pub labels: Vec<String>,
+    /// The user's character it is dressed in (`troupe.actor{ look = … }`), drawn instead
+    /// of the generated skin in the skin look.
+    pub look: Option<Arc<Dressing>>,
 }
 
 impl ActorFrame {
@@ -190,6 +193,7 @@ impl Frame {
                     .filter(|a| a.status != Status::Pending)
                     .map(|a| format!("{} ({})", a.kind, a.status.name()))
                     .collect(),
+                look: scene.look(i).cloned(),
             })
             .collect();
         let objects = scene

@@ -325,7 +325,11 @@ pub(crate) struct SceneRenderer {
     skin_capacity: usize,
     skins: SkinCache,
     /// This frame's skinned actors: skeleton key, whether far (coarse mesh).
-    skin_draws: Vec<(std::sync::Arc<troupe_body::Skeleton>, bool)>,
+    skin_draws: Vec<(
+        skinned::SkinKey,
+        std::sync::Arc<troupe_body::Skeleton>,
+        bool,
+    )>,
     skin_data: Vec<u8>,
     /// Debug lines (the navigation view).
     lines: LineRenderer,
@@ -765,8 +769,8 @@ impl SceneRenderer {
         }
         if !self.skin_draws.is_empty() {
             pass.set_pipeline(&self.skin_pipeline);
-            for (i, (skeleton, far)) in self.skin_draws.iter().enumerate() {
-                let Some(skin) = self.skins.get(&gpu.device, skeleton) else {
+            for (i, (key, skeleton, far)) in self.skin_draws.iter().enumerate() {
+                let Some(skin) = self.skins.get_key(&gpu.device, key, skeleton) else {
                     continue;
                 };
                 let (indices, count) = if *far {
@@ -862,16 +866,24 @@ impl SceneRenderer {
                 .map_or(Vec3::ZERO, |t| t.translation.as_vec3());
             let distance = (root - eye).length().max(0.05);
             let style = match self.options.style {
-                BodyStyle::Skin => match self.skins.get(&gpu.device, &actor.skeleton) {
+                BodyStyle::Skin => match self.skins.get_key(
+                    &gpu.device,
+                    &skinned::SkinKey::of(actor),
+                    &actor.skeleton,
+                ) {
                     Some(skin) => {
-                        let block = skinned::block(&skin.skin, actor, colors.slots());
+                        let block = skinned::block(&skin.source, actor, colors.slots());
                         self.skin_data.extend_from_slice(bytemuck::bytes_of(&block));
                         self.skin_data.resize(
                             self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize,
                             0,
                         );
                         let far = 1.8 * pixels_per_metre / distance < 360.0;
-                        self.skin_draws.push((actor.skeleton.clone(), far));
+                        self.skin_draws.push((
+                            skinned::SkinKey::of(actor),
+                            actor.skeleton.clone(),
+                            far,
+                        ));
                         continue;
                     }
                     None => BodyStyle::Solids,

@@ -143,6 +143,7 @@ fn vs_skin(
     @location(2) joints: vec4<u32>,
     @location(3) weights: vec4<f32>,
     @location(4) part: u32,
+    @location(5) tint: vec4<f32>,
 ) -> MeshOut {
     let m = skin.joints[joints.x] * weights.x + skin.joints[joints.y] * weights.y
         + skin.joints[joints.z] * weights.z + skin.joints[joints.w] * weights.w;
@@ -151,7 +152,7 @@ fn vs_skin(
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     // Blended rotations are near-orthogonal: the normal goes through the same matrix.
     out.normal = (m * vec4<f32>(normal, 0.0)).xyz;
-    out.color = skin.colors[part];
+    out.color = skin.colors[part] * tint;
     return out;
 }
 

@@ -3,6 +3,10 @@
 //! it) and kept on the GPU; each frame uploads only every actor's joint matrices and
 //! colours, one uniform block per actor, and draws its skin with that block.
 //!
+//! An actor dressed in a user's character (`troupe_body::Dressing`) is drawn the same
+//! way from the character's own mesh, weights and vertex colours, its skinning matrices
+//! found from troupe's joint frames each frame.
+//!
 //! Linear blend skinning rather than dual quaternions: it is what glTF files and every
 //! glTF viewer use, so the window, the PNG frames and an exported `.glb` show the same
 //! deformation; with the skin's weights (smoothed over the surface across each joint)
@@ -13,7 +17,7 @@ use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
 use std::sync::Arc;
 use troupe_body::skin::Region;
-use troupe_body::{Skeleton, Skin};
+use troupe_body::{Dressing, Skeleton, Skin};
 use wgpu::util::DeviceExt;
 
 /// The most joints a skinned skeleton may have (troupe's templates have 66); an actor
@@ -34,6 +38,9 @@ pub(crate) struct SkinVertex {
     weights: [f32; 4],
     /// Colour slot: a [`Region`], or a hand.
     part: u32,
+    /// Linear colour multiplying the slot's: white for the generated skin, the
+    /// character's own colour for a user's character.
+    tint: [f32; 4],
 }
 
 /// An actor's uniform block: colours and skinning matrices.
@@ -51,7 +58,34 @@ pub(crate) struct GpuSkin {
     pub count: u32,
     pub far_indices: wgpu::Buffer,
     pub far_count: u32,
-    pub skin: Arc<Skin>,
+    pub source: SkinSource,
+}
+
+/// What a GPU skin was made from.
+pub(crate) enum SkinSource {
+    /// A skeleton's generated skin.
+    Generated(Arc<Skin>),
+    /// A user's character fitted to an actor.
+    Character(Arc<Dressing>),
+}
+
+/// Which skin an actor is drawn with: its character's, else its skeleton's.
+#[derive(Clone)]
+pub(crate) enum SkinKey {
+    /// The generated skin of a skeleton.
+    Generated(Arc<Skeleton>),
+    /// A user's character.
+    Character(Arc<Dressing>),
+}
+
+impl SkinKey {
+    /// The key of how `actor` is drawn.
+    pub fn of(actor: &ActorFrame) -> SkinKey {
+        match &actor.look {
+            Some(d) => SkinKey::Character(d.clone()),
+            None => SkinKey::Generated(actor.skeleton.clone()),
+        }
+    }
 }
 
 /// Skins built so far, by skeleton. The skeleton is kept alive with its skin, so its
@@ -59,9 +93,49 @@ pub(crate) struct GpuSkin {
 #[derive(Default)]
 pub(crate) struct SkinCache {
     skins: HashMap<usize, (Arc<Skeleton>, Option<GpuSkin>)>,
+    /// Characters' skins, by dressing (kept alive with it, as skeletons are).
+    characters: HashMap<usize, (Arc<Dressing>, Option<GpuSkin>)>,
 }
 
 impl SkinCache {
+    /// The GPU skin of `key`, made on first use; `None` when it cannot be drawn so (a
+    /// skeleton that is not a template's, too many joints or slots): drawn as solids.
+    pub fn get_key(
+        &mut self,
+        device: &wgpu::Device,
+        key: &SkinKey,
+        skeleton: &Skeleton,
+    ) -> Option<&GpuSkin> {
+        match key {
+            SkinKey::Generated(skeleton) => self.get(device, skeleton),
+            SkinKey::Character(dressing) => self.character(device, dressing, skeleton),
+        }
+    }
+
+    /// The GPU skin of a character fitted to an actor.
+    fn character(
+        &mut self,
+        device: &wgpu::Device,
+        dressing: &Arc<Dressing>,
+        skeleton: &Skeleton,
+    ) -> Option<&GpuSkin> {
+        let key = Arc::as_ptr(dressing) as usize;
+        let entry = self.characters.entry(key).or_insert_with(|| {
+            let skin = if dressing.slot_count() > MAX_JOINTS {
+                tracing::warn!(
+                    "{}: {} moving bones, more than the {MAX_JOINTS} the skin look draws: drawing solids",
+                    dressing.source,
+                    dressing.slot_count()
+                );
+                None
+            } else {
+                Some(upload_character(device, dressing.clone(), skeleton))
+            };
+            (dressing.clone(), skin)
+        });
+        entry.1.as_ref()
+    }
+
     /// The GPU skin of `skeleton`, built on first use; `None` when the skeleton cannot
     /// be skinned (not a troupe template, or too many joints): it is drawn as solids.
     pub fn get(&mut self, device: &wgpu::Device, skeleton: &Arc<Skeleton>) -> Option<&GpuSkin> {
@@ -92,17 +166,7 @@ impl SkinCache {
 /// The colour slot of each vertex: its region, or a hand for bare skin moved mostly by a
 /// joint at or below a wrist (so grasp states can tint the hands).
 fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
-    let wrists = [
-        skeleton.joint("l_wrist").ok(),
-        skeleton.joint("r_wrist").ok(),
-    ];
-    let mut hand_of: Vec<Option<u32>> = vec![None; skeleton.joints().len()];
-    for (j, joint) in skeleton.joints().iter().enumerate() {
-        hand_of[j] = match wrists.iter().position(|w| *w == Some(j)) {
-            Some(side) => Some(LEFT_HAND + side as u32),
-            None => joint.parent.and_then(|p| hand_of[p]),
-        };
-    }
+    let hand_of = hand_slots(skeleton);
     skin.regions
         .iter()
         .zip(&skin.joints)
@@ -115,6 +179,22 @@ fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
         .collect()
 }
 
+/// The hand colour slot of each joint at or below a wrist.
+fn hand_slots(skeleton: &Skeleton) -> Vec<Option<u32>> {
+    let wrists = [
+        skeleton.joint("l_wrist").ok(),
+        skeleton.joint("r_wrist").ok(),
+    ];
+    let mut hand_of: Vec<Option<u32>> = vec![None; skeleton.joints().len()];
+    for (j, joint) in skeleton.joints().iter().enumerate() {
+        hand_of[j] = match wrists.iter().position(|w| *w == Some(j)) {
+            Some(side) => Some(LEFT_HAND + side as u32),
+            None => joint.parent.and_then(|p| hand_of[p]),
+        };
+    }
+    hand_of
+}
+
 fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSkin {
     let parts = parts(&skin, skeleton);
     let vertices: Vec<SkinVertex> = (0..skin.positions.len())
@@ -124,8 +204,70 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
             joints: skin.joints[i],
             weights: skin.weights[i],
             part: parts[i],
+            tint: [1.0; 4],
         })
         .collect();
+    let (indices, far) = (skin.indices.clone(), skin.far_indices.clone());
+    upload_mesh(
+        device,
+        &vertices,
+        &indices,
+        &far,
+        SkinSource::Generated(skin),
+    )
+}
+
+/// Uploads a character's mesh: its colours as tints of a white slot, the vertices moved
+/// mostly by a wrist or a finger in the hand slots (so grasp states can tint them).
+fn upload_character(
+    device: &wgpu::Device,
+    dressing: Arc<Dressing>,
+    skeleton: &Skeleton,
+) -> GpuSkin {
+    let hands = hand_slots(skeleton);
+    let slot_hands: Vec<Option<u32>> = dressing
+        .slot_joints()
+        .iter()
+        .map(|&j| hands.get(j).copied().flatten())
+        .collect();
+    let vertices: Vec<SkinVertex> = (0..dressing.positions.len())
+        .map(|i| SkinVertex {
+            pos: dressing.positions[i],
+            normal: dressing.normals[i],
+            joints: dressing.slots[i],
+            weights: dressing.weights[i],
+            part: slot_hands[dressing.slots[i][0] as usize].unwrap_or(Region::Skin as u32),
+            tint: {
+                let c = dressing.colors[i].map(srgb_to_linear);
+                [c[0], c[1], c[2], 1.0]
+            },
+        })
+        .collect();
+    upload_mesh(
+        device,
+        &vertices,
+        &dressing.indices,
+        &dressing.indices,
+        SkinSource::Character(dressing.clone()),
+    )
+}
+
+/// An sRGB component as linear light.
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+fn upload_mesh(
+    device: &wgpu::Device,
+    vertices: &[SkinVertex],
+    indices: &[u32],
+    far_indices: &[u32],
+    source: SkinSource,
+) -> GpuSkin {
     let buffer = |label, contents: &[u8], usage| {
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
@@ -136,42 +278,56 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
     GpuSkin {
         vertices: buffer(
             "skin vertices",
-            bytemuck::cast_slice(&vertices),
+            bytemuck::cast_slice(vertices),
             wgpu::BufferUsages::VERTEX,
         ),
         indices: buffer(
             "skin triangles",
-            bytemuck::cast_slice(&skin.indices),
+            bytemuck::cast_slice(indices),
             wgpu::BufferUsages::INDEX,
         ),
-        count: skin.indices.len() as u32,
+        count: indices.len() as u32,
         far_indices: buffer(
             "skin far triangles",
-            bytemuck::cast_slice(&skin.far_indices),
+            bytemuck::cast_slice(far_indices),
             wgpu::BufferUsages::INDEX,
         ),
-        far_count: skin.far_indices.len() as u32,
-        skin,
+        far_count: far_indices.len() as u32,
+        source,
     }
 }
 
 /// Vertex attributes of [`SkinVertex`].
-pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 5] = wgpu::vertex_attr_array![
-    0 => Float32x3, 1 => Float32x3, 2 => Uint16x4, 3 => Float32x4, 4 => Uint32
+pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Uint16x4, 3 => Float32x4, 4 => Uint32, 5 => Float32x4
 ];
 
 /// The uniform block of one actor: `colors` by slot and the skinning matrices for its
 /// current joint frames.
-pub(crate) fn block(skin: &Skin, actor: &ActorFrame, colors: [[f32; 4]; COLORS]) -> SkinBlock {
+pub(crate) fn block(
+    source: &SkinSource,
+    actor: &ActorFrame,
+    colors: [[f32; 4]; COLORS],
+) -> SkinBlock {
     let mut block = SkinBlock {
         colors,
         joints: [[[0.0; 4]; 4]; MAX_JOINTS],
     };
-    for (slot, t) in block
-        .joints
-        .iter_mut()
-        .zip(skin.skinning_transforms(&actor.globals))
-    {
+    let transforms = match source {
+        SkinSource::Generated(skin) => skin.skinning_transforms(&actor.globals),
+        SkinSource::Character(dressing) => {
+            // The character's own colours show through white slots; a hand keeps the
+            // tint of its grasp state when it is not the plain skin colour.
+            let skin = block.colors[Region::Skin as usize];
+            for (slot, color) in block.colors.iter_mut().enumerate() {
+                if slot < LEFT_HAND as usize || *color == skin {
+                    *color = [1.0; 4];
+                }
+            }
+            dressing.skinning_transforms(&actor.globals)
+        }
+    };
+    for (slot, t) in block.joints.iter_mut().zip(transforms) {
         let m =
             glam::Mat4::from_rotation_translation(t.rotation.as_quat(), t.translation.as_vec3());
         *slot = m.to_cols_array_2d();

@@ -8,6 +8,7 @@
 
 #![warn(missing_docs)]
 
+pub mod character;
 pub mod dynamics;
 pub mod error;
 pub mod ik;
@@ -26,6 +27,7 @@ pub mod state;
 pub mod template;
 pub mod transform;
 
+pub use character::{Character, Dressing};
 pub use error::{Error, Result};
 pub use glam;
 pub use object::Object;

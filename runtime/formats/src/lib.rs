@@ -8,6 +8,7 @@
 #![warn(missing_docs)]
 
 pub mod bvh;
+pub mod character;
 pub mod dispatch;
 pub mod error;
 pub mod gltf;

@@ -593,6 +593,45 @@ fn object_shape(t: &Table) -> mlua::Result<Shape> {
     Ok(shape)
 }
 
+/// Reads the character file of an actor's `look` option (a `.glb`, `.gltf` or `.vrm`
+/// beside the scene or as given) with its `bones` map (`{ hips = "NodeName", … }`).
+fn load_character(lua: &Lua, path: &str, opts: &Table) -> mlua::Result<troupe_body::Character> {
+    let base = stage(lua)?.base_dir.clone();
+    let full = resolve_path(&base, path).map_err(|e| lua_err(format!("actor: look: {e}")))?;
+    stage(lua)?.loaded_files.push(full.clone());
+    let mut bones = Vec::new();
+    match opts.get::<Value>("bones")? {
+        Value::Nil => {}
+        Value::Table(map) => {
+            for pair in map.pairs::<Value, Value>() {
+                let (key, node) = pair?;
+                match (key, node) {
+                    (Value::String(k), Value::String(n)) => {
+                        bones.push((k.to_str()?.to_string(), n.to_str()?.to_string()))
+                    }
+                    (k, n) => {
+                        return Err(lua_err(format!(
+                            "actor: bones: expected `bone = \"NodeName\"` pairs of strings, found a {} = {}",
+                            k.type_name(),
+                            n.type_name()
+                        )))
+                    }
+                }
+            }
+        }
+        other => {
+            return Err(lua_err(format!(
+                "actor: bones: expected a table `{{ hips = \"NodeName\", … }}`, found a {}",
+                other.type_name()
+            )))
+        }
+    }
+    // Lua tables have no order: sort, so that the same map gives the same character.
+    bones.sort();
+    troupe_formats::character::read_character(&full, &bones)
+        .map_err(|e| lua_err(format!("actor: look: {e}")))
+}
+
 /// Installs the `troupe` table.
 pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     let troupe = lua.create_table()?;
@@ -602,7 +641,9 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
             check_keys(
                 &t,
                 "actor",
-                &["name", "template", "height", "mass", "at", "facing"],
+                &[
+                    "name", "template", "height", "mass", "at", "facing", "look", "bones",
+                ],
             )?;
             let name = opt_string(&t, "actor", "name")?
                 .ok_or_else(|| lua_err("actor: `name` is required"))?;
@@ -619,9 +660,18 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
                 },
                 facing_degrees: opt_number(&t, "actor", "facing")?.unwrap_or(0.0),
             };
+            let look = match opt_string(&t, "actor", "look")? {
+                Some(path) => Some(load_character(lua, &path, &t)?),
+                None if !t.get::<Value>("bones")?.is_nil() => {
+                    return Err(lua_err(
+                        "actor: `bones` maps the bones of a `look` file; give `look` too",
+                    ))
+                }
+                None => None,
+            };
             let index = stage(lua)?
                 .scene
-                .add_actor(&desc)
+                .add_dressed_actor(&desc, look.as_ref())
                 .map_err(|e| lua_err(format!("actor: {e}")))?;
             Ok(ActorRef(index))
         })?,

@@ -113,7 +113,7 @@ pub const API: &[Entry] = &[
     f("", "require", &["name: string"], "any", "Loads a module from the scene's folder, else troupe's standard library (once)."),
     f("", "print", &["...: any"], "", "Logs the values with the actor's name."),
     // The troupe table.
-    f("troupe", "actor", &["opts: ActorOptions"], "Actor", "Creates an actor: `name` (required), `template`, `height`, `mass`, `at`, `facing`."),
+    f("troupe", "actor", &["opts: ActorOptions"], "Actor", "Creates an actor: `name` (required), `template`, `height`, `mass`, `at`, `facing`, and `look` (a rigged .glb/.gltf/.vrm character to draw it as) with its `bones` map."),
     f("troupe", "object", &["opts: ObjectOptions"], "Object", "Creates a rigid object: `name`, `shape` and its sizes, `at`, `rotation`, `mass`."),
     f("troupe", "time", &[], "number", "Scene time in seconds."),
     f("troupe", "tick", &[], "integer", "Ticks done."),
@@ -392,6 +392,8 @@ const TYPES: &str = r#"---@alias Vec3 number[]|{x: number, y: number, z: number}
 ---@field mass? number
 ---@field at? Vec3
 ---@field facing? number
+---@field look? string
+---@field bones? table<string, string>
 
 ---The options of `troupe.object`.
 ---@class ObjectOptions

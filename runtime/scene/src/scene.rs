@@ -14,6 +14,7 @@ use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
 use std::time::Instant;
+use troupe_body::character::{Character, Dressing};
 use troupe_body::sensors::Side;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::solid::Shape;
@@ -128,6 +129,9 @@ pub struct Scene {
     crowd: troupe_nav::Crowd,
     /// Per actor: the DOF indices of root_x and root_z.
     root_dofs: Vec<(usize, usize)>,
+    /// Per actor: the user's character it is dressed in, if any (drawn instead of the
+    /// generated skin; it changes nothing in the simulation).
+    looks: Vec<Option<Arc<Dressing>>>,
 }
 
 impl Scene {
@@ -169,6 +173,7 @@ impl Scene {
             obstacle_flags: Vec::new(),
             crowd: troupe_nav::Crowd::default(),
             root_dofs: Vec::new(),
+            looks: Vec::new(),
         })
     }
 
@@ -372,6 +377,18 @@ impl Scene {
     /// Adds an actor built from a template; actors of equal template and parameters share
     /// one skeleton.
     pub fn add_actor(&mut self, desc: &ActorDesc) -> Result<usize> {
+        self.add_dressed_actor(desc, None)
+    }
+
+    /// Adds an actor as [`Scene::add_actor`] does, dressed in a user's rigged character
+    /// fitted to its skeleton and height when `look` is given (drawn instead of the
+    /// generated skin; it changes nothing in the simulation). A character that does not
+    /// fit is an error naming what it lacks, and no actor is added.
+    pub fn add_dressed_actor(
+        &mut self,
+        desc: &ActorDesc,
+        look: Option<&Character>,
+    ) -> Result<usize> {
         if desc.name.is_empty() {
             return Err(Error::Invalid("an actor needs a name".into()));
         }
@@ -405,6 +422,10 @@ impl Scene {
                 s
             }
         };
+        let look = match look {
+            Some(character) => Some(Arc::new(character.dress(&skeleton, params.height)?)),
+            None => None,
+        };
         let mut q = vec![0.0; skeleton.dof_count()];
         q[skeleton.dof("root_x")?] = desc.at.x;
         q[skeleton.dof("root_z")?] = desc.at.z;
@@ -424,7 +445,13 @@ impl Scene {
             params,
             skeleton,
         });
+        self.looks.push(look);
         Ok(self.actors.len() - 1)
+    }
+
+    /// The character actor `actor` is dressed in, if any (see [`Scene::add_dressed_actor`]).
+    pub fn look(&self, actor: usize) -> Option<&Arc<Dressing>> {
+        self.looks.get(actor)?.as_ref()
     }
 
     /// Adds a rigid object.

@@ -153,7 +153,7 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
 
 /// Refuses a binary glTF whose header is cut short or declares a total length shorter
 /// than itself, which `gltf` would otherwise subtract past zero.
-fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
+pub(crate) fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
     if !bytes.starts_with(b"glTF") {
         return Ok(());
     }
@@ -174,7 +174,11 @@ fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> {
 
 /// The bytes of every buffer of `gltf`: the `.glb` binary chunk, a base64 `data:` URI,
 /// or a file beside `path`.
-fn load_buffers(gltf: &Gltf, path: &Path, bad: &dyn Fn(String) -> Error) -> Result<Vec<Vec<u8>>> {
+pub(crate) fn load_buffers(
+    gltf: &Gltf,
+    path: &Path,
+    bad: &dyn Fn(String) -> Error,
+) -> Result<Vec<Vec<u8>>> {
     let dir = path.parent().unwrap_or(Path::new("."));
     gltf.buffers()
         .map(|buffer| match buffer.source() {

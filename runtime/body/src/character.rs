@@ -1,0 +1,560 @@
+//! A user's own rigged character (a glTF or VRM humanoid) dressed on a troupe skeleton,
+//! so that troupe's postures move the character's skin (thesis 6.5.2: the animator sees
+//! the motion on the body it is meant for).
+//!
+//! A [`Character`] is what a file gave, in the file's own space: a skinned mesh in its
+//! bind pose, its bones (bind frames from the inverse bind matrices) and, for each bone,
+//! the troupe joint it follows (from a name map; `formats::character` reads files).
+//! [`Character::dress`] fits it to one skeleton and height, giving a [`Dressing`]:
+//!
+//! 1. **Placement**: the character is turned so that its hips-to-head line and its
+//!    left-right axis lie along those of troupe's rest posture (so it faces +Z, troupe's
+//!    front, whatever axes the file used), scaled to the actor's height (its mesh's
+//!    extent along up), its lowest vertex put on the floor and its hips over troupe's.
+//! 2. **Rest poses reconciled**: each mapped bone gets a constant rotation `A`, the
+//!    shortest arc from its direction in the bind pose (towards the centroid of the
+//!    nearest mapped bones below it) to the direction from where it stands in troupe's
+//!    rest posture to troupe's rest joints of those bones; an upper arm or a thigh aims
+//!    at the end of its limb (the wrist, the foot), so the limb hangs straight. So a
+//!    character bound in T-pose hangs its arms as troupe's rest posture does, and a
+//!    narrow-shouldered one still puts its hands by troupe's hands. The topmost mapped
+//!    bone (the hips) keeps its orientation; a mapped bone with no mapped bone below it
+//!    keeps its parent's `A`.
+//! 3. **Posing**: a mapped bone takes the world rotation its troupe joint has made since
+//!    rest, `R(q) = Rⱼ(q)·Rⱼ(0)⁻¹·A·R_bind`; its position follows the character's own
+//!    bone chain (the character keeps its proportions), and the topmost mapped bone is
+//!    carried by its troupe joint. A bone with no troupe joint keeps its bind pose
+//!    relative to its parent, so its skinning matrix is its nearest mapped ancestor's:
+//!    troupe joints with no bone (extra vertebrae, fingers of a character without finger
+//!    bones) are thereby folded into the nearest mapped bone, whose world rotation
+//!    includes theirs.
+//!
+//! The skin deforms by linear blend skinning with the file's weights (at most four per
+//! vertex, normalised by the reader), as glTF viewers do.
+
+use crate::error::{Error, Result};
+use crate::skeleton::Skeleton;
+use crate::skin::rest_globals;
+use crate::transform::Transform;
+use glam::{DQuat, DVec3};
+
+/// Troupe joints a character must have bones for, to be placed and turned upright.
+pub const REQUIRED_JOINTS: [&str; 6] = [
+    "sacroiliac",
+    "skullbase",
+    "l_hip",
+    "r_hip",
+    "l_shoulder",
+    "r_shoulder",
+];
+
+/// Troupe joints (without their `l_`/`r_`) at the root of a limb: their bones aim at the
+/// limb's end when rest poses are reconciled.
+const LIMB_ROOTS: [&str; 2] = ["shoulder", "hip"];
+
+/// One bone of a character, in the file's space.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Bone {
+    /// The bone's node name in the file.
+    pub name: String,
+    /// The parent bone (an index into the character's bones, always smaller).
+    pub parent: Option<usize>,
+    /// The bone's frame in the bind pose (the inverse of its inverse bind matrix).
+    pub bind: Transform,
+    /// The troupe joint whose motion it follows, if mapped.
+    pub joint: Option<String>,
+}
+
+/// A rigged character as a file describes it: a skinned mesh in its bind pose.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Character {
+    /// Where it came from (the file), for messages.
+    pub source: String,
+    /// Bones, parents before children.
+    pub bones: Vec<Bone>,
+    /// Bind-pose vertex positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Bind-pose unit normals.
+    pub normals: Vec<[f32; 3]>,
+    /// sRGB colour of each vertex (its material's, sampled from its texture where the
+    /// reader could).
+    pub colors: Vec<[f32; 3]>,
+    /// Up to four bones per vertex (indices into `bones`).
+    pub joints: Vec<[u16; 4]>,
+    /// Their weights, summing to one.
+    pub weights: Vec<[f32; 4]>,
+    /// Triangles, counter-clockwise from outside.
+    pub indices: Vec<u32>,
+}
+
+/// A character fitted to one skeleton and height, ready to follow its postures.
+#[derive(Clone, Debug)]
+pub struct Dressing {
+    /// Where the character came from.
+    pub source: String,
+    /// Placed bind-pose vertex positions (troupe's frame, metres).
+    pub positions: Vec<[f32; 3]>,
+    /// Placed unit normals.
+    pub normals: Vec<[f32; 3]>,
+    /// sRGB colour of each vertex.
+    pub colors: Vec<[f32; 3]>,
+    /// Up to four skinning slots per vertex (indices into [`Dressing::skinning_transforms`]).
+    pub slots: Vec<[u16; 4]>,
+    /// Their weights, summing to one.
+    pub weights: Vec<[f32; 4]>,
+    /// Triangles.
+    pub indices: Vec<u32>,
+    bones: Vec<Posed>,
+    /// For each slot, the bone whose skinning matrix it is.
+    slot_bones: Vec<usize>,
+    /// The troupe skeleton's rest frames.
+    rest: Vec<Transform>,
+}
+
+/// How one bone is posed from troupe's joint frames.
+#[derive(Clone, Debug)]
+struct Posed {
+    /// Placed bind frame.
+    bind: Transform,
+    /// How its position and rotation are found.
+    rule: Rule,
+}
+
+#[derive(Clone, Debug)]
+enum Rule {
+    /// Carried rigidly by a troupe joint (the topmost mapped bone, and bones above it).
+    Carried { joint: usize, align: DQuat },
+    /// Rotates with a troupe joint; placed along its parent at its bind offset.
+    Mapped {
+        joint: usize,
+        align: DQuat,
+        parent: usize,
+        offset: DVec3,
+    },
+    /// Keeps its bind pose relative to its parent.
+    Follows { parent: usize },
+}
+
+impl Character {
+    /// Fits the character to `skeleton` at standing height `height` (metres); an error
+    /// names the troupe joints it lacks bones for, or a mapped joint the skeleton does
+    /// not have.
+    pub fn dress(&self, skeleton: &Skeleton, height: f64) -> Result<Dressing> {
+        let invalid = |m: String| Error::Invalid(format!("{}: {m}", self.source));
+        if !(height.is_finite() && height > 0.0) {
+            return Err(invalid(format!("height {height} is not a positive length")));
+        }
+        let mut joint_of = Vec::with_capacity(self.bones.len());
+        for bone in &self.bones {
+            joint_of.push(match &bone.joint {
+                Some(name) => Some(skeleton.joint(name).map_err(|_| {
+                    invalid(format!(
+                        "bone `{}` is mapped to `{name}`, which is not a joint of skeleton `{}`",
+                        bone.name,
+                        skeleton.name()
+                    ))
+                })?),
+                None => None,
+            });
+        }
+        let bone_of = |name: &str| -> Option<usize> {
+            let j = skeleton.joint(name).ok()?;
+            joint_of.iter().position(|&b| b == Some(j))
+        };
+        let missing: Vec<&str> = REQUIRED_JOINTS
+            .iter()
+            .copied()
+            .filter(|n| bone_of(n).is_none())
+            .collect();
+        if !missing.is_empty() {
+            return Err(invalid(format!(
+                "no bone is mapped to troupe's {} (a humanoid needs them to stand up)",
+                missing.join(", ")
+            )));
+        }
+        let at = |name: &str| bone_of(name).map(|b| self.bones[b].bind.translation);
+        let rest = rest_globals(skeleton);
+        let troupe_at = |name: &str| skeleton.joint(name).ok().map(|j| rest[j].translation);
+        // The character's frame (up from hips to head, left from its right side) is
+        // turned onto the same frame of troupe's rest posture: a head carried a little
+        // forward of the hips stays so.
+        let character_frame = frame(&at).ok_or_else(|| {
+            invalid("its hips, head and left and right bones do not span a body".into())
+        })?;
+        let troupe_frame = frame(&troupe_at).ok_or_else(|| {
+            invalid(format!(
+                "skeleton `{}` has no hips, head or sides",
+                skeleton.name()
+            ))
+        })?;
+        let turn = DQuat::from_mat3(&(troupe_frame * character_frame.transpose())).normalize();
+        let turned: Vec<DVec3> = self
+            .positions
+            .iter()
+            .map(|p| turn * DVec3::from(p.map(f64::from)))
+            .collect();
+        let (low, high) = turned.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| {
+            (lo.min(p.y), hi.max(p.y))
+        });
+        if turned.is_empty() || !(high - low).is_finite() || high - low <= 0.0 {
+            return Err(invalid("its mesh has no height".into()));
+        }
+        let scale = height / (high - low);
+        let hips_bone = bone_of("sacroiliac").unwrap_or(0);
+        let hips = rest[joint_of[hips_bone].unwrap_or(0)].translation;
+        let hips_char = turn * self.bones[hips_bone].bind.translation * scale;
+        let shift = DVec3::new(hips.x - hips_char.x, -low * scale, hips.z - hips_char.z);
+        let place = |p: DVec3| turn * p * scale + shift;
+        let binds: Vec<Transform> = self
+            .bones
+            .iter()
+            .map(|b| Transform::new(turn * b.bind.rotation, place(b.bind.translation)))
+            .collect();
+
+        // The nearest mapped ancestor of each bone, and which bones are mapped.
+        let mapped_above: Vec<Option<usize>> = (0..self.bones.len())
+            .map(|b| {
+                let mut p = self.bones[b].parent;
+                while let Some(q) = p {
+                    if joint_of[q].is_some() {
+                        return Some(q);
+                    }
+                    p = self.bones[q].parent;
+                }
+                None
+            })
+            .collect();
+        // Each bone's alignment and where it stands in troupe's rest posture, parents
+        // first: a mapped bone aims from where it now stands at troupe's rest joints of
+        // the nearest mapped bones below it (so a narrow-shouldered character's hands
+        // still hang by troupe's hands); other bones keep their parent's alignment.
+        let mut align = vec![DQuat::IDENTITY; self.bones.len()];
+        let mut standing = vec![DVec3::ZERO; self.bones.len()];
+        for b in 0..self.bones.len() {
+            let parent = self.bones[b].parent;
+            standing[b] = match parent {
+                Some(p) => standing[p] + align[p] * (binds[b].translation - binds[p].translation),
+                None => binds[b].translation,
+            };
+            align[b] = parent.map_or(DQuat::IDENTITY, |p| align[p]);
+            let (Some(j), Some(_)) = (joint_of[b], mapped_above[b]) else {
+                continue; // the topmost mapped bone keeps its orientation
+            };
+            let mapped_below = |b: usize| -> Vec<usize> {
+                (0..self.bones.len())
+                    .filter(|&c| mapped_above[c] == Some(b) && joint_of[c].is_some())
+                    .collect()
+            };
+            let mut below = mapped_below(b);
+            // An upper arm or thigh aims at the end of its limb (the wrist, the foot),
+            // so the limb hangs straight as troupe's does at rest.
+            let name = &skeleton.joints()[j].name;
+            if LIMB_ROOTS.contains(&name.trim_start_matches(['l', 'r']).trim_start_matches('_'))
+                && below.len() == 1
+            {
+                let further = mapped_below(below[0]);
+                if further.len() == 1 {
+                    below = further;
+                }
+            }
+            if below.is_empty() {
+                continue;
+            }
+            let centroid = |f: &dyn Fn(usize) -> DVec3| {
+                below.iter().map(|&c| f(c)).sum::<DVec3>() / below.len() as f64
+            };
+            let from = centroid(&|c| binds[c].translation) - binds[b].translation;
+            let to = centroid(&|c| rest[joint_of[c].unwrap_or(j)].translation) - standing[b];
+            align[b] = arc(from, to);
+        }
+
+        let bones: Vec<Posed> = (0..self.bones.len())
+            .map(|b| {
+                let bind = binds[b];
+                let rule = match (joint_of[b], self.bones[b].parent) {
+                    (Some(joint), Some(parent)) if mapped_above[b].is_some() => Rule::Mapped {
+                        joint,
+                        align: align[b],
+                        parent,
+                        offset: binds[parent]
+                            .inverse()
+                            .transform_vector(bind.translation - binds[parent].translation),
+                    },
+                    (Some(joint), _) => Rule::Carried {
+                        joint,
+                        align: align[b],
+                    },
+                    (None, Some(parent)) => Rule::Follows { parent },
+                    // A bone above every mapped one (an armature root) moves with the body.
+                    (None, None) => Rule::Carried {
+                        joint: joint_of[hips_bone].unwrap_or(0),
+                        align: DQuat::IDENTITY,
+                    },
+                };
+                Posed { bind, rule }
+            })
+            .collect();
+
+        // A bone that follows its parent has its parent's skinning matrix, so vertices
+        // are skinned by the bones that move on their own: at most one per troupe joint.
+        let driver: Vec<usize> = {
+            let mut d: Vec<usize> = (0..bones.len()).collect();
+            for b in 0..bones.len() {
+                if let Rule::Follows { parent } = bones[b].rule {
+                    d[b] = d[parent];
+                }
+            }
+            d
+        };
+        let mut slot_bones: Vec<usize> = Vec::new();
+        let mut slot_of = vec![u16::MAX; bones.len()];
+        let mut slots = Vec::with_capacity(self.joints.len());
+        let mut weights = Vec::with_capacity(self.joints.len());
+        for (js, ws) in self.joints.iter().zip(&self.weights) {
+            let mut merged: Vec<(u16, f32)> = Vec::with_capacity(4);
+            for (&j, &w) in js.iter().zip(ws) {
+                if w <= 0.0 {
+                    continue;
+                }
+                let bone = *driver.get(j as usize).ok_or_else(|| {
+                    invalid(format!("a vertex names bone {j}, which does not exist"))
+                })?;
+                if slot_of[bone] == u16::MAX {
+                    slot_of[bone] = slot_bones.len() as u16;
+                    slot_bones.push(bone);
+                }
+                match merged.iter_mut().find(|(s, _)| *s == slot_of[bone]) {
+                    Some((_, sum)) => *sum += w,
+                    None => merged.push((slot_of[bone], w)),
+                }
+            }
+            let mut s = [0u16; 4];
+            let mut w = [0f32; 4];
+            for (k, (slot, weight)) in merged.into_iter().enumerate() {
+                s[k] = slot;
+                w[k] = weight;
+            }
+            slots.push(s);
+            weights.push(w);
+        }
+        Ok(Dressing {
+            source: self.source.clone(),
+            positions: turned
+                .iter()
+                .map(|p| (p * scale + shift).as_vec3().to_array())
+                .collect(),
+            normals: self
+                .normals
+                .iter()
+                .map(|n| (turn * DVec3::from(n.map(f64::from))).as_vec3().to_array())
+                .collect(),
+            colors: self.colors.clone(),
+            slots,
+            weights,
+            indices: self.indices.clone(),
+            bones,
+            slot_bones,
+            rest,
+        })
+    }
+}
+
+impl Dressing {
+    /// Number of skinning slots (distinct matrices the vertices use).
+    pub fn slot_count(&self) -> usize {
+        self.slot_bones.len()
+    }
+
+    /// The troupe joint whose motion moves each skinning slot.
+    pub fn slot_joints(&self) -> Vec<usize> {
+        self.slot_bones
+            .iter()
+            .map(|&b| self.slot_joint_of(b))
+            .collect()
+    }
+
+    /// The troupe joint that moves bone `b`: its own, or its nearest moving ancestor's.
+    fn slot_joint_of(&self, mut b: usize) -> usize {
+        loop {
+            match self.bones[b].rule {
+                Rule::Carried { joint, .. } | Rule::Mapped { joint, .. } => return joint,
+                Rule::Follows { parent } => b = parent,
+            }
+        }
+    }
+
+    /// Every bone's world frame for troupe joint frames `globals`.
+    pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
+        let mut frames: Vec<Transform> = Vec::with_capacity(self.bones.len());
+        for bone in &self.bones {
+            let moved = |joint: usize| globals[joint].mul(&self.rest[joint].inverse());
+            let frame = match bone.rule {
+                Rule::Carried { joint, align } => {
+                    let m = moved(joint);
+                    Transform::new(
+                        m.rotation * align * bone.bind.rotation,
+                        m.transform_point(bone.bind.translation),
+                    )
+                }
+                Rule::Mapped {
+                    joint,
+                    align,
+                    parent,
+                    offset,
+                } => Transform::new(
+                    moved(joint).rotation * align * bone.bind.rotation,
+                    frames[parent].transform_point(offset),
+                ),
+                Rule::Follows { parent } => {
+                    frames[parent].mul(&self.bones[parent].bind.inverse().mul(&bone.bind))
+                }
+            };
+            frames.push(frame);
+        }
+        frames
+    }
+
+    /// Skinning transforms for troupe joint frames `globals`, one per slot: each carries
+    /// a placed bind-pose vertex to where its bone has moved it.
+    pub fn skinning_transforms(&self, globals: &[Transform]) -> Vec<Transform> {
+        let frames = self.bone_frames(globals);
+        self.slot_bones
+            .iter()
+            .map(|&b| frames[b].mul(&self.bones[b].bind.inverse()))
+            .collect()
+    }
+
+    /// The character's vertex positions for troupe joint frames `globals`, by linear
+    /// blend skinning.
+    pub fn deform(&self, globals: &[Transform]) -> Vec<DVec3> {
+        let m = self.skinning_transforms(globals);
+        self.positions
+            .iter()
+            .zip(self.slots.iter().zip(&self.weights))
+            .map(|(p, (ss, ws))| {
+                let p = DVec3::from(p.map(f64::from));
+                ss.iter()
+                    .zip(ws)
+                    .filter(|(_, &w)| w > 0.0)
+                    .map(|(&s, &w)| m[s as usize].transform_point(p) * w as f64)
+                    .sum()
+            })
+            .collect()
+    }
+}
+
+/// The body frame of joint positions `at` (by troupe joint name): columns left (+X in
+/// troupe), up from hips to head, front; `None` when they do not span one.
+fn frame(at: &dyn Fn(&str) -> Option<DVec3>) -> Option<glam::DMat3> {
+    let pair = |l: &str, r: &str| Some(at(l)? - at(r)?);
+    let up = pair("skullbase", "sacroiliac")?.try_normalize()?;
+    let lateral = pair("l_hip", "r_hip")? + pair("l_shoulder", "r_shoulder")?;
+    let left = (lateral - up * lateral.dot(up)).try_normalize()?;
+    Some(glam::DMat3::from_cols(left, up, left.cross(up)))
+}
+
+/// The rotation taking direction `from` onto `to` by the shortest arc (identity when
+/// either has no direction).
+fn arc(from: DVec3, to: DVec3) -> DQuat {
+    match (from.try_normalize(), to.try_normalize()) {
+        (Some(a), Some(b)) => DQuat::from_rotation_arc(a, b),
+        _ => DQuat::IDENTITY,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::forward_kinematics;
+    use crate::template::default_skeleton;
+
+    /// A character made of troupe's own skeleton: one bone per joint at its rest frame,
+    /// one vertex on each joint (moved by it alone), and two on the floor and the crown.
+    fn troupe_shaped(skeleton: &Skeleton, height: f64) -> Character {
+        let rest = rest_globals(skeleton);
+        let joints = skeleton.joints();
+        let mut positions: Vec<[f32; 3]> = rest
+            .iter()
+            .map(|t| t.translation.as_vec3().to_array())
+            .collect();
+        let mut bone_of: Vec<u16> = (0..joints.len() as u16).collect();
+        positions.push([0.0, 0.0, 0.0]);
+        positions.push([0.0, height as f32, 0.0]);
+        bone_of.extend([0, skeleton.joint("skullbase").unwrap() as u16]);
+        let n = positions.len();
+        Character {
+            source: "troupe-shaped".into(),
+            bones: joints
+                .iter()
+                .zip(&rest)
+                .map(|(j, t)| Bone {
+                    name: j.name.clone(),
+                    parent: j.parent,
+                    bind: Transform::new(DQuat::IDENTITY, t.translation),
+                    joint: Some(j.name.clone()),
+                })
+                .collect(),
+            normals: vec![[0.0, 1.0, 0.0]; n],
+            colors: vec![[1.0; 3]; n],
+            joints: bone_of.iter().map(|&b| [b, 0, 0, 0]).collect(),
+            weights: vec![[1.0, 0.0, 0.0, 0.0]; n],
+            indices: vec![0, 1, 2],
+            positions,
+        }
+    }
+
+    #[test]
+    fn a_character_shaped_like_troupe_follows_its_joints_exactly() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let character = troupe_shaped(&skeleton, 1.75);
+        let dressing = character.dress(&skeleton, 1.75).unwrap();
+        let mut q = vec![0.0; skeleton.dof_count()];
+        for (d, v) in q.iter_mut().enumerate() {
+            // Every DOF moved, each by its own amount.
+            *v = 0.3 * ((d * 7919 % 13) as f64 / 13.0 - 0.5);
+        }
+        let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
+        forward_kinematics(&skeleton, &q, &mut globals);
+        let posed = dressing.deform(&globals);
+        for (j, g) in globals.iter().enumerate() {
+            assert!(
+                (posed[j] - g.translation).length() < 1e-4,
+                "{}: {} vs {}",
+                skeleton.joints()[j].name,
+                posed[j],
+                g.translation
+            );
+        }
+        // Folded joints: with only the required bones mapped, a fingertip follows the
+        // wrist's nearest mapped ancestor rigidly, never tearing away from it.
+        let mut sparse = character.clone();
+        for bone in &mut sparse.bones {
+            if !REQUIRED_JOINTS.contains(&bone.joint.as_deref().unwrap()) {
+                bone.joint = None;
+            }
+        }
+        let dressing = sparse.dress(&skeleton, 1.75).unwrap();
+        assert!(dressing.slot_count() <= REQUIRED_JOINTS.len() + 1);
+        let posed = dressing.deform(&globals);
+        assert!(posed.iter().all(|p| p.is_finite()));
+    }
+
+    #[test]
+    fn missing_required_bones_and_unknown_joints_are_named() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let mut character = troupe_shaped(&skeleton, 1.75);
+        for bone in &mut character.bones {
+            if bone.name.ends_with("_hip") {
+                bone.joint = None;
+            }
+        }
+        let err = character.dress(&skeleton, 1.75).unwrap_err().to_string();
+        assert!(err.contains("l_hip, r_hip"), "{err}");
+        character.bones[3].joint = Some("tail".into());
+        let err = character.dress(&skeleton, 1.75).unwrap_err().to_string();
+        assert!(err.contains("mapped to `tail`"), "{err}");
+        assert!(troupe_shaped(&skeleton, 1.75)
+            .dress(&skeleton, f64::NAN)
+            .is_err());
+    }
+}

@@ -1,0 +1,630 @@
+//! Users' own characters: real third-party files loaded, mapped to troupe's joints,
+//! dressed on a body and posed; bad files refused with errors that name what is wrong.
+
+use glam::DVec3;
+use serde_json::{json, Value};
+use std::path::PathBuf;
+use troupe_body::kinematics::forward_kinematics;
+use troupe_body::template::default_skeleton;
+use troupe_body::{Skeleton, Transform};
+use troupe_formats::character::{read_character, vrm_humanoid_bones};
+use troupe_formats::Error;
+
+fn asset(name: &str) -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../tests/assets/characters")
+        .join(name)
+}
+
+/// The map for Khronos' CesiumMan, whose joints have names of their own.
+fn cesium_map() -> Vec<(String, String)> {
+    [
+        ("hips", "Skeleton_torso_joint_1"),
+        ("spine", "Skeleton_torso_joint_2"),
+        ("upperChest", "torso_joint_3"),
+        ("neck", "Skeleton_neck_joint_1"),
+        ("head", "Skeleton_neck_joint_2"),
+        ("rightUpperArm", "Skeleton_arm_joint_R"),
+        ("rightLowerArm", "Skeleton_arm_joint_R__2_"),
+        ("rightHand", "Skeleton_arm_joint_R__3_"),
+        ("leftUpperArm", "Skeleton_arm_joint_L__4_"),
+        ("leftLowerArm", "Skeleton_arm_joint_L__3_"),
+        ("leftHand", "Skeleton_arm_joint_L__2_"),
+        ("rightUpperLeg", "leg_joint_R_1"),
+        ("rightLowerLeg", "leg_joint_R_2"),
+        ("rightFoot", "leg_joint_R_3"),
+        ("rightToes", "leg_joint_R_5"),
+        ("leftUpperLeg", "leg_joint_L_1"),
+        ("leftLowerLeg", "leg_joint_L_2"),
+        ("leftFoot", "leg_joint_L_3"),
+        ("leftToes", "leg_joint_L_5"),
+    ]
+    .iter()
+    .map(|(a, b)| (a.to_string(), b.to_string()))
+    .collect()
+}
+
+fn globals(skeleton: &Skeleton, dofs: &[(&str, f64)]) -> Vec<Transform> {
+    let mut q = vec![0.0; skeleton.dof_count()];
+    for (name, degrees) in dofs {
+        q[skeleton.dof(name).unwrap()] = degrees.to_radians();
+    }
+    let mut g = vec![Transform::IDENTITY; skeleton.joints().len()];
+    forward_kinematics(skeleton, &q, &mut g);
+    g
+}
+
+/// The vertices moved (at least 90 %) by the bone mapped to troupe joint `joint`.
+fn vertices_of(c: &troupe_body::Character, joint: &str) -> Vec<usize> {
+    let bone = c
+        .bones
+        .iter()
+        .position(|b| b.joint.as_deref() == Some(joint))
+        .unwrap();
+    (0..c.positions.len())
+        .filter(|&v| c.joints[v][0] as usize == bone && c.weights[v][0] >= 0.9)
+        .collect()
+}
+
+fn centroid(points: &[DVec3], of: &[usize]) -> DVec3 {
+    of.iter().map(|&v| points[v]).sum::<DVec3>() / of.len() as f64
+}
+
+#[test]
+fn cesium_man_follows_troupe_postures() {
+    let skel = default_skeleton("adult").unwrap();
+    let c = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    assert_eq!(c.bones.len(), 19);
+    assert!(
+        c.bones.iter().all(|b| b.joint.is_some()),
+        "every CesiumMan joint is mapped"
+    );
+    for (js, ws) in c.joints.iter().zip(&c.weights) {
+        assert!((ws.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        assert!(js.iter().all(|&j| (j as usize) < c.bones.len()));
+    }
+    let d = c.dress(&skel, 1.75).unwrap();
+    // Scaled to the actor's height, standing on the floor.
+    let (low, high) = d
+        .positions
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
+    assert!(
+        low.abs() < 1e-4 && (high - 1.75).abs() < 1e-4,
+        "{low}..{high}"
+    );
+    let left_hand = vertices_of(&c, "l_wrist");
+    let right_hand = vertices_of(&c, "r_wrist");
+    let head = vertices_of(&c, "skullbase");
+    assert!(left_hand.len() > 20 && right_hand.len() > 20 && head.len() > 100);
+    let postures: &[&[(&str, f64)]] = &[
+        &[],
+        &[("l_shoulder_flexion", 90.0), ("l_elbow_flexion", 90.0)],
+        &[
+            ("r_shoulder_abduction", 150.0),
+            ("r_elbow_flexion", 45.0),
+            ("l_hip_flexion", 60.0),
+            ("l_knee_flexion", 70.0),
+        ],
+        &[
+            ("vl5_flexion", 30.0),
+            ("l_shoulder_flexion", 170.0),
+            ("r_shoulder_flexion", -40.0),
+            ("root_yaw", 120.0),
+            ("root_x", 2.0),
+        ],
+    ];
+    let rest_globals = globals(&skel, &[]);
+    for dofs in postures {
+        let g = globals(&skel, dofs);
+        let posed = d.deform(&g);
+        // Every limb segment of the character keeps the angle to troupe's segment it had
+        // at rest (the rest-pose offset), whatever the posture.
+        let frames = d.bone_frames(&g);
+        let rest_frames = d.bone_frames(&rest_globals);
+        let at_bone = |f: &[Transform], joint: &str| {
+            f[c.bones
+                .iter()
+                .position(|b| b.joint.as_deref() == Some(joint))
+                .unwrap()]
+            .translation
+        };
+        let at_joint = |g: &[Transform], joint: &str| g[skel.joint(joint).unwrap()].translation;
+        for side in ["l_", "r_"] {
+            for pair in [
+                ["shoulder", "elbow"],
+                ["elbow", "wrist"],
+                ["hip", "knee"],
+                ["knee", "subtalar"],
+            ] {
+                let [a, b] = pair.map(|j| format!("{side}{j}"));
+                let offset = |f: &[Transform], g: &[Transform]| {
+                    (at_bone(f, &b) - at_bone(f, &a))
+                        .angle_between(at_joint(g, &b) - at_joint(g, &a))
+                };
+                let (now, then) = (offset(&frames, &g), offset(&rest_frames, &rest_globals));
+                assert!(
+                    then.to_degrees() < 45.0,
+                    "{a}→{b} is {:.1}° off troupe's at rest",
+                    then.to_degrees()
+                );
+                assert!(
+                    (now - then).abs().to_degrees() < 1.0,
+                    "{dofs:?}: {a}→{b} is {:.1}° off troupe's, {:.1}° at rest",
+                    now.to_degrees(),
+                    then.to_degrees()
+                );
+            }
+        }
+        // Its hands stay by troupe's (the knuckles of the middle finger): close at rest;
+        // posed, further, as CesiumMan is a cartoon: its head is a quarter of its height,
+        // so its shoulders are 18 cm lower than troupe's and 12 cm narrower, and its hands
+        // are big mittens.
+        let bound = if dofs.is_empty() { 0.15 } else { 0.45 };
+        for (hand, joint) in [(&left_hand, "l_middle1"), (&right_hand, "r_middle1")] {
+            let off = (centroid(&posed, hand) - at_joint(&g, joint)).length();
+            assert!(
+                off < bound,
+                "{dofs:?}: {joint}'s hand is {off:.3} m from troupe's {joint}"
+            );
+        }
+        // The skin is rigid where one bone moves it: distances within the head keep.
+        let rest = d.deform(&globals(&skel, &[]));
+        let (a, b) = (head[0], head[head.len() / 2]);
+        assert!(((posed[a] - posed[b]).length() - (rest[a] - rest[b]).length()).abs() < 1e-5);
+    }
+
+    // The head turns 90° about the vertical when troupe's head does.
+    let rest = globals(&skel, &[]);
+    let turned = globals(&skel, &[("skullbase_torsion", 90.0)]);
+    let (before, after) = (d.deform(&rest), d.deform(&turned));
+    let head_bone = c
+        .bones
+        .iter()
+        .position(|b| b.joint.as_deref() == Some("skullbase"))
+        .unwrap();
+    let pivot = |g: &[Transform]| d.bone_frames(g)[head_bone].translation;
+    let nose = *head
+        .iter()
+        .max_by(|&&a, &&b| before[a].z.total_cmp(&before[b].z))
+        .unwrap();
+    let flat = |v: DVec3| DVec3::new(v.x, 0.0, v.z);
+    let (u, w) = (
+        flat(before[nose] - pivot(&rest)),
+        flat(after[nose] - pivot(&turned)),
+    );
+    let angle = u.angle_between(w).to_degrees();
+    assert!((angle - 90.0).abs() < 1.0, "the head turned {angle:.1}°");
+    assert!(u.cross(w).y > 0.0, "turned about +Y, as troupe's head");
+    // The face looks along +Z at rest (troupe's front), and the body is untouched by the
+    // head's turn.
+    assert!(before[nose].z > pivot(&rest).z + 0.05);
+    let chest = vertices_of(&c, "vt1");
+    assert!(chest
+        .iter()
+        .all(|&v| (before[v] - after[v]).length() < 1e-9));
+    let _ = centroid(&before, &chest);
+}
+
+#[test]
+fn a_vrm_file_names_its_humanoid_bones_and_without_a_skin_is_refused() {
+    let path = asset("VRM1_humanoid_no_skin.vrm");
+    let bones = vrm_humanoid_bones(&path).unwrap();
+    assert_eq!(bones.len(), 22);
+    let node = |b: &str| bones.iter().find(|(k, _)| k == b).map(|(_, n)| n.as_str());
+    assert_eq!(node("hips"), Some("Hips"));
+    assert_eq!(node("leftUpperArm"), Some("UpperArm.L"));
+    assert_eq!(node("rightToes"), Some("Toes.R"));
+    for (bone, _) in &bones {
+        assert!(
+            troupe_formats::character::names::vrm_joint(bone).is_some(),
+            "VRM bone {bone} has a troupe joint"
+        );
+    }
+    let err = read_character(&path, &[]).unwrap_err();
+    let text = err.to_string();
+    assert!(
+        text.contains("VRM1_humanoid_no_skin.vrm") && text.contains("no skin"),
+        "{text}"
+    );
+}
+
+/// A binary glTF's JSON and binary chunk.
+fn glb_parts(bytes: &[u8]) -> (Value, Vec<u8>) {
+    let json_len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let json = serde_json::from_slice(&bytes[20..20 + json_len]).unwrap();
+    let bin_at = 20 + json_len;
+    let bin_len = u32::from_le_bytes(bytes[bin_at..bin_at + 4].try_into().unwrap()) as usize;
+    (json, bytes[bin_at + 8..bin_at + 8 + bin_len].to_vec())
+}
+
+/// A binary glTF from its JSON and binary chunk.
+fn glb(json: &Value, bin: &[u8]) -> Vec<u8> {
+    let mut text = json.to_string().into_bytes();
+    while !text.len().is_multiple_of(4) {
+        text.push(b' ');
+    }
+    let mut bin = bin.to_vec();
+    while !bin.len().is_multiple_of(4) {
+        bin.push(0);
+    }
+    let mut out = Vec::new();
+    out.extend_from_slice(b"glTF");
+    out.extend_from_slice(&2u32.to_le_bytes());
+    out.extend_from_slice(&((12 + 8 + text.len() + 8 + bin.len()) as u32).to_le_bytes());
+    out.extend_from_slice(&(text.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"JSON");
+    out.extend_from_slice(&text);
+    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
+    out.extend_from_slice(b"BIN\0");
+    out.extend_from_slice(&bin);
+    out
+}
+
+/// CesiumMan changed by `edit` (its JSON and binary chunk), written to a scratch file.
+fn cesium_variant(name: &str, edit: impl FnOnce(&mut Value, &mut Vec<u8>)) -> PathBuf {
+    let (mut json, mut bin) = glb_parts(&std::fs::read(asset("CesiumMan.glb")).unwrap());
+    edit(&mut json, &mut bin);
+    let dir = std::env::temp_dir().join(format!("troupe-character-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(name);
+    std::fs::write(&path, glb(&json, &bin)).unwrap();
+    path
+}
+
+/// Renames CesiumMan's joints by `rename` (from the names of [`cesium_map`]'s bones).
+fn renamed(json: &mut Value, rename: impl Fn(&str) -> String) {
+    let map = cesium_map();
+    for node in json["nodes"].as_array_mut().unwrap() {
+        let Some(name) = node["name"].as_str() else {
+            continue;
+        };
+        if let Some((vrm, _)) = map.iter().find(|(_, n)| n == name) {
+            node["name"] = rename(vrm).into();
+        }
+    }
+}
+
+/// The troupe joint each bone of `c` follows, by bone name.
+fn joints_by_name(c: &troupe_body::Character) -> Vec<(String, Option<String>)> {
+    c.bones
+        .iter()
+        .map(|b| (b.name.clone(), b.joint.clone()))
+        .collect()
+}
+
+#[test]
+fn built_in_maps_recognise_vrm_mixamo_and_h_anim_names() {
+    let by_user = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    let index = |json: &Value, name: &str| {
+        json["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == name)
+            .unwrap()
+    };
+    // VRM 1.0 and 0.x humanoid extensions over CesiumMan's own node names.
+    let vrm1 = cesium_variant("vrm1.vrm", |json, _| {
+        let bones: serde_json::Map<String, Value> = cesium_map()
+            .iter()
+            .map(|(b, n)| (b.clone(), json!({ "node": index(json, n) })))
+            .collect();
+        json["extensions"] =
+            json!({ "VRMC_vrm": { "specVersion": "1.0", "humanoid": { "humanBones": bones } } });
+    });
+    let vrm0 = cesium_variant("vrm0.vrm", |json, _| {
+        let bones: Vec<Value> = cesium_map()
+            .iter()
+            .map(|(b, n)| json!({ "bone": b, "node": index(json, n) }))
+            .collect();
+        json["extensions"] = json!({ "VRM": { "humanoid": { "humanBones": bones } } });
+    });
+    for path in [&vrm1, &vrm0] {
+        let c = read_character(path, &[]).unwrap();
+        assert_eq!(
+            joints_by_name(&c),
+            joints_by_name(&by_user),
+            "{}",
+            path.display()
+        );
+    }
+    // Mixamo names, with the rig's prefix.
+    let mixamo_name = |vrm: &str| -> String {
+        let table = [
+            ("hips", "Hips"),
+            ("spine", "Spine"),
+            ("upperChest", "Spine2"),
+            ("neck", "Neck"),
+            ("head", "Head"),
+            ("rightUpperArm", "RightArm"),
+            ("rightLowerArm", "RightForeArm"),
+            ("rightHand", "RightHand"),
+            ("leftUpperArm", "LeftArm"),
+            ("leftLowerArm", "LeftForeArm"),
+            ("leftHand", "LeftHand"),
+            ("rightUpperLeg", "RightUpLeg"),
+            ("rightLowerLeg", "RightLeg"),
+            ("rightFoot", "RightFoot"),
+            ("rightToes", "RightToeBase"),
+            ("leftUpperLeg", "LeftUpLeg"),
+            ("leftLowerLeg", "LeftLeg"),
+            ("leftFoot", "LeftFoot"),
+            ("leftToes", "LeftToeBase"),
+        ];
+        format!(
+            "mixamorig:{}",
+            table.iter().find(|(v, _)| *v == vrm).unwrap().1
+        )
+    };
+    let mixamo = cesium_variant("mixamo.glb", |json, _| renamed(json, mixamo_name));
+    let c = read_character(&mixamo, &[]).unwrap();
+    let joints: Vec<Option<String>> = c.bones.iter().map(|b| b.joint.clone()).collect();
+    let expected: Vec<Option<String>> = by_user.bones.iter().map(|b| b.joint.clone()).collect();
+    assert_eq!(joints, expected);
+    // H-Anim names (troupe's own, and H-Anim 2.0's `l_talocrural` for the ankle).
+    let hanim = cesium_variant("hanim.glb", |json, _| {
+        renamed(json, |vrm| {
+            let joint = troupe_formats::character::names::vrm_joint(vrm).unwrap();
+            joint.replace("subtalar", "talocrural").to_uppercase()
+        })
+    });
+    let c = read_character(&hanim, &[]).unwrap();
+    let joints: Vec<Option<String>> = c.bones.iter().map(|b| b.joint.clone()).collect();
+    let expected: Vec<Option<String>> = by_user
+        .bones
+        .iter()
+        .map(|b| b.joint.as_ref().map(|j| j.replace("subtalar", "ankle")))
+        .collect();
+    assert_eq!(joints, expected);
+    let skel = default_skeleton("child").unwrap();
+    c.dress(&skel, 1.2).unwrap();
+}
+
+fn error_of(path: &PathBuf, map: &[(String, String)]) -> String {
+    match read_character(path, map) {
+        Err(Error::Parse { file, message, .. }) => {
+            assert_eq!(file, path.display().to_string());
+            message
+        }
+        other => panic!("{}: {other:?}", path.display()),
+    }
+}
+
+#[test]
+fn missing_bones_and_non_humanoid_skeletons_are_named() {
+    // CesiumMan's own names mean nothing to the built-in maps.
+    let text = error_of(&asset("CesiumMan.glb"), &[]);
+    assert!(
+        text.contains("no bone found for hips, spine, head, leftUpperArm"),
+        "{text}"
+    );
+    assert!(
+        text.contains("Skeleton_torso_joint_1") && text.contains("bones"),
+        "{text}"
+    );
+    // A map that forgets the hands.
+    let without_hands: Vec<_> = cesium_map()
+        .into_iter()
+        .filter(|(b, _)| !b.ends_with("Hand"))
+        .collect();
+    let text = error_of(&asset("CesiumMan.glb"), &without_hands);
+    assert!(
+        text.contains("no bone found for leftHand, rightHand"),
+        "{text}"
+    );
+    // A map naming a node the skin lacks.
+    let mut wrong = cesium_map();
+    wrong[0].1 = "Pelvis".into();
+    let text = error_of(&asset("CesiumMan.glb"), &wrong);
+    assert!(
+        text.contains("`hips` names `Pelvis`, which is not a joint of the skin"),
+        "{text}"
+    );
+    // A map to a troupe joint the skeleton lacks is refused when dressing.
+    let mut odd = cesium_map();
+    odd.push(("tail".into(), "leg_joint_L_5".into()));
+    let c = read_character(asset("CesiumMan.glb"), &odd).unwrap();
+    let err = c
+        .dress(&default_skeleton("adult").unwrap(), 1.7)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("`leg_joint_L_5` is mapped to `tail`"), "{err}");
+    // A skeleton that is not a humanoid: a chain of bones with other names.
+    let chain = cesium_variant("chain.glb", |json, _| {
+        for (i, node) in json["nodes"].as_array_mut().unwrap().iter_mut().enumerate() {
+            node["name"] = format!("link{i}").into();
+        }
+    });
+    let text = error_of(&chain, &[]);
+    assert!(
+        text.contains("not a humanoid") && text.contains("link3"),
+        "{text}"
+    );
+}
+
+/// The float data of accessor `a`: its byte offset in the binary chunk and count.
+fn accessor_at(json: &Value, a: usize) -> (usize, usize, usize) {
+    let acc = &json["accessors"][a];
+    let view = &json["bufferViews"][acc["bufferView"].as_u64().unwrap() as usize];
+    let offset = view["byteOffset"].as_u64().unwrap_or(0) + acc["byteOffset"].as_u64().unwrap_or(0);
+    let stride = view["byteStride"].as_u64().unwrap_or(16) as usize;
+    (
+        offset as usize,
+        acc["count"].as_u64().unwrap() as usize,
+        stride,
+    )
+}
+
+fn attribute(json: &Value, name: &str) -> usize {
+    json["meshes"][0]["primitives"][0]["attributes"][name]
+        .as_u64()
+        .unwrap() as usize
+}
+
+#[test]
+fn weights_are_renormalised_reduced_to_four_and_all_zero_is_an_error() {
+    let map = cesium_map();
+    let plain = read_character(asset("CesiumMan.glb"), &map).unwrap();
+    // Weights scaled by 3: renormalised to the same.
+    let tripled = cesium_variant("tripled.glb", |json, bin| {
+        let (at, n, stride) = accessor_at(json, attribute(json, "WEIGHTS_0"));
+        for v in 0..n {
+            for k in 0..4 {
+                let o = at + v * stride + 4 * k;
+                let w = f32::from_le_bytes(bin[o..o + 4].try_into().unwrap()) * 3.0;
+                bin[o..o + 4].copy_from_slice(&w.to_le_bytes());
+            }
+        }
+    });
+    let c = read_character(&tripled, &map).unwrap();
+    for (a, b) in c.weights.iter().zip(&plain.weights) {
+        for k in 0..4 {
+            assert!((a[k] - b[k]).abs() < 1e-6);
+        }
+    }
+    // A second set of four influences (JOINTS_1/WEIGHTS_1): the four largest of eight
+    // are kept, renormalised.
+    let eight = cesium_variant("eight.glb", |json, bin| {
+        let n = accessor_at(json, attribute(json, "WEIGHTS_0")).1;
+        let joints_at = bin.len();
+        for _ in 0..n {
+            bin.extend_from_slice(&[1u16, 2, 3, 4].map(u16::to_le_bytes).concat());
+        }
+        let weights_at = bin.len();
+        for _ in 0..n {
+            bin.extend_from_slice(&[0.5f32, 0.25, 0.0, 0.0].map(f32::to_le_bytes).concat());
+        }
+        let views = json["bufferViews"].as_array_mut().unwrap();
+        views.push(json!({ "buffer": 0, "byteOffset": joints_at, "byteLength": n * 8 }));
+        views.push(json!({ "buffer": 0, "byteOffset": weights_at, "byteLength": n * 16 }));
+        let v = views.len();
+        let accessors = json["accessors"].as_array_mut().unwrap();
+        accessors.push(
+            json!({ "bufferView": v - 2, "componentType": 5123, "count": n, "type": "VEC4" }),
+        );
+        accessors.push(
+            json!({ "bufferView": v - 1, "componentType": 5126, "count": n, "type": "VEC4" }),
+        );
+        let a = accessors.len();
+        let attrs = &mut json["meshes"][0]["primitives"][0]["attributes"];
+        attrs["JOINTS_1"] = (a - 2).into();
+        attrs["WEIGHTS_1"] = (a - 1).into();
+        json["buffers"][0]["byteLength"] = bin.len().into();
+    });
+    let c = read_character(&eight, &map).unwrap();
+    let skin_joint = |bone: u16| {
+        // The skin's joint 1 and 2, as bone indices.
+        let name = &plain.bones[bone as usize].name;
+        name.clone()
+    };
+    let mut checked = 0;
+    for v in 0..c.positions.len() {
+        let (w, j) = (c.weights[v], c.joints[v]);
+        assert!((w.iter().sum::<f32>() - 1.0).abs() < 1e-5);
+        assert!(w.iter().filter(|&&x| x > 0.0).count() <= 4);
+        // Vertices with a single original influence now hold it with the 0.5 and 0.25.
+        if plain.weights[v][0] == 1.0 {
+            let mut got: Vec<f32> = w.to_vec();
+            got.sort_by(|a, b| b.total_cmp(a));
+            assert!(
+                (got[0] - 1.0 / 1.75).abs() < 1e-5 && (got[1] - 0.5 / 1.75).abs() < 1e-5,
+                "{got:?}"
+            );
+            assert_eq!(
+                skin_joint(j[0]),
+                plain.bones[plain.joints[v][0] as usize].name
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100);
+    // A vertex whose weights are all zero.
+    let zero = cesium_variant("zero.glb", |json, bin| {
+        let (at, _, stride) = accessor_at(json, attribute(json, "WEIGHTS_0"));
+        let o = at + 7 * stride;
+        bin[o..o + 16].fill(0);
+    });
+    let text = error_of(&zero, &map);
+    assert!(
+        text.contains("vertex 7: its weights are all zero"),
+        "{text}"
+    );
+}
+
+#[test]
+fn several_skins_take_the_one_with_most_joints() {
+    // A second, smaller skin first in the list, skinning a copy of the mesh.
+    let two = cesium_variant("two-skins.glb", |json, _| {
+        let mut small = json["skins"][0].clone();
+        small["joints"] = json!(small["joints"].as_array().unwrap()[..3]);
+        let skins = json["skins"].as_array_mut().unwrap();
+        skins.insert(0, small);
+        for node in json["nodes"].as_array_mut().unwrap() {
+            if let Some(s) = node["skin"].as_u64() {
+                node["skin"] = (s + 1).into();
+            }
+        }
+        let nodes = json["nodes"].as_array_mut().unwrap();
+        nodes.push(json!({ "name": "copy", "mesh": 0, "skin": 0 }));
+        let n = nodes.len() - 1;
+        json["scenes"][0]["nodes"]
+            .as_array_mut()
+            .unwrap()
+            .push(n.into());
+    });
+    let c = read_character(&two, &cesium_map()).unwrap();
+    assert_eq!(c.bones.len(), 19);
+    let plain = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    assert_eq!(
+        c.positions.len(),
+        plain.positions.len(),
+        "only the big skin's mesh"
+    );
+}
+
+#[test]
+fn malformed_files_are_errors_naming_the_file_never_panics() {
+    let bytes = std::fs::read(asset("CesiumMan.glb")).unwrap();
+    let dir = std::env::temp_dir().join(format!("troupe-character-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let map = cesium_map();
+    let cases: Vec<(&str, Vec<u8>)> = vec![
+        ("half.glb", bytes[..bytes.len() / 2].to_vec()),
+        ("header.glb", bytes[..9].to_vec()),
+        (
+            "garbage.glb",
+            (0..5000u32).map(|i| (i * 7919 % 251) as u8).collect(),
+        ),
+        ("empty.gltf", Vec::new()),
+        (
+            "text.vrm",
+            b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [".to_vec(),
+        ),
+    ];
+    for (name, content) in cases {
+        let path = dir.join(name);
+        std::fs::write(&path, content).unwrap();
+        let text = error_of(&path, &map);
+        assert!(!text.is_empty(), "{name}");
+    }
+    // Every cut of the file, coarsely: an error, never a panic.
+    for cut in (0..bytes.len()).step_by(bytes.len() / 97) {
+        let path = dir.join("cut.glb");
+        std::fs::write(&path, &bytes[..cut]).unwrap();
+        assert!(read_character(&path, &map).is_err(), "cut at {cut}");
+    }
+    // No inverse bind matrices; a missing file.
+    let no_ibm = cesium_variant("no-ibm.glb", |json, _| {
+        json["skins"][0]
+            .as_object_mut()
+            .unwrap()
+            .remove("inverseBindMatrices");
+    });
+    assert!(error_of(&no_ibm, &map).contains("no inverse bind matrices"));
+    let err = read_character(dir.join("absent.glb"), &map)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("absent.glb"), "{err}");
+    std::fs::remove_dir_all(dir).ok();
+}
