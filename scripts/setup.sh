@@ -36,3 +36,12 @@ if ((${#vrpn_missing[@]})); then
   $SUDO apt-get update -qq
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${vrpn_missing[@]}"
 fi
+# Zenoh: tests/zenoh_cli.rs checks a published run with an independent client, the
+# `eclipse-zenoh` Python package from PyPI (scripts/zenoh_check.py; the test is skipped
+# with a note without it). Installed once, only when missing.
+ZENOH_PY=1.10.2
+if command -v python3 >/dev/null && ! python3 -c "import zenoh" >/dev/null 2>&1; then
+  echo "setup: installing eclipse-zenoh==$ZENOH_PY (PyPI)" >&2
+  python3 -m pip install --quiet "eclipse-zenoh==$ZENOH_PY" >&2 ||
+    echo "setup: could not install eclipse-zenoh; the Python client test will be skipped" >&2
+fi

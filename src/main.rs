@@ -3,7 +3,12 @@
 mod bench;
 mod devices;
 mod export;
+mod messages;
+#[cfg(feature = "zenoh")]
+mod net;
 mod observers;
+#[cfg(feature = "zenoh")]
+mod relay;
 mod run;
 mod scenario;
 mod seq;
@@ -50,6 +55,9 @@ enum Command {
     Devices(devices::DevicesArgs),
     /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
     Emulate(devices::EmulateArgs),
+    /// Serve a serial device (fob, cyberglove) on Zenoh for a performer on another machine.
+    #[cfg(feature = "zenoh")]
+    Relay(relay::RelayArgs),
 }
 
 fn main() -> ExitCode {
@@ -85,6 +93,8 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Devices(args) => devices::run(args),
         Command::Emulate(args) => devices::emulate(args),
+        #[cfg(feature = "zenoh")]
+        Command::Relay(args) => relay::run(args),
     };
     match result {
         Ok(code) => code,

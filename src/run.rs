@@ -88,6 +88,13 @@ pub struct RunArgs {
     /// each tick (addresses in docs/devices.md).
     #[arg(long, value_name = "HOST:PORT")]
     pub osc_out: Option<String>,
+    /// Recording and replaying received messages.
+    #[command(flatten)]
+    pub messages: crate::messages::MessageArgs,
+    /// Publishing on Zenoh (`--zenoh …`).
+    #[cfg(feature = "zenoh")]
+    #[command(flatten)]
+    pub zenoh: crate::net::ZenohArgs,
 }
 
 /// Runs the scene and prints the summary.
@@ -156,11 +163,16 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         None => None,
     };
 
+    let replay_messages = args.messages.replay()?;
+    #[cfg(feature = "zenoh")]
+    let (config, zenoh) = args.zenoh.open(config)?;
     let (mut session, devices) =
         crate::devices::session(config, limits, args.record_devices.as_deref())?;
     session.scene_mut().set_chunk_size(args.chunk);
     let tally = session.observe(ActionTally::new());
     session.observe(devices);
+    #[cfg(feature = "zenoh")]
+    zenoh.install_remote_ports(&session);
     if let Err(e) = session.load_file(&args.scene) {
         // Devices the scene opened before it failed still close and report.
         for line in session.finish().unwrap_or_default() {
@@ -172,6 +184,9 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     if let Some(osc) = osc_out {
         session.observe(osc);
     }
+    args.messages.attach(&mut session, replay_messages);
+    #[cfg(feature = "zenoh")]
+    zenoh.attach(&mut session);
     if let Some(path) = &args.record {
         session.observe(RecordFile::new(path));
     }

@@ -1,6 +1,9 @@
 //! `troupe view` (play a recording on an actor, in a window or into PNG frames) and
 //! `troupe snapshot` (one picture of actors in given poses).
 
+#[cfg(feature = "zenoh")]
+mod remote;
+
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -27,7 +30,8 @@ use troupe_viewer::{
 )]
 pub struct ViewArgs {
     /// The recording to play (.trk, possibly several actors; .bvh; or .gltf/.glb written by troupe).
-    file: PathBuf,
+    #[cfg_attr(feature = "zenoh", arg(required_unless_present = "zenoh"))]
+    file: Option<PathBuf>,
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
     actor_template: String,
@@ -61,6 +65,10 @@ pub struct ViewArgs {
     /// Simulation ticks per second.
     #[arg(long, default_value_t = 100.0)]
     rate: f64,
+    /// A render node: a scene published on Zenoh instead of a recording.
+    #[cfg(feature = "zenoh")]
+    #[command(flatten)]
+    remote: remote::RemoteViewArgs,
 }
 
 /// Options of `troupe snapshot`.
@@ -155,8 +163,16 @@ fn render_options(bones: bool, labels: bool) -> RenderOptions {
 
 /// Runs `troupe view`.
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
+    #[cfg(feature = "zenoh")]
+    if let Some(prefix) = &args.remote.zenoh {
+        return remote::run(&args, prefix);
+    }
+    let file = args
+        .file
+        .as_deref()
+        .ok_or_else(|| anyhow!("troupe view: give a recording to play"))?;
     let size = parse_size(&args.size)?;
-    let performers = load_recording(&args.file, &args.actor_template)?;
+    let performers = load_recording(file, &args.actor_template)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,
         ..SceneConfig::default()
@@ -174,7 +190,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
             Keyframe::new(&skeleton, &p.sequence, None, Some(true)).with_context(|| {
                 format!(
                     "{}: `{}` on template {}",
-                    args.file.display(),
+                    file.display(),
                     p.name,
                     p.template
                 )
@@ -206,7 +222,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         return write_frames(Session::new(scene), writer, seconds);
     }
     let options = WindowOptions {
-        title: format!("troupe view {}", args.file.display()),
+        title: format!("troupe view {}", file.display()),
         size,
         camera: camera.clone(),
         render: render_options(args.bones, !args.no_labels),

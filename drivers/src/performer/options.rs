@@ -5,8 +5,9 @@
 use crate::cyberglove::calibration::GloveCalibration;
 use crate::cyberglove::decoder::GloveLayout;
 use crate::cyberglove::protocol::{GloveConfig, GloveProtocol};
-use crate::device::protocol::Mode;
-use crate::device::thread::{spawn, DeviceHandle, DriverOptions};
+use crate::device::protocol::{Mode, Protocol};
+use crate::device::remote::RemotePorts;
+use crate::device::thread::{spawn, spawn_with, DriverOptions, Opener};
 use crate::fob::commands::{Hemisphere, OutputFormat, PositionRange};
 use crate::fob::protocol::{FobConfig, FobProtocol};
 use crate::gesture::{GestureSet, GestureTracker};
@@ -197,22 +198,41 @@ fn source(
     what: &str,
     kind: &str,
     scene_time: f64,
-    live: impl FnOnce(String) -> mlua::Result<DeviceHandle>,
+    recorder: Option<Arc<Recorder>>,
+    live: impl FnOnce(String) -> (DriverOptions, Box<dyn Protocol>),
 ) -> mlua::Result<Source> {
     let port: Option<String> = opt(t, "port")?;
     let replay: Option<String> = opt(t, "replay")?;
-    match (port, replay) {
-        (Some(p), None) => Ok(Source::Live(live(p)?)),
-        (None, Some(r)) => {
+    let remote: Option<String> = opt(t, "zenoh")?;
+    match (port, replay, remote) {
+        (Some(p), None, None) => {
+            let (options, protocol) = live(p);
+            Ok(Source::Live(spawn(options, protocol, recorder)))
+        }
+        (None, Some(r), None) => {
             let stream: Option<String> = opt(t, "stream")?;
             Source::replay(&resolve(lua, &r), stream.as_deref(), kind, scene_time)
                 .map_err(|e| args::err(what, e))
         }
-        (Some(_), Some(_)) => Err(args::err(what, "give `port` or `replay`, not both")),
-        (None, None) => Err(args::err(
+        (None, None, Some(key)) => {
+            let ports = lua.app_data_ref::<RemotePorts>().map(|p| p.clone()).ok_or_else(|| {
+                args::err(
+                    what,
+                    format!(
+                        "zenoh = \"{key}\" needs a network session: troupe run with \
+                         --zenoh-connect or --zenoh-listen (a troupe built with the zenoh feature)"
+                    ),
+                )
+            })?;
+            let (options, protocol) = live(format!("zenoh:{key}"));
+            let opener: Opener = Box::new(move |_| (ports.0)(&key));
+            Ok(Source::Live(spawn_with(options, protocol, recorder, opener)))
+        }
+        (None, None, None) => Err(args::err(
             what,
-            "`port` (a serial port) or `replay` (a .rec file) is required",
+            "`port` (a serial port), `replay` (a .rec file) or `zenoh` (a relay's key) is required",
         )),
+        _ => Err(args::err(what, "give one of `port`, `replay` and `zenoh`")),
     }
 }
 
@@ -230,6 +250,7 @@ fn fob_input(
         &[
             "port",
             "replay",
+            "zenoh",
             "stream",
             "birds",
             "map",
@@ -292,11 +313,19 @@ fn fob_input(
         config.mode = parse_mode(&m)?;
     }
     let baud: u32 = opt(t, "baud")?.unwrap_or(115_200);
-    let src = source(lua, t, "performer.devices.fob", "fob", scene_time, |port| {
-        let mut o = DriverOptions::new(&format!("{name}.fob"), &port);
-        o.baud = baud;
-        Ok(spawn(o, Box::new(FobProtocol::new(config)), recorder))
-    })?;
+    let src = source(
+        lua,
+        t,
+        "performer.devices.fob",
+        "fob",
+        scene_time,
+        recorder,
+        |port| {
+            let mut o = DriverOptions::new(&format!("{name}.fob"), &port);
+            o.baud = baud;
+            (o, Box::new(FobProtocol::new(config)))
+        },
+    )?;
     Ok(FobInput {
         source: src,
         converter,
@@ -361,6 +390,7 @@ fn glove_input(
         &[
             "port",
             "replay",
+            "zenoh",
             "stream",
             "hand",
             "sensors",
@@ -428,10 +458,11 @@ fn glove_input(
             "performer.devices.glove",
             "cyberglove",
             scene_time,
+            recorder,
             |port| {
                 let mut o = DriverOptions::new(&format!("{name}.glove"), &port);
                 o.baud = baud;
-                Ok(spawn(o, Box::new(GloveProtocol::new(config)), recorder))
+                (o, Box::new(GloveProtocol::new(config)))
             },
         )?
     };

@@ -555,6 +555,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
             Ok(ObjectRef(i))
         })?,
     )?;
+    crate::messages::install(lua, &troupe)?;
     lua.globals().set("troupe", troupe)?;
     Ok(())
 }
