@@ -51,7 +51,7 @@ fn to_json(lua: &Lua, value: Value) -> mlua::Result<serde_json::Value> {
 pub(crate) fn to_lua(lua: &Lua, value: &serde_json::Value) -> mlua::Result<Value> {
     lua.to_value_with(
         value,
-        mlua::SerializeOptions::new()
+        mlua::serde::SerializeOptions::new()
             .serialize_none_to_null(false)
             .serialize_unit_to_null(false),
     )
