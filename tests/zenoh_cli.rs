@@ -39,6 +39,17 @@ fn text(out: &Output) -> String {
     )
 }
 
+/// Waits until something listens on `port` (a troupe that has opened its session).
+fn wait_listening(port: u16) {
+    for _ in 0..300 {
+        if std::net::TcpStream::connect(("127.0.0.1", port)).is_ok() {
+            return;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    panic!("nothing listens on {port}");
+}
+
 /// A child process killed when dropped (a failing test leaves nothing running).
 struct Running(Child);
 impl Drop for Running {
@@ -63,6 +74,7 @@ fn a_follower_matches_its_leader_bit_for_bit_over_1000_ticks() {
             .spawn()
             .unwrap(),
     );
+    wait_listening(port);
     // Two threads, one actor per chunk: replication holds whatever the thread count.
     let follower = troupe()
         .args(["run", scene, "--ticks", "1000", "--threads", "2", "--chunk", "1"])
@@ -126,6 +138,7 @@ fn a_follower_running_another_scene_names_the_first_tick_that_differs() {
             .spawn()
             .unwrap(),
     );
+    wait_listening(port);
     let out = troupe()
         .arg("run")
         .arg(&follower_scene)
@@ -194,6 +207,7 @@ fn a_relayed_glove_feeds_a_performer_and_survives_its_relay_restarting() {
     .unwrap();
     let rec = temp("relayed.rec");
     let mut first = Some(relay(&pty, port));
+    wait_listening(port);
     let run = troupe()
         .arg("run")
         .arg(&scene)
@@ -261,6 +275,7 @@ fn a_render_node_writes_frames_of_a_remote_scene() {
             .spawn()
             .unwrap(),
     );
+    wait_listening(port);
     let out = troupe()
         .args(["view", "--zenoh", "troupe/render-test"])
         .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{port}")])

@@ -71,7 +71,14 @@ impl Leader {
     pub fn scene(&self, timeout: Duration) -> Result<LeaderScene, NetError> {
         let deadline = Instant::now() + timeout;
         let key = self.keys.scene();
+        // Subscribed already: say so, for a leader waiting on followers (every round, and
+        // once more after the answer, since the leader listens from before it answers).
+        let hello = format!("{}/followers/{}", self.keys.prefix(), self.session.zid());
+        let say_hello = || {
+            let _ = self.session.put(hello.as_str(), Vec::<u8>::new()).wait();
+        };
         while Instant::now() < deadline {
+            say_hello();
             let replies = self
                 .session
                 .get(key.clone())
@@ -87,6 +94,7 @@ impl Leader {
                 let doc: serde_json::Value =
                     serde_json::from_slice(&sample.payload().to_bytes()).unwrap_or_default();
                 if let (Some(seed), Some(rate)) = (doc["seed"].as_u64(), doc["rate"].as_f64()) {
+                    say_hello();
                     return Ok(LeaderScene { seed, rate });
                 }
             }
@@ -104,6 +112,7 @@ impl Leader {
         (
             FollowInput {
                 prefix: self.keys.prefix().to_string(),
+                _subscriber: self._inputs,
                 inputs: self.inputs,
                 pending: BTreeMap::new(),
                 report: report.clone(),
@@ -135,6 +144,8 @@ struct Report {
 /// Delivers the leader's inputs of each tick before the tick runs (an [`Input`]).
 pub struct FollowInput {
     prefix: String,
+    /// Kept declared as long as the inputs are read.
+    _subscriber: Subscriber<()>,
     inputs: Receiver<Vec<u8>>,
     /// Inputs received, by tick.
     pending: BTreeMap<u64, Vec<Message>>,

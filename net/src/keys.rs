@@ -8,6 +8,7 @@
 //! | `<prefix>/events` | action events (started, completed, cancelled, failed) | JSON |
 //! | `<prefix>/scene` | queryable: layout version, rate, seed, actor and object names | JSON |
 //! | `<prefix>/inputs` | each tick's inputs from outside, for followers | JSON |
+//! | `<prefix>/followers/<id>` | a follower's hello, once it has subscribed | empty |
 
 use crate::error::NetError;
 use zenoh::key_expr::KeyExpr;
@@ -74,6 +75,11 @@ impl SceneKeys {
     /// Where each tick's inputs are published for followers.
     pub fn inputs(&self) -> String {
         format!("{}/inputs", self.prefix)
+    }
+
+    /// Where followers say hello (`<prefix>/followers/<id>`), once subscribed.
+    pub fn followers(&self) -> String {
+        format!("{}/followers/*", self.prefix)
     }
 
     /// Where the scene's description is served.

@@ -11,12 +11,13 @@ use crate::keys::SceneKeys;
 use crate::posture;
 use crossbeam::channel::{bounded, Receiver, Sender, TrySendError};
 use serde_json::json;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use troupe_scene::{Event, Observer, Scene};
 use zenoh::qos::CongestionControl;
-use zenoh::pubsub::Publisher;
+use zenoh::pubsub::{Publisher, Subscriber};
 use zenoh::query::{Query, Queryable};
 use zenoh::{Session, Wait};
 
@@ -58,8 +59,10 @@ pub struct ScenePublisher {
     thread: Option<JoinHandle<u64>>,
     catalog: Arc<Mutex<Catalog>>,
     _queryables: Vec<Queryable<()>>,
-    inputs: Arc<Publisher<'static>>,
     await_followers: Option<Duration>,
+    /// Set when a follower says hello on `<prefix>/followers/*`.
+    follower_seen: Arc<AtomicBool>,
+    _followers: Subscriber<()>,
     actors_seen: usize,
     objects_seen: usize,
     dropped_ticks: u64,
@@ -86,24 +89,32 @@ impl ScenePublisher {
         }
         // Followers need every tick's inputs: this one publisher waits for the network
         // (on the publishing thread, never on the tick).
-        let inputs = Arc::new(
-            session
-                .declare_publisher(keys.inputs())
-                .congestion_control(CongestionControl::Block)
-                .wait()
-                .map_err(|e| NetError::Declare {
-                    what: "publisher",
-                    key: keys.inputs(),
-                    message: e.to_string(),
-                })?,
-        );
+        let inputs = session
+            .declare_publisher(keys.inputs())
+            .congestion_control(CongestionControl::Block)
+            .wait()
+            .map_err(|e| NetError::Declare {
+                what: "publisher",
+                key: keys.inputs(),
+                message: e.to_string(),
+            })?;
+        let follower_seen = Arc::new(AtomicBool::new(false));
+        let seen = follower_seen.clone();
+        let followers = session
+            .declare_subscriber(keys.followers())
+            .callback(move |_| seen.store(true, Ordering::Release))
+            .wait()
+            .map_err(|e| NetError::Declare {
+                what: "subscriber",
+                key: keys.followers(),
+                message: e.to_string(),
+            })?;
         let (tx, rx) = bounded(QUEUE_TICKS);
         let thread_session = session.clone();
         let thread_keys = keys.clone();
-        let thread_inputs = inputs.clone();
         let thread = std::thread::Builder::new()
             .name("zenoh-publish".into())
-            .spawn(move || put_batches(&thread_session, &thread_keys, &thread_inputs, rx))
+            .spawn(move || put_batches(&thread_session, &thread_keys, &inputs, rx))
             .map_err(|e| NetError::Open(format!("starting the publishing thread: {e}")))?;
         Ok(ScenePublisher {
             keys,
@@ -112,8 +123,9 @@ impl ScenePublisher {
             thread: Some(thread),
             catalog,
             _queryables: queryables,
-            inputs,
             await_followers: None,
+            follower_seen,
+            _followers: followers,
             actors_seen: 0,
             objects_seen: 0,
             dropped_ticks: 0,
@@ -242,8 +254,8 @@ impl Observer for ScenePublisher {
         };
         let deadline = Instant::now() + timeout;
         loop {
-            let matching = self.inputs.matching_status().wait().map(|s| s.matching());
-            if matching.unwrap_or(false) {
+            // A follower says hello once it has subscribed to the postures and inputs.
+            if self.follower_seen.load(Ordering::Acquire) {
                 return Ok(());
             }
             if Instant::now() > deadline {
