@@ -148,9 +148,10 @@ fn a_follower_running_another_scene_names_the_first_tick_that_differs() {
         .unwrap();
     let t = text(&out);
     assert!(!out.status.success(), "{t}");
-    // The leader's elbow starts moving at 0.5 s: tick 51 is the first to differ.
+    // The leader's behavior starts the bend in the script phase of tick 51 (after 0.5 s);
+    // the elbow first moves in tick 52, which is the first to differ.
     assert!(
-        t.contains("postures differ from the leader first at tick 51: ann r_elbow_flexion"),
+        t.contains("postures differ from the leader first at tick 52: ann r_elbow_flexion"),
         "{t}"
     );
 }
