@@ -7,9 +7,9 @@ use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use troupe_drivers::device::{DeviceError, Port, RemotePorts};
 use troupe_lua::{LuaSession, LuaSessionExt};
-use troupe_net::relay::ZenohPort;
 use troupe_net::follow::{FollowCheck, FollowInput, Leader};
-use troupe_net::{Endpoints, MessageInput, ScenePublisher, SceneKeys};
+use troupe_net::relay::ZenohPort;
+use troupe_net::{Endpoints, MessageInput, SceneKeys, ScenePublisher};
 use troupe_scene::{Event, Observer, Scene, SceneConfig};
 
 /// How long a leader waits for a follower, and a follower for a leader.

@@ -67,7 +67,12 @@ fn a_follower_matches_its_leader_bit_for_bit_over_1000_ticks() {
     let leader = Running(
         troupe()
             .args(["run", scene, "--ticks", "1000", "--seed", "7", "--realtime"])
-            .args(["--zenoh", "--zenoh-prefix", prefix, "--zenoh-await-followers"])
+            .args([
+                "--zenoh",
+                "--zenoh-prefix",
+                prefix,
+                "--zenoh-await-followers",
+            ])
             .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{port}")])
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
@@ -77,7 +82,16 @@ fn a_follower_matches_its_leader_bit_for_bit_over_1000_ticks() {
     wait_listening(port);
     // Two threads, one actor per chunk: replication holds whatever the thread count.
     let follower = troupe()
-        .args(["run", scene, "--ticks", "1000", "--threads", "2", "--chunk", "1"])
+        .args([
+            "run",
+            scene,
+            "--ticks",
+            "1000",
+            "--threads",
+            "2",
+            "--chunk",
+            "1",
+        ])
         .args(["--zenoh-follow", prefix])
         .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{port}")])
         .stdout(Stdio::piped())
@@ -130,7 +144,14 @@ fn a_follower_running_another_scene_names_the_first_tick_that_differs() {
         troupe()
             .arg("run")
             .arg(&leader_scene)
-            .args(["--ticks", "150", "--realtime", "--zenoh", "--zenoh-prefix", prefix])
+            .args([
+                "--ticks",
+                "150",
+                "--realtime",
+                "--zenoh",
+                "--zenoh-prefix",
+                prefix,
+            ])
             .args(["--zenoh-await-followers"])
             .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{port}")])
             .stdout(Stdio::null())
@@ -174,7 +195,14 @@ fn emulated_glove() -> (Running, String) {
 fn relay(pty: &str, port: u16) -> Running {
     Running(
         troupe()
-            .args(["relay", "cyberglove", "--port", pty, "--key", "troupe/devices/glove"])
+            .args([
+                "relay",
+                "cyberglove",
+                "--port",
+                pty,
+                "--key",
+                "troupe/devices/glove",
+            ])
             .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{port}")])
             .stdout(Stdio::null())
             .stderr(Stdio::null())
@@ -268,7 +296,13 @@ fn a_render_node_writes_frames_of_a_remote_scene() {
     let frames = temp("frames");
     let _leader = Running(
         troupe()
-            .args(["run", "scripts/examples/greeting.lua", "--seconds", "8", "--realtime"])
+            .args([
+                "run",
+                "scripts/examples/greeting.lua",
+                "--seconds",
+                "8",
+                "--realtime",
+            ])
             .args(["--zenoh", "--zenoh-prefix", "troupe/render-test"])
             .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{port}")])
             .stdout(Stdio::null())
@@ -280,7 +314,15 @@ fn a_render_node_writes_frames_of_a_remote_scene() {
     let out = troupe()
         .args(["view", "--zenoh", "troupe/render-test"])
         .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{port}")])
-        .args(["--seconds", "1", "--every", "25", "--size", "160x90", "--no-msaa"])
+        .args([
+            "--seconds",
+            "1",
+            "--every",
+            "25",
+            "--size",
+            "160x90",
+            "--no-msaa",
+        ])
         .arg("--frames")
         .arg(&frames)
         .output()
@@ -296,7 +338,9 @@ fn an_independent_python_client_checks_the_postures_against_the_trk() {
         .args(["-c", "import zenoh"])
         .output();
     if !python.is_ok_and(|o| o.status.success()) {
-        eprintln!("skipped: python3 with eclipse-zenoh is not installed (scripts/setup.sh installs it)");
+        eprintln!(
+            "skipped: python3 with eclipse-zenoh is not installed (scripts/setup.sh installs it)"
+        );
         return;
     }
     let out_dir = temp("python");

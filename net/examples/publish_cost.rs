@@ -13,7 +13,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 use troupe_net::relay::now_micros;
 use troupe_net::zenoh::Wait;
-use troupe_net::{Endpoints, ScenePublisher, SceneKeys};
+use troupe_net::{Endpoints, SceneKeys, ScenePublisher};
 use troupe_scene::{ActorDesc, Scene, SceneConfig, Session};
 
 fn free_port() -> u16 {
@@ -38,11 +38,7 @@ fn percentile(v: &mut [f64], q: f64) -> f64 {
 }
 
 /// Runs `seconds` of paced ticks; returns the publish-phase time of each tick (ms).
-fn run(
-    session: &mut Session,
-    seconds: f64,
-    mut at_half: impl FnMut(),
-) -> Vec<f64> {
+fn run(session: &mut Session, seconds: f64, mut at_half: impl FnMut()) -> Vec<f64> {
     let ticks = (seconds * 100.0) as u64;
     let period = Duration::from_millis(10);
     let mut next = Instant::now();
@@ -94,8 +90,14 @@ fn main() {
     let mut alone = Session::new(crowd(actors));
     let handle = alone.observe(ScenePublisher::new(leader.clone(), keys.clone()).unwrap());
     let mut times = run(&mut alone, seconds, || {});
-    report(&format!("{actors} actors, publishing, no subscriber"), &mut times);
-    println!("  dropped ticks: {}", alone.observer(handle).dropped_ticks());
+    report(
+        &format!("{actors} actors, publishing, no subscriber"),
+        &mut times,
+    );
+    println!(
+        "  dropped ticks: {}",
+        alone.observer(handle).dropped_ticks()
+    );
     alone.finish().unwrap();
 
     // Publishing to a subscriber that is killed half way through.
@@ -109,7 +111,12 @@ fn main() {
     let packets = Arc::new(AtomicU64::new(0));
     let delays = Arc::new(Mutex::new(Vec::new()));
     let started = Arc::new(Mutex::new(std::collections::HashMap::<u64, u64>::new()));
-    let (b, p, d, s) = (bytes.clone(), packets.clone(), delays.clone(), started.clone());
+    let (b, p, d, s) = (
+        bytes.clone(),
+        packets.clone(),
+        delays.clone(),
+        started.clone(),
+    );
     let subscriber = sub
         .declare_subscriber(keys.all_poses())
         .callback(move |sample| {
@@ -145,10 +152,16 @@ fn main() {
         let n = times.len() / 2;
         (times[..n].to_vec(), times[n..].to_vec())
     };
-    report(&format!("{actors} actors, publishing to a subscriber (whole run)"), &mut times);
+    report(
+        &format!("{actors} actors, publishing to a subscriber (whole run)"),
+        &mut times,
+    );
     report("  first half, subscriber alive", &mut first.clone());
     report("  second half, subscriber killed", &mut second.clone());
-    println!("  dropped ticks: {}", listened.observer(handle).dropped_ticks());
+    println!(
+        "  dropped ticks: {}",
+        listened.observer(handle).dropped_ticks()
+    );
     let got = received_at_half.load(Ordering::Relaxed) as f64;
     println!(
         "  subscriber received {:.0} KiB of postures in {half:.1} s: {:.1} KiB/s per actor ({} packets)",

@@ -164,7 +164,10 @@ impl FollowInput {
             .iter()
             .map(|m| {
                 Ok(Message {
-                    key: m["key"].as_str().ok_or("a message without a key")?.to_string(),
+                    key: m["key"]
+                        .as_str()
+                        .ok_or("a message without a key")?
+                        .to_string(),
                     value: m["value"].clone(),
                     remote: true,
                 })
@@ -258,10 +261,16 @@ impl Observer for FollowCheck {
                 continue;
             }
             let differs = theirs.values.len() != state.q.len()
-                || theirs.values.iter().zip(&state.q).any(|(a, b)| a.to_bits() != b.to_bits());
+                || theirs
+                    .values
+                    .iter()
+                    .zip(&state.q)
+                    .any(|(a, b)| a.to_bits() != b.to_bits());
             if differs {
                 let d = (0..state.q.len())
-                    .find(|&d| theirs.values.get(d).map(|v| v.to_bits()) != Some(state.q[d].to_bits()))
+                    .find(|&d| {
+                        theirs.values.get(d).map(|v| v.to_bits()) != Some(state.q[d].to_bits())
+                    })
                     .unwrap_or(0);
                 let leader = theirs.values.get(d).copied().unwrap_or(f64::NAN);
                 report.first_difference = Some((tick, info.name.clone(), d, leader, state.q[d]));
@@ -294,7 +303,10 @@ impl Observer for FollowCheck {
             self.prefix, report.compared
         );
         if report.unchecked > 0 {
-            line += &format!(" ({} never arrived and were not compared)", report.unchecked);
+            line += &format!(
+                " ({} never arrived and were not compared)",
+                report.unchecked
+            );
         }
         Ok(Some(line))
     }

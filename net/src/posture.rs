@@ -125,7 +125,14 @@ mod tests {
 
     #[test]
     fn a_posture_round_trips_bit_for_bit() {
-        let values = [0.0, -0.0, 1.5, f64::MIN_POSITIVE, -1e-300, std::f64::consts::PI];
+        let values = [
+            0.0,
+            -0.0,
+            1.5,
+            f64::MIN_POSITIVE,
+            -1e-300,
+            std::f64::consts::PI,
+        ];
         let bytes = encode(42, 0.42, &values);
         assert_eq!(bytes.len(), HEADER_LEN + 8 * values.len());
         let back = decode(&bytes).unwrap();
@@ -150,11 +157,17 @@ mod tests {
         let good = encode(1, 0.01, &[1.0, 2.0]);
         assert_eq!(
             decode(&good[..10]),
-            Err(PostureError::Length { got: 10, expected: 24 })
+            Err(PostureError::Length {
+                got: 10,
+                expected: 24
+            })
         );
         assert_eq!(
             decode(&good[..good.len() - 1]),
-            Err(PostureError::Length { got: 39, expected: 40 })
+            Err(PostureError::Length {
+                got: 39,
+                expected: 40
+            })
         );
         let mut bad = good.clone();
         bad[0] = b'X';

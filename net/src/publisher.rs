@@ -16,8 +16,8 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 use troupe_scene::{Event, Observer, Scene};
-use zenoh::qos::CongestionControl;
 use zenoh::pubsub::{Publisher, Subscriber};
+use zenoh::qos::CongestionControl;
 use zenoh::query::{Query, Queryable};
 use zenoh::{Session, Wait};
 
@@ -165,9 +165,10 @@ impl ScenePublisher {
             let names: Vec<&str> = a.skeleton.dofs().iter().map(|d| d.name.as_str()).collect();
             let doc = json!({"actor": a.name, "template": a.template,
                              "height": a.params.height, "dofs": names});
-            catalog
-                .dofs
-                .push((self.keys.dofs(&a.name).map_err(invalid)?, doc.to_string().into_bytes()));
+            catalog.dofs.push((
+                self.keys.dofs(&a.name).map_err(invalid)?,
+                doc.to_string().into_bytes(),
+            ));
         }
         for o in objects {
             self.keys.object(&o.name).map_err(invalid)?;
@@ -365,8 +366,18 @@ fn put_batches(
     let mut failed = 0u64;
     for batch in queue {
         // Names were checked on the tick's side; a refused one has no publisher.
-        actors.extend(batch.new_actors.iter().map(|n| keys.pose(n).ok().and_then(declare)));
-        objects.extend(batch.new_objects.iter().map(|n| keys.object(n).ok().and_then(declare)));
+        actors.extend(
+            batch
+                .new_actors
+                .iter()
+                .map(|n| keys.pose(n).ok().and_then(declare)),
+        );
+        objects.extend(
+            batch
+                .new_objects
+                .iter()
+                .map(|n| keys.object(n).ok().and_then(declare)),
+        );
         let puts = (actors.iter().zip(batch.poses))
             .chain(objects.iter().zip(batch.objects))
             .chain(batch.events.into_iter().map(|e| (&events, e)));

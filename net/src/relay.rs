@@ -101,7 +101,9 @@ pub fn serve<P: Read + Write + Send>(
     let io_err = |e: std::io::Error| NetError::Open(format!("the device on {key}: {e}"));
     while !stop.load(Ordering::Acquire) {
         for command in commands.try_iter() {
-            port.write_all(&command).and_then(|_| port.flush()).map_err(io_err)?;
+            port.write_all(&command)
+                .and_then(|_| port.flush())
+                .map_err(io_err)?;
             stats.commands += 1;
         }
         match port.read(&mut buf) {
@@ -224,8 +226,14 @@ mod tests {
     #[test]
     fn a_chunk_carries_its_source_time() {
         let c = encode_chunk(1_700_000_000_000_123, b"\x01\x02");
-        assert_eq!(decode_chunk(&c), Some((1_700_000_000_000_123, &b"\x01\x02"[..])));
+        assert_eq!(
+            decode_chunk(&c),
+            Some((1_700_000_000_000_123, &b"\x01\x02"[..]))
+        );
         assert_eq!(decode_chunk(&c[..7]), None);
-        assert_eq!(decode_chunk(&c[..8]), Some((1_700_000_000_000_123, &b""[..])));
+        assert_eq!(
+            decode_chunk(&c[..8]),
+            Some((1_700_000_000_000_123, &b""[..]))
+        );
     }
 }

@@ -94,8 +94,8 @@ pub fn actor_bodies(
     let mut out = Vec::new();
     while let Ok(reply) = replies.recv() {
         let Ok(sample) = reply.result() else { continue };
-        let doc: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes())
-            .map_err(|e| NetError::Key {
+        let doc: serde_json::Value =
+            serde_json::from_slice(&sample.payload().to_bytes()).map_err(|e| NetError::Key {
                 key: sample.key_expr().to_string(),
                 message: format!("an actor description that is not JSON: {e}"),
             })?;
@@ -105,7 +105,11 @@ pub fn actor_bodies(
             height: doc["height"].as_f64(),
             dofs: doc["dofs"]
                 .as_array()
-                .map(|a| a.iter().filter_map(|d| d.as_str().map(String::from)).collect())
+                .map(|a| {
+                    a.iter()
+                        .filter_map(|d| d.as_str().map(String::from))
+                        .collect()
+                })
                 .unwrap_or_default(),
         });
     }

@@ -4,7 +4,7 @@
 use std::net::TcpListener;
 use std::time::{Duration, Instant};
 use troupe_net::subscriber::actor_bodies;
-use troupe_net::{Endpoints, PoseFeed, PoseMessage, ScenePublisher, SceneKeys};
+use troupe_net::{Endpoints, PoseFeed, PoseMessage, SceneKeys, ScenePublisher};
 use troupe_scene::{ActorDesc, Scene, SceneConfig, Session};
 use zenoh::Wait;
 
@@ -31,7 +31,10 @@ fn await_routes(leader: &zenoh::Session, keys: &SceneKeys, feeds: &[&PoseFeed]) 
     let deadline = Instant::now() + Duration::from_secs(10);
     let mut seen = vec![false; feeds.len()];
     while !seen.iter().all(|s| *s) {
-        assert!(Instant::now() < deadline, "subscribers never saw the leader");
+        assert!(
+            Instant::now() < deadline,
+            "subscribers never saw the leader"
+        );
         leader.put(&probe, b"probe".to_vec()).wait().unwrap();
         std::thread::sleep(Duration::from_millis(20));
         for (s, feed) in seen.iter_mut().zip(feeds) {
@@ -74,7 +77,12 @@ fn a_leader_with_two_subscribers_publishes_every_posture_bit_for_bit() {
     session.start().unwrap();
     let mut expected: Vec<(String, u64, Vec<f64>)> = Vec::new();
     let remember = |session: &Session, expected: &mut Vec<(String, u64, Vec<f64>)>| {
-        for (a, s) in session.scene().actors().iter().zip(session.scene().states()) {
+        for (a, s) in session
+            .scene()
+            .actors()
+            .iter()
+            .zip(session.scene().states())
+        {
             expected.push((a.name.clone(), session.scene().tick(), s.q.clone()));
         }
     };
@@ -94,13 +102,19 @@ fn a_leader_with_two_subscribers_publishes_every_posture_bit_for_bit() {
     let bodies = actor_bodies(&one, &keys, Duration::from_secs(5)).unwrap();
     let skeleton = &session.scene().actors()[0].skeleton;
     let want: Vec<String> = skeleton.dofs().iter().map(|d| d.name.clone()).collect();
-    let names: Vec<(String, Vec<String>)> =
-        bodies.into_iter().map(|b| (b.actor, b.dofs)).collect();
-    assert_eq!(names, vec![("ann".into(), want.clone()), ("bob".into(), want)]);
+    let names: Vec<(String, Vec<String>)> = bodies.into_iter().map(|b| (b.actor, b.dofs)).collect();
+    assert_eq!(
+        names,
+        vec![("ann".into(), want.clone()), ("bob".into(), want)]
+    );
     let line = session.finish().unwrap();
     assert_eq!(
         line,
-        vec![format!("published {} ticks on zenoh under {}", ticks + 1, keys.prefix())]
+        vec![format!(
+            "published {} ticks on zenoh under {}",
+            ticks + 1,
+            keys.prefix()
+        )]
     );
 
     for (i, feed) in feeds.iter().enumerate() {
@@ -115,7 +129,11 @@ fn a_leader_with_two_subscribers_publishes_every_posture_bit_for_bit() {
             .into_iter()
             .map(|m| {
                 let p = m.posture.expect("a well-formed packet");
-                (m.actor, p.tick, p.values.iter().map(|v| v.to_bits()).collect())
+                (
+                    m.actor,
+                    p.tick,
+                    p.values.iter().map(|v| v.to_bits()).collect(),
+                )
             })
             .collect();
         got.sort();

@@ -215,18 +215,23 @@ fn source(
                 .map_err(|e| args::err(what, e))
         }
         (None, None, Some(key)) => {
-            let ports = lua.app_data_ref::<RemotePorts>().map(|p| p.clone()).ok_or_else(|| {
-                args::err(
-                    what,
-                    format!(
-                        "zenoh = \"{key}\" needs a network session: troupe run with \
+            let ports = lua
+                .app_data_ref::<RemotePorts>()
+                .map(|p| p.clone())
+                .ok_or_else(|| {
+                    args::err(
+                        what,
+                        format!(
+                            "zenoh = \"{key}\" needs a network session: troupe run with \
                          --zenoh-connect or --zenoh-listen (a troupe built with the zenoh feature)"
-                    ),
-                )
-            })?;
+                        ),
+                    )
+                })?;
             let (options, protocol) = live(format!("zenoh:{key}"));
             let opener: Opener = Box::new(move |_| (ports.0)(&key));
-            Ok(Source::Live(spawn_with(options, protocol, recorder, opener)))
+            Ok(Source::Live(spawn_with(
+                options, protocol, recorder, opener,
+            )))
         }
         (None, None, None) => Err(args::err(
             what,

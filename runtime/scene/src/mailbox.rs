@@ -64,19 +64,15 @@ impl Mailbox {
     /// order does not depend on how they arrived.
     pub fn deliver(&mut self, mut messages: Vec<Message>) {
         messages.sort_by_cached_key(|m| (m.key.clone(), m.value.to_string()));
-        self.inbox.extend(messages.into_iter().map(|m| Message {
-            remote: true,
-            ..m
-        }));
+        self.inbox
+            .extend(messages.into_iter().map(|m| Message { remote: true, ..m }));
     }
 
     /// Adds messages to this tick's inbox in the order given (a replay, whose order was
     /// sorted when it was recorded).
     pub fn deliver_in_order(&mut self, messages: Vec<Message>) {
-        self.inbox.extend(messages.into_iter().map(|m| Message {
-            remote: true,
-            ..m
-        }));
+        self.inbox
+            .extend(messages.into_iter().map(|m| Message { remote: true, ..m }));
     }
 
     /// Takes this tick's inbox for the script to hand to its subscribers.
@@ -126,7 +122,11 @@ pub fn key_matches(expr: &str, key: &str) -> bool {
 /// Refuses keys Zenoh would refuse: empty chunks, spaces, `$ ? #`; wildcards (`*`, `**`
 /// as whole chunks) only in a subscription.
 fn check_key(key: &str, wildcards: bool) -> Result<()> {
-    let what = if wildcards { "subscription" } else { "message key" };
+    let what = if wildcards {
+        "subscription"
+    } else {
+        "message key"
+    };
     let bad = |why: &str| Err(Error::Invalid(format!("{what} {key:?}: {why}")));
     if key.is_empty() || key.split('/').any(str::is_empty) {
         return bad("chunks between '/' must not be empty");
@@ -183,16 +183,34 @@ mod tests {
         assert_eq!(m.published().len(), 2);
         m.begin_tick();
         m.deliver(vec![
-            Message { key: "b".into(), value: json!(2), remote: true },
-            Message { key: "a".into(), value: json!(9), remote: true },
-            Message { key: "a".into(), value: json!(1), remote: true },
+            Message {
+                key: "b".into(),
+                value: json!(2),
+                remote: true,
+            },
+            Message {
+                key: "a".into(),
+                value: json!(9),
+                remote: true,
+            },
+            Message {
+                key: "a".into(),
+                value: json!(1),
+                remote: true,
+            },
         ]);
         let keys: Vec<(String, String)> = m
             .take_inbox()
             .into_iter()
             .map(|m| (m.key, m.value.to_string()))
             .collect();
-        let want = [("z/own", "\"first\""), ("a/own", "\"second\""), ("a", "1"), ("a", "9"), ("b", "2")];
+        let want = [
+            ("z/own", "\"first\""),
+            ("a/own", "\"second\""),
+            ("a", "1"),
+            ("a", "9"),
+            ("b", "2"),
+        ];
         assert_eq!(
             keys,
             want.map(|(k, v)| (k.to_string(), v.to_string())).to_vec()

@@ -89,7 +89,10 @@ impl MessageReplay {
             let key = doc["key"]
                 .as_str()
                 .ok_or_else(|| bad("no \"key\" (a string)".into()))?;
-            if messages.last().is_some_and(|(t, _): &(u64, Message)| *t > tick) {
+            if messages
+                .last()
+                .is_some_and(|(t, _): &(u64, Message)| *t > tick)
+            {
                 return Err(bad(format!("tick {tick} comes after a later tick")));
             }
             messages.push((
@@ -119,7 +122,11 @@ impl Input for MessageReplay {
         // order is the delivered order, so it is kept as it is.
         let tick = scene.tick() + 1;
         let start = self.next;
-        while self.messages.get(self.next).is_some_and(|(t, _)| *t <= tick) {
+        while self
+            .messages
+            .get(self.next)
+            .is_some_and(|(t, _)| *t <= tick)
+        {
             self.next += 1;
         }
         let due: Vec<Message> = self.messages[start..self.next]
@@ -144,12 +151,18 @@ mod tests {
             .unwrap()
             .to_string();
         assert!(err.contains("m.jsonl:2"), "{err}");
-        let err = MessageReplay::parse("{\"key\":\"a\"}", "m.jsonl").err().unwrap().to_string();
-        assert!(err.contains("m.jsonl:1: no \"tick\""), "{err}");
-        let err = MessageReplay::parse("{\"tick\":3,\"key\":\"a\"}\n{\"tick\":2,\"key\":\"b\"}", "m")
+        let err = MessageReplay::parse("{\"key\":\"a\"}", "m.jsonl")
             .err()
             .unwrap()
             .to_string();
+        assert!(err.contains("m.jsonl:1: no \"tick\""), "{err}");
+        let err = MessageReplay::parse(
+            "{\"tick\":3,\"key\":\"a\"}\n{\"tick\":2,\"key\":\"b\"}",
+            "m",
+        )
+        .err()
+        .unwrap()
+        .to_string();
         assert!(err.contains("m:2"), "{err}");
     }
 
@@ -161,7 +174,11 @@ mod tests {
         }
         fn poll(&mut self, scene: &mut Scene) -> Result<()> {
             let now = scene.tick() + 1;
-            let due = self.0.iter().filter(|(t, _)| *t == now).map(|(_, m)| m.clone());
+            let due = self
+                .0
+                .iter()
+                .filter(|(t, _)| *t == now)
+                .map(|(_, m)| m.clone());
             scene.mailbox_mut().deliver(due.collect());
             Ok(())
         }
@@ -184,7 +201,11 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("troupe-msglog-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let path = dir.join("m.jsonl");
-        let msg = |k: &str, v: i64| Message { key: k.into(), value: json!(v), remote: true };
+        let msg = |k: &str, v: i64| Message {
+            key: k.into(),
+            value: json!(v),
+            remote: true,
+        };
         let scene = || Scene::new(SceneConfig::default()).unwrap();
         let mut live = Session::with_script(scene(), Reader::default());
         live.add_input(Box::new(Arrivals(vec![
@@ -199,7 +220,9 @@ mod tests {
         live.finish().unwrap();
         let seen = live.script().0.clone();
         assert_eq!(
-            seen.iter().map(|(t, k, _)| (*t, k.as_str())).collect::<Vec<_>>(),
+            seen.iter()
+                .map(|(t, k, _)| (*t, k.as_str()))
+                .collect::<Vec<_>>(),
             vec![(2, "a"), (2, "b"), (5, "c")]
         );
         let mut replay = Session::with_script(scene(), Reader::default());
