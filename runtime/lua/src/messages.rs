@@ -9,9 +9,6 @@ use crate::args::lua_err;
 use crate::stage::stage;
 use mlua::{Function, Lua, LuaSerdeExt, Table, Value};
 
-/// A subscription made from Lua: the key expression and the function to call.
-pub(crate) type Subscription = (String, Function);
-
 /// Adds `publish` and `subscribe` to the `troupe` table.
 pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     troupe.set(

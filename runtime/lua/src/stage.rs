@@ -66,8 +66,8 @@ pub(crate) struct Stage {
     pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
     pub tests: Vec<(String, Function)>,
     pub handler_failures: Vec<(usize, String)>,
-    /// `troupe.subscribe` calls, in order.
-    pub subscriptions: Vec<crate::messages::Subscription>,
+    /// `troupe.subscribe` calls, in order: the key expression and the function to call.
+    pub subscriptions: Vec<(String, Function)>,
 }
 
 /// The stage of the Lua state `lua`, mutably (for a callback; never across a Lua call).
