@@ -32,6 +32,8 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
+// Parsed once per process: the size of the largest variant (`run`'s options) costs nothing.
+#[allow(clippy::large_enum_variant)]
 enum Command {
     /// List the body templates with their DOF counts and scopes.
     Templates(templates::TemplatesArgs),
