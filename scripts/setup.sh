@@ -1,6 +1,8 @@
 #!/usr/bin/env bash
-# Installs the system packages troupe needs, only when something is missing (idempotent).
-# Headless rendering uses Mesa's llvmpipe through EGL: libegl1, libegl-mesa0, libgl1-mesa-dri.
+# Installs what troupe needs, only when something is missing (idempotent).
+# `scripts/setup.sh`: what running troupe needs (headless rendering uses Mesa's llvmpipe
+# through EGL: libegl1, libegl-mesa0, libgl1-mesa-dri).
+# `scripts/setup.sh --tests` (scripts/test.sh): also the tools the tests check troupe with.
 set -euo pipefail
 missing=()
 for pkg in libegl1 libegl-mesa0 libgl1-mesa-dri; do
@@ -10,9 +12,10 @@ if ((${#missing[@]})); then
   echo "setup: installing ${missing[*]}" >&2
   SUDO=""; [ "$(id -u)" -eq 0 ] || SUDO="sudo"
   $SUDO apt-get update -qq
-  $SUDO DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
+  $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${missing[@]}"
 fi
 command -v cargo >/dev/null || { echo "setup: Rust (cargo) is required: https://rustup.rs" >&2; exit 1; }
+[ "${1:-}" = "--tests" ] || exit 0
 # The Khronos glTF validator, for the test that checks the glTF files troupe writes
 # (runtime/formats/tests/khronos_validator.rs, which is skipped with a note without it).
 # Installed from the npm registry only, into .tools/node, once.
@@ -36,12 +39,32 @@ if ((${#vrpn_missing[@]})); then
   $SUDO apt-get update -qq
   $SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${vrpn_missing[@]}"
 fi
-# Zenoh: tests/zenoh_cli.rs checks a published run with an independent client, the
-# `eclipse-zenoh` Python package from PyPI (scripts/zenoh_check.py; the test is skipped
-# with a note without it). Installed once, only when missing.
-ZENOH_PY=1.10.2
-if command -v python3 >/dev/null && ! python3 -c "import zenoh" >/dev/null 2>&1; then
-  echo "setup: installing eclipse-zenoh==$ZENOH_PY (PyPI)" >&2
-  python3 -m pip install --quiet "eclipse-zenoh==$ZENOH_PY" >&2 ||
-    echo "setup: could not install eclipse-zenoh; the Python client test will be skipped" >&2
+# Python tools from PyPI, into one venv in .tools/python, once, each for a test that checks
+# troupe against an implementation it does not use (the test is skipped with a note when
+# its package is missing): Pinocchio (`pin`), an independent RNEA on troupe's own URDF
+# export (runtime/formats/tests/pinocchio_dynamics.rs); python-osc, the VMC compatibility
+# check (scripts/vmc/compat.py, run by tests/vmc.rs); junitparser, a JUnit XML reader for
+# `troupe test --junit` (tests/test_runner.rs); eclipse-zenoh, the independent Zenoh client
+# that checks a published run's postures against its .trk (scripts/zenoh_check.py, run by
+# tests/zenoh_cli.rs).
+PYTHON_TOOLS=("pin==4.1.0" "python-osc==1.10.2" "junitparser==3.2.0" "eclipse-zenoh==1.10.2")
+python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
+if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio, pythonosc, junitparser, zenoh" >/dev/null 2>&1; then
+  echo "setup: installing ${PYTHON_TOOLS[*]} into $python_tools" >&2
+  { [ -x "$python_tools/bin/pip" ] || python3 -m venv "$python_tools"; } >&2 &&
+    "$python_tools/bin/pip" install -q --disable-pip-version-check "${PYTHON_TOOLS[@]}" >&2 ||
+    echo "setup: could not install the Python test tools; their tests will be skipped" >&2
+fi
+# emmylua_check (crates.io), the Lua checker scripts/test.sh runs over every Lua file with
+# the API's definitions (`troupe lua-defs`). Built once, unoptimised and without debug
+# information (about 2 minutes on 2 free cores; a release build took 43 on a busy machine, see
+# docs/PERFORMANCE.md; it checks the repository in about a second either way), into a
+# folder outside the clone, so that later clones and CI runs on the same machine reuse it:
+# $TROUPE_TOOLS, default ~/.cache/troupe-tools.
+EMMYLUA_CHECK=0.25.1
+troupe_tools="${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}"
+if ! "$troupe_tools/bin/emmylua_check" --version 2>/dev/null | grep -q "$EMMYLUA_CHECK"; then
+  echo "setup: installing emmylua_check $EMMYLUA_CHECK into $troupe_tools (once; long)" >&2
+  CARGO_PROFILE_DEV_DEBUG=0 cargo install --locked --quiet --debug emmylua_check \
+    --version "$EMMYLUA_CHECK" --root "$troupe_tools" >&2
 fi

@@ -34,6 +34,7 @@ enum ProbeKind {
     Fob,
     Cyberglove,
     Spacemouse,
+    Vmc,
     Vrpn,
 }
 
@@ -50,6 +51,9 @@ struct ProbeArgs {
     /// VRPN: also read these button or analog devices of the same server (comma-separated).
     #[arg(long, value_delimiter = ',')]
     also: Vec<String>,
+    /// VMC: the UDP address to listen on (a Performer's port for Assistants by default).
+    #[arg(long, default_value = "0.0.0.0:39540")]
+    listen: String,
     /// FoB output format: position, angles, matrix, quaternion, position-angles,
     /// position-matrix, position-quaternion.
     #[arg(long, default_value = "position-angles")]
@@ -125,9 +129,13 @@ pub struct EmulateArgs {
     /// Glove sensors: 18 or 22.
     #[arg(long, default_value_t = 18)]
     sensors: usize,
-    /// Measurement rate, Hz.
-    #[arg(long, default_value_t = 100.0)]
-    rate: f64,
+    /// Measurement rate, Hz (default 100; VMC frames: 60).
+    #[arg(long)]
+    rate: Option<f64>,
+    /// VMC: where to send the stream, HOST:PORT (a Marionette listens on 39539; a troupe
+    /// performer on 39540).
+    #[arg(long, default_value = "127.0.0.1:39540")]
+    to: String,
     /// Also make a symbolic link at this path to the pty (stable across restarts).
     #[arg(long)]
     link: Option<PathBuf>,
@@ -140,6 +148,7 @@ pub struct EmulateArgs {
 enum EmulateKind {
     Fob,
     Cyberglove,
+    Vmc,
 }
 
 fn mode(m: &str) -> Result<Mode> {
@@ -202,6 +211,9 @@ fn list(json: bool) -> Result<ExitCode> {
 
 fn probe(a: ProbeArgs) -> Result<ExitCode> {
     let timeout = Duration::from_secs_f64(a.timeout.max(0.1));
+    if a.kind == ProbeKind::Vmc {
+        return probe_vmc(&a.listen, a.samples, timeout, a.json);
+    }
     if a.kind == ProbeKind::Spacemouse {
         let json = a.json;
         let (name, n) = troupe_drivers::spacemouse::read_spacemouse(
@@ -517,6 +529,7 @@ pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
     let (kind, name) = match a.kind {
         EmulateKind::Fob => (DeviceKind::Fob, "fob"),
         EmulateKind::Cyberglove => (DeviceKind::CyberGlove, "cyberglove"),
+        EmulateKind::Vmc => return emulate_vmc(&a),
     };
     if a.sensors != 18 && a.sensors != 22 {
         bail!("--sensors must be 18 or 22");
@@ -533,7 +546,7 @@ pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
         birds: a.birds,
         range: PositionRange::parse(&a.range).map_err(|e| anyhow!(e))?,
         sensors: a.sensors,
-        rate_hz: a.rate,
+        rate_hz: a.rate.unwrap_or(100.0),
         motion,
     };
     let emu = emulator::start(kind, options, a.link.as_deref())
@@ -557,6 +570,91 @@ pub fn emulate(a: EmulateArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
+/// `troupe emulate vmc --from MOTION --to HOST:PORT`: sends the motion as a VMC stream in
+/// real time, looped.
+fn emulate_vmc(a: &EmulateArgs) -> Result<ExitCode> {
+    use troupe_drivers::vmc::emulator::{send_motion, VmcMotion};
+    let from = a
+        .from
+        .as_ref()
+        .ok_or_else(|| anyhow!("emulate vmc needs --from MOTION.bvh or .trk"))?;
+    let rate = a.rate.unwrap_or(60.0);
+    if !(rate.is_finite() && rate > 0.0) {
+        bail!("--rate must be a positive number of frames per second");
+    }
+    let motion = VmcMotion::load(from).map_err(|e| anyhow!(e))?;
+    eprintln!(
+        "sending {} ({:.2} s, looped) as VMC to {} at {rate} Hz; stop with Ctrl-C",
+        from.display(),
+        motion.duration(),
+        a.to
+    );
+    let stop = std::sync::atomic::AtomicBool::new(false);
+    let sent = send_motion(&motion, &a.to, rate, a.seconds, &stop).map_err(|e| anyhow!(e))?;
+    eprintln!("sent {sent} frames");
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `troupe devices probe vmc --listen …`: prints what a VMC sender sends.
+fn probe_vmc(listen: &str, samples: usize, timeout: Duration, json: bool) -> Result<ExitCode> {
+    use troupe_drivers::vmc::{read_datagram, VmcCounters, VmcListener, VRM_BONES};
+    let l = VmcListener::bind(listen, "probe", None).map_err(|e| anyhow!(e))?;
+    eprintln!("listening for VMC on {}", l.addr);
+    let mut counters = VmcCounters::default();
+    let (start, mut n) = (Instant::now(), 0);
+    while n < samples && start.elapsed() < timeout {
+        let Ok((_, bytes)) = l.datagrams.recv_timeout(Duration::from_millis(50)) else {
+            continue;
+        };
+        let p = read_datagram(&bytes, &mut counters);
+        let bones: Vec<&str> = VRM_BONES
+            .iter()
+            .zip(&p.pose.bones)
+            .filter(|(_, t)| t.is_some())
+            .map(|(b, _)| b.name)
+            .collect();
+        let hips = p.pose.bones[0].map(|t| t.translation.to_array());
+        if json {
+            let v = serde_json::json!({ "time": p.time, "loaded": p.loaded, "bones": bones,
+                "root": p.pose.root.map(|t| t.translation.to_array()), "hips": hips });
+            println!("{v}");
+        } else {
+            println!(
+                "T {}  {} bones{}{}",
+                p.time
+                    .map(|t| format!("{t:8.3}"))
+                    .unwrap_or_else(|| "       -".into()),
+                bones.len(),
+                p.pose
+                    .root
+                    .map(|t| format!("  root {:.3?}", t.translation.to_array()))
+                    .unwrap_or_default(),
+                hips.map(|h| format!("  hips {h:.3?}")).unwrap_or_default()
+            );
+        }
+        n += 1;
+    }
+    let h = l.health.report();
+    eprintln!(
+        "{}: {} packets, {} malformed, {} unknown, {} ignored, {} invalid, {} unknown bones",
+        h.state.name(),
+        counters.packets,
+        counters.malformed,
+        counters.unknown,
+        counters.ignored,
+        counters.invalid,
+        counters.unknown_bones
+    );
+    if n < samples {
+        bail!(
+            "got {n} of {samples} VMC packets on {} within {:.1} s",
+            l.addr,
+            timeout.as_secs_f64()
+        );
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
 /// Device support of a run: performers and, with `--record-devices`, the recorder. As an
 /// observer it closes each tick for the latency measurement, and at the end reports every
 /// device's health and closes the recording.
@@ -576,14 +674,36 @@ pub fn session(
     limits: troupe_lua::ScriptLimits,
     record: Option<&std::path::Path>,
 ) -> Result<(troupe_lua::LuaSession, RunDevices)> {
-    let kinds = troupe_actions::action_kinds();
-    let mut session = troupe_lua::Director::session(config, kinds, limits)?;
+    session_recording(config, limits, recorder(record, false)?, record)
+}
+
+/// The recorder of a run's inputs: to the file `record`, and tapped when `tap` (a Zenoh
+/// leader sends its followers each tick's chunks); none when neither.
+pub fn recorder(
+    record: Option<&std::path::Path>,
+    tap: bool,
+) -> Result<Option<std::sync::Arc<troupe_drivers::record::Recorder>>> {
+    use troupe_drivers::record::Recorder;
     let recorder = match record {
-        Some(p) => Some(std::sync::Arc::new(
-            troupe_drivers::record::Recorder::create(p).map_err(|e| anyhow!(e))?,
-        )),
+        Some(p) => Some(Recorder::create(p).map_err(|e| anyhow!(e))?),
+        None if tap => Some(Recorder::tap_only()),
         None => None,
     };
+    if tap {
+        recorder.iter().for_each(Recorder::tap);
+    }
+    Ok(recorder.map(std::sync::Arc::new))
+}
+
+/// [`session`] with a recorder made by [`recorder`]; `record` names its file, if any.
+pub fn session_recording(
+    config: troupe_scene::SceneConfig,
+    limits: troupe_lua::ScriptLimits,
+    recorder: Option<std::sync::Arc<troupe_drivers::record::Recorder>>,
+    record: Option<&std::path::Path>,
+) -> Result<(troupe_lua::LuaSession, RunDevices)> {
+    let kinds = troupe_actions::action_kinds();
+    let mut session = troupe_lua::Director::session(config, kinds, limits)?;
     let devices = troupe_drivers::lua::install(&mut session, recorder.clone())?;
     Ok((
         session,
@@ -647,9 +767,11 @@ impl troupe_scene::Observer for RunDevices {
                 ));
             }
         }
-        if let (Some(r), Some(path)) = (&self.recorder, &self.record_path) {
+        if let Some(r) = &self.recorder {
             r.finish()
                 .map_err(|e| troupe_scene::Error::Invalid(e.to_string()))?;
+        }
+        if let Some(path) = &self.record_path {
             lines.push(format!("recorded the device streams to {}", path.display()));
         }
         Ok((!lines.is_empty()).then(|| lines.join("\n")))

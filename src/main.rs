@@ -3,8 +3,11 @@
 mod bench;
 mod devices;
 mod export;
-mod messages;
+mod lua_defs;
 #[cfg(feature = "zenoh")]
+mod net;
+#[cfg(not(feature = "zenoh"))]
+#[path = "without_zenoh.rs"]
 mod net;
 mod observers;
 #[cfg(feature = "zenoh")]
@@ -14,6 +17,7 @@ mod scenario;
 mod seq;
 mod templates;
 mod view;
+mod watch;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -57,9 +61,14 @@ enum Command {
     Devices(devices::DevicesArgs),
     /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
     Emulate(devices::EmulateArgs),
-    /// Serve a serial device (fob, cyberglove) on Zenoh for a performer on another machine.
+    /// Serve a device on Zenoh for a performer on another machine (needs the zenoh feature).
     #[cfg(feature = "zenoh")]
     Relay(relay::RelayArgs),
+    /// Serve a device on Zenoh for a performer on another machine (needs the zenoh feature).
+    #[cfg(not(feature = "zenoh"))]
+    Relay(net::RelayArgs),
+    /// Write the EmmyLua / LuaLS definition file of the Lua API (for editors and checkers).
+    LuaDefs(lua_defs::LuaDefsArgs),
 }
 
 fn main() -> ExitCode {
@@ -97,6 +106,9 @@ fn main() -> ExitCode {
         Command::Emulate(args) => devices::emulate(args),
         #[cfg(feature = "zenoh")]
         Command::Relay(args) => relay::run(args),
+        #[cfg(not(feature = "zenoh"))]
+        Command::Relay(args) => net::relay(args),
+        Command::LuaDefs(args) => lua_defs::run(args),
     };
     match result {
         Ok(code) => code,

@@ -6,6 +6,7 @@ use clap::Args;
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 use troupe_drivers::device::{DeviceError, Port, RemotePorts};
+use troupe_drivers::record::{DeviceReplay, Recorder};
 use troupe_lua::{LuaSession, LuaSessionExt};
 use troupe_net::follow::{FollowCheck, FollowInput, Leader};
 use troupe_net::relay::ZenohPort;
@@ -36,9 +37,9 @@ pub struct ZenohArgs {
     #[arg(long, requires = "zenoh")]
     pub zenoh_await_followers: bool,
     /// Follow the leader publishing under PREFIX: run this scene with the leader's seed
-    /// and inputs, compare every posture with the leader's, fail naming the first tick
-    /// that differs.
-    #[arg(long, value_name = "PREFIX", conflicts_with = "zenoh")]
+    /// and inputs (its devices' samples and messages from outside, at their ticks),
+    /// compare every posture with the leader's, fail naming the first tick that differs.
+    #[arg(long, value_name = "PREFIX", conflicts_with_all = ["zenoh", "replay_devices"])]
     pub zenoh_follow: Option<String>,
 }
 
@@ -47,7 +48,8 @@ pub struct Zenoh {
     /// The network session, when any option asked for one (relayed devices use it).
     session: Option<troupe_net::zenoh::Session>,
     publisher: Option<(ScenePublisher, MessageInput)>,
-    follower: Option<(FollowInput, FollowCheck)>,
+    /// A follower's input and check, and the replay of the leader's inputs it feeds.
+    follower: Option<(FollowInput, FollowCheck, DeviceReplay)>,
     /// Delays of relayed device bytes, source to read (microseconds).
     relay_delays: Arc<Mutex<Vec<u64>>>,
 }
@@ -94,7 +96,9 @@ impl ZenohArgs {
                 );
             }
             config.seed = scene.seed;
-            let follower = Some(leader.into_parts());
+            let (input, check) = leader.into_parts();
+            let replay = DeviceReplay::live(&format!("--zenoh-follow {prefix}"));
+            let follower = Some((input, check, replay));
             return Ok((config, Zenoh { follower, ..none }));
         }
         if !self.zenoh {
@@ -117,9 +121,17 @@ impl ZenohArgs {
 }
 
 impl Zenoh {
-    /// Lets the scene's performers name devices served by a relay (`zenoh = KEY`): call
-    /// before the scene loads.
-    pub fn install_remote_ports(&self, session: &LuaSession) {
+    /// Whether each tick's inputs are sent to followers (a leader publishing).
+    pub fn replicates(&self) -> bool {
+        self.publisher.is_some()
+    }
+
+    /// Lets the scene's performers name devices served by a relay (`zenoh = KEY`), and
+    /// makes a follower's devices read the leader's: call before the scene loads.
+    pub fn install(&self, session: &LuaSession) {
+        if let Some((_, _, replay)) = &self.follower {
+            session.lua().set_app_data(replay.clone());
+        }
         if let Some(net) = &self.session {
             let net = net.clone();
             let delays = self.relay_delays.clone();
@@ -135,18 +147,25 @@ impl Zenoh {
         }
     }
 
-    /// Attaches the publisher (an observer) and the message input, or the follower's
-    /// input and check, to a session.
-    pub fn attach(self, session: &mut LuaSession) {
+    /// Attaches the publisher (an observer, sending followers what `recorder` taps) and
+    /// the message input, or the follower's input (first: the replayed devices read what
+    /// it brings), its replayed messages and its check, to a session.
+    pub fn attach(self, session: &mut LuaSession, recorder: Option<Arc<Recorder>>) {
         if self.session.is_some() {
             session.observe(RelayDelays(self.relay_delays));
         }
-        if let Some((publisher, input)) = self.publisher {
+        if let Some((mut publisher, input)) = self.publisher {
+            if let Some(recorder) = recorder {
+                publisher.replicate(Box::new(move || recorder.take_tap()));
+            }
             session.observe(publisher);
             session.add_input(Box::new(input));
         }
-        if let Some((input, check)) = self.follower {
-            session.add_input(Box::new(input));
+        if let Some((mut input, check, replay)) = self.follower {
+            let fed = replay.clone();
+            input.replay_into(Box::new(move |chunks| fed.feed(chunks)));
+            session.add_input_first(Box::new(input));
+            session.add_input(Box::new(replay.messages()));
             session.observe(check);
         }
     }

@@ -8,8 +8,8 @@ use troupe_scene::record::PostureRecorder;
 use troupe_scene::timeline::TimelineRecorder;
 use troupe_scene::{Event, Observer, Result, Scene};
 
-/// `--record FILE`: every actor's postures, written at the end as `.trk`, `.bvh` or
-/// `.gltf` (one file per actor for the last two).
+/// `--record FILE`: every actor's postures and every object's pose and holders, written
+/// at the end as `.trk`, `.bvh` or `.gltf` (one file per actor for the last two).
 pub struct RecordFile {
     recorder: PostureRecorder,
     path: PathBuf,
@@ -39,10 +39,12 @@ impl Observer for RecordFile {
     }
 
     fn finish(&mut self, scene: &Scene) -> Result<Option<String>> {
-        // `.trk` holds every actor; `.bvh`, `.gltf` and `.glb` one each (`NAME.ACTOR.EXT`).
-        let written = troupe_formats::save_sequences(
+        // `.trk` holds every actor and object; `.bvh`, `.gltf` and `.glb` one actor each
+        // (`NAME.ACTOR.EXT`), glTF with the objects, BVH with a file per object.
+        let written = troupe_formats::save_recording(
             &self.path,
             &self.recorder.sequences(scene),
+            &self.recorder.objects(scene),
             scene
                 .actors()
                 .iter()
@@ -51,8 +53,12 @@ impl Observer for RecordFile {
         .map_err(|e| troupe_scene::Error::Invalid(e.to_string()))?;
         let list: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();
         Ok(Some(format!(
-            "recorded {} ticks of postures to {}",
+            "recorded {} ticks of postures{} to {}",
             self.recorder.len(),
+            match scene.objects().len() {
+                0 => String::new(),
+                n => format!(" and {n} object(s)"),
+            },
             list.join(", ")
         )))
     }

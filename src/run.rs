@@ -75,12 +75,19 @@ pub struct RunArgs {
     /// --trace, --osc-out and --record-devices work as in a headless run.
     #[arg(long, conflicts_with_all = ["frames", "realtime"])]
     pub view: bool,
+    /// With --view: reload the scene when it, or a file it read, changes, and run it back
+    /// to the same simulated time; a broken edit shows its error over the last good scene.
+    #[arg(long, requires = "view", conflicts_with_all = ["record", "record_torques", "trace", "record_devices", "osc_out"])]
+    pub watch: bool,
     /// VM instructions one script resume may execute.
     #[arg(long, default_value_t = ScriptLimits::default().instructions)]
     pub instruction_budget: u64,
     /// Bytes one script resume may add to the Lua heap.
     #[arg(long, default_value_t = ScriptLimits::default().memory)]
     pub memory_limit: usize,
+    /// Bytes the scene's whole Lua heap may hold (all behaviors, handlers and globals).
+    #[arg(long, default_value_t = ScriptLimits::default().heap)]
+    pub lua_memory: usize,
     /// Record every live device stream (timestamps + raw bytes) to FILE.rec.
     #[arg(long, value_name = "FILE.rec")]
     pub record_devices: Option<PathBuf>,
@@ -88,13 +95,22 @@ pub struct RunArgs {
     /// each tick (addresses in docs/devices.md).
     #[arg(long, value_name = "HOST:PORT")]
     pub osc_out: Option<String>,
-    /// Recording and replaying received messages.
-    #[command(flatten)]
-    pub messages: crate::messages::MessageArgs,
+    /// Replay a --record-devices recording in place of the scene's live and relayed
+    /// devices (`port`, `zenoh`, a VRPN `device`) and of its messages from outside: each
+    /// reading and message at the tick the recorded run took it, so the postures are the
+    /// recorded run's bit for bit.
+    #[arg(long, value_name = "FILE.rec")]
+    pub replay_devices: Option<PathBuf>,
     /// Publishing on Zenoh (`--zenoh …`).
-    #[cfg(feature = "zenoh")]
     #[command(flatten)]
     pub zenoh: crate::net::ZenohArgs,
+    /// Send an actor (default: the first) as a VMC stream to a Marionette at HOST:PORT
+    /// (default port 39539); repeatable (docs/devices.md, "VMC").
+    #[arg(long, value_name = "HOST:PORT[=ACTOR]")]
+    pub vmc_out: Vec<String>,
+    /// Frames per second of scene time of every --vmc-out stream.
+    #[arg(long, default_value_t = troupe_drivers::vmc::output::DEFAULT_RATE, value_name = "HZ")]
+    pub vmc_rate: f64,
 }
 
 /// Runs the scene and prints the summary.
@@ -107,6 +123,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let limits = ScriptLimits {
         instructions: args.instruction_budget,
         memory: args.memory_limit,
+        heap: args.lua_memory,
     };
     if let Some(path) = &args.record_torques {
         if !path
@@ -153,6 +170,13 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         None => None,
     };
+    let mut vmc_out = troupe_drivers::vmc::VmcOut::default();
+    for spec in &args.vmc_out {
+        vmc_out.streams.push(
+            troupe_drivers::vmc::VmcStream::parse(spec, args.vmc_rate)
+                .map_err(|e| anyhow::anyhow!("--vmc-out {spec}: {e}"))?,
+        );
+    }
     let frames = match &args.frames {
         Some(dir) => Some(troupe_viewer::FrameWriter::new(
             dir,
@@ -163,16 +187,33 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         None => None,
     };
 
-    let replay_messages = args.messages.replay()?;
-    #[cfg(feature = "zenoh")]
+    if args.watch {
+        let run = crate::watch::WatchedRun {
+            scene: args.scene.clone(),
+            chunk: args.chunk,
+            ticks: limit.ticks,
+        };
+        return crate::watch::view(run, config, limits, size, camera);
+    }
+    let replay = match &args.replay_devices {
+        Some(path) => Some(
+            troupe_drivers::record::DeviceReplay::from_file(path)
+                .map_err(|e| anyhow::anyhow!("--replay-devices: {e}"))?,
+        ),
+        None => None,
+    };
     let (config, zenoh) = args.zenoh.open(config)?;
+    let record_devices = args.record_devices.as_deref();
+    let recorder = crate::devices::recorder(record_devices, zenoh.replicates())?;
     let (mut session, devices) =
-        crate::devices::session(config, limits, args.record_devices.as_deref())?;
+        crate::devices::session_recording(config, limits, recorder.clone(), record_devices)?;
     session.scene_mut().set_chunk_size(args.chunk);
     let tally = session.observe(ActionTally::new());
     session.observe(devices);
-    #[cfg(feature = "zenoh")]
-    zenoh.install_remote_ports(&session);
+    if let Some(replay) = &replay {
+        session.lua().set_app_data(replay.clone());
+    }
+    zenoh.install(&session);
     if let Err(e) = session.load_file(&args.scene) {
         // Devices the scene opened before it failed still close and report.
         for line in session.finish().unwrap_or_default() {
@@ -180,13 +221,24 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         }
         return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())));
     }
+    warn_of_tests(&session, &args.scene);
+    check_camera(&camera, &session)?;
     // What every run, headless or in a window, attaches to its session.
     if let Some(osc) = osc_out {
         session.observe(osc);
     }
-    args.messages.attach(&mut session, replay_messages);
-    #[cfg(feature = "zenoh")]
-    zenoh.attach(&mut session);
+    if let Some(replay) = &replay {
+        session.add_input(Box::new(replay.messages()));
+    }
+    // Messages from outside go in the recording with the device streams (before the
+    // publisher, which sends each tick's chunks to followers).
+    if let Some(recorder) = &recorder {
+        session.observe(troupe_drivers::record::RecordMessages(recorder.clone()));
+    }
+    zenoh.attach(&mut session, recorder);
+    if !vmc_out.streams.is_empty() {
+        session.observe(vmc_out);
+    }
     if let Some(path) = &args.record {
         session.observe(RecordFile::new(path));
     }
@@ -222,6 +274,85 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     report(session, tally, limit, ran.map(drop))
 }
 
+/// What kept an `--until-idle` run from ending before `--max-seconds`: the behaviors
+/// still running and every action not yet ended, with its actor and since when.
+fn print_still_running(session: &LuaSession, reports: &[troupe_lua::BehaviorReport]) {
+    let scene = session.scene();
+    let behaviors: Vec<&str> = reports
+        .iter()
+        .filter(|r| r.status == "running")
+        .map(|r| r.actor.as_str())
+        .collect();
+    let actions: Vec<String> = (0..scene.actors().len())
+        .flat_map(|a| scene.actions_of(a))
+        .filter(|a| !a.status.is_final())
+        .map(|a| {
+            format!(
+                "{} of {} ({}{})",
+                a.kind,
+                scene.actors()[a.actor].name,
+                a.status.name(),
+                a.started_at
+                    .map(|t| format!(" since {t:.2} s"))
+                    .unwrap_or_default()
+            )
+        })
+        .collect();
+    println!(
+        "  stopped at --max-seconds ({:.2} s) before the scene was idle:",
+        scene.time()
+    );
+    if !behaviors.is_empty() {
+        println!(
+            "    {} behavior(s) still running: {}",
+            behaviors.len(),
+            behaviors.join(", ")
+        );
+    }
+    if !actions.is_empty() {
+        println!("    {} action(s) still running:", actions.len());
+        for a in actions {
+            println!("      {a}");
+        }
+    }
+}
+
+/// A camera that follows an actor the scene lacks is refused, naming the actors there are.
+fn check_camera(camera: &troupe_viewer::Camera, session: &LuaSession) -> Result<()> {
+    if let troupe_viewer::Focus::Actor(name) = &camera.focus {
+        let actors = session.scene().actors();
+        if !actors.iter().any(|a| a.name == *name) {
+            let names: Vec<&str> = actors.iter().map(|a| a.name.as_str()).collect();
+            bail!(
+                "--camera follow:{name}: the scene has no actor `{name}` (actors: {})",
+                if names.is_empty() {
+                    "none".into()
+                } else {
+                    names.join(", ")
+                }
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A scene that registers tests is probably meant for `troupe test`: say so, since `run`
+/// does not run them.
+fn warn_of_tests(session: &LuaSession, scene: &std::path::Path) {
+    let names = session.script().test_names();
+    if !names.is_empty() {
+        eprintln!(
+            "troupe: warning: {} defines {} test(s) (\"{}\"{}); `troupe run` does not run \
+             tests: use `troupe test {}`",
+            scene.display(),
+            names.len(),
+            names[0],
+            if names.len() > 1 { ", …" } else { "" },
+            scene.display()
+        );
+    }
+}
+
 /// Prints what a run did, lets every observer write its output (even after an error, so
 /// nothing recorded is lost), and returns the exit code.
 fn report(
@@ -246,9 +377,8 @@ fn report(
             }
         }
     }
-    let still = reports.iter().filter(|r| r.status == "running").count();
-    if limit.until_idle && still > 0 {
-        println!("  stopped at --max-seconds with {still} behavior(s) still running");
+    if limit.until_idle && !session.is_idle() {
+        print_still_running(&session, &reports);
     }
     let finished = session.finish();
     for line in finished.iter().flatten() {
@@ -346,7 +476,10 @@ pub struct RenderArgs {
     /// Do not draw names and action labels above the heads.
     #[arg(long)]
     pub no_labels: bool,
-    /// Draw actors as bones instead of solids.
+    /// How actors are drawn: the generated skin, the body solids, or bones.
+    #[arg(long, value_enum, default_value_t = crate::view::Look::Skin)]
+    pub look: crate::view::Look,
+    /// Same as `--look bones`.
     #[arg(long)]
     pub bones: bool,
 }
@@ -371,6 +504,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     session
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
+    check_camera(&camera, &session)?;
     let ticks = (args.at * args.rate).round() as u64;
     session.run(RunLimit {
         ticks,
@@ -382,11 +516,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     let mut renderer = troupe_viewer::OffscreenRenderer::new(size.0, size.1)?;
     renderer.set_options(troupe_viewer::RenderOptions {
         labels: !args.no_labels,
-        style: if args.bones {
-            troupe_viewer::BodyStyle::Bones
-        } else {
-            troupe_viewer::BodyStyle::Solids
-        },
+        style: crate::view::body_style(args.look, args.bones),
         ..Default::default()
     });
     let frame = troupe_viewer::Frame::from_scene(session.scene());

@@ -518,7 +518,7 @@ fn info(file: &Path, frame: usize, positions: bool, as_json: bool, scale: f64) -
                     "start": s.start(),
                     "duration": s.duration(),
                     "rate": 1.0 / s.frame_time(),
-                    "tracks": s.tracks().iter().map(|t| json!({"dof": t.dof(), "keys": t.keys().len()})).collect::<Vec<_>>(),
+                    "tracks": s.tracks().iter().map(|t| json!({"dof": t.dof(), "keys": t.keys().len(), "interpolation": t.interpolation().name()})).collect::<Vec<_>>(),
                 })
             })
             .collect();
@@ -542,7 +542,12 @@ fn info(file: &Path, frame: usize, positions: bool, as_json: bool, scale: f64) -
                     println!("  meta {k} {v}");
                 }
                 for t in s.tracks() {
-                    println!("  {:<32} {:>6} keys", t.dof(), t.keys().len());
+                    println!(
+                        "  {:<32} {:>6} keys, {}",
+                        t.dof(),
+                        t.keys().len(),
+                        t.interpolation().name()
+                    );
                 }
             }
         }

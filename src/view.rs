@@ -3,6 +3,8 @@
 
 #[cfg(feature = "zenoh")]
 mod remote;
+#[cfg(not(feature = "zenoh"))]
+use crate::net as remote;
 
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
@@ -11,7 +13,8 @@ use std::process::ExitCode;
 use troupe_actions::Keyframe;
 use troupe_body::glam::DVec3;
 use troupe_body::DofKind;
-use troupe_motion::Sequence;
+use troupe_motion::{ObjectMotion, Sequence};
+use troupe_scene::playback::ObjectPlayback;
 use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
 use troupe_viewer::{
     parse_size, run_window, BodyStyle, Camera, Frame, FrameWriter, Hand, HandState,
@@ -25,12 +28,12 @@ use troupe_viewer::{
     long_about = "Play a recording (.trk, .bvh, .gltf, .glb) on actors. With a display (DISPLAY or \
         WAYLAND_DISPLAY) it opens a window and loops the recording: left drag orbits, right \
         drag pans, the wheel zooms, Space pauses, `.` steps, `s` slow motion, Tab/1-9 follow an \
-        actor, 0 frames all, b bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
+        actor, 0 frames all, b cycles skin/solids/bones, g grid, o overlays, l labels, Esc quits. With --frames, or without \
         a display, it plays the recording once headless and writes DIR/frame_000000.png, …"
 )]
 pub struct ViewArgs {
     /// The recording to play (.trk, possibly several actors; .bvh; or .gltf/.glb written by troupe).
-    #[cfg_attr(feature = "zenoh", arg(required_unless_present = "zenoh"))]
+    #[arg(required_unless_present = "zenoh")]
     file: Option<PathBuf>,
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
@@ -50,7 +53,10 @@ pub struct ViewArgs {
     /// fits several.
     #[arg(long)]
     camera: Option<String>,
-    /// Draw the actor as bones instead of solids.
+    /// How actors are drawn: the generated skin, the body solids, or bones.
+    #[arg(long, value_enum, default_value_t = Look::Skin)]
+    look: Look,
+    /// Same as `--look bones`.
     #[arg(long)]
     bones: bool,
     /// Do not draw names and action labels above the heads.
@@ -66,7 +72,6 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 100.0)]
     rate: f64,
     /// A render node: a scene published on Zenoh instead of a recording.
-    #[cfg(feature = "zenoh")]
     #[command(flatten)]
     remote: remote::RemoteViewArgs,
 }
@@ -97,7 +102,10 @@ pub struct SnapshotArgs {
     /// @YAW,PITCH[,DISTANCE].
     #[arg(long, default_value = "fit")]
     camera: String,
-    /// Draw actors as bones instead of solids.
+    /// How actors are drawn: the generated skin, the body solids, or bones.
+    #[arg(long, value_enum, default_value_t = Look::Skin)]
+    look: Look,
+    /// Same as `--look bones`.
     #[arg(long)]
     bones: bool,
     /// Do not draw names above the heads.
@@ -149,21 +157,46 @@ pub(crate) fn has_display() -> bool {
         .any(|v| std::env::var_os(v).is_some_and(|s| !s.is_empty()))
 }
 
-fn render_options(bones: bool, labels: bool) -> RenderOptions {
+/// How actors are drawn (`--look`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, clap::ValueEnum)]
+pub enum Look {
+    /// The generated skin: a smooth body with hands and a face.
+    #[default]
+    Skin,
+    /// The body solids (thesis 3.1).
+    Solids,
+    /// A stick figure.
+    Bones,
+}
+
+/// The viewer's body style for `--look`; `--bones` (kept for old command lines) wins.
+pub(crate) fn body_style(look: Look, bones: bool) -> BodyStyle {
+    match (look, bones) {
+        (_, true) | (Look::Bones, _) => BodyStyle::Bones,
+        (Look::Solids, _) => BodyStyle::Solids,
+        (Look::Skin, _) => BodyStyle::Skin,
+    }
+}
+
+fn render_options(look: Look, bones: bool, labels: bool) -> RenderOptions {
     RenderOptions {
         labels,
-        style: if bones {
-            BodyStyle::Bones
-        } else {
-            BodyStyle::Solids
-        },
+        style: body_style(look, bones),
         ..RenderOptions::default()
+    }
+}
+
+/// The objects of a recording: those a `.trk` holds (`troupe run --record` keeps them);
+/// other formats bring none.
+fn load_objects(path: &Path) -> Result<Vec<ObjectMotion>> {
+    match troupe_formats::Format::of(path)? {
+        troupe_formats::Format::Trk => Ok(troupe_formats::trk::read_trk_file(path)?.objects),
+        _ => Ok(Vec::new()),
     }
 }
 
 /// Runs `troupe view`.
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
-    #[cfg(feature = "zenoh")]
     if let Some(prefix) = &args.remote.zenoh {
         return remote::run(&args, prefix);
     }
@@ -173,10 +206,14 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         .ok_or_else(|| anyhow!("troupe view: give a recording to play"))?;
     let size = parse_size(&args.size)?;
     let performers = load_recording(file, &args.actor_template)?;
+    let objects = load_objects(file)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,
         ..SceneConfig::default()
     })?;
+    let object_length = objects.iter().map(|o| o.pose.end()).fold(0.0, f64::max);
+    let playback = ObjectPlayback::install(&mut scene, objects)
+        .with_context(|| format!("{}: recorded objects", file.display()))?;
     let mut length: f64 = 0.0;
     for p in &performers {
         let desc = ActorDesc {
@@ -199,6 +236,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         let spec = ActionSpec::new("keyframe", keyframe.scope());
         scene.start_action(actor, spec, Box::new(keyframe))?;
     }
+    length = length.max(object_length);
     let camera: Camera = match &args.camera {
         Some(c) => c.parse()?,
         None if performers.len() == 1 => format!("follow:{}", performers[0].name).parse()?,
@@ -215,22 +253,22 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
     };
     if let Some(dir) = headless_dir {
         let seconds = args.seconds.unwrap_or(length).max(0.0);
-        let options = render_options(args.bones, !args.no_labels);
+        let options = render_options(args.look, args.bones, !args.no_labels);
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer.renderer_mut().set_options(options);
         writer.renderer_mut().set_multisampling(!args.no_msaa);
-        return write_frames(Session::new(scene), writer, seconds);
+        return write_frames(with_objects(Session::new(scene), playback), writer, seconds);
     }
     let options = WindowOptions {
         title: format!("troupe view {}", file.display()),
         size,
         camera: camera.clone(),
-        render: render_options(args.bones, !args.no_labels),
+        render: render_options(args.look, args.bones, !args.no_labels),
         tick_seconds: scene.dt(),
         close_after_frames: None,
     };
     // The session moves to the simulation thread; keep nothing else that needs it.
-    let mut session = Session::new(scene);
+    let mut session = with_objects(Session::new(scene), playback);
     let result = run_window(options, move || {
         // No observer can fail here; a tick always happens.
         let _ = session.tick();
@@ -243,6 +281,14 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         }
         Err(e) => Err(e.into()),
     }
+}
+
+/// The session with the recorded objects moving, if there are any.
+fn with_objects(mut session: Session, playback: ObjectPlayback) -> Session {
+    if !playback.is_empty() {
+        session.add_input(Box::new(playback));
+    }
+    session
 }
 
 /// Plays the session headless for `seconds`, writing pictures.
@@ -362,7 +408,7 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         }
     }
     let mut renderer = OffscreenRenderer::new(size.0, size.1)?;
-    renderer.set_options(render_options(args.bones, !args.no_labels));
+    renderer.set_options(render_options(args.look, args.bones, !args.no_labels));
     renderer.save_png(&frame, &camera, &args.out)?;
     println!(
         "wrote {} ({}x{}, {} actor{}) on {}",

@@ -101,3 +101,64 @@ fn info_prints_positions_as_json() {
     assert_eq!(v["positions"].as_array().unwrap().len(), 4);
     assert_eq!(v["positions"][0]["position"][0], 12.0);
 }
+
+#[test]
+fn a_trk_converts_to_bvh_and_gltf_on_a_template_and_back() {
+    let wave = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scripts/examples/wave.trk"
+    ));
+    let bvh = temp("wave-adult.bvh");
+    let gltf = temp("wave-adult.gltf");
+    let back = temp("wave-back.trk");
+    let s = |p: &PathBuf| p.display().to_string();
+    troupe(&["seq", "convert", &s(&wave), &s(&bvh), "--template", "adult"]);
+    troupe(&[
+        "seq",
+        "convert",
+        &s(&wave),
+        &s(&gltf),
+        "--template",
+        "adult",
+    ]);
+    assert!(
+        gltf.with_extension("bin").is_file()
+            || std::fs::read_to_string(&gltf).unwrap().contains("base64")
+    );
+    troupe(&["seq", "convert", &s(&bvh), &s(&back), "--template", "adult"]);
+    let original = &troupe_formats::load_sequences(&wave, None).unwrap()[0];
+    let again = &troupe_formats::load_sequences(&back, None).unwrap()[0];
+    // At the BVH's frames (the .trk's key times) every driven DOF comes back.
+    for track in original.tracks() {
+        let other = again
+            .track(track.dof())
+            .unwrap_or_else(|| panic!("{} came back", track.dof()));
+        for key in track.keys() {
+            let (a, b) = (track.value(key.time), other.value(key.time));
+            assert!(
+                (a - b).abs() < 1e-4,
+                "{} at {}: {a} → {b}",
+                track.dof(),
+                key.time
+            );
+        }
+    }
+}
+
+#[test]
+fn info_names_each_tracks_interpolation() {
+    let file = temp("interpolations.trk");
+    std::fs::write(
+        &file,
+        "troupe-trk 2\ntrack a\n0 0\n1 1\nend\ntrack b step\n0 0\n1 1\nend\n",
+    )
+    .unwrap();
+    let path = file.display().to_string();
+    let v: serde_json::Value =
+        serde_json::from_str(&troupe(&["seq", "info", &path, "--json"])).unwrap();
+    let tracks = &v["sequences"][0]["tracks"];
+    assert_eq!(tracks[0]["interpolation"], "cubic");
+    assert_eq!(tracks[1]["interpolation"], "step");
+    let text = troupe(&["seq", "info", &path]);
+    assert!(text.contains("2 keys, step"), "{text}");
+}

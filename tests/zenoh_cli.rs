@@ -290,6 +290,138 @@ fn a_relayed_glove_feeds_a_performer_and_survives_its_relay_restarting() {
     assert!(out.status.success(), "{}", text(&out));
 }
 
+fn relay_on(pty: &str, port: u16, key: &str) -> Running {
+    Running(
+        troupe()
+            .args(["relay", "cyberglove", "--port", pty, "--key", key])
+            .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{port}")])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap(),
+    )
+}
+
+/// The inputs of a live run travel to a follower (a relayed glove's samples and a tool's
+/// message, with their ticks) and into the `.rec` file; the follower and a replay of the
+/// file compute the leader's postures bit for bit; the behaviors' messages are published
+/// on `<prefix>/messages` with their ticks.
+#[test]
+fn live_inputs_are_replicated_to_a_follower_and_replayed_from_the_rec_bit_for_bit() {
+    let (_emulator, pty) = emulated_glove();
+    let (relay_port, leader_port) = (free_port(), free_port());
+    let _relay = relay_on(&pty, relay_port, "troupe/devices/glove-replicated");
+    wait_listening(relay_port);
+    let prefix = "troupe/replicated-test";
+    let scene = "tests/scenes/zenoh_relayed.lua";
+    let (rec, leader_trk, replay_trk) = (temp("lead.rec"), temp("lead.trk"), temp("replay.trk"));
+    let leader = troupe()
+        .args(["run", scene, "--ticks", "400", "--seed", "3", "--realtime"])
+        .args([
+            "--zenoh",
+            "--zenoh-prefix",
+            prefix,
+            "--zenoh-await-followers",
+        ])
+        .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{leader_port}")])
+        .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{relay_port}")])
+        .arg("--record-devices")
+        .arg(&rec)
+        .arg("--record")
+        .arg(&leader_trk)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let leader = Running(leader);
+    wait_listening(leader_port);
+    let follower = troupe()
+        .args([
+            "run",
+            scene,
+            "--ticks",
+            "400",
+            "--threads",
+            "2",
+            "--chunk",
+            "1",
+        ])
+        .args(["--zenoh-follow", prefix])
+        .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{leader_port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    // A tool listens to the behavior messages and, mid-run, sends bob his cue.
+    let tool = troupe_net::Endpoints {
+        connect: vec![format!("tcp/127.0.0.1:{leader_port}")],
+        listen: vec!["tcp/127.0.0.1:0".into()],
+    }
+    .open()
+    .unwrap();
+    let messages = tool
+        .declare_subscriber(format!("{prefix}/messages"))
+        .wait()
+        .unwrap();
+    std::thread::sleep(Duration::from_millis(1500));
+    tool.put("cue/bob", r#"{"side":"left","angle":1.1}"#)
+        .wait()
+        .unwrap();
+    let follower = follower.wait_with_output().unwrap();
+    let mut leader = leader;
+    let leader_out = leader.0.wait().unwrap();
+    let follower_text = text(&follower);
+    assert!(leader_out.success(), "leader failed");
+    assert!(follower.status.success(), "follower:\n{follower_text}");
+    assert!(
+        follower_text.contains("1200 postures compared, all equal to the leader's bit for bit"),
+        "{follower_text}"
+    );
+    // Behavior messages: JSON with the tick that published them, in tick order.
+    let mut ticks = Vec::new();
+    while let Ok(Some(sample)) = messages.try_recv() {
+        let doc: serde_json::Value = serde_json::from_slice(&sample.payload().to_bytes()).unwrap();
+        assert_eq!(doc["key"], "ann/reached", "{doc}");
+        let (tick, said) = (doc["tick"].as_u64().unwrap(), doc["value"]["tick"].as_u64());
+        // The behavior ran in the script phase of the tick that published it.
+        assert!(said == Some(tick) || said == Some(tick - 1), "{doc}");
+        ticks.push(tick);
+    }
+    assert!(
+        ticks.len() >= 3,
+        "behavior messages seen at ticks {ticks:?}"
+    );
+    assert!(ticks.windows(2).all(|w| w[0] < w[1]), "{ticks:?}");
+
+    // The replay of the leader's recording (glove bytes, tick marks, the cue) makes the
+    // leader's postures, byte for byte, without the relay or the network.
+    let out = troupe()
+        .args(["run", scene, "--ticks", "400", "--seed", "3"])
+        .arg("--replay-devices")
+        .arg(&rec)
+        .arg("--record")
+        .arg(&replay_trk)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    let (a, b) = (
+        std::fs::read(&leader_trk).unwrap(),
+        std::fs::read(&replay_trk).unwrap(),
+    );
+    assert!(
+        a == b,
+        "the replay's postures differ from the recorded run's"
+    );
+    // The glove moved the hand: the replay is not equal merely for want of input.
+    let recording = troupe_drivers::record::Recording::read(&rec).unwrap();
+    assert!(
+        recording.marks.len() > 100,
+        "{} tick marks",
+        recording.marks.len()
+    );
+    assert_eq!(recording.messages.len(), 1, "{:?}", recording.messages);
+}
+
 #[test]
 fn a_render_node_writes_frames_of_a_remote_scene() {
     let port = free_port();
@@ -357,4 +489,192 @@ fn an_independent_python_client_checks_the_postures_against_the_trk() {
     let t = text(&out);
     assert!(out.status.success(), "{t}");
     assert!(t.contains("match"), "{t}");
+}
+
+/// A SpaceMouse served under a key moves its object on the simulation host. No SpaceMouse
+/// is plugged in here, so the test plays `troupe relay spacemouse`'s part: one HID report
+/// per chunk on `<key>/rx` (combined report 1: translation x at 350 of 350, full right).
+#[test]
+fn a_relayed_spacemouse_moves_its_object() {
+    let port = free_port();
+    let scene = temp("mouse.lua");
+    std::fs::write(
+        &scene,
+        r#"local crate = troupe.object{ name = "crate", shape = "box", size = {0.3, 0.3, 0.3}, at = {0, 1, 0} }
+           troupe.devices.spacemouse{ object = crate, zenoh = "troupe/devices/mouse", speed = 0.25 }
+           troupe.actor{ name = "watcher" }:behave(function()
+             wait(2.5)
+             local p = crate:position()
+             print(string.format("crate x %.3f", p[1]))
+           end)"#,
+    )
+    .unwrap();
+    let run = troupe()
+        .arg("run")
+        .arg(&scene)
+        .args(["--seconds", "3", "--realtime"])
+        .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{port}")])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_listening(port);
+    let relay = troupe_net::Endpoints {
+        connect: vec![format!("tcp/127.0.0.1:{port}")],
+        listen: vec!["tcp/127.0.0.1:0".into()],
+    }
+    .open()
+    .unwrap();
+    let report = |x: i16| {
+        let mut r = vec![1u8];
+        for axis in [x, 0, 0, 0, 0, 0] {
+            r.extend_from_slice(&axis.to_le_bytes());
+        }
+        r
+    };
+    // Pushed for one second, then let go.
+    for i in 0..110 {
+        let r = report(if i < 100 { 350 } else { 0 });
+        let chunk = troupe_net::relay::encode_chunk(troupe_net::relay::now_micros(), &r);
+        relay.put("troupe/devices/mouse/rx", chunk).wait().unwrap();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let out = run.wait_with_output().unwrap();
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    let x: f64 = t
+        .split("crate x ")
+        .nth(1)
+        .and_then(|s| s.split_whitespace().next())
+        .and_then(|s| s.parse().ok())
+        .unwrap_or_else(|| panic!("no position printed:\n{t}"));
+    // About a second at 0.25 m/s (the first reports may arrive before the device opens).
+    assert!(x > 0.1 && x < 0.3, "crate moved {x} m:\n{t}");
+}
+
+#[path = "../drivers/tests/vrpn/server.rs"]
+mod vrpn_server;
+
+/// `troupe relay vrpn` reaches a VRPN server (the real one) on its machine; a performer on
+/// the simulation host names the relay's key and streams.
+#[test]
+fn a_vrpn_server_reached_through_a_relay_streams_to_a_performer() {
+    let vrpn_port = vrpn_server::free_port();
+    let _server = vrpn_server::Server::start(
+        vrpn_port,
+        "vrpn_Tracker_Spin Spin0 2 100.0 0.0 1.0 0.0 0.25\n",
+    );
+    let relay_port = free_port();
+    let _relay = Running(
+        troupe()
+            .args([
+                "relay",
+                "vrpn",
+                "--device",
+                &format!("Spin0@tcp://127.0.0.1:{vrpn_port}"),
+            ])
+            .args(["--key", "troupe/devices/vrpn"])
+            .args(["--zenoh-listen", &format!("tcp/127.0.0.1:{relay_port}")])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
+    wait_listening(relay_port);
+    let scene = temp("vrpn.lua");
+    std::fs::write(
+        &scene,
+        r#"local p = troupe.performer{ name = "pat",
+             devices = { vrpn = { device = "Spin0@relay", zenoh = "troupe/devices/vrpn",
+                                  map = { pelvis = 0, skullbase = 1 } } } }
+           p:capture{}"#,
+    )
+    .unwrap();
+    let out = troupe()
+        .arg("run")
+        .arg(&scene)
+        .args(["--ticks", "150", "--realtime"])
+        .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{relay_port}")])
+        .output()
+        .unwrap();
+    let t = text(&out);
+    assert!(out.status.success(), "{t}");
+    assert!(t.contains("device pat.vrpn: streaming"), "{t}");
+}
+
+/// A leader's tick times, a subscriber alive and after it is killed: a subscriber that
+/// vanishes must not slow the leader. Ticks are paced at 100 Hz; the subscriber is a
+/// render node in its own process (headless frames), killed with SIGKILL mid-run. The
+/// bound is loose (shared machines are noisy): a leader that waited for the vanished
+/// subscriber would take tens of milliseconds a tick, not a fraction of one.
+#[test]
+fn a_subscriber_killed_mid_run_leaves_the_leaders_tick_times_alone() {
+    use troupe_scene::{ActorDesc, Scene, SceneConfig, Session};
+    let port = free_port();
+    let keys = troupe_net::SceneKeys::new("troupe/kill-test").unwrap();
+    let leader = troupe_net::Endpoints {
+        connect: vec![],
+        listen: vec![format!("tcp/127.0.0.1:{port}")],
+    }
+    .open()
+    .unwrap();
+    let mut scene = Scene::new(SceneConfig::default()).unwrap();
+    for i in 0..50 {
+        scene.add_actor(&ActorDesc::new(&format!("a{i}"))).unwrap();
+    }
+    let mut session = Session::new(scene);
+    session.observe(troupe_net::ScenePublisher::new(leader, keys).unwrap());
+    session.start().unwrap();
+    let frames = temp("kill-frames");
+    let mut node = Running(
+        troupe()
+            .args(["view", "--zenoh", "troupe/kill-test"])
+            .args(["--zenoh-connect", &format!("tcp/127.0.0.1:{port}")])
+            .args([
+                "--seconds",
+                "60",
+                "--every",
+                "20",
+                "--size",
+                "64x36",
+                "--no-msaa",
+            ])
+            .arg("--frames")
+            .arg(&frames)
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap(),
+    );
+    let mut tick = |session: &mut Session| {
+        let t0 = std::time::Instant::now();
+        session.tick().unwrap();
+        let spent = t0.elapsed();
+        std::thread::sleep(Duration::from_millis(10).saturating_sub(spent));
+        spent.as_secs_f64()
+    };
+    // Tick until the render node has drawn a frame: it is subscribed.
+    let deadline = std::time::Instant::now() + Duration::from_secs(60);
+    while std::fs::read_dir(&frames).map_or(0, |d| d.count()) == 0 {
+        assert!(
+            std::time::Instant::now() < deadline,
+            "the render node drew nothing"
+        );
+        tick(&mut session);
+    }
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let alive = median((0..200).map(|_| tick(&mut session)).collect());
+    node.0.kill().unwrap();
+    node.0.wait().unwrap();
+    let killed = median((0..200).map(|_| tick(&mut session)).collect());
+    assert!(
+        killed <= alive * 2.0 + 0.002,
+        "median tick {:.3} ms with the subscriber, {:.3} ms after it was killed",
+        alive * 1e3,
+        killed * 1e3
+    );
+    session.finish().unwrap();
 }

@@ -40,6 +40,9 @@ fn generator_step(c: &mut Criterion) {
         holders: &[],
         board: &Blackboard::default(),
         input_poses: &[],
+        space: &Default::default(),
+        obstacle_flags: &[],
+        crowd: &Default::default(),
     };
     let mut walk = Walk::velocity(
         &skeleton,

@@ -22,4 +22,5 @@ pub mod performer;
 pub mod record;
 pub mod space_move;
 pub mod spacemouse;
+pub mod vmc;
 pub mod vrpn;

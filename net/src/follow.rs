@@ -1,11 +1,14 @@
 //! Replication you can verify (`troupe run SCENE --zenoh-follow PREFIX`): a second
 //! troupe runs the same scene file from the leader's seed and the leader's inputs from
-//! outside (each tick's messages, with their tick stamps, on `<prefix>/inputs`), and
-//! compares every posture it computes with the one the leader published for that tick.
+//! outside, and compares every posture it computes with the one the leader published for
+//! that tick.
 //!
-//! Device streams replayed from a `.rec` file are read by both from the same file (the
-//! scene file names it), so they are the same inputs by construction; live device
-//! samples are not replicated yet (docs/distributed.md, "Limits").
+//! The inputs of tick N arrive on `<prefix>/inputs` as `u64 N` (little-endian) followed
+//! by `.rec` chunks: the bytes the leader's live and relayed devices sent, the tick marks
+//! saying which readings each tick took, and the messages from outside with their ticks.
+//! [`FollowInput`] hands them, tick by tick, to whatever replays them (the command line
+//! gives them to the drivers' `DeviceReplay`). Device streams replayed from a `.rec` file
+//! named by the scene are read by both from the same file.
 
 use crate::error::NetError;
 use crate::keys::SceneKeys;
@@ -15,7 +18,7 @@ use crossbeam::channel::{unbounded, Receiver};
 use std::collections::{BTreeMap, HashMap};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
-use troupe_scene::{Event, Input, Message, Observer, Scene};
+use troupe_scene::{Event, Input, Observer, Scene};
 use zenoh::pubsub::Subscriber;
 use zenoh::{Session, Wait};
 
@@ -116,6 +119,7 @@ impl Leader {
                 inputs: self.inputs,
                 pending: BTreeMap::new(),
                 report: report.clone(),
+                replay: None,
             },
             FollowCheck {
                 prefix: self.keys.prefix().to_string(),
@@ -141,39 +145,35 @@ struct Report {
     first_difference: Option<(u64, String, usize, f64, f64)>,
 }
 
-/// Delivers the leader's inputs of each tick before the tick runs (an [`Input`]).
+/// Takes the inputs (`.rec` chunks) of each tick; an error names what was wrong.
+pub type InputsSink = Box<dyn FnMut(&[u8]) -> Result<(), String> + Send>;
+
+/// Waits, before each tick, for the leader's inputs of that tick and hands them to the
+/// replay (an [`Input`]; add it before the inputs that read the replay).
 pub struct FollowInput {
     prefix: String,
     /// Kept declared as long as the inputs are read.
     _subscriber: Subscriber<()>,
     inputs: Receiver<Vec<u8>>,
     /// Inputs received, by tick.
-    pending: BTreeMap<u64, Vec<Message>>,
+    pending: BTreeMap<u64, Vec<u8>>,
     report: Arc<Mutex<Report>>,
+    replay: Option<InputsSink>,
 }
 
 impl FollowInput {
+    /// Hands each tick's inputs to `replay`, in tick order.
+    pub fn replay_into(&mut self, replay: InputsSink) {
+        self.replay = Some(replay);
+    }
+
     /// Reads one inputs packet into `pending`.
     fn take(&mut self, bytes: &[u8]) -> Result<(), String> {
-        let doc: serde_json::Value =
-            serde_json::from_slice(bytes).map_err(|e| format!("inputs are not JSON: {e}"))?;
-        let tick = doc["tick"].as_u64().ok_or("inputs without a tick")?;
-        let messages = doc["messages"]
-            .as_array()
-            .ok_or("inputs without messages")?
-            .iter()
-            .map(|m| {
-                Ok(Message {
-                    key: m["key"]
-                        .as_str()
-                        .ok_or("a message without a key")?
-                        .to_string(),
-                    value: m["value"].clone(),
-                    remote: true,
-                })
-            })
-            .collect::<Result<Vec<_>, String>>()?;
-        self.pending.insert(tick, messages);
+        let (tick, chunks) = bytes
+            .split_first_chunk::<8>()
+            .ok_or("inputs shorter than their tick")?;
+        self.pending
+            .insert(u64::from_le_bytes(*tick), chunks.to_vec());
         Ok(())
     }
 }
@@ -202,10 +202,14 @@ impl Input for FollowInput {
                 }
             }
         }
-        let messages = self.pending.remove(&tick).unwrap_or_default();
+        let chunks = self.pending.remove(&tick).unwrap_or_default();
         // Older ticks can only be repeats; drop them.
         self.pending.retain(|t, _| *t > tick);
-        scene.mailbox_mut().deliver_in_order(messages);
+        if let Some(replay) = &mut self.replay {
+            replay(&chunks).map_err(|e| {
+                troupe_scene::Error::Invalid(format!("the leader's inputs of tick {tick}: {e}"))
+            })?;
+        }
         Ok(())
     }
 }

@@ -6,6 +6,7 @@
 //! | `<prefix>/actors/<actor>/dofs` | queryable: the actor's template and DOF names | JSON |
 //! | `<prefix>/objects/<object>` | the object's pose, every tick | JSON |
 //! | `<prefix>/events` | action events (started, completed, cancelled, failed) | JSON |
+//! | `<prefix>/messages` | behavior messages: what the scene's `troupe.publish` sent, with its tick | JSON |
 //! | `<prefix>/scene` | queryable: layout version, rate, seed, actor and object names | JSON |
 //! | `<prefix>/inputs` | each tick's inputs from outside, for followers | JSON |
 //! | `<prefix>/followers/<id>` | a follower's hello, once it has subscribed | empty |
@@ -72,6 +73,11 @@ impl SceneKeys {
         format!("{}/events", self.prefix)
     }
 
+    /// Where the behaviors' messages (`troupe.publish`) are published with their tick.
+    pub fn messages(&self) -> String {
+        format!("{}/messages", self.prefix)
+    }
+
     /// Where each tick's inputs are published for followers.
     pub fn inputs(&self) -> String {
         format!("{}/inputs", self.prefix)
@@ -122,6 +128,7 @@ mod tests {
         assert_eq!(keys.dofs("ann").unwrap(), "troupe/stage/actors/ann/dofs");
         assert_eq!(keys.object("cup").unwrap(), "troupe/stage/objects/cup");
         assert_eq!(keys.events(), "troupe/stage/events");
+        assert_eq!(keys.messages(), "troupe/stage/messages");
         assert_eq!(keys.actor_of("troupe/stage/actors/ann/pose"), Some("ann"));
         assert_eq!(keys.actor_of("troupe/other/actors/ann/pose"), None);
         assert_eq!(keys.actor_of("troupe/stage/objects/cup"), None);

@@ -1,5 +1,7 @@
 //! Publishing a scene: an [`Observer`] that encodes every tick's postures, object poses,
-//! events and the messages its script published (`troupe.publish`), and hands them to a background thread that puts them on Zenoh.
+//! events and the messages its behaviors published (`troupe.publish`, on their own keys
+//! and on `<prefix>/messages`), and hands them to a background thread that puts them on
+//! Zenoh.
 //!
 //! The tick only encodes and queues: it never waits for the network. When the queue is
 //! full (subscribers slow, a link congested) the whole tick is dropped and counted, so a
@@ -37,8 +39,11 @@ struct TickBatch {
     events: Vec<Vec<u8>>,
     /// Messages the script published (`troupe.publish`): key and JSON.
     messages: Vec<(String, Vec<u8>)>,
-    /// The tick's inputs from outside, for followers (JSON, [`inputs_json`]); none for
-    /// the starting postures.
+    /// The same messages as behavior messages on `<prefix>/messages`, one JSON document
+    /// each (`{"tick","time","key","value"}`), beside the events.
+    behavior_messages: Vec<Vec<u8>>,
+    /// The tick's inputs from outside, for followers ([`ScenePublisher::replicate`]);
+    /// none for the starting postures.
     inputs: Option<Vec<u8>>,
 }
 
@@ -67,7 +72,13 @@ pub struct ScenePublisher {
     objects_seen: usize,
     dropped_ticks: u64,
     published_ticks: u64,
+    /// What a follower needs of each tick beyond the scene file and seed.
+    replicated: Option<InputsSource>,
 }
+
+/// Gives the inputs from outside that a tick took, encoded for followers (`.rec` chunks:
+/// device bytes, tick marks, messages).
+pub type InputsSource = Box<dyn FnMut() -> Vec<u8> + Send>;
 
 impl ScenePublisher {
     /// A publisher on `session` under `keys`; declares the queryables at once.
@@ -130,6 +141,7 @@ impl ScenePublisher {
             objects_seen: 0,
             dropped_ticks: 0,
             published_ticks: 0,
+            replicated: None,
         })
     }
 
@@ -137,6 +149,12 @@ impl ScenePublisher {
     /// inputs (`--zenoh-await-followers`), so it sees the run from the start.
     pub fn await_followers(&mut self, timeout: Duration) {
         self.await_followers = Some(timeout);
+    }
+
+    /// Publishes, with each tick on `<prefix>/inputs`, what `source` gives (the inputs a
+    /// follower replays: device samples with their tick marks, messages from outside).
+    pub fn replicate(&mut self, source: InputsSource) {
+        self.replicated = Some(source);
     }
 
     /// Ticks dropped because the queue was full.
@@ -219,7 +237,23 @@ impl ScenePublisher {
                 .iter()
                 .map(|m| (m.key.clone(), m.value.to_string().into_bytes()))
                 .collect(),
-            inputs: (tick > 0).then(|| inputs_json(scene)),
+            behavior_messages: scene
+                .mailbox()
+                .published()
+                .iter()
+                .map(|m| {
+                    json!({"tick": tick, "time": time, "key": m.key, "value": m.value})
+                        .to_string()
+                        .into_bytes()
+                })
+                .collect(),
+            inputs: (tick > 0).then(|| {
+                let mut payload = tick.to_le_bytes().to_vec();
+                if let Some(source) = &mut self.replicated {
+                    payload.extend(source());
+                }
+                payload
+            }),
         };
         let Some(queue) = &self.queue else {
             return Ok(());
@@ -296,22 +330,6 @@ impl Observer for ScenePublisher {
     }
 }
 
-/// The inputs a follower needs for the tick just run, as JSON: the tick and the messages
-/// from outside that its script phase saw, in order:
-/// `{"tick":N,"messages":[{"key":"…","value":…},…]}`.
-pub fn inputs_json(scene: &Scene) -> Vec<u8> {
-    let messages: Vec<serde_json::Value> = scene
-        .mailbox()
-        .delivered()
-        .iter()
-        .filter(|m| m.remote)
-        .map(|m| json!({"key": m.key, "value": m.value}))
-        .collect();
-    json!({"tick": scene.tick(), "messages": messages})
-        .to_string()
-        .into_bytes()
-}
-
 /// The JSON document of one event.
 fn event_json(scene: &Scene, e: &Event) -> Vec<u8> {
     let actor = scene.actors().get(e.actor).map(|a| a.name.as_str());
@@ -363,6 +381,7 @@ fn put_batches(
     let mut actors = Vec::new();
     let mut objects = Vec::new();
     let events = declare(keys.events());
+    let behavior_messages = declare(keys.messages());
     let mut failed = 0u64;
     for batch in queue {
         // Names were checked on the tick's side; a refused one has no publisher.
@@ -380,7 +399,8 @@ fn put_batches(
         );
         let puts = (actors.iter().zip(batch.poses))
             .chain(objects.iter().zip(batch.objects))
-            .chain(batch.events.into_iter().map(|e| (&events, e)));
+            .chain(batch.events.into_iter().map(|e| (&events, e)))
+            .chain((batch.behavior_messages.into_iter()).map(|m| (&behavior_messages, m)));
         for (publisher, payload) in puts {
             if let Some(p) = publisher {
                 if p.put(payload).wait().is_err() {

@@ -49,15 +49,12 @@ for i, actor in ipairs(actors) do
   actor:behave(function(self)
     wait(math.random() * 0.5)
     while true do
-      -- Walk to a spot in front of a parcel near by, waving on the way.
+      -- Walk to a parcel near by (the walk plans around the pillars and ends within
+      -- reach, facing it), waving on the way.
       local here = self:position()
-      local pick = pick_parcel(here[1], here[3])
-      local parcel, p = pick.object, { pick.x, 1.0, pick.z }
-      local dx, dz = here[1] - p[1], here[3] - p[3]
-      local d = math.max(math.sqrt(dx * dx + dz * dz), 1e-6)
-      local goal = { p[1] + dx / d * 0.45, 0, p[3] + dz / d * 0.45 }
+      local parcel = pick_parcel(here[1], here[3]).object
       -- The walk first: a default-mode action waits for running actions on its scope.
-      local walking = self:walk{ to = goal, speed = 1.0 + 0.6 * math.random() }
+      local walking = self:walk{ to = parcel, speed = 1.0 + 0.6 * math.random() }
       local waving = self:play(wave, { scope = "right_arm", mode = "weighted", weight = 0.6, ease_in = 0.4, ease_out = 0.3 })
       walking:wait()
       waving:cancel()

@@ -1,56 +1,102 @@
--- Messages between scenes and tools: troupe.publish / troupe.subscribe (docs/lua-api.md).
+-- One wording for mistakes, each with a test: what was wrong, where, and how to fix it.
+local function message(f)
+  local ok, err = pcall(f)
+  expect(not ok, "the call should fail")
+  return err
+end
 
-test("a published message arrives at the start of the next tick, as a table", function()
-  local got = {}
-  troupe.subscribe("cue/*", function(value, key)
-    got[#got + 1] = { tick = troupe.tick(), key = key, value = value }
-  end)
-  local sent_at = troupe.tick()
-  troupe.publish("cue/start", { actor = "ann", at = { 1, 2.5, -3 }, loud = true })
-  expect(#got == 0, "not delivered in the tick it was published")
-  run(0.01)
-  expect(#got == 1, "delivered once, got " .. #got)
-  expect(got[1].key == "cue/start", "the key is passed along")
-  expect(got[1].value.actor == "ann" and got[1].value.loud == true, "fields kept")
-  expect(got[1].value.at[2] == 2.5 and got[1].value.at[3] == -3, "arrays kept")
-  expect(got[1].tick == sent_at + 1, "seen in the script phase of the next tick")
-end)
+local function says(f, needle)
+  local err = message(f)
+  expect(err:find(needle, 1, true), "expected `" .. needle .. "` in: " .. err)
+  expect(not err:find("runtime error", 1, true), "no mlua prefix: " .. err)
+  expect(not err:find("traceback", 1, true), "no traceback in a caught error: " .. err)
+  expect(err:find("messages%.lua:%d+: "), "the place of the call: " .. err)
+  return err
+end
 
-test("subscribers see messages in publishing order, each in subscription order", function()
-  local log = {}
-  troupe.subscribe("a/**", function(v, key) log[#log + 1] = "first " .. key .. "=" .. tostring(v) end)
-  troupe.subscribe("a/x", function(v, key) log[#log + 1] = "second " .. key .. "=" .. tostring(v) end)
-  troupe.publish("a/x", 1)
-  troupe.publish("a/y/z", "two")
-  troupe.publish("b/x", 3)
-  run(0.01)
-  local want = { "first a/x=1", "second a/x=1", "first a/y/z=two" }
-  expect(#log == #want, "three deliveries, got " .. #log)
-  for i, line in ipairs(want) do expect(log[i] == line, "got " .. tostring(log[i])) end
-end)
-
-test("a behavior can publish and another can wait for it", function()
+test("a method called with . instead of : says so", function()
   local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob" }
-  local heard = nil
-  troupe.subscribe("greet", function(v) heard = v.from end)
-  ann:behave(function() wait(0.2); troupe.publish("greet", { from = "ann" }) end)
-  bob:behave(function() wait_until(function() return heard ~= nil end, 1) end)
-  run(0.5)
-  expect(heard == "ann", "bob heard ann")
-  expect(bob:behavior_status() == "done", "bob's wait ended")
+  says(function() ann.walk{ to = {1, 0, 0} } end,
+    "walk: call it as a method, with `:` (`actor:walk(…)`), not with `.`")
+  says(function() ann.on("action_completed", function() end) end,
+    "on: call it as a method, with `:` (`actor:on(…)`), not with `.`")
+  says(function() ann.position() end, "position: call it as a method, with `:`")
 end)
 
-test("bad keys and values are refused with a message", function()
-  local function refusal(f, ...)
-    local ok, err = pcall(f, ...)
-    expect(not ok, "refused")
-    return tostring(err)
-  end
-  local err = refusal(troupe.publish, "cue/*", 1)
-  expect(err:find("without '%*'"), err)
-  err = refusal(troupe.publish, "cue", function() end)
-  expect(err:find("publish cue"), err)
-  err = refusal(troupe.subscribe, "cue//x", function() end)
-  expect(err:find("subscribe"), err)
+test("bad arguments have one wording: what, what it must be, what it got", function()
+  local ann = troupe.actor{ name = "ann" }
+  says(function() ann:on("action_completed", 5) end,
+    "on: the handler must be a function, got integer")
+  says(function() ann:on(7, function() end) end, "on: the event must be a string, got integer")
+  says(function() ann:behave("go") end, "behave: the argument must be a function, got string")
+  says(function() ann:dof({}) end, "dof: argument 1 must be a string, got table")
+  says(function() troupe.get_actor(false) end, "get_actor: the name must be a string, got boolean")
+end)
+
+test("numbers that are not finite say nan or inf", function()
+  says(function() troupe.actor{ name = "n", at = {0 / 0, 0, 0} } end,
+    "actor: at.x must be a finite number, got nan")
+  says(function() troupe.actor{ name = "i", at = {0, math.huge, 0} } end,
+    "actor: at.y must be a finite number, got inf")
+  says(function() troupe.actor{ name = "h", height = -math.huge } end,
+    "actor: option `height` must be a finite number, got -inf")
+end)
+
+test("a missing file lists the paths tried", function()
+  local ann = troupe.actor{ name = "ann" }
+  local err = says(function() ann:play("nope.trk") end, "play: file `nope.trk` not found; looked for ")
+  expect(err:find("beside the scene, [^\n]*scripts/tests/nope%.trk"), "the scene's folder: " .. err)
+  says(function() troupe.sequence("nope.bvh") end, "sequence: file `nope.bvh` not found")
+end)
+
+test("a missing module lists where require looked", function()
+  says(function() require("no_such_module") end,
+    "require: module `no_such_module` not found; looked for ")
+  says(function() require("no_such_module") end, "in the standard library (gestures)")
+end)
+
+test("the standard library is found", function()
+  local gestures = require("gestures")
+  expect(type(gestures.bow) == "function", "gestures.bow")
+end)
+
+test("an inline sequence is named after where it was made", function()
+  local s = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  expect(s.name:match("^sequence@.*messages%.lua:%d+$"), "placeholder name: " .. s.name)
+  local named = troupe.sequence{ name = "lift", r_elbow_flexion = { {0, 0}, {1, 1} } }
+  expect(named.name == "lift", "a given name is kept")
+end)
+
+test("option types are checked: loop = \"no\" is refused", function()
+  says(function() troupe.sequence{ loop = "no", r_elbow_flexion = { {0, 0}, {1, 1} } } end,
+    "sequence: option `loop` must be a boolean, got string")
+end)
+
+test("unknown names: get_actor and get_object answer nil, every other call raises", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "cup", shape = "sphere", radius = 0.04, at = {0.3, 1, 0.3} }
+  expect(troupe.get_actor("nobody") == nil, "get_actor answers nil")
+  expect(troupe.get_object("nothing") == nil, "get_object answers nil")
+  expect(troupe.get_object("cup") ~= nil, "a known name is found")
+  says(function() ann:grasp{ object = "nothing" } end, "grasp: ")
+  says(function() ann:give{ object = "cup", to = "nobody" } end, "give: ")
+  says(function() ann:look_at{ target = "nobody" } end, "look_at: ")
+  says(function() ann:dof("tail_wag") end, "unknown DOF `tail_wag`")
+  says(function() ann:on("action_exploded", function() end) end, "on: unknown event `action_exploded`")
+end)
+
+test("limits name the limit and the place", function()
+  local b = troupe.actor{ name = "loop" }:behave(function() while true do end end)
+  local _, err = b:wait()
+  expect(err:find("^[^\n]*messages%.lua:%d+: instruction budget exceeded"), err)
+end)
+
+test("device options have the same wording and types", function()
+  troupe.object{ name = "crate", shape = "box", size = {0.3, 0.3, 0.3}, at = {0, 0.15, 1} }
+  says(function() troupe.devices.spacemouse{ object = "crate", speed = "fast" } end,
+    "spacemouse: option `speed` must be a number, got string")
+  says(function() troupe.devices.spacemouse{ object = "crate", turn = 0 / 0 } end,
+    "spacemouse: option `turn` must be a finite number, got nan")
+  says(function() troupe.performer{ name = "pat", calibrate = {} } end,
+    "performer: option `calibrate` must be a string, got table")
 end)

@@ -99,5 +99,5 @@ test("bad VRPN options are clear errors", function()
   end
   local ok, e = pcall(troupe.performer, { name = "both", devices = {
     osc = { listen = "127.0.0.1:0", joints = { "pelvis" } }, vrpn = { replay = rec, map = map } } })
-  expect(not ok and tostring(e):find("one of", 1, true) ~= nil, tostring(e))
+  expect(not ok and tostring(e):find("one source of body poses", 1, true) ~= nil, tostring(e))
 end)

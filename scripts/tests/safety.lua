@@ -1,12 +1,15 @@
--- Script errors, runaway scripts and allocation bombs stop only their own behavior.
+-- Script errors, runaway scripts and allocation bombs stop only their own behavior. The
+-- tests wait for the failing behaviors (`b:wait()`): a failure a test waits for is the
+-- test's to judge, any other fails the test.
 
 test("a script error stops only that actor's behavior", function()
   local bad = troupe.actor{ name = "bad" }
   local good = troupe.actor{ name = "good", at = {2, 0, 0} }
   local ticks = 0
-  bad:behave(function() wait(0.1); local x = nil; return x.field end)
+  local b = bad:behave(function() wait(0.1); local x = nil; return x.field end)
   good:behave(function() while true do ticks = ticks + 1; wait(0.01) end end)
-  run(0.5)
+  b:wait()
+  run(0.4)
   expect(bad:behavior_status() == "failed", "bad failed")
   expect(bad:behavior_error():find("safety.lua:%d+") ~= nil, "the error names file:line: " .. bad:behavior_error())
   expect(bad:behavior_error():find("traceback") ~= nil, "with a traceback")
@@ -15,21 +18,23 @@ end)
 
 test("a runaway script is stopped within the tick", function()
   local loop = troupe.actor{ name = "loop" }
-  loop:behave(function() wait(0.05); while true do end end)
-  run(0.1)
+  local b = loop:behave(function() wait(0.05); while true do end end)
+  b:wait()
+  expect(troupe.time() < 0.1, "within the tick")
   expect(loop:behavior_status() == "failed", "runaway stopped")
   expect(loop:behavior_error():find("instruction budget") ~= nil, loop:behavior_error())
 end)
 
 test("an allocation bomb hits the memory limit", function()
   local bomb = troupe.actor{ name = "bomb" }
-  bomb:behave(function()
+  local b1 = bomb:behave(function()
     local t = {}
     for i = 1, 1e9 do t[i] = string.rep("x", 1024) .. i end
   end)
   local bomb2 = troupe.actor{ name = "bomb2", at = {2, 0, 0} }
-  bomb2:behave(function() local s = string.rep("y", 1 << 28) end)
-  run(0.05)
+  local b2 = bomb2:behave(function() wait(0.05); local s = string.rep("y", 1 << 28) end)
+  b1:wait()
+  b2:wait()
   expect(bomb:behavior_status() == "failed", "bomb failed")
   expect(bomb:behavior_error():find("memory") ~= nil, bomb:behavior_error())
   expect(bomb2:behavior_status() == "failed", "one huge allocation fails too")

@@ -117,7 +117,7 @@ pub fn run(args: &ViewArgs, prefix: &str) -> Result<ExitCode> {
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer
             .renderer_mut()
-            .set_options(render_options(args.bones, !args.no_labels));
+            .set_options(render_options(args.look, args.bones, !args.no_labels));
         writer.renderer_mut().set_multisampling(!args.no_msaa);
         // Live: one tick per tick period, showing what has arrived by then.
         session.observe(Pacer::new(Duration::from_secs_f64(1.0 / args.rate)));
@@ -127,7 +127,7 @@ pub fn run(args: &ViewArgs, prefix: &str) -> Result<ExitCode> {
         title: format!("troupe view --zenoh {prefix}"),
         size,
         camera,
-        render: render_options(args.bones, !args.no_labels),
+        render: render_options(args.look, args.bones, !args.no_labels),
         tick_seconds: 1.0 / args.rate,
         close_after_frames: None,
     };

@@ -161,6 +161,9 @@ pub struct Frame {
     pub sensors: Vec<Sensor>,
     /// IK targets (world points) to draw as small markers.
     pub ik_targets: Vec<Vec3>,
+    /// Lines of text shown in the top-left corner whatever the options (e.g. the error
+    /// of a scene that failed to reload, over the last good one).
+    pub notice: Vec<String>,
 }
 
 impl Frame {
@@ -202,6 +205,7 @@ impl Frame {
             objects,
             sensors: Vec::new(),
             ik_targets: Vec::new(),
+            notice: Vec::new(),
         }
     }
 

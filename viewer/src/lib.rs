@@ -18,10 +18,12 @@
 #![warn(missing_docs)]
 
 mod camera;
+mod face;
 mod frame;
 mod mesh;
 mod offscreen;
 mod render;
+mod skinned;
 mod text;
 mod window;
 

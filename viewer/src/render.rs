@@ -4,6 +4,7 @@
 use crate::camera::Camera;
 use crate::frame::{ActorFrame, Frame, HandState, IK_TARGET, SENSOR_IDLE, SENSOR_TOUCHING, SKIN};
 use crate::mesh::{self, MeshKey, Vertex};
+use crate::skinned::{self, SkinBlock, SkinCache, SkinVertex, BLOCK_STRIDE};
 use crate::text;
 use crate::ViewerError;
 use bytemuck::{Pod, Zeroable};
@@ -15,8 +16,12 @@ use wgpu::util::DeviceExt;
 /// How actors are drawn.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum BodyStyle {
-    /// The body solids (thesis 3.1) plus thin finger bones.
+    /// The generated skin (`troupe_body::Skin`), deformed on the GPU: a smooth body with
+    /// five-fingered hands and a face. A skeleton that cannot be skinned is drawn as
+    /// solids.
     #[default]
+    Skin,
+    /// The body solids (thesis 3.1) plus thin finger bones.
     Solids,
     /// A stick figure: a thin cylinder per bone and a small sphere per joint.
     Bones,
@@ -37,10 +42,31 @@ pub struct RenderOptions {
     pub background: [f32; 3],
 }
 
+impl BodyStyle {
+    /// Parses a `--look` value: `skin`, `solids` or `bones`.
+    pub fn parse(s: &str) -> Option<BodyStyle> {
+        match s {
+            "skin" => Some(BodyStyle::Skin),
+            "solids" => Some(BodyStyle::Solids),
+            "bones" => Some(BodyStyle::Bones),
+            _ => None,
+        }
+    }
+
+    /// The next look, for the window's `b` key: skin → solids → bones → skin.
+    pub fn next(self) -> BodyStyle {
+        match self {
+            BodyStyle::Skin => BodyStyle::Solids,
+            BodyStyle::Solids => BodyStyle::Bones,
+            BodyStyle::Bones => BodyStyle::Skin,
+        }
+    }
+}
+
 impl Default for RenderOptions {
     fn default() -> Self {
         RenderOptions {
-            style: BodyStyle::Solids,
+            style: BodyStyle::Skin,
             grid: true,
             overlays: true,
             labels: true,
@@ -51,6 +77,8 @@ impl Default for RenderOptions {
 
 /// Default background colour (sRGB).
 pub const BACKGROUND: [f32; 3] = [0.80, 0.84, 0.88];
+/// The panel behind a frame's notice (linear RGBA).
+const NOTICE_PANEL: [f32; 4] = [0.45, 0.02, 0.02, 0.85];
 const FLOOR: [f32; 3] = [0.90, 0.91, 0.92];
 const GRID: [f32; 3] = [0.62, 0.65, 0.70];
 
@@ -65,6 +93,8 @@ const SHIRTS: [[f32; 3]; 6] = [
 ];
 const TROUSERS: [[f32; 3]; 3] = [[0.22, 0.24, 0.32], [0.30, 0.26, 0.22], [0.34, 0.34, 0.36]];
 const SHOES: [f32; 3] = [0.14, 0.12, 0.11];
+const EYE_WHITE: [f32; 3] = [0.94, 0.93, 0.90];
+const PUPIL: [f32; 3] = [0.10, 0.07, 0.05];
 
 /// sRGB → linear for one channel.
 fn linear(c: f32) -> f32 {
@@ -299,6 +329,15 @@ pub(crate) struct SceneRenderer {
     scratch: Vec<(MeshKey, Instance)>,
     batches: Vec<(MeshKey, std::ops::Range<u32>)>,
     pub samples: u32,
+    skin_pipeline: wgpu::RenderPipeline,
+    skin_layout: wgpu::BindGroupLayout,
+    skin_blocks: wgpu::Buffer,
+    skin_bind_group: wgpu::BindGroup,
+    skin_capacity: usize,
+    skins: SkinCache,
+    /// This frame's skinned actors: skeleton key, whether far (coarse mesh).
+    skin_draws: Vec<(std::sync::Arc<troupe_body::Skeleton>, bool)>,
+    skin_data: Vec<u8>,
 }
 
 impl SceneRenderer {
@@ -452,8 +491,64 @@ impl SceneRenderer {
             multiview_mask: None,
             cache: None,
         });
+        let skin_layout =
+            device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("actor skin block"),
+                entries: &[wgpu::BindGroupLayoutEntry {
+                    binding: 0,
+                    visibility: wgpu::ShaderStages::VERTEX,
+                    ty: wgpu::BindingType::Buffer {
+                        ty: wgpu::BufferBindingType::Uniform,
+                        has_dynamic_offset: true,
+                        min_binding_size: wgpu::BufferSize::new(
+                            std::mem::size_of::<SkinBlock>() as u64
+                        ),
+                    },
+                    count: None,
+                }],
+            });
+        let skin_pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some("skin"),
+            bind_group_layouts: &[Some(&layout), Some(&skin_layout)],
+            immediate_size: 0,
+        });
+        let skin_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+            label: Some("skin"),
+            layout: Some(&skin_pipeline_layout),
+            vertex: wgpu::VertexState {
+                module: &shader,
+                entry_point: Some("vs_skin"),
+                compilation_options: Default::default(),
+                buffers: &[Some(wgpu::VertexBufferLayout {
+                    array_stride: std::mem::size_of::<SkinVertex>() as u64,
+                    step_mode: wgpu::VertexStepMode::Vertex,
+                    attributes: &skinned::VERTEX_ATTRIBUTES,
+                })],
+            },
+            primitive: wgpu::PrimitiveState::default(),
+            depth_stencil: depth(true),
+            multisample,
+            fragment: Some(wgpu::FragmentState {
+                module: &shader,
+                entry_point: Some("fs_mesh"),
+                compilation_options: Default::default(),
+                targets: &targets,
+            }),
+            multiview_mask: None,
+            cache: None,
+        });
+        let skin_capacity = 4;
+        let (skin_blocks, skin_bind_group) = Self::skin_buffer(device, &skin_layout, skin_capacity);
         let capacity = 1024;
         SceneRenderer {
+            skin_pipeline,
+            skin_layout,
+            skin_blocks,
+            skin_bind_group,
+            skin_capacity,
+            skins: SkinCache::default(),
+            skin_draws: Vec::new(),
+            skin_data: Vec::new(),
             rect_pipeline,
             rects: Vec::new(),
             rect_buffer: Self::rect_buffer(device, capacity),
@@ -472,6 +567,33 @@ impl SceneRenderer {
         }
     }
 
+    /// A uniform buffer for `capacity` actors' skin blocks and its bind group.
+    fn skin_buffer(
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        capacity: usize,
+    ) -> (wgpu::Buffer, wgpu::BindGroup) {
+        let buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("actor skin blocks"),
+            size: BLOCK_STRIDE * capacity as u64,
+            usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
+        let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("actor skin blocks"),
+            layout,
+            entries: &[wgpu::BindGroupEntry {
+                binding: 0,
+                resource: wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                    buffer: &buffer,
+                    offset: 0,
+                    size: wgpu::BufferSize::new(std::mem::size_of::<SkinBlock>() as u64),
+                }),
+            }],
+        });
+        (buffer, bind_group)
+    }
+
     fn rect_buffer(device: &wgpu::Device, capacity: usize) -> wgpu::Buffer {
         device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("label rectangles"),
@@ -484,15 +606,28 @@ impl SceneRenderer {
     /// Lays out every actor's name and labels above its head.
     fn build_labels(&mut self, frame: &Frame, view_proj: Mat4, width: u32, height: u32) {
         self.rects.clear();
-        if !self.options.labels {
-            return;
-        }
         let scale = if height >= 400 { 2.0 } else { 1.0 };
         let line_height = text::CELL.1 as f32 * scale;
         let pad = 2.0 * scale;
         let panel = [0.02, 0.02, 0.03, 0.55];
         let ink = [1.0, 1.0, 1.0, 1.0];
         let mut glyphs = Vec::new();
+        // The notice: a dark red panel in the top-left corner, one line per line.
+        for (i, line) in frame.notice.iter().enumerate() {
+            let (x, y) = (4.0 * scale, 4.0 * scale + i as f32 * (line_height + pad));
+            let (w, h) = text::size(line, scale);
+            self.rects.push(RectInstance {
+                rect: [x - pad, y - pad, w + 2.0 * pad, h + 2.0 * pad],
+                color: NOTICE_PANEL,
+            });
+            glyphs.clear();
+            text::layout(line, x, y, scale, &mut glyphs);
+            self.rects
+                .extend(glyphs.iter().map(|&rect| RectInstance { rect, color: ink }));
+        }
+        if !self.options.labels {
+            return;
+        }
         for actor in &frame.actors {
             let Some(anchor) = actor.label_anchor() else {
                 continue;
@@ -566,8 +701,9 @@ impl SceneRenderer {
         // Screen pixels covered by one metre at one metre from the eye.
         let pixels_per_metre =
             targets.height as f32 / (2.0 * (camera.fov_y_degrees.to_radians() * 0.5).tan());
-        self.build_instances(frame, eye, pixels_per_metre);
+        self.build_instances(gpu, frame, eye, pixels_per_metre);
         self.upload(gpu);
+        self.upload_skins(gpu);
         self.build_labels(frame, view_proj, targets.width, targets.height);
         if self.rects.len() > self.rect_capacity {
             self.rect_capacity = self.rects.len().next_power_of_two();
@@ -623,6 +759,27 @@ impl SceneRenderer {
             pass.set_index_buffer(mesh.indices.slice(..), wgpu::IndexFormat::Uint32);
             pass.draw_indexed(0..mesh.count, 0, range.clone());
         }
+        if !self.skin_draws.is_empty() {
+            pass.set_pipeline(&self.skin_pipeline);
+            for (i, (skeleton, far)) in self.skin_draws.iter().enumerate() {
+                let Some(skin) = self.skins.get(&gpu.device, skeleton) else {
+                    continue;
+                };
+                let (indices, count) = if *far {
+                    (&skin.far_indices, skin.far_count)
+                } else {
+                    (&skin.indices, skin.count)
+                };
+                pass.set_bind_group(
+                    1,
+                    &self.skin_bind_group,
+                    &[(i as u64 * BLOCK_STRIDE) as u32],
+                );
+                pass.set_vertex_buffer(0, skin.vertices.slice(..));
+                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..count, 0, 0..1);
+            }
+        }
         if !self.rects.is_empty() {
             pass.set_pipeline(&self.rect_pipeline);
             pass.set_vertex_buffer(0, self.rect_buffer.slice(..));
@@ -671,26 +828,65 @@ impl SceneRenderer {
         }
     }
 
-    /// Fills the instance list; fingers of actors too far away to show them (under about
-    /// 6 pixels long) are left out to spare CPU adapters.
-    fn build_instances(&mut self, frame: &Frame, eye: Vec3, pixels_per_metre: f32) {
+    /// Writes the skin blocks gathered by `build_instances` into the uniform buffer.
+    fn upload_skins(&mut self, gpu: &Gpu) {
+        if self.skin_draws.len() > self.skin_capacity {
+            self.skin_capacity = self.skin_draws.len().next_power_of_two();
+            (self.skin_blocks, self.skin_bind_group) =
+                Self::skin_buffer(&gpu.device, &self.skin_layout, self.skin_capacity);
+        }
+        if !self.skin_data.is_empty() {
+            gpu.queue
+                .write_buffer(&self.skin_blocks, 0, &self.skin_data);
+        }
+    }
+
+    /// Fills the instance list and the skinned actors' blocks; fingers of actors too far
+    /// away to show them (under about 6 pixels long) are left out to spare CPU adapters,
+    /// and skins under about 360 pixels tall use their coarse mesh.
+    fn build_instances(&mut self, gpu: &Gpu, frame: &Frame, eye: Vec3, pixels_per_metre: f32) {
         self.scratch.clear();
+        self.skin_draws.clear();
+        self.skin_data.clear();
         let overlays = self.options.overlays;
         for (i, actor) in frame.actors.iter().enumerate() {
             let colors = ActorColors::new(i, actor, overlays);
-            match self.options.style {
+            let root = actor
+                .globals
+                .first()
+                .map_or(Vec3::ZERO, |t| t.translation.as_vec3());
+            let distance = (root - eye).length().max(0.05);
+            let style = match self.options.style {
+                BodyStyle::Skin => match self.skins.get(&gpu.device, &actor.skeleton) {
+                    Some(skin) => {
+                        let block = skinned::block(&skin.skin, actor, colors.slots());
+                        self.skin_data.extend_from_slice(bytemuck::bytes_of(&block));
+                        self.skin_data.resize(
+                            self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize,
+                            0,
+                        );
+                        let far = 1.8 * pixels_per_metre / distance < 360.0;
+                        self.skin_draws.push((actor.skeleton.clone(), far));
+                        continue;
+                    }
+                    None => BodyStyle::Solids,
+                },
+                other => other,
+            };
+            match style {
+                BodyStyle::Skin => unreachable!("skins are drawn above"),
                 BodyStyle::Solids => {
                     self.solids(actor, &colors);
-                    let root = actor
-                        .globals
-                        .first()
-                        .map_or(Vec3::ZERO, |t| t.translation.as_vec3());
-                    let distance = (root - eye).length().max(0.05);
                     if 0.08 * pixels_per_metre / distance >= 6.0 {
                         self.bones(actor, &colors, true);
                     }
                 }
                 BodyStyle::Bones => self.bones(actor, &colors, false),
+            }
+            for f in crate::face::features(actor, SKIN) {
+                let color = linear_rgba(f.color);
+                let instance = Instance::new(f.rotation, f.center, f.radii, color);
+                self.scratch.push((MeshKey::SphereLow, instance));
             }
         }
         for o in &frame.objects {
@@ -840,6 +1036,21 @@ impl ActorColors {
             hands: [hand(actor.hands[0]), hand(actor.hands[1])],
             hand_of,
         }
+    }
+
+    /// The colour slots of the skin look, in `troupe_body::skin::Region` order then
+    /// the left and right hands.
+    fn slots(&self) -> [[f32; 4]; 8] {
+        [
+            self.skin,
+            self.shirt,
+            self.trousers,
+            self.shoes,
+            linear_rgba(EYE_WHITE),
+            linear_rgba(PUPIL),
+            self.hands[0],
+            self.hands[1],
+        ]
     }
 
     fn solid(&self, name: &str) -> [f32; 4] {

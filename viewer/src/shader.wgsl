@@ -125,3 +125,32 @@ fn vs_rect(
 fn fs_rect(in: RectOut) -> @location(0) vec4<f32> {
     return in.color;
 }
+
+// The skin look: linear blend skinning of an actor's skin by its joint matrices.
+struct SkinBlock {
+    // Linear colours by slot: skin, shirt, trousers, shoes, eye white, pupil, left hand,
+    // right hand.
+    colors: array<vec4<f32>, 8>,
+    joints: array<mat4x4<f32>, 96>,
+};
+
+@group(1) @binding(0) var<uniform> skin: SkinBlock;
+
+@vertex
+fn vs_skin(
+    @location(0) pos: vec3<f32>,
+    @location(1) normal: vec3<f32>,
+    @location(2) joints: vec4<u32>,
+    @location(3) weights: vec4<f32>,
+    @location(4) part: u32,
+) -> MeshOut {
+    let m = skin.joints[joints.x] * weights.x + skin.joints[joints.y] * weights.y
+        + skin.joints[joints.z] * weights.z + skin.joints[joints.w] * weights.w;
+    var out: MeshOut;
+    let world = (m * vec4<f32>(pos, 1.0)).xyz;
+    out.clip = globals.view_proj * vec4<f32>(world, 1.0);
+    // Blended rotations are near-orthogonal: the normal goes through the same matrix.
+    out.normal = (m * vec4<f32>(normal, 0.0)).xyz;
+    out.color = skin.colors[part];
+    return out;
+}

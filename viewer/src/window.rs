@@ -4,12 +4,12 @@
 //!
 //! Controls: left drag orbits, right or middle drag pans, the wheel zooms; Space pauses,
 //! `.` steps one tick while paused, `s` toggles slow motion (¼ speed), Tab follows the next
-//! actor, `1`–`9` follow actor N, `0` or `f` frames all actors, `b` toggles solids/bones,
+//! actor, `1`–`9` follow actor N, `0` or `f` frames all actors, `b` cycles skin/solids/bones,
 //! `g` the grid, `o` the overlays, `l` the labels, Escape or `q` quits.
 
 use crate::camera::{Camera, Focus};
 use crate::frame::Frame;
-use crate::render::{self, BodyStyle, Gpu, RenderOptions, SceneRenderer, Targets};
+use crate::render::{self, Gpu, RenderOptions, SceneRenderer, Targets};
 use crate::ViewerError;
 use glam::Vec3;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
@@ -477,10 +477,7 @@ impl App {
                     self.camera.distance = None;
                 }
                 "b" | "B" => {
-                    self.render.style = match self.render.style {
-                        BodyStyle::Solids => BodyStyle::Bones,
-                        BodyStyle::Bones => BodyStyle::Solids,
-                    }
+                    self.render.style = self.render.style.next();
                 }
                 "g" | "G" => self.render.grid = !self.render.grid,
                 "o" | "O" => self.render.overlays = !self.render.overlays,

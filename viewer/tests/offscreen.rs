@@ -371,3 +371,80 @@ fn multisampling_can_be_turned_off_and_on() {
     r.set_multisampling(true);
     assert!(r.render(&frame, &camera).is_ok());
 }
+
+#[test]
+fn the_skin_look_is_the_default_and_bares_the_forearms() {
+    assert_eq!(RenderOptions::default().style, BodyStyle::Skin);
+    let camera = front();
+    let frame = posed(&[("r_shoulder_abduction", 80.0), ("r_elbow_flexion", 30.0)]);
+    let ann = frame.actor("ann").unwrap();
+    let forearm = ann.solid_center("r_forearm").unwrap();
+    let chest = ann.solid_center("up_torso").unwrap();
+    let mut r = renderer();
+    let skin = r.render(&frame, &camera).unwrap();
+    r.set_options(RenderOptions {
+        style: BodyStyle::Solids,
+        ..RenderOptions::default()
+    });
+    let solids = r.render(&frame, &camera).unwrap();
+    // The skin follows the raised forearm, which is bare (skin-coloured: red well above
+    // blue); the solids draw it in the first actor's teal shirt.
+    let bare = pixel_at(&skin, &frame, &camera, forearm);
+    assert!(bare[0] > bare[2] + 30, "bare forearm, got {bare:?}");
+    let sleeve = pixel_at(&solids, &frame, &camera, forearm);
+    assert!(
+        sleeve[2] > sleeve[0],
+        "shirt-coloured forearm solid, got {sleeve:?}"
+    );
+    // Both looks dress the chest in the same shirt.
+    let (a, b) = (
+        pixel_at(&skin, &frame, &camera, chest),
+        pixel_at(&solids, &frame, &camera, chest),
+    );
+    assert!(
+        a[2] > a[0] && b[2] > b[0],
+        "teal shirt in both looks: {a:?} {b:?}"
+    );
+}
+
+#[test]
+fn a_skeleton_the_skin_cannot_dress_is_drawn_as_solids() {
+    use std::sync::Arc;
+    use troupe_body::glam::{DQuat, DVec3};
+    use troupe_body::skeleton::SkeletonBuilder;
+    use troupe_body::{Shape, Solid, Transform};
+    // A lone box on a pole: no head, no hands, nothing the skin's volumes need.
+    let mut b = SkeletonBuilder::new("pole");
+    b.joint("base", None, DVec3::ZERO).unwrap();
+    let shape = Shape::Box {
+        half_extents: DVec3::new(0.2, 0.4, 0.2),
+    };
+    b.solid(
+        "base",
+        Solid::new(
+            "block",
+            shape,
+            DVec3::new(0.0, 0.9, 0.0),
+            DQuat::IDENTITY,
+            5.0,
+        ),
+    )
+    .unwrap();
+    let skeleton = Arc::new(b.build().unwrap());
+    let mut frame = posed(&[]);
+    frame.actors[0].skeleton = skeleton;
+    frame.actors[0].globals = vec![Transform::IDENTITY];
+    let camera = front();
+    let mut r = renderer();
+    let img = r.render(&frame, &camera).unwrap();
+    let empty = r.render(&Frame::default(), &camera).unwrap();
+    let p = Vec3::new(0.0, 0.9, 0.0);
+    assert!(
+        !close(
+            pixel_at(&img, &frame, &camera, p),
+            pixel_at(&empty, &frame, &camera, p),
+            6
+        ),
+        "the block is drawn"
+    );
+}

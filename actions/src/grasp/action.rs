@@ -6,6 +6,7 @@
 //! pattern until every finger DOF has stopped (4.3.4), asks the scene to attach the
 //! object to the first hand, and completes once the snapshot shows it holding it.
 
+use super::body::BodyReach;
 use super::close::HandModel;
 use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
@@ -15,7 +16,10 @@ use troupe_body::glam::DVec3;
 use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::holding::HoldRequest;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Scene, SignalId, StartError, Step};
+use troupe_scene::{
+    DofWriter, Ending, Generator, GeneratorContext, Notes, Scene, SignalId, StartError, Status,
+    Step,
+};
 
 /// Seconds the fingers take to close along a pattern.
 pub const CLOSE_SECONDS: f64 = 0.6;
@@ -30,6 +34,15 @@ pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope> {
         scope = scope.union(&e);
     }
     Ok(scope)
+}
+
+/// The DOFs a grasp or receive with the hands `sides` drives by default: the arms and
+/// hands, and the whole-body part it may need to reach ([`BodyReach::body_scope`]: the
+/// spine, the legs and `root_y`). Its spec yields that part: during a walk the grasp
+/// starts at once without the legs (see `docs/scheduling.md`).
+pub fn reach_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<(Scope, Scope)> {
+    let body = BodyReach::body_scope(skeleton)?;
+    Ok((grasp_scope(skeleton, sides)?.union(&body), body))
 }
 
 /// Refuses a place that is not finite or not reached in a positive time.
@@ -101,6 +114,8 @@ pub struct Grasp {
     abort: Option<SignalId>,
     /// Raised when the object is held.
     done: Option<SignalId>,
+    /// Raised when this action ends without the object, with why (a giver stops waiting).
+    gave_up: Option<SignalId>,
 }
 
 impl Grasp {
@@ -130,6 +145,7 @@ impl Grasp {
             gate: None,
             abort: None,
             done: None,
+            gave_up: None,
         })
     }
 
@@ -137,6 +153,13 @@ impl Grasp {
     /// ended without the object arriving).
     pub fn abandoned_by(mut self, abort: SignalId) -> Self {
         self.abort = Some(abort);
+        self
+    }
+
+    /// Raises `gave_up` as a failure, with the reason, if this action ends without the
+    /// object (failed or cancelled): the giver fails at once with that reason.
+    pub fn reporting(mut self, gave_up: SignalId) -> Self {
+        self.gave_up = Some(gave_up);
         self
     }
 
@@ -169,6 +192,11 @@ impl Grasp {
                 self.options.avoid = Some(palm);
             }
         }
+        // Lean and crouch with what the action's scope (as admitted) allows.
+        self.options.body = Some(
+            ctx.scope
+                .intersection(&BodyReach::body_scope(ctx.skeleton)?),
+        );
         let plan = plan_grasp(
             ctx.skeleton,
             ctx.posture,
@@ -227,11 +255,26 @@ impl Generator for Grasp {
         Ok(())
     }
 
+    fn end(&mut self, ending: &Ending, notes: &mut Notes) {
+        if let Some(signal) = self.gave_up {
+            if ending.status != Status::Completed {
+                let why = ending.reason.unwrap_or("no reason given");
+                notes.fail(signal, format!("{}: {why}", ending.status.name()));
+            }
+        }
+    }
+
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        let board = ctx.world.board;
+        // A giver that failed takes the hand-over with it, whatever this hand is doing.
+        if let Some(why) = self.abort.and_then(|a| board.failure(a, ctx.tick)) {
+            if !matches!(self.phase, Phase::Verify) {
+                return Step::Failed(format!("the giver gave up: {why}"));
+            }
+        }
         match self.phase {
             Phase::Waiting => {
                 self.q.copy_from_slice(&ctx.posture.q);
-                let board = ctx.world.board;
                 let open = self.gate.is_some_and(|g| board.before(g, ctx.tick));
                 if !open && self.abort.is_some_and(|a| board.before(a, ctx.tick)) {
                     return Step::Failed(

@@ -2,7 +2,6 @@
 //! Lua: reads [`GraspOptions`] and [`ReleaseOptions`], and the hand and pattern names
 //! that `give` and `receive` share.
 
-use super::action::grasp_scope;
 use super::decision::GraspType;
 use super::options::{GraspOptions, Place, ReleaseOptions};
 use super::plan::{plan_grasp, HandChoice, PlanOptions};
@@ -12,22 +11,10 @@ use troupe_lua::args::{
     actor_arg, err, euler_degrees, object_arg, opt_string, table_arg, vec3, vec3_table,
 };
 use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};
-use troupe_scene::{ActionSpec, DofWriter, Generator, GeneratorContext, StartError, Step};
+use troupe_scene::{ActionSpec, Generator};
 
 /// What a builder returns: the generator and its spec.
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
-
-/// An action that fails at its start with a reason (e.g. an unknown object's name).
-struct Refuse(String);
-
-impl Generator for Refuse {
-    fn start(&mut self, _: &GeneratorContext) -> Result<(), StartError> {
-        Err(self.0.clone().into())
-    }
-    fn step(&mut self, _: &GeneratorContext, _: &mut DofWriter) -> Step {
-        Step::Failed(self.0.clone())
-    }
-}
 
 /// Reads `hand = "right"|"left"|"both"|"auto"` (default `auto`).
 pub(crate) fn hand_choice(method: &str, t: &Table) -> mlua::Result<HandChoice> {
@@ -44,6 +31,12 @@ fn pattern(method: &str, t: &Table) -> mlua::Result<Option<GraspType>> {
         .transpose()
 }
 
+/// `spec`, yielding the part of `body` (the whole-body part of a reach) in its scope.
+pub(crate) fn yielding(mut spec: ActionSpec, body: troupe_body::Scope) -> ActionSpec {
+    spec.yields = body.intersection(&spec.scope);
+    spec
+}
+
 /// Makes a spec for a hand action that decides itself when it is done.
 fn open_ended(common: &CommonOptions, kind: &str, scope: troupe_body::Scope) -> ActionSpec {
     let mut spec = common.spec(kind, scope);
@@ -58,34 +51,21 @@ pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let t = table_arg(m, args)?;
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
     let hand = hand_choice(m, &t)?;
-    let object = match t.get::<Value>("object")? {
-        // An unknown name is bad scene data, not a script error: the action fails with
-        // the reason, like an unreachable or held object.
-        Value::String(name) => {
-            let name = name.to_str()?.to_string();
-            match with_scene(ctx.lua, |s| s.object_index(&name))? {
-                Ok(i) => i,
-                Err(e) => {
-                    let scope = grasp_scope(&ctx.skeleton, &hand.sides()).map_err(|e| err(m, e))?;
-                    return Ok((
-                        Box::new(Refuse(e.to_string())),
-                        open_ended(&common, m, scope),
-                    ));
-                }
-            }
-        }
-        other => object_arg(ctx.lua, m, "object", other)?,
-    };
+    // An unknown name is a Lua error, as everywhere (docs/lua-api.md, "Unknown names").
+    let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
     let options = GraspOptions {
         object,
         hand,
         pattern: pattern(m, &t)?,
         duration: common.duration.unwrap_or(1.0),
     };
-    let scope = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
+    let (scope, body) = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
     let grasp = options.grasp().map_err(|e| err(m, e))?;
     // The generator decides when it is done; `duration` is the reach time.
-    Ok((Box::new(grasp), open_ended(&common, m, scope)))
+    Ok((
+        Box::new(grasp),
+        yielding(open_ended(&common, m, scope), body),
+    ))
 }
 
 /// Makes a release (or, with `place`, a place) of `t`'s `object`.
@@ -145,12 +125,18 @@ pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
             let actor = actor_arg(lua, m, "actor", actor)?;
             let object = object_arg(lua, m, "object", object)?;
             let mut options = PlanOptions::default();
+            let mut scope = None;
             if let Some(t) = &opts {
                 options.hand = hand_choice(m, t)?;
                 options.grasp = pattern(m, t)?;
+                scope = opt_string(t, m, "scope")?;
             }
             let result = with_scene(lua, |s| {
                 let skel = s.actors()[actor].skeleton.clone();
+                if let Some(expr) = &scope {
+                    let body = super::body::BodyReach::body_scope(&skel)?;
+                    options.body = Some(skel.scope(expr)?.intersection(&body));
+                }
                 plan_grasp(
                     &skel,
                     &s.states()[actor],
@@ -167,6 +153,8 @@ pub fn make_plan_grasp(lua: &Lua) -> mlua::Result<mlua::Function> {
                     t.set("type", plan.grasp.name())?;
                     t.set("decided", plan.decision.grasp.name())?;
                     t.set("hand_count", plan.hands.len())?;
+                    t.set("lean", plan.lean)?;
+                    t.set("crouch", plan.crouch)?;
                     let hands = lua.create_table()?;
                     for (i, h) in plan.hands.iter().enumerate() {
                         let ht = lua.create_table()?;

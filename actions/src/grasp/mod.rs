@@ -4,6 +4,7 @@
 
 pub mod action;
 pub mod automaton;
+pub mod body;
 pub mod close;
 pub mod decision;
 pub mod handover;

@@ -1,7 +1,9 @@
 //! The options of `grasp`, `release` and `place`: which object, which hand(s), which
 //! pattern, how long, and where to put the object down.
 
-use super::action::{check_duration, check_place, grasp_scope, holding_side, Grasp, Release};
+use super::action::{
+    check_duration, check_place, grasp_scope, holding_side, reach_scope, Grasp, Release,
+};
 use super::decision::GraspType;
 use super::plan::{HandChoice, PlanOptions};
 use crate::error::{OptionError, Result};
@@ -40,9 +42,11 @@ impl GraspOptions {
         check_duration(self.duration)
     }
 
-    /// The DOFs a grasp with these hands drives, on `skeleton`.
-    pub fn scope(&self, skeleton: &Skeleton) -> Result<Scope> {
-        grasp_scope(skeleton, &self.hand.sides())
+    /// The DOFs a grasp with these hands drives, on `skeleton`, and the part of them it
+    /// yields (the spine, legs and `root_y` it leans and crouches with: see
+    /// [`reach_scope`]).
+    pub fn scope(&self, skeleton: &Skeleton) -> Result<(Scope, Scope)> {
+        reach_scope(skeleton, &self.hand.sides())
     }
 
     /// The grasp generator, once the options are valid.

@@ -15,6 +15,7 @@
 //! 4. candidates are ranked by a weighted sum of the translation and rotation from the
 //!    current hand pose, and the first one inverse kinematics can reach is kept.
 
+use super::body::{BodyReach, Missed, Stage};
 use super::close::HandModel;
 use super::decision::{decide, Decision, GraspType};
 use crate::error::OptionError;
@@ -22,7 +23,7 @@ use troupe_body::glam::{DMat3, DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
 use troupe_body::sensors::{object_distance, Side};
-use troupe_body::{ActorState, Shape, Skeleton, Transform};
+use troupe_body::{ActorState, Scope, Shape, Skeleton, Transform};
 use troupe_scene::{Object, World};
 
 /// Weight of rotation (per radian) against translation (per metre) in the frame cost.
@@ -31,10 +32,7 @@ pub const ROTATION_WEIGHT: f64 = 0.15;
 pub const CLEARANCE: f64 = 0.003;
 /// Step of the origin search toward the border (metres).
 pub const SEARCH_STEP: f64 = 0.002;
-/// A planned hand pose must be reachable within this distance (metres)…
-pub const REACH_TOLERANCE: f64 = 0.005;
-/// … and this angle (radians, 3°).
-pub const REACH_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
+pub use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 
 /// A receiving palm stays this far from the giving palm (metres).
 pub const AVOID_DISTANCE: f64 = 0.08;
@@ -92,6 +90,10 @@ pub struct PlanOptions {
     pub avoid: Option<DVec3>,
     /// The object may be held by this actor (a hand-over).
     pub from: Option<usize>,
+    /// What the reach may move besides the arms (see [`super::body`]): the spine to
+    /// lean and twist, the legs and `root_y` to crouch; only DOFs in this scope are used
+    /// (`None`: all of them).
+    pub body: Option<Scope>,
 }
 
 impl Default for PlanOptions {
@@ -101,6 +103,7 @@ impl Default for PlanOptions {
             grasp: None,
             avoid: None,
             from: None,
+            body: None,
         }
     }
 }
@@ -114,7 +117,8 @@ pub struct HandPlan {
     pub wrist: Transform,
     /// Goal of the palm centre (world).
     pub palm: DVec3,
-    /// The arm posture that reaches it: (DOF, value).
+    /// The posture that reaches it: the arm's DOFs and, when the arm alone cannot, the
+    /// spine's, the legs' and `root_y` (see [`super::body`]): (DOF, value).
     pub arm: Vec<(usize, f64)>,
     /// The frame's cost (translation + weighted rotation from the current hand pose).
     pub cost: f64,
@@ -131,6 +135,10 @@ pub struct GraspPlan {
     pub grasp: GraspType,
     /// One or two hands; the first one holds the object.
     pub hands: Vec<HandPlan>,
+    /// How far (radians) the trunk leans to reach (0 when the arms reach alone).
+    pub lean: f64,
+    /// How far (metres) the pelvis is lowered to reach (0 standing).
+    pub crouch: f64,
 }
 
 /// Inverse kinematics of one arm toward a wrist pose, from a posture.
@@ -354,12 +362,12 @@ pub fn plan_grasp(
         .joint("skullbase")
         .map(|j| g[j].translation)
         .unwrap_or(root.translation + DVec3::Y * 0.6);
-    let mut hands = Vec::new();
     let one_of = options.hand == HandChoice::Auto && !two;
     let mut first_error = None;
+    // Each hand's grasp frames, cheapest first.
+    let mut frames: Vec<(Side, Vec<Frame>)> = Vec::new();
     for side in sides {
-        // With `auto` and one hand, the nearer hand is tried first, then the other.
-        let result = (|| -> crate::error::Result<HandPlan> {
+        let result = (|| -> crate::error::Result<Vec<Frame>> {
             let model = if side == Side::Right {
                 right.clone()
             } else {
@@ -382,7 +390,7 @@ pub fn plan_grasp(
                 Side::Right => -actor_left,
                 Side::Left => actor_left,
             };
-            let mut ranked: Vec<(f64, Transform, DVec3)> = Vec::new();
+            let mut ranked: Vec<Frame> = Vec::new();
             for (a, f) in candidates(obj, grasp, side, two, from_shoulder, actor_left) {
                 let rot = frame_rotation(hs.palm_normal, hs.finger_direction, a, f);
                 // The palm must not face the exterior side of the body.
@@ -432,56 +440,128 @@ pub fn plan_grasp(
                 )));
             }
             ranked.sort_by(|x, y| x.0.total_cmp(&y.0));
-            let mut ik = ArmIk::new(skeleton, side, 200)?;
-            let mut best_miss = f64::INFINITY;
-            let mut found = None;
-            for (cost, wrist, palm) in ranked.iter().take(8) {
-                let mut q = posture.q.clone();
-                let (miss, angle) = ik.solve(skeleton, &mut q, wrist)?;
-                if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
-                    let arm = ik.dofs().iter().map(|&d| (d, q[d])).collect();
-                    found = Some(HandPlan {
-                        side,
-                        wrist: *wrist,
-                        palm: *palm,
-                        arm,
-                        cost: *cost,
-                    });
-                    break;
-                }
-                best_miss = best_miss.min(miss + angle * 0.1);
-            }
-            match found {
-                Some(h) => Ok(h),
-                None => Err(crate::error::ActionError::Unfit(format!(
-                    "`{}` is out of reach of the {} hand: the best grasp misses by {:.3} m",
-                    obj.name,
-                    side.name(),
-                    best_miss
-                ))),
-            }
+            ranked.truncate(MAX_FRAMES);
+            Ok(ranked)
         })();
         match result {
-            Ok(h) => {
-                hands.push(h);
-                if one_of {
-                    break;
-                }
-            }
+            Ok(r) => frames.push((side, r)),
             Err(e) if one_of => {
                 first_error.get_or_insert(e);
             }
             Err(e) => return Err(e),
         }
     }
-    if hands.is_empty() {
+    if frames.is_empty() {
         return Err(first_error
             .unwrap_or_else(|| crate::error::ActionError::Unfit("no hand to grasp with".into())));
     }
-    Ok(GraspPlan {
-        object,
-        decision,
-        grasp,
-        hands,
-    })
+    // Reach: the arm alone first, then leaning, then crouching; for each, the frames in
+    // order of cost (with `auto` and one hand, the nearer hand's first). Two hands try
+    // their k-th frames together.
+    let allowed = match options.body {
+        Some(s) => s,
+        None => BodyReach::body_scope(skeleton)?,
+    };
+    let body = BodyReach::new(skeleton, allowed)?;
+    let attempts: Vec<Vec<(Side, usize)>> = if two {
+        let n = frames.iter().map(|(_, r)| r.len()).min().unwrap_or(0);
+        (0..n)
+            .map(|k| frames.iter().map(|(s, _)| (*s, k)).collect())
+            .collect()
+    } else {
+        frames
+            .iter()
+            .flat_map(|(s, r)| (0..r.len()).map(move |k| vec![(*s, k)]))
+            .collect()
+    };
+    let frame = |side: Side, k: usize| {
+        frames
+            .iter()
+            .find(|(s, _)| *s == side)
+            .map(|(_, r)| r[k])
+            .expect("a planned side")
+    };
+    let mut best_miss = f64::INFINITY;
+    let mut unbalanced: Option<f64> = None;
+    for stage in body.stages() {
+        for attempt in &attempts {
+            // A crouch is tried for the cheapest frames only: each costs a full solve.
+            if matches!(stage, Stage::Crouch(_)) && attempt[0].1 >= MAX_CROUCH_FRAMES {
+                continue;
+            }
+            let goals: Vec<(Side, Transform)> =
+                attempt.iter().map(|&(s, k)| (s, frame(s, k).1)).collect();
+            match body.reach(&posture.q, &goals, stage)? {
+                Ok(reached) => {
+                    let hands = attempt
+                        .iter()
+                        .map(|&(side, k)| {
+                            let (cost, wrist, palm) = frame(side, k);
+                            HandPlan {
+                                side,
+                                wrist,
+                                palm,
+                                arm: reached.changed.clone(),
+                                cost,
+                            }
+                        })
+                        .collect();
+                    return Ok(GraspPlan {
+                        object,
+                        decision,
+                        grasp,
+                        hands,
+                        lean: reached.lean,
+                        crouch: reached.crouch,
+                    });
+                }
+                Err(Missed::By(miss, angle)) => best_miss = best_miss.min(miss + angle * 0.1),
+                // Reached, but only by folding over: a deeper crouch may do it upright.
+                Err(Missed::Lean(_)) => best_miss = best_miss.min(REACH_TOLERANCE),
+                Err(Missed::Balance(by)) => {
+                    unbalanced = Some(unbalanced.map_or(by, |u: f64| u.min(by)));
+                }
+            }
+        }
+    }
+    let hands: Vec<&str> = frames.iter().map(|(s, _)| s.name()).collect();
+    let how = match stages_used(&body) {
+        "" => String::new(),
+        used => format!(" (even {used})"),
+    };
+    Err(crate::error::ActionError::Unfit(match unbalanced {
+        Some(by) if best_miss.is_infinite() || best_miss > REACH_TOLERANCE * 20.0 => format!(
+            "`{}` is out of reach of the {} hand{}{how}: reaching it would put the centre of mass {by:.3} m beyond the feet",
+            obj.name,
+            hands.join(" and "),
+            if hands.len() > 1 { "s" } else { "" },
+        ),
+        _ => format!(
+            "`{}` is out of reach of the {} hand{}{how}: the best grasp misses by {:.3} m",
+            obj.name,
+            hands.join(" and "),
+            if hands.len() > 1 { "s" } else { "" },
+            best_miss
+        ),
+    }))
+}
+
+/// A candidate grasp frame: its cost, the wrist's goal pose and the palm centre's goal.
+type Frame = (f64, Transform, DVec3);
+
+/// The frames of each hand tried by the arm and the lean.
+const MAX_FRAMES: usize = 8;
+/// The frames of each hand tried at each crouch depth.
+const MAX_CROUCH_FRAMES: usize = 3;
+
+/// What a failed plan tried besides the arm, for its error.
+fn stages_used(body: &BodyReach) -> &'static str {
+    let stages = body.stages();
+    if stages.iter().any(|s| matches!(s, Stage::Crouch(_))) {
+        "leaning and crouching"
+    } else if stages.contains(&Stage::Spine) {
+        "leaning"
+    } else {
+        ""
+    }
 }

@@ -4,12 +4,12 @@
 //! object from such a hand only while its holder offers it ([`troupe_scene::Offer`] on the
 //! scene's blackboard).
 
-use crate::grasp::action::{grasp_scope, Grasp};
+use crate::grasp::action::{reach_scope, Grasp};
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use crate::interact::Give;
 use troupe_body::sensors::Side;
 use troupe_scene::{
-    DofWriter, Generator, GeneratorContext, Notes, Offer, Scene, SignalId, StartError, Step,
+    DofWriter, Ending, Generator, GeneratorContext, Notes, Offer, Scene, SignalId, StartError, Step,
 };
 
 /// The giver's side of a give to a device-driven hand: a [`Give`] into the hand, and the
@@ -29,9 +29,9 @@ impl Generator for Offering {
     }
 
     /// Closes the offer (seen by the receiver from the next tick on) and ends the give.
-    fn end(&mut self, notes: &mut Notes) {
+    fn end(&mut self, ending: &Ending, notes: &mut Notes) {
         notes.raise(self.closed);
-        self.give.end(notes);
+        self.give.end(ending, notes);
     }
 }
 
@@ -72,7 +72,7 @@ pub fn receive(
     sides: Vec<Side>,
     reach_seconds: f64,
 ) -> crate::error::Result<(Grasp, troupe_body::Scope)> {
-    let scope = grasp_scope(skeleton, &sides)?;
+    let (scope, _) = reach_scope(skeleton, &sides)?;
     let g = Grasp::new(
         object,
         PlanOptions {

@@ -49,7 +49,8 @@ pub fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
         .map_err(|e| err(m, e))?;
     let mut spec = common.spec(m, scope);
     spec.duration = None;
-    Ok((Box::new(generator), spec))
+    let body = crate::grasp::body::BodyReach::body_scope(&ctx.skeleton).map_err(|e| err(m, e))?;
+    Ok((Box::new(generator), crate::grasp::lua::yielding(spec, body)))
 }
 
 /// Reads `key = "right"|"left"`, `default` when absent.

@@ -37,7 +37,8 @@ use troupe_body::jacobian::rotation_error;
 use troupe_body::sensors::{solid_distance, Side};
 use troupe_body::{Scope, Transform};
 use troupe_scene::{
-    DofWriter, Generator, GeneratorContext, Notes, SignalId, StartError, Step, World,
+    DofWriter, Ending, Generator, GeneratorContext, Notes, SignalId, StartError, Status, Step,
+    World,
 };
 
 /// The giver waits this long for the receiver to take the object.
@@ -76,8 +77,11 @@ pub struct Give {
     /// Bring the object into this hand of the receiver (a performer's glove hand) rather
     /// than to the point between the actors.
     receiver_hand: Option<Side>,
-    /// Raised when this action ends, however it ends (see [`Generator::end`]).
+    /// Raised when this action ends, however it ends (see [`Generator::end`]); as a
+    /// failure, with the reason, when it ends without handing the object over.
     ended: SignalId,
+    /// Raised (as a failure, with why) when the receiver's action ends without the object.
+    receiver_gave_up: Option<SignalId>,
 }
 
 impl Give {
@@ -106,12 +110,20 @@ impl Give {
             timeout: GIVE_TIMEOUT,
             receiver_hand: None,
             ended,
+            receiver_gave_up: None,
         }
     }
 
     /// Waits `seconds` (instead of [`GIVE_TIMEOUT`]) for the receiver to take the object.
     pub fn with_timeout(mut self, seconds: f64) -> Give {
         self.timeout = seconds;
+        self
+    }
+
+    /// Fails as soon as `gave_up` is raised: the receiver's action ended without the
+    /// object; the give's error carries the receiver's reason.
+    pub fn watching(mut self, gave_up: SignalId) -> Give {
+        self.receiver_gave_up = Some(gave_up);
         self
     }
 
@@ -145,9 +157,16 @@ impl Give {
 }
 
 impl Generator for Give {
-    /// The receiver waiting for the object learns that the give ended.
-    fn end(&mut self, notes: &mut Notes) {
-        notes.raise(self.ended);
+    /// The receiver waiting for the object learns that the give ended, and why if it
+    /// ended without handing the object over.
+    fn end(&mut self, ending: &Ending, notes: &mut Notes) {
+        match (ending.status, ending.reason) {
+            (Status::Completed, _) => notes.raise(self.ended),
+            (status, reason) => notes.fail(
+                self.ended,
+                format!("{}: {}", status.name(), reason.unwrap_or("no reason given")),
+            ),
+        }
     }
 
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
@@ -193,6 +212,21 @@ impl Generator for Give {
         };
         self.q.copy_from_slice(&ctx.posture.q);
         let t = ctx.local_time - self.phase_start;
+        if let Some(why) = self
+            .receiver_gave_up
+            .and_then(|s| ctx.world.board.failure(s, ctx.tick))
+        {
+            if ctx
+                .world
+                .holder(self.object)
+                .is_none_or(|h| h.actor != self.receiver)
+            {
+                return Step::Failed(format!(
+                    "`{}`'s receive ended without the object ({why})",
+                    actor_name(ctx.world, self.receiver)
+                ));
+            }
+        }
         match self.phase {
             0 => {
                 let u = quintic(t / GIVE_REACH_SECONDS);
@@ -343,7 +377,7 @@ fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
 impl Generator for HoldHand {
     /// A hold that ends any way (cancelled, pre-empted, its duration over, failed to
     /// start, never admitted) lets the follower go too, from the next tick on.
-    fn end(&mut self, notes: &mut Notes) {
+    fn end(&mut self, _ending: &Ending, notes: &mut Notes) {
         notes.raise(self.finished);
     }
 

@@ -4,7 +4,7 @@
 use super::device_hand::{offer_to_hand, receive};
 use super::{FollowHand, Give, HoldHand};
 use crate::error::{ActionError, OptionError, Result};
-use crate::grasp::action::{check_duration, grasp_scope, holding_side, Grasp};
+use crate::grasp::action::{check_duration, grasp_scope, holding_side, reach_scope, Grasp};
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
@@ -88,14 +88,15 @@ impl GiveOptions {
             return Ok((Box::new(giver), scope));
         }
         let (arrived, ended) = (scene.new_signal(), scene.new_signal());
-        let mut give = Give::new(self.object, self.to, side, arrived, ended);
+        let gave_up = scene.new_signal();
+        let mut give = Give::new(self.object, self.to, side, arrived, ended).watching(gave_up);
         if let Some(t) = self.timeout {
             give = give.with_timeout(t);
         }
         // The receiver: a grasp that waits for the object to arrive and may take it from
         // the giver.
         let sides = self.hand.sides();
-        let rx_scope = grasp_scope(&scene.actors()[self.to].skeleton, &sides)?;
+        let (rx_scope, rx_body) = reach_scope(&scene.actors()[self.to].skeleton, &sides)?;
         let plan = PlanOptions {
             hand: self.hand,
             from: Some(giver),
@@ -103,8 +104,10 @@ impl GiveOptions {
         };
         let take = Grasp::new(self.object, plan, sides, 1.0)?
             .gated(arrived)
-            .abandoned_by(give.ended());
+            .abandoned_by(give.ended())
+            .reporting(gave_up);
         let mut rx_spec = ActionSpec::new("receive", rx_scope);
+        rx_spec.yields = rx_body;
         rx_spec.delay = delay;
         scene.start_action(self.to, rx_spec, Box::new(take))?;
         Ok((Box::new(give), scope))

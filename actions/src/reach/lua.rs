@@ -80,9 +80,17 @@ fn build(
     options.via = via(m, t)?;
     options.duration = common.duration.unwrap_or(options.duration);
     options.scope = common.scope;
+    let hand = matches!(options.effector, Reacher::Hand(_));
     let generator = options.reach(&ctx.skeleton).map_err(|e| err(m, e))?;
-    let natural: Scope = generator.dofs().iter().copied().collect();
+    let mut natural: Scope = generator.dofs().iter().copied().collect();
+    // A hand reach may lean and crouch when the arm alone does not reach: its default
+    // scope adds that part, yieldable (it starts at once during a walk, without the legs).
+    let body = crate::grasp::body::BodyReach::body_scope(&ctx.skeleton).map_err(|e| err(m, e))?;
+    if hand && common.scope.is_none() {
+        natural = natural.union(&body);
+    }
     let mut spec = common.spec(options.kind(), natural);
+    spec.yields = body.intersection(&spec.scope);
     // The generator decides when it is done (and whether it failed).
     spec.duration = None;
     Ok((Box::new(generator), spec))

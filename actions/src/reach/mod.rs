@@ -17,12 +17,14 @@ pub mod options;
 pub use options::{ReachOptions, Reacher};
 
 use crate::error::{OptionError, Result};
+use crate::grasp::body::{BodyReach, Stage};
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
+use troupe_body::jacobian::scope_dofs_moving;
 use troupe_body::jacobian::Effector;
 use troupe_body::self_collision::{BodySensors, CollisionAvoidance};
-use troupe_body::Skeleton;
+use troupe_body::{Scope, Skeleton};
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step, World};
 
 /// A reach completes when the effector ends this close to its goal (metres).
@@ -168,6 +170,9 @@ pub struct Reach {
     start: DVec3,
     start_rotation: DQuat,
     lengths: Vec<f64>,
+    /// The legs' and `root_y`'s (start, goal) values of a crouching reach (see
+    /// [`Reach::widen`]), interpolated along the path.
+    crouch: Vec<(usize, f64, f64)>,
 }
 
 /// The quintic ease `10τ³ − 15τ⁴ + 6τ⁵` on [0, 1].
@@ -207,7 +212,54 @@ impl Reach {
             start: DVec3::ZERO,
             start_rotation: DQuat::IDENTITY,
             lengths: Vec::new(),
+            crouch: Vec::new(),
         })
+    }
+
+    /// Whole-body reach ([`crate::grasp::body`]): when the action's scope has more than
+    /// the IK's DOFs (a hand reach's default scope adds the spine, the legs and
+    /// `root_y`) and the goal is out of reach of those DOFs, the IK also gets the spine
+    /// and, for a low goal, the body crouches along the path.
+    fn widen(&mut self, ctx: &GeneratorContext, goal: DVec3) -> Result<()> {
+        let sk = ctx.skeleton;
+        let body = BodyReach::body_scope(sk)?;
+        let mine: Scope = self.solver.dofs().iter().copied().collect();
+        let allowed = ctx.scope.intersection(&body).difference(&mine);
+        if allowed.is_empty() {
+            return Ok(());
+        }
+        let reach = BodyReach::new(sk, allowed)?;
+        let task = IkTask {
+            effector: self.spec.effector,
+            goal: Goal {
+                position: goal,
+                orientation: self.spec.orientation,
+            },
+            priority: 0,
+        };
+        let tolerance = (POSITION_TOLERANCE, ORIENTATION_TOLERANCE);
+        for stage in reach.stages() {
+            let tasks = [(task, mine)];
+            let Ok(reached) = reach.reach_tasks(&ctx.posture.q, &tasks, stage, tolerance)? else {
+                continue;
+            };
+            if stage == Stage::Arms {
+                return Ok(());
+            }
+            let spine = sk.scope("spine")?.intersection(&allowed);
+            let wider = mine.union(&spine);
+            let dofs = scope_dofs_moving(sk, &wider, self.spec.effector.joint);
+            self.solver = IkSolver::new(sk, dofs, *self.solver.options())?;
+            let moving: Scope = self.solver.dofs().iter().copied().collect();
+            self.crouch = reached
+                .changed
+                .iter()
+                .filter(|(d, _)| allowed.contains(*d) && !moving.contains(*d))
+                .map(|&(d, v)| (d, ctx.posture.q[d], v))
+                .collect();
+            return Ok(());
+        }
+        Ok(())
     }
 
     /// The DOFs the reach moves.
@@ -251,6 +303,8 @@ impl Generator for Reach {
             .position(ctx.world)
             .map_err(|e| e.to_string())?;
         self.q = ctx.posture.q.clone();
+        self.crouch.clear();
+        self.widen(ctx, goal).map_err(|e| e.to_string())?;
         self.start = self.spec.effector.position(&ctx.posture.globals);
         self.start_rotation = self.spec.effector.rotation(&ctx.posture.globals);
         let mut prev = self.start;
@@ -281,6 +335,12 @@ impl Generator for Reach {
             self.q[d] = v;
         }
         let t = ctx.local_time;
+        // A crouching reach lowers the body along the same ease as the path.
+        let s = quintic(t / self.spec.duration);
+        for &(d, from, to) in &self.crouch {
+            self.q[d] = from + (to - from) * s;
+            out.set(d, self.q[d]);
+        }
         let finishing = t + 0.5 * ctx.dt >= self.spec.duration;
         let mut point = self.path(t, goal);
         if let (Some(sensors), Some(own)) = (&self.sensors, self.effector_sensor) {

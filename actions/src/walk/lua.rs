@@ -1,18 +1,20 @@
 //! `actor:walk{…}` in Lua: one of `to`, `path`, `velocity` or `follow`, the
 //! personification options and the common action options.
 
+use super::goal::{Goal, CONVERSATION_DISTANCE, GRASP_DISTANCE};
 use super::route::{Route, Speed, PROFILE_DT};
 use super::{Walk, WalkOptions};
 use mlua::{MultiValue, Value};
 use troupe_body::glam::DVec2;
-use troupe_lua::api::{load_sequence, SequenceRef};
-use troupe_lua::args::{err, number, opt_bool, opt_number, table_arg};
+use troupe_lua::api::{load_sequence, ActorRef, ObjectRef, SequenceRef};
+use troupe_lua::args::{err, floor_point, number, opt_bool, opt_number, table_arg};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
 /// The walk's own option names (besides the common ones).
-const WALK_OPTIONS: [&str; 13] = [
+const WALK_OPTIONS: [&str; 14] = [
     "to",
+    "distance",
     "path",
     "velocity",
     "follow",
@@ -26,56 +28,6 @@ const WALK_OPTIONS: [&str; 13] = [
     "run",
     "arms",
 ];
-
-/// Reads a floor point: `{x, z}`, `{x, y, z}` (y must be the floor) or `{x=…, z=…}`.
-fn floor_point(v: &Value, what: &str) -> mlua::Result<DVec2> {
-    let Value::Table(t) = v else {
-        return Err(err(
-            "walk",
-            format!(
-                "{what} must be a point {{x, z}} or {{x, 0, z}}, got {}",
-                v.type_name()
-            ),
-        ));
-    };
-    let items: Vec<Value> = t
-        .clone()
-        .sequence_values::<Value>()
-        .collect::<mlua::Result<_>>()?;
-    let nums: Vec<Option<f64>> = items.iter().map(number).collect();
-    let (x, y, z) = match nums.as_slice() {
-        [Some(x), Some(z)] => (*x, 0.0, *z),
-        [Some(x), Some(y), Some(z)] => (*x, *y, *z),
-        [] => {
-            let x = number(&t.get::<Value>("x")?);
-            let z = number(&t.get::<Value>("z")?);
-            let y = number(&t.get::<Value>("y")?).unwrap_or(0.0);
-            match (x, z) {
-                (Some(x), Some(z)) => (x, y, z),
-                _ => {
-                    return Err(err(
-                        "walk",
-                        format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
-                    ))
-                }
-            }
-        }
-        _ => {
-            return Err(err(
-                "walk",
-                format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
-            ))
-        }
-    };
-    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
-        return Err(err("walk", format!("{what} ({x}, {y}, {z}) is not finite")));
-    }
-    if y.abs() > 0.05 {
-        return Err(err("walk", format!("{what} ({x}, {y}, {z}) is unreachable by walking: it is {y:.2} m off the floor (y must be 0)"
-        )));
-    }
-    Ok(DVec2::new(x, z))
-}
 
 /// `actor:walk{ to = {x, 0, z} | path = {{x, z}, …} | velocity = number_or_function |
 /// follow = SEQUENCE_or_path, speed = m/s, heading = degrees, step_length, step_width,
@@ -145,26 +97,65 @@ pub fn build_walk(
             "a velocity walk takes its speed from `velocity`, not `speed`",
         ));
     }
-    let route = match kind {
-        "to" => Route::Path {
-            points: vec![floor_point(&t.get("to")?, "`to`")?],
-            heading: options.heading,
-            speed: options.speed,
-        },
+    let distance = num("distance")?;
+    if let Some(d) = distance {
+        if !(d.is_finite() && (0.0..=10.0).contains(&d)) {
+            return Err(err(
+                "walk",
+                format!("`distance` must be in [0, 10] m, got {d}"),
+            ));
+        }
+        if kind != "to" {
+            return Err(err(
+                "walk",
+                "`distance` applies to `to = OBJECT` or `to = ACTOR`",
+            ));
+        }
+    }
+    let goal = match kind {
+        "to" => Some(match t.get::<Value>("to")? {
+            Value::UserData(u) if u.is::<ObjectRef>() => Goal::Object {
+                object: u.borrow::<ObjectRef>()?.0,
+                distance: distance.unwrap_or(GRASP_DISTANCE),
+            },
+            Value::UserData(u) if u.is::<ActorRef>() => {
+                let actor = u.borrow::<ActorRef>()?.0;
+                if actor == ctx.actor {
+                    return Err(err("walk", "an actor cannot walk `to` itself"));
+                }
+                Goal::Actor {
+                    actor,
+                    distance: distance.unwrap_or(CONVERSATION_DISTANCE),
+                }
+            }
+            v => {
+                if distance.is_some() {
+                    return Err(err(
+                        "walk",
+                        "`distance` applies to `to = OBJECT` or `to = ACTOR`, not to a point",
+                    ));
+                }
+                Goal::Through(vec![floor_point(&v, "walk", "`to`")?])
+            }
+        }),
         "path" => {
             let Value::Table(list) = t.get::<Value>("path")? else {
                 return Err(err("walk", "`path` must be a list of points {{x, z}, …}"));
             };
             let mut points = Vec::new();
             for (i, v) in list.sequence_values::<Value>().enumerate() {
-                points.push(floor_point(&v?, &format!("path[{}]", i + 1))?);
+                points.push(floor_point(&v?, "walk", &format!("path[{}]", i + 1))?);
             }
-            Route::Path {
-                points,
-                heading: options.heading,
-                speed: options.speed,
-            }
+            Some(Goal::Through(points))
         }
+        _ => None,
+    };
+    let route = match kind {
+        "to" | "path" => Route::Path {
+            points: vec![DVec2::ZERO],
+            heading: options.heading,
+            speed: options.speed,
+        },
         "velocity" => {
             let duration = common.duration;
             let speed = match t.get::<Value>("velocity")? {
@@ -234,8 +225,13 @@ pub fn build_walk(
             Route::Follow(seq)
         }
     };
-    let walk = Walk::new(&ctx.skeleton, route, options).map_err(|e| err("walk", e))?;
+    let walk = match goal {
+        Some(goal) => Walk::navigate(&ctx.skeleton, goal, options),
+        None => Walk::new(&ctx.skeleton, route, options),
+    }
+    .map_err(|e| err("walk", e))?;
     let mut spec = common.spec("walk", walk.scope());
+    spec.yields = walk.yields().intersection(&spec.scope);
     // The walk decides when it has arrived (and a velocity walk's duration is its route's).
     spec.duration = None;
     Ok((Box::new(walk), spec))

@@ -23,13 +23,16 @@
 //! finishes once the body stands.
 
 pub mod cycle;
+pub mod goal;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
 pub mod rig;
 pub mod route;
+pub mod steer;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
+pub use goal::Goal;
 pub use options::WalkOptions;
 pub use rig::Rig;
 pub use route::{Plan, RootSample, Route, Speed};
@@ -42,6 +45,7 @@ use troupe_body::glam::{DVec2, DVec3};
 use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
+use troupe_scene::holding::Holder;
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
@@ -137,6 +141,22 @@ pub struct Walk {
     twist: [Option<f64>; 2],
     /// The cadence speed of this tick (see [`Walk::cadence_speed`]).
     cadence: f64,
+    /// Per arm (as in [`Rig::arms`]): the height to keep while its hand carries something,
+    /// the joint that holds it and the carried object's centre in that joint's frame (see
+    /// [`Walk::carry`]).
+    carry: [Option<(f64, usize, DVec3)>; 2],
+    /// Scratch posture and transforms for the carrying arms' kinematics.
+    carry_q: Vec<f64>,
+    carry_globals: Vec<troupe_body::Transform>,
+    /// Where a planned walk goes: the route is planned around the obstacles when it
+    /// starts. `None` walks the route as given.
+    goal: Option<Goal>,
+    /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
+    radius: f64,
+    /// How the body departs from the plan to avoid others (see [`steer`]).
+    steer: steer::Steer,
+    /// Scratch: the actors near this one.
+    near: Vec<usize>,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -175,7 +195,45 @@ impl Walk {
             last_miss: 0.0,
             twist: [None; 2],
             cadence: 0.0,
+            carry: [None; 2],
+            carry_q: Vec::new(),
+            carry_globals: Vec::new(),
+            goal: None,
+            radius: troupe_scene::space::body_radius(skeleton),
+            steer: steer::Steer::default(),
+            near: Vec::new(),
         })
+    }
+
+    /// A walk to `goal`, planned around the obstacles when it starts (an unreachable goal
+    /// fails the action with the reason).
+    pub fn navigate(skeleton: &Skeleton, goal: Goal, options: WalkOptions) -> Result<Walk> {
+        if let Goal::Through(points) = &goal {
+            if points.is_empty() {
+                return Err(OptionError::refused("path", "the path is empty").into());
+            }
+        }
+        let placeholder = match &goal {
+            Goal::Through(points) => points.clone(),
+            _ => vec![DVec2::ZERO],
+        };
+        let mut walk = Walk::path(skeleton, placeholder, options)?;
+        walk.goal = Some(goal);
+        Ok(walk)
+    }
+
+    /// Where the body ends: the plan's end, with the steering's offset.
+    fn end_sample(&self, plan: &Plan) -> RootSample {
+        let mut end = plan.sample(plan.end_time, self.heading);
+        if self.steer.engaged {
+            end.position += self.steer.offset;
+        }
+        end
+    }
+
+    /// The body radius the walk plans with (m).
+    pub fn radius(&self) -> f64 {
+        self.radius
     }
 
     /// A walk to floor point `goal` (its y must be the floor, 0) at `options.speed`.
@@ -233,6 +291,76 @@ impl Walk {
         self.dofs.iter().copied().collect()
     }
 
+    /// The part of its scope the walk can give up and keep walking: the arm swing and the
+    /// spine's lean and counter-rotation. The root, pelvis and legs are essential.
+    pub fn yields(&self) -> Scope {
+        let rig = &self.rig;
+        let upper = rig.spine.iter().chain(rig.arms.iter().flatten()).copied();
+        upper.collect::<Scope>().intersection(&self.scope())
+    }
+
+    /// Keeps what each carrying arm holds at the height it had when the walk started: the
+    /// elbow takes up the pelvis' bounce and the spine's lean, so that a carried cup stays
+    /// level. `upper` are this tick's root, pelvis and spine values as written.
+    fn carry(&mut self, ctx: &GeneratorContext, upper: &[(usize, f64)], out: &mut DofWriter) {
+        if self.carry.iter().all(Option::is_none) {
+            return;
+        }
+        let sk = ctx.skeleton;
+        self.carry_q.clear();
+        self.carry_q.extend_from_slice(&ctx.posture.q);
+        for &(d, v) in upper {
+            self.carry_q[d] = v;
+        }
+        self.carry_globals
+            .resize(sk.joints().len(), troupe_body::Transform::IDENTITY);
+        for i in 0..2 {
+            let Some((target, joint, point)) = self.carry[i] else {
+                continue;
+            };
+            if Walk::held_by_arm(ctx, i).is_none() {
+                continue;
+            }
+            let elbow = self.rig.arms[i][2];
+            if !out.scope().contains(elbow) {
+                continue;
+            }
+            let (lo, hi) = sk.limits()[elbow];
+            // Newton on the elbow angle, with a numerical slope: the height is smooth and
+            // nearly linear over the few centimetres to take up.
+            let height = |q: &mut Vec<f64>, g: &mut Vec<troupe_body::Transform>| {
+                troupe_body::kinematics::forward_kinematics(sk, q, g);
+                g[joint].transform_point(point).y
+            };
+            for _ in 0..2 {
+                let e = self.carry_q[elbow];
+                let y = height(&mut self.carry_q, &mut self.carry_globals);
+                self.carry_q[elbow] = e + 1e-4;
+                let slope = (height(&mut self.carry_q, &mut self.carry_globals) - y) / 1e-4;
+                let step = if slope.abs() > 0.05 {
+                    (target - y) / slope
+                } else {
+                    0.0
+                };
+                self.carry_q[elbow] = (e + step.clamp(-0.3, 0.3)).clamp(lo, hi);
+            }
+            out.set(elbow, self.carry_q[elbow]);
+        }
+    }
+
+    /// What the hand of arm `i` in [`Rig::arms`] (0 left, 1 right) holds, if anything:
+    /// the first holding of the actor on a joint of that side.
+    fn held_by_arm(ctx: &GeneratorContext, i: usize) -> Option<Holder> {
+        let prefix = if i == 0 { "l_" } else { "r_" };
+        let joints = ctx.skeleton.joints();
+        ctx.world.holders.iter().flatten().copied().find(|h| {
+            h.actor == ctx.actor
+                && joints
+                    .get(h.joint)
+                    .is_some_and(|j| j.name.starts_with(prefix))
+        })
+    }
+
     /// The body model the walk uses (thigh height, DOFs, foot geometry).
     pub fn rig(&self) -> &Rig {
         &self.rig
@@ -265,9 +393,10 @@ impl Walk {
     /// the feet have caught up with the body, so that no support lasts longer than the
     /// legs can reach. At constant speed it is the speed, as eq. 2-5 wants.
     fn cadence_speed(&self, plan: &Plan, t: f64) -> f64 {
-        let now = plan.speed(t);
-        let ahead = plan.speed(t + CADENCE_LOOKAHEAD);
-        let behind = plan.speed((t - CADENCE_LOOKBACK).max(0.0));
+        let speed = |t: f64| self.steer.speed(plan, t, self.t);
+        let now = speed(t);
+        let ahead = speed(t + CADENCE_LOOKAHEAD);
+        let behind = speed((t - CADENCE_LOOKBACK).max(0.0));
         now.max(ahead).max(behind)
     }
 
@@ -304,11 +433,13 @@ impl Walk {
         let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
-        let end = plan.end_time;
-        let (sample, width) = if t_mid >= end {
-            (plan.sample(end, self.heading), 1.0)
+        let (sample, width) = if self.steer.plan_time(t_mid, self.t) >= plan.end_time {
+            (self.end_sample(plan), 1.0)
         } else {
-            (plan.sample(t_mid, self.heading), self.options.step_width)
+            (
+                self.steer.sample(plan, t_mid, self.t, self.heading),
+                self.options.step_width,
+            )
         };
         let plant = self.spot(leg, &sample, width);
         let step = (plant - from).length();
@@ -394,7 +525,7 @@ impl Walk {
                     let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height)
                         * (1.0 + self.options.run);
                     let swing_time = (1.0 - sigma) * self.cycle(self.cadence).cycle;
-                    let body = plan.speed(self.t);
+                    let body = self.steer.speed(plan, self.t, self.t);
                     let start_rate = if step > 1e-6 {
                         (body * swing_time / step).clamp(0.0, 1.5)
                     } else {
@@ -513,7 +644,7 @@ impl Walk {
 
     /// Computes the whole pose for this tick and writes it.
     fn pose(&mut self, plan: &Plan, out: &mut DofWriter) -> UpperValues {
-        let sample = plan.sample(self.t, self.heading);
+        let sample = self.steer.sample(plan, self.t, self.t, self.heading);
         self.heading = sample.heading;
         let v = sample.speed;
         let a = self.activity(v);
@@ -553,7 +684,10 @@ impl Walk {
             let horizontal = DVec2::new(hip.x - ankle.x, hip.z - ankle.z).length();
             highest[leg + 1] = ankle.y + (l * l - horizontal * horizontal).max(0.0).sqrt() - hip.y;
         }
-        let root_y = soft_min(highest, 0.006 * a);
+        // A body that starts lowered (crouched to pick something up) rises to the gait's
+        // height as the pelvis blends in, rather than jumping up.
+        let crouched = self.start_q[rig.root[1]];
+        let root_y = soft_min(highest, 0.006 * a) + crouched.min(0.0) * (1.0 - k);
         let root = root0 + DVec3::Y * root_y;
         let root_vals = [
             floor.x - rig.root_rest.x,
@@ -610,6 +744,14 @@ impl Generator for Walk {
         let heading = q[rig.root[3]];
         self.yaw = heading;
         self.heading = heading;
+        if let Some(goal) = &self.goal {
+            let planned = goal.plan(ctx, start, self.radius)?;
+            self.route = Route::Path {
+                points: planned.points.into_iter().map(|(p, _)| p).collect(),
+                heading: planned.heading.or(self.options.heading),
+                speed: self.options.speed,
+            };
+        }
         let plan = Plan::new(&self.route, start, heading);
         // Both feet start planted where they are, flat.
         for leg in 0..2 {
@@ -630,16 +772,38 @@ impl Generator for Walk {
         self.lambda = [0.0, 0.5];
         self.t = 0.0;
         self.start_q = q.clone();
+        for i in 0..2 {
+            self.carry[i] = Walk::held_by_arm(ctx, i).map(|h| {
+                let at = ctx.posture.globals[h.joint].transform_point(h.grip.translation);
+                (at.y, h.joint, h.grip.translation)
+            });
+        }
         self.settle_since = None;
         self.twist = [None; 2];
+        self.steer = steer::Steer::start(ctx);
         self.plan = Some(plan);
         Ok(())
+    }
+
+    /// Slows down from now and stops with both feet side by side (the walk then reports
+    /// `Finished`, as on arrival).
+    fn stop(&mut self) -> bool {
+        match &mut self.plan {
+            Some(plan) => {
+                plan.stop_at(self.steer.plan_time(self.t, self.t));
+                true
+            }
+            None => false,
+        }
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         let Some(plan) = self.plan.take() else {
             return Step::Failed("walk: stepped before it started".into());
         };
+        if matches!(self.route, Route::Path { .. }) {
+            self.steer.decide(ctx, &plan, self.t, &mut self.near);
+        }
         let (root, pelvis, spine, arms) = self.pose(&plan, out);
         let rig = &self.rig;
         for (&d, &v) in rig.root.iter().zip(&root) {
@@ -651,29 +815,45 @@ impl Generator for Walk {
         // The upper body blends in from the posture the actor had.
         let k = smoothstep(self.t / BLEND_IN_TIME);
         let start_q = &self.start_q;
-        let mut put = |dof: usize, v: f64| {
-            let v = if k < 1.0 {
-                let s = start_q[dof];
-                s + (v - s) * k
+        let blended = |dof: usize, v: f64| {
+            if k < 1.0 {
+                start_q[dof] + (v - start_q[dof]) * k
             } else {
                 v
-            };
-            out.set(dof, v);
+            }
         };
-        for (&d, &v) in rig.spine.iter().zip(&spine) {
-            put(d, v);
+        // This tick's root, pelvis and spine values, for the carrying arms' kinematics.
+        let mut upper = [(0usize, 0.0f64); 13];
+        for (slot, (&d, &v)) in upper.iter_mut().zip(
+            rig.root
+                .iter()
+                .chain(&rig.pelvis)
+                .zip(root.iter().chain(&pelvis)),
+        ) {
+            *slot = (d, v);
+        }
+        for (i, (&d, &v)) in rig.spine.iter().zip(&spine).enumerate() {
+            let v = blended(d, v);
+            upper[9 + i] = (d, v);
+            out.set(d, v);
         }
         if self.options.arms {
-            for (dofs, values) in rig.arms.iter().zip(&arms) {
+            for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {
+                // A hand that carries something keeps its arm out of the swing, which
+                // would lower the load to the thigh.
+                if Walk::held_by_arm(ctx, i).is_some() {
+                    continue;
+                }
                 for (&d, &v) in dofs.iter().zip(values) {
-                    put(d, v);
+                    out.set(d, blended(d, v));
                 }
             }
         }
+        self.carry(ctx, &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
-        if self.t >= plan.end_time {
-            let end = plan.sample(plan.end_time, self.heading);
+        if self.steer.plan_time(self.t, self.t) >= plan.end_time {
+            let end = self.end_sample(&plan);
             let settled = (0..2).all(|leg| match self.feet[leg] {
                 Foot::Stance { plant, .. } => {
                     (plant - self.spot(leg, &end, 1.0)).length() < 0.01
@@ -690,6 +870,7 @@ impl Generator for Walk {
         }
         // Advance the clock and the phase (dφ = dt / Dc, eq. 2-5).
         self.phase += ctx.dt / self.cycle(self.cadence).cycle;
+        self.steer.advance(ctx.dt);
         self.t += ctx.dt;
         self.plan = Some(plan);
         if done {

@@ -364,6 +364,36 @@ pub struct Plan {
     start_heading: f64,
     /// When the body stops (infinite for an open-ended walk).
     pub end_time: f64,
+    /// A stop asked before the route's end (see [`Plan::stop_at`]).
+    stop: Option<Stop>,
+}
+
+/// Fastest a stop may bring the body to rest, in seconds from cruising speed: the
+/// cadence keeps its rhythm for [`super::CADENCE_LOOKBACK`] after, so the feet catch up
+/// within a step.
+pub const STOP_TIME: f64 = 0.8;
+
+/// A stop before the route's end: from `at`, the speed falls from `speed` to 0 along a
+/// smoothstep over `ramp` seconds, the body going on the way it was going.
+#[derive(Clone, Copy, Debug)]
+struct Stop {
+    at: f64,
+    speed: f64,
+    ramp: f64,
+    /// Arc length along the route at `at` (a route along a line).
+    s: f64,
+    /// Where the body was at `at` (a followed path goes straight on from there).
+    from: RootSample,
+}
+
+impl Stop {
+    /// Distance covered since `at`, and the speed, at `t`.
+    fn at(&self, t: f64) -> (f64, f64) {
+        let u = ((t - self.at) / self.ramp).clamp(0.0, 1.0);
+        // ∫(1 − smoothstep) = u − ∫smoothstep.
+        let d = self.speed * self.ramp * (u - smoothstep_integral(u));
+        (d, self.speed * (1.0 - smoothstep(u)))
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -434,6 +464,7 @@ impl Plan {
                     },
                     start_heading: heading,
                     end_time: end,
+                    stop: None,
                 }
             }
             Route::Velocity { speed, duration } => {
@@ -473,6 +504,7 @@ impl Plan {
                     },
                     start_heading: heading,
                     end_time: end,
+                    stop: None,
                 }
             }
             Route::Follow(seq) => {
@@ -495,14 +527,44 @@ impl Plan {
                     },
                     start_heading: heading,
                     end_time: seq.duration(),
+                    stop: None,
                 }
             }
         }
     }
 
+    /// Brings the body to rest from `t` (seconds after the start) on, going on the way it
+    /// was going, within [`STOP_TIME`] (less from a slower speed); the plan then ends
+    /// there. Does nothing when the plan already ends that soon.
+    pub fn stop_at(&mut self, t: f64) {
+        if self.stop.is_some() {
+            return;
+        }
+        let from = self.sample(t, self.start_heading);
+        let ramp = STOP_TIME * (from.speed / 1.2).clamp(0.5, 1.0);
+        if self.end_time <= t + ramp {
+            return;
+        }
+        let s = match &self.kind {
+            PlanKind::Along { profile, .. } => profile.at(t).0,
+            PlanKind::Follow { .. } => 0.0,
+        };
+        self.stop = Some(Stop {
+            at: t,
+            speed: from.speed,
+            ramp,
+            s,
+            from,
+        });
+        self.end_time = t + ramp;
+    }
+
     /// The body's speed `t` seconds after the start: [`Plan::sample`]'s `speed`, without
     /// finding the position and heading (the cadence asks for several speeds a tick).
     pub fn speed(&self, t: f64) -> f64 {
+        if let Some(stop) = self.stop.filter(|s| t > s.at) {
+            return stop.at(t).1;
+        }
         match &self.kind {
             PlanKind::Along { profile, .. } => profile.at(t).1,
             PlanKind::Follow { .. } => self.sample(t, 0.0).speed,
@@ -512,13 +574,20 @@ impl Plan {
     /// The body's position, heading and speed `t` seconds after the start; `fallback` is
     /// the heading to keep where the route gives none (a followed path at rest).
     pub fn sample(&self, t: f64, fallback: f64) -> RootSample {
+        let stopping = self.stop.filter(|s| t > s.at);
         match &self.kind {
             PlanKind::Along {
                 line,
                 profile,
                 end_heading,
             } => {
-                let (s, speed) = profile.at(t);
+                let (s, speed) = match stopping {
+                    Some(stop) => {
+                        let (d, v) = stop.at(t);
+                        (stop.s + d, v)
+                    }
+                    None => profile.at(t),
+                };
                 let (position, tangent) = line.at(s);
                 let mut path_heading = heading_of(tangent);
                 if line.total() < 1e-6 {
@@ -529,6 +598,15 @@ impl Plan {
                 RootSample {
                     position,
                     heading,
+                    speed,
+                }
+            }
+            PlanKind::Follow { .. } if stopping.is_some() => {
+                let stop = stopping.expect("matched");
+                let (d, speed) = stop.at(t);
+                RootSample {
+                    position: stop.from.position + direction(stop.from.heading) * d,
+                    heading: stop.from.heading,
                     speed,
                 }
             }

@@ -530,3 +530,66 @@ fn a_walk_to_where_the_actor_stands_finishes_without_stepping() {
         .all(|f| contact(f, 0, 1e-4) && contact(f, 1, 1e-4)));
     assert!(r.frames.last().unwrap().t < 1.0);
 }
+
+#[test]
+fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
+    let mut scene = adult_scene(200.0, 1);
+    let a = scene.add_actor(&ActorDesc::new("a")).unwrap();
+    let b = scene
+        .add_actor(&ActorDesc {
+            at: DVec3::new(0.0, 0.0, 8.0),
+            facing_degrees: 180.0,
+            ..ActorDesc::new("b")
+        })
+        .unwrap();
+    let skeleton = scene.actors()[a].skeleton.clone();
+    let mut ids = Vec::new();
+    for (actor, goal) in [(a, DVec2::new(0.0, 8.0)), (b, DVec2::ZERO)] {
+        let walk =
+            Walk::navigate(&skeleton, Goal::Through(vec![goal]), WalkOptions::default()).unwrap();
+        let spec = ActionSpec::new("walk", walk.scope());
+        ids.push(scene.start_action(actor, spec, Box::new(walk)).unwrap());
+    }
+    let rig = Rig::new(&skeleton).unwrap();
+    let feet = soles(&skeleton, &rig);
+    let mut frames = Vec::new();
+    let mut sideways: f64 = 0.0;
+    while scene.time() < 20.0
+        && !ids
+            .iter()
+            .all(|id| scene.action(*id).unwrap().status.is_final())
+    {
+        scene.step();
+        let st = &scene.states()[a];
+        sideways = sideways.max(st.globals[0].translation.x.abs());
+        frames.push(Frame {
+            t: scene.time(),
+            q: st.q.clone(),
+            soles: [0, 1].map(|leg| {
+                feet[leg]
+                    .points
+                    .iter()
+                    .map(|(j, p)| st.globals[*j].transform_point(*p))
+                    .collect()
+            }),
+        });
+    }
+    for id in &ids {
+        assert_eq!(scene.action(*id).unwrap().status, Status::Completed);
+    }
+    let r = Run {
+        frames,
+        status: Status::Completed,
+        ht: rig.thigh_height,
+        rig,
+    };
+    let (slide, lowest) = skating(&r);
+    println!(
+        "head-on: sidestep {sideways:.3} m, largest slide {:.2} mm, lowest sole point {:.2} mm",
+        slide * 1e3,
+        lowest * 1e3
+    );
+    assert!(sideways > 0.2, "the walkers did not sidestep: {sideways}");
+    assert!(slide <= 0.0067, "a planted foot slid {slide} m");
+    assert!(lowest >= -1e-3, "a foot went {lowest} m below the floor");
+}

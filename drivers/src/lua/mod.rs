@@ -20,6 +20,9 @@ pub enum InstallError {
     /// `troupe.devices.spacemouse`.
     #[error("installing troupe.devices.spacemouse: {0}")]
     SpaceMouse(#[source] mlua::Error),
+    /// `troupe.vmc_out`.
+    #[error("installing troupe.vmc_out: {0}")]
+    Vmc(#[source] mlua::Error),
 }
 
 /// What a session's devices share with the program that runs it.
@@ -41,6 +44,7 @@ pub fn install(
     // SpaceMice move objects rather than actors; installed after `troupe.devices` exists.
     let space_mice =
         crate::space_move::lua::install(session, recorder).map_err(InstallError::SpaceMouse)?;
+    crate::vmc::lua::install(session).map_err(InstallError::Vmc)?;
     Ok(Devices {
         performers,
         space_mice,

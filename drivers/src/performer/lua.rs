@@ -150,6 +150,9 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
                     let Some(report) = report else { continue };
                     out.set(dev, health_table(lua, report)?)?;
                 }
+                if let Some(v) = &p.vmc {
+                    out.set("vmc", crate::vmc::lua::health(lua, v)?)?;
+                }
                 Ok(out)
             })
         })?,

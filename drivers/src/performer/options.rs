@@ -16,8 +16,9 @@ use crate::osc::listener::OscListener;
 use crate::performer::converter::{transmitter_to_world, AnatomicalConverter};
 use crate::performer::glove_map::{nominal_glove_calibration, GloveMap};
 use crate::performer::registry::Performer;
-use crate::performer::source::{FobInput, GloveInput, OscPoses, Source};
+use crate::performer::source::{scene_clock, FobInput, GloveInput, OscPoses, Source};
 use crate::performer::vrpn::vrpn_input;
+use crate::record::feed::DeviceReplay;
 use crate::record::writer::Recorder;
 use glam::DQuat;
 use mlua::{Function, Lua, Table, Value};
@@ -30,8 +31,34 @@ use troupe_lua::api::{lua_err_message, ActorRef};
 use troupe_lua::args;
 use troupe_scene::InputPose;
 
+/// An optional option of `troupe.performer`, in troupe's wording when it has the wrong
+/// type (a boolean must be a boolean: `osc = "no"` is refused, not taken as true).
 fn opt<T: mlua::FromLua>(t: &Table, key: &str) -> mlua::Result<Option<T>> {
-    t.get::<Option<T>>(key)
+    let v: Value = t.get(key)?;
+    if v.is_nil() {
+        return Ok(None);
+    }
+    let rust = std::any::type_name::<T>();
+    let expected = match rust {
+        "bool" => "a boolean",
+        "alloc::string::String" => "a string",
+        "mlua::table::Table" => "a table",
+        r if r.starts_with("alloc::vec::Vec") => "a list",
+        _ => "a number",
+    };
+    let refused = || {
+        args::err(
+            "performer",
+            format!(
+                "option `{key}` must be {expected}, got {}",
+                args::value_name(&v)
+            ),
+        )
+    };
+    if rust == "bool" && !matches!(v, Value::Boolean(_)) {
+        return Err(refused());
+    }
+    t.get::<T>(key).map(Some).map_err(|_| refused())
 }
 
 /// `troupe.performer{ name=…, template=…, at=…, facing=…, calibrate="auto"|"manual",
@@ -86,20 +113,20 @@ pub(crate) fn new_performer(
         .get(actor)
         .cloned()
         .ok_or_else(|| args::err("performer", "actor vanished"))?;
-    let scene_time = lua
-        .globals()
-        .get::<Table>("troupe")?
-        .get::<Function>("time")
-        .ok()
-        .map(|f| f.call::<f64>(()))
-        .transpose()?
-        .unwrap_or(0.0);
+    let clock = scene_clock(lua)?;
+    let scene_time = clock.0;
     let mut fob = None;
     let mut osc = None;
     let mut glove = None;
     let mut vrpn = None;
+    let mut vmc = None;
+    let mut vmc_hand = None;
     if let Some(d) = &devices {
-        check_keys(d, "performer.devices", &["fob", "glove", "osc", "vrpn"])?;
+        check_keys(
+            d,
+            "performer.devices",
+            &["fob", "glove", "osc", "vmc", "vrpn"],
+        )?;
         if let Some(f) = opt::<Table>(d, "fob")? {
             fob = Some(fob_input(
                 lua,
@@ -107,7 +134,7 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
             )?);
         }
         if let Some(o) = opt::<Table>(d, "osc")? {
@@ -119,12 +146,16 @@ pub(crate) fn new_performer(
             }
             osc = Some(osc_input(&o, &skeleton)?);
         }
+        // One source of body poses: they would fight over the same DOFs.
+        let one_body_source = || {
+            args::err(
+                "performer.devices",
+                "give one source of body poses: `fob`, `osc`, `vmc` or `vrpn`",
+            )
+        };
         if let Some(v) = opt::<Table>(d, "vrpn")? {
             if fob.is_some() || osc.is_some() {
-                return Err(args::err(
-                    "performer.devices",
-                    "give one of `fob`, `osc` or `vrpn` for the body",
-                ));
+                return Err(one_body_source());
             }
             vrpn = Some(vrpn_input(
                 lua,
@@ -132,8 +163,32 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
             )?);
+        }
+        if let Some(v) = opt::<Table>(d, "vmc")? {
+            if fob.is_some() || osc.is_some() || vrpn.is_some() {
+                return Err(one_body_source());
+            }
+            let place = troupe_lua::kinds::with_scene(lua, |scene| {
+                let (sk, q) = (&scene.actors()[actor].skeleton, &scene.states()[actor].q);
+                let dof = |n: &str| sk.dof(n).map(|d| q[d]).unwrap_or(0.0);
+                (
+                    glam::DVec3::new(dof("root_x"), 0.0, dof("root_z")),
+                    dof("root_yaw"),
+                )
+            })?;
+            let (input, hand) = crate::vmc::lua::vmc_input(
+                lua,
+                &v,
+                &skeleton,
+                &name,
+                recorder.clone(),
+                scene_time,
+                place,
+            )?;
+            vmc = Some(input);
+            vmc_hand = hand;
         }
         if let Some(g) = opt::<Table>(d, "glove")? {
             glove = Some(glove_input(
@@ -142,7 +197,7 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
             )?);
         }
     }
@@ -164,7 +219,12 @@ pub(crate) fn new_performer(
             driven.insert(d);
         }
     }
-    let glove_side = glove.as_ref().map(|g| g.side);
+    if let Some(v) = &vmc {
+        for d in v.rig.dofs() {
+            driven.insert(d);
+        }
+    }
+    let glove_side = glove.as_ref().map(|g| g.side).or(vmc_hand);
     troupe_lua::kinds::with_scene_mut(lua, |scene| {
         // Nothing asked until the first samples arrive.
         scene.set_input_pose(actor, InputPose::new(n, driven))?;
@@ -183,6 +243,7 @@ pub(crate) fn new_performer(
         osc,
         vrpn,
         glove,
+        vmc,
         auto_calibrate: calibrate == "auto",
         calibrate_requested: false,
         made: 0,
@@ -197,21 +258,30 @@ fn source(
     t: &Table,
     what: &str,
     kind: &str,
-    scene_time: f64,
+    clock: (f64, u64),
     recorder: Option<Arc<Recorder>>,
     live: impl FnOnce(String) -> (DriverOptions, Box<dyn Protocol>),
 ) -> mlua::Result<Source> {
     let port: Option<String> = opt(t, "port")?;
     let replay: Option<String> = opt(t, "replay")?;
     let remote: Option<String> = opt(t, "zenoh")?;
+    // A replay of the whole run's inputs stands in for every port and relay.
+    let replayed = lua.app_data_ref::<DeviceReplay>().map(|r| r.clone());
+    if let (Some(replay), None, true) = (&replayed, &replay, port.is_some() || remote.is_some()) {
+        let (options, _) = live(port.clone().or(remote.clone()).unwrap_or_default());
+        return Source::replayed(replay, &options.name, clock).map_err(|e| args::err(what, e));
+    }
     match (port, replay, remote) {
         (Some(p), None, None) => {
             let (options, protocol) = live(p);
-            Ok(Source::Live(spawn(options, protocol, recorder)))
+            Ok(Source::Live {
+                handle: spawn(options, protocol, recorder),
+                opened: clock.1,
+            })
         }
         (None, Some(r), None) => {
             let stream: Option<String> = opt(t, "stream")?;
-            Source::replay(&resolve(lua, &r), stream.as_deref(), kind, scene_time)
+            Source::replay(&resolve(lua, &r), stream.as_deref(), kind, clock)
                 .map_err(|e| args::err(what, e))
         }
         (None, None, Some(key)) => {
@@ -229,9 +299,10 @@ fn source(
                 })?;
             let (options, protocol) = live(format!("zenoh:{key}"));
             let opener: Opener = Box::new(move |_| (ports.0)(&key));
-            Ok(Source::Live(spawn_with(
-                options, protocol, recorder, opener,
-            )))
+            Ok(Source::Live {
+                handle: spawn_with(options, protocol, recorder, opener),
+                opened: clock.1,
+            })
         }
         (None, None, None) => Err(args::err(
             what,
@@ -247,7 +318,7 @@ fn fob_input(
     skeleton: &Arc<Skeleton>,
     name: &str,
     recorder: Option<Arc<Recorder>>,
-    scene_time: f64,
+    clock: (f64, u64),
 ) -> mlua::Result<FobInput> {
     check_keys(
         t,
@@ -323,7 +394,7 @@ fn fob_input(
         t,
         "performer.devices.fob",
         "fob",
-        scene_time,
+        clock,
         recorder,
         |port| {
             let mut o = DriverOptions::new(&format!("{name}.fob"), &port);
@@ -387,7 +458,7 @@ fn glove_input(
     skeleton: &Arc<Skeleton>,
     name: &str,
     recorder: Option<Arc<Recorder>>,
-    scene_time: f64,
+    clock: (f64, u64),
 ) -> mlua::Result<GloveInput> {
     check_keys(
         t,
@@ -462,7 +533,7 @@ fn glove_input(
             t,
             "performer.devices.glove",
             "cyberglove",
-            scene_time,
+            clock,
             recorder,
             |port| {
                 let mut o = DriverOptions::new(&format!("{name}.glove"), &port);

@@ -38,6 +38,8 @@ pub struct Performer {
     pub(crate) vrpn: Option<VrpnInput>,
     /// The glove hand.
     pub(crate) glove: Option<GloveInput>,
+    /// Body poses from a VMC sender.
+    pub(crate) vmc: Option<crate::vmc::VmcInput>,
     /// Calibrate as soon as every bird has a sample.
     pub(crate) auto_calibrate: bool,
     /// `troupe.devices.calibrate` asked for a calibration at the next sample.
@@ -145,6 +147,9 @@ impl Performers {
             if let Some(h) = p.vrpn.as_ref().and_then(|v| v.source.health()) {
                 v.push((p.name.clone(), "vrpn", h));
             }
+            if let Some(h) = p.vmc.as_ref().and_then(|m| m.health()) {
+                v.push((p.name.clone(), "vmc", h));
+            }
         }
         v
     }
@@ -154,12 +159,12 @@ impl Performers {
     fn drain(&mut self, scene: &mut Scene) -> Vec<GestureEvent> {
         self.ticks += 1;
         let mut events = Vec::new();
-        let time = scene.time();
+        let (tick, time) = (scene.tick(), scene.time());
         for p in &mut self.list {
             let mut changed = false;
             let mut newest: Option<Instant> = None;
             if let Some(f) = &mut p.fob {
-                for (r, at) in f.source.take(time) {
+                for (r, at) in f.source.take(tick, time) {
                     if let Reading::Bird(b) = r {
                         // An all-zero quaternion or matrix decodes, but is no rotation:
                         // such a record is skipped rather than turned into NaN joints.
@@ -184,7 +189,7 @@ impl Performers {
                 }
             }
             if let Some(v) = &mut p.vrpn {
-                let (got, at) = v.take(time);
+                let (got, at) = v.take(tick, time);
                 changed |= got;
                 newest = newest.max(at);
                 let all = v.converter.birds().iter().all(|a| v.latest.contains_key(a));
@@ -231,8 +236,15 @@ impl Performers {
                     o.converter.calibrate_direct(&base_posture(scene, p.actor));
                 }
             }
+            if let Some(v) = &mut p.vmc {
+                let now = &scene.states()[p.actor].q;
+                if let Some(played) = v.poll(time, now) {
+                    changed = true;
+                    newest = newest.max(played.arrived);
+                }
+            }
             if let Some(g) = &mut p.glove {
-                let mut readings = g.source.take(time);
+                let mut readings = g.source.take(tick, time);
                 readings.extend(osc_glove);
                 for (r, at) in readings {
                     if let Reading::Glove(rec) = r {
@@ -268,6 +280,9 @@ impl Performers {
             }
             if let Some(v) = &mut p.vrpn {
                 v.converter.convert(&v.latest, &mut q, &mut mask);
+            }
+            if let Some(v) = &p.vmc {
+                v.apply(&mut q, &mut mask);
             }
             if let Some(g) = &p.glove {
                 if let Some(raw) = &g.latest {

@@ -12,12 +12,14 @@
 
 use crate::bvh::{from_rig, write_bvh, Axis, RotationOrder};
 use crate::error::{Error, Result};
-use crate::gltf::{read_gltf_motion, write_glb, write_gltf};
+use crate::gltf::{read_gltf_motion, write_glb, write_glb_with, write_gltf, write_gltf_with};
 use crate::retarget::load_sequence_for;
 use crate::rig::Rig;
-use crate::trk::{read_trk, read_trk_set, write_trk};
+use crate::trk::{read_trk, read_trk_set, write_trk_file, TrkFile};
 use std::path::{Path, PathBuf};
 use troupe_body::skeleton::Skeleton;
+use troupe_body::Skin;
+use troupe_motion::object_motion::ObjectMotion;
 use troupe_motion::sequence::Sequence;
 
 /// The rotation order of the BVH files troupe writes from a body's motion.
@@ -116,26 +118,117 @@ pub fn save_sequences<'a>(
     sequences: &[Sequence],
     actors: impl IntoIterator<Item = (&'a str, &'a Skeleton)>,
 ) -> Result<Vec<PathBuf>> {
+    save_recording(path, sequences, &[], actors)
+}
+
+/// Saves a recording — the actors' `sequences` (as [`save_sequences`]) and the scene's
+/// `objects` — and returns the files written: a `.trk` holds everything; each glTF file
+/// holds its actor and every object, as animated nodes; BVH, one hierarchy per file,
+/// writes each object as `STEM.OBJECT.bvh`, a one-joint hierarchy whose six channels are
+/// the object's pose (who held it is in `.trk` and glTF only).
+pub fn save_recording<'a>(
+    path: impl AsRef<Path>,
+    sequences: &[Sequence],
+    objects: &[ObjectMotion],
+    actors: impl IntoIterator<Item = (&'a str, &'a Skeleton)>,
+) -> Result<Vec<PathBuf>> {
     let path = path.as_ref();
     let format = Format::of(path)?;
     if format == Format::Trk {
-        write_trk(path, sequences)?;
+        let file = TrkFile {
+            sequences: sequences.to_vec(),
+            objects: objects.to_vec(),
+        };
+        write_trk_file(path, &file)?;
         return Ok(vec![path.to_path_buf()]);
     }
+    let beside = |name: &str| {
+        let stem = path.file_stem().unwrap_or_default().to_string_lossy();
+        let ext = path.extension().unwrap_or_default().to_string_lossy();
+        path.with_file_name(format!("{stem}.{name}.{ext}"))
+    };
     let mut written = Vec::new();
+    // Skins by skeleton: actors of one body share theirs.
+    let mut skins: Vec<(*const Skeleton, Option<Skin>)> = Vec::new();
     for (seq, (actor, skeleton)) in sequences.iter().zip(actors) {
         let out = if sequences.len() == 1 {
             path.to_path_buf()
         } else {
-            let stem = path.file_stem().unwrap_or_default().to_string_lossy();
-            let ext = path.extension().unwrap_or_default().to_string_lossy();
-            path.with_file_name(format!("{stem}.{actor}.{ext}"))
+            beside(actor)
         };
         let rig = Rig::from_sequence(skeleton, seq)?;
-        save_rig(&out, &rig, actor, seq.frame_time())?;
+        match format {
+            // A glTF file of a troupe body carries its skin (a skeleton that is not a
+            // troupe template's is written with bones only) and every object.
+            Format::Gltf | Format::Glb => {
+                let key: *const Skeleton = skeleton;
+                if !skins.iter().any(|(k, _)| *k == key) {
+                    let skin = match Skin::build(skeleton) {
+                        Ok(skin) => Some(skin),
+                        Err(e) => {
+                            tracing::warn!("{}: written without a skin: {e}", out.display());
+                            None
+                        }
+                    };
+                    skins.push((key, skin));
+                }
+                let skin = skins
+                    .iter()
+                    .find(|(k, _)| *k == key)
+                    .and_then(|(_, s)| s.as_ref());
+                let with: Vec<(&ObjectMotion, Rig)> = objects
+                    .iter()
+                    .map(|o| (o, Rig::from_object(o, seq.start(), &rig.times)))
+                    .collect();
+                if format == Format::Gltf {
+                    write_gltf_with(&out, &rig, skin, &with, actor)?;
+                } else {
+                    write_glb_with(&out, &rig, skin, &with, actor)?;
+                }
+            }
+            _ => save_rig(&out, &rig, actor, seq.frame_time())?,
+        }
         written.push(out);
     }
+    if format == Format::Bvh {
+        let (start, frame_time, end) = match sequences.first() {
+            Some(seq) => (seq.start(), seq.frame_time(), seq.end()),
+            None => (
+                0.0,
+                0.01,
+                objects.iter().map(|o| o.pose.end()).fold(0.0, f64::max),
+            ),
+        };
+        let frames = ((end - start) / frame_time).round() as usize + 1;
+        let times: Vec<f64> = (0..frames).map(|k| k as f64 * frame_time).collect();
+        for object in objects {
+            let out = beside(&object.name);
+            if written.contains(&out) {
+                return Err(Error::Invalid(format!(
+                    "{}: object `{}` has an actor's name, so its BVH file would replace the actor's",
+                    out.display(),
+                    object.name
+                )));
+            }
+            let rig = Rig::from_object(object, start, &times);
+            save_rig(&out, &rig, &object.name, frame_time)?;
+            written.push(out);
+        }
+    }
     Ok(written)
+}
+
+/// Saves a rig and the skin of its skeleton as glTF (`.gltf` or `.glb` by `path`'s
+/// extension), the scene named `name`.
+pub fn save_skinned(path: &Path, rig: &Rig, skin: Option<&Skin>, name: &str) -> Result<()> {
+    match Format::of(path)? {
+        Format::Gltf => write_gltf_with(path, rig, skin, &[], name),
+        Format::Glb => write_glb_with(path, rig, skin, &[], name),
+        _ => Err(Error::Invalid(format!(
+            "{}: a skinned character is written as .gltf or .glb",
+            path.display()
+        ))),
+    }
 }
 
 /// Saves a rig's motion to a one-actor format by `path`'s extension: glTF names its scene
@@ -209,6 +302,22 @@ mod tests {
                     dir.join(format!("rec.bob.{ext}"))
                 ]
             );
+            if ext == "gltf" {
+                // A troupe body's glTF carries its skin: one mesh on a root node.
+                let text = std::fs::read_to_string(&written[0]).unwrap();
+                let doc: serde_json::Value = serde_json::from_str(&text).unwrap();
+                assert_eq!(doc["meshes"].as_array().map(Vec::len), Some(1));
+                let skinned = doc["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .iter()
+                    .position(|n| n.get("skin").is_some() && n.get("mesh").is_some())
+                    .unwrap();
+                assert!(doc["scenes"][0]["nodes"]
+                    .as_array()
+                    .unwrap()
+                    .contains(&serde_json::Value::from(skinned)));
+            }
             for (want, got) in both.iter().zip(&loaded) {
                 let time = 0.25;
                 let p = fk_positions(&skel, &posture(&skel, want, time));
@@ -238,6 +347,87 @@ mod tests {
             0.05
         )
         .is_err());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn recordings_keep_their_objects_in_every_format() {
+        use glam::{DQuat, DVec3};
+        use troupe_body::solid::Shape;
+        use troupe_motion::object_motion::Hold;
+        let skel = adult();
+        let actor = every_dof_moving(&skel, 4, 0.25, "20");
+        let times: Vec<f64> = (0..=20).map(|i| i as f64 * 0.05).collect();
+        let poses: Vec<(DVec3, DQuat)> = times
+            .iter()
+            .map(|&t| (DVec3::new(t, 1.0, 0.5), DQuat::from_rotation_y(t)))
+            .collect();
+        let shape = Shape::Cylinder {
+            radius: 0.04,
+            height: 0.1,
+        };
+        let mut cup = ObjectMotion::from_samples("cup", shape, 0.3, &times, &poses).unwrap();
+        cup.holds.push(Hold {
+            from: 0.25,
+            to: 0.75,
+            actor: "ann".into(),
+            joint: "r_wrist".into(),
+        });
+        let objects = [cup];
+        let dir = std::env::temp_dir().join(format!("troupe-objects-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let actors = [("ann", &skel)];
+        // .trk: everything, exactly.
+        let trk = dir.join("rec.trk");
+        save_recording(&trk, std::slice::from_ref(&actor), &objects, actors).unwrap();
+        let back = crate::trk::read_trk_file(&trk).unwrap();
+        assert_eq!(back.objects, objects);
+        assert_eq!(back.sequences, std::slice::from_ref(&actor));
+        // glTF: an animated node with the holders in its extras; the actor still reads back.
+        for ext in ["gltf", "glb"] {
+            let path = dir.join(format!("rec.{ext}"));
+            save_recording(&path, std::slice::from_ref(&actor), &objects, actors).unwrap();
+            let doc = ::gltf::Gltf::open(&path).unwrap();
+            let node = doc
+                .nodes()
+                .find(|n| n.name() == Some("cup"))
+                .expect("a cup node");
+            let extras: serde_json::Value =
+                serde_json::from_str(node.extras().as_ref().unwrap().get()).unwrap();
+            assert_eq!(extras["troupe_object"]["held"][0]["actor"], "ann");
+            assert_eq!(extras["troupe_object"]["shape"], "cylinder 0.04 0.1");
+            let animated: Vec<_> = doc
+                .animations()
+                .next()
+                .unwrap()
+                .channels()
+                .filter(|c| c.target().node().index() == node.index())
+                .map(|c| c.target().property())
+                .collect();
+            assert_eq!(animated.len(), 2, "translation and rotation");
+            assert!(doc
+                .scenes()
+                .next()
+                .unwrap()
+                .nodes()
+                .any(|n| n.index() == node.index()));
+            assert!(load_sequence(&path, Some(&skel)).is_ok());
+        }
+        // BVH: the object's own one-joint file, whose root follows the pose.
+        let bvh = dir.join("rec.bvh");
+        let written = save_recording(&bvh, std::slice::from_ref(&actor), &objects, actors).unwrap();
+        assert_eq!(written, [bvh.clone(), dir.join("rec.cup.bvh")]);
+        let b = crate::bvh::read_bvh(dir.join("rec.cup.bvh")).unwrap();
+        assert_eq!(b.joints().len(), 1);
+        let k = 10; // 0.5 s at 20 frames per second
+        let p = b.joint_positions(k)[0] / BVH_UNITS_PER_METRE;
+        assert!((p - DVec3::new(0.5, 1.0, 0.5)).length() < 1e-9, "{p}");
+        // An object named like one of several actors would overwrite its file: refused.
+        let mut ann = objects[0].clone();
+        ann.name = "bob".into();
+        let two = [actor.clone(), actor.clone()];
+        let err = save_recording(&bvh, &two, &[ann], [("ann", &skel), ("bob", &skel)]);
+        assert!(err.unwrap_err().to_string().contains("has an actor's name"));
         std::fs::remove_dir_all(dir).ok();
     }
 }

@@ -16,6 +16,8 @@ pub mod rig;
 pub mod trk;
 pub mod urdf;
 
-pub use dispatch::{load_sequence, load_sequences, save_rig, save_sequences, Format};
+pub use dispatch::{
+    load_sequence, load_sequences, save_recording, save_rig, save_sequences, save_skinned, Format,
+};
 pub use error::{Error, Result};
 pub use rig::Rig;

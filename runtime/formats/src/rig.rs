@@ -11,6 +11,7 @@ use glam::{DQuat, DVec3};
 use troupe_body::kinematics::local_transform;
 use troupe_body::skeleton::{DofKind, Skeleton};
 use troupe_body::transform::Transform;
+use troupe_motion::object_motion::ObjectMotion;
 use troupe_motion::sequence::Sequence;
 
 /// Most frames a rig is sampled to, so that a sequence with an absurd duration or rate is
@@ -86,6 +87,22 @@ impl Rig {
                 .push(moving.iter().map(|&j| locals[j].translation).collect());
         }
         Ok(rig)
+    }
+
+    /// An object's motion as a one-joint rig named after it, sampled at `start + t` for
+    /// each `t` of `times` (so that it shares a troupe body's rig's frames): the joint's
+    /// rotation and translation are the object's world pose.
+    pub fn from_object(object: &ObjectMotion, start: f64, times: &[f64]) -> Rig {
+        let poses: Vec<(DVec3, DQuat)> = times.iter().map(|t| object.pose_at(start + t)).collect();
+        Rig {
+            names: vec![object.name.clone()],
+            parents: vec![None],
+            rest: vec![Transform::IDENTITY],
+            times: times.to_vec(),
+            rotations: poses.iter().map(|p| vec![p.1]).collect(),
+            moving: vec![0],
+            translations: poses.iter().map(|p| vec![p.0]).collect(),
+        }
     }
 
     /// Global rest transforms of every joint.

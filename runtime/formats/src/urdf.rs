@@ -9,10 +9,17 @@
 //! * limits in radians / metres; unlimited rotations are `continuous`; the root's
 //!   translations are `prismatic` within ±1000 m;
 //! * each segment link carries the mass, centre of mass and inertia of the solids attached
-//!   to its joint.
+//!   to its joint; every other moving link carries troupe's nominal body (a 1 g bead, see
+//!   [`troupe_body::dynamics::NOMINAL_LINK_MASS`]), as troupe's dynamics model does, so
+//!   that forward-dynamics tools have an inertia on every joint and agree with troupe.
+//! * troupe's armature (the rotor inertia its dynamics adds on each non-root DOF, which
+//!   core URDF cannot express) is written as a `<transmission>` per DOF whose actuator
+//!   carries Drake's `drake:rotor_inertia` with `drake:gear_ratio` 1 (reflected inertia
+//!   = rotor inertia × ratio², Drake's convention); other URDF readers ignore it.
 
 use glam::{DMat3, DVec3};
 use std::fmt::Write as _;
+use troupe_body::dynamics::{nominal_link_inertia, nominal_links, Model, NOMINAL_LINK_MASS};
 use troupe_body::skeleton::{DofKind, Skeleton};
 
 /// Troupe's Y-up frame to URDF's Z-up frame: `(x, y, z) ↦ (z, x, y)`.
@@ -30,6 +37,37 @@ fn xyz(v: DVec3) -> String {
     format!("{} {} {}", v.x, v.y, v.z)
 }
 
+/// Writes a link named `name` with an `<inertial>` of `mass` at `com` (URDF axes) with
+/// `inertia` about the centre of mass (URDF axes), or without one when `mass` is zero.
+fn link(s: &mut String, name: &str, mass: f64, com: DVec3, inertia: DMat3) {
+    if mass <= 0.0 {
+        let _ = writeln!(s, "  <link name=\"{name}\"/>");
+        return;
+    }
+    let i = inertia;
+    let _ = writeln!(s, "  <link name=\"{name}\">");
+    let _ = writeln!(s, "    <inertial>");
+    let _ = writeln!(s, "      <origin xyz=\"{}\" rpy=\"0 0 0\"/>", xyz(com));
+    let _ = writeln!(s, "      <mass value=\"{mass}\"/>");
+    let _ = writeln!(
+        s,
+        "      <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>",
+        i.x_axis.x, i.y_axis.x, i.z_axis.x, i.y_axis.y, i.z_axis.y, i.z_axis.z
+    );
+    let _ = writeln!(s, "    </inertial>");
+    let _ = writeln!(s, "  </link>");
+}
+
+/// Writes the link of DOF `dof` named `name`: with troupe's nominal body when `nominal`.
+fn dof_link(s: &mut String, name: &str, nominal: bool) {
+    if nominal {
+        let inertia = DMat3::from_diagonal(DVec3::splat(nominal_link_inertia()));
+        link(s, name, NOMINAL_LINK_MASS, DVec3::ZERO, inertia);
+    } else {
+        link(s, name, 0.0, DVec3::ZERO, DMat3::ZERO);
+    }
+}
+
 /// Half-range of the root's prismatic joints in the file (URDF needs finite limits).
 pub const PRISMATIC_RANGE: f64 = 1000.0;
 /// Nominal effort limit written for every moving joint (troupe has no actuator model).
@@ -37,19 +75,31 @@ pub const NOMINAL_EFFORT: f64 = 1000.0;
 /// Nominal velocity limit written for every moving joint.
 pub const NOMINAL_VELOCITY: f64 = 100.0;
 
+/// Drake's XML namespace, for the `drake:` elements that carry the armature.
+pub const DRAKE_NAMESPACE: &str = "http://drake.mit.edu";
+
 /// The URDF text of `skeleton`; with `fixed_root`, the root joint is attached to
-/// `base_link` by a fixed joint instead of its DOFs.
-pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
+/// `base_link` by a fixed joint instead of its DOFs. Fails when troupe's dynamics model
+/// of the skeleton cannot be built (the armature comes from it).
+pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> Result<String, crate::Error> {
+    let armature = Model::new(skeleton)?.armature().to_vec();
     let c = z_up_matrix();
     let mut s = String::new();
     let _ = writeln!(s, "<?xml version=\"1.0\"?>");
+    let nominal = nominal_links(skeleton);
     let _ = writeln!(
         s,
-        "<!-- troupe body template `{}` ({:.3} kg): Z up, one joint per DOF; see docs/formats.md -->",
+        "<!-- troupe body template `{}` ({:.3} kg of solids, {} nominal links of {} kg): Z up, one joint per DOF; see docs/formats.md -->",
         skeleton.name(),
-        skeleton.total_mass()
+        skeleton.total_mass(),
+        nominal.iter().filter(|&&b| b).count(),
+        NOMINAL_LINK_MASS
     );
-    let _ = writeln!(s, "<robot name=\"{}\">", skeleton.name());
+    let _ = writeln!(
+        s,
+        "<robot name=\"{}\" xmlns:drake=\"{DRAKE_NAMESPACE}\">",
+        skeleton.name()
+    );
     let _ = writeln!(s, "  <link name=\"base_link\"/>");
     for (j, joint) in skeleton.joints().iter().enumerate() {
         // The segment link, with the solids attached to this joint.
@@ -60,37 +110,33 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
             .map(|(_, s)| s)
             .collect();
         let mass: f64 = solids.iter().map(|s| s.mass).sum();
+        let mut com = DVec3::ZERO;
+        let mut inertia = DMat3::ZERO;
         if mass > 0.0 {
-            let com = solids
+            com = solids
                 .iter()
                 .map(|s| s.center_of_mass * s.mass)
                 .sum::<DVec3>()
                 / mass;
-            let mut inertia = DMat3::ZERO;
             for sol in &solids {
                 let r = sol.center_of_mass - com;
                 let shift = DMat3::from_diagonal(DVec3::splat(r.dot(r)))
                     - DMat3::from_cols(r * r.x, r * r.y, r * r.z);
                 inertia += sol.inertia + shift * sol.mass;
             }
-            let i = c * inertia * c.transpose();
-            let _ = writeln!(s, "  <link name=\"{}\">", joint.name);
-            let _ = writeln!(s, "    <inertial>");
-            let _ = writeln!(
-                s,
-                "      <origin xyz=\"{}\" rpy=\"0 0 0\"/>",
-                xyz(z_up(com))
+        }
+        let last = (!joint.dofs.is_empty()).then(|| joint.dofs.end - 1);
+        if mass > 0.0 {
+            link(
+                &mut s,
+                &joint.name,
+                mass,
+                z_up(com),
+                c * inertia * c.transpose(),
             );
-            let _ = writeln!(s, "      <mass value=\"{mass}\"/>");
-            let _ = writeln!(
-                s,
-                "      <inertia ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"/>",
-                i.x_axis.x, i.y_axis.x, i.z_axis.x, i.y_axis.y, i.z_axis.y, i.z_axis.z
-            );
-            let _ = writeln!(s, "    </inertial>");
-            let _ = writeln!(s, "  </link>");
         } else {
-            let _ = writeln!(s, "  <link name=\"{}\"/>", joint.name);
+            // A joint's own link is its last DOF's link: it may carry the nominal body.
+            dof_link(&mut s, &joint.name, last.is_some_and(|k| nominal[k]));
         }
         let parent = match joint.parent {
             Some(p) => skeleton.joints()[p].name.clone(),
@@ -117,7 +163,7 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
                 joint.name.clone()
             } else {
                 let name = format!("{}_link", dof.name);
-                let _ = writeln!(s, "  <link name=\"{name}\"/>");
+                dof_link(&mut s, &name, nominal[d]);
                 name
             };
             let (kind, limits) = match dof.kind {
@@ -159,11 +205,36 @@ pub fn urdf(skeleton: &Skeleton, fixed_root: bool) -> String {
                 }
             }
             let _ = writeln!(s, "  </joint>");
+            if armature[d] > 0.0 {
+                transmission(&mut s, &dof.name, armature[d]);
+            }
             from = child;
         }
     }
     let _ = writeln!(s, "</robot>");
-    s
+    Ok(s)
+}
+
+/// Writes the transmission of DOF `name` whose actuator carries troupe's armature as
+/// Drake's rotor inertia (gear ratio 1, so the reflected inertia is the armature).
+fn transmission(s: &mut String, name: &str, armature: f64) {
+    let _ = writeln!(s, "  <transmission name=\"{name}_transmission\">");
+    let _ = writeln!(
+        s,
+        "    <type>transmission_interface/SimpleTransmission</type>"
+    );
+    let _ = writeln!(s, "    <joint name=\"{name}\">");
+    let _ = writeln!(
+        s,
+        "      <hardwareInterface>hardware_interface/EffortJointInterface</hardwareInterface>"
+    );
+    let _ = writeln!(s, "    </joint>");
+    let _ = writeln!(s, "    <actuator name=\"{name}_armature\">");
+    let _ = writeln!(s, "      <mechanicalReduction>1</mechanicalReduction>");
+    let _ = writeln!(s, "      <drake:rotor_inertia value=\"{armature}\"/>");
+    let _ = writeln!(s, "      <drake:gear_ratio value=\"1\"/>");
+    let _ = writeln!(s, "    </actuator>");
+    let _ = writeln!(s, "  </transmission>");
 }
 
 #[cfg(test)]
@@ -285,7 +356,7 @@ mod tests {
         for (name, fixed) in [("adult", false), ("child", false), ("adult", true)] {
             let t = template(name).unwrap();
             let s = t.instantiate(t.default_params()).unwrap();
-            let text = urdf(&s, fixed);
+            let text = urdf(&s, fixed).unwrap();
             let (joints, masses) = parse(&text);
             // Every DOF is a joint named as the DOF, with its limits.
             for (i, d) in s.dofs().iter().enumerate() {
@@ -298,8 +369,12 @@ mod tests {
                     assert_eq!(j.limits, Some((d.min, d.max)), "{}", d.name);
                 }
             }
+            // The solids' masses, plus troupe's nominal body on every other moving link.
             let total: f64 = masses.values().sum();
-            assert!((total - s.total_mass()).abs() < 1e-9);
+            let beads = nominal_links(&s).iter().filter(|&&b| b).count();
+            assert!(beads > 0);
+            let expected = s.total_mass() + beads as f64 * NOMINAL_LINK_MASS;
+            assert!((total - expected).abs() < 1e-9, "{total} vs {expected}");
             // Random postures: every troupe joint's link lands where troupe's FK puts it.
             let mut seed = 99u64;
             for _ in 0..50 {
@@ -332,6 +407,50 @@ mod tests {
                         joint.name,
                         g[j].translation
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn every_moving_dof_carries_troupe_armature_as_drake_rotor_inertia() {
+        for name in ["adult", "child"] {
+            let t = template(name).unwrap();
+            let s = t.instantiate(t.default_params()).unwrap();
+            let model = Model::new(&s).unwrap();
+            for fixed in [true, false] {
+                let text = urdf(&s, fixed).unwrap();
+                let doc = roxmltree::Document::parse(&text).unwrap();
+                let mut written = HashMap::new();
+                for t in doc.descendants().filter(|n| n.has_tag_name("transmission")) {
+                    let joint = t.children().find(|c| c.has_tag_name("joint")).unwrap();
+                    let value = |tag: &str| -> f64 {
+                        t.descendants()
+                            .find(|c| c.has_tag_name((DRAKE_NAMESPACE, tag)))
+                            .and_then(|c| c.attribute("value"))
+                            .unwrap()
+                            .parse()
+                            .unwrap()
+                    };
+                    assert_eq!(value("gear_ratio"), 1.0);
+                    written.insert(joint.attribute("name").unwrap(), value("rotor_inertia"));
+                }
+                let root = model.root_dofs();
+                for (k, d) in s.dofs().iter().enumerate() {
+                    if root.contains(&k) {
+                        assert!(
+                            !written.contains_key(d.name.as_str()),
+                            "{name}: root {}",
+                            d.name
+                        );
+                    } else {
+                        assert_eq!(
+                            written.get(d.name.as_str()),
+                            Some(&model.armature()[k]),
+                            "{name}: {}",
+                            d.name
+                        );
+                    }
                 }
             }
         }

@@ -6,7 +6,7 @@
 
 use proptest::prelude::*;
 use troupe_formats::bvh::parse_bvh;
-use troupe_formats::trk::parse_trk;
+use troupe_formats::trk::{parse_trk, parse_trk_file};
 use troupe_formats::Error;
 
 fn shared(name: &str) -> String {
@@ -36,6 +36,8 @@ fn seeds() -> Vec<String> {
     out
 }
 
+/// A version-2 recording with an interpolation word and an object block.
+const TRK2: &str = "troupe-trk 2\nsequence ann\ntrack r_elbow_flexion step\n0 0\n1 1\nend\nobject cup\nshape frustum 0.03 0.04 0.1\nmass 0.3\ntrack x linear\n0 0\n1 0.5\nend\ntrack y linear\n0 0.9\nend\ntrack z\n0 0\nend\ntrack qx\n0 0\nend\ntrack qy\n0 0\nend\ntrack qz\n0 0\nend\ntrack qw\n0 1\nend\nheld 0.25 1 ann r_wrist\n";
 const TRK: &str = "troupe-trk 1\n# a set\nsequence wave\nloop true\nmeta rate 100\nmeta source bvh\ntrack r_shoulder_abduction\n0 0\n0.5 1.2 0\n1 0\nend\nsequence other\ntrack x\n0 1\nend\n";
 
 const GARBAGE: &[&str] = &[
@@ -140,13 +142,15 @@ proptest! {
     fn trk_reader_survives_mutations(
         edits in proptest::collection::vec((any::<usize>(), any::<usize>(), any::<u8>()), 1..8),
         cut in 0.0f64..1.0,
+        version_2 in any::<bool>(),
     ) {
-        let text = mutate(TRK, &edits);
+        let text = mutate(if version_2 { TRK2 } else { TRK }, &edits);
         let at = (text.len() as f64 * cut) as usize;
         let mut at = at.max(1).min(text.len());
         while !text.is_char_boundary(at) { at -= 1; }
         check_line(parse_trk(&text[..at], "mut.trk"), &text[..at])?;
         check_line(parse_trk(&text, "mut.trk"), &text)?;
+        check_line(parse_trk_file(&text, "mut.trk"), &text)?;
     }
 }
 

@@ -1,6 +1,7 @@
 //! The glTF files troupe writes pass the Khronos glTF validator with no error and no
-//! warning: a troupe body's motion and a BVH on its own hierarchy, as `.gltf` + `.bin` and
-//! as `.glb`.
+//! warning: a troupe body's motion with its skin (adult and child), with and without a
+//! recorded object, the skinned characters `troupe export gltf` writes (a one-frame rest
+//! pose), and a BVH on its own hierarchy, as `.gltf` + `.bin` and as `.glb`.
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
 //! into `.tools/node`; without node or without that package the test prints why and
@@ -8,20 +9,27 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::solid::Shape;
 use troupe_body::template::template;
+use troupe_body::{Skeleton, Skin};
 use troupe_formats::bvh::read_bvh;
-use troupe_formats::gltf::{write_glb, write_gltf};
+use troupe_formats::gltf::{write_glb, write_glb_with, write_gltf, write_gltf_with};
 use troupe_formats::Rig;
+use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
+fn body(name: &str) -> Skeleton {
+    let t = template(name).unwrap();
+    t.instantiate(t.default_params()).unwrap()
+}
+
 /// A troupe body waving and walking forward.
-fn troupe_rig() -> Rig {
-    let t = template("adult").unwrap();
-    let skeleton = t.instantiate(t.default_params()).unwrap();
+fn troupe_rig(skeleton: &Skeleton) -> Rig {
     let mut seq = Sequence::new("wave");
     seq.meta.insert("rate".into(), "30".into());
     for (dof, v) in [
@@ -32,7 +40,7 @@ fn troupe_rig() -> Rig {
         let keys = vec![Key::new(0.0, 0.0), Key::new(0.5, v), Key::new(1.0, 0.0)];
         seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
     }
-    Rig::from_sequence(&skeleton, &seq).unwrap()
+    Rig::from_sequence(skeleton, &seq).unwrap()
 }
 
 #[test]
@@ -53,16 +61,45 @@ fn written_gltf_files_pass_the_khronos_validator() {
     std::fs::create_dir_all(&dir).unwrap();
     let bvh = read_bvh(repo().join("../shared/data/bvh/pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
     let mut files = Vec::new();
-    for (name, rig) in [
-        ("wave", troupe_rig()),
-        ("walk", Rig::from_bvh(&bvh, 0.056444)),
-    ] {
-        let gltf = dir.join(format!("{name}.gltf"));
-        let glb = dir.join(format!("{name}.glb"));
-        write_gltf(&gltf, &rig, name).unwrap();
-        write_glb(&glb, &rig, name).unwrap();
-        files.extend([gltf, glb]);
+    let walk = Rig::from_bvh(&bvh, 0.056444);
+    write_gltf(dir.join("walk.gltf"), &walk, "walk").unwrap();
+    write_glb(dir.join("walk.glb"), &walk, "walk").unwrap();
+    files.extend([dir.join("walk.gltf"), dir.join("walk.glb")]);
+    for template in ["adult", "child"] {
+        let skeleton = body(template);
+        let skin = Skin::build(&skeleton).unwrap();
+        let rest = Rig::from_sequence(&skeleton, &Sequence::new("rest")).unwrap();
+        for (name, rig) in [("wave", troupe_rig(&skeleton)), ("rest", rest)] {
+            let stem = format!("{template}_{name}");
+            let gltf = dir.join(format!("{stem}.gltf"));
+            let glb = dir.join(format!("{stem}.glb"));
+            write_gltf_with(&gltf, &rig, Some(&skin), &[], &stem).unwrap();
+            write_glb_with(&glb, &rig, Some(&skin), &[], &stem).unwrap();
+            files.extend([gltf, glb]);
+        }
     }
+    // A recording with an object, as `run --record` writes it: the skinned body and one
+    // more animated node, with extras.
+    let skeleton = body("adult");
+    let skin = Skin::build(&skeleton).unwrap();
+    let rig = troupe_rig(&skeleton);
+    let times = [0.0, 0.5, 1.0];
+    let poses = times.map(|t| (DVec3::new(0.3, 1.0 + t, 0.2), DQuat::from_rotation_x(t)));
+    let mut ball =
+        ObjectMotion::from_samples("ball", Shape::Sphere { radius: 0.1 }, 0.4, &times, &poses)
+            .unwrap();
+    ball.holds.push(Hold {
+        from: 0.2,
+        to: 0.8,
+        actor: "wave".into(),
+        joint: "r_wrist".into(),
+    });
+    let objects = [(&ball, Rig::from_object(&ball, 0.0, &rig.times))];
+    let gltf = dir.join("carry.gltf");
+    let glb = dir.join("carry.glb");
+    write_gltf_with(&gltf, &rig, Some(&skin), &objects, "carry").unwrap();
+    write_glb_with(&glb, &rig, Some(&skin), &objects, "carry").unwrap();
+    files.extend([gltf, glb]);
     let out = Command::new("node")
         .arg(repo().join("scripts/validate-gltf.js"))
         .args(&files)

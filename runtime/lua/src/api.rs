@@ -2,11 +2,16 @@
 
 pub(crate) use crate::args::lua_err;
 pub use crate::args::lua_err_message;
-use crate::args::{check_keys, euler_degrees, opt_number, opt_string, vec3, vec3_table};
+use crate::args::{
+    bad_arg, check_keys, dot_call_hint, euler_degrees, opt_bool, opt_number, opt_string, vec3,
+    vec3_table,
+};
 use crate::error::Error;
-pub use crate::handles::{ActionRef, ActorRef, ObjectRef, Pins, SequenceRef};
+pub use crate::handles::{
+    ActionRef, ActorRef, BehaviorRef, HandlerRef, ObjectRef, Pins, SequenceRef,
+};
 use crate::kinds::BuildContext;
-use crate::stage::{add_behavior, stage, BehaviorState};
+use crate::stage::{add_behavior, stage, BehaviorState, Handler};
 use glam::{DQuat, DVec3};
 use mlua::{
     AnyUserData, Function, Lua, MetaMethod, MultiValue, Table, UserData, UserDataFields,
@@ -16,7 +21,7 @@ use std::path::Path;
 use std::sync::Arc;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::solid::Shape;
-use troupe_motion::sequence::{Key, Sequence, Track};
+use troupe_motion::sequence::{Interpolation, Key, Sequence, Track};
 use troupe_scene::action::ActionId;
 use troupe_scene::scene::ActorDesc;
 use troupe_scene::world::Object;
@@ -36,8 +41,11 @@ impl UserData for ActorRef {
 
     fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
         crate::dynamics::add_actor_methods(methods);
-        methods.add_method("behave", |lua, this, f: Function| {
-            add_behavior(lua, Some(this.0), f)
+        methods.add_method("behave", |lua, this, f: Value| {
+            let Value::Function(f) = f else {
+                return Err(bad_arg("behave", "the argument", "a function", &f));
+            };
+            add_behavior(lua, Some(this.0), f).map(BehaviorRef)
         });
         methods.add_method("position", |lua, this, ()| {
             let p = {
@@ -104,35 +112,52 @@ impl UserData for ActorRef {
         methods.add_method("set", |lua, this, t: Table| {
             crate::settings::set(lua, this.0, &t)
         });
-        methods.add_method("on", |lua, this, (event, f): (String, Function)| {
-            const EVENTS: [&str; 4] = [
-                "action_started",
-                "action_completed",
-                "action_failed",
-                "action_cancelled",
-            ];
-            if !EVENTS.contains(&event.as_str()) {
+        methods.add_method("on", |lua, this, (event, f): (Value, Value)| {
+            let name = match &event {
+                Value::String(s) => s.to_str()?.to_string(),
+                other => return Err(bad_arg("on", "the event", "a string", other)),
+            };
+            if !EVENTS.contains(&name.as_str()) {
                 return Err(lua_err(format!(
-                    "on: unknown event `{event}` (known: {})",
+                    "on: unknown event `{name}` (known: {})",
                     EVENTS.join(", ")
                 )));
             }
-            stage(lua)?.handlers.push((this.0, event, f));
-            Ok(())
+            let Value::Function(function) = f else {
+                return Err(bad_arg("on", "the handler", "a function", &f));
+            };
+            let mut st = stage(lua)?;
+            let id = st.next_handler;
+            st.next_handler += 1;
+            st.handlers.push(Handler {
+                id,
+                actor: this.0,
+                event: name,
+                function,
+            });
+            Ok(HandlerRef(id))
         });
         methods.add_method("behavior_status", |lua, this, ()| {
+            // Running while any of its behaviors runs; then failed if one failed.
             let st = stage(lua)?;
-            let mut status = "none";
-            for b in st.behaviors.iter().filter(|b| b.actor == Some(this.0)) {
-                status = match (&b.state, status) {
-                    (BehaviorState::Failed(_), _) => "failed",
-                    (_, "failed") => "failed",
-                    (BehaviorState::Waiting(_), _) => "running",
-                    (BehaviorState::Done, "running") => "running",
-                    (BehaviorState::Done, _) => "done",
-                };
-            }
-            Ok(status)
+            let states: Vec<&BehaviorState> = st
+                .behaviors
+                .iter()
+                .filter(|b| b.actor == Some(this.0))
+                .map(|b| &b.state)
+                .collect();
+            Ok(if states.is_empty() {
+                "none"
+            } else if states
+                .iter()
+                .any(|s| matches!(s, BehaviorState::Waiting(_)))
+            {
+                "running"
+            } else if states.iter().any(|s| matches!(s, BehaviorState::Failed(_))) {
+                "failed"
+            } else {
+                "done"
+            })
         });
         methods.add_method("behavior_error", |lua, this, ()| {
             let st = stage(lua)?;
@@ -155,7 +180,11 @@ impl UserData for ActorRef {
                     let f = lua.create_function(move |lua, args: MultiValue| {
                         let mut args = args.into_iter();
                         // Method call: the first argument is the actor itself.
-                        args.next();
+                        let is_self = matches!(args.next(),
+                            Some(Value::UserData(u)) if u.borrow::<ActorRef>().is_ok());
+                        if !is_self {
+                            return Err(lua_err(dot_call_hint(kind.method)));
+                        }
                         start_kind(lua, actor, kind, args.collect())
                     })?;
                     Ok(Value::Function(f))
@@ -236,6 +265,9 @@ impl UserData for ActionRef {
         methods.add_method("cancel", |lua, this, ()| {
             stage(lua)?.scene.cancel(this.0).map_err(lua_err)
         });
+        methods.add_method("stop", |lua, this, ()| {
+            stage(lua)?.scene.stop(this.0).map_err(lua_err)
+        });
         methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
             if key == "wait" {
                 return lua
@@ -252,6 +284,8 @@ impl UserData for ActionRef {
                 "kind" => Value::String(lua.create_string(&info.kind)?),
                 "mode" => Value::String(lua.create_string(info.mode.name())?),
                 "weight" => Value::Number(info.weight),
+                "dofs" => Value::Integer(info.scope.len() as i64),
+                "yielded" => Value::Integer(info.yielded.len() as i64),
                 "error" => match info.reason {
                     Some(r) if info.status != troupe_scene::action::Status::Completed => {
                         Value::String(lua.create_string(&r)?)
@@ -270,6 +304,79 @@ impl UserData for ActionRef {
     }
 }
 
+/// The events `actor:on` accepts.
+pub const EVENTS: [&str; 5] = [
+    "action_started",
+    "action_completed",
+    "action_failed",
+    "action_cancelled",
+    "action_narrowed",
+];
+
+impl UserData for BehaviorRef {
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("stop", |lua, this, ()| {
+            let mut st = stage(lua)?;
+            let b = &mut st.behaviors[this.0];
+            if matches!(b.state, BehaviorState::Waiting(_)) {
+                b.state = BehaviorState::Stopped;
+                b.thread = None;
+            }
+            Ok(())
+        });
+        methods.add_meta_method(MetaMethod::Index, |lua, this, key: String| {
+            if key == "wait" {
+                return lua
+                    .named_registry_value::<Function>("troupe.behavior_wait")
+                    .map(Value::Function);
+            }
+            let st = stage(lua)?;
+            let b = &st.behaviors[this.0];
+            Ok(match key.as_str() {
+                "status" => Value::String(lua.create_string(b.state.name())?),
+                "error" => match b.state.error() {
+                    Some(e) => Value::String(lua.create_string(e)?),
+                    None => Value::Nil,
+                },
+                "actor" => match b.actor {
+                    Some(a) => Value::UserData(lua.create_userdata(ActorRef(a))?),
+                    None => Value::Nil,
+                },
+                _ => {
+                    return Err(lua_err(format!(
+                        "behavior has no field `{key}` (known: status, error, actor, stop, wait)"
+                    )))
+                }
+            })
+        });
+        methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
+            let st = stage(lua)?;
+            let who = st.behaviors[this.0]
+                .actor
+                .map(|a| st.scene.actors()[a].name.clone())
+                .unwrap_or_else(|| "test".into());
+            Ok(format!("behavior {} of {who}", this.0))
+        });
+        methods.add_meta_method(MetaMethod::Eq, |_, this, other: AnyUserData| {
+            Ok(other.borrow::<BehaviorRef>().is_ok_and(|o| o.0 == this.0))
+        });
+    }
+}
+
+impl UserData for HandlerRef {
+    fn add_methods<M: UserDataMethods<Self>>(methods: &mut M) {
+        methods.add_method("off", |lua, this, ()| {
+            let mut st = stage(lua)?;
+            let before = st.handlers.len();
+            st.handlers.retain(|h| h.id != this.0);
+            Ok(st.handlers.len() < before)
+        });
+        methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
+            Ok(format!("handler {}", this.0))
+        });
+    }
+}
+
 impl UserData for SequenceRef {
     fn add_fields<F: UserDataFields<Self>>(fields: &mut F) {
         fields.add_field_method_get("name", |_, this| Ok(this.0.name.clone()));
@@ -280,17 +387,48 @@ impl UserData for SequenceRef {
         methods.add_method("dofs", |lua, this, ()| {
             lua.create_sequence_from(this.0.tracks().iter().map(|t| t.dof().to_string()))
         });
+        methods.add_method("value", |_, this, (dof, time): (String, f64)| {
+            Ok(sequence_track(&this.0, &dof)?.value(time))
+        });
+        methods.add_method("interpolation", |_, this, dof: String| {
+            Ok(sequence_track(&this.0, &dof)?.interpolation().name())
+        });
     }
 }
 
-/// Resolves a path from a script: as given if it exists, else relative to the scene file.
-pub fn resolve_path(base_dir: &Path, path: &str) -> std::path::PathBuf {
+/// The track of `dof` in `seq`, or an error naming both.
+fn sequence_track<'a>(seq: &'a Sequence, dof: &str) -> mlua::Result<&'a Track> {
+    seq.track(dof).ok_or_else(|| {
+        lua_err(format!(
+            "sequence `{}` has no track for `{dof}` (see seq:dofs())",
+            seq.name
+        ))
+    })
+}
+
+/// Resolves a path from a script: as given if it exists, else relative to the scene
+/// file. A file found in neither place is an error that lists both.
+pub fn resolve_path(base_dir: &Path, path: &str) -> mlua::Result<std::path::PathBuf> {
     let p = Path::new(path);
     if p.is_absolute() || p.exists() {
-        p.to_path_buf()
-    } else {
-        base_dir.join(p)
+        return Ok(p.to_path_buf());
     }
+    let beside = base_dir.join(p);
+    if beside.exists() {
+        return Ok(beside);
+    }
+    let tried = if p.is_absolute() {
+        crate::modules::shown(p)
+    } else {
+        format!(
+            "{} and, beside the scene, {}",
+            crate::modules::shown(p),
+            crate::modules::shown(&beside)
+        )
+    };
+    Err(lua_err(format!(
+        "file `{path}` not found; looked for {tried}"
+    )))
 }
 
 /// Loads a sequence file once per path (and per skeleton for BVH and glTF) with
@@ -301,7 +439,9 @@ pub fn load_sequence(
     path: &str,
     skeleton: Option<&Arc<Skeleton>>,
 ) -> mlua::Result<Arc<Sequence>> {
-    let full = resolve_path(&stage(lua)?.base_dir, path);
+    let base = stage(lua)?.base_dir.clone();
+    let full = resolve_path(&base, path)?;
+    stage(lua)?.loaded_files.push(full.clone());
     // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
     // cache key names the body (none: a .trk, or the default adult).
     let bound_to_body = troupe_formats::Format::of(&full)
@@ -329,18 +469,44 @@ pub fn load_sequence(
     Ok(seq)
 }
 
-/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = … }`.
-fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
-    let mut seq = Sequence::new(opt_string(t, "sequence", "name")?.unwrap_or_default());
+/// The `interpolation` option of `troupe.sequence`, if given.
+fn sequence_interpolation(t: &Table) -> mlua::Result<Option<Interpolation>> {
+    opt_string(t, "sequence", "interpolation")?
+        .map(|name| {
+            Interpolation::from_name(&name).ok_or_else(|| {
+                lua_err(format!(
+                    "sequence: unknown interpolation `{name}` (expected cubic, hermite, linear or step)"
+                ))
+            })
+        })
+        .transpose()
+}
+
+/// Builds a sequence from `{ [dof] = {{t, v}, {t, v, slope}, …}, loop = bool, name = …,
+/// interpolation = … }`; without a name, it is named after the place that made it
+/// (`sequence@scene.lua:12`).
+fn inline_sequence(lua: &Lua, t: &Table) -> mlua::Result<Sequence> {
+    let name = match opt_string(t, "sequence", "name")? {
+        Some(n) => n,
+        None => lua
+            .inspect_stack(1, |d| {
+                let src = d
+                    .source()
+                    .short_src
+                    .map(|s| s.to_string())
+                    .unwrap_or_default();
+                format!("sequence@{src}:{}", d.current_line().unwrap_or(0))
+            })
+            .unwrap_or_else(|| "sequence@?".into()),
+    };
+    let mut seq = Sequence::new(name);
+    seq.looping = crate::args::opt_bool(t, "sequence", "loop")?.unwrap_or(false);
+    let interpolation = sequence_interpolation(t)?.unwrap_or_default();
     let mut tracks = Vec::new();
     for pair in t.pairs::<String, Value>() {
         let (dof, keys) = pair?;
         match dof.as_str() {
-            "loop" => {
-                seq.looping = matches!(keys, Value::Boolean(true));
-                continue;
-            }
-            "name" => continue,
+            "loop" | "name" | "interpolation" => continue,
             _ => {}
         }
         let Value::Table(keys) = keys else {
@@ -380,7 +546,8 @@ fn inline_sequence(t: &Table) -> mlua::Result<Sequence> {
                 slope: n(3)?,
             });
         }
-        tracks.push(Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?);
+        let track = Track::new(dof, list).map_err(|e| lua_err(format!("sequence: {e}")))?;
+        tracks.push(track.with_interpolation(interpolation));
     }
     // Table iteration order is not stable across runs: sort for determinism.
     tracks.sort_by(|a, b| a.dof().cmp(b.dof()));
@@ -477,6 +644,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
                     "at",
                     "mass",
                     "rotation",
+                    "obstacle",
                 ],
             )?;
             let name = opt_string(&t, "object", "name")?
@@ -500,9 +668,15 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
                 rotation,
                 mass: opt_number(&t, "object", "mass")?.unwrap_or(1.0),
             };
-            let index = stage(lua)?
+            let obstacle = opt_bool(&t, "object", "obstacle")?;
+            let mut stage = stage(lua)?;
+            let index = stage
                 .scene
                 .add_object(object)
+                .map_err(|e| lua_err(format!("object: {e}")))?;
+            stage
+                .scene
+                .set_obstacle(index, obstacle)
                 .map_err(|e| lua_err(format!("object: {e}")))?;
             Ok(ObjectRef(index))
         })?,
@@ -525,9 +699,28 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     )?;
     troupe.set(
         "sequence",
-        lua.create_function(|lua, v: Value| match v {
-            Value::String(s) => Ok(SequenceRef(load_sequence(lua, &s.to_str()?, None)?)),
-            Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(&t)?))),
+        lua.create_function(|lua, (v, options): (Value, Option<Table>)| match v {
+            Value::String(s) => {
+                let loaded = load_sequence(lua, &s.to_str()?, None)
+                    .map_err(|e| lua_err(format!("sequence: {}", crate::args::error_text(&e))))?;
+                let interpolation = match &options {
+                    Some(o) => {
+                        check_keys(o, "sequence", &["interpolation"])?;
+                        sequence_interpolation(o)?
+                    }
+                    None => None,
+                };
+                Ok(SequenceRef(match interpolation {
+                    // The loaded file stays cached as written; this copy interpolates anew.
+                    Some(i) => {
+                        let mut seq = (*loaded).clone();
+                        seq.set_interpolation(i);
+                        Arc::new(seq)
+                    }
+                    None => loaded,
+                }))
+            }
+            Value::Table(t) => Ok(SequenceRef(Arc::new(inline_sequence(lua, &t)?))),
             other => Err(lua_err(format!(
                 "sequence: expects a file path or a table of tracks, got {}",
                 other.type_name()
@@ -543,19 +736,28 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     )?;
     troupe.set(
         "get_actor",
-        lua.create_function(|lua, name: String| {
-            let i = stage(lua)?.scene.actor_index(&name).map_err(lua_err)?;
-            Ok(ActorRef(i))
+        lua.create_function(|lua, name: Value| {
+            let Value::String(name) = &name else {
+                return Err(bad_arg("get_actor", "the name", "a string", &name));
+            };
+            // Finding by name answers nil for a name the scene lacks (the one exception
+            // to the unknown-names rule of docs/lua-api.md).
+            let i = stage(lua)?.scene.actor_index(&name.to_str()?).ok();
+            Ok(i.map(ActorRef))
         })?,
     )?;
     troupe.set(
         "get_object",
-        lua.create_function(|lua, name: String| {
-            let i = stage(lua)?.scene.object_index(&name).map_err(lua_err)?;
-            Ok(ObjectRef(i))
+        lua.create_function(|lua, name: Value| {
+            let Value::String(name) = &name else {
+                return Err(bad_arg("get_object", "the name", "a string", &name));
+            };
+            let i = stage(lua)?.scene.object_index(&name.to_str()?).ok();
+            Ok(i.map(ObjectRef))
         })?,
     )?;
     crate::messages::install(lua, &troupe)?;
+    crate::space::install(lua, &troupe)?;
     lua.globals().set("troupe", troupe)?;
     Ok(())
 }

@@ -7,7 +7,7 @@
 
 use crate::handles::{ActorRef, ObjectRef};
 use crate::stage::with_scene;
-use glam::{DQuat, DVec3, EulerRot};
+use glam::{DQuat, DVec2, DVec3, EulerRot};
 use mlua::{Lua, MultiValue, Table, UserData, Value};
 use troupe_scene::scene::Scene;
 
@@ -26,6 +26,88 @@ pub fn err(method: &str, message: impl std::fmt::Display) -> mlua::Error {
     lua_err_message(format!("{method}: {message}"))
 }
 
+/// What a value is, for "got …" in messages: its type, or `nan`, `inf`, `-inf` for a
+/// number that is not finite.
+pub fn value_name(v: &Value) -> String {
+    match v {
+        Value::Number(n) if n.is_nan() => "nan".into(),
+        Value::Number(n) if n.is_infinite() => if *n > 0.0 { "inf" } else { "-inf" }.into(),
+        other => other.type_name().into(),
+    }
+}
+
+/// The one wording of a bad argument: `"{method}: {what} must be {expected}, got {…}"`.
+pub fn bad_arg(method: &str, what: &str, expected: &str, got: &Value) -> mlua::Error {
+    err(
+        method,
+        format!("{what} must be {expected}, got {}", value_name(got)),
+    )
+}
+
+/// The message of a method called with `.` instead of `:` (its `self` is missing).
+pub fn dot_call_hint(method: &str) -> String {
+    format!("{method}: call it as a method, with `:` (`actor:{method}(…)`), not with `.`")
+}
+
+/// The text of an mlua error in troupe's wording: a bad argument that mlua converted
+/// (`self` of a method called with `.`, a value of the wrong type) says so as the
+/// hand-written checks do; other errors keep their message.
+pub(crate) fn error_text(e: &mlua::Error) -> String {
+    match e {
+        mlua::Error::BadArgument {
+            to,
+            pos,
+            name,
+            cause,
+        } => {
+            // mlua names a method `Type.method`.
+            let method = to
+                .as_deref()
+                .map(|t| t.rsplit('.').next().unwrap_or(t))
+                .unwrap_or("call");
+            if name.as_deref() == Some("self") {
+                return dot_call_hint(method);
+            }
+            // A method's arguments are counted after `self`, as the script writes them.
+            let is_method = to.as_deref().is_some_and(|t| t.contains('.'));
+            let pos = if is_method {
+                pos.saturating_sub(1)
+            } else {
+                *pos
+            };
+            let what = match name {
+                Some(n) => format!("argument {pos} (`{n}`)"),
+                None => format!("argument {pos}"),
+            };
+            match &**cause {
+                mlua::Error::FromLuaConversionError { from, to, .. } => {
+                    format!("{method}: {what} must be {}, got {from}", lua_type_of(to))
+                }
+                other => format!("{method}: {what}: {}", error_text(other)),
+            }
+        }
+        mlua::Error::FromLuaConversionError { from, to, .. } => {
+            format!("expected {}, got {from}", lua_type_of(to))
+        }
+        mlua::Error::CallbackError { cause, .. } => error_text(cause),
+        mlua::Error::RuntimeError(m) => m.clone(),
+        other => other.to_string(),
+    }
+}
+
+/// The Lua type a Rust type converts from, for messages.
+fn lua_type_of(rust: &str) -> String {
+    match rust {
+        "String" | "string" | "BorrowedStr" => "a string".into(),
+        "Function" | "function" => "a function".into(),
+        "Table" | "table" => "a table".into(),
+        "f64" | "f32" | "number" => "a number".into(),
+        "i64" | "i32" | "u64" | "u32" | "usize" | "isize" | "integer" => "an integer".into(),
+        "bool" | "boolean" => "a boolean".into(),
+        other => format!("a {}", other.to_lowercase()),
+    }
+}
+
 /// The one table of options a method takes (`actor:reach{…}`); anything else is an error.
 pub fn table_arg(method: &str, args: MultiValue) -> mlua::Result<Table> {
     let mut args = args.into_iter();
@@ -35,7 +117,7 @@ pub fn table_arg(method: &str, args: MultiValue) -> mlua::Result<Table> {
             method,
             format!(
                 "expects one table of options, got {}",
-                first.map(|v| v.type_name()).unwrap_or("nothing")
+                first.as_ref().map(value_name).unwrap_or("nothing".into())
             ),
         )),
     }
@@ -48,7 +130,7 @@ pub fn opt_table_arg(method: &str, args: MultiValue) -> mlua::Result<Option<Tabl
         Some(Value::Table(t)) => Ok(Some(t)),
         Some(other) => Err(err(
             method,
-            format!("expects a table of options, got {}", other.type_name()),
+            format!("expects a table of options, got {}", value_name(&other)),
         )),
     }
 }
@@ -88,7 +170,10 @@ pub fn opt_string(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<
         Value::String(s) => Ok(Some(s.to_str()?.to_string())),
         other => Err(err(
             method,
-            format!("option `{key}` must be a string, got {}", other.type_name()),
+            format!(
+                "option `{key}` must be a string, got {}",
+                value_name(&other)
+            ),
         )),
     }
 }
@@ -98,10 +183,20 @@ pub fn opt_number(opts: &Table, method: &str, key: &str) -> mlua::Result<Option<
     let v = opts.get::<Value>(key)?;
     match (number(&v), v) {
         (_, Value::Nil) => Ok(None),
-        (Some(n), _) => Ok(Some(n)),
+        (Some(n), _) if n.is_finite() => Ok(Some(n)),
+        (Some(_), other) => Err(err(
+            method,
+            format!(
+                "option `{key}` must be a finite number, got {}",
+                value_name(&other)
+            ),
+        )),
         (None, other) => Err(err(
             method,
-            format!("option `{key}` must be a number, got {}", other.type_name()),
+            format!(
+                "option `{key}` must be a number, got {}",
+                value_name(&other)
+            ),
         )),
     }
 }
@@ -138,11 +233,61 @@ pub fn vec3(value: &Value, what: &str) -> mlua::Result<DVec3> {
             Value::Number(n) if n.is_finite() => Ok(n),
             other => Err(lua_err_message(format!(
                 "{what}.{k} must be a finite number, got {}",
-                other.type_name()
+                value_name(&other)
             ))),
         }
     };
     Ok(DVec3::new(get(1, "x")?, get(2, "y")?, get(3, "z")?))
+}
+
+/// Reads a floor point for `method`: `{x, z}`, `{x, y, z}` (y must be the floor) or `{x=…, z=…}`.
+pub fn floor_point(v: &Value, method: &str, what: &str) -> mlua::Result<DVec2> {
+    let Value::Table(t) = v else {
+        return Err(err(
+            method,
+            format!(
+                "{what} must be a point {{x, z}} or {{x, 0, z}}, got {}",
+                v.type_name()
+            ),
+        ));
+    };
+    let items: Vec<Value> = t
+        .clone()
+        .sequence_values::<Value>()
+        .collect::<mlua::Result<_>>()?;
+    let nums: Vec<Option<f64>> = items.iter().map(number).collect();
+    let (x, y, z) = match nums.as_slice() {
+        [Some(x), Some(z)] => (*x, 0.0, *z),
+        [Some(x), Some(y), Some(z)] => (*x, *y, *z),
+        [] => {
+            let x = number(&t.get::<Value>("x")?);
+            let z = number(&t.get::<Value>("z")?);
+            let y = number(&t.get::<Value>("y")?).unwrap_or(0.0);
+            match (x, z) {
+                (Some(x), Some(z)) => (x, y, z),
+                _ => {
+                    return Err(err(
+                        method,
+                        format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
+                    ))
+                }
+            }
+        }
+        _ => {
+            return Err(err(
+                method,
+                format!("{what} must be a point {{x, z}} or {{x, 0, z}} of numbers"),
+            ))
+        }
+    };
+    if !(x.is_finite() && y.is_finite() && z.is_finite()) {
+        return Err(err(method, format!("{what} ({x}, {y}, {z}) is not finite")));
+    }
+    if y.abs() > 0.05 {
+        return Err(err(method, format!("{what} ({x}, {y}, {z}) is unreachable by walking: it is {y:.2} m off the floor (y must be 0)"
+        )));
+    }
+    Ok(DVec2::new(x, z))
 }
 
 /// A new Lua table `{x, y, z}`.
@@ -215,7 +360,7 @@ fn handle_or_name<H: UserData + 'static>(
         Value::Nil => Err(err(method, format!("`{key}` is required"))),
         other => Err(err(
             method,
-            format!("{expected}, got {}", other.type_name()),
+            format!("{expected}, got {}", value_name(&other)),
         )),
     }
 }

@@ -1,4 +1,5 @@
-//! The handles a script holds: actors, objects, actions and sequences as Lua values. Their
+//! The handles a script holds: actors, objects, actions, behaviors, event handlers and
+//! sequences as Lua values. Their
 //! methods are the API ([`crate::api`]); an action handle pins its action's final record
 //! while it lives.
 
@@ -10,6 +11,12 @@ use troupe_scene::action::ActionId;
 /// A Lua handle on an actor.
 #[derive(Clone, Copy, Debug)]
 pub struct ActorRef(pub usize);
+/// A Lua handle on a behavior (what `actor:behave` returns): its index in the director.
+#[derive(Clone, Copy, Debug)]
+pub struct BehaviorRef(pub usize);
+/// A Lua handle on an event handler (what `actor:on` returns): its number.
+#[derive(Clone, Copy, Debug)]
+pub struct HandlerRef(pub u64);
 /// A Lua handle on an object.
 #[derive(Clone, Copy, Debug)]
 pub struct ObjectRef(pub usize);

@@ -188,6 +188,7 @@ impl CommonOptions {
             duration: self.duration,
             ease_in: self.ease_in,
             ease_out: self.ease_out,
+            yields: Scope::EMPTY,
         }
     }
 }

@@ -3,6 +3,41 @@
 local yield, isyieldable = coroutine.yield, coroutine.isyieldable
 local type, error, select = type, error, select
 
+-- The sandbox's limits cannot be caught: once a resume hits one, every pcall, xpcall,
+-- coroutine.resume and coroutine.close that catches an error raises the limit's message
+-- again instead of returning. Errors they do return are clean text (no "runtime error:"
+-- prefix, no traceback). `limit(err)` gives the limit's message, or nil and the clean error.
+local limit = __troupe_limit
+local raw_pcall, raw_xpcall = pcall, xpcall
+local raw_resume, raw_close = coroutine.resume, coroutine.close
+
+local function caught(ok, ...)
+  if ok then return ok, ... end
+  local stop, clean = limit((...))
+  if stop then error(stop, 0) end
+  return false, clean, select(2, ...)
+end
+
+function pcall(f, ...)
+  return caught(raw_pcall(f, ...))
+end
+
+function xpcall(f, handler, ...)
+  return caught(raw_xpcall(f, function(e)
+    local stop, clean = limit(e)
+    if stop then return e end
+    return handler(clean)
+  end, ...))
+end
+
+coroutine.resume = function(co, ...)
+  return caught(raw_resume(co, ...))
+end
+
+coroutine.close = function(co)
+  return caught(raw_close(co))
+end
+
 local function must_yield(name)
   if not isyieldable() then
     error(name .. "() can only be called inside a behavior or a test", 3)
@@ -68,4 +103,11 @@ end
 __troupe_action_wait = function(self)
   must_yield("wait")
   return yield("action", self)
+end
+
+-- The method `behavior:wait()`; the director returns the behavior's final status
+-- ("done", "failed" or "stopped") and its error.
+__troupe_behavior_wait = function(self)
+  must_yield("wait")
+  return yield("behavior", self)
 end

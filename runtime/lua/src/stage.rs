@@ -24,6 +24,8 @@ pub(crate) enum Wait {
     Any(Vec<ActionId>),
     /// Resume with `true` once the predicate holds, `false` at the deadline.
     Until(Function, Option<f64>),
+    /// Resume with the behavior's final status and error once it has ended.
+    Behavior(usize),
 }
 
 /// Where a behavior is.
@@ -32,17 +34,55 @@ pub(crate) enum BehaviorState {
     Waiting(Wait),
     Done,
     Failed(String),
+    /// Stopped by its handle's `:stop()`.
+    Stopped,
+}
+
+impl BehaviorState {
+    /// The name scripts and reports see: `running`, `done`, `failed` or `stopped`.
+    pub(crate) fn name(&self) -> &'static str {
+        match self {
+            BehaviorState::Waiting(_) => "running",
+            BehaviorState::Done => "done",
+            BehaviorState::Failed(_) => "failed",
+            BehaviorState::Stopped => "stopped",
+        }
+    }
+
+    /// The error of a failed behavior.
+    pub(crate) fn error(&self) -> Option<&str> {
+        match self {
+            BehaviorState::Failed(e) => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// An event handler registered with `actor:on(event, fn)`.
+#[derive(Clone)]
+pub(crate) struct Handler {
+    /// Its number, which its handle's `:off()` names.
+    pub id: u64,
+    pub actor: usize,
+    pub event: String,
+    pub function: Function,
 }
 
 pub(crate) struct Behavior {
     pub actor: Option<usize>,
-    pub thread: Thread,
+    /// The coroutine, until the behavior ends (then dropped, so that what it held can
+    /// be collected).
+    pub thread: Option<Thread>,
     pub state: BehaviorState,
     /// Whether the coroutine has been resumed once (its first resume passes `self`).
     pub started: bool,
     /// Whether its wait on actions has been checked against the scene once; after that,
     /// only an action ending can make it due (see [`Stage::ended_last_step`]).
     pub checked: bool,
+    /// Whether another behavior (or the test) has waited for this one with
+    /// `handle:wait()`: its failure is then the waiter's to judge (a test expecting it
+    /// does not fail because of it).
+    pub awaited: bool,
 }
 
 /// Everything Lua callbacks reach: kept in the Lua state's app data.
@@ -53,7 +93,9 @@ pub(crate) struct Stage {
     /// Whether `scene` is the session's (lent for a load or a script phase).
     pub lent: bool,
     pub behaviors: Vec<Behavior>,
-    pub handlers: Vec<(usize, String, Function)>,
+    pub handlers: Vec<Handler>,
+    /// The number the next handler gets.
+    pub next_handler: u64,
     pub pending_events: Vec<Event>,
     /// Actions that ended in the scene steps since the behaviors last ran. Every end of
     /// an action is such an event, so a behavior waiting on actions needs looking at only
@@ -68,6 +110,8 @@ pub(crate) struct Stage {
     pub handler_failures: Vec<(usize, String)>,
     /// `troupe.subscribe` calls, in order: the key expression and the function to call.
     pub subscriptions: Vec<(String, Function)>,
+    /// Every file the scene read (the scene, its modules, its motion files), in order.
+    pub loaded_files: Vec<PathBuf>,
 }
 
 /// The stage of the Lua state `lua`, mutably (for a callback; never across a Lua call).
@@ -91,7 +135,8 @@ fn not_lent() -> mlua::Error {
 }
 
 /// Adds a behavior: a coroutine of `f`, resumed on the next tick with its actor as `self`.
-pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<()> {
+/// Returns its index (behaviors are never removed, so it names it for good).
+pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<usize> {
     let thread = lua.create_thread(f.clone())?;
     let mut st = lua
         .app_data_mut::<Stage>()
@@ -99,12 +144,13 @@ pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua
     // The behavior receives its actor as `self`.
     st.behaviors.push(Behavior {
         actor,
-        thread,
+        thread: Some(thread),
         state: BehaviorState::Waiting(Wait::NextTick),
         started: false,
         checked: false,
+        awaited: false,
     });
-    Ok(())
+    Ok(st.behaviors.len() - 1)
 }
 
 /// Reads the scene of the Lua state `lua` (for functions registered with

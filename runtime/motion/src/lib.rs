@@ -5,8 +5,10 @@
 #![warn(missing_docs)]
 
 pub mod error;
+pub mod object_motion;
 pub mod offline;
 pub mod sequence;
 
 pub use error::{Error, Result};
-pub use sequence::{Key, Sequence, Track};
+pub use object_motion::{Hold, ObjectMotion};
+pub use sequence::{Interpolation, Key, Sequence, Track};

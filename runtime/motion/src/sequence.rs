@@ -1,5 +1,14 @@
 //! Motion sequences (thesis 5.7 and 6.4.5): per-DOF tracks of Hermite keys on a common
 //! time base.
+//!
+//! How a track fills the time between its keys is its [`Interpolation`]. The default,
+//! `cubic`, is a monotone cubic (Fritsch–Carlson, with the Fritsch–Butland slopes that
+//! SciPy's `PchipInterpolator` uses): where slopes are not given, the curve between two
+//! keys never leaves the range of those two keys, so a hold stays a hold and a peak key is
+//! the peak. A slope given on a key is used exactly (plain cubic Hermite), so a curve with
+//! explicit slopes is the author's. `hermite` keeps the thesis's own default slopes (the
+//! chord of the neighbouring keys, which overshoots next to a hold); `linear` and `step`
+//! ignore slopes.
 
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
@@ -35,17 +44,60 @@ impl Key {
     }
 }
 
-/// The keys of one DOF, interpolated by a cubic Hermite spline.
+/// How a track fills the time between two keys.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, Hash)]
+pub enum Interpolation {
+    /// Monotone cubic Hermite: default slopes never leave the two keys' range; given
+    /// slopes are exact.
+    #[default]
+    Cubic,
+    /// Cubic Hermite with the thesis's default slopes (5.7: zero at the ends, the chord of
+    /// the neighbouring keys inside), which may overshoot; given slopes are exact.
+    Hermite,
+    /// A straight line between keys (slopes ignored).
+    Linear,
+    /// The earlier key's value holds until the next key (slopes ignored).
+    Step,
+}
+
+impl Interpolation {
+    /// Every interpolation, in the order of its names.
+    pub const ALL: [Interpolation; 4] = [
+        Interpolation::Cubic,
+        Interpolation::Hermite,
+        Interpolation::Linear,
+        Interpolation::Step,
+    ];
+
+    /// The name used in `.trk` files and in Lua (`cubic`, `hermite`, `linear`, `step`).
+    pub fn name(self) -> &'static str {
+        match self {
+            Interpolation::Cubic => "cubic",
+            Interpolation::Hermite => "hermite",
+            Interpolation::Linear => "linear",
+            Interpolation::Step => "step",
+        }
+    }
+
+    /// The interpolation called `name`, if there is one.
+    pub fn from_name(name: &str) -> Option<Interpolation> {
+        Interpolation::ALL.into_iter().find(|i| i.name() == name)
+    }
+}
+
+/// The keys of one DOF and how to interpolate between them.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Track {
     dof: String,
     keys: Vec<Key>,
+    interpolation: Interpolation,
     slopes: Vec<f64>,
 }
 
 impl Track {
-    /// Builds a track; times must be finite and strictly increasing, values and slopes
-    /// finite, and there must be at least one key.
+    /// Builds a track with the default (monotone cubic) interpolation; times must be
+    /// finite and strictly increasing, values and slopes finite, and there must be at
+    /// least one key.
     pub fn new(dof: impl Into<String>, keys: Vec<Key>) -> Result<Track> {
         let dof = dof.into();
         if keys.is_empty() {
@@ -70,8 +122,31 @@ impl Track {
                 )));
             }
         }
-        let slopes = default_slopes(&keys);
-        Ok(Track { dof, keys, slopes })
+        let interpolation = Interpolation::default();
+        let slopes = slopes_for(&keys, interpolation);
+        Ok(Track {
+            dof,
+            keys,
+            interpolation,
+            slopes,
+        })
+    }
+
+    /// The same keys interpolated by `interpolation`.
+    pub fn with_interpolation(mut self, interpolation: Interpolation) -> Track {
+        self.set_interpolation(interpolation);
+        self
+    }
+
+    /// Interpolates the keys by `interpolation` from now on.
+    pub fn set_interpolation(&mut self, interpolation: Interpolation) {
+        self.slopes = slopes_for(&self.keys, interpolation);
+        self.interpolation = interpolation;
+    }
+
+    /// How the track interpolates between its keys.
+    pub fn interpolation(&self) -> Interpolation {
+        self.interpolation
     }
 
     /// The DOF name the track drives.
@@ -82,7 +157,7 @@ impl Track {
     pub fn keys(&self) -> &[Key] {
         &self.keys
     }
-    /// The slope used at each key (given, or the default).
+    /// The slope used at each key by the cubic interpolations (given, or the default).
     pub fn slopes(&self) -> &[f64] {
         &self.slopes
     }
@@ -134,26 +209,36 @@ impl Track {
             Segment::After => self.keys[self.keys.len() - 1].value,
             Segment::Inside(i, s, h) => {
                 let (k0, k1) = (&self.keys[i], &self.keys[i + 1]);
+                match self.interpolation {
+                    Interpolation::Step => return k0.value,
+                    Interpolation::Linear => return k0.value + s * (k1.value - k0.value),
+                    Interpolation::Cubic | Interpolation::Hermite => {}
+                }
                 let (s2, s3) = (s * s, s * s * s);
-                let h00 = 2.0 * s3 - 3.0 * s2 + 1.0;
+                // The Hermite basis with h00 = 1 − h01 folded in, so that a hold (equal
+                // values, zero slopes) returns its value exactly.
                 let h10 = s3 - 2.0 * s2 + s;
                 let h01 = -2.0 * s3 + 3.0 * s2;
                 let h11 = s3 - s2;
-                h00 * k0.value
-                    + h10 * h * self.slopes[i]
-                    + h01 * k1.value
-                    + h11 * h * self.slopes[i + 1]
+                k0.value
+                    + h01 * (k1.value - k0.value)
+                    + h * (h10 * self.slopes[i] + h11 * self.slopes[i + 1])
             }
         }
     }
 
-    /// The first derivative at `t` (zero outside the keyed range).
+    /// The first derivative at `t` (zero outside the keyed range; for `linear`, the
+    /// chord of the segment `t` starts; for `step`, zero).
     pub fn velocity(&self, t: f64) -> f64 {
         let n = self.keys.len();
-        if n > 1 && t == self.keys[0].time {
+        let cubic = matches!(
+            self.interpolation,
+            Interpolation::Cubic | Interpolation::Hermite
+        );
+        if n > 1 && cubic && t == self.keys[0].time {
             return self.slopes[0];
         }
-        if n > 1 && t == self.keys[n - 1].time {
+        if n > 1 && cubic && t == self.keys[n - 1].time {
             return self.slopes[n - 1];
         }
         let mut cursor = 0;
@@ -161,6 +246,11 @@ impl Track {
             Segment::Before | Segment::After => 0.0,
             Segment::Inside(i, s, h) => {
                 let (k0, k1) = (&self.keys[i], &self.keys[i + 1]);
+                match self.interpolation {
+                    Interpolation::Step => return 0.0,
+                    Interpolation::Linear => return (k1.value - k0.value) / h,
+                    Interpolation::Cubic | Interpolation::Hermite => {}
+                }
                 let s2 = s * s;
                 let d00 = 6.0 * s2 - 6.0 * s;
                 let d10 = 3.0 * s2 - 4.0 * s + 1.0;
@@ -195,7 +285,7 @@ impl Track {
         Track::new(dof, keys)
     }
 
-    /// The same keys under another DOF name.
+    /// The same keys (and interpolation) under another DOF name.
     pub fn renamed(&self, dof: impl Into<String>) -> Track {
         Track {
             dof: dof.into(),
@@ -239,21 +329,47 @@ pub enum Segment {
     Inside(usize, f64, f64),
 }
 
-/// Default slopes (thesis 5.7): zero at the ends ("start slowly / end slowly"); inside,
-/// the slope of the chord between the two neighbouring keys.
-fn default_slopes(keys: &[Key]) -> Vec<f64> {
+/// The slope at each key for `interpolation`: a given slope is kept; otherwise zero at
+/// the ends ("start slowly / end slowly", thesis 5.7) and inside the default of the
+/// interpolation (unused by `linear` and `step`, which ignore slopes).
+fn slopes_for(keys: &[Key], interpolation: Interpolation) -> Vec<f64> {
     let n = keys.len();
+    let secant = |i: usize| (keys[i + 1].value - keys[i].value) / (keys[i + 1].time - keys[i].time);
     (0..n)
         .map(|i| {
             keys[i].slope.unwrap_or_else(|| {
                 if i == 0 || i == n - 1 {
-                    0.0
-                } else {
-                    (keys[i + 1].value - keys[i - 1].value) / (keys[i + 1].time - keys[i - 1].time)
+                    return 0.0;
+                }
+                match interpolation {
+                    Interpolation::Hermite => {
+                        (keys[i + 1].value - keys[i - 1].value)
+                            / (keys[i + 1].time - keys[i - 1].time)
+                    }
+                    Interpolation::Cubic => monotone_slope(
+                        secant(i - 1),
+                        secant(i),
+                        keys[i].time - keys[i - 1].time,
+                        keys[i + 1].time - keys[i].time,
+                    ),
+                    Interpolation::Linear | Interpolation::Step => 0.0,
                 }
             })
         })
         .collect()
+}
+
+/// The Fritsch–Butland slope at a key between secants `d0` (over `h0` seconds) and `d1`
+/// (over `h1`): zero where the keys turn or hold, else a weighted harmonic mean of the
+/// secants. It is at most three times the smaller secant, inside the Fritsch–Carlson
+/// region where a cubic Hermite segment is monotone, so with zero end slopes a segment
+/// stays between its two keys.
+fn monotone_slope(d0: f64, d1: f64, h0: f64, h1: f64) -> f64 {
+    if d0 * d1 <= 0.0 {
+        return 0.0;
+    }
+    let (w0, w1) = (2.0 * h1 + h0, h1 + 2.0 * h0);
+    (w0 + w1) / (w0 / d0 + w1 / d1)
 }
 
 /// Slopes of evenly spaced samples: central differences inside, one-sided at the ends.
@@ -362,6 +478,13 @@ impl Sequence {
         }
     }
 
+    /// Interpolates every track by `interpolation`.
+    pub fn set_interpolation(&mut self, interpolation: Interpolation) {
+        for track in &mut self.tracks {
+            track.set_interpolation(interpolation);
+        }
+    }
+
     /// A sequence with the same name, looping flag and metadata, and no tracks.
     pub fn empty_like(&self) -> Sequence {
         Sequence {
@@ -406,6 +529,102 @@ mod tests {
         assert_eq!(ramp.slopes()[1], 1.0);
         // Zero end slopes: starts slowly.
         assert!(ramp.value(0.1) < 0.1);
+    }
+
+    /// The value range of keys `i` and `i + 1`, widened by a rounding margin.
+    fn key_range(t: &Track, i: usize) -> (f64, f64) {
+        let (a, b) = (t.keys()[i].value, t.keys()[i + 1].value);
+        let eps = 1e-12 * (1.0 + a.abs().max(b.abs()));
+        (a.min(b) - eps, a.max(b) + eps)
+    }
+
+    #[test]
+    fn a_hold_between_two_keys_stays_a_hold() {
+        // The case: with the thesis's chord slopes the hold peaks at 1.2.
+        let keys = vec![
+            Key::new(0.0, 0.0),
+            Key::new(1.0, 1.0),
+            Key::new(2.0, 1.0),
+            Key::new(3.0, 0.0),
+        ];
+        let cubic = Track::new("x", keys.clone()).unwrap();
+        assert_eq!(cubic.interpolation(), Interpolation::Cubic);
+        let hermite = cubic.clone().with_interpolation(Interpolation::Hermite);
+        let peak = |t: &Track| {
+            (0..=300)
+                .map(|i| t.value(i as f64 / 100.0))
+                .fold(f64::MIN, f64::max)
+        };
+        assert_eq!(peak(&cubic), 1.0);
+        assert!(
+            peak(&hermite) > 1.1,
+            "the thesis default overshoots: {}",
+            peak(&hermite)
+        );
+        for i in 0..=100 {
+            assert_eq!(cubic.value(1.0 + i as f64 / 100.0), 1.0);
+        }
+    }
+
+    #[test]
+    fn linear_and_step_ignore_slopes() {
+        let keys = vec![
+            Key::with_slope(0.0, 0.0, 5.0),
+            Key::new(2.0, 1.0),
+            Key::new(3.0, -1.0),
+        ];
+        let linear = Track::new("x", keys.clone())
+            .unwrap()
+            .with_interpolation(Interpolation::Linear);
+        assert_eq!(linear.value(0.5), 0.25);
+        assert_eq!(linear.value(2.5), 0.0);
+        assert_eq!(linear.velocity(1.0), 0.5);
+        let step = linear.clone().with_interpolation(Interpolation::Step);
+        assert_eq!(step.value(1.999), 0.0);
+        assert_eq!(step.value(2.0), 1.0);
+        assert_eq!(step.value(2.9), 1.0);
+        assert_eq!(step.velocity(2.5), 0.0);
+        for i in Interpolation::ALL {
+            assert_eq!(Interpolation::from_name(i.name()), Some(i));
+        }
+        assert_eq!(Interpolation::from_name("spline"), None);
+    }
+
+    proptest::proptest! {
+        #[test]
+        fn the_default_never_leaves_the_range_of_its_two_keys(
+            keys in proptest::collection::vec((0.01f64..3.0, -10.0f64..10.0), 2..12),
+            steps in 1usize..40,
+        ) {
+            let mut time = 0.0;
+            let keys: Vec<Key> = keys.iter().map(|&(dt, v)| { time += dt; Key::new(time, v) }).collect();
+            let track = Track::new("x", keys).unwrap();
+            for i in 0..track.keys().len() - 1 {
+                let (lo, hi) = key_range(&track, i);
+                let (t0, t1) = (track.keys()[i].time, track.keys()[i + 1].time);
+                for j in 0..=steps {
+                    let v = track.value(t0 + (t1 - t0) * j as f64 / steps as f64);
+                    proptest::prop_assert!(lo <= v && v <= hi, "segment {i}: {v} outside [{lo}, {hi}]");
+                }
+            }
+        }
+
+        #[test]
+        fn given_slopes_are_exact_hermite(
+            v0 in -5.0f64..5.0, v1 in -5.0f64..5.0, m0 in -20.0f64..20.0, m1 in -20.0f64..20.0,
+            h in 0.1f64..3.0, s in 0.0f64..1.0,
+        ) {
+            let track = Track::new("x", vec![Key::with_slope(0.0, v0, m0), Key::with_slope(h, v1, m1)]).unwrap();
+            let hermite = track.clone().with_interpolation(Interpolation::Hermite);
+            // The cubic Hermite basis written out (thesis 5.7).
+            let want = (2.0 * s.powi(3) - 3.0 * s * s + 1.0) * v0
+                + (s.powi(3) - 2.0 * s * s + s) * h * m0
+                + (-2.0 * s.powi(3) + 3.0 * s * s) * v1
+                + (s.powi(3) - s * s) * h * m1;
+            let got = track.value(s * h);
+            proptest::prop_assert!((got - want).abs() <= 1e-9 * (1.0 + want.abs()), "{got} vs {want}");
+            proptest::prop_assert_eq!(got, hermite.value(s * h));
+        }
     }
 
     #[test]

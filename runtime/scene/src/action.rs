@@ -128,6 +128,10 @@ pub struct ActionSpec {
     pub ease_in: f64,
     /// Seconds to ease out from full weight to zero ("full termination").
     pub ease_out: f64,
+    /// The part of `scope` the action can lose and keep running (a walk's arm swing): an
+    /// action that needs only these DOFs takes them and *narrows* this one instead of
+    /// stopping it. The rest of the scope is essential (see [`crate::scheduler`]).
+    pub yields: Scope,
 }
 
 impl ActionSpec {
@@ -142,7 +146,13 @@ impl ActionSpec {
             duration: None,
             ease_in: 0.0,
             ease_out: 0.0,
+            yields: Scope::EMPTY,
         }
+    }
+
+    /// The part of the scope the action cannot lose without stopping.
+    pub fn essential(&self) -> Scope {
+        self.scope.difference(&self.yields)
     }
 
     /// Checks every field; the error names the offending one.
@@ -231,13 +241,16 @@ pub struct GeneratorContext<'a> {
     pub posture: &'a ActorState,
     /// The whole scene at the end of the previous tick.
     pub world: &'a World<'a>,
-    /// The action's own scope.
+    /// The action's own scope (narrowed when others took parts of it; the parts it is
+    /// still fading out of count until they have faded).
     pub scope: Scope,
 }
 
 /// Where a generator writes desired DOF values; writes outside the scope are refused.
 pub struct DofWriter<'a> {
     scope: Scope,
+    /// DOFs the action has yielded to others: writes there are dropped without complaint.
+    yielded: Scope,
     values: &'a mut [f64],
     written: Scope,
     refused: usize,
@@ -250,6 +263,7 @@ impl<'a> DofWriter<'a> {
     pub fn new(scope: Scope, values: &'a mut [f64]) -> Self {
         DofWriter {
             scope,
+            yielded: Scope::EMPTY,
             values,
             written: Scope::EMPTY,
             refused: 0,
@@ -258,8 +272,18 @@ impl<'a> DofWriter<'a> {
         }
     }
 
+    /// A writer that also drops, silently, writes to `yielded`: DOFs the action had and
+    /// gave up to another action (its generator need not know it was narrowed).
+    pub fn narrowed(scope: Scope, yielded: Scope, values: &'a mut [f64]) -> Self {
+        DofWriter {
+            yielded,
+            ..DofWriter::new(scope, values)
+        }
+    }
+
     /// Sets the desired value of DOF `dof`. Returns false (and writes nothing) when the
-    /// DOF is outside the action's scope or the value is not finite.
+    /// DOF is outside the action's scope or the value is not finite; a write to a DOF the
+    /// action yielded is dropped without counting as refused.
     #[inline]
     pub fn set(&mut self, dof: usize, value: f64) -> bool {
         if self.scope.contains(dof) && dof < self.values.len() && value.is_finite() {
@@ -267,7 +291,9 @@ impl<'a> DofWriter<'a> {
             self.written.insert(dof);
             true
         } else {
-            self.refused += 1;
+            if !self.yielded.contains(dof) {
+                self.refused += 1;
+            }
             false
         }
     }
@@ -356,10 +382,28 @@ pub trait Generator: Send {
     /// Produces this tick's desired values.
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step;
 
+    /// Asked to finish gracefully (`:stop()`, a cancel, a pre-emption): a generator that
+    /// can end its motion by itself (a walk decelerates and puts both feet down) starts
+    /// doing so, returns true, and later reports [`Step::Finished`]; the action keeps its
+    /// full weight until then. The default returns false: the action eases out instead.
+    fn stop(&mut self) -> bool {
+        false
+    }
+
     /// Called once when the action ends, however it ends (completed, failed, cancelled,
-    /// pre-empted, or never admitted): a partner waiting on this action learns it from the
-    /// notes posted here, applied after the tick like a step's.
-    fn end(&mut self, _notes: &mut Notes) {}
+    /// pre-empted, or never admitted), with how it ended: a partner waiting on this action
+    /// learns it (and why) from the notes posted here, applied after the tick like a
+    /// step's.
+    fn end(&mut self, _ending: &Ending, _notes: &mut Notes) {}
+}
+
+/// How an action ended, as its generator's [`Generator::end`] learns it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ending<'a> {
+    /// The final status: completed, cancelled or failed.
+    pub status: Status,
+    /// Why it was cancelled or failed.
+    pub reason: Option<&'a str>,
 }
 
 /// A snapshot of one action for queries and listings.
@@ -371,8 +415,10 @@ pub struct ActionInfo {
     pub actor: usize,
     /// The kind of motion.
     pub kind: String,
-    /// Its scope.
+    /// Its scope (narrowed when other actions took parts of it).
     pub scope: Scope,
+    /// The DOFs it gave up to other actions (see [`ActionSpec::yields`]).
+    pub yielded: Scope,
     /// Its priority mode.
     pub mode: Mode,
     /// Its weight.
@@ -404,4 +450,7 @@ pub struct Event {
     pub status: Status,
     /// The reason, for cancellations and failures.
     pub reason: Option<String>,
+    /// Set when the action was *narrowed* rather than changing status: the DOFs it
+    /// yielded to another action (`status` is then its unchanged status).
+    pub narrowed: Option<Scope>,
 }

@@ -79,10 +79,13 @@ pub struct Torque {
 }
 
 /// What a generator posts.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Note {
     /// Raises a signal (the first raise's tick stays).
     Raise(SignalId),
+    /// Raises a signal that says something failed, with why (the first raise's tick and
+    /// reason stay): a giver learns why its receiver gave up, and the other way round.
+    Fail(SignalId, String),
     /// The grasping automaton's state of the posting actor's device-driven hand after
     /// this tick (a performer's `capture`).
     Hand(HandState),
@@ -105,6 +108,11 @@ impl Notes {
         self.0.push(Note::Raise(signal));
     }
 
+    /// Raises `signal` as a failure, with `reason` (see [`Blackboard::failure`]).
+    pub fn fail(&mut self, signal: SignalId, reason: impl Into<String>) {
+        self.0.push(Note::Fail(signal, reason.into()));
+    }
+
     /// Posts `note`.
     pub fn post(&mut self, note: Note) {
         self.0.push(note);
@@ -121,6 +129,7 @@ impl Notes {
 #[derive(Clone, Debug, Default)]
 pub struct Blackboard {
     stamps: HashMap<SignalId, u64>,
+    failures: HashMap<SignalId, String>,
     next_signal: u64,
     device_hands: Vec<(usize, Side)>,
     hand_states: BTreeMap<usize, HandState>,
@@ -132,6 +141,15 @@ impl Blackboard {
     /// Whether `signal` was raised before `tick`.
     pub fn before(&self, signal: SignalId, tick: u64) -> bool {
         self.stamps.get(&signal).is_some_and(|&t| t < tick)
+    }
+
+    /// Why `signal` was raised as a failure, if it was, before `tick`.
+    pub fn failure(&self, signal: SignalId, tick: u64) -> Option<&str> {
+        if self.before(signal, tick) {
+            self.failures.get(&signal).map(String::as_str)
+        } else {
+            None
+        }
     }
 
     /// Whether `signal` has been raised at all.
@@ -216,6 +234,12 @@ impl Blackboard {
         for note in notes {
             match note {
                 Note::Raise(signal) => self.raise(signal, tick),
+                Note::Fail(signal, reason) => {
+                    if !self.stamps.contains_key(&signal) {
+                        self.failures.insert(signal, reason);
+                    }
+                    self.raise(signal, tick);
+                }
                 Note::Hand(state) => {
                     self.hand_states.insert(actor, state);
                 }
@@ -241,6 +265,19 @@ mod tests {
         assert!(!b.before(s, 10));
         assert!(b.before(s, 11));
         assert_ne!(b.new_signal(), s);
+    }
+
+    #[test]
+    fn a_failure_carries_its_first_reason_from_the_tick_after_its_stamp() {
+        let mut b = Blackboard::default();
+        let s = b.new_signal();
+        b.apply(0, 10, vec![Note::Fail(s, "misses by 0.2 m".into())]);
+        b.apply(1, 11, vec![Note::Fail(s, "later".into()), Note::Raise(s)]);
+        assert_eq!(b.failure(s, 10), None);
+        assert_eq!(b.failure(s, 11), Some("misses by 0.2 m"));
+        let plain = b.new_signal();
+        b.apply(0, 10, vec![Note::Raise(plain)]);
+        assert_eq!(b.failure(plain, 11), None);
     }
 
     #[test]

@@ -11,20 +11,21 @@ pub mod error;
 pub mod holding;
 pub mod input_pose;
 pub mod mailbox;
-pub mod message_log;
 pub mod pacing;
 pub mod parallel;
+pub mod playback;
 pub mod profile;
 pub mod record;
 pub mod scene;
 pub mod scheduler;
 pub mod session;
+pub mod space;
 pub mod tally;
 pub mod timeline;
 pub mod world;
 
 pub use action::{
-    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode,
+    ActionId, ActionInfo, ActionSpec, DofWriter, Ending, Event, Generator, GeneratorContext, Mode,
     StartError, Status, Step,
 };
 pub use blackboard::{Blackboard, HandState, Note, Notes, Offer, SignalId};

@@ -1,6 +1,6 @@
 //! The scene: actors, objects and their actions, stepped tick by tick.
 
-use crate::action::{ActionId, ActionInfo, ActionSpec, Event, Generator, Status};
+use crate::action::{ActionId, ActionInfo, ActionSpec, Ending, Event, Generator, Status};
 use crate::blackboard::{Blackboard, Note, Notes, Offer, SignalId};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
@@ -10,7 +10,7 @@ use crate::parallel::WorkerPool;
 use crate::profile::StepProfile;
 use crate::scheduler::{Action, ActorRuntime, TickClock};
 use crate::world::{ActorInfo, Object, World};
-use glam::{DQuat, DVec3};
+use glam::{DQuat, DVec2, DVec3};
 use std::collections::HashMap;
 use std::hash::{BuildHasherDefault, Hasher};
 use std::sync::Arc;
@@ -125,6 +125,11 @@ pub struct Scene {
     profile: StepProfile,
     skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
     mailbox: Mailbox,
+    space: troupe_nav::Space,
+    obstacle_flags: Vec<Option<bool>>,
+    crowd: troupe_nav::Crowd,
+    /// Per actor: the DOF indices of root_x and root_z.
+    root_dofs: Vec<(usize, usize)>,
 }
 
 impl Scene {
@@ -163,6 +168,10 @@ impl Scene {
             profile: StepProfile::default(),
             skeleton_cache: Vec::new(),
             mailbox: Mailbox::default(),
+            space: troupe_nav::Space::default(),
+            obstacle_flags: Vec::new(),
+            crowd: troupe_nav::Crowd::default(),
+            root_dofs: Vec::new(),
         })
     }
 
@@ -208,6 +217,43 @@ impl Scene {
     pub fn objects_mut(&mut self) -> &mut [Object] {
         &mut self.objects
     }
+    /// The shared space: walls and the walkable floor (see [`crate::space`]).
+    pub fn space(&self) -> &troupe_nav::Space {
+        &self.space
+    }
+
+    /// The shared space, to change.
+    pub(crate) fn space_mut(&mut self) -> &mut troupe_nav::Space {
+        &mut self.space
+    }
+
+    /// Where every actor stands and goes, and the obstacles' footprints, from the end of
+    /// the previous tick: what walkers avoid (see [`troupe_nav::Crowd`]).
+    fn update_crowd(&mut self) {
+        let _span = tracing::trace_span!("crowd", tick = self.tick).entered();
+        let footprints = self.world().obstacles();
+        let crowd = &mut self.crowd;
+        crowd.positions.clear();
+        crowd.velocities.clear();
+        for (state, &(x, z)) in self.states.iter().zip(&self.root_dofs) {
+            let root = state.globals[0].translation;
+            crowd.positions.push(DVec2::new(root.x, root.z));
+            crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
+        }
+        crowd.index();
+        crowd.set_footprints(footprints);
+    }
+
+    /// The crowd as of the last tick (see [`troupe_nav::Crowd`]).
+    pub fn crowd(&self) -> &troupe_nav::Crowd {
+        &self.crowd
+    }
+
+    /// Per object: forced obstacle or not, or `None` for "when it stands on the floor".
+    pub(crate) fn obstacle_flags_mut(&mut self) -> &mut [Option<bool>] {
+        &mut self.obstacle_flags
+    }
+
     /// Status changes of the last tick, in actor order then occurrence order.
     pub fn events(&self) -> &[Event] {
         &self.events
@@ -222,6 +268,9 @@ impl Scene {
             holders: &self.holders,
             board: &self.board,
             input_poses: &self.input_poses,
+            space: &self.space,
+            obstacle_flags: &self.obstacle_flags,
+            crowd: &self.crowd,
         }
     }
 
@@ -373,6 +422,9 @@ impl Scene {
         q[skeleton.dof("root_x")?] = desc.at.x;
         q[skeleton.dof("root_z")?] = desc.at.z;
         q[skeleton.dof("root_yaw")?] = desc.facing_degrees.to_radians();
+        self.root_dofs
+            .push((skeleton.dof("root_x")?, skeleton.dof("root_z")?));
+        self.crowd.radii.push(troupe_nav::body_radius(&skeleton));
         let state = ActorState::new(&skeleton, q);
         self.work.push(ActorWork {
             runtime: ActorRuntime::default(),
@@ -415,6 +467,7 @@ impl Scene {
         }
         self.objects.push(object);
         self.holders.push(None);
+        self.obstacle_flags.push(None);
         Ok(self.objects.len() - 1)
     }
 
@@ -463,7 +516,14 @@ impl Scene {
     ) -> Result<ActionId> {
         if let Err(e) = self.check_action(actor, &spec) {
             let mut notes = Notes::default();
-            generator.end(&mut notes);
+            let reason = e.to_string();
+            generator.end(
+                &Ending {
+                    status: Status::Failed,
+                    reason: Some(&reason),
+                },
+                &mut notes,
+            );
             // Signals go out; notes about an actor that does not exist do not.
             let mut notes = notes.take();
             if actor >= self.actors.len() {
@@ -475,20 +535,9 @@ impl Scene {
         let id = ActionId(self.next_action);
         self.next_action += 1;
         let begin = self.time() + spec.delay;
-        self.work[actor].runtime.push(Action {
-            id,
-            spec,
-            status: Status::Pending,
-            begin,
-            started_at: None,
-            terminate_at: None,
-            ended_at: None,
-            ending: Status::Completed,
-            reason: None,
-            cancel_requested: false,
-            last_run: 0,
-            generator,
-        });
+        self.work[actor]
+            .runtime
+            .push(Action::new(id, spec, begin, generator));
         self.action_owner.insert(id, actor);
         Ok(id)
     }
@@ -507,21 +556,38 @@ impl Scene {
     }
 
     /// Asks an action to stop: a pending one is cancelled on the next tick, a running one
-    /// eases out and ends `cancelled`. Cancelling an ended action does nothing.
+    /// winds down if its generator can (a walk stops well, see [`Scene::stop`]) or eases
+    /// out, and ends `cancelled`. Cancelling an ended action does nothing.
     pub fn cancel(&mut self, id: ActionId) -> Result<()> {
+        if let Some(a) = self.unfinished_action(id)? {
+            a.cancel_requested = true;
+        }
+        Ok(())
+    }
+
+    /// Asks an action to finish gracefully: a running one whose generator can end its
+    /// motion by itself (a walk slows down and puts both feet down) does so at full
+    /// weight, any other eases out; either ends `completed`. A pending one is cancelled on
+    /// the next tick. Stopping an ended action does nothing.
+    pub fn stop(&mut self, id: ActionId) -> Result<()> {
+        if let Some(a) = self.unfinished_action(id)? {
+            a.stop_requested = true;
+        }
+        Ok(())
+    }
+
+    /// A known action that has not ended (`None` once it has), or an error for an id the
+    /// scene never made.
+    fn unfinished_action(&mut self, id: ActionId) -> Result<Option<&mut Action>> {
         let actor = *self
             .action_owner
             .get(&id)
             .ok_or_else(|| Error::Invalid(format!("no action {id}")))?;
-        if let Some(a) = self.work[actor]
+        Ok(self.work[actor]
             .runtime
             .actions
             .iter_mut()
-            .find(|a| a.id == id)
-        {
-            a.cancel_requested = true;
-        }
-        Ok(())
+            .find(|a| a.id == id))
     }
 
     /// The status of an action, without copying its record (for wait conditions checked
@@ -615,6 +681,7 @@ impl Scene {
             profile: self.profiling,
         };
         let started = self.profiling.then(Instant::now);
+        self.update_crowd();
         {
             let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
             let world = World {
@@ -625,6 +692,9 @@ impl Scene {
                 holders: &self.holders,
                 board: &self.board,
                 input_poses: &self.input_poses,
+                space: &self.space,
+                obstacle_flags: &self.obstacle_flags,
+                crowd: &self.crowd,
             };
             let actors = &self.actors;
             let states = &self.states;

@@ -27,13 +27,15 @@
 //! so actors are stepped in parallel and the result does not depend on the thread count.
 
 use crate::action::{
-    ActionId, ActionInfo, ActionSpec, DofWriter, Event, Generator, GeneratorContext, Mode, Status,
-    Step,
+    ActionId, ActionInfo, ActionSpec, DofWriter, Ending, Event, Generator, GeneratorContext, Mode,
+    Status, Step,
 };
 use crate::blackboard::{Note, Notes};
+use crate::blend::ease;
 use crate::blend::{ease_factor, Accumulator};
 use crate::profile::{ActorPhases, PhaseClock};
 use crate::world::World;
+use troupe_body::scope::Scope;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::state::ActorState;
 
@@ -50,18 +52,72 @@ pub(crate) struct Action {
     pub ending: Status,
     pub reason: Option<String>,
     pub cancel_requested: bool,
+    /// `:stop()` was asked and not yet acted on.
+    pub stop_requested: bool,
+    /// The generator accepted to finish by itself ([`Generator::stop`]): the action keeps
+    /// full weight until it reports `Finished`, then ends with `ending`.
+    pub winding_down: bool,
+    /// The scope the action was created with (its scope shrinks when it is narrowed).
+    pub original: Scope,
+    /// DOFs given up to other actions, each set with the time it was given up: they fade
+    /// out over `ease_out` while the taker eases in.
+    pub releasing: Vec<(Scope, f64)>,
     /// The last tick the generator was started or stepped (0: never).
     pub last_run: u64,
     pub generator: Box<dyn Generator>,
 }
 
 impl Action {
+    /// A pending action, as [`crate::Scene::start_action`] creates it.
+    pub(crate) fn new(
+        id: ActionId,
+        spec: ActionSpec,
+        begin: f64,
+        generator: Box<dyn Generator>,
+    ) -> Action {
+        Action {
+            id,
+            original: spec.scope,
+            spec,
+            status: Status::Pending,
+            begin,
+            started_at: None,
+            terminate_at: None,
+            ended_at: None,
+            ending: Status::Completed,
+            reason: None,
+            cancel_requested: false,
+            stop_requested: false,
+            winding_down: false,
+            releasing: Vec::new(),
+            last_run: 0,
+            generator,
+        }
+    }
+
+    /// The DOFs its generator may still write: its scope and what it is still releasing.
+    fn writable(&self) -> Scope {
+        self.releasing
+            .iter()
+            .fold(self.spec.scope, |s, (r, _)| s.union(r))
+    }
+
+    /// How much of its weight the action still has on DOF `d` that it gave up at `since`.
+    fn release_fade(&self, since: f64, time: f64) -> f64 {
+        if self.spec.ease_out > 0.0 {
+            1.0 - ease((time - since) / self.spec.ease_out)
+        } else {
+            0.0
+        }
+    }
+
     pub(crate) fn info(&self, actor: usize) -> ActionInfo {
         ActionInfo {
             id: self.id,
             actor,
             kind: self.spec.kind.clone(),
             scope: self.spec.scope,
+            yielded: self.original.difference(&self.spec.scope),
             mode: self.spec.mode,
             weight: self.spec.weight,
             status: self.status,
@@ -117,19 +173,63 @@ impl Transitions<'_> {
         if status.is_final() {
             action.ended_at = Some(self.clock.time);
         }
+        let reason = if status.is_final() {
+            action.reason.clone()
+        } else {
+            None
+        };
+        self.event(action, reason, None);
+    }
+
+    /// Publishes `action`'s current status (with `reason`), or its narrowing by `narrowed`.
+    fn event(&mut self, action: &Action, reason: Option<String>, narrowed: Option<Scope>) {
         self.events.push(Event {
             tick: self.clock.tick,
             time: self.clock.time,
             actor: self.actor,
             action: action.id,
             kind: action.spec.kind.clone(),
-            status,
-            reason: if status.is_final() {
-                action.reason.clone()
-            } else {
-                None
-            },
+            status: action.status,
+            reason,
+            narrowed,
         });
+    }
+
+    /// Asks `action` to end gracefully toward `ending` (a stop, a cancel, a pre-emption):
+    /// a generator that can finish by itself winds down at full weight (the action is
+    /// `terminating` until it reports `Finished`); any other eases out.
+    fn stop(&mut self, action: &mut Action, ending: Status, reason: Option<String>) {
+        if action.winding_down || action.status == Status::Terminating {
+            if ending == Status::Cancelled {
+                action.ending = ending;
+                action.reason = reason;
+            }
+            return;
+        }
+        if action.generator.stop() {
+            action.winding_down = true;
+            action.ending = ending;
+            action.reason = reason;
+            self.set(action, Status::Terminating);
+        } else {
+            self.terminate(action, ending, reason);
+        }
+    }
+
+    /// Takes `taken` out of `action`'s scope (a running action's contribution there fades
+    /// out over its `ease_out`); with `report`, publishes the narrowing as an event.
+    fn narrow(&mut self, action: &mut Action, taken: Scope, report: bool) {
+        if taken.is_empty() {
+            return;
+        }
+        action.spec.scope = action.spec.scope.difference(&taken);
+        action.spec.yields = action.spec.yields.difference(&taken);
+        if action.status.is_running() {
+            action.releasing.push((taken, self.clock.time));
+        }
+        if report {
+            self.event(action, None, Some(taken));
+        }
     }
 
     /// Starts the ease-out toward `ending`, or ends at once without one.
@@ -191,6 +291,8 @@ impl ActorRuntime {
                 continue;
             }
             let start = action.started_at.unwrap_or(clock.time);
+            // What it may write: its scope and what it is still fading out of.
+            let writable = action.writable();
             let ctx = GeneratorContext {
                 time: clock.time,
                 dt: clock.dt,
@@ -200,9 +302,13 @@ impl ActorRuntime {
                 skeleton,
                 posture: previous,
                 world,
-                scope: action.spec.scope,
+                scope: writable,
             };
-            let mut out = DofWriter::new(action.spec.scope, &mut self.scratch);
+            let mut out = DofWriter::narrowed(
+                writable,
+                action.original.difference(&writable),
+                &mut self.scratch,
+            );
             action.last_run = clock.tick;
             let step = action.generator.step(&ctx, &mut out);
             let (written, refused) = (out.written(), out.refused());
@@ -231,12 +337,34 @@ impl ActorRuntime {
                     action.spec.ease_out,
                 );
             if w > 0.0 {
-                for d in written.iter() {
+                for d in written.intersection(&action.spec.scope).iter() {
                     self.accumulator.add(d, self.scratch[d], w);
                 }
+                for &(released, since) in &action.releasing {
+                    let fade = w * action.release_fade(since, clock.time);
+                    if fade > 0.0 {
+                        for d in written.intersection(&released).iter() {
+                            self.accumulator.add(d, self.scratch[d], fade);
+                        }
+                    }
+                }
             }
+            let time = clock.time;
+            let faded: Vec<bool> = action
+                .releasing
+                .iter()
+                .map(|&(_, since)| action.release_fade(since, time) <= 0.0)
+                .collect();
+            let mut faded = faded.into_iter();
+            action.releasing.retain(|_| !faded.next().unwrap_or(false));
             if step == Step::Finished {
-                tr.terminate(action, Status::Completed, None);
+                if action.winding_down {
+                    // Wound down: it stands where it stopped, so it ends without easing.
+                    let ending = action.ending;
+                    tr.set(action, ending);
+                } else {
+                    tr.terminate(action, Status::Completed, None);
+                }
             }
         }
 
@@ -260,10 +388,17 @@ impl ActorRuntime {
             if self.actions[i].status.is_final() {
                 let mut a = self.actions.remove(i);
                 let mut notes = Notes::default();
-                a.generator.end(&mut notes);
+                let ending = Ending {
+                    status: a.status,
+                    reason: a.reason.as_deref(),
+                };
+                a.generator.end(&ending, &mut notes);
                 // An end is stamped the tick after the generator last ran (its partner sees
-                // it the tick after that); an action that never ran ends now.
-                let stamp = if a.last_run > 0 {
+                // it the tick after that), except a failure in this tick's step, stamped
+                // like the step's own notes (its partner learns it on the next tick); an
+                // action that never ran ends now.
+                let failed_in_step = a.status == Status::Failed && a.last_run == clock.tick;
+                let stamp = if a.last_run > 0 && !failed_in_step {
                     a.last_run + 1
                 } else {
                     clock.tick
@@ -292,33 +427,77 @@ fn admit(
         if actions[i].status != Status::Pending {
             continue;
         }
-        if actions[i].cancel_requested {
-            actions[i].reason = Some("cancelled".into());
+        if actions[i].cancel_requested || actions[i].stop_requested {
+            actions[i].reason = Some(if actions[i].cancel_requested {
+                "cancelled".into()
+            } else {
+                "stopped before it began".into()
+            });
             tr.set(&mut actions[i], Status::Cancelled);
             continue;
         }
         if actions[i].begin > time + 1e-9 {
             continue;
         }
+        // An action being admitted first gives up the yieldable part of its own scope
+        // that others hold: whatever running actions drive and, for a `default` one,
+        // whatever earlier pending actions wait for (a grasp's optional lean and crouch
+        // during a walk: the walk keeps its legs and its spine).
+        let mode = actions[i].spec.mode;
+        if !actions[i].spec.yields.is_empty() {
+            let held = actions
+                .iter()
+                .enumerate()
+                .filter(|&(j, other)| {
+                    j != i
+                        && (other.status.is_running()
+                            || (other.status == Status::Pending && j < i && mode == Mode::Default))
+                })
+                .fold(Scope::EMPTY, |held, (_, other)| {
+                    held.union(&other.spec.scope)
+                });
+            let own = actions[i].spec.yields.intersection(&held);
+            tr.narrow(&mut actions[i], own, true);
+        }
         let scope = actions[i].spec.scope;
+        let id = actions[i].id;
         let admitted = match actions[i].spec.mode {
-            Mode::Default => !actions.iter().enumerate().any(|(j, other)| {
-                j != i
-                    && other.spec.scope.overlaps(&scope)
-                    && (other.status.is_running() || (other.status == Status::Pending && j < i))
-            }),
+            Mode::Default => {
+                // Waits for what it cannot take: an essential part of a running action,
+                // or any part of an earlier pending one.
+                let blocked = actions.iter().enumerate().any(|(j, other)| {
+                    j != i
+                        && ((other.status.is_running() && other.spec.essential().overlaps(&scope))
+                            || (other.status == Status::Pending
+                                && j < i
+                                && other.spec.scope.overlaps(&scope)))
+                });
+                if !blocked {
+                    for (j, other) in actions.iter_mut().enumerate() {
+                        if j != i && other.status.is_running() {
+                            let taken = other.spec.scope.intersection(&scope);
+                            tr.narrow(other, taken, true);
+                        }
+                    }
+                }
+                !blocked
+            }
             Mode::Weighted => true,
             Mode::Exclusive | Mode::Clearing => {
                 let clearing = actions[i].spec.mode == Mode::Clearing;
-                let id = actions[i].id;
                 for (j, other) in actions.iter_mut().enumerate() {
                     if j == i || other.status.is_final() {
                         continue;
                     }
-                    let hit = clearing || other.spec.scope.overlaps(&scope);
                     let reason = Some(format!("pre-empted by action {id}"));
-                    if hit && other.status.is_running() {
-                        tr.terminate(other, Status::Cancelled, reason);
+                    if other.status.is_running() {
+                        let taken = other.spec.scope.intersection(&scope);
+                        let loses_essential = other.spec.essential().overlaps(&scope);
+                        if clearing || loses_essential {
+                            pre_empt(tr, other, taken, reason);
+                        } else {
+                            tr.narrow(other, taken, true);
+                        }
                     } else if clearing && other.status == Status::Pending && j < i {
                         other.reason = reason;
                         tr.set(other, Status::Cancelled);
@@ -365,7 +544,14 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
         }
         let start = action.started_at.unwrap_or(time);
         if action.cancel_requested && action.ending != Status::Cancelled {
-            tr.terminate(action, Status::Cancelled, Some("cancelled".into()));
+            tr.stop(action, Status::Cancelled, Some("cancelled".into()));
+            if action.status.is_final() {
+                continue;
+            }
+        }
+        if action.stop_requested {
+            action.stop_requested = false;
+            tr.stop(action, Status::Completed, None);
             if action.status.is_final() {
                 continue;
             }
@@ -383,12 +569,22 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
                 }
             }
         }
-        if action.status == Status::Terminating {
+        if action.status == Status::Terminating && !action.winding_down {
             let t0 = action.terminate_at.unwrap_or(time);
             if time - t0 >= action.spec.ease_out - 1e-9 {
                 let ending = action.ending;
                 tr.set(action, ending);
             }
         }
+    }
+}
+
+/// `other` loses an essential part (or is cleared): it stops gracefully. If its generator
+/// winds down by itself, it gives up `taken` at once and keeps the rest until it has
+/// finished; otherwise the whole action eases out, as before.
+fn pre_empt(tr: &mut Transitions, other: &mut Action, taken: Scope, reason: Option<String>) {
+    tr.stop(other, Status::Cancelled, reason);
+    if other.winding_down {
+        tr.narrow(other, taken, false);
     }
 }

@@ -186,6 +186,13 @@ impl<S: Script> Session<S> {
         self.input_failures.push(0);
     }
 
+    /// Adds an input drained before all others: one that brings what other inputs read
+    /// (a leader's stream, which a follower's replayed devices take from).
+    pub fn add_input_first(&mut self, input: Box<dyn Input>) {
+        self.inputs.insert(0, input);
+        self.input_failures.insert(0, 0);
+    }
+
     /// How often each input has failed, by name, in the order they were added.
     pub fn input_failures(&self) -> Vec<(String, u64)> {
         self.inputs

@@ -24,6 +24,10 @@ impl TimelineRecorder {
     /// Adds a tick's events.
     pub fn record(&mut self, scene: &Scene, events: &[Event]) {
         for e in events {
+            if let Some(taken) = e.narrowed {
+                self.narrowed(scene, e, taken);
+                continue;
+            }
             if let Some((phase, since)) = self.open.remove(&e.action) {
                 self.span(scene, e, phase, since);
             }
@@ -33,19 +37,24 @@ impl TimelineRecorder {
         }
     }
 
+    /// An instant event on the actor's track: the action gave up `taken` to another.
+    fn narrowed(&mut self, scene: &Scene, e: &Event, taken: troupe_body::scope::Scope) {
+        self.spans.push(json!({
+            "name": format!("{} narrowed", e.kind),
+            "cat": e.kind,
+            "ph": "i",
+            "s": "t",
+            "pid": 1,
+            "tid": e.actor,
+            "ts": e.time * 1e6,
+            "args": { "action": e.action.0, "yielded": scope_name(scene, e.actor, taken) },
+        }));
+    }
+
     fn span(&mut self, scene: &Scene, e: &Event, phase: Status, since: f64) {
         let info = scene.action(e.action);
         let (scope, mode) = info
-            .map(|a| {
-                let skel = &scene.actors()[e.actor].skeleton;
-                let named = skel
-                    .scopes()
-                    .iter()
-                    .find(|(_, s)| **s == a.scope)
-                    .map(|(n, _)| n.clone())
-                    .unwrap_or_else(|| format!("{} DOFs", a.scope.len()));
-                (named, a.mode.name())
-            })
+            .map(|a| (scope_name(scene, e.actor, a.scope), a.mode.name()))
             .unwrap_or_default();
         self.spans.push(json!({
             "name": format!("{} {}", e.kind, phase.name()),
@@ -74,6 +83,7 @@ impl TimelineRecorder {
                     kind: info.kind.clone(),
                     status: info.status,
                     reason: None,
+                    narrowed: None,
                 };
                 self.span(scene, &e, phase, since);
             }
@@ -90,6 +100,17 @@ impl TimelineRecorder {
         events.extend(self.spans.iter().cloned());
         json!({ "traceEvents": events, "displayTimeUnit": "ms" })
     }
+}
+
+/// The name of `scope` among the actor's named scopes, or its size.
+fn scope_name(scene: &Scene, actor: usize, scope: troupe_body::scope::Scope) -> String {
+    scene.actors()[actor]
+        .skeleton
+        .scopes()
+        .iter()
+        .find(|(_, s)| **s == scope)
+        .map(|(n, _)| n.clone())
+        .unwrap_or_else(|| format!("{} DOFs", scope.len()))
 }
 
 impl Observer for TimelineRecorder {

@@ -37,6 +37,13 @@ pub struct World<'a> {
     /// What devices ask of each actor this tick, by actor index (see
     /// [`crate::input_pose`]); empty or `None` for actors no device drives.
     pub input_poses: &'a [Option<crate::input_pose::InputPose>],
+    /// Walls and the walkable floor (see [`crate::space`]).
+    pub space: &'a troupe_nav::Space,
+    /// Per object: forced obstacle or not, `None` for "when it stands on the floor".
+    pub obstacle_flags: &'a [Option<bool>],
+    /// Every actor's floor position, velocity and radius, and the obstacles' footprints,
+    /// as of the previous tick (see [`troupe_nav::Crowd`]).
+    pub crowd: &'a troupe_nav::Crowd,
 }
 
 impl World<'_> {

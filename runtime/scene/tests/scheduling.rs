@@ -3,8 +3,8 @@
 use troupe_body::Scope;
 use troupe_scene::blend::ease;
 use troupe_scene::{
-    ActionId, ActionSpec, ActorDesc, DofWriter, Generator, GeneratorContext, Mode, Notes, Scene,
-    SceneConfig, SignalId, Status, Step,
+    ActionId, ActionSpec, ActorDesc, DofWriter, Ending, Generator, GeneratorContext, Mode, Notes,
+    Scene, SceneConfig, SignalId, Status, Step,
 };
 
 /// Writes one constant value on every DOF of its scope, forever (or fails, or finishes).
@@ -636,7 +636,7 @@ impl Generator for Signaller {
         }
     }
 
-    fn end(&mut self, notes: &mut Notes) {
+    fn end(&mut self, _ending: &Ending, notes: &mut Notes) {
         notes.raise(self.ended);
     }
 }
@@ -716,4 +716,304 @@ fn an_action_that_never_ran_ends_at_once_for_its_partners() {
         .start_action(7, spec(&s, "right_arm", Mode::Weighted), Box::new(bad))
         .is_err());
     assert!(s.blackboard().before(refused, s.tick() + 1));
+}
+
+/// Writes a constant on its scope; once asked to stop, keeps going for `wind` seconds at
+/// full weight, then finishes (a walk slowing down).
+struct WindsDown {
+    value: f64,
+    wind: f64,
+    stopping_since: Option<f64>,
+    asked: bool,
+}
+
+impl Generator for WindsDown {
+    fn stop(&mut self) -> bool {
+        self.asked = true;
+        true
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        // Writes its whole original scope: the scheduler drops what it gave up.
+        for d in ctx.skeleton.scope("right_arm+left_arm").unwrap().iter() {
+            out.set(d, self.value);
+        }
+        if self.asked {
+            let since = *self.stopping_since.get_or_insert(ctx.local_time);
+            if ctx.local_time - since >= self.wind - 1e-9 {
+                return Step::Finished;
+            }
+        }
+        Step::Running
+    }
+}
+
+fn winds_down(value: f64, wind: f64) -> Box<WindsDown> {
+    Box::new(WindsDown {
+        value,
+        wind,
+        stopping_since: None,
+        asked: false,
+    })
+}
+
+/// Both arms, the left one yieldable.
+fn yielding_spec(s: &Scene) -> ActionSpec {
+    ActionSpec {
+        yields: scope(s, "left_arm"),
+        ..spec(s, "right_arm+left_arm", Mode::Default)
+    }
+}
+
+#[test]
+fn every_mode_against_a_yieldable_part() {
+    // (mode, whether A keeps running, whether A is narrowed)
+    for (mode, keeps, narrowed) in [
+        (Mode::Default, true, true),
+        (Mode::Weighted, true, false),
+        (Mode::Exclusive, true, true),
+        (Mode::Clearing, false, true),
+    ] {
+        let (mut s, a) = scene();
+        let walk = s
+            .start_action(a, yielding_spec(&s), winds_down(0.3, 0.05))
+            .unwrap();
+        s.step();
+        let b = s
+            .start_action(a, spec(&s, "l_elbow", mode), constant(1.0))
+            .unwrap();
+        let events = s.step().to_vec();
+        assert!(status(&s, b).is_running(), "{mode:?}: B starts at once");
+        let info = s.action(walk).unwrap();
+        let expected = if keeps {
+            Status::Active
+        } else {
+            Status::Terminating
+        };
+        assert_eq!(info.status, expected, "{mode:?}");
+        let narrow_events = events.iter().filter(|e| e.narrowed.is_some()).count();
+        if narrowed {
+            assert_eq!(info.yielded, scope(&s, "l_elbow"), "{mode:?}");
+            assert_eq!(q(&s, "l_elbow_flexion"), 1.0, "{mode:?}: B alone drives it");
+            assert_eq!(
+                narrow_events,
+                usize::from(keeps),
+                "{mode:?}: reported when it goes on"
+            );
+        } else {
+            assert!(info.yielded.is_empty(), "{mode:?}");
+            assert!(
+                (q(&s, "l_elbow_flexion") - 0.65).abs() < 1e-12,
+                "{mode:?}: blends"
+            );
+        }
+        assert_eq!(
+            q(&s, "r_elbow_flexion"),
+            0.3,
+            "{mode:?}: A still drives the rest"
+        );
+        // A clearing action takes all of a winding-down A's overlap but lets it finish.
+        if !keeps {
+            let end = run_until(&mut s, walk, Status::Cancelled, 20);
+            assert!(end >= 4, "wound down over 0.05 s at full weight, not cut");
+        }
+        assert_eq!(
+            s.refused_writes(),
+            0,
+            "{mode:?}: yielded writes are not refused"
+        );
+    }
+}
+
+#[test]
+fn an_action_that_needs_an_essential_part_waits_or_stops_it() {
+    let (mut s, a) = scene();
+    let walk = s
+        .start_action(a, yielding_spec(&s), winds_down(0.3, 0.05))
+        .unwrap();
+    s.step();
+    let waits = s
+        .start_action(a, spec(&s, "r_elbow", Mode::Default), constant(1.0))
+        .unwrap();
+    s.step();
+    assert_eq!(status(&s, waits), Status::Pending);
+    s.cancel(waits).unwrap();
+    let takes = s
+        .start_action(a, spec(&s, "r_elbow", Mode::Exclusive), constant(1.0))
+        .unwrap();
+    s.step();
+    assert!(status(&s, takes).is_running());
+    let info = s.action(walk).unwrap();
+    assert_eq!(info.status, Status::Terminating, "winds down");
+    assert_eq!(
+        info.yielded,
+        scope(&s, "r_elbow"),
+        "gives the overlap up at once"
+    );
+    assert_eq!(q(&s, "r_elbow_flexion"), 1.0);
+    assert_eq!(
+        q(&s, "l_elbow_flexion"),
+        0.3,
+        "and keeps the rest until it has finished"
+    );
+    run_until(&mut s, walk, Status::Cancelled, 20);
+    assert!(s
+        .action(walk)
+        .unwrap()
+        .reason
+        .unwrap()
+        .contains("pre-empted"));
+}
+
+#[test]
+fn a_yielded_dof_fades_out_over_the_ease_out_while_the_taker_comes_in() {
+    let (mut s, a) = scene();
+    let yielding = ActionSpec {
+        ease_out: 0.1,
+        ..yielding_spec(&s)
+    };
+    s.start_action(a, yielding, constant(0.4)).unwrap();
+    s.step();
+    s.start_action(a, spec(&s, "l_elbow", Mode::Default), constant(1.0))
+        .unwrap();
+    s.step();
+    // Admitted at t = 0.02: the yielded DOF's weight is 1 − ease(0) = 1 → the average.
+    assert!((q(&s, "l_elbow_flexion") - 0.7).abs() < 1e-12);
+    s.step();
+    let f = 1.0 - ease(0.1);
+    let want = (1.0 + f * 0.4) / (1.0 + f);
+    assert!((q(&s, "l_elbow_flexion") - want).abs() < 1e-12);
+    for _ in 0..10 {
+        s.step();
+    }
+    assert_eq!(q(&s, "l_elbow_flexion"), 1.0, "faded out");
+}
+
+#[test]
+fn stop_winds_down_at_full_weight_and_completes_or_eases_out() {
+    let (mut s, a) = scene();
+    let graceful = s
+        .start_action(
+            a,
+            spec(&s, "right_arm", Mode::Default),
+            winds_down(0.3, 0.05),
+        )
+        .unwrap();
+    let plain = s
+        .start_action(
+            a,
+            ActionSpec {
+                ease_out: 0.1,
+                ..spec(&s, "left_arm", Mode::Default)
+            },
+            constant(0.6),
+        )
+        .unwrap();
+    s.step();
+    s.stop(graceful).unwrap();
+    s.stop(plain).unwrap();
+    s.step();
+    assert_eq!(status(&s, graceful), Status::Terminating);
+    assert_eq!(
+        q(&s, "r_elbow_flexion"),
+        0.3,
+        "full weight while winding down"
+    );
+    assert_eq!(status(&s, plain), Status::Terminating);
+    run_until(&mut s, graceful, Status::Completed, 20);
+    run_until(&mut s, plain, Status::Completed, 20);
+    assert_eq!(s.action(graceful).unwrap().reason, None);
+    let pending = s
+        .start_action(
+            a,
+            ActionSpec {
+                delay: 1.0,
+                ..spec(&s, "right_arm", Mode::Default)
+            },
+            constant(0.1),
+        )
+        .unwrap();
+    s.stop(pending).unwrap();
+    s.step();
+    assert_eq!(status(&s, pending), Status::Cancelled);
+}
+
+#[test]
+fn narrowing_is_the_same_on_one_and_two_threads() {
+    let run = |threads: usize| {
+        let mut s = Scene::new(SceneConfig {
+            threads,
+            ..SceneConfig::default()
+        })
+        .unwrap();
+        s.set_chunk_size(Some(1));
+        let mut actors = Vec::new();
+        for i in 0..4 {
+            actors.push(s.add_actor(&ActorDesc::new(format!("a{i}"))).unwrap());
+        }
+        for (k, &a) in actors.iter().enumerate() {
+            let spec = ActionSpec {
+                ease_out: 0.05 * k as f64,
+                ..yielding_spec(&s)
+            };
+            s.start_action(a, spec, winds_down(0.1 * k as f64, 0.03))
+                .unwrap();
+        }
+        let mut trace = Vec::new();
+        for t in 0..40 {
+            if t == 5 {
+                for (k, &a) in actors.iter().enumerate() {
+                    let mode = [
+                        Mode::Default,
+                        Mode::Exclusive,
+                        Mode::Clearing,
+                        Mode::Weighted,
+                    ][k];
+                    s.start_action(a, spec(&s, "l_elbow", mode), constant(0.9))
+                        .unwrap();
+                }
+            }
+            s.step();
+            for st in s.states() {
+                trace.extend(st.q.iter().map(|v| v.to_bits()));
+            }
+        }
+        trace
+    };
+    assert_eq!(run(1), run(2));
+}
+
+#[test]
+fn a_narrowing_is_an_event_and_an_instant_in_the_timeline() {
+    let (mut s, a) = scene();
+    let mut timeline = troupe_scene::timeline::TimelineRecorder::new();
+    let walk = s
+        .start_action(a, yielding_spec(&s), winds_down(0.3, 0.05))
+        .unwrap();
+    let events = s.step().to_vec();
+    timeline.record(&s, &events);
+    s.start_action(a, spec(&s, "left_arm", Mode::Default), constant(1.0))
+        .unwrap();
+    let events = s.step().to_vec();
+    timeline.record(&s, &events);
+    let narrowed: Vec<_> = events.iter().filter(|e| e.narrowed.is_some()).collect();
+    assert_eq!(narrowed.len(), 1);
+    assert_eq!(narrowed[0].action, walk);
+    assert_eq!(
+        narrowed[0].status,
+        Status::Active,
+        "its status is unchanged"
+    );
+    assert_eq!(narrowed[0].narrowed, Some(scope(&s, "left_arm")));
+    let trace = timeline.to_json(&s);
+    let instants: Vec<_> = trace["traceEvents"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|e| e["ph"] == "i")
+        .collect();
+    assert_eq!(instants.len(), 1);
+    assert_eq!(instants[0]["name"], "test narrowed");
+    assert_eq!(instants[0]["args"]["yielded"], "left_arm");
+    assert_eq!(instants[0]["args"]["action"], walk.0);
 }

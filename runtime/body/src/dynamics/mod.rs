@@ -29,7 +29,10 @@ pub mod spatial;
 use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
 use glam::DVec3;
-pub use model::{Data, FloatingBase, Model, DEFAULT_ARMATURE, DEFAULT_ARMATURE_FRACTION};
+pub use model::{
+    nominal_link_inertia, nominal_links, Data, FloatingBase, Model, DEFAULT_ARMATURE,
+    DEFAULT_ARMATURE_FRACTION, NOMINAL_LINK_MASS, NOMINAL_LINK_RADIUS,
+};
 pub use sim::{Control, Gains, SimParams, Simulation};
 pub use spatial::{Force, Inertia, Motion};
 

@@ -19,7 +19,47 @@ pub const DEFAULT_ARMATURE: f64 = 1e-4;
 /// vt1, sacroiliac, …) enough inertia that their internal motions stay slow.
 pub const DEFAULT_ARMATURE_FRACTION: f64 = 0.01;
 
-/// A rigid body carried by a link: the sum of the solids attached to it.
+/// Mass (kg) of the nominal body on a moving link that carries no solid (a finger, toe or
+/// eye link, an intermediate link of a multi-DOF joint): a bead small enough not to
+/// matter to the body's motion, and enough that a tool without armature (Pinocchio's
+/// ABA on the exported URDF) has an inertia to divide by.
+pub const NOMINAL_LINK_MASS: f64 = 1e-3;
+/// Radius (m) of the nominal body: a solid sphere at the link's origin, so its inertia
+/// is `2/5 · NOMINAL_LINK_MASS · NOMINAL_LINK_RADIUS²` about every axis.
+pub const NOMINAL_LINK_RADIUS: f64 = 0.01;
+
+/// The inertia (kg·m², about every axis through its centre) of the nominal body.
+pub fn nominal_link_inertia() -> f64 {
+    0.4 * NOMINAL_LINK_MASS * NOMINAL_LINK_RADIUS * NOMINAL_LINK_RADIUS
+}
+
+/// Per DOF, whether its link carries the nominal body: a non-root link that no solid
+/// rides on (the solids of a joint ride on the link of its last DOF; those of a joint
+/// without DOFs on its parent's). The exporter writes the same bodies into URDF.
+pub fn nominal_links(skeleton: &Skeleton) -> Vec<bool> {
+    let joints = skeleton.joints();
+    let mut carrier: Vec<Option<usize>> = Vec::with_capacity(joints.len());
+    for joint in joints {
+        carrier.push(if joint.dofs.is_empty() {
+            joint.parent.and_then(|p| carrier[p])
+        } else {
+            Some(joint.dofs.end - 1)
+        });
+    }
+    let mut carries = vec![false; skeleton.dof_count()];
+    for (j, _) in skeleton.solids() {
+        if let Some(k) = carrier[*j] {
+            carries[k] = true;
+        }
+    }
+    let root = joints.first().map_or(0..0, |j| j.dofs.clone());
+    (0..carries.len())
+        .map(|k| !carries[k] && !root.contains(&k))
+        .collect()
+}
+
+/// A rigid body carried by a link: the sum of the solids attached to it (or the nominal
+/// body, see [`NOMINAL_LINK_MASS`]).
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Body {
     pub link: usize,
@@ -163,14 +203,24 @@ impl Model {
                 }),
             }
         }
-        bodies.sort_by_key(|b| b.link);
-        let total_mass: f64 = bodies.iter().map(|b| b.mass).sum();
-        if total_mass <= 0.0 {
+        if bodies.iter().map(|b| b.mass).sum::<f64>() <= 0.0 {
             return Err(Error::Invalid(format!(
                 "dynamics: skeleton `{}` has no mass",
                 skeleton.name()
             )));
         }
+        for (link, nominal) in nominal_links(skeleton).into_iter().enumerate() {
+            if nominal {
+                bodies.push(Body {
+                    link,
+                    mass: NOMINAL_LINK_MASS,
+                    com: DVec3::ZERO,
+                    inertia: DMat3::from_diagonal(DVec3::splat(nominal_link_inertia())),
+                });
+            }
+        }
+        bodies.sort_by_key(|b| b.link);
+        let total_mass: f64 = bodies.iter().map(|b| b.mass).sum();
         let axes = [DVec3::X, DVec3::Y, DVec3::Z];
         let floating = root.len() == 6
             && dofs[root.clone()].iter().enumerate().all(|(i, d)| {

@@ -3,14 +3,21 @@
 //! A rig is written as a node hierarchy with a skin, and its motion as one animation whose
 //! channels are per-joint rotation quaternions (and translations for joints that move,
 //! like the root): a `.gltf` (JSON) with a `.bin` beside it, or one `.glb`. Metres, Y up,
-//! facing +Z — glTF's own conventions, so no axis change is needed. Reading takes the
+//! facing +Z — glTF's own conventions, so no axis change is needed. A troupe body's file
+//! also carries its generated skin as a skinned mesh ([`skin`]). Reading takes the
 //! first animation back onto a troupe skeleton whose joint names the nodes carry.
+//! A recording's objects are written as animated nodes beside the skeleton (`objects`).
 
+mod objects;
 pub mod read;
+pub mod skin;
 pub mod write;
 
 pub use read::read_gltf_motion;
-pub use write::{to_gltf, write_glb, write_gltf};
+pub use skin::add_skin;
+pub use write::{
+    to_gltf, to_gltf_with_objects, write_glb, write_glb_with, write_gltf, write_gltf_with,
+};
 
 /// The rig glTF files are written from (the crate's one [`crate::rig::Rig`]).
 pub use crate::rig::Rig;

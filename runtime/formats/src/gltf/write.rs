@@ -1,6 +1,8 @@
 //! Writing a rig as glTF 2.0 with `gltf-json`'s typed structures: a `.gltf` (JSON) with a
 //! `.bin` buffer beside it, or one binary `.glb`.
 
+use super::objects::object_node;
+use super::skin::add_skin;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
 use ::gltf::binary::{Glb, Header};
@@ -12,6 +14,8 @@ use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::borrow::Cow;
 use std::path::Path;
+use troupe_body::Skin;
+use troupe_motion::object_motion::ObjectMotion;
 
 /// A growing binary buffer and the document whose buffer views and accessors point into
 /// it.
@@ -115,6 +119,18 @@ fn pad_to_four(bytes: &mut Vec<u8>) {
 /// animation named `name`. `bin_uri` is how the document names the buffer (`None`: the
 /// binary chunk of a `.glb`).
 pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) {
+    to_gltf_with_objects(rig, &[], name, bin_uri)
+}
+
+/// [`to_gltf`] with recorded objects: each a node of the scene animated on the rig's
+/// frames (see [`super::objects`]); `objects` pairs each object with its one-joint rig
+/// ([`Rig::from_object`] on the body rig's times).
+pub fn to_gltf_with_objects(
+    rig: &Rig,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+    bin_uri: Option<&str>,
+) -> (Root, Vec<u8>) {
     let n = rig.names.len();
     let mut b = Builder {
         root: Root {
@@ -142,7 +158,7 @@ pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) 
             ..Default::default()
         });
     }
-    let roots: Vec<Index<json::Node>> = (0..n)
+    let mut roots: Vec<Index<json::Node>> = (0..n)
         .filter(|&j| rig.parents[j].is_none())
         .map(|j| Index::new(j as u32))
         .collect();
@@ -201,6 +217,7 @@ pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) 
             let output = b.floats(&data, Type::Vec3, frames, false);
             b.channel(&mut animation, input, output, j, Property::Translation);
         }
+        roots.extend(add_object_nodes(&mut b, &mut animation, input, objects));
     }
     pad_to_four(&mut b.bytes);
     let skin = json::Skin {
@@ -232,15 +249,73 @@ pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) 
     (b.root, b.bytes)
 }
 
+/// Adds a node per recorded object (see [`super::objects`]) and its translation and
+/// rotation channels on the frames whose times accessor is `input`; returns the nodes,
+/// to list among the scene's roots.
+fn add_object_nodes(
+    b: &mut Builder,
+    animation: &mut json::Animation,
+    input: Index<json::Accessor>,
+    objects: &[(&ObjectMotion, Rig)],
+) -> Vec<Index<json::Node>> {
+    let mut nodes = Vec::new();
+    for (object, rig) in objects {
+        let frames = rig.times.len();
+        let added = object_node(object, rig);
+        let node = b.root.push(added.node);
+        let output = b.floats(&added.translations, Type::Vec3, frames, false);
+        b.channel(
+            animation,
+            input,
+            output,
+            node.value(),
+            Property::Translation,
+        );
+        let output = b.floats(&added.rotations, Type::Vec4, frames, false);
+        b.channel(animation, input, output, node.value(), Property::Rotation);
+        nodes.push(node);
+    }
+    nodes
+}
+
+/// The document and binary buffer of a file: [`to_gltf_with_objects`], plus `skin` as the
+/// body's skinned mesh when there is one.
+fn document(
+    rig: &Rig,
+    skin: Option<&Skin>,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+    uri: Option<&str>,
+) -> (Root, Vec<u8>) {
+    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, uri);
+    if let Some(skin) = skin {
+        add_skin(&mut root, &mut bytes, skin, name);
+    }
+    (root, bytes)
+}
+
 /// Writes `rig` as `path` (`.gltf`) and a `.bin` of the same stem beside it.
 pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
+    write_gltf_with(path, rig, None, &[], name)
+}
+
+/// Writes `rig` as `path` (`.gltf`) and a `.bin` beside it, with `skin` (made for the
+/// skeleton the rig comes from) as its skinned mesh and recorded `objects` as animated
+/// nodes (see [`to_gltf_with_objects`]).
+pub fn write_gltf_with(
+    path: impl AsRef<Path>,
+    rig: &Rig,
+    skin: Option<&Skin>,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+) -> Result<()> {
     let path = path.as_ref();
     let bin = path.with_extension("bin");
     let uri = bin
         .file_name()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "motion.bin".into());
-    let (root, bytes) = to_gltf(rig, name, Some(&uri));
+    let (root, bytes) = document(rig, skin, objects, name, Some(&uri));
     let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
     std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
     std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
@@ -248,8 +323,21 @@ pub fn write_gltf(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
 
 /// Writes `rig` as one binary glTF file `path` (`.glb`): a JSON chunk and a binary chunk.
 pub fn write_glb(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
+    write_glb_with(path, rig, None, &[], name)
+}
+
+/// Writes `rig` as one binary glTF file `path` (`.glb`) with `skin` (made for the
+/// skeleton the rig comes from) as its skinned mesh and recorded `objects` as animated
+/// nodes (see [`to_gltf_with_objects`]).
+pub fn write_glb_with(
+    path: impl AsRef<Path>,
+    rig: &Rig,
+    skin: Option<&Skin>,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+) -> Result<()> {
     let path = path.as_ref();
-    let (root, bytes) = to_gltf(rig, name, None);
+    let (root, bytes) = document(rig, skin, objects, name, None);
     let glb = Glb {
         header: Header {
             magic: *b"glTF",

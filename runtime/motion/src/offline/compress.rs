@@ -8,7 +8,7 @@
 
 use crate::error::{Error, Result};
 use crate::offline::pyramid::{gaussian, Grid};
-use crate::sequence::{Key, Sequence, Track};
+use crate::sequence::{Interpolation, Key, Sequence, Track};
 
 /// Fewest segments a linear subset spans; shorter straight stretches stay in the curve.
 pub const MIN_LINEAR: usize = 3;
@@ -81,7 +81,10 @@ pub fn simpson(t: &[f64], f: &[f64]) -> f64 {
 
 /// Compresses one track (5.8, table "data compression flow chart"): linear subsets become
 /// one straight Hermite segment, the non-linear subsets are approximated by recursive
-/// Hermite subdivision. The output keys are a subset of the input's, with explicit slopes.
+/// Hermite subdivision. The output keys are a subset of the input's, with explicit slopes;
+/// a key without a slope takes the chord of its neighbours (thesis 5.8), the better
+/// estimate of a sampled curve's derivative. A `linear` or `step` track is returned as it
+/// is: its keys are not Hermite samples.
 pub fn compress_track(track: &Track, opts: &SplineOptions) -> Result<Track> {
     if !(opts.tolerance.is_finite() && opts.tolerance >= 0.0) {
         return Err(Error::invalid_value(
@@ -92,12 +95,17 @@ pub fn compress_track(track: &Track, opts: &SplineOptions) -> Result<Track> {
     }
     let keys = track.keys();
     let n = keys.len();
-    if n <= 2 {
+    let hermite = matches!(
+        track.interpolation(),
+        Interpolation::Cubic | Interpolation::Hermite
+    );
+    if n <= 2 || !hermite {
         return Ok(track.clone());
     }
     let t: Vec<f64> = keys.iter().map(|k| k.time).collect();
     let v: Vec<f64> = keys.iter().map(|k| k.value).collect();
-    let s = track.slopes();
+    let chords = track.clone().with_interpolation(Interpolation::Hermite);
+    let s = chords.slopes();
     let tol = opts.tolerance;
     let itol = opts.integral_tolerance.unwrap_or(tol / 4.0);
     let smax = s.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -201,7 +209,7 @@ pub fn compress_track(track: &Track, opts: &SplineOptions) -> Result<Track> {
         .filter(|&k| keep[k])
         .map(|k| Key::with_slope(t[k], v[k], slope[k]))
         .collect();
-    Track::new(track.dof(), out)
+    Ok(Track::new(track.dof(), out)?.with_interpolation(track.interpolation()))
 }
 
 /// Spline compression of every track of `seq` (5.8).

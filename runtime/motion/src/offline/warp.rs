@@ -120,7 +120,7 @@ pub fn remap_times(
                 }),
             })
             .collect();
-        out.add_track(Track::new(track.dof(), keys)?)?;
+        out.add_track(Track::new(track.dof(), keys)?.with_interpolation(track.interpolation()))?;
     }
     Ok(out)
 }

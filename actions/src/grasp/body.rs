@@ -1,0 +1,274 @@
+//! Whole-body reach: the posture that brings one or two wrists to their goals, as a
+//! person does — the arm first; then the spine, leaning and twisting; then, for a low
+//! target, the legs, lowering the pelvis straight down with the knees bent and the feet
+//! flat where they stand — keeping the centre of mass over the feet.
+//!
+//! Each [`Stage`] widens the DOFs the inverse kinematics may move (within the action's
+//! scope); a posture counts only if the wrists reach their goals and the centre of mass,
+//! projected on the floor, stays within the feet's support rectangle.
+
+use crate::walk::Rig;
+use troupe_body::glam::DVec3;
+use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
+use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
+use troupe_body::kinematics::{center_of_mass, forward_kinematics};
+use troupe_body::sensors::Side;
+use troupe_body::{Scope, Skeleton, Transform};
+
+/// A planned hand pose must be reachable within this distance (metres)…
+pub const REACH_TOLERANCE: f64 = 0.005;
+/// … and this angle (radians, 3°).
+pub const REACH_ANGLE: f64 = 3.0 * std::f64::consts::PI / 180.0;
+/// Depths (metres) the pelvis is lowered to, in turn, for a target the standing body
+/// cannot reach.
+pub const CROUCH_DEPTHS: [f64; 6] = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6];
+/// The most the trunk leans (radians, 40°): a target further down is reached by bending
+/// the knees rather than by folding over straight legs.
+pub const MAX_LEAN: f64 = 0.7;
+/// How far (metres) the centre of mass may go beyond the ankles and the balls of the feet:
+/// the heel behind the ankle and the toes ahead of the balls still carry weight.
+pub const SUPPORT_MARGIN: (f64, f64) = (0.05, 0.06);
+
+/// What the reach may move besides the arms.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+pub enum Stage {
+    /// The arms only.
+    Arms,
+    /// The arms and the spine (lean and twist).
+    Spine,
+    /// The arms and the spine, with the pelvis lowered by the given step of
+    /// [`CROUCH_DEPTHS`] (knees bent, heels down).
+    Crouch(usize),
+}
+
+/// A posture that reaches, with how the body got there.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Reached {
+    /// The whole posture.
+    pub q: Vec<f64>,
+    /// The DOFs it changed, with their values.
+    pub changed: Vec<(usize, f64)>,
+    /// How far (radians) the trunk leans from where it was (the vl5 → vt1 axis).
+    pub lean: f64,
+    /// How far (metres) the pelvis was lowered.
+    pub crouch: f64,
+}
+
+/// Why a stage did not reach: the wrists' remaining distance and angle, or a balance
+/// failure.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Missed {
+    /// The best remaining distance (m) and angle (rad) over the goals.
+    By(f64, f64),
+    /// The wrists reached, but the centre of mass left the feet (by metres).
+    Balance(f64),
+    /// The wrists reached, but only by leaning more than [`MAX_LEAN`] (radians).
+    Lean(f64),
+}
+
+/// Whole-body reaching for one actor's skeleton, limited to `allowed` DOFs besides the
+/// arms of the hands that reach.
+pub struct BodyReach<'a> {
+    skeleton: &'a Skeleton,
+    allowed: Scope,
+    spine: Scope,
+    legs: Scope,
+    root_y: usize,
+    rig: Option<Rig>,
+}
+
+impl<'a> BodyReach<'a> {
+    /// Reaching on `skeleton`, moving the spine and legs only where `allowed` says.
+    pub fn new(skeleton: &'a Skeleton, allowed: Scope) -> crate::error::Result<BodyReach<'a>> {
+        Ok(BodyReach {
+            skeleton,
+            allowed,
+            spine: skeleton.scope("spine")?,
+            legs: skeleton.scope("legs")?,
+            root_y: skeleton.dof("root_y")?,
+            rig: Rig::new(skeleton).ok(),
+        })
+    }
+
+    /// The stages `allowed` permits, cheapest first.
+    pub fn stages(&self) -> Vec<Stage> {
+        let mut stages = vec![Stage::Arms];
+        if self.allowed.overlaps(&self.spine) {
+            stages.push(Stage::Spine);
+        }
+        let legs = self.allowed.contains_all(&self.legs) && self.allowed.contains(self.root_y);
+        if legs && self.rig.is_some() {
+            stages.extend((0..CROUCH_DEPTHS.len()).map(Stage::Crouch));
+        }
+        stages
+    }
+
+    /// The DOFs a reach with the hands `sides` may move at all (for the action's scope).
+    pub fn body_scope(skeleton: &Skeleton) -> crate::error::Result<Scope> {
+        let mut s = skeleton.scope("spine+legs")?;
+        s.insert(skeleton.dof("root_y")?);
+        Ok(s)
+    }
+
+    /// Tries `stage` from posture `q0`: the wrists of `goals` to their poses.
+    pub fn reach(
+        &self,
+        q0: &[f64],
+        goals: &[(Side, Transform)],
+        stage: Stage,
+    ) -> crate::error::Result<Result<Reached, Missed>> {
+        let sk = self.skeleton;
+        let mut tasks = Vec::new();
+        for (side, goal) in goals {
+            let task = IkTask {
+                effector: Effector::at_joint(sk.joint(&format!("{}wrist", side.prefix()))?),
+                goal: Goal {
+                    position: goal.translation,
+                    orientation: Some(goal.rotation),
+                },
+                priority: 0,
+            };
+            tasks.push((task, sk.scope(&format!("{}_arm", side.name()))?));
+        }
+        self.reach_tasks(q0, &tasks, stage, (REACH_TOLERANCE, REACH_ANGLE))
+    }
+
+    /// Tries `stage` from posture `q0`: each task's effector to its goal, moving its
+    /// `arm` scope (and at later stages the spine, after crouching), within `tolerance`
+    /// (metres, radians).
+    pub fn reach_tasks(
+        &self,
+        q0: &[f64],
+        tasks: &[(IkTask, Scope)],
+        stage: Stage,
+        tolerance: (f64, f64),
+    ) -> crate::error::Result<Result<Reached, Missed>> {
+        let sk = self.skeleton;
+        let mut q = q0.to_vec();
+        let mut crouch = 0.0;
+        if let Stage::Crouch(i) = stage {
+            crouch = CROUCH_DEPTHS[i];
+            if !self.crouch(&mut q, crouch) {
+                return Ok(Err(Missed::By(f64::INFINITY, 0.0)));
+            }
+        }
+        let mut moving = Scope::EMPTY;
+        for (task, arm) in tasks {
+            let mut scope = *arm;
+            if stage != Stage::Arms {
+                scope = scope.union(&self.spine.intersection(&self.allowed));
+            }
+            let dofs = scope_dofs_moving(sk, &scope, task.effector.joint);
+            moving = moving.union(&dofs.into_iter().collect());
+        }
+        let options = IkOptions {
+            max_iterations: 200,
+            ..IkOptions::default()
+        };
+        let tasks: Vec<IkTask> = tasks.iter().map(|(t, _)| *t).collect();
+        let mut solver = IkSolver::new(sk, moving.iter().collect(), options)?;
+        solver.solve(sk, &mut q, &tasks, Some(q0), None)?;
+        let g = solver.globals();
+        let (mut miss, mut angle) = (0.0f64, 0.0f64);
+        for task in &tasks {
+            miss = miss.max((task.effector.position(g) - task.goal.position).length());
+            if let Some(r) = task.goal.orientation {
+                angle = angle.max(rotation_error(task.effector.rotation(g), r).length());
+            }
+        }
+        if miss > tolerance.0 || angle > tolerance.1 {
+            return Ok(Err(Missed::By(miss, angle)));
+        }
+        let mut globals = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(sk, &q, &mut globals);
+        let outside = self.outside_support(&globals);
+        if outside > 0.0 {
+            return Ok(Err(Missed::Balance(outside)));
+        }
+        let mut before = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(sk, q0, &mut before);
+        let lean = self
+            .trunk_axis(&globals)?
+            .angle_between(self.trunk_axis(&before)?);
+        if lean > MAX_LEAN {
+            return Ok(Err(Missed::Lean(lean)));
+        }
+        let changed = (0..q.len())
+            .filter(|&d| q[d] != q0[d])
+            .map(|d| (d, q[d]))
+            .collect();
+        Ok(Ok(Reached {
+            q,
+            changed,
+            lean,
+            crouch,
+        }))
+    }
+
+    /// The trunk's axis, from the lowest to the highest spine joint.
+    fn trunk_axis(&self, g: &[Transform]) -> crate::error::Result<DVec3> {
+        let sk = self.skeleton;
+        Ok(g[sk.joint("vt1")?].translation - g[sk.joint("vl5")?].translation)
+    }
+
+    /// Lowers the pelvis of `q` by `depth` with the feet flat where they are (closed-form
+    /// leg IK of the walk's rig); false if a leg cannot reach its foot.
+    fn crouch(&self, q: &mut [f64], depth: f64) -> bool {
+        let Some(rig) = &self.rig else { return false };
+        let sk = self.skeleton;
+        let mut g = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(sk, q, &mut g);
+        let heading = q[rig.root[3]];
+        let pelvis = [q[rig.pelvis[0]], q[rig.pelvis[1]], q[rig.pelvis[2]]];
+        let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
+        let root = g[0].translation - DVec3::Y * depth;
+        q[self.root_y] -= depth;
+        for (leg, l) in rig.legs.iter().enumerate() {
+            let ankle_joint = l.joints[0];
+            let ankle = g[ankle_joint].translation;
+            let fwd = g[ankle_joint].rotation * DVec3::Z;
+            let yaw = fwd.x.atan2(fwd.z);
+            let hip = rig.hip_position(leg, root, heading, pelvis_rot);
+            let (vals, miss) = rig.solve_leg(
+                leg,
+                pelvis_rot,
+                heading + pelvis[2],
+                None,
+                hip,
+                ankle,
+                (yaw, 0.0, 0.0),
+            );
+            if miss > 1e-3 {
+                return false;
+            }
+            for (i, &d) in l.dofs.iter().enumerate() {
+                q[d] = vals[i];
+            }
+        }
+        true
+    }
+
+    /// How far (metres) the centre of mass lies outside the feet's support rectangle, in
+    /// the body's frame (0 inside).
+    fn outside_support(&self, g: &[Transform]) -> f64 {
+        let sk = self.skeleton;
+        let com = center_of_mass(sk, g);
+        let heading = g[0].rotation * DVec3::Z;
+        let fwd = DVec3::new(heading.x, 0.0, heading.z).normalize_or(DVec3::Z);
+        let left = DVec3::Y.cross(fwd);
+        let names = ["l_ankle", "r_ankle", "l_metatarsal", "r_metatarsal"];
+        let (mut f0, mut f1, mut s0, mut s1) = (f64::MAX, f64::MIN, f64::MAX, f64::MIN);
+        for n in names {
+            let Ok(j) = sk.joint(n) else { return 0.0 };
+            let p = g[j].translation;
+            f0 = f0.min(p.dot(fwd));
+            f1 = f1.max(p.dot(fwd));
+            s0 = s0.min(p.dot(left));
+            s1 = s1.max(p.dot(left));
+        }
+        let (back, front) = SUPPORT_MARGIN;
+        let (f, s) = (com.dot(fwd), com.dot(left));
+        let beyond = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
+        beyond(f, f0 - back, f1 + front).max(beyond(s, s0 - 0.04, s1 + 0.04))
+    }
+}

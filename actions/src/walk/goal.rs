@@ -1,0 +1,167 @@
+//! Where a planned walk is going: floor points, an object to grasp or an actor to talk
+//! to; turned into a route around the obstacles when the walk starts, from the world as
+//! it stood at the end of the previous tick.
+
+use std::f64::consts::PI;
+use troupe_body::glam::DVec2;
+use troupe_scene::GeneratorContext;
+
+/// Default distance (m) from an object's footprint edge to the body's centre when walking
+/// to it: close enough to grasp it, far enough for the body.
+pub const GRASP_DISTANCE: f64 = 0.35;
+/// Default distance (m) between two actors' centres when one walks to the other.
+pub const CONVERSATION_DISTANCE: f64 = 1.0;
+/// How far (m) each side of a planned path's corner the route is pinned, so that the
+/// walk's rounding of the corner stays within the clearance.
+const CORNER_PIN: f64 = 0.12;
+
+/// What a planned walk goes to.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Goal {
+    /// Through these floor points (x, z) in order, planning each leg.
+    Through(Vec<DVec2>),
+    /// To a standing point `distance` from object `object`'s footprint, facing it.
+    Object {
+        /// The object's index in the scene.
+        object: usize,
+        /// Metres from the object's footprint edge to the body's centre.
+        distance: f64,
+    },
+    /// To `distance` from actor `actor`, facing them.
+    Actor {
+        /// The other actor's index in the scene.
+        actor: usize,
+        /// Metres between the two centres.
+        distance: f64,
+    },
+}
+
+/// A planned route: the floor points after the start, and the heading to end with.
+pub struct Planned {
+    /// Points to walk through, ending at the goal; each says whether the planner put it
+    /// there (a corner around an obstacle) rather than the script.
+    pub points: Vec<(DVec2, bool)>,
+    /// Heading to face on arrival (radians about +Y), when the goal asks for one.
+    pub heading: Option<f64>,
+}
+
+impl Goal {
+    /// Plans the route from `start` for a body of `radius`, or says why there is none.
+    pub fn plan(
+        &self,
+        ctx: &GeneratorContext,
+        start: DVec2,
+        radius: f64,
+    ) -> Result<Planned, String> {
+        let world = ctx.world;
+        let planned = match self {
+            Goal::Through(points) => {
+                let mut route = Vec::new();
+                let mut from = start;
+                for p in points {
+                    let leg = world.path(from, *p, radius).map_err(|e| e.to_string())?;
+                    let n = leg.len();
+                    route.extend(leg.into_iter().enumerate().map(|(i, q)| (q, i + 1 < n)));
+                    from = *p;
+                }
+                Planned {
+                    points: route,
+                    heading: None,
+                }
+            }
+            Goal::Object { object, distance } => {
+                let o = world.objects.get(*object).ok_or("the object is gone")?;
+                let name = &o.name;
+                let footprint = troupe_scene::space::Footprint::of_object(o).0;
+                let centre = footprint.centre();
+                stand_near(ctx, start, centre, radius, |dir| {
+                    footprint.reach(dir) + distance
+                })
+                .map_err(|e| format!("no place to stand within reach of {name}: {e}"))?
+            }
+            Goal::Actor { actor, distance } => {
+                let other = world.states.get(*actor).ok_or("the actor is gone")?;
+                let name = &world.actors[*actor].name;
+                let at = other.globals[0].translation;
+                stand_near(ctx, start, DVec2::new(at.x, at.z), radius, |_| *distance)
+                    .map_err(|e| format!("no place to stand near {name}: {e}"))?
+            }
+        };
+        Ok(Planned {
+            points: pin_corners(start, &planned.points),
+            heading: planned.heading,
+        })
+    }
+}
+
+/// The first free standing point around `centre` (first on the side the body comes from,
+/// then turning away from it both ways, then a little further out), with the path to it
+/// and the heading that faces `centre`.
+fn stand_near(
+    ctx: &GeneratorContext,
+    start: DVec2,
+    centre: DVec2,
+    radius: f64,
+    distance: impl Fn(DVec2) -> f64,
+) -> Result<Planned, String> {
+    let towards = (centre - start).try_normalize().unwrap_or(DVec2::Y);
+    let obstacles = ctx.world.obstacles();
+    let inflated = radius + troupe_scene::space::CLEARANCE;
+    let mut last = String::from("every side is blocked");
+    for further in 0..=6 {
+        for turn in 0..=12 {
+            for side in [1.0, -1.0] {
+                if turn == 0 && side < 0.0 {
+                    continue;
+                }
+                let a = side * turn as f64 * PI / 12.0;
+                let (s, c) = a.sin_cos();
+                let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
+                let stand = centre - dir * (distance(dir) + further as f64 * 0.1);
+                if obstacles.iter().any(|o| o.distance(stand) < inflated) {
+                    continue;
+                }
+                match ctx.world.space.path(&obstacles, start, stand, radius) {
+                    Ok(points) => {
+                        let n = points.len();
+                        return Ok(Planned {
+                            points: points
+                                .into_iter()
+                                .enumerate()
+                                .map(|(i, q)| (q, i + 1 < n))
+                                .collect(),
+                            heading: Some(dir.x.atan2(dir.y)),
+                        });
+                    }
+                    Err(e) => last = e.to_string(),
+                }
+            }
+        }
+    }
+    Err(last)
+}
+
+/// `points` with extra points [`CORNER_PIN`] before and after each corner the planner
+/// made, so that the walk rounds such a corner only that close to it (the script's own
+/// points are rounded as the walk always did).
+fn pin_corners(start: DVec2, points: &[(DVec2, bool)]) -> Vec<(DVec2, bool)> {
+    let mut out = Vec::with_capacity(points.len() * 3);
+    let mut prev = start;
+    for (i, &(p, planned)) in points.iter().enumerate() {
+        match points.get(i + 1) {
+            Some(&(next, _)) if planned => {
+                let (before, after) = (p - prev, next - p);
+                if before.length() > 2.0 * CORNER_PIN {
+                    out.push((p - before.normalize() * CORNER_PIN, true));
+                }
+                out.push((p, true));
+                if after.length() > 2.0 * CORNER_PIN {
+                    out.push((p + after.normalize() * CORNER_PIN, true));
+                }
+            }
+            _ => out.push((p, planned)),
+        }
+        prev = p;
+    }
+    out
+}

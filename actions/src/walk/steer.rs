@@ -1,0 +1,197 @@
+//! Local avoidance for a walk: how the body departs from its planned route to let others
+//! pass (thesis 6.5.3; reciprocal velocity obstacles, see `troupe_nav::avoid`).
+//!
+//! The plan stays a function of time; steering bends how it is followed: the plan's
+//! clock runs at a `rate` between 0 (wait) and 1 (as planned), and the body keeps an
+//! `offset` from the planned path that drifts sideways (a sidestep) and returns to it.
+//! Each tick the walk picks a velocity from the previous tick's crowd and turns it into a
+//! new rate and drift, both changing no faster than the legs can follow; the foot
+//! placement reads the same steered plan, so the feet stay planted. Until avoidance first
+//! acts, the steered plan is the plan itself, bit for bit.
+
+use super::route::{direction, Plan, RootSample};
+use troupe_body::glam::DVec2;
+use troupe_scene::space::{choose_velocity, Agent, Footprint, GAP, NEIGHBOUR_RANGE};
+use troupe_scene::GeneratorContext;
+
+/// Largest change of the plan's clock rate per second (1 → 0 in 0.8 s).
+const RATE_CHANGE: f64 = 1.25;
+/// Largest sideways speed of the offset (m/s).
+const MAX_DRIFT: f64 = 0.35;
+/// Largest change of the sideways speed per second (m/s²).
+const DRIFT_CHANGE: f64 = 2.5;
+/// How fast the body returns to its planned path once free (1/s).
+const RETURN: f64 = 0.8;
+/// How fast the body returns to its planned path in the last seconds and after (1/s).
+const END_RETURN: f64 = 2.0;
+/// Obstacles within this distance (m) are looked at while steering.
+const OBSTACLE_RANGE: f64 = 2.0;
+
+/// How a walk currently departs from its plan.
+#[derive(Clone, Debug, Default)]
+pub struct Steer {
+    /// Whether avoidance has acted yet; until then the plan's time is the walk's time.
+    pub engaged: bool,
+    /// The plan's time now.
+    pub tau: f64,
+    /// Seconds of plan per second of walking.
+    pub rate: f64,
+    /// The body's offset (x, z) from the planned path.
+    pub offset: DVec2,
+    /// The offset's velocity.
+    pub drift: DVec2,
+    /// Actors whose bodies already touched this one's when the walk started (a hand
+    /// held, a group walking together): they are not avoided.
+    pub companions: Vec<usize>,
+}
+
+impl Steer {
+    /// The plan's time at walk time `t`, `now` being the walk's time now.
+    pub fn plan_time(&self, t: f64, now: f64) -> f64 {
+        if self.engaged {
+            self.tau + (t - now) * self.rate
+        } else {
+            t
+        }
+    }
+
+    /// The steered plan at walk time `t`: position with the offset (as it drifts, for up
+    /// to half a second ahead), speed with the rate and the drift.
+    pub fn sample(&self, plan: &Plan, t: f64, now: f64, fallback: f64) -> RootSample {
+        let mut s = plan.sample(self.plan_time(t, now), fallback);
+        if self.engaged {
+            s.position += self.offset + self.drift * (t - now).clamp(0.0, 0.5);
+            s.speed = (direction(s.heading) * s.speed * self.rate + self.drift).length();
+        }
+        s
+    }
+
+    /// The steered speed at walk time `t` (see [`Steer::sample`]).
+    pub fn speed(&self, plan: &Plan, t: f64, now: f64) -> f64 {
+        if self.engaged {
+            self.sample(plan, t, now, 0.0).speed
+        } else {
+            plan.speed(t)
+        }
+    }
+
+    /// A fresh steering for a walk starting now: notes the companions (see
+    /// [`Steer::companions`]).
+    pub fn start(ctx: &GeneratorContext) -> Steer {
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        let mut companions = Vec::new();
+        if let (Some(&p), Some(&r)) = (crowd.positions.get(me), crowd.radii.get(me)) {
+            crowd.near(p, &mut companions);
+            companions.retain(|&j| {
+                j != me && (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP
+            });
+        }
+        Steer {
+            companions,
+            ..Steer::default()
+        }
+    }
+
+    /// Advances by `dt` seconds of walking.
+    pub fn advance(&mut self, dt: f64) {
+        if self.engaged {
+            self.tau += dt * self.rate;
+            self.offset += self.drift * dt;
+        }
+    }
+
+    /// Decides this tick's rate and drift from the crowd of the previous tick, for actor
+    /// `ctx.actor` walking `plan` at walk time `now`. `others` is scratch space.
+    pub fn decide(
+        &mut self,
+        ctx: &GeneratorContext,
+        plan: &Plan,
+        now: f64,
+        others: &mut Vec<usize>,
+    ) {
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        let (Some(&position), Some(&velocity), Some(&radius)) = (
+            crowd.positions.get(me),
+            crowd.velocities.get(me),
+            crowd.radii.get(me),
+        ) else {
+            return;
+        };
+        let pt = self.plan_time(now, now);
+        let dt = ctx.dt;
+        if pt >= plan.end_time {
+            // The plan has ended: step back onto its end, then settle.
+            let back = (-self.offset * END_RETURN).clamp_length_max(MAX_DRIFT);
+            let back = if self.offset.length() < 0.005 {
+                DVec2::ZERO
+            } else {
+                back
+            };
+            self.drift += (back - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+            return;
+        }
+        let here = plan.sample(pt, 0.0);
+        let ahead = plan.sample(pt + 0.1, 0.0);
+        let planned = (ahead.position - here.position) / 0.1;
+        // Back to the path, more firmly as the end nears so the walk ends at its goal.
+        let remaining = plan.end_time - pt;
+        let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
+        let mut preferred = planned - self.offset * gain;
+        if self.engaged {
+            let cap = planned.length().max(0.3);
+            preferred = preferred.clamp_length_max(cap);
+        }
+        others.clear();
+        crowd.near(position, others);
+        let agents: Vec<Agent> = others
+            .iter()
+            .filter(|&&j| j != me && !self.companions.contains(&j))
+            .map(|&j| Agent {
+                position: crowd.positions[j],
+                velocity: crowd.velocities[j],
+                radius: crowd.radii[j],
+            })
+            .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
+            .collect();
+        if agents.is_empty() && !self.engaged {
+            return;
+        }
+        let obstacles: Vec<&Footprint> = if self.engaged {
+            crowd.footprints_near(position, OBSTACLE_RANGE).collect()
+        } else {
+            Vec::new()
+        };
+        let body = Agent {
+            position,
+            velocity,
+            radius,
+        };
+        let (v, free) = choose_velocity(&body, preferred, &agents, &obstacles);
+        if free && !self.engaged {
+            return;
+        }
+        if !self.engaged {
+            *self = Steer {
+                engaged: true,
+                tau: now,
+                rate: 1.0,
+                offset: DVec2::ZERO,
+                drift: DVec2::ZERO,
+                companions: std::mem::take(&mut self.companions),
+            };
+        }
+        let speed = planned.length();
+        let along = planned.try_normalize().unwrap_or(direction(here.heading));
+        let side = along.perp();
+        let rate = if speed > 0.05 {
+            (v.dot(along) / speed).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
+        let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
+        self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+    }
+}

@@ -1,0 +1,393 @@
+//! The skin: one closed, smooth triangle surface around the body, weighted to the
+//! joints so that it deforms with the skeleton (thesis 6.5.2, Skinlib's layered model).
+//!
+//! [`Skin::build`] makes it from a template skeleton in three steps:
+//! 1. **volumes** ([`volumes`]): rounded cones and ellipsoids over the solids, in the
+//!    rest pose: torso, limbs, a palm and five fingers per hand, a head with jaw, nose,
+//!    ears, eye sockets and eyeballs;
+//! 2. **surface** (`surface`): the volumes blended into one signed distance field (smooth
+//!    unions where neighbouring joints meet, carving for the eye sockets), its zero level
+//!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
+//!    (meshoptimizer's quadric edge collapse) to at most [`MAX_TRIANGLES`] triangles, and
+//!    once more into a coarse level of detail for actors far from the camera;
+//! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint.
+//!
+//! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
+//! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
+
+mod flips;
+mod surface;
+pub mod volumes;
+mod weights;
+
+pub use volumes::{rest_globals, Region};
+pub use weights::Influences;
+
+use crate::error::{Error, Result};
+use crate::skeleton::Skeleton;
+use crate::transform::Transform;
+use glam::DVec3;
+use volumes::{Join, Volume};
+
+/// The most triangles a skin has at full detail.
+pub const MAX_TRIANGLES: usize = 24_000;
+/// Triangles of the coarse level of detail.
+pub const FAR_TRIANGLES: usize = 6_000;
+/// Grid cells per metre of standing height when sampling the body's field.
+const CELLS_PER_HEIGHT: f64 = 400.0;
+
+/// A skinned surface in the skeleton's rest pose (every DOF zero).
+#[derive(Clone, Debug)]
+pub struct Skin {
+    /// Rest-pose vertex positions (m).
+    pub positions: Vec<[f32; 3]>,
+    /// Rest-pose unit vertex normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Up to four joint indices per vertex (into the skeleton's joints).
+    pub joints: Vec<[u16; 4]>,
+    /// The matching weights: each in [0, 1], summing to one.
+    pub weights: Vec<[f32; 4]>,
+    /// What covers each vertex (skin, shirt, …), for colouring.
+    pub regions: Vec<Region>,
+    /// Full-detail triangles, counter-clockwise seen from outside.
+    pub indices: Vec<u32>,
+    /// Coarse triangles over the same vertices, for actors far away.
+    pub far_indices: Vec<u32>,
+    /// Rest-pose frame of every joint: the bind pose.
+    pub rest: Vec<Transform>,
+}
+
+impl Skin {
+    /// Builds the skin of a skeleton made from a troupe template (any template, height
+    /// and mass); a skeleton lacking the template's joints or solids is an error naming
+    /// the first one missing.
+    pub fn build(skeleton: &Skeleton) -> Result<Skin> {
+        let rest = rest_globals(skeleton);
+        let volumes = volumes::body_volumes(skeleton)?;
+        let neighbours = neighbour_test(skeleton, &volumes, 1);
+        // Surfaces blend a generation further along the trunk, so that its stacked
+        // volumes (on a chain of joints) round into one another; elsewhere a wider blend
+        // would close loops (a thumb onto the palm, an arm onto the chest).
+        let trunk: Vec<bool> = skeleton
+            .joints()
+            .iter()
+            .map(|j| ["sacroiliac", "vl5", "vt12", "vt6", "vt1"].contains(&j.name.as_str()))
+            .collect();
+        let further = neighbour_test(skeleton, &volumes, 2);
+        let blends =
+            |a: usize, b: usize| neighbours(a, b) || (trunk[a] && trunk[b] && further(a, b));
+        let height = volumes
+            .iter()
+            .map(|v| v.form.bounds().1.y)
+            .fold(0.0f64, f64::max);
+        let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, blends);
+        let (dense_positions, dense_indices) = field.triangulate();
+        if dense_indices.is_empty() {
+            return Err(Error::Invalid(
+                "skin: the body's volumes enclose nothing".into(),
+            ));
+        }
+        let points: Vec<[f32; 3]> = dense_positions
+            .iter()
+            .map(|p| p.as_vec3().to_array())
+            .collect();
+        let adapter = meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&points), 12, 0)
+            .map_err(|e| Error::Invalid(format!("skin: {e}")))?;
+        // Regions are decided on the dense surface and carried through simplification as
+        // attributes, so that collapses keep the edges between them (sleeves, collar,
+        // waistband) along rows of vertices.
+        let dense_regions: Vec<Region> = dense_positions
+            .iter()
+            .map(|&p| region_at(p, &volumes))
+            .collect();
+        let full = simplify_closed(&dense_indices, &adapter, &dense_regions, height)?;
+        let far = meshopt::simplify(
+            &full,
+            &adapter,
+            FAR_TRIANGLES * 3,
+            (0.02 * height) as f32,
+            meshopt::SimplifyOptions::ErrorAbsolute,
+            None,
+        );
+        // Keep only the vertices the full mesh uses, in first-use order.
+        let mut remap = vec![u32::MAX; points.len()];
+        let mut positions = Vec::new();
+        let mut regions = Vec::new();
+        for &i in &full {
+            if remap[i as usize] == u32::MAX {
+                remap[i as usize] = positions.len() as u32;
+                positions.push(dense_positions[i as usize]);
+                regions.push(dense_regions[i as usize]);
+            }
+        }
+        let mut indices: Vec<u32> = full.iter().map(|&i| remap[i as usize]).collect();
+        flips::flip_slivers(&positions, &mut indices, 0.05);
+        let far_indices: Vec<u32> = far.iter().map(|&i| remap[i as usize]).collect();
+        smooth_regions(&mut regions, &indices);
+        let normals = vertex_normals(&positions, &indices);
+        let mut joints = Vec::with_capacity(positions.len());
+        let mut weights = Vec::with_capacity(positions.len());
+        for &p in &positions {
+            let (j, w) = weights::influences(p, &volumes, &neighbours);
+            joints.push(j);
+            weights.push(w);
+        }
+        Ok(Skin {
+            positions: positions.iter().map(|p| p.as_vec3().to_array()).collect(),
+            normals,
+            joints,
+            weights,
+            regions,
+            indices,
+            far_indices,
+            rest,
+        })
+    }
+
+    /// Number of full-detail triangles.
+    pub fn triangle_count(&self) -> usize {
+        self.indices.len() / 3
+    }
+
+    /// Bytes held by the skin's arrays (what an actor's skin costs in memory).
+    pub fn memory_bytes(&self) -> usize {
+        let n = self.positions.len();
+        n * (12 + 12 + 8 + 16 + 1)
+            + (self.indices.len() + self.far_indices.len()) * 4
+            + self.rest.len() * std::mem::size_of::<Transform>()
+    }
+
+    /// Skinning transforms for joint frames `globals`: `globals[j] · rest[j]⁻¹`, which
+    /// carries a rest-pose point attached to joint `j` to where the joint has moved it.
+    pub fn skinning_transforms(&self, globals: &[Transform]) -> Vec<Transform> {
+        globals
+            .iter()
+            .zip(&self.rest)
+            .map(|(g, r)| g.mul(&r.inverse()))
+            .collect()
+    }
+
+    /// The skin's vertex positions for joint frames `globals`, by linear blend skinning.
+    pub fn deform(&self, globals: &[Transform]) -> Vec<DVec3> {
+        let m = self.skinning_transforms(globals);
+        self.positions
+            .iter()
+            .zip(self.joints.iter().zip(&self.weights))
+            .map(|(p, (js, ws))| {
+                let p = DVec3::from(p.map(f64::from));
+                js.iter()
+                    .zip(ws)
+                    .filter(|(_, &w)| w > 0.0)
+                    .map(|(&j, &w)| m[j as usize].transform_point(p) * w as f64)
+                    .sum()
+            })
+            .collect()
+    }
+}
+
+/// Simplifies the dense closed mesh to at most [`MAX_TRIANGLES`] triangles, keeping it
+/// closed. Edge collapse can pinch a thin part (a fingertip, an ear's rim) into an edge
+/// shared by four triangles; where that happens the vertices around it are locked and
+/// the simplification runs again, so those few spots keep their fine triangles.
+fn simplify_closed(
+    dense: &[u32],
+    adapter: &meshopt::VertexDataAdapter<'_>,
+    regions: &[Region],
+    height: f64,
+) -> Result<Vec<u32>> {
+    // One attribute per region, 1 where the vertex has it: changing region along a
+    // collapse costs as much as moving the surface by REGION_WEIGHT × height.
+    const REGIONS: usize = 6;
+    const REGION_WEIGHT: f64 = 0.01;
+    let mut attributes = vec![0.0f32; regions.len() * REGIONS];
+    for (v, &r) in regions.iter().enumerate() {
+        attributes[v * REGIONS + r as usize] = 1.0;
+    }
+    let weights = [(REGION_WEIGHT * height) as f32; REGIONS];
+    let mut lock = vec![false; adapter.vertex_count];
+    let mut rings: Option<Vec<Vec<u32>>> = None;
+    for _ in 0..12 {
+        let full = meshopt::simplify_with_attributes_and_locks(
+            dense,
+            adapter,
+            &attributes,
+            &weights,
+            REGIONS * std::mem::size_of::<f32>(),
+            &lock,
+            MAX_TRIANGLES * 3,
+            (0.004 * height) as f32,
+            meshopt::SimplifyOptions::ErrorAbsolute | meshopt::SimplifyOptions::Regularize,
+            None,
+        );
+        let pinched = pinched_vertices(&full);
+        if pinched.is_empty() {
+            return Ok(full);
+        }
+        let rings = rings.get_or_insert_with(|| neighbours_of(dense, adapter.vertex_count));
+        // Lock each pinched vertex and its dense neighbourhood, three rings deep.
+        let mut frontier = pinched;
+        for _ in 0..3 {
+            let mut next = Vec::new();
+            for v in frontier {
+                if !lock[v as usize] {
+                    lock[v as usize] = true;
+                }
+                next.extend(
+                    rings[v as usize]
+                        .iter()
+                        .copied()
+                        .filter(|&n| !lock[n as usize]),
+                );
+            }
+            frontier = next;
+        }
+        for v in frontier {
+            lock[v as usize] = true;
+        }
+    }
+    Err(Error::Invalid(
+        "skin: the simplified surface stayed pinched (an edge shared by more than two triangles)"
+            .into(),
+    ))
+}
+
+/// Vertices of edges that are not shared by exactly two opposite triangles.
+fn pinched_vertices(indices: &[u32]) -> Vec<u32> {
+    let mut edges: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    for t in indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *edges.entry((a, b)).or_default() += 1;
+        }
+    }
+    let mut bad: Vec<u32> = edges
+        .iter()
+        .filter(|(&(a, b), &count)| count != 1 || edges.get(&(b, a)) != Some(&1))
+        .flat_map(|(&(a, b), _)| [a, b])
+        .collect();
+    bad.sort_unstable();
+    bad.dedup();
+    bad
+}
+
+/// Each vertex's neighbours along the triangles' edges.
+fn neighbours_of(indices: &[u32], count: usize) -> Vec<Vec<u32>> {
+    let mut out = vec![Vec::new(); count];
+    for t in indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            out[a as usize].push(b);
+            out[b as usize].push(a);
+        }
+    }
+    out
+}
+
+/// Evens out the edges between clothes and skin: a vertex whose neighbours mostly wear
+/// another region (a tooth sticking out of a sleeve or a waistband) takes theirs. Eyes
+/// and pupils are left as they are.
+fn smooth_regions(regions: &mut [Region], indices: &[u32]) {
+    let neighbours = neighbours_of(indices, regions.len());
+    for _ in 0..2 {
+        let before = regions.to_vec();
+        for (v, around) in neighbours.iter().enumerate() {
+            if matches!(before[v], Region::Eye | Region::Pupil) {
+                continue;
+            }
+            let mut counts = [0usize; 6];
+            for &n in around {
+                counts[before[n as usize] as usize] += 1;
+            }
+            let (best, &count) = counts
+                .iter()
+                .enumerate()
+                .max_by_key(|&(r, &c)| (c, std::cmp::Reverse(r)))
+                .expect("six regions");
+            let region = [
+                Region::Skin,
+                Region::Shirt,
+                Region::Trousers,
+                Region::Shoes,
+                Region::Eye,
+                Region::Pupil,
+            ][best];
+            if count * 2 > around.len() && !matches!(region, Region::Eye | Region::Pupil) {
+                regions[v] = region;
+            }
+        }
+    }
+}
+
+/// Area-weighted vertex normals.
+fn vertex_normals(positions: &[DVec3], indices: &[u32]) -> Vec<[f32; 3]> {
+    let mut normals = vec![DVec3::ZERO; positions.len()];
+    for t in indices.chunks_exact(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+        let n = (positions[b] - positions[a]).cross(positions[c] - positions[a]);
+        for v in [a, b, c] {
+            normals[v] += n;
+        }
+    }
+    normals
+        .iter()
+        .map(|n| n.try_normalize().unwrap_or(DVec3::Y).as_vec3().to_array())
+        .collect()
+}
+
+/// What covers the skin at `p`: the region of the volume whose surface is nearest; the
+/// front of an eyeball is its pupil.
+fn region_at(p: DVec3, volumes: &[Volume]) -> Region {
+    let nearest = volumes
+        .iter()
+        .filter(|v| v.join != Join::Carve)
+        .map(|v| (v.form.distance(p).abs(), v))
+        .min_by(|a, b| a.0.total_cmp(&b.0))
+        .map(|(_, v)| v)
+        .expect("a body has volumes");
+    match (nearest.region, nearest.form) {
+        (Region::Eye, volumes::Form::Ellipsoid { center, radii, .. })
+            if p.z - center.z > 0.75 * radii.z =>
+        {
+            Region::Pupil
+        }
+        (region, _) => region,
+    }
+}
+
+/// Whether the volumes of two joints blend (or share weights): the same joint, or one
+/// an ancestor of the other at most `generations` steps up, counting only joints with
+/// volumes (the two joints under the root, pelvis and spine, count as neighbours).
+fn neighbour_test(
+    skeleton: &Skeleton,
+    volumes: &[Volume],
+    generations: usize,
+) -> impl Fn(usize, usize) -> bool {
+    let joints = skeleton.joints();
+    let mut has = vec![false; joints.len()];
+    for v in volumes {
+        has[v.joint] = true;
+    }
+    let fleshy_parent: Vec<Option<usize>> = (0..joints.len())
+        .map(|j| {
+            let mut p = joints[j].parent;
+            while let Some(q) = p {
+                if has[q] {
+                    return Some(q);
+                }
+                p = joints[q].parent;
+            }
+            None
+        })
+        .collect();
+    move |a: usize, b: usize| {
+        let within = |a: usize, b: usize| {
+            let mut up = Some(a);
+            (0..generations).any(|_| {
+                up = up.and_then(|j| fleshy_parent[j]);
+                up == Some(b)
+            })
+        };
+        a == b
+            || within(a, b)
+            || within(b, a)
+            || (fleshy_parent[a].is_none() && fleshy_parent[b].is_none())
+    }
+}

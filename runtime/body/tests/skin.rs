@@ -1,0 +1,247 @@
+//! The generated skin, for every template at several sizes: a closed surface without
+//! degenerate triangles, normalised weights of at most four joints, and at 50 random
+//! postures within the joint limits no vertex far from its bones and no triangle turned
+//! inside out.
+
+use std::collections::HashMap;
+use troupe_body::glam::DVec3;
+use troupe_body::kinematics::forward_kinematics;
+use troupe_body::skin::MAX_TRIANGLES;
+use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
+
+/// A small deterministic generator (64-bit LCG), so the postures are the same every run.
+struct Lcg(u64);
+impl Lcg {
+    fn next(&mut self) -> f64 {
+        self.0 = self
+            .0
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (self.0 >> 11) as f64 / (1u64 << 53) as f64
+    }
+}
+
+/// The bone segments of a joint: to each child joint and end site (a point for a leaf).
+fn bones(skeleton: &Skeleton, globals: &[Transform], j: usize) -> Vec<(DVec3, DVec3)> {
+    let from = globals[j].translation;
+    let mut out: Vec<(DVec3, DVec3)> = skeleton
+        .joints()
+        .iter()
+        .enumerate()
+        .filter(|(_, c)| c.parent == Some(j))
+        .map(|(c, _)| (from, globals[c].translation))
+        .collect();
+    out.extend(
+        skeleton
+            .end_sites()
+            .iter()
+            .filter(|(e, _)| *e == j)
+            .map(|(_, off)| (from, globals[j].transform_point(*off))),
+    );
+    if out.is_empty() {
+        out.push((from, from));
+    }
+    out
+}
+
+fn segment_distance(p: DVec3, (a, b): (DVec3, DVec3)) -> f64 {
+    let ab = b - a;
+    let t = ((p - a).dot(ab) / ab.length_squared().max(1e-18)).clamp(0.0, 1.0);
+    (p - (a + ab * t)).length()
+}
+
+/// Distance from `p` to the nearest bone of the joints that move it.
+fn distance_to_bones(
+    p: DVec3,
+    joints: &[u16; 4],
+    weights: &[f32; 4],
+    segs: &[Vec<(DVec3, DVec3)>],
+) -> f64 {
+    joints
+        .iter()
+        .zip(weights)
+        .filter(|(_, &w)| w > 0.0)
+        .flat_map(|(&j, _)| {
+            segs[j as usize]
+                .iter()
+                .map(move |&s| segment_distance(p, s))
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+fn check(skeleton: &Skeleton, label: &str) {
+    let started = std::time::Instant::now();
+    let skin = Skin::build(skeleton).unwrap();
+    let built = started.elapsed();
+    let h = skin
+        .positions
+        .iter()
+        .map(|p| p[1] as f64)
+        .fold(0.0, f64::max);
+    let n = skin.positions.len();
+    let tris = skin.triangle_count();
+    eprintln!(
+        "{label}: {n} vertices, {tris} triangles (far {}), built in {built:?}",
+        skin.far_indices.len() / 3
+    );
+    assert!(
+        tris <= MAX_TRIANGLES && tris > 5_000,
+        "{label}: {tris} triangles"
+    );
+
+    // Closed: every directed edge appears once, and its reverse once.
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in skin.indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *edges.entry((a, b)).or_default() += 1;
+        }
+    }
+    for (&(a, b), &count) in &edges {
+        assert_eq!(
+            count, 1,
+            "{label}: edge {a}-{b} used {count} times the same way"
+        );
+        assert_eq!(
+            edges.get(&(b, a)),
+            Some(&1),
+            "{label}: edge {a}-{b} has no twin: the surface has a hole"
+        );
+    }
+    // Euler characteristic V - E + F: 2 for one closed surface of genus 0.
+    let chi = n as i64 - (edges.len() / 2) as i64 + tris as i64;
+    assert_eq!(chi, 2, "{label}: Euler characteristic {chi}");
+
+    // No degenerate triangles at rest: three distinct vertices, not (nearly) on a line.
+    let pos = |i: u32| DVec3::from(skin.positions[i as usize].map(f64::from));
+    for t in skin.indices.chunks_exact(3) {
+        assert!(
+            t[0] != t[1] && t[1] != t[2] && t[0] != t[2],
+            "{label}: repeated vertex in {t:?}"
+        );
+        let [a, b, c] = [pos(t[0]), pos(t[1]), pos(t[2])];
+        let area = (b - a).cross(c - a).length() / 2.0;
+        let longest = (b - a).length().max((c - b).length()).max((a - c).length());
+        assert!(
+            area > 1e-12 && area / (longest * longest) > 1e-3,
+            "{label}: triangle {t:?} is degenerate: area {area:e} m², longest edge {longest:e} m"
+        );
+    }
+
+    // Weights: at most four, each in [0, 1], summing to one; joints exist.
+    for (js, ws) in skin.joints.iter().zip(&skin.weights) {
+        let sum: f32 = ws.iter().sum();
+        assert!(
+            (sum - 1.0).abs() < 1e-6,
+            "{label}: weights {ws:?} sum to {sum}"
+        );
+        assert!(
+            ws.iter().all(|w| (0.0..=1.0).contains(w)),
+            "{label}: weights {ws:?}"
+        );
+        assert!(js.iter().all(|&j| (j as usize) < skeleton.joints().len()));
+    }
+
+    // The bound: at rest, how far each vertex lies from the bones that move it.
+    let rest_segs: Vec<_> = (0..skeleton.joints().len())
+        .map(|j| bones(skeleton, &skin.rest, j))
+        .collect();
+    let rest_distance: Vec<f64> = (0..n)
+        .map(|v| distance_to_bones(pos(v as u32), &skin.joints[v], &skin.weights[v], &rest_segs))
+        .collect();
+    let slack = 0.05 * h;
+
+    let mut rng = Lcg(7);
+    let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
+    let mut worst_inverted = 0;
+    let mut worst_excess = (0.0f64, 0, 0);
+    let mut moderate_inverted = 0;
+    for posture in 0..100 {
+        // Postures 0-49 span the whole joint ranges; 50-99 half of each range around zero.
+        let span = if posture < 50 { 1.0 } else { 0.5 };
+        let q: Vec<f64> = skeleton
+            .dofs()
+            .iter()
+            .map(|d| {
+                if d.min.is_finite() && d.max.is_finite() {
+                    (d.min + (d.max - d.min) * rng.next()) * span
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        forward_kinematics(skeleton, &q, &mut globals);
+        let posed = skin.deform(&globals);
+        let segs: Vec<_> = (0..skeleton.joints().len())
+            .map(|j| bones(skeleton, &globals, j))
+            .collect();
+        for v in 0..n {
+            let d = distance_to_bones(posed[v], &skin.joints[v], &skin.weights[v], &segs);
+            let excess = d - rest_distance[v];
+            if excess > worst_excess.0 {
+                worst_excess = (excess, posture, v);
+            }
+        }
+        // Inverted triangles: a triangle whose normal turns against the rotation its
+        // vertices' joints give it, blended by their weights.
+        let mut inverted = 0;
+        for t in skin.indices.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
+            let rest_n = (pos(t[1]) - pos(t[0])).cross(pos(t[2]) - pos(t[0]));
+            let posed_n = (posed[b] - posed[a]).cross(posed[c] - posed[a]);
+            let mut turned = DVec3::ZERO;
+            for v in [a, b, c] {
+                for (&j, &w) in skin.joints[v].iter().zip(&skin.weights[v]) {
+                    let j = j as usize;
+                    turned +=
+                        globals[j].rotation * skin.rest[j].rotation.inverse() * rest_n * w as f64;
+                }
+            }
+            if posed_n.dot(turned) <= 0.0 {
+                inverted += 1;
+            }
+        }
+        if posture < 50 {
+            worst_inverted = worst_inverted.max(inverted);
+        } else {
+            moderate_inverted = moderate_inverted.max(inverted);
+        }
+    }
+    let (excess, posture, v) = worst_excess;
+    eprintln!(
+        "{label}: worst posture has {worst_inverted} inverted triangles ({moderate_inverted} at half ranges); a vertex strays at most {:.3} h ({excess:.3} m) further from its bones than at rest",
+        excess / h
+    );
+    assert!(
+        excess <= slack,
+        "{label}, posture {posture}: vertex {v} at {:?} moved by {:?} strays {excess:.3} m further from its bones than at rest",
+        skin.positions[v],
+        skin.joints[v]
+            .iter()
+            .zip(skin.weights[v])
+            .filter(|(_, w)| *w > 0.0)
+            .map(|(&j, w)| (skeleton.joints()[j as usize].name.as_str(), w))
+            .collect::<Vec<_>>(),
+    );
+    // Linear blend skinning folds the inner side of a strongly bent joint (the crease of
+    // an elbow, a knee, a hip flexed with the spine bent): triangles there turn over, as
+    // in any LBS rig. The bound keeps that to the creases.
+    let fraction = |k: usize| k as f64 / tris as f64;
+    assert!(
+        fraction(worst_inverted) <= 0.03 && fraction(moderate_inverted) <= 0.02,
+        "{label}: {worst_inverted} triangles turned inside out at full joint ranges, {moderate_inverted} at half ranges"
+    );
+}
+
+#[test]
+fn every_template_at_several_sizes_is_skinned_soundly() {
+    for t in templates() {
+        for scale in [0.8, 1.0, 1.15] {
+            let params = TemplateParams {
+                height: t.default_height * scale,
+                mass: t.default_mass * scale.powi(3),
+            };
+            let skeleton = t.instantiate(params).unwrap();
+            check(&skeleton, &format!("{} {:.2} m", t.name, params.height));
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! The skin in glTF: a troupe [`Skin`] as one skinned mesh (positions, normals, vertex
+//! colours by region, `JOINTS_0`/`WEIGHTS_0` with at most four joints per vertex) bound
+//! to the joint nodes and the skin that [`super::to_gltf`] writes, so that Blender, a web
+//! viewer or any glTF tool shows the body moving, not only its bones.
+
+use glam::Vec3;
+use gltf_json as json;
+use json::accessor::{ComponentType, GenericComponentType, Type};
+use json::validation::{Checked::Valid, USize64};
+use json::{Index, Root};
+use std::collections::BTreeMap;
+use troupe_body::skin::Region;
+use troupe_body::Skin;
+
+/// Vertex colours (linear RGB) of the skin's regions in a file.
+fn region_color(region: Region) -> [f32; 3] {
+    match region {
+        Region::Skin => [0.84, 0.50, 0.32],
+        Region::Shirt => [0.03, 0.23, 0.30],
+        Region::Trousers => [0.04, 0.05, 0.09],
+        Region::Shoes => [0.02, 0.015, 0.012],
+        Region::Eye => [0.88, 0.86, 0.80],
+        Region::Pupil => [0.01, 0.006, 0.004],
+    }
+}
+
+/// Appends `data` to the buffer as one view for `target` and returns an accessor of
+/// `count` elements.
+#[allow(clippy::too_many_arguments)]
+fn accessor(
+    root: &mut Root,
+    bytes: &mut Vec<u8>,
+    data: &[u8],
+    component: ComponentType,
+    type_: Type,
+    count: usize,
+    target: json::buffer::Target,
+    bounds: Option<(Vec<f32>, Vec<f32>)>,
+) -> Index<json::Accessor> {
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+    let offset = bytes.len();
+    bytes.extend_from_slice(data);
+    let view = root.push(json::buffer::View {
+        buffer: Index::new(0),
+        byte_length: USize64::from(data.len()),
+        byte_offset: Some(USize64::from(offset)),
+        byte_stride: None,
+        name: None,
+        target: Some(Valid(target)),
+        extensions: None,
+        extras: Default::default(),
+    });
+    let (min, max) = match bounds {
+        Some((lo, hi)) => (Some(json::Value::from(lo)), Some(json::Value::from(hi))),
+        None => (None, None),
+    };
+    root.push(json::Accessor {
+        buffer_view: Some(view),
+        byte_offset: None,
+        count: USize64::from(count),
+        component_type: Valid(GenericComponentType(component)),
+        type_: Valid(type_),
+        min,
+        max,
+        name: None,
+        normalized: false,
+        sparse: None,
+        extensions: None,
+        extras: Default::default(),
+    })
+}
+
+fn le_f32(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
+    values.into_iter().flat_map(f32::to_le_bytes).collect()
+}
+
+/// Adds `skin` to a document written by [`super::to_gltf`] for the same skeleton: a mesh
+/// on a root node named `{name} skin` that uses the document's first skin, whose joints
+/// are the skeleton's joints in order. `bytes` is the document's one buffer; its length
+/// is updated.
+pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
+    let n = skin.positions.len();
+    let (lo, hi) = skin.positions.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), p| (lo.min(Vec3::from(*p)), hi.max(Vec3::from(*p))),
+    );
+    let array = json::buffer::Target::ArrayBuffer;
+    let positions = accessor(
+        root,
+        bytes,
+        &le_f32(skin.positions.iter().flatten().copied()),
+        ComponentType::F32,
+        Type::Vec3,
+        n,
+        array,
+        Some((lo.to_array().to_vec(), hi.to_array().to_vec())),
+    );
+    let normals = accessor(
+        root,
+        bytes,
+        &le_f32(skin.normals.iter().flatten().copied()),
+        ComponentType::F32,
+        Type::Vec3,
+        n,
+        array,
+        None,
+    );
+    let colors = accessor(
+        root,
+        bytes,
+        &le_f32(skin.regions.iter().flat_map(|&r| region_color(r))),
+        ComponentType::F32,
+        Type::Vec3,
+        n,
+        array,
+        None,
+    );
+    let joints: Vec<u8> = skin
+        .joints
+        .iter()
+        .flatten()
+        .flat_map(|j| j.to_le_bytes())
+        .collect();
+    let joints = accessor(
+        root,
+        bytes,
+        &joints,
+        ComponentType::U16,
+        Type::Vec4,
+        n,
+        array,
+        None,
+    );
+    let weights = accessor(
+        root,
+        bytes,
+        &le_f32(skin.weights.iter().flatten().copied()),
+        ComponentType::F32,
+        Type::Vec4,
+        n,
+        array,
+        None,
+    );
+    let indices: Vec<u8> = skin.indices.iter().flat_map(|i| i.to_le_bytes()).collect();
+    let indices = accessor(
+        root,
+        bytes,
+        &indices,
+        ComponentType::U32,
+        Type::Scalar,
+        skin.indices.len(),
+        json::buffer::Target::ElementArrayBuffer,
+        None,
+    );
+    let material = root.push(json::Material {
+        name: Some(format!("{name} skin")),
+        pbr_metallic_roughness: json::material::PbrMetallicRoughness {
+            metallic_factor: json::material::StrengthFactor(0.0),
+            roughness_factor: json::material::StrengthFactor(0.8),
+            ..Default::default()
+        },
+        ..Default::default()
+    });
+    let attributes: BTreeMap<_, _> = [
+        (json::mesh::Semantic::Positions, positions),
+        (json::mesh::Semantic::Normals, normals),
+        (json::mesh::Semantic::Colors(0), colors),
+        (json::mesh::Semantic::Joints(0), joints),
+        (json::mesh::Semantic::Weights(0), weights),
+    ]
+    .into_iter()
+    .map(|(s, a)| (Valid(s), a))
+    .collect();
+    let mesh = root.push(json::Mesh {
+        name: Some(format!("{name} skin")),
+        primitives: vec![json::mesh::Primitive {
+            attributes,
+            indices: Some(indices),
+            material: Some(material),
+            mode: Valid(json::mesh::Mode::Triangles),
+            targets: None,
+            extensions: None,
+            extras: Default::default(),
+        }],
+        weights: None,
+        extensions: None,
+        extras: Default::default(),
+    });
+    // A skinned mesh's node sits at the root: glTF ignores its transform, and the
+    // validator warns when it has a parent.
+    let node = root.push(json::Node {
+        name: Some(format!("{name} skin")),
+        mesh: Some(mesh),
+        skin: Some(Index::new(0)),
+        ..Default::default()
+    });
+    if let Some(scene) = root.scenes.first_mut() {
+        scene.nodes.push(node);
+    }
+    bytes.resize(bytes.len().next_multiple_of(4), 0);
+    if let Some(buffer) = root.buffers.first_mut() {
+        buffer.byte_length = USize64::from(bytes.len());
+    }
+}

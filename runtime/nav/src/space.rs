@@ -1,0 +1,499 @@
+//! The shared space: walls, the walkable floor, and navigation meshes of it (one per body
+//! radius, obstacles inflated by it) that answer path queries.
+//!
+//! The mesh is a constrained Delaunay triangulation of the floor with the inflated
+//! obstacles cut out, and the search is Polyanya (any-angle, optimal on the mesh), both
+//! from the `polyanya` crate. A mesh is built when a query first needs it and kept while
+//! its obstacles stay the same: adding, moving, putting down or removing an obstacle
+//! makes the next query rebuild the meshes it asks for.
+
+use crate::footprint::Footprint;
+use polyanya::{Mesh, Triangulation};
+use std::sync::{Arc, Mutex};
+use troupe_body::glam::DVec2;
+
+/// Half the side of the square floor used when the scene gives no outline (m).
+pub const OPEN_FLOOR_HALF_SIDE: f64 = 500.0;
+/// Extra clearance (m) added to every body radius: the path keeps it between the body's
+/// disc and the obstacles, for the corners the walk rounds and the pelvis' sway.
+pub const CLEARANCE: f64 = 0.08;
+/// Meshes kept at once (one per distinct radius asked for).
+const CACHED_MESHES: usize = 8;
+
+/// A straight wall standing on the floor.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Wall {
+    /// One end of its centre line (x, z).
+    pub from: DVec2,
+    /// The other end (x, z).
+    pub to: DVec2,
+    /// Its thickness (m).
+    pub thickness: f64,
+    /// Its height (m), for drawing.
+    pub height: f64,
+}
+
+impl Wall {
+    /// The floor the wall covers, called `name`.
+    pub fn footprint(&self, name: impl Into<String>) -> Footprint {
+        let along = (self.to - self.from).normalize_or_zero();
+        let side = along.perp() * (self.thickness / 2.0);
+        Footprint::hull(
+            name,
+            &[
+                self.from - side,
+                self.to - side,
+                self.to + side,
+                self.from + side,
+            ],
+        )
+    }
+}
+
+/// The walkable floor: an outline (x, z) and holes in it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Floor {
+    /// The outline's corners, in order.
+    pub outline: Vec<DVec2>,
+    /// Areas cut out of it, each a list of corners.
+    pub holes: Vec<Vec<DVec2>>,
+}
+
+impl Floor {
+    /// The open floor: a square of [`OPEN_FLOOR_HALF_SIDE`] about the origin.
+    pub fn open() -> Floor {
+        let h = OPEN_FLOOR_HALF_SIDE;
+        Floor {
+            outline: vec![
+                DVec2::new(-h, -h),
+                DVec2::new(h, -h),
+                DVec2::new(h, h),
+                DVec2::new(-h, h),
+            ],
+            holes: Vec::new(),
+        }
+    }
+
+    /// Whether `p` is on the floor (inside the outline, outside every hole).
+    pub fn contains(&self, p: DVec2) -> bool {
+        inside(&self.outline, p) && !self.holes.iter().any(|h| inside(h, p))
+    }
+}
+
+/// Even-odd test of `p` against the polygon `corners`.
+fn inside(corners: &[DVec2], p: DVec2) -> bool {
+    let n = corners.len();
+    let mut odd = false;
+    for i in 0..n {
+        let (a, b) = (corners[i], corners[(i + 1) % n]);
+        if (a.y > p.y) != (b.y > p.y) && p.x < a.x + (p.y - a.y) / (b.y - a.y) * (b.x - a.x) {
+            odd = !odd;
+        }
+    }
+    odd
+}
+
+/// Why there is no path.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum NoPath {
+    /// The goal is off the walkable floor.
+    #[error("no path: the goal ({:.2}, {:.2}) is off the walkable floor", .0.x, .0.y)]
+    GoalOffFloor(DVec2),
+    /// The start is off the walkable floor.
+    #[error("no path: the start ({:.2}, {:.2}) is off the walkable floor", .0.x, .0.y)]
+    StartOffFloor(DVec2),
+    /// The goal is too close to an obstacle for the body.
+    #[error("no path: the goal ({:.2}, {:.2}) is within {radius:.2} m of {obstacle}, closer than the body can stand", goal.x, goal.y)]
+    GoalBlocked {
+        /// The goal.
+        goal: DVec2,
+        /// The obstacle in the way.
+        obstacle: String,
+        /// The body radius (with its clearance).
+        radius: f64,
+    },
+    /// The floor around the goal is cut off from the start's.
+    #[error("no path: {} close the way to ({:.2}, {:.2})", list(.enclosing), goal.x, goal.y)]
+    Enclosed {
+        /// The goal.
+        goal: DVec2,
+        /// The obstacles nearest the goal, which close it in.
+        enclosing: Vec<String>,
+    },
+}
+
+/// "a", "a and b", "a, b and c".
+fn list(names: &[String]) -> String {
+    match names {
+        [] => "the obstacles".into(),
+        [one] => one.clone(),
+        [init @ .., last] => format!("{} and {last}", init.join(", ")),
+    }
+}
+
+/// A mesh for one radius and the obstacles it was built from.
+struct CachedMesh {
+    radius_mm: i64,
+    obstacles: Vec<Footprint>,
+    floor: Floor,
+    mesh: Arc<Mesh>,
+}
+
+/// Walls, the walkable floor and the navigation meshes built from them.
+#[derive(Default)]
+pub struct Space {
+    /// Walls, in the order added.
+    pub walls: Vec<Wall>,
+    /// The walkable floor; `None` is the open floor ([`Floor::open`]).
+    pub floor: Option<Floor>,
+    cache: Mutex<Vec<CachedMesh>>,
+    builds: std::sync::atomic::AtomicU64,
+}
+
+impl Clone for Space {
+    fn clone(&self) -> Space {
+        Space {
+            walls: self.walls.clone(),
+            floor: self.floor.clone(),
+            ..Space::default()
+        }
+    }
+}
+
+impl std::fmt::Debug for Space {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Space")
+            .field("walls", &self.walls)
+            .field("floor", &self.floor)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Space {
+    /// The walls' footprints, named "wall 1", "wall 2", … in the order added.
+    pub fn wall_footprints(&self) -> impl Iterator<Item = Footprint> + '_ {
+        self.walls
+            .iter()
+            .enumerate()
+            .map(|(i, w)| w.footprint(format!("wall {}", i + 1)))
+    }
+
+    /// The walkable floor.
+    pub fn floor(&self) -> Floor {
+        self.floor.clone().unwrap_or_else(Floor::open)
+    }
+
+    /// How many meshes have been built so far (a query that reuses one builds none).
+    pub fn meshes_built(&self) -> u64 {
+        self.builds.load(std::sync::atomic::Ordering::Relaxed)
+    }
+
+    /// The mesh of the floor with `obstacles` inflated by `radius` (and [`CLEARANCE`]),
+    /// built now or reused.
+    pub fn mesh(&self, obstacles: &[Footprint], radius: f64) -> Arc<Mesh> {
+        let radius_mm = ((radius + CLEARANCE) * 1000.0).round() as i64;
+        let floor = self.floor();
+        let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(c) = cache
+            .iter()
+            .find(|c| c.radius_mm == radius_mm && c.obstacles == obstacles && c.floor == floor)
+        {
+            return c.mesh.clone();
+        }
+        let mesh = Arc::new(build_mesh(&floor, obstacles, radius_mm as f32 / 1000.0));
+        self.builds
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+        cache.retain(|c| c.radius_mm != radius_mm);
+        if cache.len() >= CACHED_MESHES {
+            cache.remove(0);
+        }
+        cache.push(CachedMesh {
+            radius_mm,
+            obstacles: obstacles.to_vec(),
+            floor,
+            mesh: mesh.clone(),
+        });
+        mesh
+    }
+
+    /// The shortest path from `from` to `to` (x, z) for a body of `radius` among
+    /// `obstacles`: the points after `from`, ending at `to`; or why there is none. A start
+    /// too close to an obstacle first steps out to the nearest free point.
+    pub fn path(
+        &self,
+        obstacles: &[Footprint],
+        from: DVec2,
+        to: DVec2,
+        radius: f64,
+    ) -> Result<Vec<DVec2>, NoPath> {
+        let floor = self.floor();
+        if !floor.contains(to) {
+            return Err(NoPath::GoalOffFloor(to));
+        }
+        if !floor.contains(from) {
+            return Err(NoPath::StartOffFloor(from));
+        }
+        let inflated = radius + CLEARANCE;
+        if let Some(o) = obstacles.iter().find(|o| o.distance(to) < inflated) {
+            return Err(NoPath::GoalBlocked {
+                goal: to,
+                obstacle: o.name.clone(),
+                radius: inflated,
+            });
+        }
+        let mesh = self.mesh(obstacles, radius);
+        let mut points = Vec::new();
+        let mut start = from;
+        if !mesh.point_in_mesh(v2(from)) {
+            if let Some(free) = nearest_free(&mesh, from) {
+                points.push(free);
+                start = free;
+            }
+        }
+        let found = mesh
+            .path(v2(start), v2(to))
+            .ok_or_else(|| self.enclosed(obstacles, to, inflated))?;
+        points.extend(
+            found
+                .path
+                .iter()
+                .map(|p| DVec2::new(p.x as f64, p.y as f64)),
+        );
+        // The search works in f32: end exactly at the goal.
+        if let Some(last) = points.last_mut() {
+            *last = to;
+        }
+        Ok(points)
+    }
+
+    /// The obstacles that close in `goal`: every one within reach of the nearest, by
+    /// distance.
+    fn enclosed(&self, obstacles: &[Footprint], goal: DVec2, inflated: f64) -> NoPath {
+        let mut near: Vec<(f64, &Footprint)> =
+            obstacles.iter().map(|o| (o.distance(goal), o)).collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.name.cmp(&b.1.name)));
+        let closest = near.first().map_or(0.0, |n| n.0);
+        NoPath::Enclosed {
+            goal,
+            enclosing: near
+                .iter()
+                .filter(|(d, _)| *d <= closest + 2.0 * inflated + 1.0)
+                .map(|(_, o)| o.name.clone())
+                .collect(),
+        }
+    }
+}
+
+/// The nearest point of the mesh to `p`, searched on rings 2 cm apart up to 1.5 m.
+fn nearest_free(mesh: &Mesh, p: DVec2) -> Option<DVec2> {
+    for ring in 1..=75 {
+        let r = ring as f64 * 0.02;
+        for k in 0..32 {
+            let a = k as f64 * std::f64::consts::TAU / 32.0;
+            let q = p + DVec2::new(a.cos(), a.sin()) * r;
+            if mesh.point_in_mesh(v2(q)) {
+                return Some(q);
+            }
+        }
+    }
+    None
+}
+
+/// A floor point in the mesh's f32 coordinates.
+fn v2(p: DVec2) -> polyanya_glam::Vec2 {
+    polyanya_glam::Vec2::new(p.x as f32, p.y as f32)
+}
+
+/// The mesh of `floor` with `obstacles` inflated by `inflated` metres.
+fn build_mesh(floor: &Floor, obstacles: &[Footprint], inflated: f32) -> Mesh {
+    let mut triangulation =
+        Triangulation::from_outer_edges(&floor.outline.iter().map(|p| v2(*p)).collect::<Vec<_>>());
+    triangulation.add_obstacles(
+        floor
+            .holes
+            .iter()
+            .map(|h| h.iter().map(|p| v2(*p)).collect::<Vec<_>>())
+            .chain(
+                obstacles
+                    .iter()
+                    .filter(|o| o.outline.len() >= 3)
+                    .map(|o| o.outline.iter().map(|p| v2(*p)).collect()),
+            ),
+    );
+    triangulation.set_agent_radius(inflated);
+    triangulation.agent_radius_on_outer_edge(true);
+    let mut mesh = triangulation.as_navmesh();
+    mesh.merge_polygons();
+    mesh.bake();
+    // Points are found within a centimetre of the mesh, not the crate's default 10 cm:
+    // "on the mesh" must mean clear of the inflated obstacles.
+    mesh.set_search_delta(0.005).set_search_steps(2);
+    mesh
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 2 m × 1 m table centred at (0, 2).
+    fn table() -> Footprint {
+        Footprint::hull(
+            "table",
+            &[
+                DVec2::new(-1.0, 1.5),
+                DVec2::new(1.0, 1.5),
+                DVec2::new(1.0, 2.5),
+                DVec2::new(-1.0, 2.5),
+            ],
+        )
+    }
+
+    /// The smallest distance from the polyline `from`, `points` to `obstacle`.
+    fn closest(obstacle: &Footprint, from: DVec2, points: &[DVec2]) -> f64 {
+        let mut prev = from;
+        let mut best = f64::INFINITY;
+        for &p in points {
+            for k in 0..=100 {
+                best = best.min(obstacle.distance(prev.lerp(p, k as f64 / 100.0)));
+            }
+            prev = p;
+        }
+        best
+    }
+
+    #[test]
+    fn a_path_goes_around_a_table_keeping_the_radius() {
+        let space = Space::default();
+        let obstacles = [table()];
+        let (from, to) = (DVec2::ZERO, DVec2::new(0.0, 4.0));
+        let path = space.path(&obstacles, from, to, 0.3).unwrap();
+        assert!(path.len() >= 3, "{path:?}");
+        assert_eq!(*path.last().unwrap(), to);
+        let d = closest(&obstacles[0], from, &path);
+        // Polyanya's rounded corners are polygons inside the true circle: a few mm.
+        assert!(d >= 0.3 + CLEARANCE - 0.01, "{d}");
+        // Shortest: around the short side of the table, not much longer than the radius.
+        let length: f64 = std::iter::once(from)
+            .chain(path.iter().copied())
+            .collect::<Vec<_>>()
+            .windows(2)
+            .map(|w| (w[1] - w[0]).length())
+            .sum();
+        assert!(length < 5.4, "{length}");
+    }
+
+    #[test]
+    fn an_open_floor_gives_the_straight_line() {
+        let space = Space::default();
+        let path = space
+            .path(&[], DVec2::new(1.0, 1.0), DVec2::new(-3.0, 7.0), 0.3)
+            .unwrap();
+        assert_eq!(path, vec![DVec2::new(-3.0, 7.0)]);
+    }
+
+    #[test]
+    fn a_goal_closed_in_by_walls_names_them() {
+        let mut space = Space::default();
+        let corners = [(4.0, 4.0), (6.0, 4.0), (6.0, 6.0), (4.0, 6.0)];
+        for i in 0..4 {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            space.walls.push(Wall {
+                from: DVec2::new(a.0, a.1),
+                to: DVec2::new(b.0, b.1),
+                thickness: 0.1,
+                height: 2.0,
+            });
+        }
+        let mut obstacles: Vec<Footprint> = space.wall_footprints().collect();
+        obstacles.push(table());
+        let e = space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(5.0, 5.0), 0.3)
+            .unwrap_err();
+        let text = e.to_string();
+        assert!(
+            text.starts_with("no path: wall 1, wall 2, wall 3 and wall 4 close the way"),
+            "{text}"
+        );
+        // A goal inside an obstacle's inflated footprint says which.
+        let e = space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 1.3), 0.3)
+            .unwrap_err();
+        assert!(e.to_string().contains("of table"), "{e}");
+        // Off the floor.
+        let e = space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(900.0, 0.0), 0.3)
+            .unwrap_err();
+        assert!(matches!(e, NoPath::GoalOffFloor(_)), "{e}");
+    }
+
+    #[test]
+    fn meshes_are_reused_until_the_obstacles_change() {
+        let space = Space::default();
+        let mut obstacles = vec![table()];
+        for _ in 0..3 {
+            space
+                .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 4.0), 0.3)
+                .unwrap();
+        }
+        assert_eq!(space.meshes_built(), 1);
+        // A second radius has its own mesh; the first stays.
+        space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 4.0), 0.2)
+            .unwrap();
+        space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 4.0), 0.3)
+            .unwrap();
+        assert_eq!(space.meshes_built(), 2);
+        // Moving the table rebuilds: the path now goes straight.
+        for p in &mut obstacles[0].outline {
+            p.x += 5.0;
+        }
+        let path = space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 4.0), 0.3)
+            .unwrap();
+        assert_eq!(path.len(), 1);
+        assert_eq!(space.meshes_built(), 3);
+    }
+
+    #[test]
+    fn a_start_too_close_steps_out_first() {
+        let space = Space::default();
+        let path = space
+            .path(&[table()], DVec2::new(0.0, 1.3), DVec2::new(0.0, -2.0), 0.3)
+            .unwrap();
+        assert!(
+            table().distance(path[0]) >= 0.3 + CLEARANCE - 0.03,
+            "{path:?}"
+        );
+    }
+
+    #[test]
+    fn a_floor_outline_bounds_the_walk() {
+        let space = Space {
+            floor: Some(Floor {
+                outline: vec![
+                    DVec2::new(-2.0, -2.0),
+                    DVec2::new(2.0, -2.0),
+                    DVec2::new(2.0, 2.0),
+                    DVec2::new(-2.0, 2.0),
+                ],
+                holes: vec![vec![
+                    DVec2::new(-0.5, 0.5),
+                    DVec2::new(0.5, 0.5),
+                    DVec2::new(0.5, 1.0),
+                    DVec2::new(-0.5, 1.0),
+                ]],
+            }),
+            ..Space::default()
+        };
+        let e = space
+            .path(&[], DVec2::ZERO, DVec2::new(3.0, 0.0), 0.3)
+            .unwrap_err();
+        assert!(matches!(e, NoPath::GoalOffFloor(_)), "{e}");
+        // The hole is walked around.
+        let path = space
+            .path(&[], DVec2::ZERO, DVec2::new(0.0, 1.6), 0.2)
+            .unwrap();
+        assert!(path.len() >= 2, "{path:?}");
+    }
+}

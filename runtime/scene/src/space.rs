@@ -1,0 +1,124 @@
+//! The scene's shared space: which objects are obstacles, the walls and the walkable
+//! floor (`troupe_nav::Space`), and path queries on the world as it stands.
+//!
+//! An object is an obstacle when it stands on the floor (its lowest point within
+//! [`ON_FLOOR`] of it) and nobody holds it, unless the script said otherwise with
+//! `obstacle = true | false`. Walls always are.
+
+use crate::world::World;
+use crate::{Error, Result, Scene};
+use troupe_body::glam::DVec2;
+pub use troupe_nav::avoid::{choose_velocity, Agent, GAP};
+pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
+pub use troupe_nav::footprint::ON_FLOOR;
+pub use troupe_nav::{body_radius, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE};
+
+impl World<'_> {
+    /// Whether object `index` is an obstacle now (see the module docs).
+    pub fn is_obstacle(&self, index: usize) -> bool {
+        if self.holder(index).is_some() {
+            return false;
+        }
+        match self.obstacle_flags.get(index).copied().flatten() {
+            Some(forced) => forced,
+            None => Footprint::of_object(&self.objects[index]).1 <= ON_FLOOR,
+        }
+    }
+
+    /// Every obstacle's footprint now: walls first (in the order added), then objects (in
+    /// the order added).
+    pub fn obstacles(&self) -> Vec<Footprint> {
+        let mut all: Vec<Footprint> = self.space.wall_footprints().collect();
+        all.extend(
+            (0..self.objects.len())
+                .filter(|&i| self.is_obstacle(i))
+                .map(|i| Footprint::of_object(&self.objects[i]).0),
+        );
+        all
+    }
+
+    /// The shortest path for a body of `radius` from `from` to `to` (x, z) around the
+    /// obstacles: the points after `from`, or why there is none.
+    pub fn path(
+        &self,
+        from: DVec2,
+        to: DVec2,
+        radius: f64,
+    ) -> std::result::Result<Vec<DVec2>, NoPath> {
+        self.space.path(&self.obstacles(), from, to, radius)
+    }
+}
+
+impl Scene {
+    /// Adds a wall; the next path query plans around it.
+    pub fn add_wall(&mut self, wall: Wall) -> Result<usize> {
+        let finite = wall.from.is_finite() && wall.to.is_finite();
+        if !finite || (wall.to - wall.from).length() < 1e-6 {
+            return Err(Error::Invalid(format!(
+                "wall: `from` {} and `to` {} must be two distinct finite points",
+                wall.from, wall.to
+            )));
+        }
+        for (name, v) in [("thickness", wall.thickness), ("height", wall.height)] {
+            if !(v.is_finite() && v > 0.0 && v <= 100.0) {
+                return Err(Error::invalid_value(name, v, "a length in (0, 100] m"));
+            }
+        }
+        self.space_mut().walls.push(wall);
+        Ok(self.space().walls.len())
+    }
+
+    /// Sets the walkable floor (an outline and holes), replacing the open floor.
+    pub fn set_floor(&mut self, floor: Floor) -> Result<()> {
+        let polygons = std::iter::once(&floor.outline).chain(&floor.holes);
+        for (k, polygon) in polygons.enumerate() {
+            let what = if k == 0 {
+                "the outline".to_string()
+            } else {
+                format!("hole {k}")
+            };
+            if polygon.len() < 3 || polygon.iter().any(|p| !p.is_finite()) {
+                return Err(Error::Invalid(format!(
+                    "floor: {what} needs at least 3 finite points (got {})",
+                    polygon.len()
+                )));
+            }
+        }
+        self.space_mut().floor = Some(floor);
+        Ok(())
+    }
+
+    /// The two actors whose body discs (radius [`body_radius`] about the root) overlap
+    /// most now, and by how much (m); `None` when no two overlap. A measure for tests
+    /// and reports: the discs hold the bodies standing, so no overlap means no solids
+    /// meet (an arm swung out may reach past its disc).
+    pub fn deepest_overlap(&self) -> Option<(f64, usize, usize)> {
+        let radii = &self.crowd().radii;
+        let at: Vec<DVec2> = self
+            .states()
+            .iter()
+            .map(|s| DVec2::new(s.globals[0].translation.x, s.globals[0].translation.z))
+            .collect();
+        let mut deepest = None;
+        for i in 0..at.len() {
+            for j in i + 1..at.len() {
+                let depth = radii[i] + radii[j] - (at[i] - at[j]).length();
+                if depth > 0.0 && deepest.is_none_or(|(d, _, _)| depth > d) {
+                    deepest = Some((depth, i, j));
+                }
+            }
+        }
+        deepest
+    }
+
+    /// Makes object `index` an obstacle (`Some(true)`), never one (`Some(false)`), or one
+    /// when it stands on the floor (`None`, the default).
+    pub fn set_obstacle(&mut self, index: usize, obstacle: Option<bool>) -> Result<()> {
+        let slot = self
+            .obstacle_flags_mut()
+            .get_mut(index)
+            .ok_or_else(|| Error::Invalid(format!("no object {index}")))?;
+        *slot = obstacle;
+        Ok(())
+    }
+}

@@ -1,0 +1,100 @@
+-- Local avoidance between walkers (docs/navigation.md): they slow down, sidestep and
+-- wait rather than overlap.
+
+-- An adult's body radius (troupe_nav::body_radius): two discs closer than twice this
+-- interpenetrate.
+local RADIUS = 0.28
+
+local function flat(p) return p[1], p[3] end
+
+-- Runs until every walk in `walks` has ended (or `limit` s), watching the actors:
+-- returns the deepest disc interpenetration, the longest time any walker stood still
+-- more than 10 cm from its goal {x, z}, and whether all completed.
+local function watch(actors, walks, goals, limit, each)
+  local deepest, frozen, still = 0, 0, {}
+  local last = {}
+  for i, a in ipairs(actors) do last[i] = { flat(a:position()) }; still[i] = 0 end
+  local dt = 1 / troupe.rate()
+  local ok = run_until(function()
+    if each then each() end
+    local pos = {}
+    for i, a in ipairs(actors) do pos[i] = { flat(a:position()) } end
+    for i = 1, #actors do
+      for j = i + 1, #actors do
+        local d = math.sqrt((pos[i][1] - pos[j][1])^2 + (pos[i][2] - pos[j][2])^2)
+        deepest = math.max(deepest, 2 * RADIUS - d)
+      end
+      local moved = math.sqrt((pos[i][1] - last[i][1])^2 + (pos[i][2] - last[i][2])^2)
+      local away = math.sqrt((pos[i][1] - goals[i][1])^2 + (pos[i][2] - goals[i][2])^2) > 0.1
+      if walks[i].status == "active" and away and moved < 0.02 * dt then
+        still[i] = still[i] + dt
+        frozen = math.max(frozen, still[i])
+      else
+        still[i] = 0
+      end
+      last[i] = pos[i]
+    end
+    for _, w in ipairs(walks) do
+      if w.status ~= "completed" and w.status ~= "failed" then return false end
+    end
+    return true
+  end, limit)
+  return deepest, frozen, ok
+end
+
+test("eight actors on a circle swap to the opposite points", function()
+  local actors, walks, goals = {}, {}, {}
+  for i = 1, 8 do
+    local a = (i - 1) * math.pi / 4
+    local x, z = 3 * math.sin(a), 3 * math.cos(a)
+    actors[i] = troupe.actor{ name = "a" .. i, at = {x, 0, z}, facing = math.deg(a) + 180 }
+    goals[i] = { -x, -z }
+  end
+  for i, a in ipairs(actors) do
+    walks[i] = a:walk{ to = { goals[i][1], 0, goals[i][2] }, speed = 1.2 }
+  end
+  local deepest, frozen, ok = watch(actors, walks, goals, 40)
+  print(string.format("circle: deepest disc interpenetration %.4f m, longest stand %.2f s", deepest, frozen))
+  expect(ok, "every walk ended")
+  for i, a in ipairs(actors) do
+    expect(walks[i].status == "completed", a.name .. ": " .. tostring(walks[i].error))
+    local x, z = flat(a:position())
+    local miss = math.sqrt((x - goals[i][1])^2 + (z - goals[i][2])^2)
+    expect(miss < 0.05, string.format("%s stopped %.2f m from its goal", a.name, miss))
+  end
+  expect(deepest <= 0.01, string.format("bodies interpenetrated %.3f m", deepest))
+  expect(frozen <= 3, string.format("someone stood still %.1f s", frozen))
+end)
+
+test("two actors head-on in a 1.2 m corridor pass each other", function()
+  troupe.wall{ from = {-0.65, -1}, to = {-0.65, 9}, thickness = 0.1 }
+  troupe.wall{ from = {0.65, -1}, to = {0.65, 9}, thickness = 0.1 }
+  local ann = troupe.actor{ name = "ann", at = {0, 0, 0} }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 8}, facing = 180 }
+  local walks = { ann:walk{ to = {0, 0, 8} }, bob:walk{ to = {0, 0, 0} } }
+  -- The walls' inner faces are at x = ±0.6: the body's disc stays inside.
+  local widest = 0
+  local inner = function()
+    for _, a in ipairs({ ann, bob }) do widest = math.max(widest, math.abs(a:position()[1])) end
+  end
+  local deepest, frozen, ok = watch({ ann, bob }, walks, { {0, 8}, {0, 0} }, 40, inner)
+  print(string.format("corridor: deepest disc interpenetration %.4f m, longest stand %.2f s", deepest, frozen))
+  expect(ok and walks[1].status == "completed" and walks[2].status == "completed",
+    "both arrived: " .. tostring(walks[1].error) .. " / " .. tostring(walks[2].error))
+  expect(ann:position()[3] > 7.7 and bob:position()[3] < 0.3, "they passed")
+  print(string.format("corridor: widest %.3f m from the axis (wall at 0.6)", widest))
+  expect(0.6 - widest >= RADIUS - 0.01, string.format("a body came %.3f m from a wall", 0.6 - widest))
+  expect(deepest <= 0.01, string.format("bodies interpenetrated %.3f m", deepest))
+  expect(frozen <= 3, string.format("someone stood still %.1f s", frozen))
+end)
+
+test("troupe.deepest_overlap measures the two most overlapping body discs", function()
+  troupe.actor{ name = "ann" }
+  troupe.actor{ name = "bob", at = {3, 0, 0} }
+  local d, a, b = troupe.deepest_overlap()
+  expect(d == 0 and a == nil and b == nil, "no overlap yet: " .. d)
+  troupe.actor{ name = "cid", at = {0.3, 0, 0} }
+  d, a, b = troupe.deepest_overlap()
+  expect(math.abs(d - (2 * RADIUS - 0.3)) < 0.005 and a == "ann" and b == "cid",
+    string.format("%.3f between %s and %s", d, tostring(a), tostring(b)))
+end)

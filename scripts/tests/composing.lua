@@ -1,0 +1,281 @@
+-- Actions that compose: stopping well, partial pre-emption, carrying while walking, and
+-- hand-overs that fail fast (docs/scheduling.md, "Narrowing").
+
+local STANDING_ANKLE = nil
+
+local function done(a) return a.status == "completed" end
+
+-- A world point at (dx, y, dz) from the actor's floor position (actors here face +Z).
+local function near(actor, dx, y, dz)
+  local p = actor:position()
+  return { p[1] + dx, y, p[3] + dz }
+end
+
+-- Both ankles at their standing height (within 1 cm) and neither foot off the floor.
+local function feet_down(actor)
+  local l = actor:joint_position("l_ankle")[2]
+  local r = actor:joint_position("r_ankle")[2]
+  return math.abs(l - STANDING_ANKLE) < 0.01 and math.abs(r - STANDING_ANKLE) < 0.01, l, r
+end
+
+local function standing_ankle()
+  if not STANDING_ANKLE then
+    local probe = troupe.actor{ name = "probe", at = {50, 0, 50} }
+    STANDING_ANKLE = probe:joint_position("l_ankle")[2]
+  end
+  return STANDING_ANKLE
+end
+
+-- Runs `seconds`, checking every tick that the walk ends with both feet down for good.
+local function settles(ann, w, seconds)
+  expect(run_until(function() return w.status ~= "active" and w.status ~= "terminating" end, seconds),
+         "the walk ended: " .. w.status)
+  run(0.5)
+  local ok, l, r = feet_down(ann)
+  expect(ok, string.format("both feet down (ankles %.3f and %.3f m, standing %.3f m)", l, r, STANDING_ANKLE))
+end
+
+test("walk:stop() mid-stride decelerates and ends completed with both feet down", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2, ease_out = 0.5 }
+  run(2.17)
+  local z0 = ann:position()[3]
+  w:stop()
+  run(0.05)
+  expect(w.status == "terminating", "winding down: " .. w.status)
+  settles(ann, w, 4)
+  expect(w.status == "completed", "a stop completes: " .. w.status)
+  local slid = ann:position()[3] - z0
+  expect(slid > 0.2 and slid < 1.2, string.format("slowed down over %.2f m, not at once", slid))
+end)
+
+test("cancel of a velocity walk also stops well, and ends cancelled", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2, ease_out = 0.5 }
+  run(2.17)
+  w:cancel()
+  settles(ann, w, 4)
+  expect(w.status == "cancelled" and w.error == "cancelled", w.status .. " " .. tostring(w.error))
+end)
+
+test("a velocity walk with a duration ends with both feet down", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2, duration = 3.3 }
+  settles(ann, w, 6)
+  expect(w.status == "completed", w.status)
+end)
+
+test("a clearing action pre-empts a walk: it stops well and the arm is taken at once", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.2 }
+  run(1.53)
+  local r = ann:reach{ hand = "right", target = near(ann, -0.25, 1.2, 0.45), mode = "clearing",
+                       duration = 0.8 }
+  run(0.02)
+  expect(r.status == "active", "the reach runs at once: " .. r.status)
+  expect(w.status == "terminating", "the walk winds down: " .. w.status)
+  settles(ann, w, 4)
+  expect(w.status == "cancelled" and w.error:find("pre%-empted") ~= nil, tostring(w.error))
+end)
+
+test("every priority mode against a walk's yieldable arm swing", function()
+  local cases = {
+    -- mode, does the walk keep walking, does the reach start at once
+    { "default", true, true },
+    { "exclusive", true, true },
+    { "weighted", true, true },
+    { "clearing", false, true },
+  }
+  for _, c in ipairs(cases) do
+    local mode, keeps = c[1], c[2]
+    local ann = troupe.actor{ name = "ann_" .. mode }
+    local w = ann:walk{ velocity = 1.0 }
+    local narrowed = 0
+    ann:on("action_narrowed", function(a) if a == w then narrowed = narrowed + 1 end end)
+    run(1.0)
+    local dofs = w.dofs
+    local r = ann:reach{ hand = "right", target = near(ann, -0.25, 1.2, 0.45), mode = mode,
+                         duration = 0.8, weight = 0.5 }
+    run(0.02)
+    expect(r.status == "active", mode .. ": the reach starts at once, " .. r.status)
+    if keeps then
+      expect(w.status == "active", mode .. ": the walk keeps walking, " .. w.status)
+    else
+      expect(w.status == "terminating", mode .. ": the walk stops, " .. w.status)
+    end
+    if mode == "weighted" then
+      expect(w.yielded == 0 and narrowed == 0, mode .. ": blends, takes nothing")
+    else
+      expect(w.yielded == 3 and w.dofs == dofs - 3,
+             string.format("%s: the walk yields the right arm's 3 swing DOFs (%d yielded, %d of %d left)",
+                           mode, w.yielded, w.dofs, dofs))
+      if keeps then expect(narrowed == 1, mode .. ": reported as action_narrowed once: " .. narrowed) end
+    end
+    w:cancel()
+  end
+end)
+
+test("an action that needs the legs waits (default) or stops the walk (exclusive)", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.0 }
+  run(1.0)
+  local kneel = troupe.sequence{ r_knee_flexion = { {0, 0}, {1, 0.5} } }
+  local k = ann:play(kneel, { scope = "r_knee" })
+  run(0.2)
+  expect(k.status == "pending" and w.status == "active", "default waits for an essential part: " .. k.status)
+  k:cancel()
+  local x = ann:play(kneel, { scope = "r_knee", mode = "exclusive" })
+  run(0.02)
+  expect(x.status == "active" and w.status == "terminating", "exclusive takes it: the walk stops, " .. w.status)
+  expect(w.yielded == 1, "and gives up the knee at once: " .. w.yielded)
+end)
+
+test("a grasp during a walk starts at once and the walk keeps walking", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {0, 0, 3}, speed = 0.6 }
+  run(0.5)
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, ann:position()[3] + 0.55} }
+  local g = ann:grasp{ object = cup, hand = "right", duration = 0.6 }
+  run(0.02)
+  expect(g.status == "active", "grasp runs at once: " .. g.status)
+  expect(w.status == "active", "walk goes on: " .. w.status)
+  expect(run_until(function() return g.status ~= "active" end, 4), "grasp ended")
+  expect(w.status == "active" or done(w), "the walk was never stopped: " .. w.status)
+end)
+
+-- Ann grasps a cup, then `walk(ann)` starts a walk and `until_done(w, track)` runs it
+-- (calling `track` every tick) until it has ended; the cup's height range is checked.
+local function carries(what, walk, until_done)
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local h0 = cup:position()[2]
+  local lo, hi = h0, h0
+  local function track()
+    local y = cup:position()[2]
+    lo, hi = math.min(lo, y), math.max(hi, y)
+  end
+  local w = walk(ann)
+  until_done(w, track)
+  expect(w.status == "completed", "walked: " .. w.status .. " " .. tostring(w.error))
+  expect(cup.holder == ann, "still holds it")
+  print(string.format("carrying, %s: %+.3f to %+.3f m from %.3f m", what, lo - h0, hi - h0, h0))
+  expect(h0 - lo < 0.05 and hi - h0 < 0.05,
+         string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
+end
+
+test("carrying: a held cup stays at carrying height while walking, turning and stopping", function()
+  carries("along a turning path",
+          function(ann) return ann:walk{ path = {{0, 2}, {2, 3}, {2, 1}}, speed = 1.2 } end,
+          function(w, track) run_until(function() track(); return w.status == "completed" end, 20) end)
+end)
+
+test("carrying: the cup stays at carrying height when the walk is stopped mid-stride", function()
+  carries("stopped mid-stride",
+          function(ann) return ann:walk{ velocity = 1.3 } end,
+          function(w, track)
+            run_until(function() track(); return troupe.time() > 4.37 end, 5)
+            w:stop()
+            run_until(function() track(); return w.status == "completed" end, 4)
+          end)
+end)
+
+test("give and receive start at once during walks, which go on narrowed", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  -- Both turn on the spot (a walk to where they stand, facing a new heading)…
+  local wa = ann:walk{ to = {0, 0, 0}, heading = 10, speed = 0.5 }
+  local wb = bob:walk{ to = {0, 0, 0.9}, heading = 170, speed = 0.5 }
+  run(0.05)
+  -- … and hand the cup over meanwhile.
+  local give = ann:give{ object = cup, to = bob }
+  local receive = bob:actions()[#bob:actions()]
+  run(0.02)
+  expect(give.status == "active" and receive.kind == "receive" and receive.status == "active",
+         "both start at once: " .. give.status .. " " .. receive.status)
+  expect(wa.status == "active" and wa.yielded > 0, "ann's walk goes on narrowed: " .. wa.status)
+  expect(wb.status == "active" and wb.yielded > 0, "bob's walk goes on narrowed: " .. wb.status)
+  expect(give:wait() == "completed", "handed over: " .. tostring(give.error) .. " / " .. tostring(receive.error))
+  expect(cup.holder == bob, "bob holds it")
+end)
+
+test("look and reach run alongside a walk", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {2, 0, 2} }
+  local w = ann:walk{ velocity = 1.0, duration = 4 }
+  run(1.0)
+  local l = ann:look_at{ target = bob }
+  local r = ann:reach{ hand = "left", target = near(ann, 0.25, 1.3, 0.4), duration = 0.8 }
+  run(0.02)
+  expect(l.status ~= "pending" and r.status ~= "pending", "both start at once: " .. l.status .. " " .. r.status)
+  expect(w.status == "active", "the walk goes on: " .. w.status)
+  expect(run_until(function() return done(w) end, 6), "the walk completes: " .. w.status)
+end)
+
+-- Ann holds a cup and gives it to bob, `distance` m away (0.9 by default); `busy` keeps
+-- bob's spine and legs in a looping pose, so that he reaches with the arm alone.
+local function handover(distance, busy)
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, distance or 0.9}, facing = 180 }
+  if busy then
+    local still = troupe.sequence{ vl5_flexion = { {0, 0}, {1, 0} }, r_knee_flexion = { {0, 0}, {1, 0} },
+                                   loop = true }
+    bob:play(still, { scope = "spine+legs" })
+  end
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local give = ann:give{ object = cup, to = bob, timeout = 10, hand = busy and "left" or "auto" }
+  local actions = bob:actions()
+  return give, actions[#actions]
+end
+
+-- Runs until `follower` ends; checks it did within one tick of `leader`'s end, failed.
+local function fails_within_a_tick(leader, follower)
+  local t0 = nil
+  expect(run_until(function()
+    if leader.status ~= "active" and leader.status ~= "pending" and not t0 then t0 = troupe.time() end
+    return follower.status == "failed" or follower.status == "completed"
+  end, 12), "ended: " .. follower.status)
+  expect(follower.status == "failed", "failed: " .. follower.status)
+  expect(troupe.time() - t0 <= 0.0101, string.format("%.3f s after the other ended", troupe.time() - t0))
+end
+
+test("a give fails within one tick of its receiver's failure, with the receiver's reason", function()
+  -- Bob, 1.1 m away, cannot lean (his spine and legs are busy): the left hand alone
+  -- misses the cup when it arrives.
+  local give, receive = handover(1.1, true)
+  fails_within_a_tick(receive, give)
+  expect(receive.status == "failed" and receive.error:find("out of reach") ~= nil,
+         "the receive failed: " .. receive.status .. " " .. tostring(receive.error))
+  expect(give.error:find("bob") ~= nil and give.error:find(receive.error, 1, true) ~= nil,
+         give.error .. " / " .. tostring(receive.error))
+end)
+
+test("a give fails within one tick of its receiver's cancel", function()
+  local give, receive = handover()
+  run(0.3)
+  receive:cancel()
+  fails_within_a_tick(receive, give)
+  expect(give.error:find("bob") ~= nil and give.error:find("cancelled") ~= nil, give.error)
+end)
+
+test("a receive fails within one tick of its giver's failure, with the giver's reason", function()
+  local give, receive = handover()
+  -- The cup is at the meeting point and bob reaches for it: the giver gives up.
+  expect(run_until(function() return receive.status == "active" and troupe.time() > 0 end, 3), "receiving")
+  run(1.2)
+  expect(receive.status == "active", "bob still reaching: " .. receive.status)
+  give:cancel()
+  fails_within_a_tick(give, receive)
+  expect(receive.error:find("giver") ~= nil and receive.error:find("cancelled") ~= nil, receive.error)
+end)

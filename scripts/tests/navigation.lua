@@ -1,0 +1,161 @@
+-- A shared space: walking around furniture and walls (docs/navigation.md).
+
+-- An adult's body radius (troupe_nav::body_radius) and the planner's clearance.
+local RADIUS = 0.28
+
+-- Distance from floor point (x, z) to the axis-aligned rectangle [x0, x1] × [z0, z1].
+local function rect_dist(x, z, x0, x1, z0, z1)
+  local dx = math.max(x0 - x, 0, x - x1)
+  local dz = math.max(z0 - z, 0, z - z1)
+  return math.sqrt(dx * dx + dz * dz)
+end
+
+local function flat_dist(p, x, z)
+  return math.sqrt((p[1] - x)^2 + (p[3] - z)^2)
+end
+
+test("a table between an actor and its goal: the path goes around it", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "table", shape = "box", size = {2, 0.75, 1}, at = {0, 0.375, 2}, mass = 30 }
+  local w = ann:walk{ to = {0, 0, 4} }
+  local closest, sideways = math.huge, 0
+  local ok = run_until(function()
+    local p = ann:position()
+    closest = math.min(closest, rect_dist(p[1], p[3], -1, 1, 1.5, 2.5))
+    sideways = math.max(sideways, math.abs(p[1]))
+    return w.status == "completed"
+  end, 20)
+  expect(ok, "completed: " .. tostring(w.error))
+  expect(flat_dist(ann:position(), 0, 4) < 0.05, "arrived behind the table")
+  expect(sideways > 1 + RADIUS, string.format("went around: at most %.2f m sideways", sideways))
+  expect(closest >= RADIUS, string.format("the body's centre came %.3f m from the table (radius %.2f)", closest, RADIUS))
+  print(string.format("table: closest %.3f m, widest %.3f m", closest, sideways))
+end)
+
+test("troupe.path returns the points around the table, or nil and why", function()
+  troupe.object{ name = "table", shape = "box", size = {2, 0.75, 1}, at = {0, 0.375, 2}, mass = 30 }
+  local path, why = troupe.path({0, 0}, {0, 4})
+  expect(path ~= nil, "a path: " .. tostring(why))
+  expect(#path >= 3, "goes around: " .. #path .. " points")
+  expect(path[1][1] == 0 and path[1][2] == 0, "starts at from")
+  expect(path[#path][1] == 0 and path[#path][2] == 4, "ends at to")
+  for _, p in ipairs(path) do
+    expect(rect_dist(p[1], p[2], -1, 1, 1.5, 2.5) >= RADIUS, "a corner of the path is too close")
+  end
+  local thin = troupe.path({0, 0}, {0, 4}, { radius = 0.1 })
+  expect(#thin >= 3, "a thin body goes around too")
+  local none, reason = troupe.path({0, 0}, {0, 1.9})
+  expect(none == nil, "no path into the table")
+  expect(reason:find("table"), "the reason names the table: " .. tostring(reason))
+end)
+
+test("an object with obstacle = false, or held, is walked through", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "rug", shape = "box", size = {2, 0.02, 1}, at = {0, 0.01, 2}, obstacle = false }
+  local path = troupe.path({0, 0}, {0, 4})
+  expect(#path == 2, "straight across the rug: " .. #path .. " points")
+  local w = ann:walk{ to = {0, 0, 4} }
+  expect(run_until(function() return w.status == "completed" end, 15), "completed")
+  -- A lamp hanging above the floor is no obstacle either.
+  troupe.object{ name = "lamp", shape = "sphere", radius = 0.2, at = {0, 2.2, 6} }
+  expect(#troupe.path({0, 4}, {0, 8}) == 2, "under the lamp")
+end)
+
+test("a goal enclosed by walls fails the walk with the reason", function()
+  local ann = troupe.actor{ name = "ann" }
+  local c = { {4, 4}, {6, 4}, {6, 6}, {4, 6} }
+  for i = 1, 4 do
+    troupe.wall{ from = c[i], to = c[i % 4 + 1], thickness = 0.1, height = 2 }
+  end
+  local w = ann:walk{ to = {5, 0, 5} }
+  expect(run_until(function() return w.status == "failed" end, 2), "failed: " .. w.status)
+  expect(w.error:find("no path"), "says no path: " .. tostring(w.error))
+  expect(w.error:find("wall 1") and w.error:find("wall 4"), "names the walls: " .. w.error)
+  local p = ann:position()
+  expect(flat_dist(p, 0, 0) < 0.01, "did not move")
+end)
+
+test("walls from Lua: a walk goes through the doorway", function()
+  local ann = troupe.actor{ name = "ann" }
+  -- A wall across z = 2 with a 1.2 m door at x in [1, 2.2].
+  troupe.wall{ from = {-4, 2}, to = {1, 2}, thickness = 0.15 }
+  troupe.wall{ from = {2.2, 2}, to = {6, 2}, thickness = 0.15 }
+  local w = ann:walk{ to = {0, 0, 4} }
+  local through = nil
+  local ok = run_until(function()
+    local p = ann:position()
+    if through == nil and p[3] > 2 then through = p[1] end
+    return w.status == "completed"
+  end, 20)
+  expect(ok, "completed: " .. tostring(w.error))
+  expect(through and through > 1 + RADIUS - 0.01 and through < 2.2 - RADIUS + 0.01,
+    "crossed the wall's line at x = " .. tostring(through))
+end)
+
+test("walk to an object ends within reach, facing it", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "table", shape = "box", size = {1.2, 0.75, 0.8}, at = {0, 0.375, 3}, mass = 30 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {0.2, 0.8, 2.8} }
+  local w = ann:walk{ to = cup }
+  expect(run_until(function() return w.status == "completed" end, 15), "completed: " .. tostring(w.error))
+  local p = ann:position()
+  local d = flat_dist(p, 0.2, 2.8)
+  expect(d < 0.75, string.format("stands %.2f m from the cup", d))
+  expect(rect_dist(p[1], p[3], -0.6, 0.6, 2.6, 3.4) >= RADIUS, "outside the table")
+  local yaw = ann:dof("root_yaw")
+  local want = math.atan(0.2 - p[1], 2.8 - p[3])
+  expect(math.abs(yaw - want) < 0.1, string.format("faces the cup: %.2f vs %.2f", yaw, want))
+  -- From there the hand reaches it: the grasp completes.
+  local g = ann:grasp{ object = cup, hand = "right" }
+  expect(run_until(function() return g.status == "completed" or g.status == "failed" end, 8), "grasp ended: " .. g.status)
+  expect(g.status == "completed", "grasped: " .. tostring(g.error))
+end)
+
+test("walk to an actor ends about a metre away, facing them", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {3, 0, 4}, facing = 180 }
+  local w = ann:walk{ to = bob }
+  expect(run_until(function() return w.status == "completed" end, 15), "completed: " .. tostring(w.error))
+  local p = ann:position()
+  local d = flat_dist(p, 3, 4)
+  expect(math.abs(d - 1) < 0.06, string.format("%.2f m from bob", d))
+  local want = math.atan(3 - p[1], 4 - p[3])
+  expect(math.abs(ann:dof("root_yaw") - want) < 0.1, "faces bob")
+  local w2 = ann:walk{ to = bob, distance = 2 }
+  expect(run_until(function() return w2.status == "completed" end, 15), "completed: " .. tostring(w2.error))
+  expect(math.abs(flat_dist(ann:position(), 3, 4) - 2) < 0.06, "at 2 m")
+end)
+
+test("a walkable floor: a goal off it fails, its holes are walked around", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.floor{ outline = { {-3, -3}, {3, -3}, {3, 6}, {-3, 6} },
+                holes = { { {-1, 1.5}, {1, 1.5}, {1, 2.5}, {-1, 2.5} } } }
+  local w = ann:walk{ to = {0, 0, 4} }
+  local closest = math.huge
+  local ok = run_until(function()
+    local p = ann:position()
+    closest = math.min(closest, rect_dist(p[1], p[3], -1, 1, 1.5, 2.5))
+    return w.status == "completed"
+  end, 20)
+  expect(ok, "completed: " .. tostring(w.error))
+  expect(closest >= RADIUS, string.format("came %.3f m from the hole", closest))
+  local off = ann:walk{ to = {10, 0, 0} }
+  expect(run_until(function() return off.status == "failed" end, 2), "off the floor fails")
+  expect(off.error:find("off the walkable floor"), off.error)
+end)
+
+test("bad walls, floors and paths are refused naming what", function()
+  local ok, e = pcall(troupe.wall, { from = {0, 0}, to = {0, 0} })
+  expect(not ok and tostring(e):find("distinct"), tostring(e))
+  ok, e = pcall(troupe.wall, { from = {0, 0}, to = {1, 0}, thickness = -1 })
+  expect(not ok and tostring(e):find("thickness"), tostring(e))
+  ok, e = pcall(troupe.floor, { outline = { {0, 0}, {1, 0} } })
+  expect(not ok and tostring(e):find("3 finite points"), tostring(e))
+  ok, e = pcall(troupe.path, {0, 0}, "x")
+  expect(not ok and tostring(e):find("to"), tostring(e))
+  local ann = troupe.actor{ name = "ann" }
+  ok, e = pcall(function() return ann:walk{ to = {1, 0, 1}, distance = 1 } end)
+  expect(not ok and tostring(e):find("distance"), tostring(e))
+  ok, e = pcall(function() return ann:walk{ to = ann } end)
+  expect(not ok and tostring(e):find("itself"), tostring(e))
+end)

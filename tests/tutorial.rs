@@ -1,0 +1,79 @@
+//! docs/first-behavior.md works as written: its Lua blocks, saved as the tutorial says,
+//! run, render and pass their test.
+
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn troupe(dir: &Path, args: &[&str]) -> Output {
+    let out = Command::new(env!("CARGO_BIN_EXE_troupe"))
+        .current_dir(dir)
+        .args(args)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "troupe {args:?}: {}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    out
+}
+
+/// The ```lua blocks of the tutorial, in order.
+fn lua_blocks() -> Vec<String> {
+    let doc = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/first-behavior.md"),
+    )
+    .unwrap();
+    doc.split("```lua\n")
+        .skip(1)
+        .map(|b| b.split("```").next().unwrap().to_string())
+        .collect()
+}
+
+#[test]
+fn the_tutorial_runs_as_written() {
+    let blocks = lua_blocks();
+    assert_eq!(blocks.len(), 4, "step 1, step 2, step 4 and the test");
+    // Run from an empty folder outside the repository: the standard library is built in.
+    let dir = std::env::temp_dir().join(format!("troupe-tutorial-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("greet.lua"), &blocks[0]).unwrap();
+    let out = troupe(&dir, &["run", "greet.lua"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("ran greet.lua for 101 ticks"), "{text}");
+
+    std::fs::write(dir.join("greet.lua"), format!("{}{}", blocks[1], blocks[2])).unwrap();
+    let out = troupe(&dir, &["run", "greet.lua"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        text.contains("ann          actions: 2 completed, 1 cancelled, 0 failed"),
+        "{text}"
+    );
+    assert!(
+        text.contains("bob          actions: 1 completed"),
+        "bob nodded: {text}"
+    );
+    troupe(
+        &dir,
+        &[
+            "render",
+            "greet.lua",
+            "ann.png",
+            "--at",
+            "4",
+            "--camera",
+            "fit",
+            "--size",
+            "320x180",
+        ],
+    );
+    assert!(dir.join("ann.png").is_file());
+
+    std::fs::write(dir.join("greet_test.lua"), &blocks[3]).unwrap();
+    let out = troupe(&dir, &["test", "greet_test.lua"]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed, 0 failed"));
+    troupe(&dir, &["lua-defs", "types/troupe.d.lua"]);
+    assert!(dir.join("types/troupe.d.lua").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}
