@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 use troupe_drivers::device::Port;
-use troupe_net::relay::{serve, RelayStats};
+use troupe_net::relay::{serve, serve_on_demand, RelayStats};
 use troupe_net::Endpoints;
 
 /// Options of `troupe relay`.
@@ -78,8 +78,18 @@ pub fn run(args: RelayArgs) -> Result<ExitCode> {
     let started = Instant::now();
     let mut total = RelayStats::default();
     while !stop.load(Ordering::Acquire) {
-        let served =
-            open(&args).and_then(|mut port| Ok(serve(&session, &args.key, &mut port, &stop)?));
+        let served = if args.kind == "vrpn" {
+            // A VRPN server describes its senders once per connection: connect when the
+            // simulation host's client first speaks, so it sees the descriptions.
+            let mut connect = || {
+                open(&args)
+                    .map(Some)
+                    .map_err(|e| troupe_net::NetError::Open(format!("{e:#}")))
+            };
+            serve_on_demand(&session, &args.key, &mut connect, &stop).map_err(anyhow::Error::new)
+        } else {
+            open(&args).and_then(|mut port| Ok(serve(&session, &args.key, &mut port, &stop)?))
+        };
         match served {
             Ok(stats) => add(&mut total, stats),
             Err(e) => {

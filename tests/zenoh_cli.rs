@@ -466,18 +466,19 @@ fn a_render_node_writes_frames_of_a_remote_scene() {
 
 #[test]
 fn an_independent_python_client_checks_the_postures_against_the_trk() {
-    let python = Command::new("python3")
-        .args(["-c", "import zenoh"])
-        .output();
-    if !python.is_ok_and(|o| o.status.success()) {
+    // The venv scripts/setup.sh --tests makes in .tools/python, with eclipse-zenoh.
+    let python = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(".tools/python/bin/python");
+    let has_zenoh = Command::new(&python).args(["-c", "import zenoh"]).output();
+    if !has_zenoh.is_ok_and(|o| o.status.success()) {
         eprintln!(
-            "skipped: python3 with eclipse-zenoh is not installed (scripts/setup.sh installs it)"
+            "skipped: {} with eclipse-zenoh is not installed (scripts/setup.sh --tests installs it)",
+            python.display()
         );
         return;
     }
     let out_dir = temp("python");
     std::fs::create_dir_all(&out_dir).unwrap();
-    let out = Command::new("python3")
+    let out = Command::new(&python)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .arg("scripts/zenoh_check.py")
         .arg(env!("CARGO_BIN_EXE_troupe"))
@@ -646,7 +647,7 @@ fn a_subscriber_killed_mid_run_leaves_the_leaders_tick_times_alone() {
             .spawn()
             .unwrap(),
     );
-    let mut tick = |session: &mut Session| {
+    let tick = |session: &mut Session| {
         let t0 = std::time::Instant::now();
         session.tick().unwrap();
         let spent = t0.elapsed();

@@ -76,6 +76,32 @@ pub fn serve<P: Read + Write + Send>(
     port: &mut P,
     stop: &AtomicBool,
 ) -> Result<RelayStats, NetError> {
+    let mut port = Some(port);
+    serve_opened(session, key, &mut || Ok(port.take()), false, stop)
+}
+
+/// Opens the port with `open` once the simulation host first writes to the device (its
+/// driver configuring it), then serves it as [`serve`] does: for a device whose
+/// connection has a state the simulation host's driver must see from its start (a VRPN
+/// server describes its senders once per connection). `open` gives `None` when asked to
+/// stop.
+pub fn serve_on_demand<P: Read + Write + Send>(
+    session: &Session,
+    key: &str,
+    open: &mut dyn FnMut() -> Result<Option<P>, NetError>,
+    stop: &AtomicBool,
+) -> Result<RelayStats, NetError> {
+    serve_opened(session, key, open, true, stop)
+}
+
+/// The relay loop, the port opened by `open` at once or at the first command.
+fn serve_opened<Q: Read + Write>(
+    session: &Session,
+    key: &str,
+    open: &mut dyn FnMut() -> Result<Option<Q>, NetError>,
+    on_demand: bool,
+    stop: &AtomicBool,
+) -> Result<RelayStats, NetError> {
     let declare_err = |what: &'static str, key: String| {
         move |e: zenoh::Error| NetError::Declare {
             what,
@@ -99,6 +125,17 @@ pub fn serve<P: Read + Write + Send>(
     let mut stats = RelayStats::default();
     let mut buf = [0u8; 512];
     let io_err = |e: std::io::Error| NetError::Open(format!("the device on {key}: {e}"));
+    if on_demand {
+        while commands.is_empty() {
+            if stop.load(Ordering::Acquire) {
+                return Ok(stats);
+            }
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+    let Some(mut port) = open()? else {
+        return Ok(stats);
+    };
     while !stop.load(Ordering::Acquire) {
         for command in commands.try_iter() {
             port.write_all(&command)
