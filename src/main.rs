@@ -9,6 +9,7 @@ mod net;
 #[cfg(not(feature = "zenoh"))]
 #[path = "without_zenoh.rs"]
 mod net;
+// Its test runs in the default build too (building without the feature is costly).
 mod observers;
 #[cfg(feature = "zenoh")]
 mod relay;
@@ -18,6 +19,9 @@ mod seq;
 mod templates;
 mod view;
 mod watch;
+#[cfg(all(test, feature = "zenoh"))]
+#[allow(dead_code)]
+mod without_zenoh;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;

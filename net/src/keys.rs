@@ -8,7 +8,7 @@
 //! | `<prefix>/events` | action events (started, completed, cancelled, failed) | JSON |
 //! | `<prefix>/messages` | behavior messages: what the scene's `troupe.publish` sent, with its tick | JSON |
 //! | `<prefix>/scene` | queryable: layout version, rate, seed, actor and object names | JSON |
-//! | `<prefix>/inputs` | each tick's inputs from outside, for followers | JSON |
+//! | `<prefix>/inputs` | each tick's inputs from outside, for followers: `u64` tick, then `.rec` chunks | binary |
 //! | `<prefix>/followers/<id>` | a follower's hello, once it has subscribed | empty |
 
 use crate::error::NetError;
