@@ -621,7 +621,7 @@ fn a_subscriber_killed_mid_run_leaves_the_leaders_tick_times_alone() {
     .unwrap();
     let mut scene = Scene::new(SceneConfig::default()).unwrap();
     for i in 0..50 {
-        scene.add_actor(&ActorDesc::new(&format!("a{i}"))).unwrap();
+        scene.add_actor(&ActorDesc::new(format!("a{i}"))).unwrap();
     }
     let mut session = Session::new(scene);
     session.observe(troupe_net::ScenePublisher::new(leader, keys).unwrap());
