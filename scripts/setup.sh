@@ -44,10 +44,12 @@ fi
 # its package is missing): Pinocchio (`pin`), an independent RNEA on troupe's own URDF
 # export (runtime/formats/tests/pinocchio_dynamics.rs); python-osc, the VMC compatibility
 # check (scripts/vmc/compat.py, run by tests/vmc.rs); junitparser, a JUnit XML reader for
-# `troupe test --junit` (tests/test_runner.rs).
-PYTHON_TOOLS=("pin==4.1.0" "python-osc==1.10.2" "junitparser==3.2.0")
+# `troupe test --junit` (tests/test_runner.rs); eclipse-zenoh, the independent Zenoh client
+# that checks a published run's postures against its .trk (scripts/zenoh_check.py, run by
+# tests/zenoh_cli.rs).
+PYTHON_TOOLS=("pin==4.1.0" "python-osc==1.10.2" "junitparser==3.2.0" "eclipse-zenoh==1.10.2")
 python_tools="$(cd "$(dirname "$0")/.." && pwd)/.tools/python"
-if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio, pythonosc, junitparser" >/dev/null 2>&1; then
+if command -v python3 >/dev/null && ! "$python_tools/bin/python" -c "import pinocchio, pythonosc, junitparser, zenoh" >/dev/null 2>&1; then
   echo "setup: installing ${PYTHON_TOOLS[*]} into $python_tools" >&2
   { [ -x "$python_tools/bin/pip" ] || python3 -m venv "$python_tools"; } >&2 &&
     "$python_tools/bin/pip" install -q --disable-pip-version-check "${PYTHON_TOOLS[@]}" >&2 ||

@@ -674,14 +674,36 @@ pub fn session(
     limits: troupe_lua::ScriptLimits,
     record: Option<&std::path::Path>,
 ) -> Result<(troupe_lua::LuaSession, RunDevices)> {
-    let kinds = troupe_actions::action_kinds();
-    let mut session = troupe_lua::Director::session(config, kinds, limits)?;
+    session_recording(config, limits, recorder(record, false)?, record)
+}
+
+/// The recorder of a run's inputs: to the file `record`, and tapped when `tap` (a Zenoh
+/// leader sends its followers each tick's chunks); none when neither.
+pub fn recorder(
+    record: Option<&std::path::Path>,
+    tap: bool,
+) -> Result<Option<std::sync::Arc<troupe_drivers::record::Recorder>>> {
+    use troupe_drivers::record::Recorder;
     let recorder = match record {
-        Some(p) => Some(std::sync::Arc::new(
-            troupe_drivers::record::Recorder::create(p).map_err(|e| anyhow!(e))?,
-        )),
+        Some(p) => Some(Recorder::create(p).map_err(|e| anyhow!(e))?),
+        None if tap => Some(Recorder::tap_only()),
         None => None,
     };
+    if tap {
+        recorder.iter().for_each(Recorder::tap);
+    }
+    Ok(recorder.map(std::sync::Arc::new))
+}
+
+/// [`session`] with a recorder made by [`recorder`]; `record` names its file, if any.
+pub fn session_recording(
+    config: troupe_scene::SceneConfig,
+    limits: troupe_lua::ScriptLimits,
+    recorder: Option<std::sync::Arc<troupe_drivers::record::Recorder>>,
+    record: Option<&std::path::Path>,
+) -> Result<(troupe_lua::LuaSession, RunDevices)> {
+    let kinds = troupe_actions::action_kinds();
+    let mut session = troupe_lua::Director::session(config, kinds, limits)?;
     let devices = troupe_drivers::lua::install(&mut session, recorder.clone())?;
     Ok((
         session,
@@ -745,9 +767,11 @@ impl troupe_scene::Observer for RunDevices {
                 ));
             }
         }
-        if let (Some(r), Some(path)) = (&self.recorder, &self.record_path) {
+        if let Some(r) = &self.recorder {
             r.finish()
                 .map_err(|e| troupe_scene::Error::Invalid(e.to_string()))?;
+        }
+        if let Some(path) = &self.record_path {
             lines.push(format!("recorded the device streams to {}", path.display()));
         }
         Ok((!lines.is_empty()).then(|| lines.join("\n")))

@@ -4,13 +4,24 @@ mod bench;
 mod devices;
 mod export;
 mod lua_defs;
+#[cfg(feature = "zenoh")]
+mod net;
+#[cfg(not(feature = "zenoh"))]
+#[path = "without_zenoh.rs"]
+mod net;
+// Its test runs in the default build too (building without the feature is costly).
 mod observers;
+#[cfg(feature = "zenoh")]
+mod relay;
 mod run;
 mod scenario;
 mod seq;
 mod templates;
 mod view;
 mod watch;
+#[cfg(all(test, feature = "zenoh"))]
+#[allow(dead_code)]
+mod without_zenoh;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -29,6 +40,8 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
+// Parsed once per process: the size of the largest variant (`run`'s options) costs nothing.
+#[allow(clippy::large_enum_variant)]
 enum Command {
     /// List the body templates with their DOF counts and scopes.
     Templates(templates::TemplatesArgs),
@@ -52,6 +65,12 @@ enum Command {
     Devices(devices::DevicesArgs),
     /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
     Emulate(devices::EmulateArgs),
+    /// Serve a device on Zenoh for a performer on another machine (needs the zenoh feature).
+    #[cfg(feature = "zenoh")]
+    Relay(relay::RelayArgs),
+    /// Serve a device on Zenoh for a performer on another machine (needs the zenoh feature).
+    #[cfg(not(feature = "zenoh"))]
+    Relay(net::RelayArgs),
     /// Write the EmmyLua / LuaLS definition file of the Lua API (for editors and checkers).
     LuaDefs(lua_defs::LuaDefsArgs),
 }
@@ -89,6 +108,10 @@ fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Devices(args) => devices::run(args),
         Command::Emulate(args) => devices::emulate(args),
+        #[cfg(feature = "zenoh")]
+        Command::Relay(args) => relay::run(args),
+        #[cfg(not(feature = "zenoh"))]
+        Command::Relay(args) => net::relay(args),
         Command::LuaDefs(args) => lua_defs::run(args),
     };
     match result {

@@ -95,6 +95,15 @@ pub struct RunArgs {
     /// each tick (addresses in docs/devices.md).
     #[arg(long, value_name = "HOST:PORT")]
     pub osc_out: Option<String>,
+    /// Replay a --record-devices recording in place of the scene's live and relayed
+    /// devices (`port`, `zenoh`, a VRPN `device`) and of its messages from outside: each
+    /// reading and message at the tick the recorded run took it, so the postures are the
+    /// recorded run's bit for bit.
+    #[arg(long, value_name = "FILE.rec")]
+    pub replay_devices: Option<PathBuf>,
+    /// Publishing on Zenoh (`--zenoh …`).
+    #[command(flatten)]
+    pub zenoh: crate::net::ZenohArgs,
     /// Send an actor (default: the first) as a VMC stream to a Marionette at HOST:PORT
     /// (default port 39539); repeatable (docs/devices.md, "VMC").
     #[arg(long, value_name = "HOST:PORT[=ACTOR]")]
@@ -192,11 +201,25 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         };
         return crate::watch::view(run, config, limits, size, camera);
     }
+    let replay = match &args.replay_devices {
+        Some(path) => Some(
+            troupe_drivers::record::DeviceReplay::from_file(path)
+                .map_err(|e| anyhow::anyhow!("--replay-devices: {e}"))?,
+        ),
+        None => None,
+    };
+    let (config, zenoh) = args.zenoh.open(config)?;
+    let record_devices = args.record_devices.as_deref();
+    let recorder = crate::devices::recorder(record_devices, zenoh.replicates())?;
     let (mut session, devices) =
-        crate::devices::session(config, limits, args.record_devices.as_deref())?;
+        crate::devices::session_recording(config, limits, recorder.clone(), record_devices)?;
     session.scene_mut().set_chunk_size(args.chunk);
     let tally = session.observe(ActionTally::new());
     session.observe(devices);
+    if let Some(replay) = &replay {
+        session.lua().set_app_data(replay.clone());
+    }
+    zenoh.install(&session);
     if let Err(e) = session.load_file(&args.scene) {
         // Devices the scene opened before it failed still close and report.
         for line in session.finish().unwrap_or_default() {
@@ -210,6 +233,15 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     if let Some(osc) = osc_out {
         session.observe(osc);
     }
+    if let Some(replay) = &replay {
+        session.add_input(Box::new(replay.messages()));
+    }
+    // Messages from outside go in the recording with the device streams (before the
+    // publisher, which sends each tick's chunks to followers).
+    if let Some(recorder) = &recorder {
+        session.observe(troupe_drivers::record::RecordMessages(recorder.clone()));
+    }
+    zenoh.attach(&mut session, recorder);
     if !vmc_out.streams.is_empty() {
         session.observe(vmc_out);
     }

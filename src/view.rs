@@ -1,6 +1,11 @@
 //! `troupe view` (play a recording on an actor, in a window or into PNG frames) and
 //! `troupe snapshot` (one picture of actors in given poses).
 
+#[cfg(feature = "zenoh")]
+mod remote;
+#[cfg(not(feature = "zenoh"))]
+use crate::net as remote;
+
 use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
@@ -28,7 +33,8 @@ use troupe_viewer::{
 )]
 pub struct ViewArgs {
     /// The recording to play (.trk, possibly several actors; .bvh; or .gltf/.glb written by troupe).
-    file: PathBuf,
+    #[arg(required_unless_present = "zenoh")]
+    file: Option<PathBuf>,
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
     actor_template: String,
@@ -69,6 +75,9 @@ pub struct ViewArgs {
     /// the recorded objects (a recording holds no walls, plans or avoidance).
     #[arg(long, value_name = "CHANNEL", value_parser = parse_debug)]
     debug: Option<DebugView>,
+    /// A render node: a scene published on Zenoh instead of a recording.
+    #[command(flatten)]
+    remote: remote::RemoteViewArgs,
 }
 
 /// Options of `troupe snapshot`.
@@ -197,16 +206,23 @@ fn load_objects(path: &Path) -> Result<Vec<ObjectMotion>> {
 
 /// Runs `troupe view`.
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
+    if let Some(prefix) = &args.remote.zenoh {
+        return remote::run(&args, prefix);
+    }
+    let file = args
+        .file
+        .as_deref()
+        .ok_or_else(|| anyhow!("troupe view: give a recording to play"))?;
     let size = parse_size(&args.size)?;
-    let performers = load_recording(&args.file, &args.actor_template)?;
-    let objects = load_objects(&args.file)?;
+    let performers = load_recording(file, &args.actor_template)?;
+    let objects = load_objects(file)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,
         ..SceneConfig::default()
     })?;
     let object_length = objects.iter().map(|o| o.pose.end()).fold(0.0, f64::max);
     let playback = ObjectPlayback::install(&mut scene, objects)
-        .with_context(|| format!("{}: recorded objects", args.file.display()))?;
+        .with_context(|| format!("{}: recorded objects", file.display()))?;
     let mut length: f64 = 0.0;
     for p in &performers {
         let desc = ActorDesc {
@@ -220,7 +236,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
             Keyframe::new(&skeleton, &p.sequence, None, Some(true)).with_context(|| {
                 format!(
                     "{}: `{}` on template {}",
-                    args.file.display(),
+                    file.display(),
                     p.name,
                     p.template
                 )
@@ -254,7 +270,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         return write_frames(with_objects(Session::new(scene), playback), writer, seconds);
     }
     let options = WindowOptions {
-        title: format!("troupe view {}", args.file.display()),
+        title: format!("troupe view {}", file.display()),
         size,
         camera: camera.clone(),
         render: render_options(args.look, args.bones, !args.no_labels),

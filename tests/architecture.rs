@@ -9,7 +9,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
 /// The source folders checked for cycles, one per crate.
-const CRATES: [&str; 9] = [
+const CRATES: [&str; 10] = [
     "runtime/body/src",
     "runtime/motion/src",
     "runtime/formats/src",
@@ -18,6 +18,7 @@ const CRATES: [&str; 9] = [
     "actions/src",
     "drivers/src",
     "viewer/src",
+    "net/src",
     "src",
 ];
 
@@ -352,6 +353,7 @@ fn the_architecture_diagram_draws_the_real_crate_graph() {
         ("troupe-actions", "actions"),
         ("troupe-drivers", "drivers"),
         ("troupe-viewer", "viewer"),
+        ("troupe-net", "net"),
         ("troupe", "."),
     ];
     let mut direct: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();

@@ -48,6 +48,14 @@ pub enum DeviceError {
     /// No SpaceMouse is plugged in.
     #[error("no SpaceMouse found (vendors 046d/256f; see `troupe devices`)")]
     NoSpaceMouse,
+    /// A device served by a relay (`zenoh = KEY`) could not be reached.
+    #[error("relayed device {key}: {message}")]
+    Remote {
+        /// The key the relay serves.
+        key: String,
+        /// Why.
+        message: String,
+    },
     /// A command could not be written.
     #[error("writing {bytes:02x?}: {source}")]
     Write {

@@ -8,6 +8,7 @@ pub(crate) mod health;
 pub(crate) mod port;
 pub(crate) mod protocol;
 pub(crate) mod reading;
+pub(crate) mod remote;
 pub(crate) mod thread;
 
 pub use error::DeviceError;
@@ -15,4 +16,5 @@ pub use health::{Health, HealthReport, HealthState};
 pub use port::{open_serial, serial_ports, Port, SerialInfo};
 pub use protocol::{Mode, Protocol};
 pub use reading::{Reading, Sample};
+pub use remote::{RemoteOpen, RemotePorts};
 pub use thread::{spawn, spawn_with, DeviceHandle, DriverOptions, Opener};

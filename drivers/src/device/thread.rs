@@ -62,12 +62,24 @@ pub struct DeviceHandle {
     pub health: Arc<Health>,
     stop: Arc<AtomicBool>,
     thread: Option<JoinHandle<()>>,
+    /// The recorder and this device's stream in it, when recording.
+    recording: Option<(Arc<Recorder>, u16)>,
 }
 
 impl DeviceHandle {
     /// All samples waiting, without blocking.
     pub fn drain(&self) -> Vec<Sample> {
         self.samples.try_iter().collect()
+    }
+
+    /// All samples waiting, noting in the recording (if any) that `ticks` ticks after the
+    /// device opened the scene had taken them, so a replay takes them at the same tick.
+    pub fn drain_at_tick(&self, ticks: u64) -> Vec<Sample> {
+        let samples = self.drain();
+        if let (Some((recorder, stream)), Some(last)) = (&self.recording, samples.last()) {
+            recorder.mark(*stream, ticks, last.seq + 1);
+        }
+        samples
     }
 
     /// Stops the thread and waits for it.
@@ -113,9 +125,15 @@ pub fn spawn_with(
     let health = Arc::new(Health::new());
     let stop = Arc::new(AtomicBool::new(false));
     let (h, s) = (health.clone(), stop.clone());
+    // Declared here, before the thread starts, so the handle knows its stream for marks.
+    let recording = recorder.map(|r| {
+        let stream = r.add_stream(&options.name, protocol.kind(), protocol.settings());
+        (r, stream)
+    });
+    let thread_recording = recording.clone();
     let thread = std::thread::Builder::new()
         .name(format!("device {}", options.name))
-        .spawn(move || run(options, protocol, recorder, opener, tx, h, s))
+        .spawn(move || run(options, protocol, thread_recording, opener, tx, h, s))
         .ok();
     if thread.is_none() {
         health.set_state(HealthState::Failed);
@@ -126,6 +144,7 @@ pub fn spawn_with(
         health,
         stop,
         thread,
+        recording,
     }
 }
 
@@ -144,16 +163,13 @@ fn sleep_unless_stopped(d: Duration, stop: &AtomicBool) {
 fn run(
     o: DriverOptions,
     mut protocol: Box<dyn Protocol>,
-    recorder: Option<Arc<Recorder>>,
+    recording: Option<(Arc<Recorder>, u16)>,
     mut opener: Opener,
     tx: Sender<Sample>,
     health: Arc<Health>,
     stop: Arc<AtomicBool>,
 ) {
     let start = Instant::now();
-    let stream = recorder
-        .as_ref()
-        .map(|r| r.add_stream(&o.name, protocol.kind(), protocol.settings()));
     let mut seq = 0u64;
     let mut failures = 0u32;
     let mut backoff = o.backoff_initial;
@@ -197,8 +213,8 @@ fn run(
                 Ok(0) => break "port closed".to_string(),
                 Ok(n) => {
                     let now = Instant::now();
-                    if let (Some(r), Some(s)) = (&recorder, stream) {
-                        r.data(s, &buf[..n]);
+                    if let Some((r, s)) = &recording {
+                        r.data(*s, &buf[..n]);
                     }
                     let mut produced = false;
                     protocol.decode(&buf[..n], &mut |reading| {

@@ -5,8 +5,9 @@
 use crate::cyberglove::calibration::GloveCalibration;
 use crate::cyberglove::decoder::GloveLayout;
 use crate::cyberglove::protocol::{GloveConfig, GloveProtocol};
-use crate::device::protocol::Mode;
-use crate::device::thread::{spawn, DeviceHandle, DriverOptions};
+use crate::device::protocol::{Mode, Protocol};
+use crate::device::remote::RemotePorts;
+use crate::device::thread::{spawn, spawn_with, DriverOptions, Opener};
 use crate::fob::commands::{Hemisphere, OutputFormat, PositionRange};
 use crate::fob::protocol::{FobConfig, FobProtocol};
 use crate::gesture::{GestureSet, GestureTracker};
@@ -15,8 +16,9 @@ use crate::osc::listener::OscListener;
 use crate::performer::converter::{transmitter_to_world, AnatomicalConverter};
 use crate::performer::glove_map::{nominal_glove_calibration, GloveMap};
 use crate::performer::registry::Performer;
-use crate::performer::source::{FobInput, GloveInput, OscPoses, Source};
+use crate::performer::source::{scene_clock, FobInput, GloveInput, OscPoses, Source};
 use crate::performer::vrpn::vrpn_input;
+use crate::record::feed::DeviceReplay;
 use crate::record::writer::Recorder;
 use glam::DQuat;
 use mlua::{Function, Lua, Table, Value};
@@ -111,14 +113,8 @@ pub(crate) fn new_performer(
         .get(actor)
         .cloned()
         .ok_or_else(|| args::err("performer", "actor vanished"))?;
-    let scene_time = lua
-        .globals()
-        .get::<Table>("troupe")?
-        .get::<Function>("time")
-        .ok()
-        .map(|f| f.call::<f64>(()))
-        .transpose()?
-        .unwrap_or(0.0);
+    let clock = scene_clock(lua)?;
+    let scene_time = clock.0;
     let mut fob = None;
     let mut osc = None;
     let mut glove = None;
@@ -138,7 +134,7 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
             )?);
         }
         if let Some(o) = opt::<Table>(d, "osc")? {
@@ -167,7 +163,7 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
             )?);
         }
         if let Some(v) = opt::<Table>(d, "vmc")? {
@@ -201,7 +197,7 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
             )?);
         }
     }
@@ -262,23 +258,57 @@ fn source(
     t: &Table,
     what: &str,
     kind: &str,
-    scene_time: f64,
-    live: impl FnOnce(String) -> mlua::Result<DeviceHandle>,
+    clock: (f64, u64),
+    recorder: Option<Arc<Recorder>>,
+    live: impl FnOnce(String) -> (DriverOptions, Box<dyn Protocol>),
 ) -> mlua::Result<Source> {
     let port: Option<String> = opt(t, "port")?;
     let replay: Option<String> = opt(t, "replay")?;
-    match (port, replay) {
-        (Some(p), None) => Ok(Source::Live(live(p)?)),
-        (None, Some(r)) => {
+    let remote: Option<String> = opt(t, "zenoh")?;
+    // A replay of the whole run's inputs stands in for every port and relay.
+    let replayed = lua.app_data_ref::<DeviceReplay>().map(|r| r.clone());
+    if let (Some(replay), None, true) = (&replayed, &replay, port.is_some() || remote.is_some()) {
+        let (options, _) = live(port.clone().or(remote.clone()).unwrap_or_default());
+        return Source::replayed(replay, &options.name, clock).map_err(|e| args::err(what, e));
+    }
+    match (port, replay, remote) {
+        (Some(p), None, None) => {
+            let (options, protocol) = live(p);
+            Ok(Source::Live {
+                handle: spawn(options, protocol, recorder),
+                opened: clock.1,
+            })
+        }
+        (None, Some(r), None) => {
             let stream: Option<String> = opt(t, "stream")?;
-            Source::replay(&resolve(lua, &r), stream.as_deref(), kind, scene_time)
+            Source::replay(&resolve(lua, &r), stream.as_deref(), kind, clock)
                 .map_err(|e| args::err(what, e))
         }
-        (Some(_), Some(_)) => Err(args::err(what, "give `port` or `replay`, not both")),
-        (None, None) => Err(args::err(
+        (None, None, Some(key)) => {
+            let ports = lua
+                .app_data_ref::<RemotePorts>()
+                .map(|p| p.clone())
+                .ok_or_else(|| {
+                    args::err(
+                        what,
+                        format!(
+                            "zenoh = \"{key}\" needs a network session: troupe run with \
+                         --zenoh-connect or --zenoh-listen (a troupe built with the zenoh feature)"
+                        ),
+                    )
+                })?;
+            let (options, protocol) = live(format!("zenoh:{key}"));
+            let opener: Opener = Box::new(move |_| (ports.0)(&key));
+            Ok(Source::Live {
+                handle: spawn_with(options, protocol, recorder, opener),
+                opened: clock.1,
+            })
+        }
+        (None, None, None) => Err(args::err(
             what,
-            "`port` (a serial port) or `replay` (a .rec file) is required",
+            "`port` (a serial port), `replay` (a .rec file) or `zenoh` (a relay's key) is required",
         )),
+        _ => Err(args::err(what, "give one of `port`, `replay` and `zenoh`")),
     }
 }
 
@@ -288,7 +318,7 @@ fn fob_input(
     skeleton: &Arc<Skeleton>,
     name: &str,
     recorder: Option<Arc<Recorder>>,
-    scene_time: f64,
+    clock: (f64, u64),
 ) -> mlua::Result<FobInput> {
     check_keys(
         t,
@@ -296,6 +326,7 @@ fn fob_input(
         &[
             "port",
             "replay",
+            "zenoh",
             "stream",
             "birds",
             "map",
@@ -358,11 +389,19 @@ fn fob_input(
         config.mode = parse_mode(&m)?;
     }
     let baud: u32 = opt(t, "baud")?.unwrap_or(115_200);
-    let src = source(lua, t, "performer.devices.fob", "fob", scene_time, |port| {
-        let mut o = DriverOptions::new(&format!("{name}.fob"), &port);
-        o.baud = baud;
-        Ok(spawn(o, Box::new(FobProtocol::new(config)), recorder))
-    })?;
+    let src = source(
+        lua,
+        t,
+        "performer.devices.fob",
+        "fob",
+        clock,
+        recorder,
+        |port| {
+            let mut o = DriverOptions::new(&format!("{name}.fob"), &port);
+            o.baud = baud;
+            (o, Box::new(FobProtocol::new(config)))
+        },
+    )?;
     Ok(FobInput {
         source: src,
         converter,
@@ -419,7 +458,7 @@ fn glove_input(
     skeleton: &Arc<Skeleton>,
     name: &str,
     recorder: Option<Arc<Recorder>>,
-    scene_time: f64,
+    clock: (f64, u64),
 ) -> mlua::Result<GloveInput> {
     check_keys(
         t,
@@ -427,6 +466,7 @@ fn glove_input(
         &[
             "port",
             "replay",
+            "zenoh",
             "stream",
             "hand",
             "sensors",
@@ -493,11 +533,12 @@ fn glove_input(
             t,
             "performer.devices.glove",
             "cyberglove",
-            scene_time,
+            clock,
+            recorder,
             |port| {
                 let mut o = DriverOptions::new(&format!("{name}.glove"), &port);
                 o.baud = baud;
-                Ok(spawn(o, Box::new(GloveProtocol::new(config)), recorder))
+                (o, Box::new(GloveProtocol::new(config)))
             },
         )?
     };

@@ -159,12 +159,12 @@ impl Performers {
     fn drain(&mut self, scene: &mut Scene) -> Vec<GestureEvent> {
         self.ticks += 1;
         let mut events = Vec::new();
-        let time = scene.time();
+        let (tick, time) = (scene.tick(), scene.time());
         for p in &mut self.list {
             let mut changed = false;
             let mut newest: Option<Instant> = None;
             if let Some(f) = &mut p.fob {
-                for (r, at) in f.source.take(time) {
+                for (r, at) in f.source.take(tick, time) {
                     if let Reading::Bird(b) = r {
                         // An all-zero quaternion or matrix decodes, but is no rotation:
                         // such a record is skipped rather than turned into NaN joints.
@@ -189,7 +189,7 @@ impl Performers {
                 }
             }
             if let Some(v) = &mut p.vrpn {
-                let (got, at) = v.take(time);
+                let (got, at) = v.take(tick, time);
                 changed |= got;
                 newest = newest.max(at);
                 let all = v.converter.birds().iter().all(|a| v.latest.contains_key(a));
@@ -244,7 +244,7 @@ impl Performers {
                 }
             }
             if let Some(g) = &mut p.glove {
-                let mut readings = g.source.take(time);
+                let mut readings = g.source.take(tick, time);
                 readings.extend(osc_glove);
                 for (r, at) in readings {
                     if let Reading::Glove(rec) = r {

@@ -11,10 +11,12 @@ use crate::osc::listener::OscListener;
 use crate::performer::converter::AnatomicalConverter;
 use crate::performer::glove_map::GloveMap;
 use crate::record::error::RecordError;
+use crate::record::feed::{DeviceReplay, SharedFeed, StreamFeed};
 use crate::record::file::Recording;
 use glam::{DQuat, DVec3};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
 use std::time::Instant;
 use troupe_body::sensors::Side;
 
@@ -36,26 +38,42 @@ pub enum SourceError {
 
 /// Where a device's samples come from.
 pub(crate) enum Source {
-    /// A live driver thread.
-    Live(DeviceHandle),
-    /// A recording, delivered by scene time (deterministic).
+    /// A live driver thread, opened `opened` ticks into the scene.
+    Live { handle: DeviceHandle, opened: u64 },
+    /// A recorded stream (a file, or a leader's), delivered at the recorded run's ticks
+    /// (tick marks) or else by scene time from `start` on (deterministic either way).
     Replay {
-        readings: Vec<(f64, Reading)>,
-        next: usize,
+        feed: SharedFeed,
+        opened: u64,
         start: f64,
     },
     /// Fed from elsewhere (a glove whose values come over OSC).
     External,
 }
 
+/// The scene's time and tick as the script sees them now (`troupe.time()`,
+/// `troupe.tick()`): when a device opens.
+pub(crate) fn scene_clock(lua: &mlua::Lua) -> mlua::Result<(f64, u64)> {
+    let troupe = lua.globals().get::<mlua::Table>("troupe")?;
+    let call = |name: &str| -> mlua::Result<Option<mlua::Value>> {
+        troupe
+            .get::<Option<mlua::Function>>(name)?
+            .map(|f| f.call(()))
+            .transpose()
+    };
+    let time = call("time")?.and_then(|v| v.as_f64()).unwrap_or(0.0);
+    let tick = call("tick")?.and_then(|v| v.as_u64()).unwrap_or(0);
+    Ok((time, tick))
+}
+
 impl Source {
     /// The stream of `kind` (or the one named `stream`) of the recording at `path`,
-    /// delivered by scene time from `scene_time` on.
+    /// delivered from now (`time`, `tick`) on.
     pub(crate) fn replay(
         path: &Path,
         stream: Option<&str>,
         kind: &str,
-        scene_time: f64,
+        (time, tick): (f64, u64),
     ) -> Result<Source, SourceError> {
         let rec = Recording::read(path)?;
         let s = rec
@@ -65,34 +83,47 @@ impl Source {
                 kind: kind.to_string(),
             })?;
         Ok(Source::Replay {
-            readings: rec.readings(s)?,
-            next: 0,
-            start: scene_time,
+            feed: Arc::new(Mutex::new(StreamFeed::from_recording(&rec, s)?)),
+            opened: tick,
+            start: time,
         })
     }
 
-    /// Readings due now, with the instant they arrived (live only).
-    pub(crate) fn take(&mut self, scene_time: f64) -> Vec<(Reading, Option<Instant>)> {
+    /// The device named `name` read from a replay of the whole run's inputs
+    /// (`--replay-devices`, `--zenoh-follow`) in place of its port.
+    pub(crate) fn replayed(
+        replay: &DeviceReplay,
+        name: &str,
+        (time, tick): (f64, u64),
+    ) -> Result<Source, String> {
+        Ok(Source::Replay {
+            feed: replay.stream(name)?,
+            opened: tick,
+            start: time,
+        })
+    }
+
+    /// Readings due before the tick after `tick` at scene time `time`, with the instant
+    /// they arrived (live only).
+    pub(crate) fn take(&mut self, tick: u64, time: f64) -> Vec<(Reading, Option<Instant>)> {
         match self {
-            Source::Live(h) => h
-                .drain()
+            Source::Live { handle, opened } => handle
+                .drain_at_tick(tick.saturating_sub(*opened))
                 .into_iter()
                 .map(|s| (s.reading, Some(s.arrived)))
                 .collect(),
             Source::Replay {
-                readings,
-                next,
+                feed,
+                opened,
                 start,
-            } => {
-                let t0 = readings.first().map(|r| r.0).unwrap_or(0.0);
-                let mut out = Vec::new();
-                while *next < readings.len() && readings[*next].0 - t0 <= scene_time - *start + 1e-9
-                {
-                    out.push((readings[*next].1.clone(), None));
-                    *next += 1;
-                }
-                out
-            }
+            } => match feed.lock() {
+                Ok(mut f) => f
+                    .take(tick.saturating_sub(*opened), time - *start)
+                    .into_iter()
+                    .map(|r| (r, None))
+                    .collect(),
+                Err(_) => Vec::new(),
+            },
             Source::External => Vec::new(),
         }
     }
@@ -100,7 +131,7 @@ impl Source {
     /// The device's health; `None` for a replay or an external feed.
     pub(crate) fn health(&self) -> Option<HealthReport> {
         match self {
-            Source::Live(h) => Some(h.health.report()),
+            Source::Live { handle, .. } => Some(handle.health.report()),
             Source::Replay { .. } | Source::External => None,
         }
     }

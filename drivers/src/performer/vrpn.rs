@@ -5,10 +5,13 @@
 //! connection become the performer's controls.
 
 use crate::device::reading::Reading;
+use crate::device::remote::RemotePorts;
+use crate::device::thread::Opener;
 use crate::lua::args::{check_keys, resolve};
 use crate::performer::controls::Controls;
 use crate::performer::converter::AnatomicalConverter;
 use crate::performer::source::Source;
+use crate::record::feed::DeviceReplay;
 use crate::record::writer::Recorder;
 use crate::vrpn::{self, DeviceName, VrpnConfig, VrpnReading};
 use glam::{DQuat, DVec3};
@@ -57,13 +60,13 @@ pub(crate) struct VrpnInput {
 }
 
 impl VrpnInput {
-    /// Takes the reports due at `time`: sensor poses into `latest`, buttons and analogs into
+    /// Takes the reports due before the tick after `tick`, at `time`: sensor poses into `latest`, buttons and analogs into
     /// the controls. Returns whether a mapped pose changed and the newest arrival instant.
-    pub(crate) fn take(&mut self, time: f64) -> (bool, Option<Instant>) {
+    pub(crate) fn take(&mut self, tick: u64, time: f64) -> (bool, Option<Instant>) {
         let mut changed = false;
         let mut newest = None;
         let mapped = self.converter.birds();
-        for (r, at) in self.source.take(time) {
+        for (r, at) in self.source.take(tick, time) {
             let Reading::Vrpn(r) = r else { continue };
             match r {
                 VrpnReading::Tracker {
@@ -101,13 +104,14 @@ pub(crate) fn vrpn_input(
     skeleton: &Arc<Skeleton>,
     name: &str,
     recorder: Option<Arc<Recorder>>,
-    scene_time: f64,
+    clock: (f64, u64),
 ) -> mlua::Result<VrpnInput> {
     check_keys(
         t,
         WHAT,
         &[
-            "device", "replay", "stream", "map", "units", "axes", "buttons", "analogs", "timeout",
+            "device", "zenoh", "replay", "stream", "map", "units", "axes", "buttons", "analogs",
+            "timeout",
         ],
     )?;
     let map_t: Table = t
@@ -150,7 +154,14 @@ pub(crate) fn vrpn_input(
         .map_err(|e| args::err(WHAT, e))?;
     let device: Option<String> = t.get("device")?;
     let replay: Option<String> = t.get("replay")?;
+    let replayed = lua.app_data_ref::<DeviceReplay>().map(|r| r.clone());
     let source = match (device, replay) {
+        // A replay of the whole run's inputs stands in for the server.
+        (Some(_), None) if replayed.is_some() => {
+            let replay = replayed.as_ref().expect("a replay");
+            Source::replayed(replay, &format!("{name}.vrpn"), clock)
+                .map_err(|e| args::err(WHAT, e))?
+        }
         (Some(d), None) => {
             let n = DeviceName::parse(&d).map_err(|e| args::err(WHAT, e))?;
             let extra: Vec<String> = ["buttons", "analogs"]
@@ -170,18 +181,40 @@ pub(crate) fn vrpn_input(
                 ));
             }
             let options = vrpn::driver_options(&format!("{name}.vrpn"), &d);
-            let h = vrpn::spawn(
-                VrpnConfig::new(&n, &extra),
-                options,
-                Duration::from_secs_f64(timeout),
-                recorder,
-            )
-            .map_err(|e| args::err(WHAT, e))?;
-            Source::Live(h)
+            let h = match t.get::<Option<String>>("zenoh")? {
+                // The server is reached through `troupe relay vrpn` on another machine.
+                Some(key) => {
+                    let ports = lua
+                        .app_data_ref::<RemotePorts>()
+                        .map(|p| p.clone())
+                        .ok_or_else(|| {
+                            args::err(
+                                WHAT,
+                                format!(
+                                    "zenoh = \"{key}\" needs a network session: troupe run with \
+                                     --zenoh-connect or --zenoh-listen"
+                                ),
+                            )
+                        })?;
+                    let opener: Opener = Box::new(move |_| (ports.0)(&key));
+                    vrpn::spawn_through(VrpnConfig::new(&n, &extra), options, recorder, opener)
+                }
+                None => vrpn::spawn(
+                    VrpnConfig::new(&n, &extra),
+                    options,
+                    Duration::from_secs_f64(timeout),
+                    recorder,
+                )
+                .map_err(|e| args::err(WHAT, e))?,
+            };
+            Source::Live {
+                handle: h,
+                opened: clock.1,
+            }
         }
         (None, Some(r)) => {
             let stream: Option<String> = t.get("stream")?;
-            Source::replay(&resolve(lua, &r), stream.as_deref(), "vrpn", scene_time)
+            Source::replay(&resolve(lua, &r), stream.as_deref(), "vrpn", clock)
                 .map_err(|e| args::err(WHAT, e))?
         }
         (Some(_), Some(_)) => return Err(args::err(WHAT, "give `device` or `replay`, not both")),

@@ -67,7 +67,7 @@ pub enum ParseError {
     /// The file does not start with the magic line.
     #[error("not a troupe device recording (missing TROUPEREC1 header)")]
     NoMagic,
-    /// A chunk starts with a tag other than `H` or `D`.
+    /// A chunk starts with a tag other than `H`, `D`, `T` or `M`.
     #[error("unknown chunk tag 0x{tag:02x} at byte {offset}")]
     UnknownTag {
         /// The tag byte.
@@ -97,6 +97,21 @@ pub enum ParseError {
     Undeclared {
         /// The stream index.
         stream: u16,
+        /// Where the chunk starts.
+        offset: usize,
+    },
+    /// A recorded message that is not JSON.
+    #[error("message at byte {offset}: {source}")]
+    Message {
+        /// Where the chunk starts.
+        offset: usize,
+        /// What the JSON parser said.
+        #[source]
+        source: serde_json::Error,
+    },
+    /// A recorded message without a `key` string.
+    #[error("message at byte {offset}: no \"key\" (a string)")]
+    MessageKey {
         /// Where the chunk starts.
         offset: usize,
     },

@@ -11,7 +11,15 @@
 //!   'H' u16 stream  u32 len  JSON               a stream: {"name","kind","settings"}
 //!   'D' u16 stream  u64 micros  u32 len  bytes  bytes read from that stream's port,
 //!                                               `micros` after the recording started
+//!   'T' u16 stream  u64 tick  u64 taken         at `tick` ticks after the device opened,
+//!                                               the scene had taken its readings 0..taken
+//!   'M' u64 tick  u32 len  JSON                 a message from outside,
+//!                                               {"key","value"}, seen at tick `tick`
 //! ```
+//!
+//! Tick marks make a replay take every reading at the tick the recorded run took it, so
+//! the replayed postures are the recorded run's bit for bit; a recording without marks
+//! (older files, `troupe devices` tools) is replayed by its times.
 
 use crate::record::error::{ParseError, RecordError};
 use serde::{Deserialize, Serialize};
@@ -42,13 +50,53 @@ pub struct Chunk {
     pub bytes: Vec<u8>,
 }
 
-/// A whole recording in memory.
+/// At a tick, a scene took a stream's readings up to (not including) a sequence number.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Mark {
+    /// Stream index.
+    pub stream: u16,
+    /// Ticks since the device opened.
+    pub tick: u64,
+    /// Readings taken so far: the stream's readings `0..taken`, in decoding order.
+    pub taken: u64,
+}
+
+/// A message a scene received from outside (`troupe.subscribe`), with its tick.
 #[derive(Clone, Debug, PartialEq)]
+pub struct RecordedMessage {
+    /// The tick whose script phase saw it.
+    pub tick: u64,
+    /// Its key.
+    pub key: String,
+    /// Its value.
+    pub value: serde_json::Value,
+}
+
+/// One chunk of a recording.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Item {
+    /// A stream is declared (its index is the count of streams before it).
+    Stream(StreamInfo),
+    /// Bytes read from a stream's port.
+    Data(Chunk),
+    /// What a tick took from a stream.
+    Mark(Mark),
+    /// A message from outside.
+    Message(RecordedMessage),
+}
+
+/// A whole recording in memory.
+#[derive(Clone, Debug, PartialEq, Default)]
 pub struct Recording {
     /// Declared streams, by index.
     pub streams: Vec<StreamInfo>,
     /// Data chunks in file order (time order per stream).
     pub chunks: Vec<Chunk>,
+    /// Tick marks in file order: which readings each tick took (recordings made by
+    /// `troupe run --record-devices`; older ones have none and replay by time).
+    pub marks: Vec<Mark>,
+    /// Messages from outside, in delivery order.
+    pub messages: Vec<RecordedMessage>,
 }
 
 impl Recording {
@@ -70,65 +118,28 @@ impl Recording {
         if !bytes.starts_with(MAGIC) {
             return Err(ParseError::NoMagic);
         }
-        let mut streams = Vec::new();
-        let mut chunks = Vec::new();
-        let mut i = MAGIC.len();
-        let take = |i: &mut usize, n: usize| -> Option<&[u8]> {
-            let s = bytes.get(*i..*i + n)?;
-            *i += n;
-            Some(s)
-        };
-        while i < bytes.len() {
-            let at = i;
-            let tag = bytes[i];
-            i += 1;
-            let parsed = match tag {
-                b'H' => (|| {
-                    let index = u16::from_le_bytes(take(&mut i, 2)?.try_into().ok()?);
-                    let len = u32::from_le_bytes(take(&mut i, 4)?.try_into().ok()?) as usize;
-                    let json = take(&mut i, len)?;
-                    Some(Err((index, json.to_vec())))
-                })(),
-                b'D' => (|| {
-                    let stream = u16::from_le_bytes(take(&mut i, 2)?.try_into().ok()?);
-                    let micros = u64::from_le_bytes(take(&mut i, 8)?.try_into().ok()?);
-                    let len = u32::from_le_bytes(take(&mut i, 4)?.try_into().ok()?) as usize;
-                    let data = take(&mut i, len)?;
-                    Some(Ok(Chunk {
-                        stream,
-                        micros,
-                        bytes: data.to_vec(),
-                    }))
-                })(),
-                tag => return Err(ParseError::UnknownTag { tag, offset: at }),
-            };
-            match parsed {
-                None => {
-                    tracing::warn!(
-                        "device recording truncated at byte {at}; using what precedes it"
-                    );
-                    break;
-                }
-                Some(Err((index, json))) => {
-                    if usize::from(index) != streams.len() {
-                        return Err(ParseError::OutOfOrder { index, offset: at });
-                    }
-                    let info: StreamInfo = serde_json::from_slice(&json)
-                        .map_err(|source| ParseError::Header { offset: at, source })?;
-                    streams.push(info);
-                }
-                Some(Ok(c)) => {
-                    if usize::from(c.stream) >= streams.len() {
-                        return Err(ParseError::Undeclared {
-                            stream: c.stream,
-                            offset: at,
-                        });
-                    }
-                    chunks.push(c);
-                }
-            }
+        let mut reader = ChunkReader::default();
+        let mut recording = Recording::default();
+        for item in reader.read(&bytes[MAGIC.len()..])? {
+            recording.add(item);
         }
-        Ok(Recording { streams, chunks })
+        if reader.pending() > 0 {
+            tracing::warn!(
+                "device recording truncated at byte {}; using what precedes it",
+                MAGIC.len() as u64 + reader.offset
+            );
+        }
+        Ok(recording)
+    }
+
+    /// Adds a chunk read by a [`ChunkReader`].
+    fn add(&mut self, item: Item) {
+        match item {
+            Item::Stream(s) => self.streams.push(s),
+            Item::Data(c) => self.chunks.push(c),
+            Item::Mark(m) => self.marks.push(m),
+            Item::Message(m) => self.messages.push(m),
+        }
     }
 
     /// The index of the stream named `name`, or of the only stream of a kind.
@@ -142,5 +153,120 @@ impl Recording {
                     .collect();
                 (of_kind.len() == 1).then(|| of_kind[0])
             })
+    }
+}
+
+/// Reads chunks from bytes that arrive in pieces (a file at once, or a leader's stream
+/// tick by tick); a chunk split between pieces is kept until its end arrives.
+#[derive(Debug, Default)]
+pub struct ChunkReader {
+    buf: Vec<u8>,
+    /// Offset of `buf`'s first byte in the whole stream (after the magic), for errors.
+    offset: u64,
+    streams: u16,
+}
+
+impl ChunkReader {
+    /// Reads every whole chunk of what has arrived with `bytes`.
+    pub fn read(&mut self, bytes: &[u8]) -> Result<Vec<Item>, ParseError> {
+        self.buf.extend_from_slice(bytes);
+        let mut items = Vec::new();
+        let mut i = 0;
+        while let Some((item, next)) = self.chunk_at(i)? {
+            items.push(item);
+            i = next;
+        }
+        self.buf.drain(..i);
+        self.offset += i as u64;
+        Ok(items)
+    }
+
+    /// Bytes of a chunk not yet whole.
+    pub fn pending(&self) -> usize {
+        self.buf.len()
+    }
+
+    /// The chunk starting at `i` of the buffer and where the next starts, or `None` when it
+    /// has not all arrived.
+    fn chunk_at(&mut self, i: usize) -> Result<Option<(Item, usize)>, ParseError> {
+        let bytes = &self.buf;
+        let Some(&tag) = bytes.get(i) else {
+            return Ok(None);
+        };
+        let offset = (self.offset + i as u64) as usize + MAGIC.len();
+        let mut at = i + 1;
+        let mut take = |n: usize| -> Option<&[u8]> {
+            let s = bytes.get(at..at + n)?;
+            at += n;
+            Some(s)
+        };
+        let u16_ = |b: &[u8]| u16::from_le_bytes(b.try_into().unwrap_or_default());
+        let u32_ = |b: &[u8]| u32::from_le_bytes(b.try_into().unwrap_or_default()) as usize;
+        let u64_ = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or_default());
+        macro_rules! field {
+            ($n:expr) => {
+                match take($n) {
+                    Some(b) => b,
+                    None => return Ok(None),
+                }
+            };
+        }
+        let item = match tag {
+            b'H' => {
+                let index = u16_(field!(2));
+                let len = u32_(field!(4));
+                let json = field!(len);
+                if index != self.streams {
+                    return Err(ParseError::OutOfOrder { index, offset });
+                }
+                let info: StreamInfo = serde_json::from_slice(json)
+                    .map_err(|source| ParseError::Header { offset, source })?;
+                self.streams += 1;
+                Item::Stream(info)
+            }
+            b'D' => {
+                let stream = u16_(field!(2));
+                let micros = u64_(field!(8));
+                let len = u32_(field!(4));
+                let data = field!(len).to_vec();
+                if stream >= self.streams {
+                    return Err(ParseError::Undeclared { stream, offset });
+                }
+                Item::Data(Chunk {
+                    stream,
+                    micros,
+                    bytes: data,
+                })
+            }
+            b'T' => {
+                let stream = u16_(field!(2));
+                let tick = u64_(field!(8));
+                let taken = u64_(field!(8));
+                if stream >= self.streams {
+                    return Err(ParseError::Undeclared { stream, offset });
+                }
+                Item::Mark(Mark {
+                    stream,
+                    tick,
+                    taken,
+                })
+            }
+            b'M' => {
+                let tick = u64_(field!(8));
+                let len = u32_(field!(4));
+                let doc: serde_json::Value = serde_json::from_slice(field!(len))
+                    .map_err(|source| ParseError::Message { offset, source })?;
+                let key = doc["key"]
+                    .as_str()
+                    .ok_or(ParseError::MessageKey { offset })?;
+                Item::Message(RecordedMessage {
+                    tick,
+                    key: key.to_string(),
+                    value: doc.get("value").cloned().unwrap_or_default(),
+                })
+            }
+            tag => return Err(ParseError::UnknownTag { tag, offset }),
+        };
+        Ok(Some((item, at)))
     }
 }

@@ -1,5 +1,7 @@
 //! Writing a `.rec` file while devices run: each device thread declares its stream and
-//! appends the bytes it reads, one whole chunk per call.
+//! appends the bytes it reads, one whole chunk per call; the scene marks what each tick
+//! took and records the messages it received. A tap keeps a copy of the chunks written
+//! since it was last taken (what a Zenoh leader sends its followers each tick).
 
 use crate::record::error::RecordError;
 use crate::record::file::{StreamInfo, MAGIC};
@@ -16,7 +18,10 @@ pub struct Recorder {
 }
 
 struct RecorderInner {
-    out: std::io::BufWriter<std::fs::File>,
+    /// The file, if recording to one.
+    out: Option<std::io::BufWriter<std::fs::File>>,
+    /// Chunks written since the tap was last taken, if tapped.
+    tap: Option<Vec<u8>>,
     streams: u16,
     /// The first write error; later chunks are not written.
     error: Option<std::io::Error>,
@@ -36,13 +41,44 @@ impl Recorder {
         })?;
         Ok(Recorder {
             inner: Mutex::new(RecorderInner {
-                out,
+                out: Some(out),
+                tap: None,
                 streams: 0,
                 error: None,
             }),
             start: Instant::now(),
             path: path.to_path_buf(),
         })
+    }
+
+    /// A recorder that writes no file, only its tap (see [`Recorder::tap`]).
+    pub fn tap_only() -> Recorder {
+        Recorder {
+            inner: Mutex::new(RecorderInner {
+                out: None,
+                tap: Some(Vec::new()),
+                streams: 0,
+                error: None,
+            }),
+            start: Instant::now(),
+            path: PathBuf::new(),
+        }
+    }
+
+    /// From now on, keeps a copy of every chunk until [`Recorder::take_tap`].
+    pub fn tap(&self) {
+        if let Ok(mut g) = self.inner.lock() {
+            g.tap.get_or_insert_with(Vec::new);
+        }
+    }
+
+    /// The chunks written since the last call (without the magic); empty when not tapped.
+    pub fn take_tap(&self) -> Vec<u8> {
+        self.inner
+            .lock()
+            .ok()
+            .and_then(|mut g| g.tap.as_mut().map(std::mem::take))
+            .unwrap_or_default()
     }
 
     /// Declares a stream; returns its index.
@@ -84,10 +120,34 @@ impl Recorder {
         g.write(&chunk);
     }
 
+    /// Notes that `tick` ticks after the stream's device opened, the scene had taken its
+    /// readings `0..taken`.
+    pub fn mark(&self, stream: u16, tick: u64, taken: u64) {
+        let Ok(mut g) = self.inner.lock() else { return };
+        let mut chunk = Vec::with_capacity(19);
+        chunk.push(b'T');
+        chunk.extend_from_slice(&stream.to_le_bytes());
+        chunk.extend_from_slice(&tick.to_le_bytes());
+        chunk.extend_from_slice(&taken.to_le_bytes());
+        g.write(&chunk);
+    }
+
+    /// Records a message from outside that the script phase of `tick` saw.
+    pub fn message(&self, tick: u64, key: &str, value: &serde_json::Value) {
+        let json = serde_json::json!({"key": key, "value": value}).to_string();
+        let Ok(mut g) = self.inner.lock() else { return };
+        let mut chunk = Vec::with_capacity(13 + json.len());
+        chunk.push(b'M');
+        chunk.extend_from_slice(&tick.to_le_bytes());
+        chunk.extend_from_slice(&(json.len() as u32).to_le_bytes());
+        chunk.extend_from_slice(json.as_bytes());
+        g.write(&chunk);
+    }
+
     /// Flushes to disk; returns the first write error, if any (once: the error is taken).
     pub fn finish(&self) -> Result<(), RecordError> {
         let mut g = self.inner.lock().map_err(|_| RecordError::Poisoned)?;
-        if let Err(e) = g.out.flush() {
+        if let Some(Err(e)) = g.out.as_mut().map(|o| o.flush()) {
             g.error.get_or_insert(e);
         }
         match g.error.take() {
@@ -102,8 +162,11 @@ impl Recorder {
 
 impl RecorderInner {
     fn write(&mut self, chunk: &[u8]) {
-        if self.error.is_none() {
-            if let Err(e) = self.out.write_all(chunk) {
+        if let Some(tap) = &mut self.tap {
+            tap.extend_from_slice(chunk);
+        }
+        if let (None, Some(out)) = (&self.error, &mut self.out) {
+            if let Err(e) = out.write_all(chunk) {
                 self.error = Some(e);
             }
         }

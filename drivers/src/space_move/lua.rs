@@ -1,6 +1,7 @@
 //! The Lua API of SpaceMouse movers: `troupe.devices.spacemouse{…}` makes one, and
 //! `troupe.devices.health` answers for it by name.
 
+use crate::device::remote::RemotePorts;
 use crate::device::thread::{spawn_with, DriverOptions, Opener};
 use crate::lua::args::{check_keys, resolve};
 use crate::lua::health::health_table;
@@ -44,8 +45,8 @@ fn shared(lua: &Lua) -> mlua::Result<SharedSpaceMice> {
         .ok_or_else(|| lua_err_message("devices are not enabled"))
 }
 
-const KEYS: [&str; 8] = [
-    "object", "name", "path", "replay", "stream", "speed", "turn", "deadzone",
+const KEYS: [&str; 9] = [
+    "object", "name", "path", "zenoh", "replay", "stream", "speed", "turn", "deadzone",
 ];
 
 fn install_lua(lua: &Lua) -> mlua::Result<()> {
@@ -92,8 +93,8 @@ fn number(t: &Table, key: &str, default: f64) -> mlua::Result<f64> {
     Ok(args::opt_number(t, "spacemouse", key)?.unwrap_or(default))
 }
 
-/// `troupe.devices.spacemouse{ object=…, name="spacemouse", path=nil, replay=nil,
-/// stream=nil, speed=1.0, turn=90, deadzone=0.05 }` → the mover's name.
+/// `troupe.devices.spacemouse{ object=…, name="spacemouse", path=nil, zenoh=nil,
+/// replay=nil, stream=nil, speed=1.0, turn=90, deadzone=0.05 }` → the mover's name.
 fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
     check_keys(&t, "spacemouse", &KEYS)?;
     let object = match t.get::<Value>("object")? {
@@ -186,11 +187,33 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
             }
         }
         None => {
+            let remote: Option<String> = t.get("zenoh")?;
             let mut o = DriverOptions::new(&name, path.as_deref().unwrap_or(""));
             // A SpaceMouse at rest sends nothing: silence is not staleness.
             o.stale_after = Duration::MAX;
-            let opener: Opener =
-                Box::new(move |_o: &DriverOptions| open_spacemouse(path.as_deref()));
+            let opener: Opener = match remote {
+                // Served by `troupe relay spacemouse` on another machine.
+                Some(key) => {
+                    if path.is_some() {
+                        return Err(args::err("spacemouse", "give `path` or `zenoh`, not both"));
+                    }
+                    let ports = lua
+                        .app_data_ref::<RemotePorts>()
+                        .map(|p| p.clone())
+                        .ok_or_else(|| {
+                            args::err(
+                                "spacemouse",
+                                format!(
+                                    "zenoh = \"{key}\" needs a network session: troupe run with \
+                                     --zenoh-connect or --zenoh-listen (a troupe built with the \
+                                     zenoh feature)"
+                                ),
+                            )
+                        })?;
+                    Box::new(move |_o: &DriverOptions| (ports.0)(&key))
+                }
+                None => Box::new(move |_o: &DriverOptions| open_spacemouse(path.as_deref())),
+            };
             Source::Live(spawn_with(
                 o,
                 Box::new(SpaceMouseProtocol::default()),

@@ -64,3 +64,21 @@ pub fn spawn(
         opener,
     ))
 }
+
+/// Starts a client thread for `config` whose connection is opened by `opener` (a server
+/// reached through `troupe relay vrpn`, whose relay made the TCP connection and cookie
+/// exchange); `options` name it and set staleness and backoff.
+pub fn spawn_through(
+    config: VrpnConfig,
+    options: DriverOptions,
+    recorder: Option<Arc<Recorder>>,
+    opener: Opener,
+) -> DeviceHandle {
+    let counters = Arc::new(DatagramCounters::default());
+    spawn_with(
+        options,
+        Box::new(VrpnProtocol::new(config, counters)),
+        recorder,
+        opener,
+    )
+}

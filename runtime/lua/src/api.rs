@@ -806,6 +806,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
             Ok(i.map(ObjectRef))
         })?,
     )?;
+    crate::messages::install(lua, &troupe)?;
     crate::space::install(lua, &troupe)?;
     lua.globals().set("troupe", troupe)?;
     Ok(())

@@ -17,6 +17,7 @@ mod dynamics;
 pub mod error;
 mod handles;
 pub mod kinds;
+mod messages;
 pub mod modules;
 pub mod reference;
 mod sandbox;
@@ -115,6 +116,7 @@ impl Director {
             sequences: HashMap::new(),
             tests: Vec::new(),
             handler_failures: Vec::new(),
+            subscriptions: Vec::new(),
             loaded_files: Vec::new(),
         });
         let globals = lua.globals();
@@ -359,6 +361,34 @@ impl Director {
         for e in events {
             if e.status.is_final() {
                 st.ended_last_step.insert(e.action);
+            }
+        }
+    }
+
+    /// Hands this tick's messages to the subscribers whose key expression matches, in
+    /// the mailbox's order, each subscriber in the order it subscribed.
+    fn run_messages(&mut self) {
+        let (inbox, subscriptions) = {
+            let mut st = self.stage_mut();
+            let inbox = st.scene.mailbox_mut().take_inbox();
+            if inbox.is_empty() || st.subscriptions.is_empty() {
+                return;
+            }
+            (inbox, st.subscriptions.clone())
+        };
+        for message in inbox {
+            for (expr, f) in &subscriptions {
+                if !troupe_scene::mailbox::key_matches(expr, &message.key) {
+                    continue;
+                }
+                let result = self.guarded(|| {
+                    let value = messages::to_lua(&self.lua, &message.value)?;
+                    f.call::<()>((value, message.key.as_str()))
+                });
+                if let Err(e) = result {
+                    let msg = e.message();
+                    tracing::error!("subscriber of {expr} failed on {}: {msg}", message.key);
+                }
             }
         }
     }
@@ -681,6 +711,7 @@ impl Script for Director {
         let _span = tracing::trace_span!("scripts").entered();
         self.lend(scene, |d| {
             d.run_hooks();
+            d.run_messages();
             d.run_handlers();
             d.run_behaviors();
         });

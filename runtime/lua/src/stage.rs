@@ -108,6 +108,8 @@ pub(crate) struct Stage {
     pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
     pub tests: Vec<(String, Function)>,
     pub handler_failures: Vec<(usize, String)>,
+    /// `troupe.subscribe` calls, in order: the key expression and the function to call.
+    pub subscriptions: Vec<(String, Function)>,
     /// Every file the scene read (the scene, its modules, its motion files), in order.
     pub loaded_files: Vec<PathBuf>,
 }

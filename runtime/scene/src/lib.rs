@@ -10,6 +10,7 @@ pub mod blend;
 pub mod error;
 pub mod holding;
 pub mod input_pose;
+pub mod mailbox;
 pub mod pacing;
 pub mod parallel;
 pub mod playback;
@@ -30,6 +31,7 @@ pub use action::{
 pub use blackboard::{Blackboard, HandState, Note, Notes, Offer, SignalId};
 pub use error::{Error, Result};
 pub use input_pose::InputPose;
+pub use mailbox::{Mailbox, Message};
 pub use scene::{ActorDesc, Scene, SceneConfig};
 pub use session::{Input, NoScript, Observer, ObserverHandle, RunLimit, Script, Session};
 pub use world::{ActorInfo, Object, World};

@@ -5,6 +5,7 @@ use crate::blackboard::{Blackboard, Note, Notes, Offer, SignalId};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
 use crate::input_pose::InputPose;
+use crate::mailbox::Mailbox;
 use crate::parallel::WorkerPool;
 use crate::profile::StepProfile;
 use crate::scheduler::{Action, ActorRuntime, TickClock};
@@ -124,6 +125,7 @@ pub struct Scene {
     profiling: bool,
     profile: StepProfile,
     skeleton_cache: Vec<(String, TemplateParams, Arc<Skeleton>)>,
+    mailbox: Mailbox,
     space: troupe_nav::Space,
     obstacle_flags: Vec<Option<bool>>,
     crowd: troupe_nav::Crowd,
@@ -169,12 +171,23 @@ impl Scene {
             profiling: false,
             profile: StepProfile::default(),
             skeleton_cache: Vec::new(),
+            mailbox: Mailbox::default(),
             space: troupe_nav::Space::default(),
             obstacle_flags: Vec::new(),
             crowd: troupe_nav::Crowd::default(),
             root_dofs: Vec::new(),
             looks: Vec::new(),
         })
+    }
+
+    /// Messages between scenes and tools (`troupe.publish`, `troupe.subscribe`).
+    pub fn mailbox(&self) -> &Mailbox {
+        &self.mailbox
+    }
+
+    /// The mailbox, to publish, subscribe and deliver.
+    pub fn mailbox_mut(&mut self) -> &mut Mailbox {
+        &mut self.mailbox
     }
 
     /// The configuration.

@@ -1,7 +1,8 @@
 //! A session owns a [`Scene`] and runs each tick in four phases, with no Lua in it:
 //!
-//! 1. **input**: every [`Input`] (device sources, network streams, replays) drains what
-//!    arrived into the scene, in the order they were added;
+//! 1. **input**: the messages the script published last tick become this tick's inbox
+//!    ([`crate::Mailbox`]); every [`Input`] (device sources, network streams, replays)
+//!    drains what arrived into the scene, in the order they were added;
 //! 2. **script**: the session's [`Script`] (the Lua director, or none) borrows the scene
 //!    to start, cancel and query actions;
 //! 3. **step**: the scheduler advances every actor one tick ([`Scene::step`]);
@@ -185,6 +186,13 @@ impl<S: Script> Session<S> {
         self.input_failures.push(0);
     }
 
+    /// Adds an input drained before all others: one that brings what other inputs read
+    /// (a leader's stream, which a follower's replayed devices take from).
+    pub fn add_input_first(&mut self, input: Box<dyn Input>) {
+        self.inputs.insert(0, input);
+        self.input_failures.insert(0, 0);
+    }
+
     /// How often each input has failed, by name, in the order they were added.
     pub fn input_failures(&self) -> Vec<(String, u64)> {
         self.inputs
@@ -256,6 +264,8 @@ impl<S: Script> Session<S> {
             return Err(e);
         }
         let t0 = self.timing.then(Instant::now);
+        // Last tick's messages are delivered now, before what inputs bring.
+        self.scene.mailbox_mut().begin_tick();
         self.poll_inputs();
         let t1 = self.timing.then(Instant::now);
         self.script.run(&mut self.scene);

@@ -1,0 +1,56 @@
+-- Messages between scenes and tools: troupe.publish / troupe.subscribe (docs/lua-api.md).
+
+test("a published message arrives at the start of the next tick, as a table", function()
+  local got = {}
+  troupe.subscribe("cue/*", function(value, key)
+    got[#got + 1] = { tick = troupe.tick(), key = key, value = value }
+  end)
+  local sent_at = troupe.tick()
+  troupe.publish("cue/start", { actor = "ann", at = { 1, 2.5, -3 }, loud = true })
+  expect(#got == 0, "not delivered in the tick it was published")
+  run(0.01)
+  expect(#got == 1, "delivered once, got " .. #got)
+  expect(got[1].key == "cue/start", "the key is passed along")
+  expect(got[1].value.actor == "ann" and got[1].value.loud == true, "fields kept")
+  expect(got[1].value.at[2] == 2.5 and got[1].value.at[3] == -3, "arrays kept")
+  expect(got[1].tick == sent_at + 1, "seen in the script phase of the next tick")
+end)
+
+test("subscribers see messages in publishing order, each in subscription order", function()
+  local log = {}
+  troupe.subscribe("a/**", function(v, key) log[#log + 1] = "first " .. key .. "=" .. tostring(v) end)
+  troupe.subscribe("a/x", function(v, key) log[#log + 1] = "second " .. key .. "=" .. tostring(v) end)
+  troupe.publish("a/x", 1)
+  troupe.publish("a/y/z", "two")
+  troupe.publish("b/x", 3)
+  run(0.01)
+  local want = { "first a/x=1", "second a/x=1", "first a/y/z=two" }
+  expect(#log == #want, "three deliveries, got " .. #log)
+  for i, line in ipairs(want) do expect(log[i] == line, "got " .. tostring(log[i])) end
+end)
+
+test("a behavior can publish and another can wait for it", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob" }
+  local heard = nil
+  troupe.subscribe("greet", function(v) heard = v.from end)
+  ann:behave(function() wait(0.2); troupe.publish("greet", { from = "ann" }) end)
+  bob:behave(function() wait_until(function() return heard ~= nil end, 1) end)
+  run(0.5)
+  expect(heard == "ann", "bob heard ann")
+  expect(bob:behavior_status() == "done", "bob's wait ended")
+end)
+
+test("bad keys and values are refused with a message", function()
+  local function refusal(f, ...)
+    local ok, err = pcall(f, ...)
+    expect(not ok, "refused")
+    return tostring(err)
+  end
+  local err = refusal(troupe.publish, "cue/*", 1)
+  expect(err:find("without '%*'"), err)
+  err = refusal(troupe.publish, "cue", function() end)
+  expect(err:find("publish cue"), err)
+  err = refusal(troupe.subscribe, "cue//x", function() end)
+  expect(err:find("subscribe"), err)
+end)
