@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod dynamics;
+pub mod collision;
 pub mod error;
 pub mod ik;
 pub mod jacobian;

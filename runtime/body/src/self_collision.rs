@@ -293,21 +293,24 @@ fn sphere_depth(
     if depth <= -margin {
         return None;
     }
+    let g = outward(&solid.shape, p);
+    Some((depth, frame.rotation * (solid.orientation * g)))
+}
+
+/// The unit gradient of `shape`'s signed distance at `p` (canonical frame): the way out
+/// of the solid there (central differences; straight up where it vanishes).
+pub fn outward(shape: &Shape, p: DVec3) -> DVec3 {
     let h = 1e-5;
     let g = DVec3::new(
-        signed_distance(&solid.shape, p + DVec3::X * h)
-            - signed_distance(&solid.shape, p - DVec3::X * h),
-        signed_distance(&solid.shape, p + DVec3::Y * h)
-            - signed_distance(&solid.shape, p - DVec3::Y * h),
-        signed_distance(&solid.shape, p + DVec3::Z * h)
-            - signed_distance(&solid.shape, p - DVec3::Z * h),
+        signed_distance(shape, p + DVec3::X * h) - signed_distance(shape, p - DVec3::X * h),
+        signed_distance(shape, p + DVec3::Y * h) - signed_distance(shape, p - DVec3::Y * h),
+        signed_distance(shape, p + DVec3::Z * h) - signed_distance(shape, p - DVec3::Z * h),
     );
-    let g = if g.length_squared() > 1e-30 {
+    if g.length_squared() > 1e-30 {
         g.normalize()
     } else {
         DVec3::Y
-    };
-    Some((depth, frame.rotation * (solid.orientation * g)))
+    }
 }
 
 /// Signed distance from `p` (in the shape's canonical frame) to the surface of `shape`:
