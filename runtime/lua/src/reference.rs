@@ -128,7 +128,7 @@ pub const API: &[Entry] = &[
     f("troupe", "wall", &["opts: { from: number[], to: number[], thickness?: number, height?: number }"], "integer", "Adds a wall between two floor points `{x, z}`: an obstacle to walkers (docs/navigation.md)."),
     f("troupe", "floor", &["opts: { outline: number[][], holes?: number[][][] }"], "", "Sets the walkable floor: an outline of `{x, z}` points, with holes."),
     f("troupe", "path", &["from: number[]", "to: number[]", "opts?: { radius?: number }"], "number[][]?, string?", "A path around the obstacles from `from` to `to` (`{x, z}`), or nil and why."),
-    f("troupe", "deepest_overlap", &[], "number, string?, string?", "How much the two most overlapping actors' body discs overlap now, in metres, and their names."),
+    f("troupe", "deepest_overlap", &["opts?: { discs?: boolean }"], "number, string?, string?, string?, string?", "The deepest interpenetration of two actors' solids, or an actor's solid and an obstacle, now (m), with the actor, the other actor or obstacle, and the two solids' names; `{ discs = true }`: of the body discs (docs/navigation.md)."),
     f("troupe", "vmc_out", &["opts: { actor?: Actor|string, to: string, rate?: number }"], "", "Streams an actor's motion over VMC to `to` (host:port) at `rate` frames per second of scene time (docs/devices.md, \"VMC\")."),
     f("troupe.devices", "spacemouse", &["opts: table"], "string", "Moves an object with a SpaceMouse (live or replayed); returns the device's name."),
     f("troupe.devices", "glove", &["performer: Actor|string"], "integer[]?", "The latest raw glove sensor values, or nil."),
