@@ -28,7 +28,9 @@ pub mod goal;
 pub(crate) mod lua;
 pub mod options;
 pub mod rig;
+pub mod room;
 pub mod route;
+pub mod shoulders;
 pub mod steer;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
@@ -157,6 +159,10 @@ pub struct Walk {
     steer: steer::Steer,
     /// Scratch: the actors near this one.
     near: Vec<usize>,
+    /// What this tick's landings keep clear of (see [`room`]).
+    room: room::Room,
+    /// How far the shoulders are turned to pass someone (see [`shoulders`]).
+    shoulders: shoulders::Shoulders,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -202,6 +208,8 @@ impl Walk {
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
+            room: room::Room::default(),
+            shoulders: shoulders::Shoulders::default(),
         })
     }
 
@@ -441,7 +449,12 @@ impl Walk {
                 self.options.step_width,
             )
         };
-        let plant = self.spot(leg, &sample, width);
+        let plant = room::keep_inside(
+            self.spot(leg, &sample, width),
+            sample.heading,
+            &self.rig.legs[leg],
+            &self.room,
+        );
         let step = (plant - from).length();
         let q = (step / (0.8 * self.rig.thigh_height)).min(1.0);
         Landing {
@@ -457,6 +470,11 @@ impl Walk {
     fn step_foot(&mut self, plan: &Plan, leg: usize, lambda: f64, sigma: f64) -> FootPose {
         let wrapped = lambda < self.lambda[leg];
         self.lambda[leg] = lambda;
+        // A swing can last long when the walk slows: its landing keeps to the room as
+        // it is now, not as they were when it lifted.
+        if let Foot::Swing { to, .. } = &mut self.feet[leg] {
+            to.plant = room::keep_inside(to.plant, to.yaw, &self.rig.legs[leg], &self.room);
+        }
         let rig = &self.rig;
         // Transitions first.
         match self.feet[leg] {
@@ -781,6 +799,7 @@ impl Generator for Walk {
         self.settle_since = None;
         self.twist = [None; 2];
         self.steer = steer::Steer::start(ctx);
+        self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
         Ok(())
     }
@@ -804,7 +823,19 @@ impl Generator for Walk {
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
         }
-        let (root, pelvis, spine, arms) = self.pose(&plan, out);
+        room::survey(ctx, &self.steer.companions, &mut self.room);
+        let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
+        // The shoulders turn to pass: half the turn at each thoracic level; the arms,
+        // whose swing would now go sideways into the other, hang still as they turn.
+        self.shoulders
+            .update(ctx, self.heading, &self.steer.companions);
+        spine[1] += self.shoulders.turn / 2.0;
+        spine[2] += self.shoulders.turn / 2.0;
+        let swing = 1.0 - (self.shoulders.turn.abs() / shoulders::MAX_TURN).min(1.0);
+        for arm in &mut arms {
+            arm[0] *= swing;
+            arm[1] *= swing;
+        }
         let rig = &self.rig;
         for (&d, &v) in rig.root.iter().zip(&root) {
             out.set(d, v);
