@@ -86,3 +86,38 @@ test("two walkers pass in a 1.2 m corridor: no solid interpenetrates more than 1
     "both arrived: " .. tostring(walks[1].error) .. " / " .. tostring(walks[2].error))
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
 end)
+
+-- Bob holds his left arm straight out across the way; a cup hangs above it, within
+-- Ann's reach: her hand's straight path from her side to the cup crosses his arm.
+local function arm_across()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.5}, facing = 90 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+    at = {-0.3, 1.78, 0.42}, obstacle = false }
+  local held = bob:reach{ hand = "left", target = {-0.12, 1.45, 0.3}, duration = 1 }
+  held:wait()
+  expect(held.status == "completed", "bob holds his arm out: " .. tostring(held.error))
+  return ann, bob, cup
+end
+
+test("a reaching arm bends round another actor's arm to a cup", function()
+  local ann, _, cup = arm_across()
+  local before = troupe.deepest_overlap()
+  expect(before == 0, string.format("nothing touches before the reach: %.3f", before))
+  local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
+  local ok, deepest, between = watch(function() return r.status ~= "active" and r.status ~= "pending" end, 5)
+  print(string.format("reach round an arm: deepest %.4f m (%s), %d temporary goal(s)", deepest, between, r.detours))
+  expect(ok and r.status == "completed", "the reach completed: " .. tostring(r.error))
+  expect(r.detours >= 1, "a temporary goal was inserted")
+  expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
+end)
+
+test("without detours the same reach passes through the arm", function()
+  local ann, _, cup = arm_across()
+  local r = ann:reach{ hand = "right", target = cup, duration = 1.5, detour = false }
+  local ok, deepest, between = watch(function() return r.status ~= "active" and r.status ~= "pending" end, 5)
+  print(string.format("reach through an arm: deepest %.4f m (%s)", deepest, between))
+  expect(ok and r.status == "completed", "the reach completed: " .. tostring(r.error))
+  expect(r.detours == 0, "no temporary goal")
+  expect(deepest > 0.03, string.format("only %.3f m: the straight path should cross the arm", deepest))
+end)

@@ -19,7 +19,6 @@
 //! shape's signed distance (convex), again concave in `s`. Both are exact up to the
 //! search's tolerance (a micrometre) and cost well under a microsecond.
 
-use crate::self_collision::{outward, signed_distance};
 use crate::skeleton::Skeleton;
 use crate::solid::{Shape, Solid};
 use crate::transform::Transform;
@@ -242,6 +241,62 @@ pub fn shape_sphere(shape: &Shape, pose: &Transform, c: DVec3, radius: f64) -> P
     Penetration {
         depth: radius - d,
         normal: pose.rotation * g,
+    }
+}
+
+/// The unit gradient of `shape`'s signed distance at `p` (canonical frame): the way out
+/// of the solid there (central differences; straight up where it vanishes).
+pub fn outward(shape: &Shape, p: DVec3) -> DVec3 {
+    let h = 1e-5;
+    let g = DVec3::new(
+        signed_distance(shape, p + DVec3::X * h) - signed_distance(shape, p - DVec3::X * h),
+        signed_distance(shape, p + DVec3::Y * h) - signed_distance(shape, p - DVec3::Y * h),
+        signed_distance(shape, p + DVec3::Z * h) - signed_distance(shape, p - DVec3::Z * h),
+    );
+    if g.length_squared() > 1e-30 {
+        g.normalize()
+    } else {
+        DVec3::Y
+    }
+}
+
+/// Signed distance from `p` (in the shape's canonical frame) to the surface of `shape`:
+/// negative inside. Exact for spheres, boxes and cylinders; for frusta and ellipsoids a
+/// first-order estimate with the exact sign.
+pub fn signed_distance(shape: &Shape, p: DVec3) -> f64 {
+    fn capped(dr: f64, dy: f64) -> f64 {
+        dr.max(dy).min(0.0) + DVec3::new(dr.max(0.0), dy.max(0.0), 0.0).length()
+    }
+    match *shape {
+        Shape::Sphere { radius } => p.length() - radius,
+        Shape::Box { half_extents } => {
+            let q = p.abs() - half_extents;
+            q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
+        }
+        Shape::Cylinder { radius, height } => {
+            capped(p.x.hypot(p.z) - radius, p.y.abs() - height / 2.0)
+        }
+        Shape::Frustum {
+            bottom_radius,
+            top_radius,
+            height,
+        } => {
+            let hh = height / 2.0;
+            let s = (p.y.clamp(-hh, hh) / height) + 0.5;
+            let r = bottom_radius + (top_radius - bottom_radius) * s;
+            let slope = (top_radius - bottom_radius) / height;
+            let dr = (p.x.hypot(p.z) - r) / (1.0 + slope * slope).sqrt();
+            capped(dr, p.y.abs() - hh)
+        }
+        Shape::Ellipsoid { radii } => {
+            let k0 = (p / radii).length();
+            let k1 = (p / (radii * radii)).length();
+            if k1 < 1e-12 {
+                -radii.min_element()
+            } else {
+                k0 * (k0 - 1.0) / k1
+            }
+        }
     }
 }
 

@@ -187,6 +187,7 @@ pub const API: &[Entry] = &[
     field("Action", "error", "string?", "Why it was cancelled or failed, else nil."),
     field("Action", "dofs", "integer", "How many DOFs its scope holds."),
     field("Action", "yielded", "integer", "How many DOFs of its scope it gave up to others (`action_narrowed`)."),
+    field("Action", "detours", "integer", "How many temporary goals its hand path took round other actors' bodies and obstacles (a `reach`; docs/navigation.md)."),
     m("Action", "stop", &[], "", "Ends the action gracefully (a walk comes to a stop); it completes."),
     m("Action", "wait", &[], "ActionStatus", "Yields until the action ends; returns its final status."),
     m("Action", "cancel", &[], "", "Cancels the action (a running one eases out)."),
@@ -276,6 +277,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("orientation", "Vec3"),
             ("via", "any"),
             ("self_collision", "boolean"),
+            ("detour", "boolean"),
         ],
     ),
     (
@@ -288,6 +290,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("orientation", "Vec3"),
             ("via", "any"),
             ("self_collision", "boolean"),
+            ("detour", "boolean"),
         ],
     ),
     ("look_at", "LookAtOptions", &[("target", "any")]),

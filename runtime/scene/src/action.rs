@@ -395,6 +395,12 @@ pub trait Generator: Send {
     /// learns it (and why) from the notes posted here, applied after the tick like a
     /// step's.
     fn end(&mut self, _ending: &Ending, _notes: &mut Notes) {}
+
+    /// How many temporary goals the motion's path took round other actors' bodies and
+    /// obstacles (a reach bending round someone, thesis 4.6.3); 0 by default.
+    fn detours(&self) -> usize {
+        0
+    }
 }
 
 /// How an action ended, as its generator's [`Generator::end`] learns it.
@@ -431,6 +437,9 @@ pub struct ActionInfo {
     pub started_at: Option<f64>,
     /// When it ended.
     pub ended_at: Option<f64>,
+    /// How many temporary goals its path took round other bodies and obstacles (see
+    /// [`Generator::detours`]).
+    pub detours: usize,
 }
 
 /// A status change, published after each tick.
