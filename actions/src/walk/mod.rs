@@ -609,6 +609,17 @@ impl Walk {
                 let clearance = lift * 4.0 * w * (1.0 - w);
                 let mut ankle = from + (target - from) * s;
                 ankle.y = clearance - rig.lowest_offset(leg, pitch, toes);
+                // On its way the foot keeps to the room too: a neighbour may have come
+                // between where it left and where it lands.
+                let yaw = from_yaw + wrap(to.yaw - from_yaw) * ease;
+                let kept = room::keep_inside(
+                    DVec2::new(ankle.x, ankle.z),
+                    yaw,
+                    &rig.legs[leg],
+                    &self.room,
+                );
+                ankle.x = kept.x;
+                ankle.z = kept.y;
                 FootPose {
                     ankle,
                     yaw: from_yaw + wrap(to.yaw - from_yaw) * ease,

@@ -27,6 +27,12 @@ const END_RETURN: f64 = 2.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
+/// Within this gap (m) between the disc and an obstacle, the sideways drift may not go
+/// towards it.
+const WALL_GUARD: f64 = 0.02;
+/// Room (m) kept between two bodies' discs beyond the avoidance's gap, where there is
+/// room for it: arms swing and feet step past the discs.
+const PERSONAL_SPACE: f64 = 0.1;
 /// Seconds of a walker's velocity by which its stepping feet reach past its disc, ahead
 /// of it: a foot lands about half a stride in front of the hips, further than the arms
 /// hanging at the sides that set the disc's radius.
@@ -168,7 +174,8 @@ impl Steer {
                 let apart = crowd.positions[j] - position;
                 let towards = apart.normalize_or_zero();
                 let stride = stride_reach(velocity, towards)
-                    + stride_reach(crowd.velocities[j], -towards);
+                    + stride_reach(crowd.velocities[j], -towards)
+                    + PERSONAL_SPACE;
                 let room = apart.length() - radius - crowd.radii[j] - GAP - 0.01;
                 Agent {
                     position: crowd.positions[j],
@@ -216,5 +223,22 @@ impl Steer {
         self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
         self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+        // The drift never takes the disc into an obstacle: the velocity it chose may,
+        // while the drift changes within its limits, carry the body on sideways.
+        for f in crowd.footprints_near(position, radius + WALL_GUARD) {
+            let gap = f.distance(position) - radius;
+            if gap < WALL_GUARD {
+                let h = 0.01;
+                let away = DVec2::new(
+                    f.distance(position + DVec2::X * h) - f.distance(position - DVec2::X * h),
+                    f.distance(position + DVec2::Y * h) - f.distance(position - DVec2::Y * h),
+                )
+                .normalize_or_zero();
+                let towards = -self.drift.dot(away);
+                if towards > 0.0 {
+                    self.drift += away * towards;
+                }
+            }
+        }
     }
 }
