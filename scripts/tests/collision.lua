@@ -20,6 +20,17 @@ local function watch(fn, limit)
   return ok, deepest, between
 end
 
+-- How far (degrees) the line of `a`'s shoulders is turned from the line of its hips,
+-- seen from above.
+local function shoulder_turn(a)
+  local function yaw(l, r)
+    local pl, pr = a:joint_position(l), a:joint_position(r)
+    return math.atan(pl[3] - pr[3], pl[1] - pr[1])
+  end
+  local d = math.deg(yaw("l_shoulder", "r_shoulder") - yaw("l_hip", "r_hip"))
+  return (d + 180) % 360 - 180
+end
+
 local function all_ended(walks)
   return function()
     for _, w in ipairs(walks) do
@@ -80,11 +91,30 @@ test("two walkers pass in a 1.2 m corridor: no solid interpenetrates more than 1
   local ann = troupe.actor{ name = "ann", at = {0, 0, 0} }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 8}, facing = 180 }
   local walks = { ann:walk{ to = {0, 0, 8} }, bob:walk{ to = {0, 0, 0} } }
-  local ok, deepest, between = watch(all_ended(walks), 40)
-  print(string.format("corridor: deepest solid interpenetration %.4f m (%s)", deepest, between))
+  local turned = { 0, 0 }
+  local ended = all_ended(walks)
+  local ok, deepest, between = watch(function()
+    for i, a in ipairs({ ann, bob }) do turned[i] = math.max(turned[i], math.abs(shoulder_turn(a))) end
+    return ended()
+  end, 40)
+  print(string.format("corridor: deepest solid interpenetration %.4f m (%s); shoulders turned %.0f° and %.0f°",
+    deepest, between, turned[1], turned[2]))
   expect(ok and walks[1].status == "completed" and walks[2].status == "completed",
     "both arrived: " .. tostring(walks[1].error) .. " / " .. tostring(walks[2].error))
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
+  expect(turned[1] > 20 and turned[2] > 20, string.format("the shoulders turned to pass: %.0f° and %.0f°", turned[1], turned[2]))
+end)
+
+test("a walker alone keeps its shoulders square", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {0, 0, 6} }
+  local turned = 0
+  run_until(function()
+    turned = math.max(turned, math.abs(shoulder_turn(ann)))
+    return w.status == "completed"
+  end, 20)
+  expect(w.status == "completed", "arrived: " .. tostring(w.error))
+  expect(turned < 12, string.format("only the gait's counter-rotation: %.1f°", turned))
 end)
 
 -- Bob holds his left arm straight out across the way; a cup hangs above it, within
