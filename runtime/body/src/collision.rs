@@ -347,19 +347,57 @@ impl BodyVolumes {
     }
 }
 
+/// The distance between the segments `p0–p1` and `q0–q1` (closest points in closed
+/// form, after Ericson, *Real-Time Collision Detection*, 5.1.9).
+pub fn segment_distance(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> f64 {
+    let (d1, d2, r) = (p1 - p0, q1 - q0, p0 - q0);
+    let (a, e, f) = (d1.length_squared(), d2.length_squared(), d2.dot(r));
+    let eps = 1e-18;
+    let (s, t) = if a <= eps && e <= eps {
+        (0.0, 0.0)
+    } else if a <= eps {
+        (0.0, (f / e).clamp(0.0, 1.0))
+    } else {
+        let c = d1.dot(r);
+        if e <= eps {
+            ((-c / a).clamp(0.0, 1.0), 0.0)
+        } else {
+            let b = d1.dot(d2);
+            let denom = a * e - b * b;
+            let mut s = if denom > eps {
+                ((b * f - c * e) / denom).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            let mut t = (b * s + f) / e;
+            if t < 0.0 {
+                t = 0.0;
+                s = (-c / a).clamp(0.0, 1.0);
+            } else if t > 1.0 {
+                t = 1.0;
+                s = ((b - c) / a).clamp(0.0, 1.0);
+            }
+            (s, t)
+        }
+    };
+    ((p0 + d1 * s) - (q0 + d2 * t)).length()
+}
+
 /// The deepest interpenetration between two sets of capsules (two bodies): the depth
-/// (negative: no contact, then not meaningful beyond the bounds' test) and the indices of
-/// the two capsules; `None` when no pair's bounds even touch.
+/// and the indices of the two capsules; `None` when no two touch. Pairs whose axes are
+/// further apart than their widest radii are skipped before the exact (search) depth.
 pub fn deepest_between(a: &[Capsule], b: &[Capsule]) -> Option<(f64, usize, usize)> {
     let mut best: Option<(f64, usize, usize)> = None;
     for (i, ca) in a.iter().enumerate() {
-        let (pa, ra) = ca.bound();
+        let wa = ca.ra.max(ca.rb);
         for (j, cb) in b.iter().enumerate() {
-            let (pb, rb) = cb.bound();
-            if (pa - pb).length() >= ra + rb {
+            if segment_distance(ca.a, ca.b, cb.a, cb.b) >= wa + cb.ra.max(cb.rb) {
                 continue;
             }
             let (depth, _) = Volume::Capsule(*cb).capsule_depth(ca);
+            if depth <= 0.0 {
+                continue;
+            }
             if best.is_none_or(|(d, _, _)| depth > d) {
                 best = Some((depth, i, j));
             }
@@ -392,6 +430,28 @@ mod tests {
         let far = cap([0.0, 0.5, -1.0], [0.0, 0.5, 1.0], 0.1, 0.1);
         let (d, _) = Volume::Capsule(far).capsule_depth(&x);
         assert!((d + 0.3).abs() < 1e-6, "{d}");
+    }
+
+    #[test]
+    fn segment_distances_match_a_brute_force_search() {
+        let cases = [
+            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, -1.0], [0.5, 1.0, 1.0]),
+            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.5, 0.0], [3.0, 0.5, 0.0]),
+            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.2, 0.3, 0.0], [0.8, 0.3, 0.0]),
+            ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.2, 0.3, 0.0], [0.8, 0.3, 0.4]),
+        ];
+        for (p0, p1, q0, q1) in cases {
+            let (p0, p1, q0, q1) = (DVec3::from(p0), DVec3::from(p1), DVec3::from(q0), DVec3::from(q1));
+            let mut brute = f64::INFINITY;
+            for i in 0..=200 {
+                for j in 0..=200 {
+                    let (s, t) = (i as f64 / 200.0, j as f64 / 200.0);
+                    brute = brute.min((p0.lerp(p1, s) - q0.lerp(q1, t)).length());
+                }
+            }
+            let d = segment_distance(p0, p1, q0, q1);
+            assert!((d - brute).abs() < 1e-3 && d <= brute + 1e-12, "{d} vs {brute}");
+        }
     }
 
     #[test]
@@ -473,8 +533,7 @@ mod tests {
             let f = Transform::from_translation(DVec3::new(dx, 0.0, 0.0));
             placed.iter().map(|c| c.placed(&f)).collect()
         };
-        let (d, _, _) = deepest_between(&placed, &shifted(1.0)).unwrap_or((-1.0, 0, 0));
-        assert!(d < 0.0, "{d}");
+        assert_eq!(deepest_between(&placed, &shifted(1.0)), None);
         let (d, _, _) = deepest_between(&placed, &shifted(0.3)).unwrap();
         assert!(d > 0.05, "{d}");
     }

@@ -1,9 +1,9 @@
 //! Detection of solid interpenetration between actors and with obstacles
-//! (`World::deepest_interpenetration`, issue 18 item 5), per actor-tick: a crowd of
-//! adults standing on a grid 0.7 m apart (each body's capsules within reach of its eight
-//! neighbours' bounds, so the exact capsule test runs for every neighbour pair), with a
-//! few boxes among them; and the one-body part a walker or a reach pays each tick
-//! (placing one body's 17 capsules).
+//! (`World::deepest_interpenetration`, issue 18 item 5), per actor-tick: crowds of
+//! adults standing on a grid, turned every which way, with a box every fourth cell:
+//! 0.6 m apart (a dense crowd: the boxes around neighbouring bodies overlap, so their
+//! capsule pairs are tested) and 1.0 m apart (a loose one); and the one-body part a
+//! walker or a reach pays for each neighbour each tick (placing one body's 17 capsules).
 //!
 //! Run: `cargo bench -p troupe-scene --bench collision`.
 
@@ -42,10 +42,12 @@ fn crowd(n: usize, spacing: f64) -> Scene {
 }
 
 fn detection(c: &mut Criterion) {
-    for n in [10usize, 20] {
-        let scene = crowd(n, 0.7);
+    for (n, spacing) in [(10usize, 0.6), (20, 0.6), (20, 1.0)] {
+        let scene = crowd(n, spacing);
         let actors = (n * n) as u64;
-        let mut g = c.benchmark_group(format!("deepest_interpenetration/{actors}_actors"));
+        let mut g = c.benchmark_group(format!(
+            "deepest_interpenetration/{actors}_actors_{spacing}_m_apart"
+        ));
         g.throughput(criterion::Throughput::Elements(actors));
         g.bench_function("scene", |b| {
             b.iter(|| black_box(scene.deepest_interpenetration()))

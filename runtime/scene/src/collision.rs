@@ -94,7 +94,7 @@ impl World<'_> {
         let bodies: Vec<Vec<Capsule>> = (0..self.states.len())
             .map(|i| self.body_capsules(i))
             .collect();
-        let bounds: Vec<(DVec3, f64)> = bodies.iter().map(|b| bound_of(b)).collect();
+        let bounds: Vec<(DVec3, DVec3)> = bodies.iter().map(|b| bound_of(b)).collect();
         let obstacles = self.obstacle_volumes();
         let mut deepest: Option<Interpenetration> = None;
         let mut note = |found: Interpenetration| {
@@ -102,20 +102,18 @@ impl World<'_> {
                 deepest = Some(found);
             }
         };
-        // Sweep along x: the actors sorted by the left edge of their bounds.
+        let overlap = |(alo, ahi): (DVec3, DVec3), (blo, bhi): (DVec3, DVec3)| {
+            alo.cmple(bhi).all() && blo.cmple(ahi).all()
+        };
+        // Sweep along x: the actors sorted by the low x of their boxes.
         let mut order: Vec<usize> = (0..bodies.len()).collect();
-        order.sort_by(|&i, &j| {
-            let key = |k: usize| bounds[k].0.x - bounds[k].1;
-            key(i).total_cmp(&key(j)).then(i.cmp(&j))
-        });
+        order.sort_by(|&i, &j| bounds[i].0.x.total_cmp(&bounds[j].0.x).then(i.cmp(&j)));
         for (n, &i) in order.iter().enumerate() {
-            let (ci, ri) = bounds[i];
             for &j in &order[n + 1..] {
-                let (cj, rj) = bounds[j];
-                if cj.x - rj > ci.x + ri {
+                if bounds[j].0.x > bounds[i].1.x {
                     break;
                 }
-                if (ci - cj).length() >= ri + rj {
+                if !overlap(bounds[i], bounds[j]) {
                     continue;
                 }
                 let (a, b) = (i.min(j), i.max(j));
@@ -133,13 +131,16 @@ impl World<'_> {
             }
         }
         for (i, body) in bodies.iter().enumerate() {
-            let (ci, ri) = bounds[i];
             for (name, volume) in &obstacles {
-                let (co, ro) = volume.bound();
-                if (ci - co).length() >= ri + ro {
+                let (c, r) = volume.bound();
+                if !overlap(bounds[i], (c - DVec3::splat(r), c + DVec3::splat(r))) {
                     continue;
                 }
                 for (k, capsule) in body.iter().enumerate() {
+                    let (ck, rk) = capsule.bound();
+                    if (ck - c).length() >= rk + r {
+                        continue;
+                    }
                     let (depth, _) = volume.capsule_depth(capsule);
                     note(Interpenetration {
                         depth,
@@ -154,22 +155,15 @@ impl World<'_> {
     }
 }
 
-/// A sphere around a body's capsules (centre, radius).
-pub fn bound_of(capsules: &[Capsule]) -> (DVec3, f64) {
-    if capsules.is_empty() {
-        return (DVec3::ZERO, 0.0);
-    }
-    let (lo, hi) = capsules.iter().fold(
+/// The box (lowest and highest corners) around a body's capsules.
+pub fn bound_of(capsules: &[Capsule]) -> (DVec3, DVec3) {
+    capsules.iter().fold(
         (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
         |(lo, hi), c| {
-            let r = c.ra.max(c.rb);
-            (
-                lo.min(c.a.min(c.b) - DVec3::splat(r)),
-                hi.max(c.a.max(c.b) + DVec3::splat(r)),
-            )
+            let r = DVec3::splat(c.ra.max(c.rb));
+            (lo.min(c.a.min(c.b) - r), hi.max(c.a.max(c.b) + r))
         },
-    );
-    ((lo + hi) / 2.0, (hi - lo).length() / 2.0)
+    )
 }
 
 impl Scene {
