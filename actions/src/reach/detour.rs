@@ -43,7 +43,7 @@ pub fn volumes_around(
         }
     }
     out.extend(world.obstacle_volumes().into_iter().map(|(_, v)| v));
-    out.retain(|v| v.sphere(goal, radius).depth <= 0.0);
+    out.retain(|v| v.sphere_depth(goal, radius) <= 0.0);
     out
 }
 
@@ -76,7 +76,7 @@ fn deepest(points: &[DVec3], radius: f64, volumes: &[Volume]) -> Option<(usize, 
         for k in 0..=n {
             let p = pair[0].lerp(pair[1], k as f64 / n as f64);
             for v in volumes {
-                let depth = v.sphere(p, radius).depth;
+                let depth = v.sphere_depth(p, radius);
                 if depth > 0.0 && best.is_none_or(|b| depth > b.2) {
                     best = Some((seg, p, depth));
                 }

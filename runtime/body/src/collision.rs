@@ -224,10 +224,39 @@ impl Volume {
         }
     }
 
+    /// How far a sphere (centre `c`, `radius`) enters the volume: [`Volume::sphere`]'s
+    /// depth without the normal (a shape's gradient costs six more distances).
+    pub fn sphere_depth(&self, c: DVec3, radius: f64) -> f64 {
+        match self {
+            Volume::Capsule(_) => self.sphere(c, radius).depth,
+            Volume::Shape { shape, pose } => {
+                radius - signed_distance(shape, pose.inverse().transform_point(c))
+            }
+        }
+    }
+
+    /// Whether `capsule` may touch the volume: false only when it surely does not (a
+    /// quick test before [`Volume::capsule_depth`]'s search). Against a capsule, the axes'
+    /// distance; against a shape, its signed distance at the axis' middle, which no point
+    /// of the axis undercuts by more than half its length (a distance changes no faster
+    /// than the point moves).
+    pub fn may_touch(&self, capsule: &Capsule) -> bool {
+        let widest = capsule.ra.max(capsule.rb);
+        match self {
+            Volume::Capsule(k) => {
+                segment_distance(capsule.a, capsule.b, k.a, k.b) < widest + k.ra.max(k.rb)
+            }
+            Volume::Shape { shape, pose } => {
+                let mid = pose.inverse().transform_point(capsule.point(0.5));
+                signed_distance(shape, mid) - (capsule.b - capsule.a).length() / 2.0 < widest
+            }
+        }
+    }
+
     /// The deepest interpenetration of `capsule` with this volume (m; negative: the
     /// distance between them), and the point of the capsule's axis where it is.
     pub fn capsule_depth(&self, capsule: &Capsule) -> (f64, DVec3) {
-        let (t, depth) = maximize(|t| self.sphere(capsule.point(t), capsule.radius(t)).depth);
+        let (t, depth) = maximize(|t| self.sphere_depth(capsule.point(t), capsule.radius(t)));
         (depth, capsule.point(t))
     }
 }
@@ -384,17 +413,17 @@ pub fn segment_distance(p0: DVec3, p1: DVec3, q0: DVec3, q1: DVec3) -> f64 {
 }
 
 /// The deepest interpenetration between two sets of capsules (two bodies): the depth
-/// and the indices of the two capsules; `None` when no two touch. Pairs whose axes are
-/// further apart than their widest radii are skipped before the exact (search) depth.
+/// and the indices of the two capsules; `None` when no two touch. Pairs that surely do
+/// not touch ([`Volume::may_touch`]) are skipped before the exact (search) depth.
 pub fn deepest_between(a: &[Capsule], b: &[Capsule]) -> Option<(f64, usize, usize)> {
     let mut best: Option<(f64, usize, usize)> = None;
     for (i, ca) in a.iter().enumerate() {
-        let wa = ca.ra.max(ca.rb);
         for (j, cb) in b.iter().enumerate() {
-            if segment_distance(ca.a, ca.b, cb.a, cb.b) >= wa + cb.ra.max(cb.rb) {
+            let other = Volume::Capsule(*cb);
+            if !other.may_touch(ca) {
                 continue;
             }
-            let (depth, _) = Volume::Capsule(*cb).capsule_depth(ca);
+            let (depth, _) = other.capsule_depth(ca);
             if depth <= 0.0 {
                 continue;
             }

@@ -138,7 +138,7 @@ impl World<'_> {
                 }
                 for (k, capsule) in body.iter().enumerate() {
                     let (ck, rk) = capsule.bound();
-                    if (ck - c).length() >= rk + r {
+                    if (ck - c).length() >= rk + r || !volume.may_touch(capsule) {
                         continue;
                     }
                     let (depth, _) = volume.capsule_depth(capsule);
