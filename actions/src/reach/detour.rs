@@ -35,9 +35,7 @@ pub fn volumes_around(
     let mut out = Vec::new();
     for (j, state) in world.states.iter().enumerate() {
         let root = state.globals.first().map_or(DVec3::ZERO, |g| g.translation);
-        let near = |p: DVec3| {
-            (root.x - p.x).hypot(root.z - p.z) < NEAR
-        };
+        let near = |p: DVec3| (root.x - p.x).hypot(root.z - p.z) < NEAR;
         if j != me && (near(start) || near(goal)) {
             out.extend(world.body_capsules(j).into_iter().map(Volume::Capsule));
         }

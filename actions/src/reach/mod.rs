@@ -352,8 +352,7 @@ impl Generator for Reach {
             self.volumes =
                 detour::volumes_around(ctx.world, ctx.actor, start, goal + offset, radius);
             let via: Vec<DVec3> = self.spec.via.iter().map(|p| *p + offset).collect();
-            let around =
-                detour::temporary_goals(start, &via, goal + offset, radius, &self.volumes);
+            let around = detour::temporary_goals(start, &via, goal + offset, radius, &self.volumes);
             self.detours = around.len() - via.len();
             self.via = around.into_iter().map(|p| p - offset).collect();
         }
@@ -401,12 +400,14 @@ impl Generator for Reach {
             let start = self.start + offset;
             self.volumes =
                 detour::volumes_around(ctx.world, ctx.actor, start, goal + offset, radius);
-            point = detour::push_out(point + offset, radius, COLLISION_MARGIN, &self.volumes)
-                - offset;
+            point =
+                detour::push_out(point + offset, radius, COLLISION_MARGIN, &self.volumes) - offset;
         }
-        if let (true, Some(sensors), Some(own)) =
-            (self.spec.self_collision, &self.sensors, self.effector_sensor)
-        {
+        if let (true, Some(sensors), Some(own)) = (
+            self.spec.self_collision,
+            &self.sensors,
+            self.effector_sensor,
+        ) {
             // 4.6.3: a path point inside the body becomes a temporary goal outside it.
             point = sensors.push_out(
                 ctx.skeleton,
@@ -452,11 +453,8 @@ impl Generator for Reach {
         let skip: Vec<usize> = self.effector_sensor.into_iter().collect();
         let report = match &self.sensors {
             Some(sensors) => {
-                let external: &[troupe_body::collision::Volume] = if self.spec.detour {
-                    &self.volumes
-                } else {
-                    &[]
-                };
+                let external: &[troupe_body::collision::Volume] =
+                    if self.spec.detour { &self.volumes } else { &[] };
                 let mut avoid = CollisionAvoidance::new(sensors, COLLISION_MARGIN, skip)
                     .with_external(external);
                 if !self.spec.self_collision {

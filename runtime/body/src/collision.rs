@@ -177,7 +177,10 @@ fn maximize(f: impl Fn(f64) -> f64) -> (f64, f64) {
     // The ends too: a concave function on a segment may peak at either.
     [(x1, f1), (0.0, f(0.0)), (1.0, f(1.0))]
         .into_iter()
-        .fold((x1, f64::NEG_INFINITY), |best, c| if c.1 > best.1 { c } else { best })
+        .fold(
+            (x1, f64::NEG_INFINITY),
+            |best, c| if c.1 > best.1 { c } else { best },
+        )
 }
 
 impl Volume {
@@ -368,11 +371,7 @@ impl BodyVolumes {
     /// Replaces `out` with the world capsules for joint transforms `globals`.
     pub fn place(&self, globals: &[Transform], out: &mut Vec<Capsule>) {
         out.clear();
-        out.extend(
-            self.capsules
-                .iter()
-                .map(|(j, c)| c.placed(&globals[*j])),
-        );
+        out.extend(self.capsules.iter().map(|(j, c)| c.placed(&globals[*j])));
     }
 }
 
@@ -464,13 +463,38 @@ mod tests {
     #[test]
     fn segment_distances_match_a_brute_force_search() {
         let cases = [
-            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 1.0, -1.0], [0.5, 1.0, 1.0]),
-            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.5, 0.0], [3.0, 0.5, 0.0]),
-            ([0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.2, 0.3, 0.0], [0.8, 0.3, 0.0]),
-            ([0.0, 0.0, 0.0], [0.0, 0.0, 0.0], [0.2, 0.3, 0.0], [0.8, 0.3, 0.4]),
+            (
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.5, 1.0, -1.0],
+                [0.5, 1.0, 1.0],
+            ),
+            (
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [2.0, 0.5, 0.0],
+                [3.0, 0.5, 0.0],
+            ),
+            (
+                [0.0, 0.0, 0.0],
+                [1.0, 0.0, 0.0],
+                [0.2, 0.3, 0.0],
+                [0.8, 0.3, 0.0],
+            ),
+            (
+                [0.0, 0.0, 0.0],
+                [0.0, 0.0, 0.0],
+                [0.2, 0.3, 0.0],
+                [0.8, 0.3, 0.4],
+            ),
         ];
         for (p0, p1, q0, q1) in cases {
-            let (p0, p1, q0, q1) = (DVec3::from(p0), DVec3::from(p1), DVec3::from(q0), DVec3::from(q1));
+            let (p0, p1, q0, q1) = (
+                DVec3::from(p0),
+                DVec3::from(p1),
+                DVec3::from(q0),
+                DVec3::from(q1),
+            );
             let mut brute = f64::INFINITY;
             for i in 0..=200 {
                 for j in 0..=200 {
@@ -479,7 +503,10 @@ mod tests {
                 }
             }
             let d = segment_distance(p0, p1, q0, q1);
-            assert!((d - brute).abs() < 1e-3 && d <= brute + 1e-12, "{d} vs {brute}");
+            assert!(
+                (d - brute).abs() < 1e-3 && d <= brute + 1e-12,
+                "{d} vs {brute}"
+            );
         }
     }
 

@@ -8,8 +8,8 @@
 
 #![warn(missing_docs)]
 
-pub mod dynamics;
 pub mod collision;
+pub mod dynamics;
 pub mod error;
 pub mod ik;
 pub mod jacobian;

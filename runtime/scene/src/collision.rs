@@ -198,7 +198,10 @@ mod tests {
         let scene = scene_with(&[[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [0.0, 0.0, 0.25]]);
         let found = scene.deepest_interpenetration().unwrap();
         assert_eq!(found.actor, 0);
-        assert!(matches!(found.other, Other::Actor { actor: 2, .. }), "{found:?}");
+        assert!(
+            matches!(found.other, Other::Actor { actor: 2, .. }),
+            "{found:?}"
+        );
         // Torsos of radius ~0.14 with centres 0.25 m apart.
         assert!(found.depth > 0.02 && found.depth < 0.3, "{found:?}");
     }
