@@ -28,7 +28,6 @@ pub mod goal;
 pub(crate) mod lua;
 pub mod options;
 pub mod rig;
-pub mod room;
 pub mod route;
 pub mod shoulders;
 pub mod steer;
@@ -159,8 +158,6 @@ pub struct Walk {
     steer: steer::Steer,
     /// Scratch: the actors near this one.
     near: Vec<usize>,
-    /// What this tick's landings keep clear of (see [`room`]).
-    room: room::Room,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
     shoulders: shoulders::Shoulders,
 }
@@ -208,7 +205,6 @@ impl Walk {
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
-            room: room::Room::default(),
             shoulders: shoulders::Shoulders::default(),
         })
     }
@@ -449,12 +445,7 @@ impl Walk {
                 self.options.step_width,
             )
         };
-        let plant = room::keep_inside(
-            self.spot(leg, &sample, width),
-            sample.heading,
-            &self.rig.legs[leg],
-            &self.room,
-        );
+        let plant = self.spot(leg, &sample, width);
         let step = (plant - from).length();
         let q = (step / (0.8 * self.rig.thigh_height)).min(1.0);
         Landing {
@@ -470,11 +461,6 @@ impl Walk {
     fn step_foot(&mut self, plan: &Plan, leg: usize, lambda: f64, sigma: f64) -> FootPose {
         let wrapped = lambda < self.lambda[leg];
         self.lambda[leg] = lambda;
-        // A swing can last long when the walk slows: its landing keeps to the room as
-        // it is now, not as they were when it lifted.
-        if let Foot::Swing { to, .. } = &mut self.feet[leg] {
-            to.plant = room::keep_inside(to.plant, to.yaw, &self.rig.legs[leg], &self.room);
-        }
         let rig = &self.rig;
         // Transitions first.
         match self.feet[leg] {
@@ -609,17 +595,6 @@ impl Walk {
                 let clearance = lift * 4.0 * w * (1.0 - w);
                 let mut ankle = from + (target - from) * s;
                 ankle.y = clearance - rig.lowest_offset(leg, pitch, toes);
-                // On its way the foot keeps to the room too: a neighbour may have come
-                // between where it left and where it lands.
-                let yaw = from_yaw + wrap(to.yaw - from_yaw) * ease;
-                let kept = room::keep_inside(
-                    DVec2::new(ankle.x, ankle.z),
-                    yaw,
-                    &rig.legs[leg],
-                    &self.room,
-                );
-                ankle.x = kept.x;
-                ankle.z = kept.y;
                 FootPose {
                     ankle,
                     yaw: from_yaw + wrap(to.yaw - from_yaw) * ease,
@@ -834,7 +809,6 @@ impl Generator for Walk {
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
         }
-        room::survey(ctx, &self.steer.companions, &mut self.room);
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
         // The shoulders turn to pass: half the turn at each thoracic level; the arms,
         // whose swing would now go sideways into the other, hang still as they turn.

@@ -30,20 +30,6 @@ const OBSTACLE_RANGE: f64 = 2.0;
 /// Within this gap (m) between the disc and an obstacle, the sideways drift may not go
 /// towards it.
 const WALL_GUARD: f64 = 0.02;
-/// Room (m) kept between two bodies' discs beyond the avoidance's gap, where there is
-/// room for it: arms swing and feet step past the discs.
-const PERSONAL_SPACE: f64 = 0.1;
-/// Seconds of a walker's velocity by which its stepping feet reach past its disc, ahead
-/// of it: a foot lands about half a stride in front of the hips, further than the arms
-/// hanging at the sides that set the disc's radius.
-const STRIDE_REACH: f64 = 0.16;
-
-/// How far a body walking at `velocity` reaches past its disc in the direction `towards`
-/// (a unit vector): its feet step out ahead of it, not behind or to the side.
-pub fn stride_reach(velocity: DVec2, towards: DVec2) -> f64 {
-    STRIDE_REACH * velocity.dot(towards).max(0.0)
-}
-
 /// How a walk currently departs from its plan.
 #[derive(Clone, Debug, Default)]
 pub struct Steer {
@@ -165,23 +151,10 @@ impl Steer {
         let agents: Vec<Agent> = others
             .iter()
             .filter(|&&j| j != me && !self.companions.contains(&j))
-            .map(|&j| {
-                // The discs hold the bodies standing; a stepping foot reaches past them
-                // towards where its body goes. Counted on the other's disc, so that
-                // obstacles still see this body's own radius.
-                // It only makes them turn aside sooner: never more than the room left
-                // between the discs, which would forbid every step but backwards.
-                let apart = crowd.positions[j] - position;
-                let towards = apart.normalize_or_zero();
-                let stride = stride_reach(velocity, towards)
-                    + stride_reach(crowd.velocities[j], -towards)
-                    + PERSONAL_SPACE;
-                let room = apart.length() - radius - crowd.radii[j] - GAP - 0.01;
-                Agent {
-                    position: crowd.positions[j],
-                    velocity: crowd.velocities[j],
-                    radius: crowd.radii[j] + stride.min(room).max(0.0),
-                }
+            .map(|&j| Agent {
+                position: crowd.positions[j],
+                velocity: crowd.velocities[j],
+                radius: crowd.radii[j],
             })
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
