@@ -47,6 +47,7 @@ fn reach(
         duration,
         via,
         self_collision: collision,
+        detour: collision,
         dofs,
     };
     let g = Reach::new(&sk, spec).unwrap();
@@ -161,6 +162,7 @@ fn targets_that_cannot_be_found_fail_without_panicking() {
         duration: 1.0,
         via: vec![],
         self_collision: false,
+        detour: false,
         dofs: vec![50],
     };
     assert!(Reach::new(&sk, spec.clone()).is_err());

@@ -91,10 +91,10 @@ end)
 test("troupe.deepest_overlap measures the two most overlapping body discs", function()
   troupe.actor{ name = "ann" }
   troupe.actor{ name = "bob", at = {3, 0, 0} }
-  local d, a, b = troupe.deepest_overlap()
+  local d, a, b = troupe.deepest_overlap{ discs = true }
   expect(d == 0 and a == nil and b == nil, "no overlap yet: " .. d)
   troupe.actor{ name = "cid", at = {0.3, 0, 0} }
-  d, a, b = troupe.deepest_overlap()
+  d, a, b = troupe.deepest_overlap{ discs = true }
   expect(math.abs(d - (2 * RADIUS - 0.3)) < 0.005 and a == "ann" and b == "cid",
     string.format("%.3f between %s and %s", d, tostring(a), tostring(b)))
 end)

@@ -12,10 +12,10 @@ use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
 /// The options of `reach` and `ik` besides the common ones and the effector's.
-const REACH_OPTIONS: [&str; 4] = ["target", "orientation", "via", "self_collision"];
+const REACH_OPTIONS: [&str; 5] = ["target", "orientation", "via", "self_collision", "detour"];
 
 /// `actor:reach{ hand = "right"|"left", target = …, orientation = {x, y, z}, via = {…},
-/// self_collision = bool, <common options> }`.
+/// self_collision = bool, detour = bool, <common options> }`.
 pub fn build_reach(
     ctx: &BuildContext,
     args: MultiValue,
@@ -37,7 +37,7 @@ pub fn build_reach(
 }
 
 /// `actor:ik{ effector = JOINT, point = {x, y, z}, target = …, orientation = …, via = …,
-/// self_collision = bool, <common options> }`.
+/// self_collision = bool, detour = bool, <common options> }`.
 pub fn build_ik(
     ctx: &BuildContext,
     args: MultiValue,
@@ -75,6 +75,9 @@ fn build(
         .or_else(|| troupe_lua::settings::self_collision(ctx.lua, ctx.actor))
     {
         options.self_collision = on;
+    }
+    if let Some(on) = opt_bool(t, m, "detour")? {
+        options.detour = on;
     }
     options.orientation = orientation(m, t)?;
     options.via = via(m, t)?;

@@ -1,6 +1,8 @@
 //! The reach generator (thesis 4.3.3, 4.6): an end effector follows a smooth path to a goal
 //! by inverse kinematics, through optional temporary goals (`via`, 4.6.3), with
-//! self-collision correction (4.6.2) as the IK secondary task.
+//! self-collision correction (4.6.2) as the IK secondary task; a hand's path also bends
+//! round other actors' bodies and obstacles through temporary goals of its own
+//! ([`detour`]), and the arm is kept out of them the same way as out of its own body.
 //!
 //! The path from the effector's start to the goal is a polyline through the via points;
 //! each segment is travelled with the quintic `s(τ) = 10τ³ − 15τ⁴ + 6τ⁵` (zero velocity
@@ -10,6 +12,7 @@
 //! [`ORIENTATION_TOLERANCE`] when an orientation is asked) and fails otherwise, with the
 //! residual distance in the reason.
 
+pub mod detour;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
@@ -155,6 +158,8 @@ pub struct ReachSpec {
     pub via: Vec<DVec3>,
     /// Whether self-collision correction is on.
     pub self_collision: bool,
+    /// Whether the path bends round other bodies and obstacles ([`detour`]).
+    pub detour: bool,
     /// The DOFs IK moves (all must move the effector).
     pub dofs: Vec<usize>,
 }
@@ -173,6 +178,12 @@ pub struct Reach {
     /// The legs' and `root_y`'s (start, goal) values of a crouching reach (see
     /// [`Reach::widen`]), interpolated along the path.
     crouch: Vec<(usize, f64, f64)>,
+    /// The path's via points: the spec's, with the temporary goals of [`detour`].
+    via: Vec<DVec3>,
+    /// How many temporary goals [`detour`] inserted at the start.
+    detours: usize,
+    /// Other bodies and obstacles near, as of the previous tick (with `detour`).
+    volumes: Vec<troupe_body::collision::Volume>,
 }
 
 /// The quintic ease `10τ³ − 15τ⁴ + 6τ⁵` on [0, 1].
@@ -191,7 +202,7 @@ impl Reach {
             ..IkOptions::default()
         };
         let solver = IkSolver::new(skeleton, spec.dofs.clone(), options)?;
-        let (sensors, effector_sensor) = if spec.self_collision {
+        let (sensors, effector_sensor) = if spec.self_collision || spec.detour {
             let s = BodySensors::new(skeleton)?;
             // The sensor riding on the effector's joint (the hand) follows the main task.
             let own = s
@@ -213,6 +224,9 @@ impl Reach {
             start_rotation: DQuat::IDENTITY,
             lengths: Vec::new(),
             crouch: Vec::new(),
+            via: Vec::new(),
+            detours: 0,
+            volumes: Vec::new(),
         })
     }
 
@@ -267,11 +281,28 @@ impl Reach {
         self.solver.dofs()
     }
 
+    /// How many temporary goals the path got round other bodies and obstacles when it
+    /// started (0 before it starts or when the straight path was clear).
+    pub fn detours(&self) -> usize {
+        self.detours
+    }
+
+    /// The effector's sensor's radius at full size (the hand's solid), and the offset
+    /// from the effector to the sensor's centre now.
+    fn hand_sphere(&self, globals: &[troupe_body::Transform]) -> Option<(f64, DVec3)> {
+        let (sensors, own) = (self.sensors.as_ref()?, self.effector_sensor?);
+        let radius = sensors.sensors()[own].radius / troupe_body::self_collision::SENSOR_SCALE;
+        Some((
+            radius,
+            sensors.center(own, globals) - self.spec.effector.position(globals),
+        ))
+    }
+
     /// The point on the path at `t` seconds for the goal now at `goal`.
     fn path(&self, t: f64, goal: DVec3) -> DVec3 {
-        let mut points = Vec::with_capacity(self.spec.via.len() + 2);
+        let mut points = Vec::with_capacity(self.via.len() + 2);
         points.push(self.start);
-        points.extend_from_slice(&self.spec.via);
+        points.extend_from_slice(&self.via);
         points.push(goal);
         let total: f64 = self.lengths.iter().sum();
         let tau = (t / self.spec.duration).clamp(0.0, 1.0);
@@ -296,6 +327,10 @@ impl Reach {
 }
 
 impl Generator for Reach {
+    fn detours(&self) -> usize {
+        self.detours
+    }
+
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let goal = self
             .spec
@@ -307,9 +342,23 @@ impl Generator for Reach {
         self.widen(ctx, goal).map_err(|e| e.to_string())?;
         self.start = self.spec.effector.position(&ctx.posture.globals);
         self.start_rotation = self.spec.effector.rotation(&ctx.posture.globals);
+        self.via = self.spec.via.clone();
+        self.detours = 0;
+        if let (true, Some((radius, offset))) =
+            (self.spec.detour, self.hand_sphere(&ctx.posture.globals))
+        {
+            // 4.6.3: temporary goals round what the straight path would go through.
+            let start = self.start + offset;
+            self.volumes =
+                detour::volumes_around(ctx.world, ctx.actor, start, goal + offset, radius);
+            let via: Vec<DVec3> = self.spec.via.iter().map(|p| *p + offset).collect();
+            let around = detour::temporary_goals(start, &via, goal + offset, radius, &self.volumes);
+            self.detours = around.len() - via.len();
+            self.via = around.into_iter().map(|p| p - offset).collect();
+        }
         let mut prev = self.start;
         self.lengths.clear();
-        for p in self.spec.via.iter().chain(std::iter::once(&goal)) {
+        for p in self.via.iter().chain(std::iter::once(&goal)) {
             self.lengths.push((*p - prev).length());
             prev = *p;
         }
@@ -343,7 +392,22 @@ impl Generator for Reach {
         }
         let finishing = t + 0.5 * ctx.dt >= self.spec.duration;
         let mut point = self.path(t, goal);
-        if let (Some(sensors), Some(own)) = (&self.sensors, self.effector_sensor) {
+        if let (true, Some((radius, offset))) =
+            (self.spec.detour, self.hand_sphere(&ctx.posture.globals))
+        {
+            // The others move: the volumes as they stood last tick, and the path point
+            // out of them.
+            let start = self.start + offset;
+            self.volumes =
+                detour::volumes_around(ctx.world, ctx.actor, start, goal + offset, radius);
+            point =
+                detour::push_out(point + offset, radius, COLLISION_MARGIN, &self.volumes) - offset;
+        }
+        if let (true, Some(sensors), Some(own)) = (
+            self.spec.self_collision,
+            &self.sensors,
+            self.effector_sensor,
+        ) {
             // 4.6.3: a path point inside the body becomes a temporary goal outside it.
             point = sensors.push_out(
                 ctx.skeleton,
@@ -389,7 +453,13 @@ impl Generator for Reach {
         let skip: Vec<usize> = self.effector_sensor.into_iter().collect();
         let report = match &self.sensors {
             Some(sensors) => {
-                let mut avoid = CollisionAvoidance::new(sensors, COLLISION_MARGIN, skip);
+                let external: &[troupe_body::collision::Volume] =
+                    if self.spec.detour { &self.volumes } else { &[] };
+                let mut avoid = CollisionAvoidance::new(sensors, COLLISION_MARGIN, skip)
+                    .with_external(external);
+                if !self.spec.self_collision {
+                    avoid = avoid.without_own_body();
+                }
                 self.solver
                     .solve(ctx.skeleton, &mut self.q, &[task], None, Some(&mut avoid))
             }

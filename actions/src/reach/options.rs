@@ -35,6 +35,9 @@ pub struct ReachOptions {
     pub via: Vec<DVec3>,
     /// Whether self-collision correction is on.
     pub self_collision: bool,
+    /// Whether the effector's path bends round other actors' bodies and obstacles
+    /// (temporary goals, 4.6.3) and the arm is kept out of them.
+    pub detour: bool,
     /// Seconds to reach the goal.
     pub duration: f64,
     /// The DOFs that may move (those that move the effector are used); `None`: the
@@ -44,8 +47,8 @@ pub struct ReachOptions {
 
 impl ReachOptions {
     /// Reaches `target` with `effector` in one second, on its natural scope, without
-    /// orientation or via points; self-collision correction is on for a hand and off for
-    /// a joint.
+    /// orientation or via points; self-collision correction and detours are on for a hand
+    /// and off for a joint.
     pub fn new(effector: Reacher, target: Target) -> ReachOptions {
         let self_collision = matches!(effector, Reacher::Hand(_));
         ReachOptions {
@@ -54,6 +57,7 @@ impl ReachOptions {
             orientation: None,
             via: Vec::new(),
             self_collision,
+            detour: self_collision,
             duration: 1.0,
             scope: None,
         }
@@ -133,6 +137,7 @@ impl ReachOptions {
             duration: self.duration,
             via: self.via.clone(),
             self_collision: self.self_collision,
+            detour: self.detour,
             dofs,
         })
     }

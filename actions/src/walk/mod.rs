@@ -29,6 +29,7 @@ pub(crate) mod lua;
 pub mod options;
 pub mod rig;
 pub mod route;
+pub mod shoulders;
 pub mod steer;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
@@ -161,6 +162,8 @@ pub struct Walk {
     steer: steer::Steer,
     /// Scratch: the actors near this one.
     near: Vec<usize>,
+    /// How far the shoulders are turned to pass someone (see [`shoulders`]).
+    shoulders: shoulders::Shoulders,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -206,6 +209,7 @@ impl Walk {
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
+            shoulders: shoulders::Shoulders::default(),
         })
     }
 
@@ -785,6 +789,7 @@ impl Generator for Walk {
         self.settle_since = None;
         self.twist = [None; 2];
         self.steer = steer::Steer::start(ctx);
+        self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
         Ok(())
     }
@@ -808,7 +813,18 @@ impl Generator for Walk {
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
         }
-        let (root, pelvis, spine, arms) = self.pose(&plan, out);
+        let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
+        // The shoulders turn to pass: half the turn at each thoracic level; the arms,
+        // whose swing would now go sideways into the other, hang still as they turn.
+        self.shoulders
+            .update(ctx, self.heading, &self.steer.companions);
+        spine[1] += self.shoulders.turn / 2.0;
+        spine[2] += self.shoulders.turn / 2.0;
+        let swing = 1.0 - (self.shoulders.turn.abs() / shoulders::MAX_TURN).min(1.0);
+        for arm in &mut arms {
+            arm[0] *= swing;
+            arm[1] *= swing;
+        }
         let rig = &self.rig;
         for (&d, &v) in rig.root.iter().zip(&root) {
             out.set(d, v);

@@ -26,6 +26,10 @@ const RETURN: f64 = 0.8;
 const END_RETURN: f64 = 2.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
+
+/// Within this gap (m) between the disc and an obstacle, the sideways drift may not go
+/// towards it.
+const WALL_GUARD: f64 = 0.02;
 /// How a walk currently departs from its plan.
 #[derive(Clone, Debug, Default)]
 pub struct Steer {
@@ -162,6 +166,27 @@ impl Steer {
         let (rate, drift) = self.target;
         self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
         self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
+        // The drift never takes the disc into an obstacle: the velocity it chose may,
+        // while the drift changes within its limits, carry the body on sideways.
+        for f in ctx
+            .world
+            .crowd
+            .footprints_near(position, radius + WALL_GUARD)
+        {
+            let gap = f.distance(position) - radius;
+            if gap < WALL_GUARD {
+                let h = 0.01;
+                let away = DVec2::new(
+                    f.distance(position + DVec2::X * h) - f.distance(position - DVec2::X * h),
+                    f.distance(position + DVec2::Y * h) - f.distance(position - DVec2::Y * h),
+                )
+                .normalize_or_zero();
+                let towards = -self.drift.dot(away);
+                if towards > 0.0 {
+                    self.drift += away * towards;
+                }
+            }
+        }
     }
 
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,

@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod character;
+pub mod collision;
 pub mod dynamics;
 pub mod error;
 pub mod ik;

@@ -12,6 +12,8 @@
 //! the secondary task of IK, `Δq = J⁺Δx + (I − J⁺J)Δz`: the chain moves out of the body
 //! while the end effector keeps to its goal. See [`CollisionAvoidance`].
 
+pub use crate::collision::signed_distance;
+use crate::collision::{outward, Volume};
 use crate::error::{Error, Result};
 use crate::ik::{NullSpaceContext, NullSpaceTask};
 use crate::jacobian::{fill_jacobian, Effector};
@@ -293,61 +295,8 @@ fn sphere_depth(
     if depth <= -margin {
         return None;
     }
-    let h = 1e-5;
-    let g = DVec3::new(
-        signed_distance(&solid.shape, p + DVec3::X * h)
-            - signed_distance(&solid.shape, p - DVec3::X * h),
-        signed_distance(&solid.shape, p + DVec3::Y * h)
-            - signed_distance(&solid.shape, p - DVec3::Y * h),
-        signed_distance(&solid.shape, p + DVec3::Z * h)
-            - signed_distance(&solid.shape, p - DVec3::Z * h),
-    );
-    let g = if g.length_squared() > 1e-30 {
-        g.normalize()
-    } else {
-        DVec3::Y
-    };
+    let g = outward(&solid.shape, p);
     Some((depth, frame.rotation * (solid.orientation * g)))
-}
-
-/// Signed distance from `p` (in the shape's canonical frame) to the surface of `shape`:
-/// negative inside. Exact for spheres, boxes and cylinders; for frusta and ellipsoids a
-/// first-order estimate with the exact sign.
-pub fn signed_distance(shape: &Shape, p: DVec3) -> f64 {
-    fn capped(dr: f64, dy: f64) -> f64 {
-        dr.max(dy).min(0.0) + DVec3::new(dr.max(0.0), dy.max(0.0), 0.0).length()
-    }
-    match *shape {
-        Shape::Sphere { radius } => p.length() - radius,
-        Shape::Box { half_extents } => {
-            let q = p.abs() - half_extents;
-            q.max(DVec3::ZERO).length() + q.max_element().min(0.0)
-        }
-        Shape::Cylinder { radius, height } => {
-            capped(p.x.hypot(p.z) - radius, p.y.abs() - height / 2.0)
-        }
-        Shape::Frustum {
-            bottom_radius,
-            top_radius,
-            height,
-        } => {
-            let hh = height / 2.0;
-            let s = (p.y.clamp(-hh, hh) / height) + 0.5;
-            let r = bottom_radius + (top_radius - bottom_radius) * s;
-            let slope = (top_radius - bottom_radius) / height;
-            let dr = (p.x.hypot(p.z) - r) / (1.0 + slope * slope).sqrt();
-            capped(dr, p.y.abs() - hh)
-        }
-        Shape::Ellipsoid { radii } => {
-            let k0 = (p / radii).length();
-            let k1 = (p / (radii * radii)).length();
-            if k1 < 1e-12 {
-                -radii.min_element()
-            } else {
-                k0 * (k0 - 1.0) / k1
-            }
-        }
-    }
 }
 
 /// The self-collision response of table 4-1 as an IK secondary task: each sensor on the
@@ -355,6 +304,11 @@ pub fn signed_distance(shape: &Shape, p: DVec3) -> f64 {
 /// along the solid's normal through its sub-chain's pseudo-inverse (eq. 4-2).
 pub struct CollisionAvoidance<'a> {
     sensors: &'a BodySensors,
+    /// Other bodies' and objects' volumes the sensors also keep out of (see
+    /// [`CollisionAvoidance::with_external`]).
+    external: &'a [Volume],
+    /// Whether the body's own solids count (off: only the external volumes do).
+    own_body: bool,
     margin: f64,
     skip: Vec<usize>,
     /// Per sensor, whether the solved DOFs move it; found on the first step, since the
@@ -372,6 +326,8 @@ impl<'a> CollisionAvoidance<'a> {
     pub fn new(sensors: &'a BodySensors, margin: f64, skip: Vec<usize>) -> Self {
         CollisionAvoidance {
             sensors,
+            external: &[],
+            own_body: true,
             margin,
             skip,
             movable: Vec::new(),
@@ -379,6 +335,43 @@ impl<'a> CollisionAvoidance<'a> {
             j: Mat::zeros(3, 1),
             svd: Svd::default(),
         }
+    }
+
+    /// Also keeps the sensors out of `external` volumes (other actors' bodies, obstacles:
+    /// thesis 6.5.3, figure 6-22's correction with IK), each sensor at its limb's full
+    /// radius, the same response vector and sub-chain pseudo-inverse as for the body.
+    pub fn with_external(mut self, external: &'a [Volume]) -> Self {
+        self.external = external;
+        self
+    }
+
+    /// Leaves the body's own solids out: only the external volumes count.
+    pub fn without_own_body(mut self) -> Self {
+        self.own_body = false;
+        self
+    }
+
+    /// Adds the response to sensor `sensor` moving by `v` (world) to `dz`.
+    fn respond(&mut self, ctx: &NullSpaceContext, sensor: usize, v: DVec3, dz: &mut [f64]) {
+        let s = &self.sensors.sensors()[sensor];
+        self.j.reset(3, ctx.dofs.len());
+        let e = Effector {
+            joint: s.joint,
+            point: s.point,
+        };
+        fill_jacobian(
+            ctx.skeleton,
+            ctx.globals,
+            ctx.dofs,
+            ctx.axes,
+            &e,
+            false,
+            &mut self.j,
+            0,
+        );
+        self.svd.compute(&self.j);
+        self.svd
+            .add_pseudo_inverse_times(&[v.x, v.y, v.z], 1e-4, dz);
     }
 }
 
@@ -399,38 +392,35 @@ impl NullSpaceTask for CollisionAvoidance<'_> {
                 .collect();
         }
         let movable = &self.movable;
+        let own_body = self.own_body;
         sensors.contacts(
             ctx.skeleton,
             ctx.globals,
             self.margin,
-            |i| movable[i],
+            |i| own_body && movable[i],
             &mut self.contacts,
         );
         let mut penetrating = false;
-        let n = ctx.dofs.len();
-        for c in &self.contacts {
+        let contacts = std::mem::take(&mut self.contacts);
+        for c in &contacts {
             penetrating |= c.depth > 0.0;
-            let s = &sensors.sensors()[c.sensor];
             // Step 3–4 of table 4-1: the guidance frame g2 is the sensor moved by v.
-            let v = c.normal * (c.depth + self.margin);
-            self.j.reset(3, n);
-            let e = Effector {
-                joint: s.joint,
-                point: s.point,
-            };
-            fill_jacobian(
-                ctx.skeleton,
-                ctx.globals,
-                ctx.dofs,
-                ctx.axes,
-                &e,
-                false,
-                &mut self.j,
-                0,
-            );
-            self.svd.compute(&self.j);
-            self.svd
-                .add_pseudo_inverse_times(&[v.x, v.y, v.z], 1e-4, dz);
+            self.respond(ctx, c.sensor, c.normal * (c.depth + self.margin), dz);
+        }
+        self.contacts = contacts;
+        for i in 0..sensors.sensors().len() {
+            if self.external.is_empty() || !self.movable[i] {
+                continue;
+            }
+            let c = sensors.center(i, ctx.globals);
+            let radius = sensors.sensors()[i].radius / SENSOR_SCALE;
+            for k in 0..self.external.len() {
+                let p = self.external[k].sphere(c, radius);
+                if p.depth > -self.margin {
+                    penetrating |= p.depth > 0.0;
+                    self.respond(ctx, i, p.normal * (p.depth + self.margin), dz);
+                }
+            }
         }
         penetrating
     }

@@ -286,6 +286,7 @@ impl UserData for ActionRef {
                 "weight" => Value::Number(info.weight),
                 "dofs" => Value::Integer(info.scope.len() as i64),
                 "yielded" => Value::Integer(info.yielded.len() as i64),
+                "detours" => Value::Integer(info.detours as i64),
                 "error" => match info.reason {
                     Some(r) if info.status != troupe_scene::action::Status::Completed => {
                         Value::String(lua.create_string(&r)?)

@@ -1,11 +1,12 @@
 //! The shared space in Lua: `troupe.wall{…}`, `troupe.floor{…}` and
-//! `troupe.path(from, to[, { radius }])`.
+//! `troupe.path(from, to[, { radius }])`, and `troupe.deepest_overlap([{ discs }])`.
 
 use crate::args::{check_keys, err, floor_point, opt_number};
 use crate::stage::stage;
 use mlua::{Lua, Table, Value};
 use troupe_body::glam::DVec2;
 use troupe_body::template::template;
+use troupe_scene::collision::Other;
 use troupe_scene::space::{body_radius, Floor, Wall};
 
 /// Reads a list of floor points `{{x, z}, …}` for `method`.
@@ -76,19 +77,40 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     )?;
     troupe.set(
         "deepest_overlap",
-        lua.create_function(|lua, ()| {
-            let stage = stage(lua)?;
-            match stage.scene.deepest_overlap() {
-                Some((depth, i, j)) => {
-                    let names = stage.scene.actors();
-                    Ok((
-                        depth,
-                        Some(names[i].name.clone()),
-                        Some(names[j].name.clone()),
-                    ))
+        lua.create_function(|lua, options: Option<Table>| {
+            let discs = match &options {
+                Some(o) => {
+                    check_keys(o, "deepest_overlap", &["discs"])?;
+                    o.get::<Option<bool>>("discs")?.unwrap_or(false)
                 }
-                None => Ok((0.0, None, None)),
+                None => false,
+            };
+            let stage = stage(lua)?;
+            let actors = stage.scene.actors();
+            let name = |i: usize| Some(actors[i].name.clone());
+            if discs {
+                return Ok(match stage.scene.deepest_overlap() {
+                    Some((depth, i, j)) => (depth, name(i), name(j), None, None),
+                    None => (0.0, None, None, None, None),
+                });
             }
+            let solid = |i: usize, k: usize| Some(actors[i].skeleton.solids()[k].1.name.clone());
+            Ok(match stage.scene.deepest_interpenetration() {
+                Some(found) => {
+                    let (other, other_solid) = match found.other {
+                        Other::Actor { actor, solid: k } => (name(actor), solid(actor, k)),
+                        Other::Obstacle(obstacle) => (Some(obstacle), None),
+                    };
+                    (
+                        found.depth,
+                        name(found.actor),
+                        other,
+                        solid(found.actor, found.solid),
+                        other_solid,
+                    )
+                }
+                None => (0.0, None, None, None, None),
+            })
         })?,
     )?;
     troupe.set(

@@ -401,6 +401,12 @@ pub trait Generator: Send {
     fn navigation(&self) -> Option<crate::space::Navigation> {
         None
     }
+
+    /// How many temporary goals the motion's path took round other actors' bodies and
+    /// obstacles (a reach bending round someone, thesis 4.6.3); 0 by default.
+    fn detours(&self) -> usize {
+        0
+    }
 }
 
 /// How an action ended, as its generator's [`Generator::end`] learns it.
@@ -437,6 +443,9 @@ pub struct ActionInfo {
     pub started_at: Option<f64>,
     /// When it ended.
     pub ended_at: Option<f64>,
+    /// How many temporary goals its path took round other bodies and obstacles (see
+    /// [`Generator::detours`]).
+    pub detours: usize,
 }
 
 /// A status change, published after each tick.

@@ -124,6 +124,7 @@ impl Action {
             reason: self.reason.clone(),
             started_at: self.started_at,
             ended_at: self.ended_at,
+            detours: self.generator.detours(),
         }
     }
 }

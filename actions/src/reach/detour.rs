@@ -1,0 +1,140 @@
+//! Temporary goals round other bodies (thesis 4.6.3, after Zhao and Badler): when the
+//! straight path of a reaching hand would pass through another actor's body or an
+//! obstacle, a temporary goal outside it is inserted where the path went deepest, and
+//! again on the new segments until the path is clear (at most [`MAX_DETOURS`]). The
+//! volumes are those of the world the reach starts in (the previous tick's); while the
+//! reach runs, the path point is also pushed out of the volumes as they stand each tick,
+//! and the arm's sensors are kept out of them by the IK's secondary task
+//! ([`troupe_body::self_collision::CollisionAvoidance::with_external`]).
+
+use troupe_body::collision::Volume;
+use troupe_body::glam::DVec3;
+use troupe_scene::World;
+
+/// Most temporary goals a reach inserts.
+pub const MAX_DETOURS: usize = 4;
+/// How far outside a volume a temporary goal puts the hand's surface (m).
+pub const DETOUR_CLEARANCE: f64 = 0.04;
+/// Another actor counts when its root is within this distance (m) of the reach's start
+/// or goal.
+const NEAR: f64 = 2.5;
+/// Path samples are this far apart (m).
+const SAMPLE: f64 = 0.01;
+
+/// What a reach by actor `me` must keep its hand out of: the bodies of the other actors
+/// near its start or `goal`, and the obstacles; less every volume that a sphere of
+/// `radius` at the goal already enters (the hand is meant to end there: a partner's
+/// hand in a hand-over, the table under a cup).
+pub fn volumes_around(
+    world: &World,
+    me: usize,
+    start: DVec3,
+    goal: DVec3,
+    radius: f64,
+) -> Vec<Volume> {
+    let mut out = Vec::new();
+    for (j, state) in world.states.iter().enumerate() {
+        let root = state.globals.first().map_or(DVec3::ZERO, |g| g.translation);
+        let near = |p: DVec3| (root.x - p.x).hypot(root.z - p.z) < NEAR;
+        if j != me && (near(start) || near(goal)) {
+            out.extend(world.body_capsules(j).into_iter().map(Volume::Capsule));
+        }
+    }
+    out.extend(world.obstacle_volumes().into_iter().map(|(_, v)| v));
+    out.retain(|v| v.sphere_depth(goal, radius) <= 0.0);
+    out
+}
+
+/// Moves a sphere (centre `p`, `radius`) out of every volume until its surface is
+/// `clearance` outside each (a few rounds: leaving one may enter another).
+pub fn push_out(p: DVec3, radius: f64, clearance: f64, volumes: &[Volume]) -> DVec3 {
+    let mut q = p;
+    for _ in 0..8 {
+        let mut moved = false;
+        for v in volumes {
+            let pen = v.sphere(q, radius);
+            if pen.depth > -clearance {
+                q += pen.normal * (pen.depth + clearance);
+                moved = true;
+            }
+        }
+        if !moved {
+            break;
+        }
+    }
+    q
+}
+
+/// The deepest point of the polyline `points` for a sphere of `radius` into `volumes`:
+/// the segment's index, the point and the depth; `None` when it stays clear.
+fn deepest(points: &[DVec3], radius: f64, volumes: &[Volume]) -> Option<(usize, DVec3, f64)> {
+    let mut best: Option<(usize, DVec3, f64)> = None;
+    for (seg, pair) in points.windows(2).enumerate() {
+        let n = ((pair[1] - pair[0]).length() / SAMPLE).ceil().max(1.0) as usize;
+        for k in 0..=n {
+            let p = pair[0].lerp(pair[1], k as f64 / n as f64);
+            for v in volumes {
+                let depth = v.sphere_depth(p, radius);
+                if depth > 0.0 && best.is_none_or(|b| depth > b.2) {
+                    best = Some((seg, p, depth));
+                }
+            }
+        }
+    }
+    best
+}
+
+/// The via points of a hand (a sphere of `radius`) going from `start` through `via` to
+/// `goal` with the temporary goals that keep it out of `volumes` inserted; `via` as given
+/// when the straight path is clear.
+pub fn temporary_goals(
+    start: DVec3,
+    via: &[DVec3],
+    goal: DVec3,
+    radius: f64,
+    volumes: &[Volume],
+) -> Vec<DVec3> {
+    let mut points: Vec<DVec3> = std::iter::once(start)
+        .chain(via.iter().copied())
+        .chain(std::iter::once(goal))
+        .collect();
+    for _ in 0..MAX_DETOURS {
+        let Some((seg, p, _)) = deepest(&points, radius, volumes) else {
+            break;
+        };
+        let q = push_out(p, radius, DETOUR_CLEARANCE, volumes);
+        if (q - p).length() < 1e-6 {
+            break;
+        }
+        points.insert(seg + 1, q);
+    }
+    points[1..points.len() - 1].to_vec()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_body::collision::Capsule;
+
+    #[test]
+    fn a_path_through_an_arm_gets_a_temporary_goal_beside_it() {
+        // An arm lying along x at (y 1.45, z 0.3); the hand goes from below it to above.
+        let arm = Volume::Capsule(Capsule {
+            a: DVec3::new(-0.7, 1.45, 0.3),
+            b: DVec3::new(-0.1, 1.45, 0.3),
+            ra: 0.04,
+            rb: 0.03,
+        });
+        let start = DVec3::new(-0.3, 0.9, 0.2);
+        let goal = DVec3::new(-0.3, 1.8, 0.4);
+        let via = temporary_goals(start, &[], goal, 0.05, &[arm]);
+        assert!(!via.is_empty());
+        let mut points = vec![start];
+        points.extend(&via);
+        points.push(goal);
+        assert!(deepest(&points, 0.05, &[arm]).is_none(), "{points:?}");
+        // A clear path is left alone.
+        let clear = temporary_goals(start, &[], DVec3::new(0.5, 1.8, 0.4), 0.05, &[arm]);
+        assert!(clear.is_empty(), "{clear:?}");
+    }
+}
