@@ -1,7 +1,8 @@
 //! VMC end to end: troupe sends an actor to a second troupe over UDP and the performer
 //! there stands where the actor stood; bad input and bursts are counted, never fatal; the
 //! health goes stale and comes back; a live stream recorded with `--record-devices`
-//! replays identically on 1 and 2 threads; and python-osc, an OSC implementation troupe
+//! replays identically on 1 and 2 threads, and `--replay-devices` gives the live run's
+//! postures byte for byte; and python-osc, an OSC implementation troupe
 //! does not use, reads troupe's stream and drives a troupe performer
 //! (`scripts/vmc/compat.py`).
 
@@ -266,9 +267,12 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    let live_trk = temp("live.trk");
     let out = troupe()
         .args(["run", "--realtime", "--seconds", "2", "--record-devices"])
         .arg(&rec)
+        .arg("--record")
+        .arg(&live_trk)
         .arg(&live)
         .output()
         .unwrap();
@@ -319,6 +323,31 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
         hashes[0], hashes[1],
         "replays differ between 1 and 2 threads"
     );
+    // The whole run's inputs replayed in place of the listener: each datagram at the tick
+    // the live run took it, the jitter buffer played at the live run's clock marks, so
+    // the postures are the live run's byte for byte (1 and 2 threads).
+    let live_postures = std::fs::read(&live_trk).unwrap();
+    for threads in [&["--threads", "1"][..], &["--threads", "2", "--chunk", "1"]] {
+        let trk = temp(&format!("replay-devices{}.trk", threads.len()));
+        let out = troupe()
+            .args(["run", "--seconds", "2", "--replay-devices"])
+            .arg(&rec)
+            .args(threads)
+            .arg("--record")
+            .arg(&trk)
+            .arg(&live)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        assert!(
+            std::fs::read(&trk).unwrap() == live_postures,
+            "--replay-devices {threads:?}: the postures differ from the live run's"
+        );
+    }
 }
 
 #[test]
