@@ -165,6 +165,31 @@ fn assert_followed(out: &Output, postures: usize) {
     assert!(!t.contains("not compared"), "{t}");
 }
 
+/// Adds `--record-devices REC --record TRK` to a run: its inputs and its postures.
+fn recording<'a>(run: &'a mut Command, rec: &Path, trk: &Path) -> &'a mut Command {
+    run.arg("--record-devices")
+        .arg(rec)
+        .arg("--record")
+        .arg(trk)
+}
+
+/// `troupe run SCENE LENGTH --replay-devices REC --record TRK`, which must succeed: the
+/// scene run from a recording of its inputs, without devices or a network.
+fn replay_devices(scene: impl AsRef<OsStr>, length: &[&str], rec: &Path, trk: &Path) -> Output {
+    let out = troupe()
+        .arg("run")
+        .arg(scene)
+        .args(length)
+        .arg("--replay-devices")
+        .arg(rec)
+        .arg("--record")
+        .arg(trk)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", text(&out));
+    out
+}
+
 /// Checks that two `.trk` files are byte for byte the same.
 fn assert_same_trk(live: &Path, replayed: &Path) {
     let (a, b) = (
@@ -364,15 +389,13 @@ fn live_inputs_are_replicated_to_a_follower_and_replayed_from_the_rec_bit_for_bi
     let prefix = "troupe/replicated-test";
     let scene = "tests/scenes/zenoh_relayed.lua";
     let (rec, leader_trk, replay_trk) = (temp("lead.rec"), temp("lead.trk"), temp("replay.trk"));
-    let leader = Running::piped(
+    let leader = Running::piped(recording(
         leader(scene, prefix, leader_port)
             .args(["--ticks", "400", "--seed", "3"])
-            .args(["--zenoh-connect", &on(relay_port)])
-            .arg("--record-devices")
-            .arg(&rec)
-            .arg("--record")
-            .arg(&leader_trk),
-    );
+            .args(["--zenoh-connect", &on(relay_port)]),
+        &rec,
+        &leader_trk,
+    ));
     wait_listening(leader_port);
     let follower = Running::piped(follower(scene, prefix, leader_port).args(["--ticks", "400"]));
     // A tool listens to the behavior messages and, mid-run, sends bob his cue.
@@ -405,15 +428,7 @@ fn live_inputs_are_replicated_to_a_follower_and_replayed_from_the_rec_bit_for_bi
 
     // The replay of the leader's recording (glove bytes, tick marks, the cue) makes the
     // leader's postures, byte for byte, without the relay or the network.
-    let out = troupe()
-        .args(["run", scene, "--ticks", "400", "--seed", "3"])
-        .arg("--replay-devices")
-        .arg(&rec)
-        .arg("--record")
-        .arg(&replay_trk)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", text(&out));
+    replay_devices(scene, &["--ticks", "400", "--seed", "3"], &rec, &replay_trk);
     assert_same_trk(&leader_trk, &replay_trk);
     // The glove moved the hand: the replay is not equal merely for want of input.
     let recording = troupe_drivers::record::Recording::read(&rec).unwrap();
@@ -456,15 +471,13 @@ fn a_relayed_vmc_sender_drives_a_performer_followed_and_replayed_bit_for_bit() {
     .unwrap();
     let prefix = "troupe/vmc-test";
     let (rec, leader_trk, replay_trk) = (temp("vmc.rec"), temp("vmc.trk"), temp("vmc-replay.trk"));
-    let leader = Running::piped(
+    let leader = Running::piped(recording(
         leader(&scene, prefix, leader_port)
             .args(["--ticks", "600"])
-            .args(["--zenoh-connect", &on(relay_port)])
-            .arg("--record-devices")
-            .arg(&rec)
-            .arg("--record")
-            .arg(&leader_trk),
-    );
+            .args(["--zenoh-connect", &on(relay_port)]),
+        &rec,
+        &leader_trk,
+    ));
     wait_listening(leader_port);
     let follower = Running::piped(follower(&scene, prefix, leader_port).args(["--ticks", "600"]));
     // Kill the relay 2 s in; start another on the same ports 1 s later.
@@ -478,16 +491,7 @@ fn a_relayed_vmc_sender_drives_a_performer_followed_and_replayed_bit_for_bit() {
     assert!(out.status.success(), "leader:\n{t}");
     assert_stale_then_back(&t, "vmc");
 
-    let out = troupe()
-        .arg("run")
-        .arg(&scene)
-        .args(["--ticks", "600", "--replay-devices"])
-        .arg(&rec)
-        .arg("--record")
-        .arg(&replay_trk)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", text(&out));
+    replay_devices(&scene, &["--ticks", "600"], &rec, &replay_trk);
     assert_same_trk(&leader_trk, &replay_trk);
     // The datagrams moved the performer: every tick read the clock, and over a hundred
     // took datagrams (60 a second while a relay ran).
@@ -583,17 +587,15 @@ fn a_relayed_spacemouse_moves_its_object_and_replays_bit_for_bit() {
         temp("mouse.trk"),
         temp("mouse-replay.trk"),
     );
-    let run = Running::piped(
+    let run = Running::piped(recording(
         troupe()
             .arg("run")
             .arg(&scene)
             .args(["--seconds", "3", "--realtime"])
-            .args(["--zenoh-listen", &on(port)])
-            .arg("--record-devices")
-            .arg(&rec)
-            .arg("--record")
-            .arg(&live_trk),
-    );
+            .args(["--zenoh-listen", &on(port)]),
+        &rec,
+        &live_trk,
+    ));
     wait_listening(port);
     let relay = tool(port);
     let report = |x: i16| {
@@ -628,16 +630,7 @@ fn a_relayed_spacemouse_moves_its_object_and_replays_bit_for_bit() {
     assert!(x > 0.15 && x < 0.4, "crate moved {x} m:\n{t}");
 
     // The replay takes each report at the tick the live run took it, without a network.
-    let out = troupe()
-        .arg("run")
-        .arg(&scene)
-        .args(["--seconds", "3", "--replay-devices"])
-        .arg(&rec)
-        .arg("--record")
-        .arg(&replay_trk)
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", text(&out));
+    let out = replay_devices(&scene, &["--seconds", "3"], &rec, &replay_trk);
     assert!(
         text(&out).contains(&format!("crate x {x:.3}")),
         "{}",

@@ -258,31 +258,25 @@ impl ChunkReader {
                     bytes: data,
                 })
             }
-            b'T' => {
+            b'T' | b'C' => {
                 let stream = u16_(field!(2));
                 let tick = u64_(field!(8));
-                let taken = u64_(field!(8));
+                let value = u64_(field!(8));
                 if stream >= self.streams {
                     return Err(ParseError::Undeclared { stream, offset });
                 }
-                Item::Mark(Mark {
-                    stream,
-                    tick,
-                    taken,
-                })
-            }
-            b'C' => {
-                let stream = u16_(field!(2));
-                let tick = u64_(field!(8));
-                let micros = u64_(field!(8));
-                if stream >= self.streams {
-                    return Err(ParseError::Undeclared { stream, offset });
+                match tag {
+                    b'T' => Item::Mark(Mark {
+                        stream,
+                        tick,
+                        taken: value,
+                    }),
+                    _ => Item::Clock(ClockMark {
+                        stream,
+                        tick,
+                        micros: value,
+                    }),
                 }
-                Item::Clock(ClockMark {
-                    stream,
-                    tick,
-                    micros,
-                })
             }
             b'M' => {
                 let tick = u64_(field!(8));

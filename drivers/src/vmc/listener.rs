@@ -8,6 +8,7 @@
 
 use crate::device::health::{Health, HealthState};
 use crate::device::port::Port;
+use crate::osc::listener::bind_udp;
 use crate::osc::OscError;
 use crate::record::writer::Recorder;
 use crate::vmc::stream::micros_since;
@@ -37,14 +38,7 @@ pub struct UdpDatagrams(pub UdpSocket);
 impl UdpDatagrams {
     /// Binds `addr` (`host:port`; port 0 for any) with a 20 ms read timeout.
     pub fn bind(addr: &str) -> Result<UdpDatagrams, OscError> {
-        let socket = UdpSocket::bind(addr).map_err(|source| OscError::Bind {
-            addr: addr.to_string(),
-            source,
-        })?;
-        socket
-            .set_read_timeout(Some(Duration::from_millis(20)))
-            .map_err(OscError::Socket)?;
-        Ok(UdpDatagrams(socket))
+        bind_udp(addr).map(UdpDatagrams)
     }
 }
 
