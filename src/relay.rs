@@ -65,6 +65,11 @@ pub fn run(args: RelayArgs) -> Result<ExitCode> {
         ),
     }
     troupe_net::SceneKeys::new(&args.key).context("--key")?;
+    if args.kind == "vmc" {
+        // An address that cannot be bound now will not be later: refuse it at once.
+        troupe_drivers::vmc::UdpDatagrams::bind(&args.listen)
+            .with_context(|| format!("troupe relay vmc --listen {}", args.listen))?;
+    }
     let session = Endpoints {
         connect: args.zenoh_connect.clone(),
         listen: args.zenoh_listen.clone(),

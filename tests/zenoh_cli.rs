@@ -440,6 +440,41 @@ fn live_inputs_are_replicated_to_a_follower_and_replayed_from_the_rec_bit_for_bi
     assert_eq!(recording.messages.len(), 1, "{:?}", recording.messages);
 }
 
+/// What cannot work is refused at once, naming it: a relay of a kind troupe does not
+/// relay, a VMC relay on an address it cannot bind, a VMC performer naming a relay's key
+/// without a network session, or naming both a UDP port and a key.
+#[test]
+fn bad_relay_and_vmc_options_are_refused_naming_them() {
+    let refused = |c: &mut Command| {
+        let out = c.output().unwrap();
+        assert!(!out.status.success(), "{}", text(&out));
+        text(&out)
+    };
+    let t = refused(troupe().args(["relay", "osc", "--key", "stage/osc"]));
+    assert!(
+        t.contains("troupe relay osc: relays serve") && t.contains("vmc"),
+        "{t}"
+    );
+    let t = refused(troupe().args(["relay", "vmc", "--listen", "256.1.1.1:9", "--key", "k"]));
+    assert!(t.contains("troupe relay vmc --listen 256.1.1.1:9"), "{t}");
+    for (devices, says) in [
+        (
+            r#"{ zenoh = "stage/vmc" }"#,
+            r#"zenoh = "stage/vmc" needs a network session"#,
+        ),
+        (
+            r#"{ listen = "127.0.0.1:0", zenoh = "stage/vmc" }"#,
+            "give one of `listen`, `zenoh` and `replay`",
+        ),
+    ] {
+        let scene = temp("bad-vmc.lua");
+        let lua = format!(r#"troupe.performer{{ name = "pat", devices = {{ vmc = {devices} }} }}"#);
+        std::fs::write(&scene, lua).unwrap();
+        let t = refused(troupe().arg("run").arg(&scene).args(["--ticks", "1"]));
+        assert!(t.contains(&format!("performer.devices.vmc: {says}")), "{t}");
+    }
+}
+
 /// `troupe relay vmc` on the sender's machine: a VMC sender (`troupe emulate vmc`, playing
 /// a recorded wave over UDP) feeds the relay, a performer on the simulation host names its
 /// key; a follower matches the leader bit for bit from the replicated datagrams, tick
