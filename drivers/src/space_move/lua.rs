@@ -151,6 +151,10 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
         }
         g.recorder.clone()
     };
+    let remote: Option<String> = t.get("zenoh")?;
+    if path.is_some() && remote.is_some() {
+        return Err(args::err("spacemouse", "give `path` or `zenoh`, not both"));
+    }
     let clock = crate::performer::source::scene_clock(lua)?;
     // A replay of the whole run's inputs stands in for the live or relayed device.
     let replayed = lua.app_data_ref::<DeviceReplay>().map(|r| r.clone());
@@ -198,16 +202,12 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
             }
         }
         (None, None) => {
-            let remote: Option<String> = t.get("zenoh")?;
             let mut o = DriverOptions::new(&name, path.as_deref().unwrap_or(""));
             // A SpaceMouse at rest sends nothing: silence is not staleness.
             o.stale_after = Duration::MAX;
             let opener: Opener = match remote {
                 // Served by `troupe relay spacemouse` on another machine.
                 Some(key) => {
-                    if path.is_some() {
-                        return Err(args::err("spacemouse", "give `path` or `zenoh`, not both"));
-                    }
                     let ports = RemotePorts::from_lua(lua, "spacemouse", &key)?;
                     Box::new(move |_o: &DriverOptions| (ports.0)(&key))
                 }
