@@ -443,6 +443,7 @@ fn print_sample(s: &driver::Sample, cal: Option<&GloveCalibration>, json: bool) 
             s.time, m.translation, m.rotation, m.buttons
         ),
         Reading::Vrpn(v) => println!("{:8.3}s vrpn {v}", s.time),
+        Reading::Datagram { bytes } => println!("{:8.3}s datagram {} bytes", s.time, bytes.len()),
     }
 }
 
@@ -599,14 +600,14 @@ fn emulate_vmc(a: &EmulateArgs) -> Result<ExitCode> {
 fn probe_vmc(listen: &str, samples: usize, timeout: Duration, json: bool) -> Result<ExitCode> {
     use troupe_drivers::vmc::{read_datagram, VmcCounters, VmcListener, VRM_BONES};
     let l = VmcListener::bind(listen, "probe", None).map_err(|e| anyhow!(e))?;
-    eprintln!("listening for VMC on {}", l.addr);
+    eprintln!("listening for VMC on {}", l.from);
     let mut counters = VmcCounters::default();
     let (start, mut n) = (Instant::now(), 0);
     while n < samples && start.elapsed() < timeout {
-        let Ok((_, bytes)) = l.datagrams.recv_timeout(Duration::from_millis(50)) else {
+        let Ok(d) = l.datagrams.recv_timeout(Duration::from_millis(50)) else {
             continue;
         };
-        let p = read_datagram(&bytes, &mut counters);
+        let p = read_datagram(&d.bytes, &mut counters);
         let bones: Vec<&str> = VRM_BONES
             .iter()
             .zip(&p.pose.bones)
@@ -648,7 +649,7 @@ fn probe_vmc(listen: &str, samples: usize, timeout: Duration, json: bool) -> Res
     if n < samples {
         bail!(
             "got {n} of {samples} VMC packets on {} within {:.1} s",
-            l.addr,
+            l.from,
             timeout.as_secs_f64()
         );
     }

@@ -1,8 +1,8 @@
 //! `troupe relay KIND --port PATH --key KEY --zenoh-…`: serves a device on Zenoh from the
 //! machine it is plugged into (a Flock of Birds or a CyberGlove on a serial port, a
-//! SpaceMouse on hidraw); the simulation host names it with `zenoh = KEY` in a
-//! performer's device table or `troupe.devices.spacemouse` (docs/distributed.md,
-//! "Remote device hosts").
+//! SpaceMouse on hidraw, a VRPN server it reaches, a VMC sender's UDP datagrams); the
+//! simulation host names it with `zenoh = KEY` in a performer's device table or
+//! `troupe.devices.spacemouse` (docs/distributed.md, "Remote device hosts").
 
 use anyhow::{bail, Context, Result};
 use clap::Args;
@@ -17,8 +17,9 @@ use troupe_net::Endpoints;
 /// Options of `troupe relay`.
 #[derive(Args)]
 pub struct RelayArgs {
-    /// The device kind: fob, cyberglove (serial ports), spacemouse (hidraw) or vrpn (a
-    /// VRPN server this machine reaches, --device).
+    /// The device kind: fob, cyberglove (serial ports), spacemouse (hidraw), vrpn (a
+    /// VRPN server this machine reaches, --device) or vmc (a VMC sender's UDP datagrams,
+    /// --listen).
     pub kind: String,
     /// The serial port the device is on; for a SpaceMouse, its hidraw path (default: the
     /// first SpaceMouse found).
@@ -27,6 +28,9 @@ pub struct RelayArgs {
     /// VRPN: the server's device, Tracker0@host[:port] (or Tracker0@tcp://host:port).
     #[arg(long)]
     pub device: Option<String>,
+    /// VMC: the UDP address the sender sends to (host:port).
+    #[arg(long, default_value = "0.0.0.0:39539")]
+    pub listen: String,
     /// Baud rate.
     #[arg(long, default_value_t = 115_200)]
     pub baud: u32,
@@ -47,18 +51,25 @@ pub struct RelayArgs {
 /// Serves the device until the time is up, reopening its port when it fails.
 pub fn run(args: RelayArgs) -> Result<ExitCode> {
     match (args.kind.as_str(), &args.port, &args.device) {
-        ("fob" | "cyberglove", Some(_), _) | ("spacemouse", _, _) | ("vrpn", _, Some(_)) => {}
+        ("fob" | "cyberglove", Some(_), _)
+        | ("spacemouse" | "vmc", _, _)
+        | ("vrpn", _, Some(_)) => {}
         ("fob" | "cyberglove", None, _) => {
             bail!("troupe relay {}: --port is required", args.kind)
         }
         ("vrpn", _, None) => bail!("troupe relay vrpn: --device Tracker0@host is required"),
         (other, _, _) => bail!(
             "troupe relay {other}: relays serve fob, cyberglove (serial ports), spacemouse \
-             (hidraw) and vrpn (a VRPN server); VMC and OSC senders send to the simulation \
-             host's UDP port directly (docs/distributed.md)"
+             (hidraw), vrpn (a VRPN server) and vmc (a VMC sender's UDP datagrams); OSC \
+             senders send to the simulation host's UDP port directly (docs/distributed.md)"
         ),
     }
     troupe_net::SceneKeys::new(&args.key).context("--key")?;
+    if args.kind == "vmc" {
+        // An address that cannot be bound now will not be later: refuse it at once.
+        troupe_drivers::vmc::UdpDatagrams::bind(&args.listen)
+            .with_context(|| format!("troupe relay vmc --listen {}", args.listen))?;
+    }
     let session = Endpoints {
         connect: args.zenoh_connect.clone(),
         listen: args.zenoh_listen.clone(),
@@ -72,8 +83,12 @@ pub fn run(args: RelayArgs) -> Result<ExitCode> {
             stop.store(true, Ordering::Release);
         });
     }
-    let port_name =
-        (args.device.as_deref().or(args.port.as_deref())).unwrap_or("(the first SpaceMouse)");
+    let port_name = match args.kind.as_str() {
+        "vmc" => format!("udp {}", args.listen),
+        _ => (args.device.as_deref().or(args.port.as_deref()))
+            .unwrap_or("(the first SpaceMouse)")
+            .to_string(),
+    };
     println!("relaying {} {port_name} on {}", args.kind, args.key);
     let started = Instant::now();
     let mut total = RelayStats::default();
@@ -109,12 +124,16 @@ pub fn run(args: RelayArgs) -> Result<ExitCode> {
 }
 
 /// The device's port: a serial port; a SpaceMouse's hidraw node (one report a read, each
-/// put as one chunk, which is one read on the simulation host); or a connection to a VRPN
+/// put as one chunk, which is one read on the simulation host); a connection to a VRPN
 /// server, cookies exchanged (whole messages a read; the simulation host's VRPN client
-/// describes its senders through the relay).
+/// describes its senders through the relay); or a UDP socket a VMC sender sends to (one
+/// datagram a read, a chunk each, read whole on the simulation host).
 fn open(args: &RelayArgs) -> Result<Box<dyn Port>> {
     use troupe_drivers::vrpn::{DatagramCounters, DeviceName, VrpnPort, HANDSHAKE_TIMEOUT};
     match (args.kind.as_str(), &args.port, &args.device) {
+        ("vmc", _, _) => Ok(Box::new(troupe_drivers::vmc::UdpDatagrams::bind(
+            &args.listen,
+        )?)),
         ("spacemouse", path, _) => Ok(troupe_drivers::spacemouse::open_spacemouse(
             path.as_deref(),
         )?),

@@ -1,11 +1,13 @@
 //! VMC end to end: troupe sends an actor to a second troupe over UDP and the performer
 //! there stands where the actor stood; bad input and bursts are counted, never fatal; the
 //! health goes stale and comes back; a live stream recorded with `--record-devices`
-//! replays identically on 1 and 2 threads; and python-osc, an OSC implementation troupe
+//! replays identically on 1 and 2 threads, and `--replay-devices` gives the live run's
+//! postures byte for byte; and python-osc, an OSC implementation troupe
 //! does not use, reads troupe's stream and drives a troupe performer
 //! (`scripts/vmc/compat.py`).
 
 use rosc::{OscBundle, OscMessage, OscPacket, OscType};
+use std::ffi::OsStr;
 use std::net::UdpSocket;
 use std::path::PathBuf;
 use std::process::{Command, Stdio};
@@ -266,9 +268,12 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
         .stderr(Stdio::null())
         .spawn()
         .unwrap();
+    let live_trk = temp("live.trk");
     let out = troupe()
         .args(["run", "--realtime", "--seconds", "2", "--record-devices"])
         .arg(&rec)
+        .arg("--record")
+        .arg(&live_trk)
         .arg(&live)
         .output()
         .unwrap();
@@ -297,28 +302,45 @@ fn a_recorded_stream_replays_identically_on_one_and_two_threads() {
         ),
     )
     .unwrap();
-    let mut hashes = Vec::new();
-    for threads in [&["--threads", "1"][..], &["--threads", "2", "--chunk", "1"]] {
-        let trk = temp(&format!("replay{}.trk", threads.len()));
-        let out = troupe()
-            .args(["run", "--seconds", "2"])
-            .args(threads)
-            .arg("--record")
-            .arg(&trk)
-            .arg(&replay)
-            .output()
-            .unwrap();
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        hashes.push(std::fs::read(&trk).unwrap());
-    }
-    assert_eq!(
-        hashes[0], hashes[1],
+    // `troupe run SCENE --seconds 2 EXTRA --record TRK` on 1, then 2 threads: the
+    // postures of each.
+    let postures = |scene: &PathBuf, extra: &[&OsStr]| -> Vec<Vec<u8>> {
+        let threads = [&["--threads", "1"][..], &["--threads", "2", "--chunk", "1"]];
+        (threads.iter().enumerate())
+            .map(|(i, threads)| {
+                let trk = temp(&format!("replay{i}.trk"));
+                let out = troupe()
+                    .args(["run", "--seconds", "2"])
+                    .args(extra)
+                    .args(*threads)
+                    .arg("--record")
+                    .arg(&trk)
+                    .arg(scene)
+                    .output()
+                    .unwrap();
+                let err = String::from_utf8_lossy(&out.stderr);
+                assert!(out.status.success(), "{err}");
+                std::fs::read(&trk).unwrap()
+            })
+            .collect()
+    };
+    let by_time = postures(&replay, &[]);
+    assert!(
+        by_time[0] == by_time[1],
         "replays differ between 1 and 2 threads"
     );
+    // The whole run's inputs replayed in place of the listener: each datagram at the tick
+    // the live run took it, the jitter buffer played at the live run's clock marks, so
+    // the postures are the live run's byte for byte (1 and 2 threads).
+    let live_postures = std::fs::read(&live_trk).unwrap();
+    let whole_run = postures(&live, &["--replay-devices".as_ref(), rec.as_os_str()]);
+    for (threads, replayed) in whole_run.iter().enumerate() {
+        assert!(
+            *replayed == live_postures,
+            "--replay-devices on {} thread(s): the postures differ from the live run's",
+            threads + 1
+        );
+    }
 }
 
 #[test]

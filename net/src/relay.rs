@@ -1,5 +1,6 @@
-//! Remote device hosts: a byte stream (a serial port with a tracker or a glove) served on
-//! Zenoh by `troupe relay`, and read on the simulation host as if it were the port.
+//! Remote device hosts: a byte stream (a serial port with a tracker or a glove, a hidraw
+//! node, a VRPN connection, a VMC sender's UDP datagrams) served on Zenoh by `troupe
+//! relay`, and read on the simulation host as if it were the port.
 //!
 //! The relay reads what the device sends and puts it on `<key>/rx` as it arrives, each
 //! chunk stamped with its source time; whatever is put on `<key>/tx` (the commands a
@@ -123,7 +124,9 @@ fn serve_opened<Q: Read + Write>(
         .wait()
         .map_err(declare_err("subscriber", tx_key(key)))?;
     let mut stats = RelayStats::default();
-    let mut buf = [0u8; 512];
+    // Room for any UDP datagram (a VMC sender's bundle is a few kilobytes): one read,
+    // one chunk, read whole on the simulation host.
+    let mut buf = vec![0u8; 65_536];
     let io_err = |e: std::io::Error| NetError::Open(format!("the device on {key}: {e}"));
     if on_demand {
         while commands.is_empty() {

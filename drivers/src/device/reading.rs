@@ -20,6 +20,11 @@ pub enum Reading {
     SpaceMouse(SpaceMouseState),
     /// A report of a device on a VRPN server.
     Vrpn(VrpnReading),
+    /// A whole datagram, read in the tick that takes it (a VMC sender's OSC packet).
+    Datagram {
+        /// The datagram's bytes.
+        bytes: Vec<u8>,
+    },
 }
 
 /// A timestamped reading.

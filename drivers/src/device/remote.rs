@@ -14,3 +14,21 @@ pub type RemoteOpen = dyn Fn(&str) -> Result<Box<dyn Port>, DeviceError> + Send 
 /// How `zenoh = KEY` devices are opened: installed as Lua app data by the command line.
 #[derive(Clone)]
 pub struct RemotePorts(pub Arc<RemoteOpen>);
+
+impl RemotePorts {
+    /// The opener the command line installed in `lua`, for the device option `what`
+    /// naming `zenoh = key`; without a network session, an error saying how to get one.
+    pub(crate) fn from_lua(lua: &mlua::Lua, what: &str, key: &str) -> mlua::Result<RemotePorts> {
+        lua.app_data_ref::<RemotePorts>()
+            .map(|p| p.clone())
+            .ok_or_else(|| {
+                troupe_lua::args::err(
+                    what,
+                    format!(
+                        "zenoh = \"{key}\" needs a network session: troupe run with \
+                         --zenoh-connect or --zenoh-listen (a troupe built with the zenoh feature)"
+                    ),
+                )
+            })
+    }
+}

@@ -23,16 +23,23 @@ pub struct OscListener {
     thread: Option<JoinHandle<()>>,
 }
 
+/// Binds a UDP socket on `addr` (`host:port`, port 0 for any) whose reads time out after
+/// 20 ms, so a listener thread notices a stop request and a silent sender.
+pub fn bind_udp(addr: &str) -> Result<UdpSocket, OscError> {
+    let socket = UdpSocket::bind(addr).map_err(|source| OscError::Bind {
+        addr: addr.to_string(),
+        source,
+    })?;
+    socket
+        .set_read_timeout(Some(Duration::from_millis(20)))
+        .map_err(OscError::Socket)?;
+    Ok(socket)
+}
+
 impl OscListener {
     /// Binds `addr` (e.g. `127.0.0.1:9000`, port 0 for any) and starts the thread.
     pub fn bind(addr: &str, capacity: usize) -> Result<OscListener, OscError> {
-        let socket = UdpSocket::bind(addr).map_err(|source| OscError::Bind {
-            addr: addr.to_string(),
-            source,
-        })?;
-        socket
-            .set_read_timeout(Some(Duration::from_millis(20)))
-            .map_err(OscError::Socket)?;
+        let socket = bind_udp(addr)?;
         let local = socket.local_addr().map_err(OscError::Socket)?;
         let (tx, rx) = bounded(capacity.max(1));
         let health = Arc::new(Health::new_state(HealthState::Connected));

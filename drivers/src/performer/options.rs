@@ -114,7 +114,6 @@ pub(crate) fn new_performer(
         .cloned()
         .ok_or_else(|| args::err("performer", "actor vanished"))?;
     let clock = scene_clock(lua)?;
-    let scene_time = clock.0;
     let mut fob = None;
     let mut osc = None;
     let mut glove = None;
@@ -184,7 +183,7 @@ pub(crate) fn new_performer(
                 &skeleton,
                 &name,
                 recorder.clone(),
-                scene_time,
+                clock,
                 place,
             )?;
             vmc = Some(input);
@@ -285,18 +284,7 @@ fn source(
                 .map_err(|e| args::err(what, e))
         }
         (None, None, Some(key)) => {
-            let ports = lua
-                .app_data_ref::<RemotePorts>()
-                .map(|p| p.clone())
-                .ok_or_else(|| {
-                    args::err(
-                        what,
-                        format!(
-                            "zenoh = \"{key}\" needs a network session: troupe run with \
-                         --zenoh-connect or --zenoh-listen (a troupe built with the zenoh feature)"
-                        ),
-                    )
-                })?;
+            let ports = RemotePorts::from_lua(lua, what, &key)?;
             let (options, protocol) = live(format!("zenoh:{key}"));
             let opener: Opener = Box::new(move |_| (ports.0)(&key));
             Ok(Source::Live {

@@ -238,7 +238,7 @@ impl Performers {
             }
             if let Some(v) = &mut p.vmc {
                 let now = &scene.states()[p.actor].q;
-                if let Some(played) = v.poll(time, now) {
+                if let Some(played) = v.poll(tick, time, now) {
                     changed = true;
                     newest = newest.max(played.arrived);
                 }

@@ -184,18 +184,7 @@ pub(crate) fn vrpn_input(
             let h = match t.get::<Option<String>>("zenoh")? {
                 // The server is reached through `troupe relay vrpn` on another machine.
                 Some(key) => {
-                    let ports = lua
-                        .app_data_ref::<RemotePorts>()
-                        .map(|p| p.clone())
-                        .ok_or_else(|| {
-                            args::err(
-                                WHAT,
-                                format!(
-                                    "zenoh = \"{key}\" needs a network session: troupe run with \
-                                     --zenoh-connect or --zenoh-listen"
-                                ),
-                            )
-                        })?;
+                    let ports = RemotePorts::from_lua(lua, WHAT, &key)?;
                     let opener: Opener = Box::new(move |_| (ports.0)(&key));
                     vrpn::spawn_through(VrpnConfig::new(&n, &extra), options, recorder, opener)
                 }

@@ -1,6 +1,7 @@
 //! Replaying recorded inputs in place of live ones: each stream's bytes decoded by the
 //! decoder a live device runs, its readings handed out at the ticks the recorded run took
-//! them (tick marks), and the messages from outside delivered at their ticks.
+//! them (tick marks) with the receiver clock each tick read (clock marks: VMC), and the
+//! messages from outside delivered at their ticks.
 //!
 //! The same replay serves a `.rec` file (`troupe run --replay-devices`) and a leader's
 //! stream arriving tick by tick (`troupe run --zenoh-follow`): both are `.rec` chunks.
@@ -17,7 +18,7 @@ use troupe_scene::{Input, Message, Scene};
 
 /// One stream's readings as they are decoded, and which tick took which.
 #[derive(Default)]
-pub(crate) struct StreamFeed {
+pub struct StreamFeed {
     /// The stream's decoder, once its header is known.
     protocol: Option<Box<dyn Protocol>>,
     /// Every reading decoded so far (its sequence number is its index), with its
@@ -25,6 +26,10 @@ pub(crate) struct StreamFeed {
     readings: Vec<(f64, Reading)>,
     /// (ticks since the device opened, readings taken by then), in order.
     marks: VecDeque<(u64, u64)>,
+    /// (ticks since the device opened, the receiver clock that tick read), in order.
+    clocks: VecDeque<(u64, u64)>,
+    /// The receiver clock of the newest clock mark reached.
+    clock: Option<u64>,
     /// Readings handed out so far.
     next: usize,
     /// Whether readings go out by tick marks (else by recorded time).
@@ -53,11 +58,16 @@ impl StreamFeed {
             .filter(|m| usize::from(m.stream) == stream)
             .map(|m| (m.tick, m.taken))
             .collect();
+        feed.clocks = (rec.clocks.iter())
+            .filter(|c| usize::from(c.stream) == stream)
+            .map(|c| (c.tick, c.micros))
+            .collect();
         Ok(feed)
     }
 
     fn decode(&mut self, micros: u64, bytes: &[u8]) {
-        let t = micros as f64 * 1e-6;
+        // The conversion a live VMC listener makes too: the same seconds, bit for bit.
+        let t = crate::vmc::stream::clock_seconds(micros);
         if let Some(p) = &mut self.protocol {
             p.decode(bytes, &mut |r| self.readings.push((t, r)));
         }
@@ -66,6 +76,14 @@ impl StreamFeed {
     /// The readings due: by tick marks, those the recorded run had taken `ticks` ticks
     /// after the device opened; by time, those recorded up to `seconds` after the first.
     pub(crate) fn take(&mut self, ticks: u64, seconds: f64) -> Vec<Reading> {
+        self.take_timed(ticks, seconds)
+            .into_iter()
+            .map(|(_, r)| r)
+            .collect()
+    }
+
+    /// The readings due, as [`StreamFeed::take`], each with its recorded time in seconds.
+    pub(crate) fn take_timed(&mut self, ticks: u64, seconds: f64) -> Vec<(f64, Reading)> {
         let end = if self.by_ticks {
             let mut end = self.next;
             while let Some(&(tick, taken)) = self.marks.front() {
@@ -90,17 +108,32 @@ impl StreamFeed {
             }
             end
         };
-        let out = self.readings[self.next..end]
-            .iter()
-            .map(|(_, r)| r.clone())
-            .collect();
+        let out = self.readings[self.next..end].to_vec();
         self.next = end;
         out
+    }
+
+    /// The receiver clock (microseconds) the recorded run read `ticks` ticks after the
+    /// device opened: its clock mark's, or the newest before it; `None` without any.
+    pub(crate) fn clock_at(&mut self, ticks: u64) -> Option<u64> {
+        while let Some(&(tick, micros)) = self.clocks.front() {
+            if tick > ticks {
+                break;
+            }
+            self.clock = Some(micros);
+            self.clocks.pop_front();
+        }
+        self.clock
+    }
+
+    /// The recorded time of the first reading, in seconds.
+    pub(crate) fn first_time(&self) -> Option<f64> {
+        self.readings.first().map(|r| r.0)
     }
 }
 
 /// A shared stream feed (the device's source holds one, the replay fills it).
-pub(crate) type SharedFeed = Arc<Mutex<StreamFeed>>;
+pub type SharedFeed = Arc<Mutex<StreamFeed>>;
 
 /// Recorded inputs replayed in place of the scene's live and relayed devices and its
 /// messages from outside. Installed as Lua app data before the scene loads, so a device
@@ -132,7 +165,7 @@ impl DeviceReplay {
         let mut by_name = HashMap::new();
         let mut streams = Vec::new();
         for (i, info) in rec.streams.iter().enumerate() {
-            // A stream no performer device reads (VMC) is refused only if asked for.
+            // A stream no decoder reads (an unknown kind) is refused only if asked for.
             let feed = StreamFeed::from_recording(&rec, i).unwrap_or_else(|e| StreamFeed {
                 error: Some(e.to_string()),
                 ..StreamFeed::default()
@@ -198,6 +231,12 @@ impl DeviceReplay {
                     if let Some(feed) = g.streams.get(usize::from(m.stream)) {
                         let mut f = feed.lock().map_err(|_| "feed lock poisoned")?;
                         f.marks.push_back((m.tick, m.taken));
+                    }
+                }
+                Item::Clock(c) => {
+                    if let Some(feed) = g.streams.get(usize::from(c.stream)) {
+                        let mut f = feed.lock().map_err(|_| "feed lock poisoned")?;
+                        f.clocks.push_back((c.tick, c.micros));
                     }
                 }
                 Item::Message(m) => g.messages.push_back(m),
@@ -353,6 +392,36 @@ mod tests {
             (inbox[0].key.as_str(), &inbox[0].value),
             ("cue/a", &json!({"n": 5}))
         );
+    }
+
+    #[test]
+    fn a_vmc_stream_hands_out_datagrams_with_their_arrival_and_each_ticks_clock() {
+        let rec = Recorder::tap_only();
+        let s = rec.add_stream("pat.vmc", "vmc", json!({ "zenoh": "stage/vmc" }));
+        rec.data_at(s, 1_000, b"one");
+        rec.mark(s, 0, 1);
+        rec.clock(s, 0, 1_200);
+        rec.data_at(s, 9_000, b"two");
+        rec.clock(s, 1, 11_200);
+        rec.mark(s, 2, 2);
+        rec.clock(s, 2, 21_300);
+        let replay = DeviceReplay::live("a leader");
+        let feed = replay.stream("pat.vmc").unwrap();
+        for piece in rec.take_tap().chunks(7) {
+            replay.feed(piece).unwrap();
+        }
+        let datagram = |b: &[u8]| Reading::Datagram { bytes: b.to_vec() };
+        let mut f = feed.lock().unwrap();
+        let micros = crate::vmc::stream::clock_seconds;
+        assert_eq!(f.take_timed(0, 0.0), [(micros(1_000), datagram(b"one"))]);
+        assert_eq!(f.clock_at(0), Some(1_200));
+        // Tick 1 took nothing though "two" had arrived: by ticks, not by arrival.
+        assert!(f.take_timed(1, 5.0).is_empty());
+        assert_eq!(f.clock_at(1), Some(11_200));
+        assert_eq!(f.take_timed(2, 0.0), [(micros(9_000), datagram(b"two"))]);
+        assert_eq!(f.clock_at(2), Some(21_300));
+        // A tick without its own clock mark keeps the newest.
+        assert_eq!(f.clock_at(7), Some(21_300));
     }
 
     #[test]

@@ -13,6 +13,10 @@
 //!                                               `micros` after the recording started
 //!   'T' u16 stream  u64 tick  u64 taken         at `tick` ticks after the device opened,
 //!                                               the scene had taken its readings 0..taken
+//!   'C' u16 stream  u64 tick  u64 micros        clock mark: at `tick` ticks after the
+//!                                               device opened, the scene played the
+//!                                               stream at its receiver clock `micros`
+//!                                               (VMC: its jitter buffer's clock)
 //!   'M' u64 tick  u32 len  JSON                 a message from outside,
 //!                                               {"key","value"}, seen at tick `tick`
 //! ```
@@ -33,7 +37,7 @@ pub const MAGIC: &[u8; 11] = b"TROUPEREC1\n";
 pub struct StreamInfo {
     /// Device name.
     pub name: String,
-    /// Device kind: `fob`, `cyberglove`, `spacemouse` or `vrpn`.
+    /// Device kind: `fob`, `cyberglove`, `spacemouse`, `vrpn` or `vmc`.
     pub kind: String,
     /// The driver settings needed to decode it.
     pub settings: serde_json::Value,
@@ -61,6 +65,17 @@ pub struct Mark {
     pub taken: u64,
 }
 
+/// At a tick, a scene read a stream's receiver clock (a VMC jitter buffer plays by it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ClockMark {
+    /// Stream index.
+    pub stream: u16,
+    /// Ticks since the device opened.
+    pub tick: u64,
+    /// The receiver clock that tick read, in microseconds on the stream's data clock.
+    pub micros: u64,
+}
+
 /// A message a scene received from outside (`troupe.subscribe`), with its tick.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RecordedMessage {
@@ -81,6 +96,8 @@ pub enum Item {
     Data(Chunk),
     /// What a tick took from a stream.
     Mark(Mark),
+    /// The receiver clock a tick read for a stream.
+    Clock(ClockMark),
     /// A message from outside.
     Message(RecordedMessage),
 }
@@ -95,6 +112,8 @@ pub struct Recording {
     /// Tick marks in file order: which readings each tick took (recordings made by
     /// `troupe run --record-devices`; older ones have none and replay by time).
     pub marks: Vec<Mark>,
+    /// Clock marks in file order (VMC streams recorded by `troupe run`).
+    pub clocks: Vec<ClockMark>,
     /// Messages from outside, in delivery order.
     pub messages: Vec<RecordedMessage>,
 }
@@ -138,6 +157,7 @@ impl Recording {
             Item::Stream(s) => self.streams.push(s),
             Item::Data(c) => self.chunks.push(c),
             Item::Mark(m) => self.marks.push(m),
+            Item::Clock(c) => self.clocks.push(c),
             Item::Message(m) => self.messages.push(m),
         }
     }
@@ -238,18 +258,25 @@ impl ChunkReader {
                     bytes: data,
                 })
             }
-            b'T' => {
+            b'T' | b'C' => {
                 let stream = u16_(field!(2));
                 let tick = u64_(field!(8));
-                let taken = u64_(field!(8));
+                let value = u64_(field!(8));
                 if stream >= self.streams {
                     return Err(ParseError::Undeclared { stream, offset });
                 }
-                Item::Mark(Mark {
-                    stream,
-                    tick,
-                    taken,
-                })
+                match tag {
+                    b'T' => Item::Mark(Mark {
+                        stream,
+                        tick,
+                        taken: value,
+                    }),
+                    _ => Item::Clock(ClockMark {
+                        stream,
+                        tick,
+                        micros: value,
+                    }),
+                }
             }
             b'M' => {
                 let tick = u64_(field!(8));

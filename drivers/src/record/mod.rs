@@ -9,6 +9,8 @@ pub(crate) mod writer;
 
 pub use error::{KindError, ParseError, RecordError};
 pub use feed::{DeviceReplay, RecordMessages, ReplayedMessages};
-pub use file::{Chunk, ChunkReader, Item, Mark, RecordedMessage, Recording, StreamInfo, MAGIC};
+pub use file::{
+    Chunk, ChunkReader, ClockMark, Item, Mark, RecordedMessage, Recording, StreamInfo, MAGIC,
+};
 pub use replay::protocol_from_settings;
 pub use writer::Recorder;

@@ -8,6 +8,7 @@ use crate::fob::protocol::{FobConfig, FobProtocol};
 use crate::record::error::{KindError, RecordError};
 use crate::record::file::Recording;
 use crate::spacemouse::protocol::SpaceMouseProtocol;
+use crate::vmc::stream::{VmcDatagrams, REC_KIND as VMC};
 use crate::vrpn::{VrpnConfig, VrpnProtocol};
 
 impl Recording {
@@ -56,6 +57,7 @@ pub fn protocol_from_settings(
             Ok(Box::new(GloveProtocol::new(c)))
         }
         "spacemouse" => Ok(Box::new(SpaceMouseProtocol::default())),
+        VMC => Ok(Box::new(VmcDatagrams)),
         "vrpn" => {
             let c: VrpnConfig = serde_json::from_value(settings.clone())?;
             Ok(Box::new(VrpnProtocol::new(c, Default::default())))

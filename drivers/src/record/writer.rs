@@ -1,6 +1,7 @@
 //! Writing a `.rec` file while devices run: each device thread declares its stream and
 //! appends the bytes it reads, one whole chunk per call; the scene marks what each tick
-//! took and records the messages it received. A tap keeps a copy of the chunks written
+//! took (and, for a VMC stream, the receiver clock it played at) and records the messages
+//! it received. A tap keeps a copy of the chunks written
 //! since it was last taken (what a Zenoh leader sends its followers each tick).
 
 use crate::record::error::RecordError;
@@ -123,13 +124,29 @@ impl Recorder {
     /// Notes that `tick` ticks after the stream's device opened, the scene had taken its
     /// readings `0..taken`.
     pub fn mark(&self, stream: u16, tick: u64, taken: u64) {
+        self.tick_chunk(b'T', stream, tick, taken);
+    }
+
+    /// Notes that `tick` ticks after the stream's device opened, the scene read the
+    /// stream's receiver clock at `micros` (on the clock of its data chunks).
+    pub fn clock(&self, stream: u16, tick: u64, micros: u64) {
+        self.tick_chunk(b'C', stream, tick, micros);
+    }
+
+    /// Writes a chunk `tag u16 stream u64 tick u64 value` (a tick or clock mark).
+    fn tick_chunk(&self, tag: u8, stream: u16, tick: u64, value: u64) {
         let Ok(mut g) = self.inner.lock() else { return };
         let mut chunk = Vec::with_capacity(19);
-        chunk.push(b'T');
+        chunk.push(tag);
         chunk.extend_from_slice(&stream.to_le_bytes());
         chunk.extend_from_slice(&tick.to_le_bytes());
-        chunk.extend_from_slice(&taken.to_le_bytes());
+        chunk.extend_from_slice(&value.to_le_bytes());
         g.write(&chunk);
+    }
+
+    /// When the recording started: the origin of its data chunks' `micros`.
+    pub fn started(&self) -> Instant {
+        self.start
     }
 
     /// Records a message from outside that the script phase of `tick` saw.

@@ -5,6 +5,7 @@ use crate::device::remote::RemotePorts;
 use crate::device::thread::{spawn_with, DriverOptions, Opener};
 use crate::lua::args::{check_keys, resolve};
 use crate::lua::health::health_table;
+use crate::record::feed::DeviceReplay;
 use crate::record::file::Recording;
 use crate::record::writer::Recorder;
 use crate::space_move::mover::{
@@ -150,8 +151,22 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
         }
         g.recorder.clone()
     };
-    let source = match replay {
-        Some(r) => {
+    let remote: Option<String> = t.get("zenoh")?;
+    if path.is_some() && remote.is_some() {
+        return Err(args::err("spacemouse", "give `path` or `zenoh`, not both"));
+    }
+    let clock = crate::performer::source::scene_clock(lua)?;
+    // A replay of the whole run's inputs stands in for the live or relayed device.
+    let replayed = lua.app_data_ref::<DeviceReplay>().map(|r| r.clone());
+    let source = match (replay, replayed) {
+        (None, Some(whole_run)) => Source::Replayed {
+            feed: whole_run
+                .stream(&name)
+                .map_err(|e| args::err("spacemouse", e))?,
+            opened: clock.1,
+            start: clock.0,
+        },
+        (Some(r), _) => {
             if path.is_some() {
                 return Err(args::err("spacemouse", "give `path` or `replay`, not both"));
             }
@@ -186,40 +201,22 @@ fn lua_spacemouse(lua: &Lua, t: Table) -> mlua::Result<String> {
                 start: None,
             }
         }
-        None => {
-            let remote: Option<String> = t.get("zenoh")?;
+        (None, None) => {
             let mut o = DriverOptions::new(&name, path.as_deref().unwrap_or(""));
             // A SpaceMouse at rest sends nothing: silence is not staleness.
             o.stale_after = Duration::MAX;
             let opener: Opener = match remote {
                 // Served by `troupe relay spacemouse` on another machine.
                 Some(key) => {
-                    if path.is_some() {
-                        return Err(args::err("spacemouse", "give `path` or `zenoh`, not both"));
-                    }
-                    let ports = lua
-                        .app_data_ref::<RemotePorts>()
-                        .map(|p| p.clone())
-                        .ok_or_else(|| {
-                            args::err(
-                                "spacemouse",
-                                format!(
-                                    "zenoh = \"{key}\" needs a network session: troupe run with \
-                                     --zenoh-connect or --zenoh-listen (a troupe built with the \
-                                     zenoh feature)"
-                                ),
-                            )
-                        })?;
+                    let ports = RemotePorts::from_lua(lua, "spacemouse", &key)?;
                     Box::new(move |_o: &DriverOptions| (ports.0)(&key))
                 }
                 None => Box::new(move |_o: &DriverOptions| open_spacemouse(path.as_deref())),
             };
-            Source::Live(spawn_with(
-                o,
-                Box::new(SpaceMouseProtocol::default()),
-                recorder,
-                opener,
-            ))
+            Source::Live {
+                handle: spawn_with(o, Box::new(SpaceMouseProtocol::default()), recorder, opener),
+                opened: clock.1,
+            }
         }
     };
     s.0.lock()

@@ -2,8 +2,10 @@
 //!
 //! Each tick, in the session's input phase (after the performers' input, before the
 //! scripts), every SpaceMouse mover takes the readings that are due — from its device thread
-//! (never blocking: the thread's channel is drained with `try_recv`) or from a replayed
-//! recording by scene time (deterministic) — and moves its object for one tick: a linear
+//! (never blocking: the thread's channel is drained with `try_recv`, and the tick that
+//! took them is marked in the recording), from a replay of the whole run's inputs at the
+//! ticks the recorded run took them, or from a `replay =` recording by scene time
+//! (deterministic either way) — and moves its object for one tick: a linear
 //! velocity from the three translation axes and an angular velocity from the three rotation
 //! axes, both mapped from the device frame to the scene frame.
 //!
@@ -17,6 +19,7 @@
 use crate::device::health::{HealthReport, HealthState};
 use crate::device::reading::Reading;
 use crate::device::thread::DeviceHandle;
+use crate::record::feed::SharedFeed;
 use crate::record::writer::Recorder;
 use crate::spacemouse::decoder::SpaceMouseState;
 use glam::{DQuat, DVec3};
@@ -85,8 +88,8 @@ pub fn integrate(
 
 /// Where a mover's readings come from.
 pub(crate) enum Source {
-    /// A live HID device thread.
-    Live(DeviceHandle),
+    /// A live HID device thread (local or relayed), made `opened` ticks into the scene.
+    Live { handle: DeviceHandle, opened: u64 },
     /// A recording, delivered by scene time since the first scene step the mover took
     /// part in (`start`, set then): whether the mover was made before the first tick or by
     /// a script mid-tick, its first recorded report then moves the object for a whole tick.
@@ -94,6 +97,14 @@ pub(crate) enum Source {
         readings: Vec<(f64, Reading)>,
         next: usize,
         start: Option<f64>,
+    },
+    /// The mover's stream in a replay of the whole run's inputs (`--replay-devices`,
+    /// `--zenoh-follow`): readings at the ticks the recorded run took them (by scene time
+    /// from `start`, when it was made, for a recording without tick marks).
+    Replayed {
+        feed: SharedFeed,
+        opened: u64,
+        start: f64,
     },
 }
 
@@ -112,18 +123,18 @@ pub(crate) struct Mover {
 }
 
 impl Mover {
-    /// Takes the readings due at `time` into the state.
-    fn update(&mut self, time: f64) {
+    /// Takes the readings due at `tick` (scene time `time`) into the state.
+    fn update(&mut self, tick: u64, time: f64) {
         match &mut self.source {
-            Source::Live(h) => {
-                for s in h.drain() {
+            Source::Live { handle, opened } => {
+                for s in handle.drain_at_tick(tick.saturating_sub(*opened)) {
                     if let Reading::SpaceMouse(m) = s.reading {
                         self.state = m;
                     }
                 }
                 // A device that went away must not keep the object flying with its last axes.
                 if matches!(
-                    h.health.state(),
+                    handle.health.state(),
                     HealthState::Reconnecting | HealthState::Failed
                 ) {
                     self.state = SpaceMouseState::default();
@@ -142,13 +153,28 @@ impl Mover {
                     *next += 1;
                 }
             }
+            Source::Replayed {
+                feed,
+                opened,
+                start,
+            } => {
+                let due = match feed.lock() {
+                    Ok(mut f) => f.take(tick.saturating_sub(*opened), time - *start),
+                    Err(_) => Vec::new(),
+                };
+                for r in due {
+                    if let Reading::SpaceMouse(m) = r {
+                        self.state = m;
+                    }
+                }
+            }
         }
     }
 
     fn health(&self) -> Option<HealthReport> {
         match &self.source {
-            Source::Live(h) => Some(h.health.report()),
-            Source::Replay { .. } => None,
+            Source::Live { handle, .. } => Some(handle.health.report()),
+            Source::Replay { .. } | Source::Replayed { .. } => None,
         }
     }
 }
@@ -169,10 +195,10 @@ pub struct SharedSpaceMice(pub Arc<Mutex<SpaceMice>>);
 impl SpaceMice {
     /// The scene step: take due readings, then move each object not held by an actor.
     pub fn step(&mut self, scene: &mut Scene) {
-        let time = scene.time();
+        let (tick, time) = (scene.tick(), scene.time());
         let dt = scene.dt();
         for m in &mut self.movers {
-            m.update(time);
+            m.update(tick, time);
             // A held object follows its holder's hand (crate::holding); moving it here
             // would fight the hand, so a held object is left alone.
             if scene.holder(m.object).is_some() {

@@ -1,28 +1,53 @@
-//! VMC into a performer: datagrams from a live listener or a `.rec` replay are read into
-//! poses, wait in the jitter buffer, and play out as the performer's posture, retargeted
-//! through the T-pose onto the actor.
+//! VMC into a performer: datagrams from a live listener (a UDP port or a relay's key), a
+//! replay of the whole run's inputs (`--replay-devices`, `--zenoh-follow`) or a `.rec`
+//! file are read into poses, wait in the jitter buffer, and play out as the performer's
+//! posture, retargeted through the T-pose onto the actor.
+//!
+//! A live input notes in the recording which datagrams each tick took (tick marks) and
+//! the receiver clock it played the buffer at (clock marks); a replay of the whole run
+//! takes the same datagrams at the same ticks and plays at the same clock, so its
+//! postures are the live run's bit for bit.
 
 use crate::device::health::HealthReport;
+use crate::device::reading::Reading;
 use crate::record::error::RecordError;
+use crate::record::feed::SharedFeed;
 use crate::record::file::Recording;
 use crate::vmc::jitter::{JitterBuffer, Playout};
 use crate::vmc::listener::{VmcListener, REC_KIND};
 use crate::vmc::message::{read_datagram, VmcCounters};
 use crate::vmc::rig::VmcRig;
+use crate::vmc::stream::clock_seconds;
 use std::path::Path;
 use troupe_body::transform::Transform;
 
 /// Where a performer's VMC datagrams come from.
 pub enum VmcSource {
-    /// A UDP listener.
-    Live(VmcListener),
-    /// A recording's datagrams `(seconds, bytes)`, delivered by scene time.
+    /// A listener (UDP or a relay's key), made `opened` ticks into the scene.
+    Live {
+        /// The listener thread.
+        listener: VmcListener,
+        /// The tick the performer was made at.
+        opened: u64,
+    },
+    /// A recording's datagrams `(seconds, bytes)`, delivered by scene time (`replay =`).
     Replay {
         /// The datagrams in recorded order.
         datagrams: Vec<(f64, Vec<u8>)>,
         /// The next to deliver.
         next: usize,
         /// The scene time the replay started.
+        start: f64,
+    },
+    /// The stream of this performer in a replay of the whole run's inputs: datagrams at
+    /// the ticks the recorded run took them, played at its clock (by scene time from
+    /// `start` when the recording has no marks).
+    Replayed {
+        /// The stream's feed.
+        feed: SharedFeed,
+        /// The tick the performer was made at.
+        opened: u64,
+        /// The scene time it was made at.
         start: f64,
     },
 }
@@ -107,28 +132,29 @@ impl VmcInput {
     /// (what `troupe run` prints); `None` for a replay.
     pub fn health(&self) -> Option<HealthReport> {
         match &self.source {
-            VmcSource::Live(l) => {
-                let mut h = l.health.report();
+            VmcSource::Live { listener, .. } => {
+                let mut h = listener.health.report();
                 let c = &self.counters;
                 h.resyncs += c.malformed + c.unknown + c.invalid + c.unknown_bones;
                 Some(h)
             }
-            VmcSource::Replay { .. } => None,
+            VmcSource::Replay { .. } | VmcSource::Replayed { .. } => None,
         }
     }
 
-    /// Reads what arrived, and plays the buffer at scene time `scene_time` onto the
-    /// actor whose posture is `q`: returns the played frame when there is one (its
+    /// Reads what arrived, and plays the buffer at `tick` (scene time `scene_time`) onto
+    /// the actor whose posture is `q`: returns the played frame when there is one (its
     /// arrival instant for the latency measurement); the retargeted pose is in `target`.
-    pub fn poll(&mut self, scene_time: f64, q: &[f64]) -> Option<Playout> {
+    pub fn poll(&mut self, tick: u64, scene_time: f64, q: &[f64]) -> Option<Playout> {
         let now = match &mut self.source {
-            VmcSource::Live(l) => {
-                for (at, bytes) in l.datagrams.try_iter() {
-                    let p = read_datagram(&bytes, &mut self.counters);
-                    let arrival = at.duration_since(l.started).as_secs_f64();
-                    self.buffer.push(arrival, p.time, &p.pose, Some(at));
+            VmcSource::Live { listener, opened } => {
+                let ticks = tick.saturating_sub(*opened);
+                for d in listener.drain_at_tick(ticks) {
+                    let p = read_datagram(&d.bytes, &mut self.counters);
+                    let arrival = clock_seconds(d.micros);
+                    self.buffer.push(arrival, p.time, &p.pose, Some(d.arrived));
                 }
-                l.started.elapsed().as_secs_f64()
+                clock_seconds(listener.clock_at_tick(ticks))
             }
             VmcSource::Replay {
                 datagrams,
@@ -144,6 +170,24 @@ impl VmcInput {
                     *next += 1;
                 }
                 now
+            }
+            VmcSource::Replayed {
+                feed,
+                opened,
+                start,
+            } => {
+                let ticks = tick.saturating_sub(*opened);
+                let mut f = feed.lock().ok()?;
+                for (at, reading) in f.take_timed(ticks, scene_time - *start) {
+                    if let Reading::Datagram { bytes } = reading {
+                        let p = read_datagram(&bytes, &mut self.counters);
+                        self.buffer.push(at, p.time, &p.pose, None);
+                    }
+                }
+                match f.clock_at(ticks) {
+                    Some(micros) => clock_seconds(micros),
+                    None => f.first_time().unwrap_or(0.0) + (scene_time - *start),
+                }
             }
         };
         let played = self.buffer.play(now)?;

@@ -1,7 +1,10 @@
 //! The Lua side of VMC: `troupe.vmc_out{ actor, to, rate }` and a performer's
-//! `devices = { vmc = { listen = "0.0.0.0:39540" | replay = "file.rec", latency, … } }`.
+//! `devices = { vmc = { listen = "0.0.0.0:39540" | zenoh = KEY | replay = "file.rec",
+//! latency, … } }`.
 
+use crate::device::remote::RemotePorts;
 use crate::lua::args::{check_keys, resolve};
+use crate::record::feed::DeviceReplay;
 use crate::record::writer::Recorder;
 use crate::vmc::input::{VmcInput, VmcSource};
 use crate::vmc::listener::VmcListener;
@@ -71,48 +74,79 @@ pub(crate) fn install(session: &mut LuaSession) -> mlua::Result<()> {
 }
 
 /// Reads `performer.devices.vmc` into the performer's VMC input for `skeleton`, whose
-/// actor stands at `at` facing `yaw` (the sender's origin is put there), and the hand
-/// whose fingers grasp (`hand = "right"|"left"`: the grasping automaton runs on the
-/// sender's finger bones, as on a glove's).
+/// actor stands at `at` facing `yaw` (the sender's origin is put there), made at `clock`
+/// (scene time and tick), and the hand whose fingers grasp (`hand = "right"|"left"`: the
+/// grasping automaton runs on the sender's finger bones, as on a glove's).
 pub(crate) fn vmc_input(
     lua: &Lua,
     t: &Table,
     skeleton: &Arc<Skeleton>,
     name: &str,
     recorder: Option<Arc<Recorder>>,
-    scene_time: f64,
+    (scene_time, tick): (f64, u64),
     place: (DVec3, f64),
 ) -> mlua::Result<(VmcInput, Option<Side>)> {
     const WHAT: &str = "performer.devices.vmc";
-    check_keys(t, WHAT, &["listen", "replay", "stream", "latency", "hand"])?;
+    check_keys(
+        t,
+        WHAT,
+        &["listen", "zenoh", "replay", "stream", "latency", "hand"],
+    )?;
     let hand = match t.get::<Option<String>>("hand")? {
         Some(h) => Some(Side::parse(&h).map_err(|e| args::err(WHAT, e))?),
         None => None,
     };
     let listen: Option<String> = t.get("listen")?;
+    let remote: Option<String> = t.get("zenoh")?;
     let replay: Option<String> = t.get("replay")?;
-    let source = match (listen, replay) {
-        (Some(l), None) => {
+    let stream_name = format!("{name}.vmc");
+    // A replay of the whole run's inputs stands in for the port and the relay.
+    let replayed = lua.app_data_ref::<DeviceReplay>().map(|r| r.clone());
+    let live = |listener| VmcSource::Live {
+        listener,
+        opened: tick,
+    };
+    let source = match (listen, remote, replay) {
+        (Some(_), None, None) | (None, Some(_), None) if replayed.is_some() => {
+            let replay = replayed.as_ref().expect("a replay");
+            VmcSource::Replayed {
+                feed: replay
+                    .stream(&stream_name)
+                    .map_err(|e| args::err(WHAT, e))?,
+                opened: tick,
+                start: scene_time,
+            }
+        }
+        (Some(l), None, None) => {
             let l = if l.contains(':') {
                 l
             } else {
                 format!("{l}:{PERFORMER_PORT}")
             };
-            VmcSource::Live(
-                VmcListener::bind(&l, &format!("{name}.vmc"), recorder)
+            live(VmcListener::bind(&l, &stream_name, recorder).map_err(|e| args::err(WHAT, e))?)
+        }
+        (None, Some(key), None) => {
+            // Datagrams served by `troupe relay vmc` on the sender's machine.
+            let ports = RemotePorts::from_lua(lua, WHAT, &key)?;
+            let port = (ports.0)(&key).map_err(|e| args::err(WHAT, e))?;
+            live(
+                VmcListener::relayed(port, &key, &stream_name, recorder)
                     .map_err(|e| args::err(WHAT, e))?,
             )
         }
-        (None, Some(r)) => {
+        (None, None, Some(r)) => {
             let stream: Option<String> = t.get("stream")?;
             VmcSource::replay(&resolve(lua, &r), stream.as_deref(), scene_time)
                 .map_err(|e| args::err(WHAT, e))?
         }
-        (Some(_), Some(_)) => return Err(args::err(WHAT, "give `listen` or `replay`, not both")),
-        (None, None) => {
+        (None, None, None) => return Err(args::err(
+            WHAT,
+            "`listen` (host:port), `zenoh` (a relay's key) or `replay` (a .rec file) is required",
+        )),
+        _ => {
             return Err(args::err(
                 WHAT,
-                "`listen` (host:port) or `replay` (a .rec file) is required",
+                "give one of `listen`, `zenoh` and `replay`",
             ))
         }
     };

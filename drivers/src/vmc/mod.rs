@@ -6,7 +6,8 @@
 //! VRM bone poses (Unity's frame, relative to the T-pose) and back; `message` builds and
 //! reads the OSC bundles; `output` sends actors (`--vmc-out`, `troupe.vmc_out`);
 //! `listener`, `jitter` and `input` receive a stream into a performer (`devices = { vmc
-//! = … }`), live or replayed from `.rec`; `emulator` sends a motion file as a VMC stream.
+//! = … }`), live (UDP or a relay's key) or replayed; `stream` is a VMC stream in `.rec`
+//! and the receiver clock; `emulator` sends a motion file as a VMC stream.
 
 pub mod bones;
 pub mod emulator;
@@ -17,10 +18,11 @@ pub(crate) mod lua;
 pub mod message;
 pub mod output;
 pub mod rig;
+pub mod stream;
 
 pub use bones::{VrmBone, VRM_BONES};
 pub use input::{VmcInput, VmcSource};
-pub use listener::VmcListener;
+pub use listener::{Datagram, UdpDatagrams, VmcListener};
 pub use message::{frame_bundle, read_datagram, VmcCounters, VmcPacket};
 pub use output::{VmcOut, VmcStream, MARIONETTE_PORT};
 pub use rig::{VmcPose, VmcRig};
