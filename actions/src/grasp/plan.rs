@@ -34,8 +34,9 @@ pub const CLEARANCE: f64 = 0.003;
 pub const SEARCH_STEP: f64 = 0.002;
 pub use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 
-/// A receiving palm stays this far from the giving palm (metres).
-pub const AVOID_DISTANCE: f64 = 0.08;
+/// A receiving palm stays this far from the giving palm (metres): far enough that the
+/// two hands' solids (about 5 cm round each palm) do not interpenetrate.
+pub const AVOID_DISTANCE: f64 = 0.11;
 
 /// Which hand(s) a grasp uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
