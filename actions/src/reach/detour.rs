@@ -218,6 +218,29 @@ mod tests {
     use troupe_body::collision::Capsule;
 
     #[test]
+    fn a_hand_path_stops_at_each_via_point_and_follows_the_goal() {
+        let (start, via, goal) = (
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 3.0, 0.0),
+        );
+        let path = HandPath::new(start, vec![via], goal);
+        assert_eq!(path.at(0.0, goal), start);
+        // The first segment is a quarter of the length: a quarter of the time.
+        assert_eq!(path.segment(0.25), (0, 1.0));
+        assert!((path.at(0.25, goal) - via).length() < 1e-12);
+        assert_eq!(path.segment(0.625).0, 1);
+        assert!((path.at(0.625, goal) - DVec3::new(1.0, 1.5, 0.0)).length() < 1e-12);
+        // The goal moved: the last segment ends where it is now.
+        let moved = DVec3::new(2.0, 3.0, 0.0);
+        assert!((path.at(1.0, moved) - moved).length() < 1e-12);
+        // Without via points: one eased segment.
+        let straight = HandPath::new(start, Vec::new(), goal);
+        assert_eq!(straight.segment(0.3), (0, 0.3));
+        assert!((straight.at(0.5, goal) - goal * 0.5).length() < 1e-12);
+    }
+
+    #[test]
     fn a_path_through_an_arm_gets_a_temporary_goal_beside_it() {
         // An arm lying along x at (y 1.45, z 0.3); the hand goes from below it to above.
         let arm = Volume::Capsule(Capsule {
