@@ -4,23 +4,8 @@
 -- off. The deepest interpenetration of solids is what troupe.deepest_overlap() measures.
 
 local LIMIT = 0.01
-
--- Runs `fn` every tick until it returns true (or `limit` s), watching the deepest solid
--- interpenetration: returns whether `fn` did, the deepest depth and what it was between.
-local function watch(fn, limit)
-  local deepest, between = 0, "nothing"
-  local ok = run_until(function()
-    local d, a, b, sa, sb = troupe.deepest_overlap()
-    if d > deepest then
-      deepest = d
-      between = string.format("%s's %s and %s's %s", a, sa, b, tostring(sb))
-    end
-    return fn()
-  end, limit)
-  return ok, deepest, between
-end
-
-local function ended(a) return a.status ~= "active" and a.status ~= "pending" end
+local solids = require("support.solids")
+local watch, ended = solids.watch, solids.ended
 
 -- Bob, on Ann's right, holds his left hand out across the way of her right hand from
 -- her side to a cup in front of her.
