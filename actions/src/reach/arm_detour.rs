@@ -84,7 +84,11 @@ impl ArmDetour {
     /// the planned motion keeps the arm clear of the other bodies and obstacles near.
     pub fn plan(ctx: &GeneratorContext, arm: &PlannedArm) -> Result<Option<ArmDetour>> {
         let sk = ctx.skeleton;
-        let sensors = BodySensors::new(sk)?;
+        // A body without the humanoid sensors (4.6.2) cannot be kept out of others: its
+        // arm moves as planned.
+        let Ok(sensors) = BodySensors::new(sk) else {
+            return Ok(None);
+        };
         let prefix = arm.side.prefix();
         let hand = sensors
             .index_of(&format!("{prefix}hand"))
