@@ -60,8 +60,8 @@ local function hand_over_beside_cid(detour)
   expect(out.status == "completed", "cid holds his hand out: " .. tostring(out.error))
   expect(troupe.deepest_overlap() == 0, "nothing touches before the hand-over")
   local give = ann:give{ object = cup, to = bob, detour = detour }
-  local receive = bob:actions()[1]
-  expect(receive ~= nil and receive.kind == "receive", "bob got a receive action")
+  local receive = assert(bob:actions()[1], "bob got a receive action")
+  expect(receive.kind == "receive", "bob's action is a receive: " .. receive.kind)
   local ok, deepest, between = watch(function() return ended(give) and ended(receive) end, 8)
   print(string.format("hand-over beside cid (detour = %s): deepest %.4f m (%s), give %d and receive %d temporary goal(s)",
     tostring(detour), deepest, between, give.detours, receive.detours))
@@ -92,7 +92,7 @@ test("a hand-over with nobody in the way takes no temporary goal and keeps the h
   local g = ann:grasp{ object = cup, hand = "right" }
   expect(run_until(function() return ended(g) end, 4) and g.status == "completed", tostring(g.error))
   local give = ann:give{ object = cup, to = bob }
-  local receive = bob:actions()[1]
+  local receive = assert(bob:actions()[1], "bob got a receive action")
   local ok, deepest, between = watch(function() return ended(give) and ended(receive) end, 8)
   expect(ok and cup.holder == bob, "the cup changed hands: " .. tostring(give.error) .. " / " .. tostring(receive.error))
   expect(give.detours == 0 and receive.detours == 0, "nothing in the way")
@@ -102,6 +102,7 @@ end)
 test("detour must be a boolean", function()
   local ann = troupe.actor{ name = "ann" }
   troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1, at = {-0.2, 1.05, 0.38} }
+  ---@diagnostic disable-next-line: assign-type-mismatch
   local ok, e = pcall(function() return ann:grasp{ object = "cup", detour = "no" } end)
   expect(not ok and tostring(e):find("detour") ~= nil, "a bad detour names the option: " .. tostring(e))
 end)

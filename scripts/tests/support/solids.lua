@@ -6,7 +6,7 @@ local M = {}
 -- interpenetration (troupe.deepest_overlap): returns whether `fn` did, the deepest depth
 -- and what it was between.
 function M.watch(fn, limit)
-  local deepest, between = 0, "nothing"
+  local deepest, between = 0.0, "nothing"
   local ok = run_until(function()
     local d, a, b, sa, sb = troupe.deepest_overlap()
     if d > deepest then
