@@ -4,13 +4,16 @@
 //! current posture to the planned one with the quintic ease (4.3.3: interpolation of the
 //! arm DOFs toward the IK solution), then closes the fingers along the hand motion
 //! pattern until every finger DOF has stopped (4.3.4), asks the scene to attach the
-//! object to the first hand, and completes once the snapshot shows it holding it.
+//! object to the first hand, and completes once the snapshot shows it holding it. When
+//! that interpolation would take an arm through another actor's body or an obstacle,
+//! the hand goes round it through temporary goals instead ([`ArmDetour`], 4.6.3).
 
 use super::body::BodyReach;
 use super::close::HandModel;
 use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
 use crate::error::{OptionError, Result};
+use crate::reach::arm_detour::{ArmDetour, PlannedArm};
 use crate::reach::quintic;
 use troupe_body::glam::DVec3;
 use troupe_body::sensors::{object_distance, Side};
@@ -116,6 +119,10 @@ pub struct Grasp {
     done: Option<SignalId>,
     /// Raised when this action ends without the object, with why (a giver stops waiting).
     gave_up: Option<SignalId>,
+    /// Whether the arms bend round other bodies and obstacles ([`ArmDetour`]).
+    detour: bool,
+    /// Per planned hand, its motion round other bodies when the interpolation is blocked.
+    detours: Vec<Option<ArmDetour>>,
 }
 
 impl Grasp {
@@ -146,7 +153,16 @@ impl Grasp {
             abort: None,
             done: None,
             gave_up: None,
+            detour: true,
+            detours: Vec::new(),
         })
+    }
+
+    /// Bends the arms round other bodies and obstacles (`true`, the default) or lets
+    /// them interpolate straight to the plan.
+    pub fn detouring(mut self, on: bool) -> Self {
+        self.detour = on;
+        self
     }
 
     /// Fails while still waiting for its gate once `abort` is raised (the giver's action
@@ -227,11 +243,46 @@ impl Grasp {
                 blocked: Scope::EMPTY,
             });
         }
+        self.detours.clear();
+        if self.detour {
+            let name = ctx.world.objects.get(self.object).map(|o| o.name.as_str());
+            for h in &plan.hands {
+                let arm = PlannedArm {
+                    side: h.side,
+                    to: &h.arm,
+                    wrist: h.wrist,
+                    except: name,
+                };
+                self.detours.push(ArmDetour::plan(ctx, &arm)?);
+            }
+        }
         self.start_q = ctx.posture.q.clone();
         self.plan = Some(plan);
         self.phase = Phase::Reach;
         self.phase_start = ctx.local_time;
         Ok(())
+    }
+
+    /// From the end of a reach round other bodies on, the arms stay where its last solve
+    /// put them (at the planned wrist poses, the joints as the path left them).
+    fn hold_detoured_arms(&mut self) {
+        let solved: Vec<(usize, f64)> = self
+            .detours
+            .iter()
+            .flatten()
+            .flat_map(ArmDetour::solved)
+            .collect();
+        let Some(plan) = &mut self.plan else {
+            return;
+        };
+        for h in &mut plan.hands {
+            for &(d, v) in &solved {
+                match h.arm.iter_mut().find(|(x, _)| *x == d) {
+                    Some(entry) => entry.1 = v,
+                    None => h.arm.push((d, v)),
+                }
+            }
+        }
     }
 
     fn write(&self, out: &mut DofWriter, q: &[f64]) {
@@ -242,6 +293,10 @@ impl Grasp {
 }
 
 impl Generator for Grasp {
+    fn detours(&self) -> usize {
+        self.detours.iter().flatten().map(ArmDetour::detours).sum()
+    }
+
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         if ctx.world.objects.get(self.object).is_none() {
             return Err(
@@ -297,17 +352,26 @@ impl Generator for Grasp {
                 let Some(plan) = &self.plan else {
                     return Step::Failed("grasp: no plan".into());
                 };
-                let u = quintic((ctx.local_time - self.phase_start) / self.reach_seconds);
+                let tau = (ctx.local_time - self.phase_start) / self.reach_seconds;
+                let u = quintic(tau);
+                let finished = u >= 1.0 - 1e-12;
                 self.q.copy_from_slice(&ctx.posture.q);
                 for h in &plan.hands {
                     for &(d, v) in &h.arm {
                         self.q[d] = self.start_q[d] + (v - self.start_q[d]) * u;
                     }
                 }
+                for arm in self.detours.iter_mut().flatten() {
+                    let tau = if finished { 1.0 } else { tau };
+                    if let Err(e) = arm.step(ctx, tau, &mut self.q) {
+                        return Step::Failed(e.to_string());
+                    }
+                }
                 let q = std::mem::take(&mut self.q);
                 self.write(out, &q);
                 self.q = q;
-                if u >= 1.0 - 1e-12 {
+                if finished {
+                    self.hold_detoured_arms();
                     self.phase = Phase::Close;
                     self.s = 0.0;
                     for c in &mut self.closing {

@@ -8,7 +8,7 @@ use super::plan::{plan_grasp, HandChoice, PlanOptions};
 use mlua::{Lua, MultiValue, Table, Value};
 use troupe_body::glam::{DVec3, EulerRot};
 use troupe_lua::args::{
-    actor_arg, err, euler_degrees, object_arg, opt_string, table_arg, vec3, vec3_table,
+    actor_arg, err, euler_degrees, object_arg, opt_bool, opt_string, table_arg, vec3, vec3_table,
 };
 use troupe_lua::kinds::{with_scene, BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
@@ -44,12 +44,17 @@ fn open_ended(common: &CommonOptions, kind: &str, scope: troupe_body::Scope) -> 
     spec
 }
 
+/// Reads `detour = false` (default `true`: the arm bends round other bodies).
+pub(crate) fn detour(method: &str, t: &Table) -> mlua::Result<bool> {
+    Ok(opt_bool(t, method, "detour")?.unwrap_or(true))
+}
+
 /// `actor:grasp{object = OBJ, hand = "right"|"left"|"both"|"auto", pattern = TYPE,
-/// duration = reach seconds, <common options>}`.
+/// duration = reach seconds, detour = bool, <common options>}`.
 pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "grasp";
     let t = table_arg(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern"])?;
+    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "hand", "pattern", "detour"])?;
     let hand = hand_choice(m, &t)?;
     // An unknown name is a Lua error, as everywhere (docs/lua-api.md, "Unknown names").
     let object = object_arg(ctx.lua, m, "object", t.get("object")?)?;
@@ -58,6 +63,7 @@ pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
         hand,
         pattern: pattern(m, &t)?,
         duration: common.duration.unwrap_or(1.0),
+        detour: detour(m, &t)?,
     };
     let (scope, body) = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
     let grasp = options.grasp().map_err(|e| err(m, e))?;

@@ -23,6 +23,9 @@ pub struct GraspOptions {
     pub pattern: Option<GraspType>,
     /// Seconds to reach the object.
     pub duration: f64,
+    /// Whether the arm bends round other actors' bodies and obstacles on its way
+    /// (temporary goals, thesis 4.6.3; see [`crate::reach::arm_detour`]).
+    pub detour: bool,
 }
 
 impl GraspOptions {
@@ -34,6 +37,7 @@ impl GraspOptions {
             hand: HandChoice::Auto,
             pattern: None,
             duration: 1.0,
+            detour: true,
         }
     }
 
@@ -57,7 +61,10 @@ impl GraspOptions {
             grasp: self.pattern,
             ..PlanOptions::default()
         };
-        Grasp::new(self.object, options, self.hand.sides(), self.duration)
+        Ok(
+            Grasp::new(self.object, options, self.hand.sides(), self.duration)?
+                .detouring(self.detour),
+        )
     }
 }
 

@@ -34,8 +34,14 @@ pub const CLEARANCE: f64 = 0.003;
 pub const SEARCH_STEP: f64 = 0.002;
 pub use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 
-/// A receiving palm stays this far from the giving palm (metres).
+/// A receiving palm stays at least this far from the giving palm (metres)…
 pub const AVOID_DISTANCE: f64 = 0.08;
+/// … and this far when a frame allows it: the two hands' solids (about 5 cm round each
+/// palm) then do not interpenetrate.
+pub const APART_DISTANCE: f64 = 0.11;
+/// Cost added to a frame whose palm is nearer the giving palm than [`APART_DISTANCE`]:
+/// it is tried after every frame that keeps the hands apart.
+const NEAR_PENALTY: f64 = 10.0;
 
 /// Which hand(s) a grasp uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -422,14 +428,19 @@ pub fn plan_grasp(
                 if !free {
                     continue;
                 }
+                let mut penalty = 0.0;
                 if let Some(avoid) = options.avoid {
-                    if (origin - avoid).length() < AVOID_DISTANCE {
+                    let apart = (origin - avoid).length();
+                    if apart < AVOID_DISTANCE {
                         continue;
+                    }
+                    if apart < APART_DISTANCE {
+                        penalty = NEAR_PENALTY;
                     }
                 }
                 let wrist = Transform::new(rot, origin - rot * hs.palm);
                 let angle = rotation_error(wrist_now.rotation, rot).length();
-                let cost = (origin - palm_now).length() + ROTATION_WEIGHT * angle;
+                let cost = (origin - palm_now).length() + ROTATION_WEIGHT * angle + penalty;
                 ranked.push((cost, wrist, origin));
             }
             if ranked.is_empty() {
@@ -483,43 +494,49 @@ pub fn plan_grasp(
     };
     let mut best_miss = f64::INFINITY;
     let mut unbalanced: Option<f64> = None;
-    for stage in body.stages() {
-        for attempt in &attempts {
-            // A crouch is tried for the cheapest frames only: each costs a full solve.
-            if matches!(stage, Stage::Crouch(_)) && attempt[0].1 >= MAX_CROUCH_FRAMES {
-                continue;
-            }
-            let goals: Vec<(Side, Transform)> =
-                attempt.iter().map(|&(s, k)| (s, frame(s, k).1)).collect();
-            match body.reach(&posture.q, &goals, stage)? {
-                Ok(reached) => {
-                    let hands = attempt
-                        .iter()
-                        .map(|&(side, k)| {
-                            let (cost, wrist, palm) = frame(side, k);
-                            HandPlan {
-                                side,
-                                wrist,
-                                palm,
-                                arm: reached.changed.clone(),
-                                cost,
-                            }
-                        })
-                        .collect();
-                    return Ok(GraspPlan {
-                        object,
-                        decision,
-                        grasp,
-                        hands,
-                        lean: reached.lean,
-                        crouch: reached.crouch,
-                    });
+    // Frames that keep a receiving hand apart from the giving one first, whichever hand.
+    for near in [false, true] {
+        for stage in body.stages() {
+            for attempt in &attempts {
+                // A crouch is tried for the cheapest frames only: each costs a full solve.
+                if matches!(stage, Stage::Crouch(_)) && attempt[0].1 >= MAX_CROUCH_FRAMES {
+                    continue;
                 }
-                Err(Missed::By(miss, angle)) => best_miss = best_miss.min(miss + angle * 0.1),
-                // Reached, but only by folding over: a deeper crouch may do it upright.
-                Err(Missed::Lean(_)) => best_miss = best_miss.min(REACH_TOLERANCE),
-                Err(Missed::Balance(by)) => {
-                    unbalanced = Some(unbalanced.map_or(by, |u: f64| u.min(by)));
+                if attempt.iter().any(|&(s, k)| frame(s, k).0 >= NEAR_PENALTY) != near {
+                    continue;
+                }
+                let goals: Vec<(Side, Transform)> =
+                    attempt.iter().map(|&(s, k)| (s, frame(s, k).1)).collect();
+                match body.reach(&posture.q, &goals, stage)? {
+                    Ok(reached) => {
+                        let hands = attempt
+                            .iter()
+                            .map(|&(side, k)| {
+                                let (cost, wrist, palm) = frame(side, k);
+                                HandPlan {
+                                    side,
+                                    wrist,
+                                    palm,
+                                    arm: reached.changed.clone(),
+                                    cost,
+                                }
+                            })
+                            .collect();
+                        return Ok(GraspPlan {
+                            object,
+                            decision,
+                            grasp,
+                            hands,
+                            lean: reached.lean,
+                            crouch: reached.crouch,
+                        });
+                    }
+                    Err(Missed::By(miss, angle)) => best_miss = best_miss.min(miss + angle * 0.1),
+                    // Reached, but only by folding over: a deeper crouch may do it upright.
+                    Err(Missed::Lean(_)) => best_miss = best_miss.min(REACH_TOLERANCE),
+                    Err(Missed::Balance(by)) => {
+                        unbalanced = Some(unbalanced.map_or(by, |u: f64| u.min(by)));
+                    }
                 }
             }
         }

@@ -47,7 +47,12 @@ pub fn offer_to_hand(
     timeout: Option<f64>,
 ) -> crate::error::Result<Offering> {
     let (arrived, closed, ended) = (scene.new_signal(), scene.new_signal(), scene.new_signal());
-    let mut give = Give::new(object, receiver, side, arrived, ended).into_hand(hand);
+    // Into a hand a person drives, the carry stays the planned interpolation: taking the
+    // hand's straight path instead brushes the object past the glove's sensors on the
+    // way (its automaton then flickers to GRASPING_IN_PROGRESS and back).
+    let mut give = Give::new(object, receiver, side, arrived, ended)
+        .into_hand(hand)
+        .detouring(false);
     if let Some(t) = timeout {
         give = give.with_timeout(t);
     }

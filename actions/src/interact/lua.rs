@@ -2,7 +2,7 @@
 //! in Lua: reads [`GiveOptions`], [`ReceiveOptions`] and [`HoldHandOptions`].
 
 use super::options::{GiveOptions, HoldHandOptions, ReceiveOptions};
-use crate::grasp::lua::hand_choice;
+use crate::grasp::lua::{detour, hand_choice};
 use mlua::{MultiValue, Table};
 use troupe_body::sensors::Side;
 use troupe_lua::args::{actor_arg, err, object_arg, opt_number, opt_string, table_arg};
@@ -12,17 +12,23 @@ use troupe_scene::{ActionSpec, Generator};
 /// What a builder returns: the generator and its spec.
 type Built = mlua::Result<(Box<dyn Generator>, ActionSpec)>;
 
-/// `actor:give{object = OBJ, to = ACTOR, hand = …, timeout = s}`: starts the receiver's
-/// `receive` action too.
+/// `actor:give{object = OBJ, to = ACTOR, hand = …, timeout = s, detour = bool}`: starts
+/// the receiver's `receive` action too.
 pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "give";
     let t = table_arg(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "to", "hand", "timeout"])?;
+    let common = CommonOptions::parse(
+        ctx,
+        m,
+        Some(&t),
+        &["object", "to", "hand", "timeout", "detour"],
+    )?;
     let options = GiveOptions {
         object: object_arg(ctx.lua, m, "object", t.get("object")?)?,
         to: actor_arg(ctx.lua, m, "to", t.get("to")?)?,
         timeout: opt_number(&t, m, "timeout")?,
         hand: hand_choice(m, &t)?,
+        detour: detour(m, &t)?,
     };
     let (generator, scope) = ctx
         .with_scene_mut(|s| options.start(s, ctx.actor, common.delay))?
@@ -32,17 +38,19 @@ pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
     Ok((generator, spec))
 }
 
-/// `actor:receive{object = OBJ, from = ACTOR, hand = …, duration = reach seconds}`: take
+/// `actor:receive{object = OBJ, from = ACTOR, hand = …, duration = reach seconds,
+/// detour = bool}`: take
 /// `object` out of `from`'s hand (e.g. from a performer holding it out).
 pub fn build_receive(ctx: &BuildContext, args: MultiValue) -> Built {
     let m = "receive";
     let t = table_arg(m, args)?;
-    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "from", "hand"])?;
+    let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "from", "hand", "detour"])?;
     let options = ReceiveOptions {
         object: object_arg(ctx.lua, m, "object", t.get("object")?)?,
         from: actor_arg(ctx.lua, m, "from", t.get("from")?)?,
         hand: hand_choice(m, &t)?,
         duration: common.duration.unwrap_or(1.0),
+        detour: detour(m, &t)?,
     };
     let (generator, scope) = options
         .receive(&ctx.skeleton, ctx.actor)

@@ -9,7 +9,9 @@
 //!   (the object leads, the arm follows by IK as in 4.4), raises `arrived`; the receiver
 //!   (a gated [`Grasp`] allowed to take the object from the giver) plans its grasp on the
 //!   object there, reaches, closes and attaches; once the snapshot shows the receiver
-//!   holding it, the giver opens its hand and completes.
+//!   holding it, the giver opens its hand and completes. Both arms bend round a third
+//!   actor's body or an obstacle in their way through temporary goals
+//!   ([`ArmDetour`], thesis 4.6.3), unless `detour` is off.
 //! - **hold hands**: the active actor reaches the other's hand (grasp frame from the other
 //!   hand's palm, origin search against the other's body solids, its bounding volumes),
 //!   closes its fingers around it (sensors against the other's body) and raises `held`;
@@ -31,6 +33,7 @@ use crate::grasp::plan::{
     frame_rotation, ArmIk, CLEARANCE, REACH_ANGLE, REACH_TOLERANCE, ROTATION_WEIGHT, SEARCH_STEP,
 };
 use crate::grasp::GraspType;
+use crate::reach::arm_detour::{ArmDetour, PlannedArm};
 use crate::reach::quintic;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::jacobian::rotation_error;
@@ -82,6 +85,10 @@ pub struct Give {
     ended: SignalId,
     /// Raised (as a failure, with why) when the receiver's action ends without the object.
     receiver_gave_up: Option<SignalId>,
+    /// Whether the carrying arm bends round other bodies and obstacles ([`ArmDetour`]).
+    detour: bool,
+    /// The carry round other bodies, when the interpolation is blocked.
+    arm_detour: Option<ArmDetour>,
 }
 
 impl Give {
@@ -111,7 +118,16 @@ impl Give {
             receiver_hand: None,
             ended,
             receiver_gave_up: None,
+            detour: true,
+            arm_detour: None,
         }
+    }
+
+    /// Bends the carrying arm round other bodies and obstacles (`true`, the default) or
+    /// lets it interpolate straight to the meeting point.
+    pub fn detouring(mut self, on: bool) -> Give {
+        self.detour = on;
+        self
     }
 
     /// Waits `seconds` (instead of [`GIVE_TIMEOUT`]) for the receiver to take the object.
@@ -157,6 +173,10 @@ impl Give {
 }
 
 impl Generator for Give {
+    fn detours(&self) -> usize {
+        self.arm_detour.as_ref().map_or(0, ArmDetour::detours)
+    }
+
     /// The receiver waiting for the object learns that the give ended, and why if it
     /// ended without handing the object over.
     fn end(&mut self, ending: &Ending, notes: &mut Notes) {
@@ -201,6 +221,17 @@ impl Generator for Give {
             )
             .into());
         }
+        self.arm_detour = None;
+        if self.detour {
+            let to: Vec<(usize, f64)> = ik.dofs().iter().map(|&d| (d, self.goal_q[d])).collect();
+            let arm = PlannedArm {
+                side: self.sides[0],
+                to: &to,
+                wrist: wrist_goal,
+                except: Some(&obj.name),
+            };
+            self.arm_detour = ArmDetour::plan(ctx, &arm)?;
+        }
         self.arm = Some(ik);
         self.q = ctx.posture.q.clone();
         Ok(())
@@ -230,10 +261,27 @@ impl Generator for Give {
         match self.phase {
             0 => {
                 let u = quintic(t / GIVE_REACH_SECONDS);
+                let finished = u >= 1.0 - 1e-12;
                 for &d in arm.dofs() {
                     self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
                 }
-                if u >= 1.0 - 1e-12 {
+                if let Some(around) = &mut self.arm_detour {
+                    let tau = if finished {
+                        1.0
+                    } else {
+                        t / GIVE_REACH_SECONDS
+                    };
+                    if let Err(e) = around.step(ctx, tau, &mut self.q) {
+                        return Step::Failed(e.to_string());
+                    }
+                    if finished {
+                        // From now on the arm stays where the last solve put it.
+                        for (d, v) in around.solved() {
+                            self.goal_q[d] = v;
+                        }
+                    }
+                }
+                if finished {
                     self.phase = 1;
                     self.phase_start = ctx.local_time;
                 }

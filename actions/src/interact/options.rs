@@ -32,6 +32,9 @@ pub struct GiveOptions {
     pub hand: HandChoice,
     /// Seconds the giver waits for the receiver; `None`: [`super::GIVE_TIMEOUT`].
     pub timeout: Option<f64>,
+    /// Whether the giver's and the receiver's arms bend round other bodies and obstacles
+    /// (temporary goals, thesis 4.6.3; see [`crate::reach::arm_detour`]).
+    pub detour: bool,
 }
 
 impl GiveOptions {
@@ -42,6 +45,7 @@ impl GiveOptions {
             to,
             hand: HandChoice::Auto,
             timeout: None,
+            detour: true,
         }
     }
 
@@ -89,7 +93,9 @@ impl GiveOptions {
         }
         let (arrived, ended) = (scene.new_signal(), scene.new_signal());
         let gave_up = scene.new_signal();
-        let mut give = Give::new(self.object, self.to, side, arrived, ended).watching(gave_up);
+        let mut give = Give::new(self.object, self.to, side, arrived, ended)
+            .watching(gave_up)
+            .detouring(self.detour);
         if let Some(t) = self.timeout {
             give = give.with_timeout(t);
         }
@@ -105,7 +111,8 @@ impl GiveOptions {
         let take = Grasp::new(self.object, plan, sides, 1.0)?
             .gated(arrived)
             .abandoned_by(give.ended())
-            .reporting(gave_up);
+            .reporting(gave_up)
+            .detouring(self.detour);
         let mut rx_spec = ActionSpec::new("receive", rx_scope);
         rx_spec.yields = rx_body;
         rx_spec.delay = delay;
@@ -125,6 +132,8 @@ pub struct ReceiveOptions {
     pub hand: HandChoice,
     /// Seconds to reach it.
     pub duration: f64,
+    /// Whether the arm bends round other bodies and obstacles (as a grasp's).
+    pub detour: bool,
 }
 
 impl ReceiveOptions {
@@ -139,14 +148,15 @@ impl ReceiveOptions {
     pub fn receive(&self, skeleton: &Skeleton, receiver: usize) -> Result<(Grasp, Scope)> {
         self.validate(receiver)?;
         let sides = self.hand.sides();
-        receive(
+        let (grasp, scope) = receive(
             skeleton,
             self.object,
             self.from,
             self.hand,
             sides,
             self.duration,
-        )
+        )?;
+        Ok((grasp.detouring(self.detour), scope))
     }
 }
 
@@ -248,6 +258,7 @@ mod tests {
             from: 1,
             hand: HandChoice::Right,
             duration: 1.0,
+            detour: true,
         };
         receive.validate(0).unwrap();
         let hold = HoldHandOptions::new(1, Side::Right, false);
@@ -275,6 +286,7 @@ mod tests {
             from: 0,
             hand: HandChoice::Auto,
             duration: 1.0,
+            detour: true,
         };
         receive.validate(0).unwrap_err().assert_names("from");
         let hasty = ReceiveOptions {

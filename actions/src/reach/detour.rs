@@ -11,6 +11,8 @@ use troupe_body::collision::Volume;
 use troupe_body::glam::DVec3;
 use troupe_scene::World;
 
+use super::quintic;
+
 /// Most temporary goals a reach inserts.
 pub const MAX_DETOURS: usize = 4;
 /// How far outside a volume a temporary goal puts the hand's surface (m).
@@ -32,6 +34,19 @@ pub fn volumes_around(
     goal: DVec3,
     radius: f64,
 ) -> Vec<Volume> {
+    volumes_around_except(world, me, start, goal, radius, None)
+}
+
+/// [`volumes_around`], leaving out the obstacle called `except` as well (the object a
+/// grasp is reaching for: the hand is meant to touch it).
+pub fn volumes_around_except(
+    world: &World,
+    me: usize,
+    start: DVec3,
+    goal: DVec3,
+    radius: f64,
+    except: Option<&str>,
+) -> Vec<Volume> {
     let mut out = Vec::new();
     for (j, state) in world.states.iter().enumerate() {
         let root = state.globals.first().map_or(DVec3::ZERO, |g| g.translation);
@@ -40,7 +55,13 @@ pub fn volumes_around(
             out.extend(world.body_capsules(j).into_iter().map(Volume::Capsule));
         }
     }
-    out.extend(world.obstacle_volumes().into_iter().map(|(_, v)| v));
+    out.extend(
+        world
+            .obstacle_volumes()
+            .into_iter()
+            .filter(|(name, _)| Some(name.as_str()) != except)
+            .map(|(_, v)| v),
+    );
     out.retain(|v| v.sphere_depth(goal, radius) <= 0.0);
     out
 }
@@ -65,9 +86,89 @@ pub fn push_out(p: DVec3, radius: f64, clearance: f64, volumes: &[Volume]) -> DV
     q
 }
 
+/// A hand's path from its start through via points to a goal, each segment travelled
+/// with the [`quintic`] ease, its share of the duration proportional to its length as
+/// the path was planned (the goal may move afterwards: the last segment follows it).
+#[derive(Clone, Debug, Default)]
+pub struct HandPath {
+    start: DVec3,
+    via: Vec<DVec3>,
+    lengths: Vec<f64>,
+}
+
+impl HandPath {
+    /// The path from `start` through `via` to `goal` (where the goal is now).
+    pub fn new(start: DVec3, via: Vec<DVec3>, goal: DVec3) -> HandPath {
+        let mut prev = start;
+        let mut lengths = Vec::with_capacity(via.len() + 1);
+        for p in via.iter().chain(std::iter::once(&goal)) {
+            lengths.push((*p - prev).length());
+            prev = *p;
+        }
+        HandPath {
+            start,
+            via,
+            lengths,
+        }
+    }
+
+    /// Where the path starts.
+    pub fn start(&self) -> DVec3 {
+        self.start
+    }
+
+    /// The via points, temporary goals included.
+    pub fn via(&self) -> &[DVec3] {
+        &self.via
+    }
+
+    /// The point at `tau` (0 to 1, the fraction of the duration) for the goal now at
+    /// `goal`.
+    pub fn at(&self, tau: f64, goal: DVec3) -> DVec3 {
+        if self.lengths.iter().sum::<f64>() <= 1e-12 || self.via.is_empty() {
+            return self.start.lerp(goal, quintic(tau.clamp(0.0, 1.0)));
+        }
+        let (i, local) = self.segment(tau);
+        let point = |i: usize| match i {
+            0 => self.start,
+            i if i <= self.via.len() => self.via[i - 1],
+            _ => goal,
+        };
+        point(i).lerp(point(i + 1), quintic(local))
+    }
+
+    /// Which segment the path is on at `tau` (0 to 1) and how far along it (0 to 1,
+    /// before the ease); the last segment ends at the goal.
+    pub fn segment(&self, tau: f64) -> (usize, f64) {
+        let tau = tau.clamp(0.0, 1.0);
+        let total: f64 = self.lengths.iter().sum();
+        if total <= 1e-12 || self.via.is_empty() {
+            return (self.via.len(), tau);
+        }
+        let mut begin = 0.0;
+        for (i, len) in self.lengths.iter().enumerate() {
+            let share = len / total;
+            if tau <= begin + share || i + 1 == self.lengths.len() {
+                let local = if share > 0.0 {
+                    (tau - begin) / share
+                } else {
+                    1.0
+                };
+                return (i, local);
+            }
+            begin += share;
+        }
+        (self.via.len(), 1.0)
+    }
+}
+
 /// The deepest point of the polyline `points` for a sphere of `radius` into `volumes`:
 /// the segment's index, the point and the depth; `None` when it stays clear.
-fn deepest(points: &[DVec3], radius: f64, volumes: &[Volume]) -> Option<(usize, DVec3, f64)> {
+pub(crate) fn deepest(
+    points: &[DVec3],
+    radius: f64,
+    volumes: &[Volume],
+) -> Option<(usize, DVec3, f64)> {
     let mut best: Option<(usize, DVec3, f64)> = None;
     for (seg, pair) in points.windows(2).enumerate() {
         let n = ((pair[1] - pair[0]).length() / SAMPLE).ceil().max(1.0) as usize;
@@ -115,6 +216,29 @@ pub fn temporary_goals(
 mod tests {
     use super::*;
     use troupe_body::collision::Capsule;
+
+    #[test]
+    fn a_hand_path_stops_at_each_via_point_and_follows_the_goal() {
+        let (start, via, goal) = (
+            DVec3::ZERO,
+            DVec3::new(1.0, 0.0, 0.0),
+            DVec3::new(1.0, 3.0, 0.0),
+        );
+        let path = HandPath::new(start, vec![via], goal);
+        assert_eq!(path.at(0.0, goal), start);
+        // The first segment is a quarter of the length: a quarter of the time.
+        assert_eq!(path.segment(0.25), (0, 1.0));
+        assert!((path.at(0.25, goal) - via).length() < 1e-12);
+        assert_eq!(path.segment(0.625).0, 1);
+        assert!((path.at(0.625, goal) - DVec3::new(1.0, 1.5, 0.0)).length() < 1e-12);
+        // The goal moved: the last segment ends where it is now.
+        let moved = DVec3::new(2.0, 3.0, 0.0);
+        assert!((path.at(1.0, moved) - moved).length() < 1e-12);
+        // Without via points: one eased segment.
+        let straight = HandPath::new(start, Vec::new(), goal);
+        assert_eq!(straight.segment(0.3), (0, 0.3));
+        assert!((straight.at(0.5, goal) - goal * 0.5).length() < 1e-12);
+    }
 
     #[test]
     fn a_path_through_an_arm_gets_a_temporary_goal_beside_it() {

@@ -12,6 +12,7 @@
 //! [`ORIENTATION_TOLERANCE`] when an orientation is asked) and fails otherwise, with the
 //! residual distance in the reason.
 
+pub mod arm_detour;
 pub mod detour;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
@@ -174,12 +175,11 @@ pub struct Reach {
     started: bool,
     start: DVec3,
     start_rotation: DQuat,
-    lengths: Vec<f64>,
     /// The legs' and `root_y`'s (start, goal) values of a crouching reach (see
     /// [`Reach::widen`]), interpolated along the path.
     crouch: Vec<(usize, f64, f64)>,
-    /// The path's via points: the spec's, with the temporary goals of [`detour`].
-    via: Vec<DVec3>,
+    /// The path: through the spec's via points and the temporary goals of [`detour`].
+    path: detour::HandPath,
     /// How many temporary goals [`detour`] inserted at the start.
     detours: usize,
     /// Other bodies and obstacles near, as of the previous tick (with `detour`).
@@ -222,9 +222,8 @@ impl Reach {
             started: false,
             start: DVec3::ZERO,
             start_rotation: DQuat::IDENTITY,
-            lengths: Vec::new(),
             crouch: Vec::new(),
-            via: Vec::new(),
+            path: detour::HandPath::default(),
             detours: 0,
             volumes: Vec::new(),
         })
@@ -300,29 +299,7 @@ impl Reach {
 
     /// The point on the path at `t` seconds for the goal now at `goal`.
     fn path(&self, t: f64, goal: DVec3) -> DVec3 {
-        let mut points = Vec::with_capacity(self.via.len() + 2);
-        points.push(self.start);
-        points.extend_from_slice(&self.via);
-        points.push(goal);
-        let total: f64 = self.lengths.iter().sum();
-        let tau = (t / self.spec.duration).clamp(0.0, 1.0);
-        if total <= 1e-12 || points.len() == 2 {
-            return self.start.lerp(goal, quintic(tau));
-        }
-        let mut begin = 0.0;
-        for (i, len) in self.lengths.iter().enumerate() {
-            let share = len / total;
-            if tau <= begin + share || i + 1 == self.lengths.len() {
-                let local = if share > 0.0 {
-                    (tau - begin) / share
-                } else {
-                    1.0
-                };
-                return points[i].lerp(points[i + 1], quintic(local));
-            }
-            begin += share;
-        }
-        goal
+        self.path.at(t / self.spec.duration, goal)
     }
 }
 
@@ -342,7 +319,7 @@ impl Generator for Reach {
         self.widen(ctx, goal).map_err(|e| e.to_string())?;
         self.start = self.spec.effector.position(&ctx.posture.globals);
         self.start_rotation = self.spec.effector.rotation(&ctx.posture.globals);
-        self.via = self.spec.via.clone();
+        let mut via = self.spec.via.clone();
         self.detours = 0;
         if let (true, Some((radius, offset))) =
             (self.spec.detour, self.hand_sphere(&ctx.posture.globals))
@@ -351,17 +328,13 @@ impl Generator for Reach {
             let start = self.start + offset;
             self.volumes =
                 detour::volumes_around(ctx.world, ctx.actor, start, goal + offset, radius);
-            let via: Vec<DVec3> = self.spec.via.iter().map(|p| *p + offset).collect();
-            let around = detour::temporary_goals(start, &via, goal + offset, radius, &self.volumes);
-            self.detours = around.len() - via.len();
-            self.via = around.into_iter().map(|p| p - offset).collect();
+            let shifted: Vec<DVec3> = self.spec.via.iter().map(|p| *p + offset).collect();
+            let around =
+                detour::temporary_goals(start, &shifted, goal + offset, radius, &self.volumes);
+            self.detours = around.len() - shifted.len();
+            via = around.into_iter().map(|p| p - offset).collect();
         }
-        let mut prev = self.start;
-        self.lengths.clear();
-        for p in self.via.iter().chain(std::iter::once(&goal)) {
-            self.lengths.push((*p - prev).length());
-            prev = *p;
-        }
+        self.path = detour::HandPath::new(self.start, via, goal);
         self.started = true;
         Ok(())
     }

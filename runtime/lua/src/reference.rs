@@ -189,7 +189,7 @@ pub const API: &[Entry] = &[
     field("Action", "error", "string?", "Why it was cancelled or failed, else nil."),
     field("Action", "dofs", "integer", "How many DOFs its scope holds."),
     field("Action", "yielded", "integer", "How many DOFs of its scope it gave up to others (`action_narrowed`)."),
-    field("Action", "detours", "integer", "How many temporary goals its hand path took round other actors' bodies and obstacles (a `reach`; docs/navigation.md)."),
+    field("Action", "detours", "integer", "How many temporary goals its hand path took round other actors' bodies and obstacles (a `reach`, `grasp`, `give` or `receive`; docs/navigation.md)."),
     m("Action", "stop", &[], "", "Ends the action gracefully (a walk comes to a stop); it completes."),
     m("Action", "wait", &[], "ActionStatus", "Yields until the action ends; returns its final status."),
     m("Action", "cancel", &[], "", "Cancels the action (a running one eases out)."),
@@ -323,6 +323,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("object", "Object|string"),
             ("hand", "string"),
             ("pattern", "string"),
+            ("detour", "boolean"),
         ],
     ),
     ("release", "ReleaseOptions", &[("object", "Object|string")]),
@@ -351,6 +352,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("to", "Actor|string"),
             ("hand", "string"),
             ("timeout", "number"),
+            ("detour", "boolean"),
         ],
     ),
     (
@@ -360,6 +362,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("object", "Object|string"),
             ("from", "Actor|string"),
             ("hand", "string"),
+            ("detour", "boolean"),
         ],
     ),
     (
