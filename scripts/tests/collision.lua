@@ -10,20 +10,10 @@
 local LIMIT = 0.01
 local WALKERS_TODAY = 0.12
 
--- Runs `fn` every tick until it returns true (or `limit` s), watching the deepest solid
--- interpenetration: returns whether `fn` did, the deepest depth and what it was between.
-local function watch(fn, limit)
-  local deepest, between = 0, "nothing"
-  local ok = run_until(function()
-    local d, a, b, sa, sb = troupe.deepest_overlap()
-    if d > deepest then
-      deepest = d
-      between = string.format("%s's %s and %s's %s", a, sa, b, tostring(sb))
-    end
-    return fn()
-  end, limit)
-  return ok, deepest, between
-end
+-- Watching the deepest solid interpenetration while something runs (shared with
+-- collision_hands.lua).
+local solids = require("support.solids")
+local watch = solids.watch
 
 -- How far (degrees) the line of `a`'s shoulders is turned from the line of its hips,
 -- seen from above.
@@ -140,7 +130,7 @@ test("a reaching arm bends round another actor's arm to a cup", function()
   local before = troupe.deepest_overlap()
   expect(before == 0, string.format("nothing touches before the reach: %.3f", before))
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
-  local ok, deepest, between = watch(function() return r.status ~= "active" and r.status ~= "pending" end, 5)
+  local ok, deepest, between = watch(function() return solids.ended(r) end, 5)
   print(string.format("reach round an arm: deepest %.4f m (%s), %d temporary goal(s)", deepest, between, r.detours))
   expect(ok and r.status == "completed", "the reach completed: " .. tostring(r.error))
   expect(r.detours >= 1, "a temporary goal was inserted")
@@ -150,7 +140,7 @@ end)
 test("without detours the same reach passes through the arm", function()
   local ann, _, cup = arm_across()
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5, detour = false }
-  local ok, deepest, between = watch(function() return r.status ~= "active" and r.status ~= "pending" end, 5)
+  local ok, deepest, between = watch(function() return solids.ended(r) end, 5)
   print(string.format("reach through an arm: deepest %.4f m (%s)", deepest, between))
   expect(ok and r.status == "completed", "the reach completed: " .. tostring(r.error))
   expect(r.detours == 0, "no temporary goal")
