@@ -84,15 +84,12 @@ fn cesium_man_follows_troupe_postures() {
         assert!(js.iter().all(|&j| (j as usize) < c.bones.len()));
     }
     let d = c.dress(&skel, 1.75).unwrap();
-    // Scaled to the actor's height, standing on the floor.
+    // Scaled to the actor's height (standing on the floor: the next test).
     let (low, high) = d
         .positions
         .iter()
         .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
-    assert!(
-        low.abs() < 1e-4 && (high - 1.75).abs() < 1e-4,
-        "{low}..{high}"
-    );
+    assert!((high - low - 1.75).abs() < 1e-4, "{low}..{high}");
     let left_hand = vertices_of(&c, "l_wrist");
     let right_hand = vertices_of(&c, "r_wrist");
     let head = vertices_of(&c, "skullbase");
@@ -627,4 +624,27 @@ fn malformed_files_are_errors_naming_the_file_never_panics() {
         .to_string();
     assert!(err.contains("absent.glb"), "{err}");
     std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn cesium_man_stands_on_the_floor_in_troupes_rest_posture() {
+    // Its legs are bound spread and its feet tilted: once they hang as troupe's do, the
+    // mesh must still stand on the floor, not sink into it.
+    let c = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    for (template, height) in [("adult", 1.75), ("adult", 1.6), ("child", 1.1)] {
+        let skel = troupe_body::template::template(template).unwrap();
+        let mut params = skel.default_params();
+        params.height = height;
+        let skel = skel.instantiate(params).unwrap();
+        let d = c.dress(&skel, height).unwrap();
+        let low = d
+            .deform(&globals(&skel, &[]))
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::MAX, f64::min);
+        assert!(
+            low.abs() < 0.01,
+            "{template} {height} m: the lowest vertex at rest is at {low:.4} m"
+        );
+    }
 }
