@@ -266,6 +266,18 @@ pub fn save_skinned(path: &Path, rig: &Rig, skin: Option<&Skin>, name: &str) -> 
     }
 }
 
+/// Saves a user's character fitted to a skeleton (`dressing`), following `rig` (that
+/// skeleton's), as glTF (`.gltf` or `.glb` by `path`'s extension), the scene named `name`.
+pub fn save_character(path: &Path, dressing: &Dressing, rig: &Rig, name: &str) -> Result<()> {
+    match Format::of(path)? {
+        Format::Gltf | Format::Glb => write_character(path, dressing, rig, &[], name),
+        _ => Err(Error::Invalid(format!(
+            "{}: a character is written as .gltf or .glb",
+            path.display()
+        ))),
+    }
+}
+
 /// Saves a rig's motion to a one-actor format by `path`'s extension: glTF names its scene
 /// `name`; BVH is written in [`BVH_ROTATION_ORDER`] and [`BVH_UNITS_PER_METRE`], a frame
 /// every `frame_time` seconds. A `.trk` cannot hold a rig (it names DOFs, not joints).

@@ -1,7 +1,9 @@
 //! The glTF files troupe writes pass the Khronos glTF validator with no error and no
 //! warning: a troupe body's motion with its skin (adult and child), with and without a
 //! recorded object, the skinned characters `troupe export gltf` writes (a one-frame rest
-//! pose), and a BVH on its own hierarchy, as `.gltf` + `.bin` and as `.glb`.
+//! pose), users' characters (CesiumMan, and CesiumMan as a VRM 1.0 file) moving with an
+//! object, in troupe's rest posture and in their bind pose, and a BVH on its own
+//! hierarchy, as `.gltf` + `.bin` and as `.glb`.
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
 //! into `.tools/node`; without node or without that package the test prints why and
@@ -14,7 +16,10 @@ use troupe_body::solid::Shape;
 use troupe_body::template::template;
 use troupe_body::{Skeleton, Skin};
 use troupe_formats::bvh::read_bvh;
-use troupe_formats::gltf::{write_glb, write_glb_with, write_gltf, write_gltf_with};
+use troupe_formats::character::read_character;
+use troupe_formats::gltf::{
+    write_character, write_glb, write_glb_with, write_gltf, write_gltf_with,
+};
 use troupe_formats::Rig;
 use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
@@ -41,6 +46,69 @@ fn troupe_rig(skeleton: &Skeleton) -> Rig {
         seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
     }
     Rig::from_sequence(skeleton, &seq).unwrap()
+}
+
+fn characters() -> PathBuf {
+    repo().join("tests/assets/characters")
+}
+
+/// VRM humanoid bones of Khronos' CesiumMan, whose joints have names of their own.
+const CESIUM_BONES: [(&str, &str); 19] = [
+    ("hips", "Skeleton_torso_joint_1"),
+    ("spine", "Skeleton_torso_joint_2"),
+    ("upperChest", "torso_joint_3"),
+    ("neck", "Skeleton_neck_joint_1"),
+    ("head", "Skeleton_neck_joint_2"),
+    ("rightUpperArm", "Skeleton_arm_joint_R"),
+    ("rightLowerArm", "Skeleton_arm_joint_R__2_"),
+    ("rightHand", "Skeleton_arm_joint_R__3_"),
+    ("leftUpperArm", "Skeleton_arm_joint_L__4_"),
+    ("leftLowerArm", "Skeleton_arm_joint_L__3_"),
+    ("leftHand", "Skeleton_arm_joint_L__2_"),
+    ("rightUpperLeg", "leg_joint_R_1"),
+    ("rightLowerLeg", "leg_joint_R_2"),
+    ("rightFoot", "leg_joint_R_3"),
+    ("rightToes", "leg_joint_R_5"),
+    ("leftUpperLeg", "leg_joint_L_1"),
+    ("leftLowerLeg", "leg_joint_L_2"),
+    ("leftFoot", "leg_joint_L_3"),
+    ("leftToes", "leg_joint_L_5"),
+];
+
+/// The `bones` map a user gives for CesiumMan.
+fn cesium_map() -> Vec<(String, String)> {
+    CESIUM_BONES
+        .iter()
+        .map(|(a, b)| (a.to_string(), b.to_string()))
+        .collect()
+}
+
+/// The binary glTF `path` as a VRM 1.0 file: its JSON given a `VRMC_vrm` humanoid that
+/// names CesiumMan's joints.
+fn as_vrm(path: &Path) -> Vec<u8> {
+    let bytes = std::fs::read(path).unwrap();
+    let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
+    let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
+    let node = |name: &str| {
+        json["nodes"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .position(|n| n["name"] == name)
+            .unwrap()
+    };
+    let bones: serde_json::Map<String, serde_json::Value> = CESIUM_BONES
+        .iter()
+        .map(|(bone, name)| (bone.to_string(), serde_json::json!({ "node": node(name) })))
+        .collect();
+    json["extensions"] = serde_json::json!({
+        "VRMC_vrm": { "specVersion": "1.0", "humanoid": { "humanBones": bones } }
+    });
+    let glb = gltf::binary::Glb {
+        json: serde_json::to_vec(&json).unwrap().into(),
+        ..glb
+    };
+    glb.to_vec().unwrap()
 }
 
 #[test]
@@ -100,6 +168,30 @@ fn written_gltf_files_pass_the_khronos_validator() {
     write_gltf_with(&gltf, &rig, Some(&skin), &objects, "carry").unwrap();
     write_glb_with(&glb, &rig, Some(&skin), &objects, "carry").unwrap();
     files.extend([gltf, glb]);
+    // Users' characters, as `troupe export gltf --look` and `run --record` write them:
+    // CesiumMan (mapped by a `bones` map) waving with an object, and in troupe's rest
+    // posture; a VRM 1.0 file (CesiumMan with a `VRMC_vrm` humanoid, mapped by it) at
+    // rest and in its bind pose (no animation).
+    let cesium = read_character(characters().join("CesiumMan.glb"), &cesium_map()).unwrap();
+    let vrm = dir.join("cesium.vrm");
+    std::fs::write(&vrm, as_vrm(&characters().join("CesiumMan.glb"))).unwrap();
+    let vrm = read_character(&vrm, &[]).unwrap();
+    let rest = Rig::from_sequence(&skeleton, &Sequence::new("rest")).unwrap();
+    let mut bind = rest.clone();
+    (bind.times, bind.rotations, bind.translations) = (vec![], vec![], vec![]);
+    for (stem, character, rig, with) in [
+        ("cesium_carry", &cesium, &rig, &objects[..]),
+        ("cesium_rest", &cesium, &rest, &[][..]),
+        ("vrm_rest", &vrm, &rest, &[][..]),
+        ("vrm_bind", &vrm, &bind, &[][..]),
+    ] {
+        let dressing = character.dress(&skeleton, 1.75).unwrap();
+        for ext in ["gltf", "glb"] {
+            let file = dir.join(format!("{stem}.{ext}"));
+            write_character(&file, &dressing, rig, with, stem).unwrap();
+            files.push(file);
+        }
+    }
     let out = Command::new("node")
         .arg(repo().join("scripts/validate-gltf.js"))
         .args(&files)

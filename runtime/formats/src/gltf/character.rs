@@ -80,10 +80,17 @@ pub fn add_character(root: &mut Root, bytes: &mut Vec<u8>, dressing: &Dressing, 
         positions: &dressing.positions,
         normals: &dressing.normals,
         colors: dressing.colors.iter().map(|c| c.map(linear)).collect(),
+        // An unused slot (weight 0) names joint 0, as glTF asks.
         joints: dressing
             .slots
             .iter()
-            .map(|s| s.map(|slot| slot_bones[slot as usize] as u16))
+            .zip(&dressing.weights)
+            .map(|(s, w)| {
+                std::array::from_fn(|k| match w[k] > 0.0 {
+                    true => slot_bones[s[k] as usize] as u16,
+                    false => 0,
+                })
+            })
             .collect(),
         weights: &dressing.weights,
         indices: &dressing.indices,
