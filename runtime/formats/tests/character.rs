@@ -759,6 +759,14 @@ fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
             Some(blob) => blob.clone(),
             None => std::fs::read(dir.join("cesium.bin")).unwrap(),
         };
+        // Not a troupe motion: reading it back as one is refused, naming the character.
+        let err = troupe_formats::gltf::read_gltf_motion(&path, &skel)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.contains("user's character") && err.contains("CesiumMan.glb"),
+            "{err}"
+        );
         let doc = &gltf.document;
         let skin = doc.skins().next().unwrap();
         let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
