@@ -10,39 +10,8 @@ use troupe_body::{Skeleton, Transform};
 use troupe_formats::character::{read_character, vrm_humanoid_bones};
 use troupe_formats::Error;
 
-fn asset(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/assets/characters")
-        .join(name)
-}
-
-/// The map for Khronos' CesiumMan, whose joints have names of their own.
-fn cesium_map() -> Vec<(String, String)> {
-    [
-        ("hips", "Skeleton_torso_joint_1"),
-        ("spine", "Skeleton_torso_joint_2"),
-        ("upperChest", "torso_joint_3"),
-        ("neck", "Skeleton_neck_joint_1"),
-        ("head", "Skeleton_neck_joint_2"),
-        ("rightUpperArm", "Skeleton_arm_joint_R"),
-        ("rightLowerArm", "Skeleton_arm_joint_R__2_"),
-        ("rightHand", "Skeleton_arm_joint_R__3_"),
-        ("leftUpperArm", "Skeleton_arm_joint_L__4_"),
-        ("leftLowerArm", "Skeleton_arm_joint_L__3_"),
-        ("leftHand", "Skeleton_arm_joint_L__2_"),
-        ("rightUpperLeg", "leg_joint_R_1"),
-        ("rightLowerLeg", "leg_joint_R_2"),
-        ("rightFoot", "leg_joint_R_3"),
-        ("rightToes", "leg_joint_R_5"),
-        ("leftUpperLeg", "leg_joint_L_1"),
-        ("leftLowerLeg", "leg_joint_L_2"),
-        ("leftFoot", "leg_joint_L_3"),
-        ("leftToes", "leg_joint_L_5"),
-    ]
-    .iter()
-    .map(|(a, b)| (a.to_string(), b.to_string()))
-    .collect()
-}
+mod cesium;
+use cesium::{asset, cesium_map};
 
 fn globals(skeleton: &Skeleton, dofs: &[(&str, f64)]) -> Vec<Transform> {
     let mut q = vec![0.0; skeleton.dof_count()];

@@ -25,6 +25,9 @@ use troupe_formats::Rig;
 use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
 
+mod cesium;
+use cesium::{asset, cesium_map, CESIUM_BONES};
+
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
@@ -47,41 +50,6 @@ fn troupe_rig(skeleton: &Skeleton) -> Rig {
         seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
     }
     Rig::from_sequence(skeleton, &seq).unwrap()
-}
-
-fn characters() -> PathBuf {
-    repo().join("tests/assets/characters")
-}
-
-/// VRM humanoid bones of Khronos' CesiumMan, whose joints have names of their own.
-const CESIUM_BONES: [(&str, &str); 19] = [
-    ("hips", "Skeleton_torso_joint_1"),
-    ("spine", "Skeleton_torso_joint_2"),
-    ("upperChest", "torso_joint_3"),
-    ("neck", "Skeleton_neck_joint_1"),
-    ("head", "Skeleton_neck_joint_2"),
-    ("rightUpperArm", "Skeleton_arm_joint_R"),
-    ("rightLowerArm", "Skeleton_arm_joint_R__2_"),
-    ("rightHand", "Skeleton_arm_joint_R__3_"),
-    ("leftUpperArm", "Skeleton_arm_joint_L__4_"),
-    ("leftLowerArm", "Skeleton_arm_joint_L__3_"),
-    ("leftHand", "Skeleton_arm_joint_L__2_"),
-    ("rightUpperLeg", "leg_joint_R_1"),
-    ("rightLowerLeg", "leg_joint_R_2"),
-    ("rightFoot", "leg_joint_R_3"),
-    ("rightToes", "leg_joint_R_5"),
-    ("leftUpperLeg", "leg_joint_L_1"),
-    ("leftLowerLeg", "leg_joint_L_2"),
-    ("leftFoot", "leg_joint_L_3"),
-    ("leftToes", "leg_joint_L_5"),
-];
-
-/// The `bones` map a user gives for CesiumMan.
-fn cesium_map() -> Vec<(String, String)> {
-    CESIUM_BONES
-        .iter()
-        .map(|(a, b)| (a.to_string(), b.to_string()))
-        .collect()
 }
 
 /// The binary glTF `path` as a VRM 1.0 file: its JSON given a `VRMC_vrm` humanoid that
@@ -199,7 +167,7 @@ fn vrm_with_boxes(path: &Path) -> Vec<u8> {
         }
     }
     let mut push = |data: Vec<u8>, count: usize, component: u32, kind: &str| {
-        while bin.len() % 4 != 0 {
+        while !bin.len().is_multiple_of(4) {
             bin.push(0);
         }
         let views = json["bufferViews"].as_array_mut().unwrap();
@@ -356,16 +324,12 @@ fn written_gltf_files_pass_the_khronos_validator() {
     // posture; a VRM 1.0 file (CesiumMan with a `VRMC_vrm` humanoid, mapped by it) at
     // rest and in its bind pose (no animation); the VRM 1.0 sample of the test assets
     // (its own skeleton and humanoid bones) skinned with a box per bone.
-    let cesium = read_character(characters().join("CesiumMan.glb"), &cesium_map()).unwrap();
+    let cesium = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
     let vrm = dir.join("cesium.vrm");
-    std::fs::write(&vrm, as_vrm(&characters().join("CesiumMan.glb"))).unwrap();
+    std::fs::write(&vrm, as_vrm(&asset("CesiumMan.glb"))).unwrap();
     let vrm = read_character(&vrm, &[]).unwrap();
     let boxes = dir.join("boxes.vrm");
-    std::fs::write(
-        &boxes,
-        vrm_with_boxes(&characters().join("VRM1_humanoid_no_skin.vrm")),
-    )
-    .unwrap();
+    std::fs::write(&boxes, vrm_with_boxes(&asset("VRM1_humanoid_no_skin.vrm"))).unwrap();
     let boxes = read_character(&boxes, &[]).unwrap();
     let rest = Rig::from_sequence(&skeleton, &Sequence::new("rest")).unwrap();
     let mut bind = rest.clone();
