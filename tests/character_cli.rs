@@ -182,6 +182,24 @@ fn a_dressed_actor_is_recorded_and_exported_as_its_character() {
     // Ann keeps troupe's skeleton and generated skin.
     let ann = glb_json(&dir.join("character.ann.glb"));
     assert!(node_names(&ann).contains(&"r_wrist") && node_names(&ann).contains(&"ann skin"));
+    // The same with two threads and chunks of one action: the same bytes.
+    let again = dir.join("again.glb");
+    let run = troupe()
+        .current_dir(repo())
+        .args(["run", "scripts/examples/character.lua", "--seconds", "1"])
+        .args(["--threads", "2", "--chunk", "1", "--record"])
+        .arg(&again)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        std::fs::read(dir.join("again.cesium.glb")).unwrap()
+            == std::fs::read(dir.join("character.cesium.glb")).unwrap()
+    );
     // Played back as a troupe motion, CesiumMan's file is refused with a reason.
     let view = troupe()
         .args(["seq", "convert"])
