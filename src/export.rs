@@ -20,7 +20,8 @@ pub struct ExportArgs {
 enum Format {
     /// Write a body template as a URDF robot description (Z up).
     Urdf(UrdfArgs),
-    /// Write a body template as a skinned glTF character (.gltf + .bin, or .glb).
+    /// Write a body template as a skinned glTF character (.gltf + .bin, or .glb), or a
+    /// user's character fitted to it (--look).
     Gltf(GltfArgs),
 }
 
@@ -58,7 +59,7 @@ struct GltfArgs {
 enum Pose {
     /// troupe's rest posture.
     Rest,
-    /// The character file's bind pose.
+    /// the character file's bind pose.
     Bind,
 }
 
@@ -74,7 +75,8 @@ fn bone_pair(text: &str) -> Result<(String, String), String> {
     }
 }
 
-/// Writes the skinned character of `a` at rest.
+/// Writes the skinned character of `a` at rest: troupe's generated skin, or the
+/// user's `--look` character fitted to the body.
 fn export_gltf(a: GltfArgs) -> Result<ExitCode> {
     let t = troupe_body::template(&a.template)?;
     let d = t.default_params();
