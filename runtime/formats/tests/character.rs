@@ -10,8 +10,8 @@ use troupe_body::{Skeleton, Transform};
 use troupe_formats::character::{read_character, vrm_humanoid_bones};
 use troupe_formats::Error;
 
-mod cesium;
-use cesium::{asset, cesium_map};
+mod characters;
+use characters::{asset, cesium_map, vrm_with_boxes};
 
 fn globals(skeleton: &Skeleton, dofs: &[(&str, f64)]) -> Vec<Transform> {
     let mut q = vec![0.0; skeleton.dof_count()];
@@ -596,11 +596,20 @@ fn malformed_files_are_errors_naming_the_file_never_panics() {
 }
 
 #[test]
-fn cesium_man_stands_on_the_floor_in_troupes_rest_posture() {
+fn characters_stand_on_the_floor_in_troupes_rest_posture() {
     // Its legs are bound spread and its feet tilted: once they hang as troupe's do, the
     // mesh must still stand on the floor, not sink into it.
-    let c = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
-    for (template, height) in [("adult", 1.75), ("adult", 1.6), ("child", 1.1)] {
+    let cesium = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    // And the VRM 1.0 sample, bound with its feet turned 45° down, given a box per bone.
+    let boxes = std::env::temp_dir().join(format!("troupe-boxes-{}.vrm", std::process::id()));
+    std::fs::write(&boxes, vrm_with_boxes(&asset("VRM1_humanoid_no_skin.vrm"))).unwrap();
+    let boxes = read_character(&boxes, &[]).unwrap();
+    for (c, template, height) in [
+        (&cesium, "adult", 1.75),
+        (&cesium, "adult", 1.6),
+        (&cesium, "child", 1.1),
+        (&boxes, "adult", 1.75),
+    ] {
         let skel = troupe_body::template::template(template).unwrap();
         let mut params = skel.default_params();
         params.height = height;
@@ -613,7 +622,8 @@ fn cesium_man_stands_on_the_floor_in_troupes_rest_posture() {
             .fold(f64::MAX, f64::min);
         assert!(
             low.abs() < 0.01,
-            "{template} {height} m: the lowest vertex at rest is at {low:.4} m"
+            "{} on a {height} m {template}: the lowest vertex at rest is at {low:.4} m",
+            c.source
         );
     }
 }
@@ -698,8 +708,6 @@ fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
     use troupe_formats::Rig;
     use troupe_motion::sequence::{Key, Sequence, Track};
     let skel = default_skeleton("adult").unwrap();
-    let c = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
-    let d = c.dress(&skel, 1.75).unwrap();
     let mut seq = Sequence::new("wave");
     seq.meta.insert("rate".into(), "20".into());
     for (dof, v) in [
@@ -719,27 +727,47 @@ fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
     let rig = Rig::from_sequence(&skel, &seq).unwrap();
     let dir = std::env::temp_dir().join(format!("troupe-character-gltf-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for file in ["cesium.glb", "cesium.gltf"] {
-        let path = dir.join(file);
+    // CesiumMan (its bind pose from COLLADA, a `bones` map) and the VRM 1.0 sample (its
+    // own humanoid map; limbs bound with rotated frames), given a box per bone.
+    let boxes = dir.join("boxes.vrm");
+    std::fs::write(&boxes, vrm_with_boxes(&asset("VRM1_humanoid_no_skin.vrm"))).unwrap();
+    let characters = [
+        (
+            asset("CesiumMan.glb"),
+            cesium_map(),
+            "Skeleton_arm_joint_R__3_",
+            19,
+        ),
+        (boxes, vec![], "Hand.R", 22),
+    ];
+    for ((source, map, hand_bone, bone_count), ext) in characters
+        .iter()
+        .flat_map(|c| ["glb", "gltf"].map(|ext| (c, ext)))
+    {
+        let c = read_character(source, map).unwrap();
+        let d = c.dress(&skel, 1.75).unwrap();
+        let path = dir.join(format!("character.{ext}"));
+        let file = format!("{} as .{ext}", source.display());
         write_character(&path, &d, &rig, &[], "ann").unwrap();
         let bytes = std::fs::read(&path).unwrap();
         let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
         let bin = match &gltf.blob {
             Some(blob) => blob.clone(),
-            None => std::fs::read(dir.join("cesium.bin")).unwrap(),
+            None => std::fs::read(dir.join("character.bin")).unwrap(),
         };
         // Not a troupe motion: reading it back as one is refused, naming the character.
         let err = troupe_formats::gltf::read_gltf_motion(&path, &skel)
             .unwrap_err()
             .to_string();
+        let name = source.file_name().unwrap().to_string_lossy();
         assert!(
-            err.contains("user's character") && err.contains("CesiumMan.glb"),
+            err.contains("user's character") && err.contains(&*name),
             "{err}"
         );
         let doc = &gltf.document;
         let skin = doc.skins().next().unwrap();
         let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
-        assert_eq!(joints.len(), 19, "one joint per CesiumMan bone");
+        assert_eq!(joints.len(), *bone_count, "{file}: one joint per bone");
         let ibm = accessor_values(&skin.inverse_bind_matrices().unwrap(), &bin);
         let primitive = doc.meshes().next().unwrap().primitives().next().unwrap();
         let attribute = |s: gltf::Semantic| accessor_values(&primitive.get(&s).unwrap(), &bin);
@@ -747,11 +775,7 @@ fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
         let vertex_joints = attribute(gltf::Semantic::Joints(0));
         let weights = attribute(gltf::Semantic::Weights(0));
         assert_eq!(positions.len() / 3, d.positions.len());
-        let hand = d
-            .bone_names
-            .iter()
-            .position(|n| n == "Skeleton_arm_joint_R__3_")
-            .unwrap();
+        let hand = d.bone_names.iter().position(|n| n == hand_bone).unwrap();
         let wrist = skel.joint("r_wrist").unwrap();
         let rest = globals(&skel, &[]);
         for k in [0, 3, 10, 14, 20] {
