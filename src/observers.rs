@@ -41,14 +41,16 @@ impl Observer for RecordFile {
     fn finish(&mut self, scene: &Scene) -> Result<Option<String>> {
         // `.trk` holds every actor and object; `.bvh`, `.gltf` and `.glb` one actor each
         // (`NAME.ACTOR.EXT`), glTF with the objects, BVH with a file per object.
-        let written = troupe_formats::save_recording(
+        // An actor dressed with `look = FILE` is written as that character in glTF.
+        let written = troupe_formats::save_dressed_recording(
             &self.path,
             &self.recorder.sequences(scene),
             &self.recorder.objects(scene),
             scene
                 .actors()
                 .iter()
-                .map(|a| (a.name.as_str(), &*a.skeleton)),
+                .enumerate()
+                .map(|(i, a)| (a.name.as_str(), &*a.skeleton, scene.look(i).map(|d| &**d))),
         )
         .map_err(|e| troupe_scene::Error::Invalid(e.to_string()))?;
         let list: Vec<String> = written.iter().map(|p| p.display().to_string()).collect();

@@ -116,3 +116,152 @@ fn a_bad_look_stops_the_scene_naming_the_file() {
         "{err}"
     );
 }
+
+/// The JSON chunk of a binary glTF file.
+fn glb_json(path: &std::path::Path) -> serde_json::Value {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..4], b"glTF", "{} is a .glb", path.display());
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&bytes[20..20 + len]).unwrap()
+}
+
+/// The names of a glTF document's nodes.
+fn node_names(json: &serde_json::Value) -> Vec<&str> {
+    json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|n| n["name"].as_str())
+        .collect()
+}
+
+#[test]
+fn a_dressed_actor_is_recorded_and_exported_as_its_character() {
+    let dir = temp_dir();
+    let out = dir.join("character.glb");
+    let run = troupe()
+        .current_dir(repo())
+        .args([
+            "run",
+            "scripts/examples/character.lua",
+            "--seconds",
+            "1",
+            "--record",
+        ])
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    // CesiumMan's actor: its 19 bones as the skin's joints, its mesh marked as a user's
+    // character, its bones animated.
+    let cesium = glb_json(&dir.join("character.cesium.glb"));
+    assert_eq!(cesium["skins"][0]["joints"].as_array().unwrap().len(), 19);
+    let names = node_names(&cesium);
+    assert!(names.contains(&"Skeleton_arm_joint_R__3_") && !names.contains(&"r_wrist"));
+    let mesh_node = cesium["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|n| n.get("mesh").is_some())
+        .unwrap();
+    assert!(mesh_node["extras"]["troupe_character"]["source"]
+        .as_str()
+        .unwrap()
+        .ends_with("CesiumMan.glb"));
+    assert!(
+        cesium["animations"][0]["channels"]
+            .as_array()
+            .unwrap()
+            .len()
+            > 10
+    );
+    // Ann keeps troupe's skeleton and generated skin.
+    let ann = glb_json(&dir.join("character.ann.glb"));
+    assert!(node_names(&ann).contains(&"r_wrist") && node_names(&ann).contains(&"ann skin"));
+    // The same with two threads and chunks of one action: the same bytes.
+    let again = dir.join("again.glb");
+    let run = troupe()
+        .current_dir(repo())
+        .args(["run", "scripts/examples/character.lua", "--seconds", "1"])
+        .args(["--threads", "2", "--chunk", "1", "--record"])
+        .arg(&again)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    assert!(
+        std::fs::read(dir.join("again.cesium.glb")).unwrap()
+            == std::fs::read(dir.join("character.cesium.glb")).unwrap()
+    );
+    // Played back as a troupe motion, CesiumMan's file is refused with a reason.
+    let view = troupe()
+        .args(["seq", "convert"])
+        .arg(dir.join("character.cesium.glb"))
+        .arg(dir.join("back.trk"))
+        .args(["--template", "adult"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&view.stderr);
+    assert!(
+        !view.status.success() && err.contains("user's character"),
+        "{err}"
+    );
+
+    // `troupe export gltf --look`, with the map given as `--bones`.
+    let bones = "hips=Skeleton_torso_joint_1,spine=Skeleton_torso_joint_2,\
+        upperChest=torso_joint_3,neck=Skeleton_neck_joint_1,head=Skeleton_neck_joint_2,\
+        leftUpperArm=Skeleton_arm_joint_L__4_,leftLowerArm=Skeleton_arm_joint_L__3_,\
+        leftHand=Skeleton_arm_joint_L__2_,rightUpperArm=Skeleton_arm_joint_R,\
+        rightLowerArm=Skeleton_arm_joint_R__2_,rightHand=Skeleton_arm_joint_R__3_,\
+        leftUpperLeg=leg_joint_L_1,leftLowerLeg=leg_joint_L_2,leftFoot=leg_joint_L_3,\
+        rightUpperLeg=leg_joint_R_1,rightLowerLeg=leg_joint_R_2,rightFoot=leg_joint_R_3";
+    for (pose, animated) in [("rest", true), ("bind", false)] {
+        let file = dir.join(format!("cesium_{pose}.glb"));
+        let export = troupe()
+            .current_dir(repo())
+            .args(["export", "gltf"])
+            .arg(&file)
+            .args([
+                "--look",
+                "tests/assets/characters/CesiumMan.glb",
+                "--bones",
+                bones,
+            ])
+            .args(["--pose", pose])
+            .output()
+            .unwrap();
+        assert!(
+            export.status.success(),
+            "{}",
+            String::from_utf8_lossy(&export.stderr)
+        );
+        let json = glb_json(&file);
+        assert_eq!(json["skins"][0]["joints"].as_array().unwrap().len(), 19);
+        assert_eq!(json.get("animations").is_some(), animated, "{pose}");
+    }
+    // A map that names a node the file lacks is refused, naming it.
+    let export = troupe()
+        .current_dir(repo())
+        .args(["export", "gltf"])
+        .arg(dir.join("bad.glb"))
+        .args([
+            "--look",
+            "tests/assets/characters/CesiumMan.glb",
+            "--bones",
+            "hips=Pelvis",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&export.stderr);
+    assert!(
+        !export.status.success() && err.contains("`Pelvis`"),
+        "{err}"
+    );
+}

@@ -10,7 +10,7 @@
 //! 1. **Placement**: the character is turned so that its hips-to-head line and its
 //!    left-right axis lie along those of troupe's rest posture (so it faces +Z, troupe's
 //!    front, whatever axes the file used), scaled to the actor's height (its mesh's
-//!    extent along up), its lowest vertex put on the floor and its hips over troupe's.
+//!    extent along up) and its hips put over troupe's.
 //! 2. **Rest poses reconciled**: each mapped bone gets a constant rotation `A`, the
 //!    shortest arc from its direction in the bind pose (towards the centroid of the
 //!    nearest mapped bones below it) to the direction from where it stands in troupe's
@@ -19,7 +19,9 @@
 //!    character bound in T-pose hangs its arms as troupe's rest posture does, and a
 //!    narrow-shouldered one still puts its hands by troupe's hands. The topmost mapped
 //!    bone (the hips) keeps its orientation; a mapped bone with no mapped bone below it
-//!    keeps its parent's `A`.
+//!    keeps its parent's `A`; the bones of a foot keep their bind orientation (`A` = 1):
+//!    a bind pose and troupe's rest posture both stand flat-footed. Last, the character
+//!    is lifted so that its lowest vertex in troupe's rest posture is on the floor.
 //! 3. **Posing**: a mapped bone takes the world rotation its troupe joint has made since
 //!    rest, `R(q) = Rⱼ(q)·Rⱼ(0)⁻¹·A·R_bind`; its position follows the character's own
 //!    bone chain (the character keeps its proportions), and the topmost mapped bone is
@@ -51,6 +53,20 @@ pub const REQUIRED_JOINTS: [&str; 6] = [
 /// Troupe joints (without their `l_`/`r_`) at the root of a limb: their bones aim at the
 /// limb's end when rest poses are reconciled.
 const LIMB_ROOTS: [&str; 2] = ["shoulder", "hip"];
+
+/// Troupe joints (without their `l_`/`r_`) of the foot: their bones keep their bind
+/// orientation at rest, since a character's bind pose and troupe's rest posture both
+/// stand flat-footed. Aiming them at troupe's foot joints instead would tilt a foot
+/// whose bones are placed otherwise (CesiumMan's toe bone sits at the ball, 4 cm ahead
+/// of the ankle, troupe's 18 cm): toes up, heel 3 cm into the floor.
+const FOOT: [&str; 4] = ["ankle", "subtalar", "midtarsal", "metatarsal"];
+
+/// A troupe joint's name without its side (`l_hip` → `hip`).
+fn sideless(name: &str) -> &str {
+    name.strip_prefix("l_")
+        .or_else(|| name.strip_prefix("r_"))
+        .unwrap_or(name)
+}
 
 /// One bone of a character, in the file's space.
 #[derive(Clone, Debug, PartialEq)]
@@ -104,6 +120,10 @@ pub struct Dressing {
     pub weights: Vec<[f32; 4]>,
     /// Triangles.
     pub indices: Vec<u32>,
+    /// Each bone's node name in the file.
+    pub bone_names: Vec<String>,
+    /// Each bone's parent bone (always a smaller index).
+    pub bone_parents: Vec<Option<usize>>,
     bones: Vec<Posed>,
     /// For each slot, the bone whose skinning matrix it is.
     slot_bones: Vec<usize>,
@@ -240,6 +260,11 @@ impl Character {
             let (Some(j), Some(_)) = (joint_of[b], mapped_above[b]) else {
                 continue; // the topmost mapped bone keeps its orientation
             };
+            let name = sideless(&skeleton.joints()[j].name);
+            if FOOT.contains(&name) {
+                align[b] = DQuat::IDENTITY;
+                continue;
+            }
             let mapped_below = |b: usize| -> Vec<usize> {
                 (0..self.bones.len())
                     .filter(|&c| mapped_above[c] == Some(b) && joint_of[c].is_some())
@@ -248,10 +273,7 @@ impl Character {
             let mut below = mapped_below(b);
             // An upper arm or thigh aims at the end of its limb (the wrist, the foot),
             // so the limb hangs straight as troupe's does at rest.
-            let name = &skeleton.joints()[j].name;
-            if LIMB_ROOTS.contains(&name.trim_start_matches(['l', 'r']).trim_start_matches('_'))
-                && below.len() == 1
-            {
+            if LIMB_ROOTS.contains(&name) && below.len() == 1 {
                 let further = mapped_below(below[0]);
                 if further.len() == 1 {
                     below = further;
@@ -337,7 +359,7 @@ impl Character {
             slots.push(s);
             weights.push(w);
         }
-        Ok(Dressing {
+        let mut dressing = Dressing {
             source: self.source.clone(),
             positions: turned
                 .iter()
@@ -352,17 +374,50 @@ impl Character {
             slots,
             weights,
             indices: self.indices.clone(),
+            bone_names: self.bones.iter().map(|b| b.name.clone()).collect(),
+            bone_parents: self.bones.iter().map(|b| b.parent).collect(),
             bones,
             slot_bones,
             rest,
-        })
+        };
+        // Reconciling rest poses moves the mesh (legs bound apart hang straight, and
+        // so reach lower): it stands on the floor in troupe's rest posture.
+        let lowest = dressing
+            .deform(&dressing.rest)
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::INFINITY, f64::min);
+        dressing.lift(-lowest);
+        Ok(dressing)
     }
 }
 
 impl Dressing {
+    /// Moves the whole character up by `height` (metres): its bind pose, so its every
+    /// posture.
+    fn lift(&mut self, height: f64) {
+        for p in &mut self.positions {
+            p[1] += height as f32;
+        }
+        for bone in &mut self.bones {
+            bone.bind.translation.y += height;
+        }
+    }
+
     /// Number of skinning slots (distinct matrices the vertices use).
     pub fn slot_count(&self) -> usize {
         self.slot_bones.len()
+    }
+
+    /// The bone whose skinning matrix each slot is (an index into the bones).
+    pub fn slot_bones(&self) -> &[usize] {
+        &self.slot_bones
+    }
+
+    /// Every bone's placed bind frame (troupe's frame, metres): where
+    /// [`Dressing::positions`] are bound.
+    pub fn bind_frames(&self) -> Vec<Transform> {
+        self.bones.iter().map(|b| b.bind).collect()
     }
 
     /// The troupe joint whose motion moves each skinning slot.

@@ -12,13 +12,15 @@
 
 use crate::bvh::{from_rig, write_bvh, Axis, RotationOrder};
 use crate::error::{Error, Result};
-use crate::gltf::{read_gltf_motion, write_glb, write_glb_with, write_gltf, write_gltf_with};
+use crate::gltf::{
+    read_gltf_motion, write_character, write_glb, write_glb_with, write_gltf, write_gltf_with,
+};
 use crate::retarget::load_sequence_for;
 use crate::rig::Rig;
 use crate::trk::{read_trk, read_trk_set, write_trk_file, TrkFile};
 use std::path::{Path, PathBuf};
 use troupe_body::skeleton::Skeleton;
-use troupe_body::Skin;
+use troupe_body::{Dressing, Skin};
 use troupe_motion::object_motion::ObjectMotion;
 use troupe_motion::sequence::Sequence;
 
@@ -132,6 +134,23 @@ pub fn save_recording<'a>(
     objects: &[ObjectMotion],
     actors: impl IntoIterator<Item = (&'a str, &'a Skeleton)>,
 ) -> Result<Vec<PathBuf>> {
+    let actors = actors
+        .into_iter()
+        .map(|(name, skeleton)| (name, skeleton, None));
+    save_dressed_recording(path, sequences, objects, actors)
+}
+
+/// [`save_recording`] of actors that may be dressed in a user's character: `actors` gives
+/// `(name, skeleton, look)`; a glTF file of an actor with a look holds that character
+/// (its bones, mesh and their animation, [`crate::gltf::character`]) in place of
+/// troupe's skeleton and generated skin. Other formats are written as by
+/// [`save_recording`].
+pub fn save_dressed_recording<'a>(
+    path: impl AsRef<Path>,
+    sequences: &[Sequence],
+    objects: &[ObjectMotion],
+    actors: impl IntoIterator<Item = (&'a str, &'a Skeleton, Option<&'a Dressing>)>,
+) -> Result<Vec<PathBuf>> {
     let path = path.as_ref();
     let format = Format::of(path)?;
     if format == Format::Trk {
@@ -148,9 +167,8 @@ pub fn save_recording<'a>(
         path.with_file_name(format!("{stem}.{name}.{ext}"))
     };
     let mut written = Vec::new();
-    // Skins by skeleton: actors of one body share theirs.
     let mut skins: Vec<(*const Skeleton, Option<Skin>)> = Vec::new();
-    for (seq, (actor, skeleton)) in sequences.iter().zip(actors) {
+    for (seq, (actor, skeleton, look)) in sequences.iter().zip(actors) {
         let out = if sequences.len() == 1 {
             path.to_path_buf()
         } else {
@@ -159,31 +177,23 @@ pub fn save_recording<'a>(
         let rig = Rig::from_sequence(skeleton, seq)?;
         match format {
             // A glTF file of a troupe body carries its skin (a skeleton that is not a
-            // troupe template's is written with bones only) and every object.
+            // troupe template's is written with bones only), or the user's character the
+            // actor is dressed in, and every object.
             Format::Gltf | Format::Glb => {
-                let key: *const Skeleton = skeleton;
-                if !skins.iter().any(|(k, _)| *k == key) {
-                    let skin = match Skin::build(skeleton) {
-                        Ok(skin) => Some(skin),
-                        Err(e) => {
-                            tracing::warn!("{}: written without a skin: {e}", out.display());
-                            None
-                        }
-                    };
-                    skins.push((key, skin));
-                }
-                let skin = skins
-                    .iter()
-                    .find(|(k, _)| *k == key)
-                    .and_then(|(_, s)| s.as_ref());
                 let with: Vec<(&ObjectMotion, Rig)> = objects
                     .iter()
                     .map(|o| (o, Rig::from_object(o, seq.start(), &rig.times)))
                     .collect();
-                if format == Format::Gltf {
-                    write_gltf_with(&out, &rig, skin, &with, actor)?;
-                } else {
-                    write_glb_with(&out, &rig, skin, &with, actor)?;
+                match look {
+                    Some(look) => write_character(&out, look, &rig, &with, actor)?,
+                    None => {
+                        let skin = skin_of(&mut skins, skeleton, &out);
+                        if format == Format::Gltf {
+                            write_gltf_with(&out, &rig, skin, &with, actor)?;
+                        } else {
+                            write_glb_with(&out, &rig, skin, &with, actor)?;
+                        }
+                    }
                 }
             }
             _ => save_rig(&out, &rig, actor, seq.frame_time())?,
@@ -218,6 +228,31 @@ pub fn save_recording<'a>(
     Ok(written)
 }
 
+/// The generated skin of `skeleton`, built once per skeleton and kept in `skins` (actors
+/// of one body share theirs); `None`, with a warning naming `out`, for a skeleton that is
+/// not a troupe template's.
+fn skin_of<'s>(
+    skins: &'s mut Vec<(*const Skeleton, Option<Skin>)>,
+    skeleton: &Skeleton,
+    out: &Path,
+) -> Option<&'s Skin> {
+    let key: *const Skeleton = skeleton;
+    if !skins.iter().any(|(k, _)| *k == key) {
+        let skin = match Skin::build(skeleton) {
+            Ok(skin) => Some(skin),
+            Err(e) => {
+                tracing::warn!("{}: written without a skin: {e}", out.display());
+                None
+            }
+        };
+        skins.push((key, skin));
+    }
+    skins
+        .iter()
+        .find(|(k, _)| *k == key)
+        .and_then(|(_, s)| s.as_ref())
+}
+
 /// Saves a rig and the skin of its skeleton as glTF (`.gltf` or `.glb` by `path`'s
 /// extension), the scene named `name`.
 pub fn save_skinned(path: &Path, rig: &Rig, skin: Option<&Skin>, name: &str) -> Result<()> {
@@ -226,6 +261,18 @@ pub fn save_skinned(path: &Path, rig: &Rig, skin: Option<&Skin>, name: &str) -> 
         Format::Glb => write_glb_with(path, rig, skin, &[], name),
         _ => Err(Error::Invalid(format!(
             "{}: a skinned character is written as .gltf or .glb",
+            path.display()
+        ))),
+    }
+}
+
+/// Saves a user's character fitted to a skeleton (`dressing`), following `rig` (that
+/// skeleton's), as glTF (`.gltf` or `.glb` by `path`'s extension), the scene named `name`.
+pub fn save_character(path: &Path, dressing: &Dressing, rig: &Rig, name: &str) -> Result<()> {
+    match Format::of(path)? {
+        Format::Gltf | Format::Glb => write_character(path, dressing, rig, &[], name),
+        _ => Err(Error::Invalid(format!(
+            "{}: a character is written as .gltf or .glb",
             path.display()
         ))),
     }

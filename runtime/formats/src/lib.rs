@@ -18,7 +18,8 @@ pub mod trk;
 pub mod urdf;
 
 pub use dispatch::{
-    load_sequence, load_sequences, save_recording, save_rig, save_sequences, save_skinned, Format,
+    load_sequence, load_sequences, save_character, save_dressed_recording, save_recording,
+    save_rig, save_sequences, save_skinned, Format,
 };
 pub use error::{Error, Result};
 pub use rig::Rig;

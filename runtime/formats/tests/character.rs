@@ -10,39 +10,8 @@ use troupe_body::{Skeleton, Transform};
 use troupe_formats::character::{read_character, vrm_humanoid_bones};
 use troupe_formats::Error;
 
-fn asset(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../../tests/assets/characters")
-        .join(name)
-}
-
-/// The map for Khronos' CesiumMan, whose joints have names of their own.
-fn cesium_map() -> Vec<(String, String)> {
-    [
-        ("hips", "Skeleton_torso_joint_1"),
-        ("spine", "Skeleton_torso_joint_2"),
-        ("upperChest", "torso_joint_3"),
-        ("neck", "Skeleton_neck_joint_1"),
-        ("head", "Skeleton_neck_joint_2"),
-        ("rightUpperArm", "Skeleton_arm_joint_R"),
-        ("rightLowerArm", "Skeleton_arm_joint_R__2_"),
-        ("rightHand", "Skeleton_arm_joint_R__3_"),
-        ("leftUpperArm", "Skeleton_arm_joint_L__4_"),
-        ("leftLowerArm", "Skeleton_arm_joint_L__3_"),
-        ("leftHand", "Skeleton_arm_joint_L__2_"),
-        ("rightUpperLeg", "leg_joint_R_1"),
-        ("rightLowerLeg", "leg_joint_R_2"),
-        ("rightFoot", "leg_joint_R_3"),
-        ("rightToes", "leg_joint_R_5"),
-        ("leftUpperLeg", "leg_joint_L_1"),
-        ("leftLowerLeg", "leg_joint_L_2"),
-        ("leftFoot", "leg_joint_L_3"),
-        ("leftToes", "leg_joint_L_5"),
-    ]
-    .iter()
-    .map(|(a, b)| (a.to_string(), b.to_string()))
-    .collect()
-}
+mod characters;
+use characters::{asset, cesium_map, vrm_with_boxes};
 
 fn globals(skeleton: &Skeleton, dofs: &[(&str, f64)]) -> Vec<Transform> {
     let mut q = vec![0.0; skeleton.dof_count()];
@@ -84,15 +53,12 @@ fn cesium_man_follows_troupe_postures() {
         assert!(js.iter().all(|&j| (j as usize) < c.bones.len()));
     }
     let d = c.dress(&skel, 1.75).unwrap();
-    // Scaled to the actor's height, standing on the floor.
+    // Scaled to the actor's height (standing on the floor: the next test).
     let (low, high) = d
         .positions
         .iter()
         .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
-    assert!(
-        low.abs() < 1e-4 && (high - 1.75).abs() < 1e-4,
-        "{low}..{high}"
-    );
+    assert!((high - low - 1.75).abs() < 1e-4, "{low}..{high}");
     let left_hand = vertices_of(&c, "l_wrist");
     let right_hand = vertices_of(&c, "r_wrist");
     let head = vertices_of(&c, "skullbase");
@@ -626,5 +592,247 @@ fn malformed_files_are_errors_naming_the_file_never_panics() {
         .unwrap_err()
         .to_string();
     assert!(err.contains("absent.glb"), "{err}");
+    std::fs::remove_dir_all(dir).ok();
+}
+
+#[test]
+fn characters_stand_on_the_floor_in_troupes_rest_posture() {
+    // Its legs are bound spread and its feet tilted: once they hang as troupe's do, the
+    // mesh must still stand on the floor, not sink into it.
+    let cesium = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    // And the VRM 1.0 sample, bound with its feet turned 45° down, given a box per bone.
+    let boxes = std::env::temp_dir().join(format!("troupe-boxes-{}.vrm", std::process::id()));
+    std::fs::write(&boxes, vrm_with_boxes(&asset("VRM1_humanoid_no_skin.vrm"))).unwrap();
+    let boxes = read_character(&boxes, &[]).unwrap();
+    for (c, template, height) in [
+        (&cesium, "adult", 1.75),
+        (&cesium, "adult", 1.6),
+        (&cesium, "child", 1.1),
+        (&boxes, "adult", 1.75),
+    ] {
+        let skel = troupe_body::template::template(template).unwrap();
+        let mut params = skel.default_params();
+        params.height = height;
+        let skel = skel.instantiate(params).unwrap();
+        let d = c.dress(&skel, height).unwrap();
+        let low = d
+            .deform(&globals(&skel, &[]))
+            .iter()
+            .map(|p| p.y)
+            .fold(f64::MAX, f64::min);
+        assert!(
+            low.abs() < 0.01,
+            "{} on a {height} m {template}: the lowest vertex at rest is at {low:.4} m",
+            c.source
+        );
+    }
+}
+
+/// The values of an accessor as troupe writes them (tightly packed `f32`, `u16` or
+/// `u32`), read with no help from troupe's reader.
+fn accessor_values(accessor: &gltf::Accessor, bin: &[u8]) -> Vec<f64> {
+    let view = accessor.view().unwrap();
+    let start = view.offset() + accessor.offset();
+    let n = accessor.count() * accessor.dimensions().multiplicity();
+    let width = accessor.data_type().size();
+    (0..n)
+        .map(|i| {
+            let b = &bin[start + width * i..start + width * (i + 1)];
+            match accessor.data_type() {
+                gltf::accessor::DataType::F32 => f32::from_le_bytes(b.try_into().unwrap()) as f64,
+                gltf::accessor::DataType::U16 => u16::from_le_bytes(b.try_into().unwrap()) as f64,
+                gltf::accessor::DataType::U32 => u32::from_le_bytes(b.try_into().unwrap()) as f64,
+                other => panic!("troupe does not write {other:?}"),
+            }
+        })
+        .collect()
+}
+
+/// Every node's world matrix at time `t` of a document's first animation, as a glTF
+/// viewer computes it: channels sampled linearly (rotations by slerp), node transforms
+/// chained from the scene's roots.
+fn node_worlds_at(doc: &gltf::Document, bin: &[u8], t: f64) -> Vec<glam::DMat4> {
+    use glam::{DQuat, DVec3};
+    let mut trs: Vec<(DVec3, DQuat)> = doc
+        .nodes()
+        .map(|n| {
+            let (t, r, _) = n.transform().decomposed();
+            (
+                DVec3::from(t.map(f64::from)),
+                DQuat::from_array(r.map(f64::from)),
+            )
+        })
+        .collect();
+    for channel in doc.animations().next().unwrap().channels() {
+        let times = accessor_values(&channel.sampler().input(), bin);
+        let values = accessor_values(&channel.sampler().output(), bin);
+        let k = times.iter().rposition(|&x| x <= t).unwrap_or(0);
+        let (k1, f) = if k + 1 < times.len() {
+            (k + 1, (t - times[k]) / (times[k + 1] - times[k]))
+        } else {
+            (k, 0.0)
+        };
+        let node = channel.target().node().index();
+        match channel.target().property() {
+            gltf::animation::Property::Translation => {
+                let at = |k: usize| DVec3::from_slice(&values[3 * k..3 * k + 3]);
+                trs[node].0 = at(k).lerp(at(k1), f);
+            }
+            gltf::animation::Property::Rotation => {
+                let at = |k: usize| DQuat::from_slice(&values[4 * k..4 * k + 4]);
+                trs[node].1 = at(k).slerp(at(k1), f);
+            }
+            other => panic!("troupe does not animate {other:?}"),
+        }
+    }
+    let mut world = vec![glam::DMat4::IDENTITY; trs.len()];
+    let mut stack: Vec<(usize, glam::DMat4)> = doc
+        .default_scene()
+        .unwrap()
+        .nodes()
+        .map(|n| (n.index(), glam::DMat4::IDENTITY))
+        .collect();
+    while let Some((n, parent)) = stack.pop() {
+        let (t, r) = trs[n];
+        world[n] = parent * glam::DMat4::from_rotation_translation(r, t);
+        for child in doc.nodes().nth(n).unwrap().children() {
+            stack.push((child.index(), world[n]));
+        }
+    }
+    world
+}
+
+#[test]
+fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
+    use troupe_formats::gltf::write_character;
+    use troupe_formats::Rig;
+    use troupe_motion::sequence::{Key, Sequence, Track};
+    let skel = default_skeleton("adult").unwrap();
+    let mut seq = Sequence::new("wave");
+    seq.meta.insert("rate".into(), "20".into());
+    for (dof, v) in [
+        ("r_shoulder_abduction", 140.0f64),
+        ("r_elbow_flexion", 60.0),
+        ("r_wrist_flexion", 40.0),
+        ("l_shoulder_flexion", 80.0),
+        ("l_knee_flexion", 50.0),
+        ("vl5_flexion", 20.0),
+        ("root_yaw", 90.0),
+        ("root_x", 0.0),
+    ] {
+        let v = if dof == "root_x" { 1.0 } else { v.to_radians() };
+        let keys = vec![Key::new(0.0, 0.0), Key::new(0.5, v), Key::new(1.0, v / 3.0)];
+        seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
+    }
+    let rig = Rig::from_sequence(&skel, &seq).unwrap();
+    let dir = std::env::temp_dir().join(format!("troupe-character-gltf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    // CesiumMan (its bind pose from COLLADA, a `bones` map) and the VRM 1.0 sample (its
+    // own humanoid map; limbs bound with rotated frames), given a box per bone.
+    let boxes = dir.join("boxes.vrm");
+    std::fs::write(&boxes, vrm_with_boxes(&asset("VRM1_humanoid_no_skin.vrm"))).unwrap();
+    let characters = [
+        (
+            asset("CesiumMan.glb"),
+            cesium_map(),
+            "Skeleton_arm_joint_R__3_",
+            19,
+        ),
+        (boxes, vec![], "Hand.R", 22),
+    ];
+    for ((source, map, hand_bone, bone_count), ext) in characters
+        .iter()
+        .flat_map(|c| ["glb", "gltf"].map(|ext| (c, ext)))
+    {
+        let c = read_character(source, map).unwrap();
+        let d = c.dress(&skel, 1.75).unwrap();
+        let path = dir.join(format!("character.{ext}"));
+        let file = format!("{} as .{ext}", source.display());
+        write_character(&path, &d, &rig, &[], "ann").unwrap();
+        let bytes = std::fs::read(&path).unwrap();
+        let gltf = gltf::Gltf::from_slice(&bytes).unwrap();
+        let bin = match &gltf.blob {
+            Some(blob) => blob.clone(),
+            None => std::fs::read(dir.join("character.bin")).unwrap(),
+        };
+        // Not a troupe motion: reading it back as one is refused, naming the character.
+        let err = troupe_formats::gltf::read_gltf_motion(&path, &skel)
+            .unwrap_err()
+            .to_string();
+        let name = source.file_name().unwrap().to_string_lossy();
+        assert!(
+            err.contains("user's character") && err.contains(&*name),
+            "{err}"
+        );
+        let doc = &gltf.document;
+        let skin = doc.skins().next().unwrap();
+        let joints: Vec<usize> = skin.joints().map(|n| n.index()).collect();
+        assert_eq!(joints.len(), *bone_count, "{file}: one joint per bone");
+        let ibm = accessor_values(&skin.inverse_bind_matrices().unwrap(), &bin);
+        let primitive = doc.meshes().next().unwrap().primitives().next().unwrap();
+        let attribute = |s: gltf::Semantic| accessor_values(&primitive.get(&s).unwrap(), &bin);
+        let positions = attribute(gltf::Semantic::Positions);
+        let vertex_joints = attribute(gltf::Semantic::Joints(0));
+        let weights = attribute(gltf::Semantic::Weights(0));
+        assert_eq!(positions.len() / 3, d.positions.len());
+        let hand = d.bone_names.iter().position(|n| n == hand_bone).unwrap();
+        let wrist = skel.joint("r_wrist").unwrap();
+        let rest = globals(&skel, &[]);
+        for k in [0, 3, 10, 14, 20] {
+            let t = k as f64 * seq.frame_time();
+            let mut q = vec![0.0; skel.dof_count()];
+            for track in seq.tracks() {
+                q[skel.dof(track.dof()).unwrap()] = track.value(t);
+            }
+            let mut g = vec![Transform::IDENTITY; skel.joints().len()];
+            forward_kinematics(&skel, &q, &mut g);
+            let world = node_worlds_at(doc, &bin, t);
+            // Every bone where troupe's viewer puts it: f32 storage over a chain of at
+            // most seven bones a metre or two from the origin rounds by well under 0.1 mm.
+            let frames = d.bone_frames(&g);
+            for (b, &node) in joints.iter().enumerate() {
+                let at = world[node].w_axis.truncate();
+                assert!(
+                    (at - frames[b].translation).length() < 1e-4,
+                    "{file} t={t}: bone {} at {at}, troupe {}",
+                    d.bone_names[b],
+                    frames[b].translation
+                );
+            }
+            // The hand turns as troupe's wrist does since rest (its rest offset kept).
+            let turned = |r: glam::DQuat, r0: glam::DQuat| r * r0.inverse();
+            let (_, hand_now, _) = world[joints[hand]].to_scale_rotation_translation();
+            let hand_rest = d.bone_frames(&rest)[hand].rotation;
+
+            // (The angle from the vector part, which is well conditioned near zero
+            // where `acos` of a dot product is not: f32 storage turns by ~1e-7 rad.)
+            let off = turned(hand_now, hand_rest).inverse()
+                * turned(g[wrist].rotation, rest[wrist].rotation);
+            let angle = (2.0 * off.xyz().length().asin()).to_degrees();
+            assert!(
+                angle < 1e-3,
+                "{file} t={t}: the hand is {angle}° off troupe's wrist"
+            );
+            // The skin: every vertex where troupe's linear blend skinning puts it.
+            let posed = d.deform(&g);
+            let skinning: Vec<glam::DMat4> = (0..joints.len())
+                .map(|j| world[joints[j]] * glam::DMat4::from_cols_slice(&ibm[16 * j..16 * j + 16]))
+                .collect();
+            for v in 0..posed.len() {
+                let p = DVec3::from_slice(&positions[3 * v..3 * v + 3]);
+                let skinned: DVec3 = (0..4)
+                    .map(|i| {
+                        skinning[vertex_joints[4 * v + i] as usize].transform_point3(p)
+                            * weights[4 * v + i]
+                    })
+                    .sum();
+                assert!(
+                    (skinned - posed[v]).length() < 1e-4,
+                    "{file} t={t}: vertex {v} at {skinned}, troupe {}",
+                    posed[v]
+                );
+            }
+        }
+    }
     std::fs::remove_dir_all(dir).ok();
 }

@@ -1,7 +1,10 @@
 //! The glTF files troupe writes pass the Khronos glTF validator with no error and no
 //! warning: a troupe body's motion with its skin (adult and child), with and without a
 //! recorded object, the skinned characters `troupe export gltf` writes (a one-frame rest
-//! pose), and a BVH on its own hierarchy, as `.gltf` + `.bin` and as `.glb`.
+//! pose), users' characters (CesiumMan, CesiumMan as a VRM 1.0 file, and the VRM 1.0
+//! sample of the test assets given a box per bone as its skin) moving with an
+//! object, in troupe's rest posture and in their bind pose, and a BVH on its own
+//! hierarchy, as `.gltf` + `.bin` and as `.glb`.
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
 //! into `.tools/node`; without node or without that package the test prints why and
@@ -14,10 +17,16 @@ use troupe_body::solid::Shape;
 use troupe_body::template::template;
 use troupe_body::{Skeleton, Skin};
 use troupe_formats::bvh::read_bvh;
-use troupe_formats::gltf::{write_glb, write_glb_with, write_gltf, write_gltf_with};
+use troupe_formats::character::read_character;
+use troupe_formats::gltf::{
+    write_character, write_glb, write_glb_with, write_gltf, write_gltf_with,
+};
 use troupe_formats::Rig;
 use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
+
+mod characters;
+use characters::{as_vrm, asset, cesium_map, vrm_with_boxes};
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -100,6 +109,36 @@ fn written_gltf_files_pass_the_khronos_validator() {
     write_gltf_with(&gltf, &rig, Some(&skin), &objects, "carry").unwrap();
     write_glb_with(&glb, &rig, Some(&skin), &objects, "carry").unwrap();
     files.extend([gltf, glb]);
+    // Users' characters, as `troupe export gltf --look` and `run --record` write them:
+    // CesiumMan (mapped by a `bones` map) waving with an object, and in troupe's rest
+    // posture; a VRM 1.0 file (CesiumMan with a `VRMC_vrm` humanoid, mapped by it) at
+    // rest and in its bind pose (no animation); the VRM 1.0 sample of the test assets
+    // (its own skeleton and humanoid bones) skinned with a box per bone.
+    let cesium = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
+    let vrm = dir.join("cesium.vrm");
+    std::fs::write(&vrm, as_vrm(&asset("CesiumMan.glb"))).unwrap();
+    let vrm = read_character(&vrm, &[]).unwrap();
+    let boxes = dir.join("boxes.vrm");
+    std::fs::write(&boxes, vrm_with_boxes(&asset("VRM1_humanoid_no_skin.vrm"))).unwrap();
+    let boxes = read_character(&boxes, &[]).unwrap();
+    let rest = Rig::from_sequence(&skeleton, &Sequence::new("rest")).unwrap();
+    let mut bind = rest.clone();
+    (bind.times, bind.rotations, bind.translations) = (vec![], vec![], vec![]);
+    for (stem, character, rig, with) in [
+        ("cesium_carry", &cesium, &rig, &objects[..]),
+        ("cesium_rest", &cesium, &rest, &[][..]),
+        ("vrm_rest", &vrm, &rest, &[][..]),
+        ("vrm_bind", &vrm, &bind, &[][..]),
+        ("boxes_carry", &boxes, &rig, &objects[..]),
+        ("boxes_bind", &boxes, &bind, &[][..]),
+    ] {
+        let dressing = character.dress(&skeleton, 1.75).unwrap();
+        for ext in ["gltf", "glb"] {
+            let file = dir.join(format!("{stem}.{ext}"));
+            write_character(&file, &dressing, rig, with, stem).unwrap();
+            files.push(file);
+        }
+    }
     let out = Command::new("node")
         .arg(repo().join("scripts/validate-gltf.js"))
         .args(&files)

@@ -5,9 +5,11 @@
 //! like the root): a `.gltf` (JSON) with a `.bin` beside it, or one `.glb`. Metres, Y up,
 //! facing +Z — glTF's own conventions, so no axis change is needed. A troupe body's file
 //! also carries its generated skin as a skinned mesh ([`skin`]). Reading takes the
-//! first animation back onto a troupe skeleton whose joint names the nodes carry.
+//! first animation back onto a troupe skeleton whose joint names the nodes carry. An
+//! actor dressed in a user's character is written as that character ([`character`]).
 //! A recording's objects are written as animated nodes beside the skeleton (`objects`).
 
+pub mod character;
 mod objects;
 pub mod read;
 pub mod skin;
@@ -16,7 +18,8 @@ pub mod write;
 pub use read::read_gltf_motion;
 pub use skin::add_skin;
 pub use write::{
-    to_gltf, to_gltf_with_objects, write_glb, write_glb_with, write_gltf, write_gltf_with,
+    to_gltf, to_gltf_with_objects, write_character, write_glb, write_glb_with, write_gltf,
+    write_gltf_with,
 };
 
 /// The rig glTF files are written from (the crate's one [`crate::rig::Rig`]).

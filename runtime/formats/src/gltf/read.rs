@@ -8,7 +8,9 @@
 //! root's animated translation gives `root_x/y/z`. Buffers may be external files, base64
 //! `data:` URIs or the binary chunk of a `.glb`; channels are read from tightly packed
 //! 32-bit float accessors (what troupe writes), and everything else is refused with a
-//! message naming the file and what was wrong.
+//! message naming the file and what was wrong. A file of a user's character (what
+//! `--record` writes for an actor dressed in one) is refused too: its bones are the
+//! character's, not troupe's joints.
 
 use crate::error::{Error, Result};
 use ::gltf::accessor::{DataType, Dimensions};
@@ -24,6 +26,16 @@ use troupe_motion::sequence::{Key, Sequence, Track};
 
 /// Bytes of a binary glTF header: magic, version and total length.
 const GLB_HEADER: usize = 12;
+
+/// The file a user's character came from, when the document is one troupe wrote of an
+/// actor dressed in it (a node's `extras` mark it, see [`super::character`]).
+fn character_source(gltf: &Gltf) -> Option<String> {
+    gltf.document.as_json().nodes.iter().find_map(|node| {
+        let extras: serde_json::Value = serde_json::from_str(node.extras.as_ref()?.get()).ok()?;
+        let character = extras.get(super::character::CHARACTER_EXTRAS)?;
+        Some(character["source"].as_str().unwrap_or("?").to_string())
+    })
+}
 
 /// Reads the first animation of a glTF file (`.gltf` or `.glb`) as a sequence for
 /// `skeleton`.
@@ -45,6 +57,12 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
         },
         other => bad(format!("not valid glTF: {other}")),
     })?;
+    if let Some(source) = character_source(&gltf) {
+        return Err(bad(format!(
+            "it holds a user's character ({source}) moved by its own bones, not troupe's \
+             joints: play the run's .trk recording instead"
+        )));
+    }
     let buffers = load_buffers(&gltf, path, &bad)?;
 
     let animation = gltf

@@ -74,11 +74,48 @@ fn le_f32(values: impl IntoIterator<Item = f32>) -> Vec<u8> {
     values.into_iter().flat_map(f32::to_le_bytes).collect()
 }
 
+/// The vertex arrays of a skinned triangle mesh, as one glTF primitive holds them.
+pub struct SkinnedMesh<'a> {
+    /// Bind-pose positions.
+    pub positions: &'a [[f32; 3]],
+    /// Unit normals.
+    pub normals: &'a [[f32; 3]],
+    /// Linear RGB colour of each vertex (`COLOR_0`).
+    pub colors: Vec<[f32; 3]>,
+    /// Up to four joints per vertex, indices into the document's skin's joints; unused
+    /// slots have weight 0.
+    pub joints: Vec<[u16; 4]>,
+    /// Their weights, summing to one.
+    pub weights: &'a [[f32; 4]],
+    /// Triangles.
+    pub indices: &'a [u32],
+}
+
 /// Adds `skin` to a document written by [`super::to_gltf`] for the same skeleton: a mesh
 /// on a root node named `{name} skin` that uses the document's first skin, whose joints
 /// are the skeleton's joints in order. `bytes` is the document's one buffer; its length
 /// is updated.
 pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
+    let mesh = SkinnedMesh {
+        positions: &skin.positions,
+        normals: &skin.normals,
+        colors: skin.regions.iter().map(|&r| region_color(r)).collect(),
+        joints: skin.joints.clone(),
+        weights: &skin.weights,
+        indices: &skin.indices,
+    };
+    add_skinned_mesh(root, bytes, &mesh, &format!("{name} skin"));
+}
+
+/// Adds `skin` as a mesh named `name` (with a white, rough material, so that its vertex
+/// colours show) on a root node of that name using the document's first skin; returns
+/// the node.
+pub fn add_skinned_mesh(
+    root: &mut Root,
+    bytes: &mut Vec<u8>,
+    skin: &SkinnedMesh,
+    name: &str,
+) -> Index<json::Node> {
     let n = skin.positions.len();
     let (lo, hi) = skin.positions.iter().fold(
         (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
@@ -108,7 +145,7 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
     let colors = accessor(
         root,
         bytes,
-        &le_f32(skin.regions.iter().flat_map(|&r| region_color(r))),
+        &le_f32(skin.colors.iter().flatten().copied()),
         ComponentType::F32,
         Type::Vec3,
         n,
@@ -153,7 +190,7 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
         None,
     );
     let material = root.push(json::Material {
-        name: Some(format!("{name} skin")),
+        name: Some(name.to_string()),
         pbr_metallic_roughness: json::material::PbrMetallicRoughness {
             metallic_factor: json::material::StrengthFactor(0.0),
             roughness_factor: json::material::StrengthFactor(0.8),
@@ -172,7 +209,7 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
     .map(|(s, a)| (Valid(s), a))
     .collect();
     let mesh = root.push(json::Mesh {
-        name: Some(format!("{name} skin")),
+        name: Some(name.to_string()),
         primitives: vec![json::mesh::Primitive {
             attributes,
             indices: Some(indices),
@@ -189,7 +226,7 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
     // A skinned mesh's node sits at the root: glTF ignores its transform, and the
     // validator warns when it has a parent.
     let node = root.push(json::Node {
-        name: Some(format!("{name} skin")),
+        name: Some(name.to_string()),
         mesh: Some(mesh),
         skin: Some(Index::new(0)),
         ..Default::default()
@@ -201,4 +238,5 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
     if let Some(buffer) = root.buffers.first_mut() {
         buffer.byte_length = USize64::from(bytes.len());
     }
+    node
 }

@@ -1,6 +1,7 @@
 //! Writing a rig as glTF 2.0 with `gltf-json`'s typed structures: a `.gltf` (JSON) with a
 //! `.bin` buffer beside it, or one binary `.glb`.
 
+use super::character::{add_character, character_rig};
 use super::objects::object_node;
 use super::skin::add_skin;
 use crate::error::{Error, Result};
@@ -14,7 +15,7 @@ use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::borrow::Cow;
 use std::path::Path;
-use troupe_body::Skin;
+use troupe_body::{Dressing, Skin};
 use troupe_motion::object_motion::ObjectMotion;
 
 /// A growing binary buffer and the document whose buffer views and accessors point into
@@ -309,19 +310,12 @@ pub fn write_gltf_with(
     objects: &[(&ObjectMotion, Rig)],
     name: &str,
 ) -> Result<()> {
-    let path = path.as_ref();
-    let bin = path.with_extension("bin");
-    let uri = bin
-        .file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "motion.bin".into());
-    let (root, bytes) = document(rig, skin, objects, name, Some(&uri));
-    let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
-    std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
-    std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e))
+    save_document(path.as_ref(), false, |uri| {
+        document(rig, skin, objects, name, uri)
+    })
 }
 
-/// Writes `rig` as one binary glTF file `path` (`.glb`): a JSON chunk and a binary chunk.
+/// Writes `rig` as one binary glTF file `path` (`.glb`).
 pub fn write_glb(path: impl AsRef<Path>, rig: &Rig, name: &str) -> Result<()> {
     write_glb_with(path, rig, None, &[], name)
 }
@@ -336,8 +330,54 @@ pub fn write_glb_with(
     objects: &[(&ObjectMotion, Rig)],
     name: &str,
 ) -> Result<()> {
+    save_document(path.as_ref(), true, |uri| {
+        document(rig, skin, objects, name, uri)
+    })
+}
+
+/// Writes a user's character (`dressing`) following `troupe`, the rig of the skeleton
+/// it was fitted to, with recorded `objects` (on `troupe`'s frames), as `path`: one binary
+/// file if its extension is `.glb` (any case), else `.gltf` and a `.bin` beside it (see
+/// [`super::character`]).
+pub fn write_character(
+    path: impl AsRef<Path>,
+    dressing: &Dressing,
+    troupe: &Rig,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+) -> Result<()> {
     let path = path.as_ref();
-    let (root, bytes) = document(rig, skin, objects, name, None);
+    let binary = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
+    save_document(path, binary, |uri| {
+        let rig = character_rig(dressing, troupe);
+        let (mut root, mut bytes) = to_gltf_with_objects(&rig, objects, name, uri);
+        add_character(&mut root, &mut bytes, dressing, name);
+        (root, bytes)
+    })
+}
+
+/// Writes the document `build` makes, given how it names its buffer: as one binary
+/// `path` (a JSON chunk and a binary chunk, the buffer unnamed) when `binary`, else as
+/// JSON `path` with the buffer in a `.bin` of the same stem beside it.
+fn save_document(
+    path: &Path,
+    binary: bool,
+    build: impl FnOnce(Option<&str>) -> (Root, Vec<u8>),
+) -> Result<()> {
+    if !binary {
+        let bin = path.with_extension("bin");
+        let uri = bin
+            .file_name()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "motion.bin".into());
+        let (root, bytes) = build(Some(&uri));
+        let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;
+        std::fs::write(path, text).map_err(|e| Error::io(path, e))?;
+        return std::fs::write(&bin, bytes).map_err(|e| Error::io(&bin, e));
+    }
+    let (root, bytes) = build(None);
     let glb = Glb {
         header: Header {
             magic: *b"glTF",
