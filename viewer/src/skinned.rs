@@ -20,8 +20,8 @@ use troupe_body::skin::Region;
 use troupe_body::{Dressing, Skeleton, Skin};
 use wgpu::util::DeviceExt;
 
-/// The most joints a skinned skeleton may have (troupe's templates have 66); an actor
-/// with more is drawn as solids.
+/// The most skinning slots a skin may have (troupe's templates have 66 joints and the
+/// generated skin adds its helper joints); an actor with more is drawn as solids.
 pub(crate) const MAX_JOINTS: usize = 96;
 /// Colour slots of an actor's block: the skin regions, then the two hands.
 const COLORS: usize = 8;
@@ -141,20 +141,20 @@ impl SkinCache {
     pub fn get(&mut self, device: &wgpu::Device, skeleton: &Arc<Skeleton>) -> Option<&GpuSkin> {
         let key = Arc::as_ptr(skeleton) as usize;
         let entry = self.skins.entry(key).or_insert_with(|| {
-            let skin = if skeleton.joints().len() > MAX_JOINTS {
-                tracing::warn!(
-                    "skeleton `{}` has {} joints, more than the {MAX_JOINTS} the skin look draws: drawing solids",
-                    skeleton.name(),
-                    skeleton.joints().len()
-                );
-                None
-            } else {
-                match Skin::build(skeleton) {
-                    Ok(skin) => Some(upload(device, Arc::new(skin), skeleton)),
-                    Err(e) => {
-                        tracing::warn!("no skin for skeleton `{}` ({e}): drawing solids", skeleton.name());
-                        None
-                    }
+            let skin = match Skin::build(skeleton) {
+                // Slots: the skeleton's joints and the skin's helper joints.
+                Ok(skin) if skin.rest.len() > MAX_JOINTS => {
+                    tracing::warn!(
+                        "skeleton `{}` has {} joints and helpers, more than the {MAX_JOINTS} the skin look draws: drawing solids",
+                        skeleton.name(),
+                        skin.rest.len()
+                    );
+                    None
+                }
+                Ok(skin) => Some(upload(device, Arc::new(skin), skeleton)),
+                Err(e) => {
+                    tracing::warn!("no skin for skeleton `{}` ({e}): drawing solids", skeleton.name());
+                    None
                 }
             };
             (skeleton.clone(), skin)
@@ -171,7 +171,7 @@ fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
         .iter()
         .zip(&skin.joints)
         .map(
-            |(&region, joints)| match (region, hand_of[joints[0] as usize]) {
+            |(&region, joints)| match (region, hand_of[skin.slot_joint(joints[0] as usize)]) {
                 (Region::Skin, Some(hand)) => hand,
                 _ => region as u32,
             },

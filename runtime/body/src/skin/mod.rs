@@ -11,16 +11,21 @@
 //!    (meshoptimizer's quadric edge collapse) to at most [`MAX_TRIANGLES`] triangles, and
 //!    once more into a coarse level of detail for actors far from the camera;
 //! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
-//!    and smoothed over the surface so that they change continuously from vertex to vertex.
+//!    and smoothed over the surface so that they change continuously from vertex to vertex;
+//!    across the big joints the blend runs through [`helpers`], in-between joints turned
+//!    by a fraction of the joint's rotation, so that a bend folds no skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
 
+mod collapse;
 mod flips;
+pub mod helpers;
 mod surface;
 pub mod volumes;
 mod weights;
 
+pub use helpers::Helper;
 pub use volumes::{rest_globals, Region};
 pub use weights::Influences;
 
@@ -34,6 +39,9 @@ use volumes::{Join, Volume};
 pub const MAX_TRIANGLES: usize = 24_000;
 /// Triangles of the coarse level of detail.
 pub const FAR_TRIANGLES: usize = 6_000;
+/// Edges shorter than this many grid cells are collapsed after the simplification
+/// (see `collapse`).
+const TINY_EDGE: f64 = 0.5;
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -44,7 +52,8 @@ pub struct Skin {
     pub positions: Vec<[f32; 3]>,
     /// Rest-pose unit vertex normals.
     pub normals: Vec<[f32; 3]>,
-    /// Up to four joint indices per vertex (into the skeleton's joints).
+    /// Up to four skinning slots per vertex: the skeleton's joints, then the
+    /// [`helpers`](Skin::helpers) (slot `joints + i` is helper `i`).
     pub joints: Vec<[u16; 4]>,
     /// The matching weights: each in [0, 1], summing to one.
     pub weights: Vec<[f32; 4]>,
@@ -54,8 +63,11 @@ pub struct Skin {
     pub indices: Vec<u32>,
     /// Coarse triangles over the same vertices, for actors far away.
     pub far_indices: Vec<u32>,
-    /// Rest-pose frame of every joint: the bind pose.
+    /// Rest-pose frame of every slot, the skeleton's joints then the helpers: the bind
+    /// pose.
     pub rest: Vec<Transform>,
+    /// Helper joints at the big joints, after the skeleton's joints among the slots.
+    pub helpers: Vec<Helper>,
 }
 
 impl Skin {
@@ -63,7 +75,9 @@ impl Skin {
     /// and mass); a skeleton lacking the template's joints or solids is an error naming
     /// the first one missing.
     pub fn build(skeleton: &Skeleton) -> Result<Skin> {
-        let rest = rest_globals(skeleton);
+        let helpers = helpers::helpers(skeleton)?;
+        let joint_rest = rest_globals(skeleton);
+        let rest = with_helpers(&joint_rest, &helpers);
         let volumes = volumes::body_volumes(skeleton)?;
         let neighbours = neighbour_test(skeleton, &volumes, 1);
         // Surfaces blend a generation further along the trunk, so that its stacked
@@ -122,13 +136,42 @@ impl Skin {
             }
         }
         let mut indices: Vec<u32> = full.iter().map(|&i| remap[i as usize]).collect();
+        let merged = collapse::collapse_short_edges(
+            &mut positions,
+            &mut indices,
+            TINY_EDGE * height / CELLS_PER_HEIGHT,
+        );
+        // Renumber the vertices left, in first-use order, and point the coarse level's
+        // triangles at the vertices theirs were merged into.
+        let mut renumber = vec![u32::MAX; positions.len()];
+        let mut kept = 0u32;
+        for &i in &indices {
+            if renumber[i as usize] == u32::MAX {
+                renumber[i as usize] = kept;
+                kept += 1;
+            }
+        }
+        let positions = gather(&positions, &renumber, kept as usize);
+        let mut regions = gather(&regions, &renumber, kept as usize);
+        for i in &mut indices {
+            *i = renumber[*i as usize];
+        }
         flips::flip_slivers(&positions, &mut indices, 0.05);
-        let far_indices: Vec<u32> = far.iter().map(|&i| remap[i as usize]).collect();
+        let far_indices: Vec<u32> = far
+            .chunks_exact(3)
+            .map(|t| {
+                [t[0], t[1], t[2]].map(|i| renumber[merged[remap[i as usize] as usize] as usize])
+            })
+            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+            .flatten()
+            .collect();
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
-        let (joints, weights) = weights::skin_weights(&positions, &indices, &volumes, &neighbours)
-            .into_iter()
-            .unzip();
+        let chains = weights::Chains::new(&helpers, joint_rest.len());
+        let (joints, weights) =
+            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains)
+                .into_iter()
+                .unzip();
         Ok(Skin {
             positions: positions.iter().map(|p| p.as_vec3().to_array()).collect(),
             normals,
@@ -138,7 +181,24 @@ impl Skin {
             indices,
             far_indices,
             rest,
+            helpers,
         })
+    }
+
+    /// The frame of every skinning slot for joint frames `globals`: the joints' own, then
+    /// each helper's.
+    pub fn frames(&self, globals: &[Transform]) -> Vec<Transform> {
+        with_helpers(globals, &self.helpers)
+    }
+
+    /// The skeleton joint a skinning slot follows: the slot's own joint, or the joint a
+    /// helper helps.
+    pub fn slot_joint(&self, slot: usize) -> usize {
+        let joints = self.rest.len() - self.helpers.len();
+        match slot.checked_sub(joints) {
+            Some(h) => self.helpers[h].joint,
+            None => slot,
+        }
     }
 
     /// Number of full-detail triangles.
@@ -154,10 +214,11 @@ impl Skin {
             + self.rest.len() * std::mem::size_of::<Transform>()
     }
 
-    /// Skinning transforms for joint frames `globals`: `globals[j] · rest[j]⁻¹`, which
-    /// carries a rest-pose point attached to joint `j` to where the joint has moved it.
+    /// Skinning transforms for joint frames `globals`, one per slot (joints, then
+    /// helpers): `frame[s] · rest[s]⁻¹`, which carries a rest-pose point attached to slot
+    /// `s` to where the slot has moved it.
     pub fn skinning_transforms(&self, globals: &[Transform]) -> Vec<Transform> {
-        globals
+        self.frames(globals)
             .iter()
             .zip(&self.rest)
             .map(|(g, r)| g.mul(&r.inverse()))
@@ -180,6 +241,26 @@ impl Skin {
             })
             .collect()
     }
+}
+
+/// The items of `list` whose `renumber` is not `u32::MAX`, each at that index.
+fn gather<T: Copy>(list: &[T], renumber: &[u32], count: usize) -> Vec<T> {
+    let mut out: Vec<Option<T>> = vec![None; count];
+    for (item, &to) in list.iter().zip(renumber) {
+        if to != u32::MAX {
+            out[to as usize] = Some(*item);
+        }
+    }
+    out.into_iter()
+        .map(|item| item.expect("every kept vertex is numbered"))
+        .collect()
+}
+
+/// Joint frames `globals` followed by the frames of `helpers` among them.
+fn with_helpers(globals: &[Transform], helpers: &[Helper]) -> Vec<Transform> {
+    let mut frames = globals.to_vec();
+    frames.extend(helpers.iter().map(|h| h.frame(globals)));
+    frames
 }
 
 /// Simplifies the dense closed mesh to at most [`MAX_TRIANGLES`] triangles, keeping it

@@ -13,11 +13,17 @@
 //!    volume (which grows with the limb's thickness); the jumps become smooth ramps and
 //!    each joint's bend spreads over a wider band, so far fewer triangles turn over where
 //!    a joint bends.
-//! 3. **Four at most**: the four heaviest joints keep the excess of their weight over the
+//! 3. **Through the helpers**: the weight a vertex gives a helped joint and its parent
+//!    (the band across a shoulder, hip, elbow, knee or wrist) is moved onto the chain
+//!    parent → helpers → joint ([`super::helpers`]), to the two neighbours on the chain
+//!    that bracket the joint's share, so the vertex turns by about the same part of the
+//!    bend but as a blend of two nearly equal rotations.
+//! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
 //!    they are normalised to sum to one.
 
+use super::helpers::Helper;
 use super::volumes::{Join, Volume};
 use glam::DVec3;
 
@@ -27,8 +33,12 @@ pub type Influences = ([u16; 4], [f32; 4]);
 
 /// Smoothing length over the surface, as a multiple of the reach of the volume nearest
 /// to the vertex (the reach grows with the limb's thickness: 12 cm on the trunk, 9 cm on
-/// the arms, 1.2 cm on the fingers for a 1.75 m adult).
-const SMOOTHING_PER_REACH: f64 = 0.6;
+/// the arms, 1.2 cm on the fingers for a 1.75 m adult). Where the edges are long the
+/// rounds cap it (a vertex moves at most to its neighbours' mean each round, so the
+/// spread stays under about eight edges). With the shoulders' helper joints, 1.2 turned
+/// fewer triangles over than 0.6 (the rotation about the shoulder needs a long band);
+/// without them it turned more.
+const SMOOTHING_PER_REACH: f64 = 1.2;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
 /// neighbours' mean.
 const SMOOTHING_ROUNDS: usize = 60;
@@ -53,6 +63,7 @@ pub(crate) fn skin_weights(
     indices: &[u32],
     volumes: &[Volume],
     neighbours: &impl Fn(usize, usize) -> bool,
+    chains: &Chains,
 ) -> Vec<Influences> {
     let mut rows = Vec::with_capacity(positions.len());
     let mut smoothing = Vec::with_capacity(positions.len());
@@ -63,7 +74,101 @@ pub(crate) fn skin_weights(
         smoothing.push(SMOOTHING_PER_REACH * reach);
     }
     diffuse(&mut rows, positions, indices, &smoothing);
-    rows.iter().map(four_heaviest).collect()
+    rows.iter()
+        .map(|row| four_heaviest(&chains.route(row)))
+        .collect()
+}
+
+/// The chains of skinning slots across the helped joints.
+pub(crate) struct Chains(Vec<Chain>);
+
+/// One helped joint's chain: its parent, its helpers' slots by fraction, the joint.
+struct Chain {
+    parent: u16,
+    joint: u16,
+    /// Helper slots and the fraction of the joint's rotation each takes, ascending.
+    links: Vec<(u16, f64)>,
+}
+
+impl Chains {
+    /// The chains of `helpers`, whose slots start at `first_slot` (the number of joints).
+    pub(crate) fn new(helpers: &[Helper], first_slot: usize) -> Chains {
+        let mut chains: Vec<Chain> = Vec::new();
+        for (i, h) in helpers.iter().enumerate() {
+            let slot = (first_slot + i) as u16;
+            match chains.iter_mut().find(|c| c.joint as usize == h.joint) {
+                Some(c) => c.links.push((slot, h.fraction)),
+                None => chains.push(Chain {
+                    parent: h.parent as u16,
+                    joint: h.joint as u16,
+                    links: vec![(slot, h.fraction)],
+                }),
+            }
+        }
+        for c in &mut chains {
+            c.links.sort_by(|a, b| a.1.total_cmp(&b.1));
+        }
+        Chains(chains)
+    }
+
+    /// `row` with the weights of each helped joint and its parent moved onto their chain.
+    /// A joint in several chains (a hip: child in the pelvis's, parent in the knee's; the
+    /// pelvis: parent of both hips) splits its weight among them in proportion to its
+    /// partner's weight in each, so the routing is continuous over the surface: where a
+    /// partner's weight fades to nothing its chain's share does too.
+    fn route(&self, row: &Row) -> Row {
+        let weight = |j: u16| row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
+        let mut partners: Row = Vec::new();
+        for c in &self.0 {
+            add(&mut partners, c.parent, weight(c.joint));
+            add(&mut partners, c.joint, weight(c.parent));
+        }
+        let partner_total = |j: u16| {
+            partners
+                .iter()
+                .find(|(i, _)| *i == j)
+                .map_or(0.0, |(_, w)| *w)
+        };
+        // Joints in no chain with a partner keep their weight.
+        let mut out: Row = row
+            .iter()
+            .filter(|&&(j, _)| partner_total(j) <= 0.0)
+            .copied()
+            .collect();
+        for c in &self.0 {
+            let (wp, wj) = (weight(c.parent), weight(c.joint));
+            if wp <= 0.0 || wj <= 0.0 {
+                continue;
+            }
+            let from_parent = wp * wj / partner_total(c.parent);
+            let from_joint = wj * wp / partner_total(c.joint);
+            let total = from_parent + from_joint;
+            // The joint's share of the pair, placed on the chain's fractions.
+            let share = from_joint / total;
+            let stops: Vec<(u16, f64)> = std::iter::once((c.parent, 0.0))
+                .chain(c.links.iter().copied())
+                .chain(std::iter::once((c.joint, 1.0)))
+                .collect();
+            let k = stops
+                .windows(2)
+                .position(|w| share <= w[1].1)
+                .unwrap_or(stops.len() - 2);
+            let ((lo, at_lo), (hi, at_hi)) = (stops[k], stops[k + 1]);
+            let t = (share - at_lo) / (at_hi - at_lo);
+            add(&mut out, lo, total * (1.0 - t));
+            add(&mut out, hi, total * t);
+        }
+        out.retain(|&(_, w)| w > 0.0);
+        out
+    }
+}
+
+/// Adds `w` to joint `j`'s weight in `row`.
+fn add(row: &mut Row, j: u16, w: f64) {
+    match row.iter_mut().find(|(i, _)| *i == j) {
+        Some((_, sum)) => *sum += w,
+        None => row.push((j, w)),
+    }
 }
 
 /// Smooths the weight rows over the surface: each round moves a vertex's row towards
@@ -234,6 +339,61 @@ mod tests {
         assert!((weights.iter().sum::<f32>() - 1.0).abs() < 1e-6);
         // The trace floor is subtracted from every weight kept.
         assert!((weights[0] - 0.55 / 0.87).abs() < 1e-6, "{weights:?}");
+    }
+
+    /// Chains across joint 2 (parent 1) and joint 3 (parent 1), helpers at a quarter,
+    /// half and three quarters in slots 10-12 and 13-15.
+    fn chains() -> Chains {
+        let helpers: Vec<Helper> = [2, 3]
+            .into_iter()
+            .flat_map(|joint| {
+                [0.25, 0.5, 0.75].map(|fraction| Helper {
+                    name: format!("{joint}_{fraction}"),
+                    joint,
+                    parent: 1,
+                    fraction,
+                })
+            })
+            .collect();
+        Chains::new(&helpers, 10)
+    }
+
+    fn weight_in(row: &Row, j: u16) -> f64 {
+        row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w)
+    }
+
+    #[test]
+    fn a_joints_share_goes_to_the_two_helpers_that_bracket_it() {
+        let chains = chains();
+        // The joint's share 0.4 lies between the helpers at 0.25 and 0.5.
+        let row = chains.route(&vec![(1, 0.6), (2, 0.4), (7, 0.0)]);
+        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 11) - 0.6).abs() < 1e-12, "{row:?}");
+        assert_eq!(weight_in(&row, 1) + weight_in(&row, 2), 0.0);
+        // A parent alone, or a joint alone, keeps its weight.
+        assert_eq!(chains.route(&vec![(1, 1.0)]), vec![(1, 1.0)]);
+        assert_eq!(
+            chains.route(&vec![(2, 0.7), (5, 0.3)]),
+            vec![(2, 0.7), (5, 0.3)]
+        );
+        // Continuous where the share crosses a helper's fraction.
+        let (below, above) = (
+            chains.route(&vec![(1, 0.5 + 1e-9), (2, 0.5 - 1e-9)]),
+            chains.route(&vec![(1, 0.5 - 1e-9), (2, 0.5 + 1e-9)]),
+        );
+        for slot in [1, 2, 10, 11, 12] {
+            assert!((weight_in(&below, slot) - weight_in(&above, slot)).abs() < 1e-6);
+        }
+    }
+
+    #[test]
+    fn a_parent_of_two_helped_joints_splits_its_weight_between_their_chains() {
+        // The pelvis between two hips: half of its weight goes with each.
+        let row = chains().route(&vec![(1, 0.5), (2, 0.25), (3, 0.25)]);
+        let total: f64 = row.iter().map(|(_, w)| w).sum();
+        assert!((total - 1.0).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 11) - 0.5).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 14) - 0.5).abs() < 1e-12, "{row:?}");
     }
 
     /// A strip of `n` squares along x, 1 cm wide, as triangles.

@@ -2,7 +2,13 @@
 //! colours by region, `JOINTS_0`/`WEIGHTS_0` with at most four joints per vertex) bound
 //! to the joint nodes and the skin that [`super::to_gltf`] writes, so that Blender, a web
 //! viewer or any glTF tool shows the body moving, not only its bones.
+//!
+//! The skin's helper joints ([`troupe_body::skin::helpers`]) become joints of the rig
+//! ([`with_helper_joints`]): nodes under their joint's parent whose rotation is animated
+//! as the fraction of the joint's that the helper takes, so a glTF viewer's linear blend
+//! skinning deforms the skin as troupe's viewer does.
 
+use crate::rig::Rig;
 use glam::Vec3;
 use gltf_json as json;
 use json::accessor::{ComponentType, GenericComponentType, Type};
@@ -10,7 +16,29 @@ use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::collections::BTreeMap;
 use troupe_body::skin::Region;
-use troupe_body::Skin;
+use troupe_body::{Skin, Transform};
+
+/// `rig` (a troupe skeleton's, joints in the skeleton's order) with `skin`'s helper
+/// joints appended after its joints, in the skin's slot order, so that the skin's
+/// `JOINTS_0` slots are the rig's joints: each helper a child of its joint's parent, at
+/// the joint's rest offset, turned on every frame by [`troupe_body::skin::Helper::local_rotation`]
+/// of the joint's local rotation.
+pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
+    let mut out = rig.clone();
+    for h in &skin.helpers {
+        let rest = rig.rest[h.joint];
+        out.names.push(h.name.clone());
+        out.parents.push(Some(h.parent));
+        out.rest.push(Transform::new(
+            h.local_rotation(rest.rotation),
+            rest.translation,
+        ));
+        for (frame, rotations) in out.rotations.iter_mut().enumerate() {
+            rotations.push(h.local_rotation(rig.rotations[frame][h.joint]));
+        }
+    }
+    out
+}
 
 /// Vertex colours (linear RGB) of the skin's regions in a file.
 fn region_color(region: Region) -> [f32; 3] {
@@ -93,7 +121,8 @@ pub struct SkinnedMesh<'a> {
 
 /// Adds `skin` to a document written by [`super::to_gltf`] for the same skeleton: a mesh
 /// on a root node named `{name} skin` that uses the document's first skin, whose joints
-/// are the skeleton's joints in order. `bytes` is the document's one buffer; its length
+/// are the skin's slots in order (the skeleton's joints, then the helpers: a document of
+/// the rig [`with_helper_joints`] makes). `bytes` is the document's one buffer; its length
 /// is updated.
 pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
     let mesh = SkinnedMesh {
@@ -239,4 +268,53 @@ pub fn add_skinned_mesh(
         buffer.byte_length = USize64::from(bytes.len());
     }
     node
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_body::template::template;
+    use troupe_motion::sequence::{Key, Sequence, Track};
+
+    /// What a glTF viewer computes from the written rig (each node's global transform
+    /// times its inverse bind matrix, the inverse of its rest global) is the skin's own
+    /// skinning transforms, helpers included, on every frame.
+    #[test]
+    fn a_viewer_of_the_written_rig_skins_with_the_skins_own_transforms() {
+        let t = template("adult").unwrap();
+        let skeleton = t.instantiate(t.default_params()).unwrap();
+        let skin = Skin::build(&skeleton).unwrap();
+        assert!(!skin.helpers.is_empty());
+        let mut seq = Sequence::new("raise");
+        seq.meta.insert("rate".into(), "10".into());
+        for (dof, v) in [
+            ("l_shoulder_abduction", 2.8),
+            ("l_shoulder_flexion", 0.9),
+            ("r_shoulder_twist", -1.2),
+            ("l_sternoclavicular_elevation", 0.5),
+            ("root_yaw", 0.7),
+        ] {
+            let keys = vec![Key::new(0.0, 0.0), Key::new(1.0, v)];
+            seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
+        }
+        let rig = Rig::from_sequence(&skeleton, &seq).unwrap();
+        let written = with_helper_joints(&rig, &skin);
+        assert_eq!(written.names.len(), skin.rest.len());
+        let bind = written.rest_globals();
+        for k in 0..written.times.len() {
+            let nodes = written.globals(k);
+            let joints = &rig.globals(k)[..];
+            let expected = skin.skinning_transforms(joints);
+            for (slot, want) in expected.iter().enumerate() {
+                let got = nodes[slot].mul(&bind[slot].inverse());
+                assert!(
+                    got.rotation.abs_diff_eq(want.rotation, 1e-9)
+                        && got.translation.abs_diff_eq(want.translation, 1e-9),
+                    "frame {k}, slot {} ({}): {got:?} against {want:?}",
+                    slot,
+                    written.names[slot]
+                );
+            }
+        }
+    }
 }

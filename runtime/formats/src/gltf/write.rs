@@ -3,7 +3,7 @@
 
 use super::character::{add_character, character_rig};
 use super::objects::object_node;
-use super::skin::add_skin;
+use super::skin::{add_skin, with_helper_joints};
 use crate::error::{Error, Result};
 use crate::rig::Rig;
 use ::gltf::binary::{Glb, Header};
@@ -288,6 +288,11 @@ fn document(
     name: &str,
     uri: Option<&str>,
 ) -> (Root, Vec<u8>) {
+    // The skin's helper joints join the rig, so its slots are the rig's joints.
+    let rig = &match skin {
+        Some(skin) => with_helper_joints(rig, skin),
+        None => rig.clone(),
+    };
     let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, uri);
     if let Some(skin) = skin {
         add_skin(&mut root, &mut bytes, skin, name);
