@@ -113,9 +113,10 @@ fn export_gltf(a: GltfArgs) -> Result<ExitCode> {
     troupe_formats::save_skinned(&a.out, &rig, Some(&skin), &a.template)
         .with_context(|| format!("writing {}", a.out.display()))?;
     eprintln!(
-        "wrote {} ({} joints, a skin of {} vertices and {} triangles)",
+        "wrote {} ({} joints and {} helper joints, a skin of {} vertices and {} triangles)",
         a.out.display(),
         skeleton.joints().len(),
+        skin.helpers.len(),
         skin.positions.len(),
         skin.triangle_count()
     );
