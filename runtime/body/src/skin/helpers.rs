@@ -44,7 +44,7 @@ pub const FRACTIONS: [f64; 3] = [0.25, 0.5, 0.75];
 /// `joint`'s rotation in it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Helper {
-    /// Its name in files: the joint's name and the fraction in per cent (`l_hip_50`).
+    /// Its name in files: the joint's name and the fraction in per cent (`l_shoulder_50`).
     pub name: String,
     /// The joint it helps (index into the skeleton's joints).
     pub joint: usize,
