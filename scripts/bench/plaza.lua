@@ -3,27 +3,14 @@
 -- streams jam and bodies overlap; kept here as the measurement to make pass. Run it with
 --   troupe test scripts/bench/plaza.lua
 test("four streams of 50 cross a plaza: everyone arrives", function()
-  for i, c in ipairs({ {-4, -4}, {4, -4}, {4, 4}, {-4, 4} }) do
-    troupe.object{ name = "planter" .. i, shape = "box", size = {1.5, 0.8, 1.5}, at = {c[1], 0.4, c[2]}, mass = 200 }
-  end
-  local actors, walks, goals, walked, straight = {}, {}, {}, {}, {}
   -- Stream s starts in a 5 × 10 block outside one edge and goes to the opposite one.
-  local streams = { {1, 0}, {-1, 0}, {0, 1}, {0, -1} }
-  for s, d in ipairs(streams) do
-    local side = { -d[2], d[1] }
-    for k = 0, 49 do
-      local row, col = k // 5, k % 5
-      local lateral = (col - 2) * 1.0 + (s <= 2 and 0.3 or -0.3)
-      local back = 11 + row * 1.0
-      local x, z = -d[1] * back + side[1] * lateral, -d[2] * back + side[2] * lateral
-      local gx, gz = d[1] * (back - 1) + side[1] * lateral, d[2] * (back - 1) + side[2] * lateral
-      local a = troupe.actor{ name = string.format("s%d_%02d", s, k), at = {x, 0, z},
-                              facing = math.deg(math.atan(d[1], d[2])) }
-      actors[#actors + 1] = a
-      goals[#goals + 1] = { gx, gz }
-      straight[#straight + 1] = math.sqrt((gx - x)^2 + (gz - z)^2)
-      walked[#walked + 1] = 0
-    end
+  local actors, walks, goals, walked, straight = {}, {}, {}, {}, {}
+  local plaza = require("plaza_streams")
+  for i, w in ipairs(plaza.build(plaza.BUSY)) do
+    actors[i] = w.actor
+    goals[i] = { w.gx, w.gz }
+    straight[i] = math.sqrt((w.gx - w.x)^2 + (w.gz - w.z)^2)
+    walked[i] = 0
   end
   for i, a in ipairs(actors) do
     walks[i] = a:walk{ to = { goals[i][1], 0, goals[i][2] }, speed = 1.3 }

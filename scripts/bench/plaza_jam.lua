@@ -7,24 +7,12 @@
 local RADIUS = 0.28
 
 test("four streams of 50 in the plaza: who stands, and behind whom", function()
-  for i, c in ipairs({ {-4, -4}, {4, -4}, {4, 4}, {-4, 4} }) do
-    troupe.object{ name = "planter" .. i, shape = "box", size = {1.5, 0.8, 1.5}, at = {c[1], 0.4, c[2]}, mass = 200 }
-  end
+  local plaza = require("plaza_streams")
   local actors, walks, goals, stream = {}, {}, {}, {}
-  local streams = { {1, 0}, {-1, 0}, {0, 1}, {0, -1} }
-  for s, d in ipairs(streams) do
-    local side = { -d[2], d[1] }
-    for k = 0, 49 do
-      local row, col = k // 5, k % 5
-      local lateral = (col - 2) * 1.0 + (s <= 2 and 0.3 or -0.3)
-      local back = 11 + row * 1.0
-      local x, z = -d[1] * back + side[1] * lateral, -d[2] * back + side[2] * lateral
-      local a = troupe.actor{ name = string.format("s%d_%02d", s, k), at = {x, 0, z},
-                              facing = math.deg(math.atan(d[1], d[2])) }
-      actors[#actors + 1] = a
-      goals[#goals + 1] = { d[1] * (back - 1) + side[1] * lateral, d[2] * (back - 1) + side[2] * lateral }
-      stream[#stream + 1] = s
-    end
+  for i, w in ipairs(plaza.build(plaza.BUSY)) do
+    actors[i] = w.actor
+    goals[i] = { w.gx, w.gz }
+    stream[i] = w.stream
   end
   for i, a in ipairs(actors) do
     walks[i] = a:walk{ to = { goals[i][1], 0, goals[i][2] }, speed = 1.3 }

@@ -1,0 +1,37 @@
+-- The plaza's scene, shared by plaza.lua, plaza_jam.lua and plaza_picture.lua: a planter
+-- near each corner of a square, and four streams of walkers, each starting in a block
+-- outside one edge, bound for the opposite edge. Nobody walks yet: the caller says how.
+local M = {}
+
+-- Makes the planters and the actors. `o.planter`: the planters' centres' distance from
+-- the middle along x and z; `o.planter_size`: their box; `o.per_stream` actors a stream,
+-- in rows of `o.columns` 1 m apart, the first row `o.back` m from the middle. Returns one
+-- entry per actor, in the order made: { actor, stream, x, z (start), gx, gz (goal) }.
+function M.build(o)
+  local size = o.planter_size
+  for i, c in ipairs({ {-1, -1}, {1, -1}, {1, 1}, {-1, 1} }) do
+    troupe.object{ name = "planter" .. i, shape = "box", size = size,
+                   at = {c[1] * o.planter, size[2] / 2, c[2] * o.planter}, mass = 200 }
+  end
+  local walkers = {}
+  local streams = { {1, 0}, {-1, 0}, {0, 1}, {0, -1} }
+  for s, d in ipairs(streams) do
+    local side = { -d[2], d[1] }
+    for k = 0, o.per_stream - 1 do
+      local row, col = k // o.columns, k % o.columns
+      local lateral = (col - (o.columns - 1) / 2) * 1.0 + (s <= 2 and 0.3 or -0.3)
+      local back = o.back + row * 1.0
+      local x, z = -d[1] * back + side[1] * lateral, -d[2] * back + side[2] * lateral
+      local gx, gz = d[1] * (back - 1) + side[1] * lateral, d[2] * (back - 1) + side[2] * lateral
+      local a = troupe.actor{ name = string.format("s%d_%02d", s, k), at = {x, 0, z},
+                              facing = math.deg(math.atan(d[1], d[2])) }
+      walkers[#walkers + 1] = { actor = a, stream = s, x = x, z = z, gx = gx, gz = gz }
+    end
+  end
+  return walkers
+end
+
+-- The plaza of plaza.lua and plaza_jam.lua: 20 m × 20 m, four streams of 50.
+M.BUSY = { planter = 4, planter_size = {1.5, 0.8, 1.5}, per_stream = 50, columns = 5, back = 11 }
+
+return M
