@@ -19,6 +19,37 @@ fn temp_dir() -> PathBuf {
     d
 }
 
+/// CesiumMan's bones for troupe's joints (`bones` in Lua, `--bones` on the command line).
+const CESIUM_BONES: [(&str, &str); 17] = [
+    ("hips", "Skeleton_torso_joint_1"),
+    ("spine", "Skeleton_torso_joint_2"),
+    ("upperChest", "torso_joint_3"),
+    ("neck", "Skeleton_neck_joint_1"),
+    ("head", "Skeleton_neck_joint_2"),
+    ("leftUpperArm", "Skeleton_arm_joint_L__4_"),
+    ("leftLowerArm", "Skeleton_arm_joint_L__3_"),
+    ("leftHand", "Skeleton_arm_joint_L__2_"),
+    ("rightUpperArm", "Skeleton_arm_joint_R"),
+    ("rightLowerArm", "Skeleton_arm_joint_R__2_"),
+    ("rightHand", "Skeleton_arm_joint_R__3_"),
+    ("leftUpperLeg", "leg_joint_L_1"),
+    ("leftLowerLeg", "leg_joint_L_2"),
+    ("leftFoot", "leg_joint_L_3"),
+    ("rightUpperLeg", "leg_joint_R_1"),
+    ("rightLowerLeg", "leg_joint_R_2"),
+    ("rightFoot", "leg_joint_R_3"),
+];
+
+/// Runs `command`, failing the test with its error output unless it succeeds.
+fn succeeds(command: &mut Command) {
+    let out = command.output().unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Renders a scene holding one actor made with `options` (Lua table fields) and returns
 /// its pixels.
 fn render(name: &str, options: &str) -> image::RgbaImage {
@@ -30,26 +61,21 @@ fn render(name: &str, options: &str) -> image::RgbaImage {
     )
     .unwrap();
     let png = dir.join(format!("{name}.png"));
-    let out = troupe()
-        .current_dir(repo())
-        .args(["render"])
-        .arg(&scene)
-        .arg(&png)
-        .args([
-            "--at",
-            "0",
-            "--size",
-            "320x240",
-            "--camera",
-            "follow:cesium@0,10,2.5",
-            "--no-labels",
-        ])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeds(
+        troupe()
+            .current_dir(repo())
+            .args(["render"])
+            .arg(&scene)
+            .arg(&png)
+            .args([
+                "--at",
+                "0",
+                "--size",
+                "320x240",
+                "--camera",
+                "follow:cesium@0,10,2.5",
+                "--no-labels",
+            ]),
     );
     image::open(&png).unwrap().to_rgba8()
 }
@@ -63,14 +89,14 @@ fn logo_green(p: &image::Rgba<u8>) -> bool {
 #[test]
 fn a_dressed_actor_is_drawn_as_its_character() {
     let look = format!(
-        ", look = {:?}, bones = {{ hips = \"Skeleton_torso_joint_1\", spine = \"Skeleton_torso_joint_2\", \
-         upperChest = \"torso_joint_3\", neck = \"Skeleton_neck_joint_1\", head = \"Skeleton_neck_joint_2\", \
-         leftUpperArm = \"Skeleton_arm_joint_L__4_\", leftLowerArm = \"Skeleton_arm_joint_L__3_\", \
-         leftHand = \"Skeleton_arm_joint_L__2_\", rightUpperArm = \"Skeleton_arm_joint_R\", \
-         rightLowerArm = \"Skeleton_arm_joint_R__2_\", rightHand = \"Skeleton_arm_joint_R__3_\", \
-         leftUpperLeg = \"leg_joint_L_1\", leftLowerLeg = \"leg_joint_L_2\", leftFoot = \"leg_joint_L_3\", \
-         rightUpperLeg = \"leg_joint_R_1\", rightLowerLeg = \"leg_joint_R_2\", rightFoot = \"leg_joint_R_3\" }}",
-        repo().join("tests/assets/characters/CesiumMan.glb").display().to_string()
+        ", look = {:?}, bones = {{ {} }}",
+        repo()
+            .join("tests/assets/characters/CesiumMan.glb")
+            .display()
+            .to_string(),
+        CESIUM_BONES
+            .map(|(key, node)| format!("{key} = {node:?}"))
+            .join(", ")
     );
     let dressed = render("dressed", &look);
     let plain = render("plain", "");
@@ -139,22 +165,17 @@ fn node_names(json: &serde_json::Value) -> Vec<&str> {
 fn a_dressed_actor_is_recorded_and_exported_as_its_character() {
     let dir = temp_dir();
     let out = dir.join("character.glb");
-    let run = troupe()
-        .current_dir(repo())
-        .args([
-            "run",
-            "scripts/examples/character.lua",
-            "--seconds",
-            "1",
-            "--record",
-        ])
-        .arg(&out)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    succeeds(
+        troupe()
+            .current_dir(repo())
+            .args([
+                "run",
+                "scripts/examples/character.lua",
+                "--seconds",
+                "1",
+                "--record",
+            ])
+            .arg(&out),
     );
     // CesiumMan's actor: its 19 bones as the skin's joints, its mesh marked as a user's
     // character, its bones animated.
@@ -184,17 +205,12 @@ fn a_dressed_actor_is_recorded_and_exported_as_its_character() {
     assert!(node_names(&ann).contains(&"r_wrist") && node_names(&ann).contains(&"ann skin"));
     // The same with two threads and chunks of one action: the same bytes.
     let again = dir.join("again.glb");
-    let run = troupe()
-        .current_dir(repo())
-        .args(["run", "scripts/examples/character.lua", "--seconds", "1"])
-        .args(["--threads", "2", "--chunk", "1", "--record"])
-        .arg(&again)
-        .output()
-        .unwrap();
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
+    succeeds(
+        troupe()
+            .current_dir(repo())
+            .args(["run", "scripts/examples/character.lua", "--seconds", "1"])
+            .args(["--threads", "2", "--chunk", "1", "--record"])
+            .arg(&again),
     );
     assert!(
         std::fs::read(dir.join("again.cesium.glb")).unwrap()
@@ -215,32 +231,23 @@ fn a_dressed_actor_is_recorded_and_exported_as_its_character() {
     );
 
     // `troupe export gltf --look`, with the map given as `--bones`.
-    let bones = "hips=Skeleton_torso_joint_1,spine=Skeleton_torso_joint_2,\
-        upperChest=torso_joint_3,neck=Skeleton_neck_joint_1,head=Skeleton_neck_joint_2,\
-        leftUpperArm=Skeleton_arm_joint_L__4_,leftLowerArm=Skeleton_arm_joint_L__3_,\
-        leftHand=Skeleton_arm_joint_L__2_,rightUpperArm=Skeleton_arm_joint_R,\
-        rightLowerArm=Skeleton_arm_joint_R__2_,rightHand=Skeleton_arm_joint_R__3_,\
-        leftUpperLeg=leg_joint_L_1,leftLowerLeg=leg_joint_L_2,leftFoot=leg_joint_L_3,\
-        rightUpperLeg=leg_joint_R_1,rightLowerLeg=leg_joint_R_2,rightFoot=leg_joint_R_3";
+    let bones = CESIUM_BONES
+        .map(|(key, node)| format!("{key}={node}"))
+        .join(",");
     for (pose, animated) in [("rest", true), ("bind", false)] {
         let file = dir.join(format!("cesium_{pose}.glb"));
-        let export = troupe()
-            .current_dir(repo())
-            .args(["export", "gltf"])
-            .arg(&file)
-            .args([
-                "--look",
-                "tests/assets/characters/CesiumMan.glb",
-                "--bones",
-                bones,
-            ])
-            .args(["--pose", pose])
-            .output()
-            .unwrap();
-        assert!(
-            export.status.success(),
-            "{}",
-            String::from_utf8_lossy(&export.stderr)
+        succeeds(
+            troupe()
+                .current_dir(repo())
+                .args(["export", "gltf"])
+                .arg(&file)
+                .args([
+                    "--look",
+                    "tests/assets/characters/CesiumMan.glb",
+                    "--bones",
+                    &bones,
+                ])
+                .args(["--pose", pose]),
         );
         let json = glb_json(&file);
         assert_eq!(json["skins"][0]["joints"].as_array().unwrap().len(), 19);
