@@ -67,11 +67,7 @@ test("eight actors on a circle swap to the opposite points", function()
 end)
 
 test("two actors head-on in a 1.2 m corridor pass each other", function()
-  troupe.wall{ from = {-0.65, -1}, to = {-0.65, 9}, thickness = 0.1 }
-  troupe.wall{ from = {0.65, -1}, to = {0.65, 9}, thickness = 0.1 }
-  local ann = troupe.actor{ name = "ann", at = {0, 0, 0} }
-  local bob = troupe.actor{ name = "bob", at = {0, 0, 8}, facing = 180 }
-  local walks = { ann:walk{ to = {0, 0, 8} }, bob:walk{ to = {0, 0, 0} } }
+  local ann, bob, walks = require("support.corridor")()
   -- The walls' inner faces are at x = ±0.6: the body's disc stays inside.
   local widest = 0
   local inner = function()

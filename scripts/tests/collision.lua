@@ -81,11 +81,7 @@ test("eight actors on a circle swap: solids measured (legs meet; the 1 cm goal i
 end)
 
 test("two walkers pass in a 1.2 m corridor turning their shoulders (legs meet; the 1 cm goal is not met yet)", function()
-  troupe.wall{ from = {-0.65, -1}, to = {-0.65, 9}, thickness = 0.1 }
-  troupe.wall{ from = {0.65, -1}, to = {0.65, 9}, thickness = 0.1 }
-  local ann = troupe.actor{ name = "ann", at = {0, 0, 0} }
-  local bob = troupe.actor{ name = "bob", at = {0, 0, 8}, facing = 180 }
-  local walks = { ann:walk{ to = {0, 0, 8} }, bob:walk{ to = {0, 0, 0} } }
+  local ann, bob, walks = require("support.corridor")()
   local turned = { 0, 0 }
   local ended = all_ended(walks)
   local ok, deepest, between = watch(function()
