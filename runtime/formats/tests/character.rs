@@ -11,7 +11,7 @@ use troupe_formats::character::{read_character, vrm_humanoid_bones};
 use troupe_formats::Error;
 
 mod characters;
-use characters::{asset, cesium_map, vrm_with_boxes};
+use characters::{asset, cesium_map, node_index, vrm_with_boxes};
 
 fn globals(skeleton: &Skeleton, dofs: &[(&str, f64)]) -> Vec<Transform> {
     let mut q = vec![0.0; skeleton.dof_count()];
@@ -262,19 +262,11 @@ fn joints_by_name(c: &troupe_body::Character) -> Vec<(String, Option<String>)> {
 #[test]
 fn built_in_maps_recognise_vrm_mixamo_and_h_anim_names() {
     let by_user = read_character(asset("CesiumMan.glb"), &cesium_map()).unwrap();
-    let index = |json: &Value, name: &str| {
-        json["nodes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .position(|n| n["name"] == name)
-            .unwrap()
-    };
     // VRM 1.0 and 0.x humanoid extensions over CesiumMan's own node names.
     let vrm1 = cesium_variant("vrm1.vrm", |json, _| {
         let bones: serde_json::Map<String, Value> = cesium_map()
             .iter()
-            .map(|(b, n)| (b.clone(), json!({ "node": index(json, n) })))
+            .map(|(b, n)| (b.clone(), json!({ "node": node_index(json, n) })))
             .collect();
         json["extensions"] =
             json!({ "VRMC_vrm": { "specVersion": "1.0", "humanoid": { "humanBones": bones } } });
@@ -282,7 +274,7 @@ fn built_in_maps_recognise_vrm_mixamo_and_h_anim_names() {
     let vrm0 = cesium_variant("vrm0.vrm", |json, _| {
         let bones: Vec<Value> = cesium_map()
             .iter()
-            .map(|(b, n)| json!({ "bone": b, "node": index(json, n) }))
+            .map(|(b, n)| json!({ "bone": b, "node": node_index(json, n) }))
             .collect();
         json["extensions"] = json!({ "VRM": { "humanoid": { "humanBones": bones } } });
     });

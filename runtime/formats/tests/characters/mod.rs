@@ -42,23 +42,30 @@ pub fn cesium_map() -> Vec<(String, String)> {
         .collect()
 }
 
+/// The index of the node named `name` in a glTF document's JSON.
+pub fn node_index(json: &serde_json::Value, name: &str) -> usize {
+    json["nodes"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|n| n["name"] == name)
+        .unwrap()
+}
+
 /// The binary glTF `path` as a VRM 1.0 file: its JSON given a `VRMC_vrm` humanoid that
 /// names CesiumMan's joints.
 pub fn as_vrm(path: &Path) -> Vec<u8> {
     let bytes = std::fs::read(path).unwrap();
     let glb = gltf::binary::Glb::from_slice(&bytes).unwrap();
     let mut json: serde_json::Value = serde_json::from_slice(&glb.json).unwrap();
-    let node = |name: &str| {
-        json["nodes"]
-            .as_array()
-            .unwrap()
-            .iter()
-            .position(|n| n["name"] == name)
-            .unwrap()
-    };
     let bones: serde_json::Map<String, serde_json::Value> = CESIUM_BONES
         .iter()
-        .map(|(bone, name)| (bone.to_string(), serde_json::json!({ "node": node(name) })))
+        .map(|(bone, name)| {
+            (
+                bone.to_string(),
+                serde_json::json!({ "node": node_index(&json, name) }),
+            )
+        })
         .collect();
     json["extensions"] = serde_json::json!({
         "VRMC_vrm": { "specVersion": "1.0", "humanoid": { "humanBones": bones } }
