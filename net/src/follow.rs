@@ -82,16 +82,7 @@ impl Leader {
         };
         while Instant::now() < deadline {
             say_hello();
-            let replies = self
-                .session
-                .get(key.clone())
-                .timeout(Duration::from_millis(500))
-                .wait()
-                .map_err(|e| NetError::Declare {
-                    what: "query",
-                    key: key.clone(),
-                    message: e.to_string(),
-                })?;
+            let replies = crate::session::query(&self.session, &key, Duration::from_millis(500))?;
             while let Ok(reply) = replies.recv() {
                 let Ok(sample) = reply.result() else { continue };
                 let doc: serde_json::Value =

@@ -3,6 +3,9 @@
 //! whatever else runs on the network).
 
 use crate::error::NetError;
+use std::time::Duration;
+use zenoh::handlers::FifoChannelHandler;
+use zenoh::query::Reply;
 use zenoh::{Config, Session, Wait};
 
 /// Where a troupe process meets the others.
@@ -59,6 +62,24 @@ fn check(endpoints: &[String], option: &str) -> Result<(), NetError> {
         }
     }
     Ok(())
+}
+
+/// Asks the queryables on `key`; their replies arrive on the returned channel until
+/// `timeout` has passed.
+pub(crate) fn query(
+    session: &Session,
+    key: &str,
+    timeout: Duration,
+) -> Result<FifoChannelHandler<Reply>, NetError> {
+    session
+        .get(key)
+        .timeout(timeout)
+        .wait()
+        .map_err(|e| NetError::Declare {
+            what: "query",
+            key: key.to_string(),
+            message: e.to_string(),
+        })
 }
 
 #[cfg(test)]

@@ -82,15 +82,7 @@ pub fn actor_bodies(
     timeout: Duration,
 ) -> Result<Vec<ActorBody>, NetError> {
     let key = keys.all_dofs();
-    let replies = session
-        .get(key.clone())
-        .timeout(timeout)
-        .wait()
-        .map_err(|e| NetError::Declare {
-            what: "query",
-            key: key.clone(),
-            message: e.to_string(),
-        })?;
+    let replies = crate::session::query(session, &key, timeout)?;
     let mut out = Vec::new();
     while let Ok(reply) = replies.recv() {
         let Ok(sample) = reply.result() else { continue };
