@@ -148,12 +148,7 @@ fn relay(kind: &str, device: &[&str], key: &str, port: u16) -> Running {
 /// A tool's session (sending cues, listening, playing a relay's part), connected to the
 /// troupe listening on `port`.
 fn tool(port: u16) -> Session {
-    troupe_net::Endpoints {
-        connect: vec![on(port)],
-        listen: vec!["tcp/127.0.0.1:0".into()],
-    }
-    .open()
-    .unwrap()
+    troupe_net::Endpoints::loopback_peer(port).open().unwrap()
 }
 
 /// Checks that a follower compared `postures` postures, all equal to its leader's.

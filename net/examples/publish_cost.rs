@@ -81,12 +81,7 @@ fn main() {
 
     // Publishing, nobody listening.
     let port = free_port();
-    let leader = Endpoints {
-        connect: vec![],
-        listen: vec![format!("tcp/127.0.0.1:{port}")],
-    }
-    .open()
-    .unwrap();
+    let leader = Endpoints::loopback_listener(port).open().unwrap();
     let mut alone = Session::new(crowd(actors));
     let handle = alone.observe(ScenePublisher::new(leader.clone(), keys.clone()).unwrap());
     let mut times = run(&mut alone, seconds, || {});
@@ -101,12 +96,7 @@ fn main() {
     alone.finish().unwrap();
 
     // Publishing to a subscriber that is killed half way through.
-    let sub = Endpoints {
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        listen: vec!["tcp/127.0.0.1:0".into()],
-    }
-    .open()
-    .unwrap();
+    let sub = Endpoints::loopback_peer(port).open().unwrap();
     let bytes = Arc::new(AtomicU64::new(0));
     let packets = Arc::new(AtomicU64::new(0));
     let delays = Arc::new(Mutex::new(Vec::new()));

@@ -18,6 +18,24 @@ pub struct Endpoints {
 }
 
 impl Endpoints {
+    /// A peer listening on the loopback interface at `port` (0: a free port), for tests
+    /// and measurements on one machine.
+    pub fn loopback_listener(port: u16) -> Self {
+        Self {
+            connect: vec![],
+            listen: vec![format!("tcp/127.0.0.1:{port}")],
+        }
+    }
+
+    /// A peer connecting to the loopback listener at `port`, listening on a free loopback
+    /// port itself.
+    pub fn loopback_peer(port: u16) -> Self {
+        Self {
+            connect: vec![format!("tcp/127.0.0.1:{port}")],
+            listen: vec!["tcp/127.0.0.1:0".into()],
+        }
+    }
+
     /// The Zenoh configuration: a peer with these endpoints and scouting off.
     pub fn config(&self) -> Result<Config, NetError> {
         let mut config = Config::default();

@@ -48,20 +48,8 @@ fn await_routes(leader: &zenoh::Session, keys: &SceneKeys, feeds: &[&PoseFeed]) 
 #[test]
 fn a_leader_with_two_subscribers_publishes_every_posture_bit_for_bit() {
     let port = free_port();
-    let leader_session = Endpoints {
-        connect: vec![],
-        listen: vec![format!("tcp/127.0.0.1:{port}")],
-    }
-    .open()
-    .unwrap();
-    let subscriber = || {
-        Endpoints {
-            connect: vec![format!("tcp/127.0.0.1:{port}")],
-            listen: vec!["tcp/127.0.0.1:0".into()],
-        }
-        .open()
-        .unwrap()
-    };
+    let leader_session = Endpoints::loopback_listener(port).open().unwrap();
+    let subscriber = || Endpoints::loopback_peer(port).open().unwrap();
     let (one, two) = (subscriber(), subscriber());
     let keys = SceneKeys::new("troupe/test-two-subscribers").unwrap();
     let feeds = [
@@ -150,18 +138,8 @@ fn a_leader_with_two_subscribers_publishes_every_posture_bit_for_bit() {
 #[test]
 fn a_subscriber_that_goes_away_does_not_stop_the_leader() {
     let port = free_port();
-    let leader = Endpoints {
-        connect: vec![],
-        listen: vec![format!("tcp/127.0.0.1:{port}")],
-    }
-    .open()
-    .unwrap();
-    let follower = Endpoints {
-        connect: vec![format!("tcp/127.0.0.1:{port}")],
-        listen: vec!["tcp/127.0.0.1:0".into()],
-    }
-    .open()
-    .unwrap();
+    let leader = Endpoints::loopback_listener(port).open().unwrap();
+    let follower = Endpoints::loopback_peer(port).open().unwrap();
     let keys = SceneKeys::new("troupe/test-vanish").unwrap();
     let feed = PoseFeed::subscribe(&follower, &keys).unwrap();
     await_routes(&leader, &keys, &[&feed]);
@@ -184,12 +162,7 @@ fn a_subscriber_that_goes_away_does_not_stop_the_leader() {
 
 #[test]
 fn a_name_that_cannot_be_a_key_is_refused_by_name() {
-    let session = Endpoints {
-        connect: vec![],
-        listen: vec!["tcp/127.0.0.1:0".into()],
-    }
-    .open()
-    .unwrap();
+    let session = Endpoints::loopback_listener(0).open().unwrap();
     let keys = SceneKeys::new("troupe/test-bad-name").unwrap();
     let mut scene = Scene::new(SceneConfig::default()).unwrap();
     scene.add_actor(&ActorDesc::new("two words")).unwrap();
