@@ -158,10 +158,28 @@ fn bad_performer_options_are_clear_errors() {
             r#"troupe.performer{ name = "f", colour = "red" }"#,
             "unknown option `colour`",
         ),
+        (
+            // Not an address of this machine: the listener cannot bind it.
+            r#"troupe.performer{ name = "a", devices = { osc = { listen = "203.0.113.1:9", joints = { "pelvis" } } } }"#,
+            "binding 203.0.113.1:9",
+        ),
     ] {
         let e = d.load_str(code, "bad").unwrap_err().to_string();
         assert!(e.contains(expect), "{code}: {e}");
     }
+    // A refused performer leaves no actor behind: its name is free for the next one.
+    assert_eq!(d.scene().actors().len(), 0);
+    d.load_str(
+        r#"troupe.performer{ name = "a", devices = { osc = { listen = "127.0.0.1:0", joints = { "pelvis" } } } }"#,
+        "good",
+    )
+    .unwrap();
+    assert_eq!(d.scene().actors().len(), 1);
+    let e = d
+        .load_str(r#"troupe.performer{ name = "a" }"#, "again")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("actor") && e.contains("`a`"), "{e}");
 }
 
 #[test]

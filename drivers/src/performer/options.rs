@@ -92,27 +92,18 @@ pub(crate) fn new_performer(
             format!("`calibrate` must be \"auto\" or \"manual\", got \"{calibrate}\""),
         ));
     }
-    // The actor itself is made by troupe.actor, with the actor options.
+    // The actor itself is made by troupe.actor, with the actor options, once its devices
+    // are open: a device that fails to open then leaves no actor behind. They open with
+    // the skeleton the actor will have and the place it will stand on.
     let actor_opts = lua.create_table()?;
     for k in ["name", "template", "height", "mass", "at", "facing"] {
         actor_opts.set(k, t.get::<Value>(k)?)?;
     }
-    let troupe: Table = lua.globals().get("troupe")?;
-    let make: Function = troupe.get("actor")?;
-    let actor_value: Value = make.call(actor_opts)?;
-    let Value::UserData(ud) = &actor_value else {
-        return Err(args::err(
-            "performer",
-            "troupe.actor did not return an actor",
-        ));
-    };
-    let actor = ud.borrow::<ActorRef>()?.0;
-    let name: String = t.get("name")?;
-    let skeleton = troupe_lua::actor_skeletons(lua)
-        .ok_or_else(|| lua_err_message("no scene"))?
-        .get(actor)
-        .cloned()
-        .ok_or_else(|| args::err("performer", "actor vanished"))?;
+    let desc = troupe_lua::api::actor_desc(&actor_opts)?;
+    let skeleton = troupe_lua::kinds::with_scene_mut(lua, |scene| scene.skeleton_for(&desc))?
+        .map_err(|e| lua_err_message(format!("actor: {e}")))?
+        .0;
+    let name = desc.name.clone();
     let clock = scene_clock(lua)?;
     let mut fob = None;
     let mut osc = None;
@@ -169,14 +160,10 @@ pub(crate) fn new_performer(
             if fob.is_some() || osc.is_some() || vrpn.is_some() {
                 return Err(one_body_source());
             }
-            let place = troupe_lua::kinds::with_scene(lua, |scene| {
-                let (sk, q) = (&scene.actors()[actor].skeleton, &scene.states()[actor].q);
-                let dof = |n: &str| sk.dof(n).map(|d| q[d]).unwrap_or(0.0);
-                (
-                    glam::DVec3::new(dof("root_x"), 0.0, dof("root_z")),
-                    dof("root_yaw"),
-                )
-            })?;
+            let place = (
+                glam::DVec3::new(desc.at.x, 0.0, desc.at.z),
+                desc.facing_degrees.to_radians(),
+            );
             let (input, hand) = crate::vmc::lua::vmc_input(
                 lua,
                 &v,
@@ -200,6 +187,16 @@ pub(crate) fn new_performer(
             )?);
         }
     }
+    let troupe: Table = lua.globals().get("troupe")?;
+    let make: Function = troupe.get("actor")?;
+    let actor_value: Value = make.call(actor_opts)?;
+    let Value::UserData(ud) = &actor_value else {
+        return Err(args::err(
+            "performer",
+            "troupe.actor did not return an actor",
+        ));
+    };
+    let actor = ud.borrow::<ActorRef>()?.0;
     let n = skeleton.dof_count();
     // Every DOF the devices can drive: the natural scope of the performer's `capture`.
     let mut driven = Scope::EMPTY;

@@ -633,6 +633,26 @@ fn load_character(lua: &Lua, path: &str, opts: &Table) -> mlua::Result<troupe_bo
         .map_err(|e| lua_err(format!("actor: look: {e}")))
 }
 
+/// The actor that `troupe.actor`'s options `name`, `template`, `height`, `mass`, `at` and
+/// `facing` describe (`troupe.performer` reads the same options).
+pub fn actor_desc(t: &Table) -> mlua::Result<ActorDesc> {
+    let name =
+        opt_string(t, "actor", "name")?.ok_or_else(|| lua_err("actor: `name` is required"))?;
+    let at: Value = t.get("at")?;
+    Ok(ActorDesc {
+        name,
+        template: opt_string(t, "actor", "template")?.unwrap_or_else(|| "adult".into()),
+        height: opt_number(t, "actor", "height")?,
+        mass: opt_number(t, "actor", "mass")?,
+        at: if at.is_nil() {
+            DVec3::ZERO
+        } else {
+            vec3(&at, "actor: at")?
+        },
+        facing_degrees: opt_number(t, "actor", "facing")?.unwrap_or(0.0),
+    })
+}
+
 /// Installs the `troupe` table.
 pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
     let troupe = lua.create_table()?;
@@ -646,21 +666,7 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
                     "name", "template", "height", "mass", "at", "facing", "look", "bones",
                 ],
             )?;
-            let name = opt_string(&t, "actor", "name")?
-                .ok_or_else(|| lua_err("actor: `name` is required"))?;
-            let at: Value = t.get("at")?;
-            let desc = ActorDesc {
-                name,
-                template: opt_string(&t, "actor", "template")?.unwrap_or_else(|| "adult".into()),
-                height: opt_number(&t, "actor", "height")?,
-                mass: opt_number(&t, "actor", "mass")?,
-                at: if at.is_nil() {
-                    DVec3::ZERO
-                } else {
-                    vec3(&at, "actor: at")?
-                },
-                facing_degrees: opt_number(&t, "actor", "facing")?.unwrap_or(0.0),
-            };
+            let desc = actor_desc(&t)?;
             let look = match opt_string(&t, "actor", "look")? {
                 Some(path) => Some(load_character(lua, &path, &t)?),
                 None if !t.get::<Value>("bones")?.is_nil() => {

@@ -393,15 +393,11 @@ impl Scene {
         self.add_dressed_actor(desc, None)
     }
 
-    /// Adds an actor as [`Scene::add_actor`] does, dressed in a user's rigged character
-    /// fitted to its skeleton and height when `look` is given (drawn instead of the
-    /// generated skin; it changes nothing in the simulation). A character that does not
-    /// fit is an error naming what it lacks, and no actor is added.
-    pub fn add_dressed_actor(
-        &mut self,
-        desc: &ActorDesc,
-        look: Option<&Character>,
-    ) -> Result<usize> {
+    /// The skeleton an actor of `desc` would have, after the checks that adding it makes
+    /// (name given and unused, finite place and facing, a known template); adds nothing.
+    /// A performer opens its devices with it before its actor exists, so that a device
+    /// that fails leaves no actor behind.
+    pub fn skeleton_for(&mut self, desc: &ActorDesc) -> Result<(Arc<Skeleton>, TemplateParams)> {
         if desc.name.is_empty() {
             return Err(Error::Invalid("an actor needs a name".into()));
         }
@@ -422,11 +418,11 @@ impl Scene {
             height: desc.height.unwrap_or(t.default_height),
             mass: desc.mass.unwrap_or(t.default_mass),
         };
-        let skeleton = match self
+        let cached = self
             .skeleton_cache
             .iter()
-            .find(|(n, p, _)| *n == desc.template && *p == params)
-        {
+            .find(|(n, p, _)| *n == desc.template && *p == params);
+        let skeleton = match cached {
             Some((_, _, s)) => s.clone(),
             None => {
                 let s = Arc::new(t.instantiate(params)?);
@@ -435,6 +431,19 @@ impl Scene {
                 s
             }
         };
+        Ok((skeleton, params))
+    }
+
+    /// Adds an actor as [`Scene::add_actor`] does, dressed in a user's rigged character
+    /// fitted to its skeleton and height when `look` is given (drawn instead of the
+    /// generated skin; it changes nothing in the simulation). A character that does not
+    /// fit is an error naming what it lacks, and no actor is added.
+    pub fn add_dressed_actor(
+        &mut self,
+        desc: &ActorDesc,
+        look: Option<&Character>,
+    ) -> Result<usize> {
+        let (skeleton, params) = self.skeleton_for(desc)?;
         let look = match look {
             Some(character) => Some(Arc::new(character.dress(&skeleton, params.height)?)),
             None => None,
