@@ -30,14 +30,21 @@
 //!    troupe joints with no bone (extra vertebrae, fingers of a character without finger
 //!    bones) are thereby folded into the nearest mapped bone, whose world rotation
 //!    includes theirs.
+//! 4. **Feet on troupe's feet**: then each leg's knee and hip are bent by two-bone
+//!    inverse kinematics so that its ankle rides with troupe's foot where the leg can
+//!    reach ([`feet`]): a character of other proportions does not slide its planted
+//!    feet.
 //!
 //! The skin deforms by linear blend skinning with the file's weights (at most four per
 //! vertex, normalised by the reader), as glTF viewers do.
+
+mod feet;
 
 use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
 use crate::skin::rest_globals;
 use crate::transform::Transform;
+use feet::Leg;
 use glam::{DQuat, DVec3};
 
 /// Troupe joints a character must have bones for, to be placed and turned upright.
@@ -129,6 +136,8 @@ pub struct Dressing {
     slot_bones: Vec<usize>,
     /// The troupe skeleton's rest frames.
     rest: Vec<Transform>,
+    /// The legs whose ankles are kept on troupe's feet.
+    legs: Vec<Leg>,
 }
 
 /// How one bone is posed from troupe's joint frames.
@@ -379,6 +388,7 @@ impl Character {
             bones,
             slot_bones,
             rest,
+            legs: Vec::new(),
         };
         // Reconciling rest poses moves the mesh (legs bound apart hang straight, and
         // so reach lower): it stands on the floor in troupe's rest posture.
@@ -388,6 +398,7 @@ impl Character {
             .map(|p| p.y)
             .fold(f64::INFINITY, f64::min);
         dressing.lift(-lowest);
+        dressing.legs = dressing.legs(skeleton, &joint_of);
         Ok(dressing)
     }
 }
@@ -438,11 +449,75 @@ impl Dressing {
         }
     }
 
-    /// Every bone's world frame for troupe joint frames `globals`.
+    /// The legs whose thigh, shank and foot bones are mapped to troupe's hip, knee and
+    /// ankle (or subtalar) joints, each bone below the one before, given the troupe
+    /// joint of each bone (`joint_of`); with where each ankle stands on troupe's foot.
+    fn legs(&self, skeleton: &Skeleton, joint_of: &[Option<usize>]) -> Vec<Leg> {
+        let bone = |name: &str| -> Option<(usize, usize)> {
+            let j = skeleton.joint(name).ok()?;
+            let b = joint_of.iter().position(|&x| x == Some(j))?;
+            matches!(self.bones[b].rule, Rule::Mapped { .. }).then_some((b, j))
+        };
+        let below = |lower: usize, upper: usize| {
+            let mut b = Some(lower);
+            while let Some(x) = b {
+                if x == upper {
+                    return true;
+                }
+                b = self.bone_parents[x];
+            }
+            false
+        };
+        let rest_frames = self.bone_frames(&self.rest);
+        ["l_", "r_"]
+            .iter()
+            .filter_map(|side| {
+                let (thigh, _) = bone(&format!("{side}hip"))?;
+                let (shin, knee) = bone(&format!("{side}knee"))?;
+                let (foot, ankle) =
+                    bone(&format!("{side}ankle")).or_else(|| bone(&format!("{side}subtalar")))?;
+                (shin != thigh && foot != shin && below(shin, thigh) && below(foot, shin)).then(
+                    || Leg {
+                        thigh,
+                        shin,
+                        foot,
+                        knee_joint: knee,
+                        foot_joint: ankle,
+                        in_foot: self.rest[ankle]
+                            .inverse()
+                            .transform_point(rest_frames[foot].translation),
+                    },
+                )
+            })
+            .collect()
+    }
+
+    /// Every bone's world frame for troupe joint frames `globals`: the rotations troupe's
+    /// joints made (steps 3 and 4 of [the module](self)), then the legs bent so that the
+    /// feet stay on troupe's.
     pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
+        let frames = self.rotated_frames(globals, &[]);
+        if self.legs.is_empty() {
+            return frames;
+        }
+        let turns: Vec<(usize, DQuat)> = self
+            .legs
+            .iter()
+            .flat_map(|leg| leg.reach(&frames, globals, &self.rest))
+            .collect();
+        self.rotated_frames(globals, &turns)
+    }
+
+    /// Every bone's world frame with the rotations of troupe's joints, a mapped bone
+    /// turned further by its entry of `turns` (bone, world rotation) if it has one.
+    fn rotated_frames(&self, globals: &[Transform], turns: &[(usize, DQuat)]) -> Vec<Transform> {
         let mut frames: Vec<Transform> = Vec::with_capacity(self.bones.len());
-        for bone in &self.bones {
+        for (b, bone) in self.bones.iter().enumerate() {
             let moved = |joint: usize| globals[joint].mul(&self.rest[joint].inverse());
+            let turn = turns
+                .iter()
+                .find(|(t, _)| *t == b)
+                .map_or(DQuat::IDENTITY, |(_, q)| *q);
             let frame = match bone.rule {
                 Rule::Carried { joint, align } => {
                     let m = moved(joint);
@@ -457,7 +532,7 @@ impl Dressing {
                     parent,
                     offset,
                 } => Transform::new(
-                    moved(joint).rotation * align * bone.bind.rotation,
+                    turn * moved(joint).rotation * align * bone.bind.rotation,
                     frames[parent].transform_point(offset),
                 ),
                 Rule::Follows { parent } => {
