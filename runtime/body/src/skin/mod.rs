@@ -16,7 +16,7 @@
 //! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
 //!    and smoothed over the surface so that they change continuously from vertex to vertex;
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
-//!    by a fraction of the joint's rotation, so that a bend folds no skin over.
+//!    by a fraction of the joint's rotation, so that a bend folds less skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).

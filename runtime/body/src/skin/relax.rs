@@ -5,8 +5,9 @@
 //! blends of the joints' matrices, and a thin triangle turns over at the slightest
 //! difference (its third vertex crosses the opposite edge) where a well-shaped one only
 //! stretches: on the 1.75 m adult, triangles of quality under 0.3 (see
-//! [`super::flips::quality`]) were 8 % of the mesh and a third of the triangles turned
-//! over at the test's postures, nearly all at the quarter ranges. Each vertex is moved
+//! [`super::flips::quality`]) were 8 % of the mesh but a third of the triangles that
+//! turned over at the skin test's postures, and nearly all of those at a quarter of the
+//! joint ranges. Each vertex is moved
 //! towards the mean of its neighbours, along its tangent plane only, then back onto the
 //! body's field; a move is kept only when it raises the worst quality of the triangles
 //! around the vertex and turns none of them over, so no triangle gets worse.
