@@ -9,11 +9,14 @@
 //!    unions where neighbouring joints meet, carving for the eye sockets), its zero level
 //!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
 //!    (meshoptimizer's quadric edge collapse) to at most [`MAX_TRIANGLES`] triangles, and
-//!    once more into a coarse level of detail for actors far from the camera;
+//!    once more into a coarse level of detail for actors far from the camera; its tiny
+//!    edges are collapsed (`collapse`) and its thin triangles evened out by edge flips
+//!    (`flips`) and tangential relaxation (`relax`), since thin triangles turn over
+//!    at the slightest bend;
 //! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
 //!    and smoothed over the surface so that they change continuously from vertex to vertex;
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
-//!    by a fraction of the joint's rotation, so that a bend folds no skin over.
+//!    by a fraction of the joint's rotation, so that a bend folds less skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
@@ -21,6 +24,7 @@
 mod collapse;
 mod flips;
 pub mod helpers;
+mod relax;
 mod surface;
 pub mod volumes;
 mod weights;
@@ -42,6 +46,10 @@ pub const FAR_TRIANGLES: usize = 6_000;
 /// Edges shorter than this many grid cells are collapsed after the simplification
 /// (see `collapse`).
 const TINY_EDGE: f64 = 0.5;
+/// Triangles of lower quality than this (twice the area over the longest edge squared,
+/// `flips::quality`) have their longest edge flipped after the relaxation, when that
+/// makes both triangles of the pair better.
+const THIN: f64 = 0.3;
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -151,12 +159,18 @@ impl Skin {
                 kept += 1;
             }
         }
-        let positions = gather(&positions, &renumber, kept as usize);
+        let mut positions = gather(&positions, &renumber, kept as usize);
         let mut regions = gather(&regions, &renumber, kept as usize);
         for i in &mut indices {
             *i = renumber[*i as usize];
         }
+        // Thin triangles turn over at the slightest bend: flip the worst away, relax the
+        // vertices along the surface, flip again what is still thin and relax once more
+        // (more rounds changed nothing measurable).
         flips::flip_slivers(&positions, &mut indices, 0.05);
+        relax::relax(&mut positions, &indices, &field, 10);
+        flips::flip_slivers(&positions, &mut indices, THIN);
+        relax::relax(&mut positions, &indices, &field, 5);
         let far_indices: Vec<u32> = far
             .chunks_exact(3)
             .map(|t| {

@@ -100,6 +100,50 @@ impl Field {
         }
     }
 
+    /// The field at `p`, interpolated trilinearly between the samples (the far value
+    /// outside the grid).
+    pub fn value_at(&self, p: DVec3) -> f64 {
+        let g = (p - self.origin) / self.cell;
+        let [nx, ny, nz] = self.dims;
+        if g.min_element() < 0.0
+            || g.x >= (nx - 1) as f64
+            || g.y >= (ny - 1) as f64
+            || g.z >= (nz - 1) as f64
+        {
+            return self.values[0] as f64;
+        }
+        let (i, j, k) = (g.x as usize, g.y as usize, g.z as usize);
+        let f = g - DVec3::new(i as f64, j as f64, k as f64);
+        let at = |di: usize, dj: usize, dk: usize| {
+            self.values[((k + dk) * ny + j + dj) * nx + i + di] as f64
+        };
+        let lerp = |a: f64, b: f64, t: f64| a + (b - a) * t;
+        let x00 = lerp(at(0, 0, 0), at(1, 0, 0), f.x);
+        let x10 = lerp(at(0, 1, 0), at(1, 1, 0), f.x);
+        let x01 = lerp(at(0, 0, 1), at(1, 0, 1), f.x);
+        let x11 = lerp(at(0, 1, 1), at(1, 1, 1), f.x);
+        lerp(lerp(x00, x10, f.y), lerp(x01, x11, f.y), f.z)
+    }
+
+    /// `p` moved onto the zero level set along the field's gradient (two Newton steps;
+    /// `p` itself where the gradient vanishes).
+    pub fn project(&self, p: DVec3) -> DVec3 {
+        let h = self.cell * 0.5;
+        let mut p = p;
+        for _ in 0..2 {
+            let d = |axis: DVec3| {
+                (self.value_at(p + axis * h) - self.value_at(p - axis * h)) / (2.0 * h)
+            };
+            let gradient = DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z));
+            let g2 = gradient.length_squared();
+            if g2 < 1e-6 {
+                return p;
+            }
+            p -= gradient * (self.value_at(p) / g2);
+        }
+        p
+    }
+
     /// Extracts the zero level set: vertex positions and counter-clockwise triangles
     /// (seen from outside).
     pub fn triangulate(&self) -> (Vec<DVec3>, Vec<u32>) {
