@@ -23,6 +23,7 @@
 //! finishes once the body stands.
 
 pub mod cycle;
+pub mod footing;
 pub mod goal;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
@@ -164,6 +165,8 @@ pub struct Walk {
     near: Vec<usize>,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
     shoulders: shoulders::Shoulders,
+    /// The root's floor point on the previous tick, where the feet held it.
+    last_floor: Option<DVec2>,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -210,6 +213,7 @@ impl Walk {
             steer: steer::Steer::default(),
             near: Vec::new(),
             shoulders: shoulders::Shoulders::default(),
+            last_floor: None,
         })
     }
 
@@ -405,7 +409,9 @@ impl Walk {
         let now = speed(t);
         let ahead = speed(t + CADENCE_LOOKAHEAD);
         let behind = speed((t - CADENCE_LOOKBACK).max(0.0));
-        now.max(ahead).max(behind)
+        now.max(ahead)
+            .max(behind)
+            .max(self.steer.cadence_floor(plan, t, self.t))
     }
 
     /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
@@ -678,7 +684,47 @@ impl Walk {
         let heading = sample.heading;
         self.yaw += wrap(heading - self.yaw);
         let left = DVec2::new(heading.cos(), -heading.sin());
-        let floor = sample.position + left * sway;
+        let lift = (vertical, a, k);
+        let mut floor = sample.position + left * sway;
+        let mut legs = self.legs_at(floor, heading, pelvis, lift);
+        // A steered body goes no further than its planted feet allow (see [`footing`]).
+        if self.steer.engaged {
+            if let Some(last) = self.last_floor {
+                let held = footing::hold(last, floor, legs.strain, |p| {
+                    self.legs_at(p, heading, pelvis, lift).strain
+                });
+                if held != floor {
+                    self.steer.hold(plan, held - floor);
+                    floor = held;
+                    legs = self.legs_at(floor, heading, pelvis, lift);
+                }
+            }
+        }
+        self.last_floor = Some(floor);
+        let rig = &self.rig;
+        let root_vals = [
+            floor.x - rig.root_rest.x,
+            legs.root_y,
+            floor.y - rig.root_rest.z,
+            self.yaw,
+            0.0,
+            0.0,
+        ];
+        for leg in 0..2 {
+            self.twist[leg] = Some(legs.values[leg][2]);
+            for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
+                out.set(d, legs.values[leg][i]);
+            }
+        }
+        self.last_miss = legs.miss;
+        (root_vals, pelvis, spine, arms)
+    }
+
+    /// The legs for the root over floor point `floor` with heading `heading` and the pelvis
+    /// at `pelvis`; `(vertical, a, k)` are the gait's vertical offset, its activity and
+    /// how far the pelvis has blended in.
+    fn legs_at(&self, floor: DVec2, heading: f64, pelvis: [f64; 3], lift: (f64, f64, f64)) -> Legs {
+        let (vertical, a, k) = lift;
         let rig = &self.rig;
         let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
         // Highest root drop that lets both legs reach their feet: a smooth minimum, so the
@@ -697,20 +743,17 @@ impl Walk {
         let crouched = self.start_q[rig.root[1]];
         let root_y = soft_min(highest, 0.006 * a) + crouched.min(0.0) * (1.0 - k);
         let root = root0 + DVec3::Y * root_y;
-        let root_vals = [
-            floor.x - rig.root_rest.x,
-            root_y,
-            floor.y - rig.root_rest.z,
-            self.yaw,
-            0.0,
-            0.0,
-        ];
         let pelvis_yaw = heading + pelvis[2];
-        let mut miss: f64 = 0.0;
+        let mut legs = Legs {
+            root_y,
+            values: [[0.0; 7]; 2],
+            miss: 0.0,
+            strain: 0.0,
+        };
         for leg in 0..2 {
             let hip = rig.hip_position(leg, root, heading, pelvis_rot);
             let p = self.poses[leg];
-            let (vals, m) = rig.solve_leg(
+            let (values, miss) = rig.solve_leg(
                 leg,
                 pelvis_rot,
                 pelvis_yaw,
@@ -719,15 +762,28 @@ impl Walk {
                 p.ankle,
                 (p.yaw, p.pitch, p.toes),
             );
-            miss = miss.max(m);
-            self.twist[leg] = Some(vals[2]);
-            for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
-                out.set(d, vals[i]);
+            legs.miss = legs.miss.max(miss);
+            if matches!(self.feet[leg], Foot::Stance { stays: false, .. }) {
+                legs.strain = legs
+                    .strain
+                    .max(footing::strain(&rig.legs[leg], &values, miss));
             }
+            legs.values[leg] = values;
         }
-        self.last_miss = miss;
-        (root_vals, pelvis, spine, arms)
+        legs
     }
+}
+
+/// Both legs solved for one root position (see [`Walk::legs_at`]).
+struct Legs {
+    /// The root's height DOF.
+    root_y: f64,
+    /// Each leg's DOF values, in [`rig::Leg::dofs`] order.
+    values: [[f64; 7]; 2],
+    /// How far an ankle stays from its target.
+    miss: f64,
+    /// How far a planted leg is asked past what it can do (see [`footing::strain`]).
+    strain: f64,
 }
 
 /// A smooth minimum of three values (log-sum-exp with temperature `k`); the plain minimum
@@ -788,6 +844,7 @@ impl Generator for Walk {
         }
         self.settle_since = None;
         self.twist = [None; 2];
+        self.last_floor = None;
         self.steer = steer::Steer::start(ctx);
         self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
@@ -814,7 +871,6 @@ impl Generator for Walk {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
         }
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
-        // The shoulders turn to pass: half the turn at each thoracic level; the arms,
         // whose swing would now go sideways into the other, hang still as they turn.
         self.shoulders
             .update(ctx, self.heading, &self.steer.companions);

@@ -37,6 +37,8 @@ pub struct Leg {
     pub toe_sole: DVec3,
     /// Joint indices: ankle, metatarsal (for measurements).
     pub joints: [usize; 2],
+    /// Each DOF's limits (lower, upper), in [`Leg::dofs`] order.
+    pub limits: [(f64, f64); 7],
 }
 
 /// The body as the walking motor sees it.
@@ -162,6 +164,7 @@ impl Rig {
                 ball,
                 toe_sole: DVec3::new(tip.x, -mt_rest.y, tip.z),
                 joints: [ankle, mt],
+                limits: dofs.map(|dof| skeleton.limits()[dof]),
             });
         }
         let pelvis = [

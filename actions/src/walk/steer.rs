@@ -24,6 +24,9 @@ const DRIFT_CHANGE: f64 = 2.5;
 const RETURN: f64 = 0.8;
 /// How fast the body returns to its planned path in the last seconds and after (1/s).
 const END_RETURN: f64 = 2.0;
+/// The cadence (as a walking speed, m/s) a steered walk keeps at least while its plan
+/// moves (see [`Steer::cadence_floor`]).
+pub const STEERED_CADENCE: f64 = 1.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
@@ -52,6 +55,9 @@ pub struct Steer {
     pub decision: Option<(DVec2, DVec2)>,
     /// The rate and drift that velocity asks for.
     target: (f64, DVec2),
+    /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
+    /// past it.
+    tau_before: f64,
 }
 
 impl Steer {
@@ -84,6 +90,19 @@ impl Steer {
         }
     }
 
+    /// The least speed (m/s) that sets the cadence at walk time `t` (`now` being the
+    /// walk's time now) while steering: the planned pace, up to [`STEERED_CADENCE`]. A
+    /// walker slowed by avoidance takes short quick steps rather than slowing to the
+    /// slowest cycle (2.5 s), so that a foot planted for the pace it lifted at is soon
+    /// under the body again instead of staying out in front for seconds.
+    pub fn cadence_floor(&self, plan: &Plan, t: f64, now: f64) -> f64 {
+        if self.engaged {
+            plan.speed(self.plan_time(t, now)).min(STEERED_CADENCE)
+        } else {
+            0.0
+        }
+    }
+
     /// A fresh steering for a walk starting now: notes the companions (see
     /// [`Steer::companions`]).
     pub fn start(ctx: &GeneratorContext) -> Steer {
@@ -102,9 +121,26 @@ impl Steer {
         }
     }
 
+    /// Moves the steered body by `by` (x, z) from where the plan and the offset put it now:
+    /// held back by its planted feet (see [`super::footing`]). What is along the plan
+    /// moves the plan's clock, never back past where it stood on the last tick; the rest
+    /// joins the offset.
+    pub fn hold(&mut self, plan: &Plan, by: DVec2) {
+        let forward = direction(plan.sample(self.tau, 0.0).heading);
+        let speed = plan.speed(self.tau);
+        let mut along = 0.0;
+        if speed > 0.05 {
+            let tau = (self.tau + by.dot(forward) / speed).max(self.tau_before);
+            along = (tau - self.tau) * speed;
+            self.tau = tau;
+        }
+        self.offset += by - forward * along;
+    }
+
     /// Advances by `dt` seconds of walking.
     pub fn advance(&mut self, dt: f64) {
         if self.engaged {
+            self.tau_before = self.tau;
             self.tau += dt * self.rate;
             self.offset += self.drift * dt;
         }
@@ -240,6 +276,7 @@ impl Steer {
                 companions: std::mem::take(&mut self.companions),
                 decision: self.decision,
                 target: (1.0, DVec2::ZERO),
+                tau_before: now,
             };
         }
         let speed = planned.length();
@@ -251,5 +288,34 @@ impl Steer {
         };
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
         self.target = (rate, drift);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::walk::route::Route;
+
+    #[test]
+    fn a_steered_walk_keeps_a_quick_cadence_however_slow_its_rate() {
+        let route = Route::Path {
+            points: vec![DVec2::new(0.0, 8.0)],
+            heading: None,
+            speed: 1.3,
+        };
+        let plan = Plan::new(&route, DVec2::ZERO, 0.0);
+        let mut steer = Steer::default();
+        // Not steering: the plan's own speeds set the cadence.
+        assert_eq!(steer.cadence_floor(&plan, 2.0, 2.0), 0.0);
+        steer.engaged = true;
+        steer.tau = 2.0;
+        steer.rate = 0.05;
+        assert_eq!(steer.cadence_floor(&plan, 2.0, 2.0), STEERED_CADENCE);
+        // Where the plan itself slows to its end, so does the cadence.
+        steer.tau = plan.end_time;
+        assert_eq!(
+            steer.cadence_floor(&plan, 2.0, 2.0),
+            plan.speed(plan.end_time)
+        );
     }
 }
