@@ -16,7 +16,8 @@
 //!    spine and the arms oscillate with the cycle, scaled by the personification;
 //! 5. the legs come from the feet by closed-form IK ([`rig`]); the pelvis is lowered
 //!    (smoothly) where a leg could not otherwise reach its planted foot, so the feet
-//!    really stay put.
+//!    really stay put; while avoidance steers the walk ([`steer`]), the root goes no
+//!    further than the planted legs' joint limits allow ([`footing`]).
 //!
 //! Arrival: the plan slows to a stop at the goal; the feet take their last steps to stand
 //! side by side under the hips, the oscillations fade with the speed, and the action
