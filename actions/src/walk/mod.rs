@@ -74,6 +74,10 @@ pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
 pub const CADENCE_LOOKBACK: f64 = 0.6;
 
+/// How fast (m/s) a swinging foot's landing follows the steered body (see
+/// [`Walk::follow_steering`]).
+pub const RETARGET_SPEED: f64 = 3.0;
+
 /// Seconds of plan between two points of the path a walk reports for drawing.
 const NAVIGATION_SAMPLE: f64 = 0.1;
 
@@ -168,6 +172,11 @@ pub struct Walk {
     shoulders: shoulders::Shoulders,
     /// The root's floor point on the previous tick, where the feet held it.
     last_floor: Option<DVec2>,
+    /// Per leg, the ankle target's correction for the subtalar offset (see
+    /// [`Rig::subtalar_shift`]), from the previous tick's solution.
+    subtalar: [DVec3; 2],
+    /// The tick period (s).
+    dt: f64,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -215,6 +224,8 @@ impl Walk {
             near: Vec::new(),
             shoulders: shoulders::Shoulders::default(),
             last_floor: None,
+            subtalar: [DVec3::ZERO; 2],
+            dt: 0.01,
         })
     }
 
@@ -467,6 +478,22 @@ impl Walk {
         }
     }
 
+    /// Moves the landing of swinging foot `leg` (local phase `lambda`) towards where the
+    /// steered body will be at its mid-support, at most [`RETARGET_SPEED`]: avoidance
+    /// changes the pace and the sidestep after the foot lifted, and a landing chosen for
+    /// the old ones would leave it a stride ahead of (or beside) a body that stopped.
+    fn follow_steering(&mut self, plan: &Plan, leg: usize, lambda: f64) {
+        let Foot::Swing { from, to, .. } = self.feet[leg] else {
+            return;
+        };
+        let fresh = self.plan_landing(plan, leg, lambda, DVec2::new(from.x, from.z));
+        let step = RETARGET_SPEED * self.dt;
+        if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
+            landing.plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
+            landing.yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
+        }
+    }
+
     /// Advances foot `leg` to local phase `lambda` (support fraction `sigma`) and returns
     /// its pose.
     fn step_foot(&mut self, plan: &Plan, leg: usize, lambda: f64, sigma: f64) -> FootPose {
@@ -557,6 +584,9 @@ impl Walk {
                     };
                 }
             }
+        }
+        if self.steer.engaged {
+            self.follow_steering(plan, leg, lambda);
         }
         let rig = &self.rig;
         match self.feet[leg] {
@@ -711,6 +741,11 @@ impl Walk {
             0.0,
             0.0,
         ];
+        let pelvis_rot = self.rig.pelvis_rotation(heading, pelvis);
+        for leg in 0..2 {
+            self.subtalar[leg] = self.rig.subtalar_shift(leg, pelvis_rot, &legs.values[leg]);
+        }
+        let rig = &self.rig;
         for leg in 0..2 {
             self.twist[leg] = Some(legs.values[leg][2]);
             for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
@@ -760,7 +795,7 @@ impl Walk {
                 pelvis_yaw,
                 self.twist[leg],
                 hip,
-                p.ankle,
+                p.ankle + self.subtalar[leg],
                 (p.yaw, p.pitch, p.toes),
             );
             legs.miss = legs.miss.max(miss);
@@ -846,6 +881,7 @@ impl Generator for Walk {
         self.settle_since = None;
         self.twist = [None; 2];
         self.last_floor = None;
+        self.subtalar = [DVec3::ZERO; 2];
         self.steer = steer::Steer::start(ctx);
         self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
@@ -871,6 +907,7 @@ impl Generator for Walk {
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
         }
+        self.dt = ctx.dt;
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
         // whose swing would now go sideways into the other, hang still as they turn.
         self.shoulders

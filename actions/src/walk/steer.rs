@@ -193,6 +193,7 @@ impl Steer {
             position,
             velocity,
             radius,
+            feet: feet_of(ctx, me),
         };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
@@ -249,6 +250,7 @@ impl Steer {
                 position: crowd.positions[j],
                 velocity: crowd.velocities[j],
                 radius: crowd.radii[j],
+                feet: feet_of(ctx, j),
             })
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
@@ -289,6 +291,23 @@ impl Steer {
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
         self.target = (rate, drift);
     }
+}
+
+/// The floor points under actor `j`'s ankles at the end of the previous tick (see
+/// [`Agent::feet`]); its root for a body without the humanoid's ankles.
+fn feet_of(ctx: &GeneratorContext, j: usize) -> [DVec2; 2] {
+    let root = ctx.world.crowd.positions[j];
+    let (Some(info), Some(state)) = (ctx.world.actors.get(j), ctx.world.states.get(j)) else {
+        return [root; 2];
+    };
+    let ankle = |name: &str| {
+        info.skeleton
+            .joint(name)
+            .ok()
+            .and_then(|i| state.globals.get(i))
+            .map_or(root, |g| DVec2::new(g.translation.x, g.translation.z))
+    };
+    [ankle("l_ankle"), ankle("r_ankle")]
 }
 
 #[cfg(test)]
