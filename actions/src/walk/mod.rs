@@ -459,6 +459,12 @@ impl Walk {
         let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
+        self.landing_at(plan, leg, t_mid, from)
+    }
+
+    /// The landing of foot `leg`, stepping from `from`, under the steered body at walk
+    /// time `t_mid`.
+    fn landing_at(&self, plan: &Plan, leg: usize, t_mid: f64, from: DVec2) -> Landing {
         let (sample, width) = if self.steer.plan_time(t_mid, self.t) >= plan.end_time {
             (self.end_sample(plan), 1.0)
         } else {
@@ -486,7 +492,13 @@ impl Walk {
         let Foot::Swing { from, to, .. } = self.feet[leg] else {
             return;
         };
-        let fresh = self.plan_landing(plan, leg, lambda, DVec2::new(from.x, from.z));
+        // The time of its mid-support at the cadence of now: finding it as a new landing
+        // does (simulating the cadence ahead) every tick would cost the crowd a third of
+        // its speed.
+        let cycle = self.cycle(self.cadence);
+        let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
+        let t_mid = self.t + ahead * cycle.cycle;
+        let fresh = self.landing_at(plan, leg, t_mid, DVec2::new(from.x, from.z));
         let step = RETARGET_SPEED * self.dt;
         if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
             landing.plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);

@@ -58,6 +58,9 @@ pub struct Steer {
     /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
     /// past it.
     tau_before: f64,
+    /// The walker's ankle joints (left, right), to find the feet of the neighbours that
+    /// share its skeleton.
+    ankles: Option<[usize; 2]>,
 }
 
 impl Steer {
@@ -115,8 +118,10 @@ impl Steer {
                 j != me && (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP
             });
         }
+        let ankle = |name: &str| ctx.skeleton.joint(name).ok();
         Steer {
             companions,
+            ankles: ankle("l_ankle").zip(ankle("r_ankle")).map(|(l, r)| [l, r]),
             ..Steer::default()
         }
     }
@@ -193,7 +198,7 @@ impl Steer {
             position,
             velocity,
             radius,
-            feet: feet_of(ctx, me),
+            feet: feet_of(ctx, me, self.ankles),
         };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
@@ -250,7 +255,7 @@ impl Steer {
                 position: crowd.positions[j],
                 velocity: crowd.velocities[j],
                 radius: crowd.radii[j],
-                feet: feet_of(ctx, j),
+                feet: feet_of(ctx, j, self.ankles),
             })
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
@@ -279,6 +284,7 @@ impl Steer {
                 decision: self.decision,
                 target: (1.0, DVec2::ZERO),
                 tau_before: now,
+                ankles: self.ankles,
             };
         }
         let speed = planned.length();
@@ -294,19 +300,25 @@ impl Steer {
 }
 
 /// The floor points under actor `j`'s ankles at the end of the previous tick (see
-/// [`Agent::feet`]); its root for a body without the humanoid's ankles.
-fn feet_of(ctx: &GeneratorContext, j: usize) -> [DVec2; 2] {
+/// [`Agent::feet`]); its root for a body without the humanoid's ankles. `ankles` are
+/// the ankle joints of the deciding walker's own skeleton, if known.
+fn feet_of(ctx: &GeneratorContext, j: usize, ankles: Option<[usize; 2]>) -> [DVec2; 2] {
     let root = ctx.world.crowd.positions[j];
     let (Some(info), Some(state)) = (ctx.world.actors.get(j), ctx.world.states.get(j)) else {
         return [root; 2];
     };
-    let ankle = |name: &str| {
-        info.skeleton
-            .joint(name)
-            .ok()
+    let under = |joint: Option<usize>| {
+        joint
             .and_then(|i| state.globals.get(i))
             .map_or(root, |g| DVec2::new(g.translation.x, g.translation.z))
     };
+    // Most neighbours share the walker's skeleton: its ankles are found once per walk.
+    if std::ptr::eq(&*info.skeleton, ctx.skeleton) {
+        if let Some(ankles) = ankles {
+            return ankles.map(|a| under(Some(a)));
+        }
+    }
+    let ankle = |name: &str| under(info.skeleton.joint(name).ok());
     [ankle("l_ankle"), ankle("r_ankle")]
 }
 
