@@ -493,7 +493,7 @@ impl Walk {
             return;
         };
         // The time of its mid-support at the cadence of now: finding it as a new landing
-        // does (simulating the cadence ahead) every tick would cost the crowd a third of
+        // does (simulating the cadence ahead) every tick cost the crowd benchmark 40 % of
         // its speed.
         let cycle = self.cycle(self.cadence);
         let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
