@@ -16,13 +16,15 @@
 //!    spine and the arms oscillate with the cycle, scaled by the personification;
 //! 5. the legs come from the feet by closed-form IK ([`rig`]); the pelvis is lowered
 //!    (smoothly) where a leg could not otherwise reach its planted foot, so the feet
-//!    really stay put.
+//!    really stay put; while avoidance steers the walk ([`steer`]), the root goes no
+//!    further than the planted legs' joint limits allow ([`footing`]).
 //!
 //! Arrival: the plan slows to a stop at the goal; the feet take their last steps to stand
 //! side by side under the hips, the oscillations fade with the speed, and the action
 //! finishes once the body stands.
 
 pub mod cycle;
+pub mod footing;
 pub mod goal;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
@@ -71,6 +73,10 @@ pub const BLEND_IN_TIME: f64 = 0.4;
 pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
 pub const CADENCE_LOOKBACK: f64 = 0.6;
+
+/// How fast (m/s) a swinging foot's landing follows the steered body (see
+/// [`Walk::follow_steering`]).
+pub const RETARGET_SPEED: f64 = 3.0;
 
 /// Seconds of plan between two points of the path a walk reports for drawing.
 const NAVIGATION_SAMPLE: f64 = 0.1;
@@ -164,6 +170,13 @@ pub struct Walk {
     near: Vec<usize>,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
     shoulders: shoulders::Shoulders,
+    /// The root's floor point on the previous tick, where the feet held it.
+    last_floor: Option<DVec2>,
+    /// Per leg, the ankle target's correction for the subtalar offset (see
+    /// [`Rig::subtalar_shift`]), from the previous tick's solution.
+    subtalar: [DVec3; 2],
+    /// The tick period (s).
+    dt: f64,
 }
 
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
@@ -210,6 +223,9 @@ impl Walk {
             steer: steer::Steer::default(),
             near: Vec::new(),
             shoulders: shoulders::Shoulders::default(),
+            last_floor: None,
+            subtalar: [DVec3::ZERO; 2],
+            dt: 0.01,
         })
     }
 
@@ -405,7 +421,9 @@ impl Walk {
         let now = speed(t);
         let ahead = speed(t + CADENCE_LOOKAHEAD);
         let behind = speed((t - CADENCE_LOOKBACK).max(0.0));
-        now.max(ahead).max(behind)
+        now.max(ahead)
+            .max(behind)
+            .max(self.steer.cadence_floor(plan, t, self.t))
     }
 
     /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
@@ -441,6 +459,12 @@ impl Walk {
         let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
+        self.landing_at(plan, leg, t_mid, from)
+    }
+
+    /// The landing of foot `leg`, stepping from `from`, under the steered body at walk
+    /// time `t_mid`.
+    fn landing_at(&self, plan: &Plan, leg: usize, t_mid: f64, from: DVec2) -> Landing {
         let (sample, width) = if self.steer.plan_time(t_mid, self.t) >= plan.end_time {
             (self.end_sample(plan), 1.0)
         } else {
@@ -457,6 +481,28 @@ impl Walk {
             yaw: sample.heading,
             strike: 0.26 * q,
             roll: MAX_ROLL * q,
+        }
+    }
+
+    /// Moves the landing of swinging foot `leg` (local phase `lambda`) towards where the
+    /// steered body will be at its mid-support, at most [`RETARGET_SPEED`]: avoidance
+    /// changes the pace and the sidestep after the foot lifted, and a landing chosen for
+    /// the old ones would leave it a stride ahead of (or beside) a body that stopped.
+    fn follow_steering(&mut self, plan: &Plan, leg: usize, lambda: f64) {
+        let Foot::Swing { from, to, .. } = self.feet[leg] else {
+            return;
+        };
+        // The time of its mid-support at the cadence of now: finding it as a new landing
+        // does (simulating the cadence ahead) every tick cost the crowd benchmark 40 % of
+        // its speed.
+        let cycle = self.cycle(self.cadence);
+        let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
+        let t_mid = self.t + ahead * cycle.cycle;
+        let fresh = self.landing_at(plan, leg, t_mid, DVec2::new(from.x, from.z));
+        let step = RETARGET_SPEED * self.dt;
+        if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
+            landing.plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
+            landing.yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
         }
     }
 
@@ -550,6 +596,9 @@ impl Walk {
                     };
                 }
             }
+        }
+        if self.steer.engaged {
+            self.follow_steering(plan, leg, lambda);
         }
         let rig = &self.rig;
         match self.feet[leg] {
@@ -678,7 +727,52 @@ impl Walk {
         let heading = sample.heading;
         self.yaw += wrap(heading - self.yaw);
         let left = DVec2::new(heading.cos(), -heading.sin());
-        let floor = sample.position + left * sway;
+        let lift = (vertical, a, k);
+        let mut floor = sample.position + left * sway;
+        let mut legs = self.legs_at(floor, heading, pelvis, lift);
+        // A steered body goes no further than its planted feet allow (see [`footing`]).
+        if self.steer.engaged {
+            if let Some(last) = self.last_floor {
+                let held = footing::hold(last, floor, legs.strain, |p| {
+                    self.legs_at(p, heading, pelvis, lift).strain
+                });
+                if held != floor {
+                    self.steer.hold(plan, held - floor);
+                    floor = held;
+                    legs = self.legs_at(floor, heading, pelvis, lift);
+                }
+            }
+        }
+        self.last_floor = Some(floor);
+        let rig = &self.rig;
+        let root_vals = [
+            floor.x - rig.root_rest.x,
+            legs.root_y,
+            floor.y - rig.root_rest.z,
+            self.yaw,
+            0.0,
+            0.0,
+        ];
+        let pelvis_rot = self.rig.pelvis_rotation(heading, pelvis);
+        for leg in 0..2 {
+            self.subtalar[leg] = self.rig.subtalar_shift(leg, pelvis_rot, &legs.values[leg]);
+        }
+        let rig = &self.rig;
+        for leg in 0..2 {
+            self.twist[leg] = Some(legs.values[leg][2]);
+            for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
+                out.set(d, legs.values[leg][i]);
+            }
+        }
+        self.last_miss = legs.miss;
+        (root_vals, pelvis, spine, arms)
+    }
+
+    /// The legs for the root over floor point `floor` with heading `heading` and the pelvis
+    /// at `pelvis`; `(vertical, a, k)` are the gait's vertical offset, its activity and
+    /// how far the pelvis has blended in.
+    fn legs_at(&self, floor: DVec2, heading: f64, pelvis: [f64; 3], lift: (f64, f64, f64)) -> Legs {
+        let (vertical, a, k) = lift;
         let rig = &self.rig;
         let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
         // Highest root drop that lets both legs reach their feet: a smooth minimum, so the
@@ -697,37 +791,47 @@ impl Walk {
         let crouched = self.start_q[rig.root[1]];
         let root_y = soft_min(highest, 0.006 * a) + crouched.min(0.0) * (1.0 - k);
         let root = root0 + DVec3::Y * root_y;
-        let root_vals = [
-            floor.x - rig.root_rest.x,
-            root_y,
-            floor.y - rig.root_rest.z,
-            self.yaw,
-            0.0,
-            0.0,
-        ];
         let pelvis_yaw = heading + pelvis[2];
-        let mut miss: f64 = 0.0;
+        let mut legs = Legs {
+            root_y,
+            values: [[0.0; 7]; 2],
+            miss: 0.0,
+            strain: 0.0,
+        };
         for leg in 0..2 {
             let hip = rig.hip_position(leg, root, heading, pelvis_rot);
             let p = self.poses[leg];
-            let (vals, m) = rig.solve_leg(
+            let (values, miss) = rig.solve_leg(
                 leg,
                 pelvis_rot,
                 pelvis_yaw,
                 self.twist[leg],
                 hip,
-                p.ankle,
+                p.ankle + self.subtalar[leg],
                 (p.yaw, p.pitch, p.toes),
             );
-            miss = miss.max(m);
-            self.twist[leg] = Some(vals[2]);
-            for (i, &d) in rig.legs[leg].dofs.iter().enumerate() {
-                out.set(d, vals[i]);
+            legs.miss = legs.miss.max(miss);
+            if matches!(self.feet[leg], Foot::Stance { stays: false, .. }) {
+                legs.strain = legs
+                    .strain
+                    .max(footing::strain(&rig.legs[leg], &values, miss));
             }
+            legs.values[leg] = values;
         }
-        self.last_miss = miss;
-        (root_vals, pelvis, spine, arms)
+        legs
     }
+}
+
+/// Both legs solved for one root position (see [`Walk::legs_at`]).
+struct Legs {
+    /// The root's height DOF.
+    root_y: f64,
+    /// Each leg's DOF values, in [`rig::Leg::dofs`] order.
+    values: [[f64; 7]; 2],
+    /// How far an ankle stays from its target.
+    miss: f64,
+    /// How far a planted leg is asked past what it can do (see [`footing::strain`]).
+    strain: f64,
 }
 
 /// A smooth minimum of three values (log-sum-exp with temperature `k`); the plain minimum
@@ -788,6 +892,8 @@ impl Generator for Walk {
         }
         self.settle_since = None;
         self.twist = [None; 2];
+        self.last_floor = None;
+        self.subtalar = [DVec3::ZERO; 2];
         self.steer = steer::Steer::start(ctx);
         self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
@@ -813,8 +919,8 @@ impl Generator for Walk {
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
         }
+        self.dt = ctx.dt;
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
-        // The shoulders turn to pass: half the turn at each thoracic level; the arms,
         // whose swing would now go sideways into the other, hang still as they turn.
         self.shoulders
             .update(ctx, self.heading, &self.steer.companions);

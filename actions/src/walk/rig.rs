@@ -37,6 +37,11 @@ pub struct Leg {
     pub toe_sole: DVec3,
     /// Joint indices: ankle, metatarsal (for measurements).
     pub joints: [usize; 2],
+    /// Each DOF's limits (lower, upper), in [`Leg::dofs`] order.
+    pub limits: [(f64, f64); 7],
+    /// Where the foot's own joint (the subtalar, parent of the metatarsal) sits in the
+    /// ankle joint's frame: below the ankle, so it swings sideways as the shank leans.
+    pub subtalar: DVec3,
 }
 
 /// The body as the walking motor sees it.
@@ -162,6 +167,11 @@ impl Rig {
                 ball,
                 toe_sole: DVec3::new(tip.x, -mt_rest.y, tip.z),
                 joints: [ankle, mt],
+                limits: dofs.map(|dof| skeleton.limits()[dof]),
+                subtalar: match joints[mt].parent {
+                    Some(p) if p != ankle => joints[p].offset,
+                    _ => DVec3::ZERO,
+                },
             });
         }
         let pelvis = [
@@ -276,6 +286,25 @@ impl Rig {
         let ball = DVec3::new(l.ball.x, -ya, l.ball.z);
         let toe = l.ball - DVec3::new(0.0, ya, 0.0) + DQuat::from_rotation_x(toes) * l.toe_sole;
         y(heel).min(y(ball)).min(y(toe))
+    }
+
+    /// How far (world) to move the ankle target of `leg` so that its foot stays where
+    /// [`Rig::ankle_from_plant`] puts it, for the leg at DOF `values` (in [`Leg::dofs`]
+    /// order) under the pelvis' world rotation `pelvis`: the foot hangs from its subtalar
+    /// joint, which sits below the ankle in the shank's frame, whereas the plant is
+    /// measured as if it turned with the foot. As the shank leans sideways over a planted
+    /// foot (a sidestep), the difference creeps by millimetres.
+    pub fn subtalar_shift(&self, leg: usize, pelvis: DQuat, values: &[f64; 7]) -> DVec3 {
+        let l = &self.legs[leg];
+        let a = |i: usize| values[i] * l.signs[i];
+        let ankle = pelvis
+            * DQuat::from_rotation_x(a(0))
+            * DQuat::from_rotation_z(a(1))
+            * DQuat::from_rotation_y(a(2))
+            * DQuat::from_rotation_x(a(3))
+            * DQuat::from_rotation_x(a(4));
+        let foot = ankle * DQuat::from_rotation_z(a(5));
+        foot * l.subtalar - ankle * l.subtalar
     }
 
     /// The leg's DOF values that put its ankle at `ankle` with the foot at heading `yaw`
@@ -438,6 +467,46 @@ mod tests {
                 );
             }
         }
+    }
+
+    #[test]
+    fn the_subtalar_shift_keeps_a_planted_foot_put_as_the_shank_leans() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let rig = Rig::new(&skeleton).unwrap();
+        let mut q = vec![0.0; skeleton.dof_count()];
+        let mut g = vec![Transform::IDENTITY; skeleton.joints().len()];
+        let leg = 0;
+        let subtalar = skeleton.joints()[rig.legs[leg].joints[1]].parent.unwrap();
+        let plant = DVec2::new(0.09, 0.1);
+        let ankle = rig.ankle_from_plant(leg, plant, 0.0, 0.0);
+        // Where the foot's joint is when the foot stands at `plant`, the leg upright.
+        let wanted = ankle + rig.legs[leg].subtalar;
+        // The body sidestepped 0.15 m: the shank leans over the planted foot.
+        let pelvis = rig.pelvis_rotation(0.0, [0.0; 3]);
+        let root = rig.root_rest + DVec3::new(-0.15, -0.03, 0.0);
+        q[rig.root[0]] = -0.15;
+        q[rig.root[1]] = -0.03;
+        let hip = rig.hip_position(leg, root, 0.0, pelvis);
+        let solve = |target: DVec3| {
+            rig.solve_leg(leg, pelvis, 0.0, None, hip, target, (0.0, 0.0, 0.0))
+                .0
+        };
+        let foot_at = |values: [f64; 7], q: &mut Vec<f64>, g: &mut Vec<Transform>| {
+            for (i, &dof) in rig.legs[leg].dofs.iter().enumerate() {
+                q[dof] = values[i];
+            }
+            forward_kinematics(&skeleton, q, g);
+            g[subtalar].translation
+        };
+        let plain = solve(ankle);
+        let drift = (foot_at(plain, &mut q, &mut g) - wanted).length();
+        let shifted = solve(ankle + rig.subtalar_shift(leg, pelvis, &plain));
+        let kept = (foot_at(shifted, &mut q, &mut g) - wanted).length();
+        assert!(drift > 5e-4, "the lean moves the foot: {drift}");
+        assert!(
+            kept < 0.2 * drift,
+            "the shift keeps it: {kept} (without: {drift})"
+        );
     }
 
     #[test]

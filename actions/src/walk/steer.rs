@@ -24,6 +24,9 @@ const DRIFT_CHANGE: f64 = 2.5;
 const RETURN: f64 = 0.8;
 /// How fast the body returns to its planned path in the last seconds and after (1/s).
 const END_RETURN: f64 = 2.0;
+/// The cadence (as a walking speed, m/s) a steered walk keeps at least while its plan
+/// moves (see [`Steer::cadence_floor`]).
+pub const STEERED_CADENCE: f64 = 1.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
@@ -52,6 +55,12 @@ pub struct Steer {
     pub decision: Option<(DVec2, DVec2)>,
     /// The rate and drift that velocity asks for.
     target: (f64, DVec2),
+    /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
+    /// past it.
+    tau_before: f64,
+    /// The walker's ankle joints (left, right), to find the feet of the neighbours that
+    /// share its skeleton.
+    ankles: Option<[usize; 2]>,
 }
 
 impl Steer {
@@ -84,6 +93,19 @@ impl Steer {
         }
     }
 
+    /// The least speed (m/s) that sets the cadence at walk time `t` (`now` being the
+    /// walk's time now) while steering: the planned pace, up to [`STEERED_CADENCE`]. A
+    /// walker slowed by avoidance takes short quick steps rather than slowing to the
+    /// slowest cycle (2.5 s), so that a foot planted for the pace it lifted at is soon
+    /// under the body again instead of staying out in front for seconds.
+    pub fn cadence_floor(&self, plan: &Plan, t: f64, now: f64) -> f64 {
+        if self.engaged {
+            plan.speed(self.plan_time(t, now)).min(STEERED_CADENCE)
+        } else {
+            0.0
+        }
+    }
+
     /// A fresh steering for a walk starting now: notes the companions (see
     /// [`Steer::companions`]).
     pub fn start(ctx: &GeneratorContext) -> Steer {
@@ -96,15 +118,34 @@ impl Steer {
                 j != me && (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP
             });
         }
+        let ankle = |name: &str| ctx.skeleton.joint(name).ok();
         Steer {
             companions,
+            ankles: ankle("l_ankle").zip(ankle("r_ankle")).map(|(l, r)| [l, r]),
             ..Steer::default()
         }
+    }
+
+    /// Moves the steered body by `by` (x, z) from where the plan and the offset put it now:
+    /// held back by its planted feet (see [`super::footing`]). What is along the plan
+    /// moves the plan's clock, never back past where it stood on the last tick; the rest
+    /// joins the offset.
+    pub fn hold(&mut self, plan: &Plan, by: DVec2) {
+        let forward = direction(plan.sample(self.tau, 0.0).heading);
+        let speed = plan.speed(self.tau);
+        let mut along = 0.0;
+        if speed > 0.05 {
+            let tau = (self.tau + by.dot(forward) / speed).max(self.tau_before);
+            along = (tau - self.tau) * speed;
+            self.tau = tau;
+        }
+        self.offset += by - forward * along;
     }
 
     /// Advances by `dt` seconds of walking.
     pub fn advance(&mut self, dt: f64) {
         if self.engaged {
+            self.tau_before = self.tau;
             self.tau += dt * self.rate;
             self.offset += self.drift * dt;
         }
@@ -157,6 +198,7 @@ impl Steer {
             position,
             velocity,
             radius,
+            feet: feet_of(ctx, me, self.ankles),
         };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
@@ -213,6 +255,7 @@ impl Steer {
                 position: crowd.positions[j],
                 velocity: crowd.velocities[j],
                 radius: crowd.radii[j],
+                feet: feet_of(ctx, j, self.ankles),
             })
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
@@ -240,6 +283,8 @@ impl Steer {
                 companions: std::mem::take(&mut self.companions),
                 decision: self.decision,
                 target: (1.0, DVec2::ZERO),
+                tau_before: now,
+                ankles: self.ankles,
             };
         }
         let speed = planned.length();
@@ -251,5 +296,57 @@ impl Steer {
         };
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
         self.target = (rate, drift);
+    }
+}
+
+/// The floor points under actor `j`'s ankles at the end of the previous tick (see
+/// [`Agent::feet`]); its root for a body without the humanoid's ankles. `ankles` are
+/// the ankle joints of the deciding walker's own skeleton, if known.
+fn feet_of(ctx: &GeneratorContext, j: usize, ankles: Option<[usize; 2]>) -> [DVec2; 2] {
+    let root = ctx.world.crowd.positions[j];
+    let (Some(info), Some(state)) = (ctx.world.actors.get(j), ctx.world.states.get(j)) else {
+        return [root; 2];
+    };
+    let under = |joint: Option<usize>| {
+        joint
+            .and_then(|i| state.globals.get(i))
+            .map_or(root, |g| DVec2::new(g.translation.x, g.translation.z))
+    };
+    // Most neighbours share the walker's skeleton: its ankles are found once per walk.
+    if std::ptr::eq(&*info.skeleton, ctx.skeleton) {
+        if let Some(ankles) = ankles {
+            return ankles.map(|a| under(Some(a)));
+        }
+    }
+    let ankle = |name: &str| under(info.skeleton.joint(name).ok());
+    [ankle("l_ankle"), ankle("r_ankle")]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::walk::route::Route;
+
+    #[test]
+    fn a_steered_walk_keeps_a_quick_cadence_however_slow_its_rate() {
+        let route = Route::Path {
+            points: vec![DVec2::new(0.0, 8.0)],
+            heading: None,
+            speed: 1.3,
+        };
+        let plan = Plan::new(&route, DVec2::ZERO, 0.0);
+        let mut steer = Steer::default();
+        // Not steering: the plan's own speeds set the cadence.
+        assert_eq!(steer.cadence_floor(&plan, 2.0, 2.0), 0.0);
+        steer.engaged = true;
+        steer.tau = 2.0;
+        steer.rate = 0.05;
+        assert_eq!(steer.cadence_floor(&plan, 2.0, 2.0), STEERED_CADENCE);
+        // Where the plan itself slows to its end, so does the cadence.
+        steer.tau = plan.end_time;
+        assert_eq!(
+            steer.cadence_floor(&plan, 2.0, 2.0),
+            plan.speed(plan.end_time)
+        );
     }
 }

@@ -107,12 +107,14 @@ fn avoidance(c: &mut Criterion) {
         position: DVec2::ZERO,
         velocity: DVec2::new(0.0, 1.2),
         radius: 0.28,
+        feet: [DVec2::ZERO; 2],
     };
     let others: Vec<Agent> = (0..6)
         .map(|_| Agent {
             position: DVec2::new(rng.next() * 6.0 - 3.0, rng.next() * 6.0 - 1.0),
             velocity: DVec2::new(rng.next() * 2.0 - 1.0, rng.next() * 2.0 - 1.0),
             radius: 0.28,
+            feet: [DVec2::ZERO; 2],
         })
         .collect();
     let boxes = obstacles(&mut rng);

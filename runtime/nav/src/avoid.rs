@@ -35,6 +35,35 @@ pub struct Agent {
     pub velocity: DVec2,
     /// Body radius (m).
     pub radius: f64,
+    /// Floor points (x, z) under the body's ankles (its position for a body without
+    /// feet). A walker's legs reach out to its feet: a foot planted a stride ahead
+    /// reaches past the disc, and the walker cannot stop before it has come over it.
+    pub feet: [DVec2; 2],
+}
+
+/// How far (m) a body reaches past the point under an ankle: the toes ahead of it, the
+/// heel behind, and the leg leaning out above it.
+pub const FOOT: f64 = 0.15;
+
+impl Agent {
+    /// A body of `radius` at `position` going at `velocity`, its feet under it.
+    pub fn disc(position: DVec2, velocity: DVec2, radius: f64) -> Agent {
+        Agent {
+            position,
+            velocity,
+            radius,
+            feet: [position; 2],
+        }
+    }
+
+    /// How far (m) the body reaches from its position along the unit vector `towards`:
+    /// its radius, or further where a foot reaches out that way (by [`FOOT`] past it).
+    pub fn reach(&self, towards: DVec2) -> f64 {
+        self.feet
+            .iter()
+            .map(|f| (*f - self.position).dot(towards) + FOOT)
+            .fold(self.radius, f64::max)
+    }
 }
 
 /// The velocity `me` should take to go about `preferred` without running into `others`
@@ -145,7 +174,9 @@ impl<'a> Surroundings<'a> {
             .iter()
             .map(|o| {
                 let offset = o.position - me.position;
-                let reach = me.radius + o.radius + GAP;
+                // Each body reaches towards the other as far as its disc or its feet.
+                let towards = offset.normalize_or_zero();
+                let reach = me.reach(towards) + o.reach(-towards) + GAP;
                 // Reciprocal: I take half the change and they are assumed to take the
                 // other half, unless they stand still: then I go round them alone.
                 let (share, shift) = if o.velocity.length() > STANDING {
@@ -267,11 +298,7 @@ mod tests {
     use super::*;
 
     fn agent(x: f64, z: f64, vx: f64, vz: f64) -> Agent {
-        Agent {
-            position: DVec2::new(x, z),
-            velocity: DVec2::new(vx, vz),
-            radius: 0.28,
-        }
+        Agent::disc(DVec2::new(x, z), DVec2::new(vx, vz), 0.28)
     }
 
     #[test]
@@ -293,6 +320,28 @@ mod tests {
         assert!(va.x < 0.0 && vb.x > 0.0, "{va} {vb}");
         // Mirror images: the choice depends only on the geometry.
         assert!((va.x + vb.x).abs() < 1e-12 && (va.y + vb.y).abs() < 1e-12);
+    }
+
+    #[test]
+    fn a_foot_planted_ahead_widens_the_reach_towards_it_only() {
+        let mut a = agent(0.0, 0.0, 0.0, 1.2);
+        assert_eq!(a.reach(DVec2::Y), 0.28);
+        a.feet = [DVec2::new(0.09, 0.6), DVec2::new(-0.09, -0.2)];
+        assert!((a.reach(DVec2::Y) - (0.6 + FOOT)).abs() < 1e-12);
+        assert!((a.reach(DVec2::X) - 0.28).abs() < 1e-12);
+        // Bob stands 0.8 m ahead: the discs are 0.21 m apart, so Ann may still go on
+        // at a slant; with her foot planted 0.4 m ahead her leg already reaches him, and
+        // she may only keep her distance.
+        let bob = agent(0.0, 0.8, 0.0, 0.0);
+        let ann = agent(0.0, 0.0, 0.0, 1.2);
+        let (v, _) = choose_velocity(&ann, DVec2::new(0.0, 1.2), &[bob], &[]);
+        assert!(v.y > 0.0, "{v}");
+        let ann = Agent {
+            feet: [DVec2::new(0.09, 0.4), DVec2::new(-0.09, -0.1)],
+            ..ann
+        };
+        let (v, _) = choose_velocity(&ann, DVec2::new(0.0, 1.2), &[bob], &[]);
+        assert!(v.y <= 0.0, "{v}");
     }
 
     #[test]
