@@ -5,7 +5,9 @@ local M = {}
 
 -- Makes the planters and the actors. `o.planter`: the planters' centres' distance from
 -- the middle along x and z; `o.planter_size`: their box; `o.per_stream` actors a stream,
--- in rows of `o.columns` 1 m apart, the first row `o.back` m from the middle. Returns one
+-- in rows of `o.columns` 1 m apart, the first row `o.back` m from the middle, each bound
+-- for the mirror image of its place beyond the middle (the first row the furthest, the
+-- last `o.back` − 1 m from the middle). Returns one
 -- entry per actor, in the order made: { actor, stream, x, z (start), gx, gz (goal) }.
 function M.build(o)
   local size = o.planter_size
@@ -22,7 +24,11 @@ function M.build(o)
       local lateral = (col - (o.columns - 1) / 2) * 1.0 + (s <= 2 and 0.3 or -0.3)
       local back = o.back + row * 1.0
       local x, z = -d[1] * back + side[1] * lateral, -d[2] * back + side[2] * lateral
-      local gx, gz = d[1] * (back - 1) + side[1] * lateral, d[2] * (back - 1) + side[2] * lateral
+      -- The block crosses whole: its first row ends furthest, its last nearest, so
+      -- nobody's goal lies behind someone who has already arrived.
+      local rows = math.ceil(o.per_stream / o.columns)
+      local far = o.back - 1 + (rows - 1 - row) * 1.0
+      local gx, gz = d[1] * far + side[1] * lateral, d[2] * far + side[2] * lateral
       local a = troupe.actor{ name = string.format("s%d_%02d", s, k), at = {x, 0, z},
                               facing = math.deg(math.atan(d[1], d[2])) }
       walkers[#walkers + 1] = { actor = a, stream = s, x = x, z = z, gx = gx, gz = gz }

@@ -11,7 +11,9 @@
 
 use super::route::{direction, Plan, RootSample};
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{choose_velocity, Agent, Footprint, GAP, NEIGHBOUR_RANGE};
+use troupe_scene::space::{
+    choose_velocity, wait_line, Agent, Footprint, Walker, GAP, NEIGHBOUR_RANGE,
+};
 use troupe_scene::GeneratorContext;
 
 /// Largest change of the plan's clock rate per second (1 → 0 in 0.8 s).
@@ -24,6 +26,13 @@ const DRIFT_CHANGE: f64 = 2.5;
 const RETURN: f64 = 0.8;
 /// How fast the body returns to its planned path in the last seconds and after (1/s).
 const END_RETURN: f64 = 2.0;
+/// Deceleration (m/s²) of a walker stopping to wait for one that has the way: what the
+/// rate's change limit allows at a cruising speed, with a margin.
+const WAIT_BRAKING: f64 = 0.6;
+/// Sideways speed (m/s, to the right) a walker keeps in a counter-flow.
+const LANE_BIAS: f64 = 0.15;
+/// Distance (m) ahead within which a walker coming the other way makes a counter-flow.
+const ONCOMING_RANGE: f64 = 4.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
@@ -148,7 +157,14 @@ impl Steer {
         // Back to the path, more firmly as the end nears so the walk ends at its goal.
         let remaining = plan.end_time - pt;
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
-        let mut preferred = planned - self.offset * gain;
+        let along = planned.try_normalize().unwrap_or(direction(here.heading));
+        let mut preferred = if remaining >= 2.0 && self.oncoming(ctx, position, along, others) {
+            // In a counter-flow: keep to the right, where the sidestep put the body,
+            // rather than back onto the plan's line (lanes form).
+            planned + along.perp() * LANE_BIAS
+        } else {
+            planned - self.offset * gain
+        };
         if self.engaged {
             let cap = planned.length().max(0.3);
             preferred = preferred.clamp_length_max(cap);
@@ -158,7 +174,6 @@ impl Steer {
             velocity,
             radius,
         };
-        let along = planned.try_normalize().unwrap_or(direction(here.heading));
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
         if !self.engaged {
             return;
@@ -189,6 +204,29 @@ impl Steer {
         }
     }
 
+    /// Whether someone faces me within [`ONCOMING_RANGE`] ahead of `position` on my way
+    /// (`along`): walking towards me, or waiting to.
+    fn oncoming(
+        &self,
+        ctx: &GeneratorContext,
+        position: DVec2,
+        along: DVec2,
+        others: &mut Vec<usize>,
+    ) -> bool {
+        let crowd = ctx.world.crowd;
+        others.clear();
+        crowd.near(position, others);
+        others.iter().any(|&j| {
+            let o = crowd.positions[j] - position;
+            let ahead = o.dot(along);
+            j != ctx.actor
+                && ahead > 0.0
+                && ahead < ONCOMING_RANGE
+                && along.perp_dot(o).abs() < 1.2
+                && crowd.facings.get(j).is_some_and(|f| f.dot(along) < -0.5)
+        })
+    }
+
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,
     /// and turns it into the rate and drift to head for along the plan (`planned`
     /// velocity, in direction `along`).
@@ -206,17 +244,31 @@ impl Steer {
         let position = body.position;
         others.clear();
         crowd.near(position, others);
-        let agents: Vec<Agent> = others
+        // Those who may cross my way further ahead, for the give-way rule.
+        crowd.near(position + along * NEIGHBOUR_RANGE, others);
+        others.sort_unstable();
+        others.dedup();
+        let near: Vec<Walker> = others
             .iter()
             .filter(|&&j| j != me && !self.companions.contains(&j))
-            .map(|&j| Agent {
-                position: crowd.positions[j],
-                velocity: crowd.velocities[j],
-                radius: crowd.radii[j],
+            .map(|&j| Walker {
+                body: Agent {
+                    position: crowd.positions[j],
+                    velocity: crowd.velocities[j],
+                    radius: crowd.radii[j],
+                },
+                facing: crowd.facings.get(j).copied().unwrap_or_default(),
             })
+            .collect();
+        // Where ways cross, one walker has the way (see `troupe_nav::way`): the other
+        // waits before the crossing.
+        let wait = wait_line(body, along, planned.length(), &near);
+        let agents: Vec<Agent> = near
+            .iter()
+            .map(|w| w.body)
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
-        if agents.is_empty() && !self.engaged {
+        if agents.is_empty() && !self.engaged && wait.is_none() {
             self.decision = Some((preferred, preferred));
             return;
         }
@@ -227,7 +279,7 @@ impl Steer {
         };
         let (v, free) = choose_velocity(body, preferred, &agents, &obstacles);
         self.decision = Some((preferred, v));
-        if free && !self.engaged {
+        if free && !self.engaged && wait.is_none() {
             return;
         }
         if !self.engaged {
@@ -244,11 +296,15 @@ impl Steer {
         }
         let speed = planned.length();
         let side = along.perp();
-        let rate = if speed > 0.05 {
+        let mut rate = if speed > 0.05 {
             (v.dot(along) / speed).clamp(0.0, 1.0)
         } else {
             1.0
         };
+        if let (Some(d), true) = (wait, speed > 0.05) {
+            // Slow down so as to stop at the line: v² = 2·a·d.
+            rate = rate.min((2.0 * WAIT_BRAKING * d).sqrt() / speed);
+        }
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
         self.target = (rate, drift);
     }
