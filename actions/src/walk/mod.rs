@@ -27,6 +27,7 @@ pub mod goal;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
+pub mod replan;
 pub mod rig;
 pub mod route;
 pub mod shoulders;
@@ -162,6 +163,8 @@ pub struct Walk {
     steer: steer::Steer,
     /// Scratch: the actors near this one.
     near: Vec<usize>,
+    /// When the walk stood blocked and took new routes (see [`replan`]).
+    replan: replan::Replan,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
     shoulders: shoulders::Shoulders,
 }
@@ -209,6 +212,7 @@ impl Walk {
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
+            replan: replan::Replan::default(),
             shoulders: shoulders::Shoulders::default(),
         })
     }
@@ -237,6 +241,41 @@ impl Walk {
             end.position += self.steer.offset;
         }
         end
+    }
+
+    /// A new plan round the actors standing in the way, from where the body is now to
+    /// the route's end (see [`replan`]); `None` leaves the plan as it is.
+    fn new_route(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        let Route::Path {
+            points,
+            heading,
+            speed,
+        } = &self.route
+        else {
+            return None;
+        };
+        let goal = *points.last()?;
+        let here = self
+            .steer
+            .sample(plan, self.t, self.t, self.heading)
+            .position;
+        let ends = (here, goal);
+        let companions = &self.steer.companions;
+        let points = self
+            .replan
+            .route(ctx, self.t, ends, self.radius, companions)?;
+        self.route = Route::Path {
+            points,
+            heading: *heading,
+            speed: *speed,
+        };
+        self.steer.restart();
+        Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// How many new routes the walk has taken round actors standing in its way.
+    pub fn new_routes(&self) -> u32 {
+        self.replan.count
     }
 
     /// The body radius the walk plans with (m).
@@ -789,6 +828,7 @@ impl Generator for Walk {
         self.settle_since = None;
         self.twist = [None; 2];
         self.steer = steer::Steer::start(ctx);
+        self.replan = replan::Replan::default();
         self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
         Ok(())
@@ -807,11 +847,16 @@ impl Generator for Walk {
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        let Some(plan) = self.plan.take() else {
+        let Some(mut plan) = self.plan.take() else {
             return Step::Failed("walk: stepped before it started".into());
         };
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
+            if self.steer.engaged && self.replan.due(self.t, self.steer.rate) {
+                if let Some(new) = self.new_route(ctx, &plan) {
+                    plan = new;
+                }
+            }
         }
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
         // The shoulders turn to pass: half the turn at each thoracic level; the arms,

@@ -31,6 +31,10 @@ const END_RETURN: f64 = 2.0;
 const WAIT_BRAKING: f64 = 0.6;
 /// Sideways speed (m/s, to the right) a walker keeps in a counter-flow.
 const LANE_BIAS: f64 = 0.15;
+/// Furthest (m) a walker keeps to the right of its plan in a counter-flow.
+const LANE_WIDTH: f64 = 0.5;
+/// Gap (m) to an obstacle within which a walker keeps no lane.
+const LANE_CLEARANCE: f64 = 1.0;
 /// Distance (m) ahead within which a walker coming the other way makes a counter-flow.
 const ONCOMING_RANGE: f64 = 4.0;
 /// Obstacles within this distance (m) are looked at while steering.
@@ -111,6 +115,21 @@ impl Steer {
         }
     }
 
+    /// Follows a new plan from its start, which is where the body is now (a new route
+    /// taken mid-walk, see [`super::replan`]): the offset is gone, the drift carries on.
+    pub fn restart(&mut self) {
+        *self = Steer {
+            engaged: true,
+            tau: 0.0,
+            rate: 1.0,
+            offset: DVec2::ZERO,
+            drift: self.drift,
+            companions: std::mem::take(&mut self.companions),
+            decision: self.decision,
+            target: (1.0, self.drift),
+        };
+    }
+
     /// Advances by `dt` seconds of walking.
     pub fn advance(&mut self, dt: f64) {
         if self.engaged {
@@ -159,9 +178,13 @@ impl Steer {
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
         let mut preferred = if remaining >= 2.0 && self.oncoming(ctx, position, along, others) {
-            // In a counter-flow: keep to the right, where the sidestep put the body,
-            // rather than back onto the plan's line (lanes form).
-            planned + along.perp() * LANE_BIAS
+            // In a counter-flow: keep to the right of the plan, up to LANE_WIDTH, where
+            // the sidesteps put the body, rather than back onto the plan's line: lanes
+            // form (Helbing's keep-right bias). Any other offset returns as usual.
+            let right = along.perp();
+            let kept = self.offset.dot(right).clamp(0.0, LANE_WIDTH);
+            let room = ((LANE_WIDTH - kept) / 0.2).min(1.0);
+            planned - (self.offset - right * kept) * gain + right * LANE_BIAS * room
         } else {
             planned - self.offset * gain
         };
@@ -205,7 +228,8 @@ impl Steer {
     }
 
     /// Whether someone faces me within [`ONCOMING_RANGE`] ahead of `position` on my way
-    /// (`along`): walking towards me, or waiting to.
+    /// (`along`), walking towards me or waiting to, away from obstacles: a counter-flow
+    /// to keep right in.
     fn oncoming(
         &self,
         ctx: &GeneratorContext,
@@ -214,6 +238,14 @@ impl Steer {
         others: &mut Vec<usize>,
     ) -> bool {
         let crowd = ctx.world.crowd;
+        // Beside furniture the walk keeps to its plan, which keeps clear of it.
+        let radius = crowd.radii.get(ctx.actor).copied().unwrap_or(0.0);
+        if crowd
+            .footprints_near(position, radius + LANE_CLEARANCE)
+            .any(|f| f.distance(position) < radius + LANE_CLEARANCE)
+        {
+            return false;
+        }
         others.clear();
         crowd.near(position, others);
         others.iter().any(|&j| {
