@@ -11,19 +11,21 @@
 //! landings are placed on the new plan.
 
 use troupe_body::glam::DVec2;
-use troupe_scene::space::Footprint;
+use troupe_scene::space::{path_length, Footprint, CLEARANCE};
 use troupe_scene::GeneratorContext;
 
 /// Seconds a walk waits, blocked, before it plans round those in its way.
-pub const BLOCKED_TIME: f64 = 1.5;
+pub const BLOCKED_TIME: f64 = 1.0;
 /// Seconds between two new routes of one walk, at least.
-const REPLAN_INTERVAL: f64 = 3.0;
+const REPLAN_INTERVAL: f64 = 2.0;
 /// Below this plan clock rate the walk counts as waiting.
 const WAITING_RATE: f64 = 0.1;
 /// Below this speed (m/s) an actor counts as standing: an obstacle for the new route.
 const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.
 const AROUND: f64 = 4.0;
+/// Longest new route taken, in times the straight distance to the goal (plus a metre).
+const LONGEST: f64 = 1.5;
 
 /// When a walk last stood blocked, and when it last planned anew.
 #[derive(Clone, Debug, Default)]
@@ -80,11 +82,22 @@ impl Replan {
             return None;
         }
         let obstacles = ctx.world.obstacles();
+        // Pressed against furniture or a wall, a new route would first step out to the
+        // nearest free point, which may lie beyond it: wait on instead.
+        let inflated = radius + CLEARANCE;
+        if obstacles.iter().any(|o| o.distance(from) < inflated) {
+            return None;
+        }
         let points = ctx
             .world
             .space
             .path_around(&obstacles, &standing, from, goal, radius)
             .ok()?;
+        // A way round that is much longer than waiting is worth (round a whole corridor,
+        // say) is not taken.
+        if path_length(from, &points) > (goal - from).length() * LONGEST + 1.0 {
+            return None;
+        }
         self.count += 1;
         Some(points)
     }
@@ -98,15 +111,16 @@ mod tests {
     fn a_new_route_is_due_after_waiting_and_not_too_often() {
         let mut r = Replan::default();
         assert!(!r.due(0.0, 0.0));
-        assert!(!r.due(1.0, 0.05));
-        assert!(r.due(1.5, 0.0));
-        r.last = Some(1.5);
+        assert!(!r.due(0.5, 0.05));
+        assert!(r.due(1.0, 0.0));
+        r.last = Some(1.0);
         // Waiting on: not again before the interval.
-        assert!(!r.due(3.0, 0.0));
-        assert!(r.due(4.5, 0.0));
+        assert!(!r.due(2.5, 0.0));
+        assert!(r.due(3.0, 0.0));
         // Walking again resets the wait.
         assert!(!r.due(5.0, 0.5));
+        assert!(!r.due(5.5, 0.0));
         assert!(!r.due(6.0, 0.0));
-        assert!(r.due(7.5, 0.0));
+        assert!(r.due(6.5, 0.0));
     }
 }

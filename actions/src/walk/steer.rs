@@ -229,7 +229,7 @@ impl Steer {
 
     /// Whether someone faces me within [`ONCOMING_RANGE`] ahead of `position` on my way
     /// (`along`), walking towards me or waiting to, away from obstacles: a counter-flow
-    /// to keep right in.
+    /// to keep right in, when there are two or more.
     fn oncoming(
         &self,
         ctx: &GeneratorContext,
@@ -248,7 +248,7 @@ impl Steer {
         }
         others.clear();
         crowd.near(position, others);
-        others.iter().any(|&j| {
+        let facing_me = others.iter().filter(|&&j| {
             let o = crowd.positions[j] - position;
             let ahead = o.dot(along);
             j != ctx.actor
@@ -256,7 +256,9 @@ impl Steer {
                 && ahead < ONCOMING_RANGE
                 && along.perp_dot(o).abs() < 1.2
                 && crowd.facings.get(j).is_some_and(|f| f.dot(along) < -0.5)
-        })
+        });
+        // One walker head-on is passed by plain avoidance; two or more make a flow.
+        facing_me.count() >= 2
     }
 
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,

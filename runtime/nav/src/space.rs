@@ -346,6 +346,19 @@ impl Space {
     }
 }
 
+/// The length of the path from `from` through `points` (m).
+pub fn path_length(from: DVec2, points: &[DVec2]) -> f64 {
+    let mut at = from;
+    points
+        .iter()
+        .map(|&p| {
+            let leg = (p - at).length();
+            at = p;
+            leg
+        })
+        .sum()
+}
+
 /// The radius plus [`CLEARANCE`] in whole millimetres: what a mesh is inflated by.
 fn inflation_mm(radius: f64) -> i64 {
     ((radius + CLEARANCE) * 1000.0).round() as i64
@@ -460,12 +473,7 @@ mod tests {
         // Polyanya's rounded corners are polygons inside the true circle: a few mm.
         assert!(d >= 0.3 + CLEARANCE - 0.01, "{d}");
         // Shortest: around the short side of the table, not much longer than the radius.
-        let length: f64 = std::iter::once(from)
-            .chain(path.iter().copied())
-            .collect::<Vec<_>>()
-            .windows(2)
-            .map(|w| (w[1] - w[0]).length())
-            .sum();
+        let length = path_length(from, &path);
         assert!(length < 5.4, "{length}");
     }
 
@@ -583,7 +591,7 @@ mod tests {
         let someone = Footprint::disc("someone", DVec2::new(3.0, 2.0), 0.28);
         let (from, to) = (DVec2::new(3.0, 0.0), DVec2::new(3.0, 4.0));
         let path = space
-            .path_around(&obstacles, &[someone.clone()], from, to, 0.3)
+            .path_around(&obstacles, std::slice::from_ref(&someone), from, to, 0.3)
             .unwrap();
         assert!(path.len() >= 2, "{path:?}");
         assert!(closest(&someone, from, &path) >= 0.3 + CLEARANCE - 0.01);
