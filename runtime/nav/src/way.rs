@@ -197,4 +197,41 @@ mod tests {
             }
         }
     }
+
+    fn walker(x: f64, z: f64, facing: DVec2, speed: f64) -> Walker {
+        Walker {
+            body: Agent {
+                position: DVec2::new(x, z),
+                velocity: facing * speed,
+                radius: 0.28,
+            },
+            facing,
+        }
+    }
+
+    #[test]
+    fn a_walker_waits_before_the_way_of_one_that_has_it() {
+        // I walk along +x from (−3, 0); a walker along +z (its line comes first) will
+        // cross my way at (0, 0) in 2 s.
+        let me = walker(-3.0, 0.0, DVec2::X, 1.3).body;
+        let north = walker(0.0, -2.6, DVec2::Y, 1.3);
+        let line = wait_line(&me, DVec2::X, 1.3, &[north]).unwrap();
+        // Stopped there, my disc stays WAIT_GAP clear of its disc.
+        assert!((line - (3.0 - (0.56 + WAIT_GAP))).abs() < 1e-9, "{line}");
+        // It does not wait for me: my line comes after its.
+        let it = north.body;
+        let me_walking = walker(-3.0, 0.0, DVec2::X, 1.3);
+        assert_eq!(wait_line(&it, DVec2::Y, 1.3, &[me_walking]), None);
+        // Far off (crossing in more than WAIT_HORIZON), past me, or standing: no wait.
+        let far = walker(0.0, -6.0, DVec2::Y, 1.3);
+        let past = walker(0.0, 2.5, DVec2::Y, 1.3);
+        let standing = walker(0.0, -1.0, DVec2::Y, 0.0);
+        assert_eq!(wait_line(&me, DVec2::X, 1.3, &[far, past, standing]), None);
+        // Already well onto its way: go on across.
+        let on_way = walker(-0.3, 0.0, DVec2::X, 1.3).body;
+        assert_eq!(wait_line(&on_way, DVec2::X, 1.3, &[north]), None);
+        // Slowed down in a crowd, it still has the way, expected at ASSUMED_SPEED.
+        let slow = walker(0.0, -2.6, DVec2::Y, 0.2);
+        assert!(wait_line(&me, DVec2::X, 1.3, &[slow]).is_some());
+    }
 }
