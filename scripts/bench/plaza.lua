@@ -56,7 +56,7 @@ test("four streams of 50 cross a plaza: everyone arrives", function()
     end
     return true
   end, TIME_BOUND)
-  local detour, arrived = 0, 0
+  local detour, arrived = 0.0, 0
   for i in ipairs(actors) do
     if walks[i].status == "completed" then arrived = arrived + 1 end
     detour = detour + walked[i] / straight[i] - 1

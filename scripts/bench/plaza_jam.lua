@@ -40,7 +40,7 @@ test("four streams of 50 in the plaza: who stands, and behind whom", function()
     end
     if tick % every ~= 0 then return false end
     local arrived, stood, same, cross, none, chains = 0, 0, 0, 0, 0, 0
-    local overlaps, deepest = 0, 0
+    local overlaps, deepest = 0, 0.0
     for i = 1, #actors do
       for j = i + 1, #actors do
         local gap = math.sqrt((pos[i][1] - pos[j][1])^2 + (pos[i][2] - pos[j][2])^2) - 2 * RADIUS

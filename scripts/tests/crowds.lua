@@ -8,7 +8,7 @@ test("two ways cross: the walker along x waits for the one along z", function()
   local bob = troupe.actor{ name = "bob", at = {0, 0, -6}, facing = 0 }
   local wa = ann:walk{ to = {6, 0, 0}, speed = 1.3 }
   local wb = bob:walk{ to = {0, 0, 6}, speed = 1.3 }
-  local deepest, ann_at, bob_at = 0, nil, nil
+  local deepest, ann_at, bob_at = 0.0, nil, nil
   run_until(function()
     deepest = math.max(deepest, (troupe.deepest_overlap{ discs = true }))
     local a, b = ann:position(), bob:position()
@@ -32,7 +32,7 @@ test("a row of people standing across the way: the walker goes round it", functi
   end
   local ann = troupe.actor{ name = "ann", at = {0, 0, -4}, facing = 0 }
   local walk = ann:walk{ to = {0, 0, 4}, speed = 1.2 }
-  local deepest = 0
+  local deepest = 0.0
   local ok = run_until(function()
     deepest = math.max(deepest, (troupe.deepest_overlap{ discs = true }))
     return walk.status == "completed" or walk.status == "failed"
