@@ -24,6 +24,7 @@
 
 pub mod cycle;
 pub mod goal;
+pub mod lanes;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;

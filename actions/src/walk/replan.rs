@@ -11,7 +11,7 @@
 //! landings are placed on the new plan.
 
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{path_length, Footprint, CLEARANCE};
+use troupe_scene::space::{path_length, Footprint};
 use troupe_scene::GeneratorContext;
 
 /// Seconds a walk waits, blocked, before it plans round those in its way.
@@ -82,17 +82,23 @@ impl Replan {
             return None;
         }
         let obstacles = ctx.world.obstacles();
-        // Pressed against furniture or a wall, a new route would first step out to the
-        // nearest free point, which may lie beyond it: wait on instead.
-        let inflated = radius + CLEARANCE;
-        if obstacles.iter().any(|o| o.distance(from) < inflated) {
-            return None;
-        }
         let points = ctx
             .world
             .space
             .path_around(&obstacles, &standing, from, goal, radius)
             .ok()?;
+        // Pressed against furniture or a wall, a route first steps out to the nearest
+        // free point, which may lie beyond it (in a corridor with someone standing in
+        // it): a first leg through an obstacle is not taken.
+        let first = *points.first()?;
+        let steps = ((first - from).length() / 0.05).ceil().max(1.0) as usize;
+        let through = (0..=steps).any(|k| {
+            let p = from.lerp(first, k as f64 / steps as f64);
+            obstacles.iter().any(|o| o.contains(p))
+        });
+        if through {
+            return None;
+        }
         // A way round that is much longer than waiting is worth (round a whole corridor,
         // say) is not taken.
         if path_length(from, &points) > (goal - from).length() * LONGEST + 1.0 {

@@ -7,8 +7,11 @@
 //! Each tick the walk picks a velocity from the previous tick's crowd and turns it into a
 //! new rate and drift, both changing no faster than the legs can follow; the foot
 //! placement reads the same steered plan, so the feet stay planted. Until avoidance first
-//! acts, the steered plan is the plan itself, bit for bit.
+//! acts, the steered plan is the plan itself, bit for bit. Where ways cross, the walker
+//! without the way also stops at a line before the crossing (`troupe_nav::way`); in a
+//! counter-flow the pull back onto the plan keeps a lane to the right ([`super::lanes`]).
 
+use super::lanes;
 use super::route::{direction, Plan, RootSample};
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{
@@ -29,14 +32,6 @@ const END_RETURN: f64 = 2.0;
 /// Deceleration (m/s²) of a walker stopping to wait for one that has the way: what the
 /// rate's change limit allows at a cruising speed, with a margin.
 const WAIT_BRAKING: f64 = 0.6;
-/// Sideways speed (m/s, to the right) a walker keeps in a counter-flow.
-const LANE_BIAS: f64 = 0.15;
-/// Furthest (m) a walker keeps to the right of its plan in a counter-flow.
-const LANE_WIDTH: f64 = 0.5;
-/// Gap (m) to an obstacle within which a walker keeps no lane.
-const LANE_CLEARANCE: f64 = 1.0;
-/// Distance (m) ahead within which a walker coming the other way makes a counter-flow.
-const ONCOMING_RANGE: f64 = 4.0;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
@@ -177,17 +172,12 @@ impl Steer {
         let remaining = plan.end_time - pt;
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
-        let mut preferred = if remaining >= 2.0 && self.oncoming(ctx, position, along, others) {
-            // In a counter-flow: keep to the right of the plan, up to LANE_WIDTH, where
-            // the sidesteps put the body, rather than back onto the plan's line: lanes
-            // form (Helbing's keep-right bias). Any other offset returns as usual.
-            let right = along.perp();
-            let kept = self.offset.dot(right).clamp(0.0, LANE_WIDTH);
-            let room = ((LANE_WIDTH - kept) / 0.2).min(1.0);
-            planned - (self.offset - right * kept) * gain + right * LANE_BIAS * room
-        } else {
-            planned - self.offset * gain
-        };
+        let mut preferred =
+            if remaining >= 2.0 && lanes::in_counter_flow(ctx, position, along, others) {
+                lanes::preferred(planned, self.offset, along, gain)
+            } else {
+                planned - self.offset * gain
+            };
         if self.engaged {
             let cap = planned.length().max(0.3);
             preferred = preferred.clamp_length_max(cap);
@@ -225,40 +215,6 @@ impl Steer {
                 }
             }
         }
-    }
-
-    /// Whether someone faces me within [`ONCOMING_RANGE`] ahead of `position` on my way
-    /// (`along`), walking towards me or waiting to, away from obstacles: a counter-flow
-    /// to keep right in, when there are two or more.
-    fn oncoming(
-        &self,
-        ctx: &GeneratorContext,
-        position: DVec2,
-        along: DVec2,
-        others: &mut Vec<usize>,
-    ) -> bool {
-        let crowd = ctx.world.crowd;
-        // Beside furniture the walk keeps to its plan, which keeps clear of it.
-        let radius = crowd.radii.get(ctx.actor).copied().unwrap_or(0.0);
-        if crowd
-            .footprints_near(position, radius + LANE_CLEARANCE)
-            .any(|f| f.distance(position) < radius + LANE_CLEARANCE)
-        {
-            return false;
-        }
-        others.clear();
-        crowd.near(position, others);
-        let facing_me = others.iter().filter(|&&j| {
-            let o = crowd.positions[j] - position;
-            let ahead = o.dot(along);
-            j != ctx.actor
-                && ahead > 0.0
-                && ahead < ONCOMING_RANGE
-                && along.perp_dot(o).abs() < 1.2
-                && crowd.facings.get(j).is_some_and(|f| f.dot(along) < -0.5)
-        });
-        // One walker head-on is passed by plain avoidance; two or more make a flow.
-        facing_me.count() >= 2
     }
 
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,
