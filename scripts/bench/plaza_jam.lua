@@ -1,10 +1,12 @@
 -- Where and why the plaza jams (docs/navigation.md, Limits): the scene of
--- scripts/bench/plaza.lua, run for 25 s, printing every 2.5 s how many walkers stand
+-- scripts/bench/plaza.lua, run for DURATION (120 s), printing every 2.5 s how many walkers stand
 -- (slower than 0.1 m/s, away from their goal) and, for each stream, who blocks whom:
 -- the nearest actor ahead of a standing walker (within 60° of the way to its goal), its
 -- stream, the gap between their body discs, and whether it stands too. Run it with
 --   troupe test scripts/bench/plaza_jam.lua
 local RADIUS = 0.28
+-- Seconds to watch.
+local DURATION = 120
 
 test("four streams of 50 in the plaza: who stands, and behind whom", function()
   local plaza = require("plaza_streams")
@@ -38,7 +40,7 @@ test("four streams of 50 in the plaza: who stands, and behind whom", function()
     end
     if tick % every ~= 0 then return false end
     local arrived, stood, same, cross, none, chains = 0, 0, 0, 0, 0, 0
-    local overlaps, deepest = 0, 0
+    local overlaps, deepest = 0, 0.0
     for i = 1, #actors do
       for j = i + 1, #actors do
         local gap = math.sqrt((pos[i][1] - pos[j][1])^2 + (pos[i][2] - pos[j][2])^2) - 2 * RADIUS
@@ -76,5 +78,5 @@ test("four streams of 50 in the plaza: who stands, and behind whom", function()
       troupe.time(), arrived, stood, same, cross, none, chains, overlaps, deepest))
     for _, e in ipairs(examples) do print("    " .. e) end
     return false
-  end, 25)
+  end, DURATION)
 end)

@@ -5,7 +5,10 @@ local M = {}
 
 -- Makes the planters and the actors. `o.planter`: the planters' centres' distance from
 -- the middle along x and z; `o.planter_size`: their box; `o.per_stream` actors a stream,
--- in rows of `o.columns` 1 m apart, the first row `o.back` m from the middle. Returns one
+-- in rows of `o.columns` 1 m apart, the first row `o.back` m from the middle, each bound
+-- for the mirror image of its place beyond the middle, the block spread to rows and
+-- columns `o.spread` m apart (the first row the furthest, the last `o.back` − 1 m from
+-- the middle). Returns one
 -- entry per actor, in the order made: { actor, stream, x, z (start), gx, gz (goal) }.
 function M.build(o)
   local size = o.planter_size
@@ -22,7 +25,13 @@ function M.build(o)
       local lateral = (col - (o.columns - 1) / 2) * 1.0 + (s <= 2 and 0.3 or -0.3)
       local back = o.back + row * 1.0
       local x, z = -d[1] * back + side[1] * lateral, -d[2] * back + side[2] * lateral
-      local gx, gz = d[1] * (back - 1) + side[1] * lateral, d[2] * (back - 1) + side[2] * lateral
+      -- The block crosses whole, spreading out: its first row ends furthest, its last
+      -- nearest, `o.spread` m apart, so that one who arrives late can pass between
+      -- those who stand at their places already.
+      local rows = math.ceil(o.per_stream / o.columns)
+      local far = o.back - 1 + (rows - 1 - row) * o.spread
+      local wide = (col - (o.columns - 1) / 2) * o.spread + (s <= 2 and 0.3 or -0.3)
+      local gx, gz = d[1] * far + side[1] * wide, d[2] * far + side[2] * wide
       local a = troupe.actor{ name = string.format("s%d_%02d", s, k), at = {x, 0, z},
                               facing = math.deg(math.atan(d[1], d[2])) }
       walkers[#walkers + 1] = { actor = a, stream = s, x = x, z = z, gx = gx, gz = gz }
@@ -32,6 +41,7 @@ function M.build(o)
 end
 
 -- The plaza of plaza.lua and plaza_jam.lua: 20 m × 20 m, four streams of 50.
-M.BUSY = { planter = 4, planter_size = {1.5, 0.8, 1.5}, per_stream = 50, columns = 5, back = 11 }
+M.BUSY = { planter = 4, planter_size = {1.5, 0.8, 1.5}, per_stream = 50, columns = 5, back = 11,
+           spread = 1.5 }
 
 return M

@@ -26,9 +26,11 @@
 pub mod cycle;
 pub mod footing;
 pub mod goal;
+pub mod lanes;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
+pub mod replan;
 pub mod rig;
 pub mod route;
 pub mod shoulders;
@@ -168,6 +170,8 @@ pub struct Walk {
     steer: steer::Steer,
     /// Scratch: the actors near this one.
     near: Vec<usize>,
+    /// When the walk stood blocked and took new routes (see [`replan`]).
+    replan: replan::Replan,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
     shoulders: shoulders::Shoulders,
     /// The root's floor point on the previous tick, where the feet held it.
@@ -222,6 +226,7 @@ impl Walk {
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
+            replan: replan::Replan::default(),
             shoulders: shoulders::Shoulders::default(),
             last_floor: None,
             subtalar: [DVec3::ZERO; 2],
@@ -253,6 +258,41 @@ impl Walk {
             end.position += self.steer.offset;
         }
         end
+    }
+
+    /// A new plan round the actors standing in the way, from where the body is now to
+    /// the route's end (see [`replan`]); `None` leaves the plan as it is.
+    fn new_route(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        let Route::Path {
+            points,
+            heading,
+            speed,
+        } = &self.route
+        else {
+            return None;
+        };
+        let goal = *points.last()?;
+        let here = self
+            .steer
+            .sample(plan, self.t, self.t, self.heading)
+            .position;
+        let ends = (here, goal);
+        let companions = &self.steer.companions;
+        let points = self
+            .replan
+            .route(ctx, self.t, ends, self.radius, companions)?;
+        self.route = Route::Path {
+            points,
+            heading: *heading,
+            speed: *speed,
+        };
+        self.steer.restart();
+        Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// How many new routes the walk has taken round actors standing in its way.
+    pub fn new_routes(&self) -> u32 {
+        self.replan.count
     }
 
     /// The body radius the walk plans with (m).
@@ -895,6 +935,7 @@ impl Generator for Walk {
         self.last_floor = None;
         self.subtalar = [DVec3::ZERO; 2];
         self.steer = steer::Steer::start(ctx);
+        self.replan = replan::Replan::default();
         self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
         Ok(())
@@ -913,11 +954,16 @@ impl Generator for Walk {
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        let Some(plan) = self.plan.take() else {
+        let Some(mut plan) = self.plan.take() else {
             return Step::Failed("walk: stepped before it started".into());
         };
         if matches!(self.route, Route::Path { .. }) {
             self.steer.decide(ctx, &plan, self.t, &mut self.near);
+            if self.steer.engaged && self.replan.due(self.t, self.steer.rate) {
+                if let Some(new) = self.new_route(ctx, &plan) {
+                    plan = new;
+                }
+            }
         }
         self.dt = ctx.dt;
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);

@@ -7,11 +7,16 @@
 //! Each tick the walk picks a velocity from the previous tick's crowd and turns it into a
 //! new rate and drift, both changing no faster than the legs can follow; the foot
 //! placement reads the same steered plan, so the feet stay planted. Until avoidance first
-//! acts, the steered plan is the plan itself, bit for bit.
+//! acts, the steered plan is the plan itself, bit for bit. Where ways cross, the walker
+//! without the way also stops at a line before the crossing (`troupe_nav::way`); in a
+//! counter-flow the pull back onto the plan keeps a lane to the right ([`super::lanes`]).
 
+use super::lanes;
 use super::route::{direction, Plan, RootSample};
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{choose_velocity, Agent, Footprint, GAP, NEIGHBOUR_RANGE};
+use troupe_scene::space::{
+    choose_velocity, wait_line, Agent, Footprint, Walker, GAP, NEIGHBOUR_RANGE,
+};
 use troupe_scene::GeneratorContext;
 
 /// Largest change of the plan's clock rate per second (1 → 0 in 0.8 s).
@@ -27,6 +32,9 @@ const END_RETURN: f64 = 2.0;
 /// The cadence (as a walking speed, m/s) a steered walk keeps at least while its plan
 /// moves (see [`Steer::cadence_floor`]).
 pub const STEERED_CADENCE: f64 = 1.0;
+/// Deceleration (m/s²) of a walker stopping to wait for one that has the way: what the
+/// rate's change limit allows at a cruising speed, with a margin.
+const WAIT_BRAKING: f64 = 0.6;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
@@ -142,6 +150,23 @@ impl Steer {
         self.offset += by - forward * along;
     }
 
+    /// Follows a new plan from its start, which is where the body is now (a new route
+    /// taken mid-walk, see [`super::replan`]): the offset is gone, the drift carries on.
+    pub fn restart(&mut self) {
+        *self = Steer {
+            engaged: true,
+            tau: 0.0,
+            rate: 1.0,
+            offset: DVec2::ZERO,
+            drift: self.drift,
+            companions: std::mem::take(&mut self.companions),
+            decision: self.decision,
+            target: (1.0, self.drift),
+            tau_before: 0.0,
+            ankles: self.ankles,
+        };
+    }
+
     /// Advances by `dt` seconds of walking.
     pub fn advance(&mut self, dt: f64) {
         if self.engaged {
@@ -189,7 +214,13 @@ impl Steer {
         // Back to the path, more firmly as the end nears so the walk ends at its goal.
         let remaining = plan.end_time - pt;
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
-        let mut preferred = planned - self.offset * gain;
+        let along = planned.try_normalize().unwrap_or(direction(here.heading));
+        let mut preferred =
+            if remaining >= 2.0 && lanes::in_counter_flow(ctx, position, along, others) {
+                lanes::preferred(planned, self.offset, along, gain)
+            } else {
+                planned - self.offset * gain
+            };
         if self.engaged {
             let cap = planned.length().max(0.3);
             preferred = preferred.clamp_length_max(cap);
@@ -200,7 +231,6 @@ impl Steer {
             radius,
             feet: feet_of(ctx, me, self.ankles),
         };
-        let along = planned.try_normalize().unwrap_or(direction(here.heading));
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
         if !self.engaged {
             return;
@@ -248,18 +278,32 @@ impl Steer {
         let position = body.position;
         others.clear();
         crowd.near(position, others);
-        let agents: Vec<Agent> = others
+        // Those who may cross my way further ahead, for the give-way rule.
+        crowd.near(position + along * NEIGHBOUR_RANGE, others);
+        others.sort_unstable();
+        others.dedup();
+        let near: Vec<Walker> = others
             .iter()
             .filter(|&&j| j != me && !self.companions.contains(&j))
-            .map(|&j| Agent {
-                position: crowd.positions[j],
-                velocity: crowd.velocities[j],
-                radius: crowd.radii[j],
-                feet: feet_of(ctx, j, self.ankles),
+            .map(|&j| Walker {
+                body: Agent {
+                    position: crowd.positions[j],
+                    velocity: crowd.velocities[j],
+                    radius: crowd.radii[j],
+                    feet: feet_of(ctx, j, self.ankles),
+                },
+                facing: crowd.facings.get(j).copied().unwrap_or_default(),
             })
+            .collect();
+        // Where ways cross, one walker has the way (see `troupe_nav::way`): the other
+        // waits before the crossing.
+        let wait = wait_line(body, along, planned.length(), &near);
+        let agents: Vec<Agent> = near
+            .iter()
+            .map(|w| w.body)
             .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
             .collect();
-        if agents.is_empty() && !self.engaged {
+        if agents.is_empty() && !self.engaged && wait.is_none() {
             self.decision = Some((preferred, preferred));
             return;
         }
@@ -270,7 +314,7 @@ impl Steer {
         };
         let (v, free) = choose_velocity(body, preferred, &agents, &obstacles);
         self.decision = Some((preferred, v));
-        if free && !self.engaged {
+        if free && !self.engaged && wait.is_none() {
             return;
         }
         if !self.engaged {
@@ -289,11 +333,15 @@ impl Steer {
         }
         let speed = planned.length();
         let side = along.perp();
-        let rate = if speed > 0.05 {
+        let mut rate = if speed > 0.05 {
             (v.dot(along) / speed).clamp(0.0, 1.0)
         } else {
             1.0
         };
+        if let (Some(d), true) = (wait, speed > 0.05) {
+            // Slow down so as to stop at the line: v² = 2·a·d.
+            rate = rate.min((2.0 * WAIT_BRAKING * d).sqrt() / speed);
+        }
         let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
         self.target = (rate, drift);
     }

@@ -18,6 +18,8 @@ pub struct Crowd {
     pub velocities: Vec<DVec2>,
     /// Body radius per actor (see [`crate::body_radius`]).
     pub radii: Vec<f64>,
+    /// Which way each actor faces: the unit floor direction (x, z) of its root's +z.
+    pub facings: Vec<DVec2>,
     /// Every obstacle's footprint, with the centre and radius of a circle around it.
     pub footprints: Vec<(Footprint, DVec2, f64)>,
     /// (cell, actor) sorted: the actors of a cell are a contiguous run.

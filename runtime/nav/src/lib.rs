@@ -13,9 +13,11 @@ pub mod crowd;
 pub mod footprint;
 pub mod radius;
 pub mod space;
+pub mod way;
 
 pub use avoid::{choose_velocity, Agent};
 pub use crowd::Crowd;
 pub use footprint::Footprint;
 pub use radius::body_radius;
-pub use space::{Floor, NoPath, Space, Wall, CLEARANCE};
+pub use space::{path_length, Floor, NoPath, Space, Wall, CLEARANCE};
+pub use way::{precedence, Precedence};

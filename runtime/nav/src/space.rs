@@ -191,7 +191,7 @@ impl Space {
     /// The mesh of the floor with `obstacles` inflated by `radius` (and [`CLEARANCE`]),
     /// built now or reused.
     pub fn mesh(&self, obstacles: &[Footprint], radius: f64) -> Arc<Mesh> {
-        let radius_mm = ((radius + CLEARANCE) * 1000.0).round() as i64;
+        let radius_mm = inflation_mm(radius);
         let floor = self.floor();
         let mut cache = self.cache.lock().unwrap_or_else(|e| e.into_inner());
         if let Some(c) = cache
@@ -258,6 +258,36 @@ impl Space {
         to: DVec2,
         radius: f64,
     ) -> Result<Vec<DVec2>, NoPath> {
+        self.search(obstacles, from, to, radius, || self.mesh(obstacles, radius))
+    }
+
+    /// The shortest path as [`Space::path`] finds it, round `temporary` obstacles too
+    /// (people standing in the way), on a mesh built for this query alone: the cached
+    /// meshes of the lasting obstacles stay as they are.
+    pub fn path_around(
+        &self,
+        obstacles: &[Footprint],
+        temporary: &[Footprint],
+        from: DVec2,
+        to: DVec2,
+        radius: f64,
+    ) -> Result<Vec<DVec2>, NoPath> {
+        let all: Vec<Footprint> = obstacles.iter().chain(temporary).cloned().collect();
+        self.search(&all, from, to, radius, || {
+            let inflated = inflation_mm(radius) as f32 / 1000.0;
+            Arc::new(build_mesh(&self.floor(), &all, inflated))
+        })
+    }
+
+    /// The shortest path from `from` to `to` among `obstacles` on the mesh `mesh` gives.
+    fn search(
+        &self,
+        obstacles: &[Footprint],
+        from: DVec2,
+        to: DVec2,
+        radius: f64,
+        mesh: impl FnOnce() -> Arc<Mesh>,
+    ) -> Result<Vec<DVec2>, NoPath> {
         let floor = self.floor();
         if !floor.contains(to) {
             return Err(NoPath::GoalOffFloor(to));
@@ -273,7 +303,7 @@ impl Space {
                 radius: inflated,
             });
         }
-        let mesh = self.mesh(obstacles, radius);
+        let mesh = mesh();
         let mut points = Vec::new();
         let mut start = from;
         if !mesh.point_in_mesh(v2(from)) {
@@ -314,6 +344,24 @@ impl Space {
                 .collect(),
         }
     }
+}
+
+/// The length of the path from `from` through `points` (m).
+pub fn path_length(from: DVec2, points: &[DVec2]) -> f64 {
+    let mut at = from;
+    points
+        .iter()
+        .map(|&p| {
+            let leg = (p - at).length();
+            at = p;
+            leg
+        })
+        .sum()
+}
+
+/// The radius plus [`CLEARANCE`] in whole millimetres: what a mesh is inflated by.
+fn inflation_mm(radius: f64) -> i64 {
+    ((radius + CLEARANCE) * 1000.0).round() as i64
 }
 
 /// How far (m) [`nearest_free`] looks.
@@ -425,12 +473,7 @@ mod tests {
         // Polyanya's rounded corners are polygons inside the true circle: a few mm.
         assert!(d >= 0.3 + CLEARANCE - 0.01, "{d}");
         // Shortest: around the short side of the table, not much longer than the radius.
-        let length: f64 = std::iter::once(from)
-            .chain(path.iter().copied())
-            .collect::<Vec<_>>()
-            .windows(2)
-            .map(|w| (w[1] - w[0]).length())
-            .sum();
+        let length = path_length(from, &path);
         assert!(length < 5.4, "{length}");
     }
 
@@ -535,6 +578,29 @@ mod tests {
             .unwrap();
         assert_eq!(path.len(), 1);
         assert_eq!(space.meshes_built(), 3);
+    }
+
+    #[test]
+    fn a_path_around_temporary_obstacles_leaves_the_cached_mesh_alone() {
+        let space = Space::default();
+        let obstacles = [table()];
+        space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 4.0), 0.3)
+            .unwrap();
+        // Someone stands on the straight way from (3, 0) to (3, 4).
+        let someone = Footprint::disc("someone", DVec2::new(3.0, 2.0), 0.28);
+        let (from, to) = (DVec2::new(3.0, 0.0), DVec2::new(3.0, 4.0));
+        let path = space
+            .path_around(&obstacles, std::slice::from_ref(&someone), from, to, 0.3)
+            .unwrap();
+        assert!(path.len() >= 2, "{path:?}");
+        assert!(closest(&someone, from, &path) >= 0.3 + CLEARANCE - 0.01);
+        // The cached mesh is still the table's: no rebuild for the plain query.
+        space
+            .path(&obstacles, DVec2::ZERO, DVec2::new(0.0, 4.0), 0.3)
+            .unwrap();
+        assert_eq!(space.meshes_built(), 1);
+        assert_eq!(space.path(&obstacles, from, to, 0.3).unwrap(), vec![to]);
     }
 
     #[test]

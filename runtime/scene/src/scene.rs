@@ -240,10 +240,15 @@ impl Scene {
         let crowd = &mut self.crowd;
         crowd.positions.clear();
         crowd.velocities.clear();
+        crowd.facings.clear();
         for (state, &(x, z)) in self.states.iter().zip(&self.root_dofs) {
             let root = state.globals[0].translation;
             crowd.positions.push(DVec2::new(root.x, root.z));
             crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
+            let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
+            crowd
+                .facings
+                .push(DVec2::new(forward.x, forward.z).normalize_or_zero());
         }
         crowd.index();
         crowd.set_footprints(footprints);

@@ -11,7 +11,10 @@ use troupe_body::glam::DVec2;
 pub use troupe_nav::avoid::{choose_velocity, Agent, GAP};
 pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
 pub use troupe_nav::footprint::ON_FLOOR;
-pub use troupe_nav::{body_radius, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE};
+pub use troupe_nav::way::{wait_line, Walker};
+pub use troupe_nav::{
+    body_radius, path_length, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE,
+};
 
 /// A walker's plan and its last avoidance decision, as a walking generator reports it
 /// ([`crate::Generator::navigation`]) for the debug view.
