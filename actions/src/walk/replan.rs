@@ -18,12 +18,24 @@ use troupe_scene::GeneratorContext;
 pub const BLOCKED_TIME: f64 = 1.0;
 /// Seconds between two new routes of one walk, at least.
 const REPLAN_INTERVAL: f64 = 2.0;
+/// Longest wait (s) between two attempts after attempts that found no route: each such
+/// attempt doubles the wait from [`REPLAN_INTERVAL`] up to this. A query builds a mesh
+/// of its own (milliseconds among many obstacles), and in a crowd converging on a few
+/// spots, where walkers stand blocked for long, attempts every 2 s that found nothing
+/// took a quarter of the tick (`troupe bench --actors 1000`).
+const LONGEST_INTERVAL: f64 = 16.0;
 /// Below this plan clock rate the walk counts as waiting.
 const WAITING_RATE: f64 = 0.1;
 /// Below this speed (m/s) an actor counts as standing: an obstacle for the new route.
 const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.
 const AROUND: f64 = 4.0;
+/// Within this distance (m) of its goal a blocked walk waits rather than plan anew:
+/// those standing in its way stand at or by its goal (a crowd converging on one spot),
+/// and a way round them would end behind them all the same. (In `troupe bench`'s crowd,
+/// walkers blocked by their goals' pillars built a mesh each and took a quarter of the
+/// tick.)
+const NEAR_GOAL: f64 = 3.0;
 /// Longest new route taken, in times the straight distance to the goal (plus a metre).
 const LONGEST: f64 = 1.5;
 
@@ -36,6 +48,8 @@ pub struct Replan {
     last: Option<f64>,
     /// How many new routes the walk has taken.
     pub count: u32,
+    /// Attempts in a row that found no route (see [`LONGEST_INTERVAL`]).
+    failures: u32,
 }
 
 impl Replan {
@@ -47,7 +61,9 @@ impl Replan {
             return false;
         }
         let since = *self.blocked_since.get_or_insert(now);
-        now - since >= BLOCKED_TIME && self.last.is_none_or(|t| now - t >= REPLAN_INTERVAL)
+        let interval =
+            (REPLAN_INTERVAL * 2f64.powi(self.failures.min(8) as i32)).min(LONGEST_INTERVAL);
+        now - since >= BLOCKED_TIME && self.last.is_none_or(|t| now - t >= interval)
     }
 
     /// A route from `from` to `goal` for a body of `radius` round the obstacles and the
@@ -63,6 +79,27 @@ impl Replan {
         companions: &[usize],
     ) -> Option<Vec<DVec2>> {
         self.last = Some(now);
+        let found = Self::find(ctx, (from, goal), radius, companions);
+        match found {
+            Some(_) => {
+                self.count += 1;
+                self.failures = 0;
+            }
+            None => self.failures += 1,
+        }
+        found
+    }
+
+    /// The route [`Replan::route`] looks for.
+    fn find(
+        ctx: &GeneratorContext,
+        (from, goal): (DVec2, DVec2),
+        radius: f64,
+        companions: &[usize],
+    ) -> Option<Vec<DVec2>> {
+        if (goal - from).length() < NEAR_GOAL {
+            return None;
+        }
         let crowd = ctx.world.crowd;
         let mut near = Vec::new();
         crowd.near(from, &mut near);
@@ -104,7 +141,6 @@ impl Replan {
         if path_length(from, &points) > (goal - from).length() * LONGEST + 1.0 {
             return None;
         }
-        self.count += 1;
         Some(points)
     }
 }
@@ -128,5 +164,22 @@ mod tests {
         assert!(!r.due(5.5, 0.0));
         assert!(!r.due(6.0, 0.0));
         assert!(r.due(6.5, 0.0));
+    }
+
+    #[test]
+    fn attempts_that_find_nothing_are_spaced_out_more_and_more() {
+        let mut r = Replan {
+            last: Some(10.0),
+            failures: 1,
+            ..Replan::default()
+        };
+        assert!(!r.due(9.0, 0.0));
+        // One failure: 4 s, not 2.
+        assert!(!r.due(13.0, 0.0));
+        assert!(r.due(14.0, 0.0));
+        // Many: at most 16 s.
+        r.failures = 30;
+        assert!(!r.due(25.0, 0.0));
+        assert!(r.due(26.0, 0.0));
     }
 }

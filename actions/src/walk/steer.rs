@@ -285,23 +285,27 @@ impl Steer {
         let near: Vec<Walker> = others
             .iter()
             .filter(|&&j| j != me && !self.companions.contains(&j))
-            .map(|&j| Walker {
-                body: Agent {
-                    position: crowd.positions[j],
-                    velocity: crowd.velocities[j],
-                    radius: crowd.radii[j],
-                    feet: feet_of(ctx, j, self.ankles),
-                },
-                facing: crowd.facings.get(j).copied().unwrap_or_default(),
+            .map(|&j| {
+                let position = crowd.positions[j];
+                Walker {
+                    // The feet are found below, for the neighbours avoidance weighs.
+                    body: Agent::disc(position, crowd.velocities[j], crowd.radii[j]),
+                    facing: crowd.facings.get(j).copied().unwrap_or_default(),
+                }
             })
             .collect();
         // Where ways cross, one walker has the way (see `troupe_nav::way`): the other
         // waits before the crossing.
         let wait = wait_line(body, along, planned.length(), &near);
-        let agents: Vec<Agent> = near
+        let agents: Vec<Agent> = others
             .iter()
-            .map(|w| w.body)
-            .filter(|a| (a.position - position).length() < NEIGHBOUR_RANGE)
+            .filter(|&&j| j != me && !self.companions.contains(&j))
+            .zip(&near)
+            .filter(|(_, w)| (w.body.position - position).length() < NEIGHBOUR_RANGE)
+            .map(|(&j, w)| Agent {
+                feet: feet_of(ctx, j, self.ankles),
+                ..w.body
+            })
             .collect();
         if agents.is_empty() && !self.engaged && wait.is_none() {
             self.decision = Some((preferred, preferred));
