@@ -11,7 +11,7 @@
 //! landings are placed on the new plan.
 
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{path_length, Footprint};
+use troupe_scene::space::{path_length, Footprint, CLEARANCE};
 use troupe_scene::GeneratorContext;
 
 /// Seconds a walk waits, blocked, before it plans round those in its way.
@@ -30,12 +30,6 @@ const WAITING_RATE: f64 = 0.1;
 const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.
 const AROUND: f64 = 4.0;
-/// Within this distance (m) of its goal a blocked walk waits rather than plan anew:
-/// those standing in its way stand at or by its goal (a crowd converging on one spot),
-/// and a way round them would end behind them all the same. (In `troupe bench`'s crowd,
-/// walkers blocked by their goals' pillars built a mesh each and took a quarter of the
-/// tick.)
-const NEAR_GOAL: f64 = 3.0;
 /// Longest new route taken, in times the straight distance to the goal (plus a metre).
 const LONGEST: f64 = 1.5;
 
@@ -97,9 +91,6 @@ impl Replan {
         radius: f64,
         companions: &[usize],
     ) -> Option<Vec<DVec2>> {
-        if (goal - from).length() < NEAR_GOAL {
-            return None;
-        }
         let crowd = ctx.world.crowd;
         let mut near = Vec::new();
         crowd.near(from, &mut near);
@@ -118,7 +109,16 @@ impl Replan {
         if standing.is_empty() {
             return None;
         }
-        let obstacles = ctx.world.obstacles();
+        // Only the obstacles that can bear on a route short enough to be taken: each
+        // query builds a mesh of its own, and among many obstacles (a field of pillars)
+        // the build took a quarter of the tick of `troupe bench`'s crowd.
+        let window = RouteWindow::new(from, goal, radius + CLEARANCE);
+        let obstacles: Vec<Footprint> = ctx
+            .world
+            .obstacles()
+            .into_iter()
+            .filter(|o| window.may_touch(o))
+            .collect();
         let points = ctx
             .world
             .space
@@ -145,6 +145,42 @@ impl Replan {
     }
 }
 
+/// Where a route short enough to be taken can lie: every point of a route no longer
+/// than `LONGEST` × the straight way + 1 m is within the ellipse whose foci are its ends
+/// (the sum of its distances to them is at most that length), so within the ellipse's
+/// bounding box. On a mesh without the obstacles outside the box (grown by the body's
+/// inflation), the shortest route is still right: if it leaves the box it is too long
+/// and is refused, and if it stays inside it meets every obstacle there.
+struct RouteWindow {
+    centre: DVec2,
+    half: DVec2,
+}
+
+impl RouteWindow {
+    /// The window of routes from `from` to `to` for a body inflated by `inflation` (m).
+    fn new(from: DVec2, to: DVec2, inflation: f64) -> RouteWindow {
+        let straight = (to - from).length();
+        let axis = (to - from).try_normalize().unwrap_or(DVec2::X);
+        let a = (straight * LONGEST + 1.0) / 2.0;
+        let b = (a * a - straight * straight / 4.0).max(0.0).sqrt();
+        let half = DVec2::new(
+            (a * a * axis.x * axis.x + b * b * axis.y * axis.y).sqrt(),
+            (a * a * axis.y * axis.y + b * b * axis.x * axis.x).sqrt(),
+        );
+        RouteWindow {
+            centre: (from + to) / 2.0,
+            half: half + DVec2::splat(inflation),
+        }
+    }
+
+    /// Whether obstacle `o` may come within the window (by its bounding circle).
+    fn may_touch(&self, o: &Footprint) -> bool {
+        let (c, r) = o.bounding_circle();
+        let outside = ((c - self.centre).abs() - self.half).max(DVec2::ZERO);
+        outside.length() <= r
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -164,6 +200,35 @@ mod tests {
         assert!(!r.due(5.5, 0.0));
         assert!(!r.due(6.0, 0.0));
         assert!(r.due(6.5, 0.0));
+    }
+
+    #[test]
+    fn the_window_holds_every_route_short_enough_to_take() {
+        let (from, to) = (DVec2::new(1.0, 2.0), DVec2::new(7.0, -3.0));
+        let w = RouteWindow::new(from, to, 0.0);
+        let longest = (to - from).length() * LONGEST + 1.0;
+        // Points on the ellipse of routes of the longest length, all round it.
+        for k in 0..360 {
+            let dir = DVec2::from_angle((k as f64).to_radians());
+            // The distance along `dir` from `from` at which the sum reaches `longest`.
+            let (mut lo, mut hi) = (0.0, longest);
+            for _ in 0..60 {
+                let m = (lo + hi) / 2.0;
+                let p = from + dir * m;
+                if (p - from).length() + (p - to).length() < longest {
+                    lo = m;
+                } else {
+                    hi = m;
+                }
+            }
+            let p = from + dir * lo;
+            assert!(
+                w.may_touch(&Footprint::disc("p", p, 1e-6)),
+                "{p} is on a route short enough but outside the window"
+            );
+        }
+        // And a pillar well beyond it is left out.
+        assert!(!w.may_touch(&Footprint::disc("far", DVec2::new(30.0, 0.0), 0.5)));
     }
 
     #[test]
