@@ -3,7 +3,6 @@
 -- render on a CPU. Rendered with the navigation debug view:
 --   troupe render scripts/bench/plaza_picture.lua docs/images/plaza.png --at 5.5 \
 --     --debug nav --size 1000x660 --camera fixed:0,13,11:0,0,-0.3 --no-labels
--- The picture predates the give-way order, the lanes and the new routes (docs/navigation.md, "The plaza").
 -- Stream s starts in a 4 × 3 block outside one edge and goes to the opposite one.
 local plaza = require("plaza_streams")
 local walkers = plaza.build{ planter = 2.5, planter_size = {1.2, 0.7, 1.2}, per_stream = 12, columns = 4, back = 6,
