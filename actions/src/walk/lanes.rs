@@ -26,12 +26,13 @@ const ONCOMING_COS: f64 = -0.9;
 /// Whether actor `ctx.actor` at `position`, going along the unit `along`, walks in a
 /// counter-flow: two or more others face it within [`ONCOMING_RANGE`] ahead on its way
 /// (walking towards it or waiting to), and no obstacle is within [`LANE_CLEARANCE`].
-/// `others` is scratch space.
+/// `around` are the actors the crowd finds near `position` (`Crowd::near`), which the
+/// steering gathers once a tick for this and for avoidance.
 pub fn in_counter_flow(
     ctx: &GeneratorContext,
     position: DVec2,
     along: DVec2,
-    others: &mut Vec<usize>,
+    around: &[usize],
 ) -> bool {
     let crowd = ctx.world.crowd;
     let radius = crowd.radii.get(ctx.actor).copied().unwrap_or(0.0);
@@ -41,9 +42,7 @@ pub fn in_counter_flow(
     {
         return false;
     }
-    others.clear();
-    crowd.near(position, others);
-    let facing_me = others.iter().filter(|&&j| {
+    let facing_me = around.iter().filter(|&&j| {
         let o = crowd.positions[j] - position;
         let ahead = o.dot(along);
         j != ctx.actor

@@ -153,16 +153,22 @@ impl Steer {
     /// Follows a new plan from its start, which is where the body is now (a new route
     /// taken mid-walk, see [`super::replan`]): the offset is gone, the drift carries on.
     pub fn restart(&mut self) {
+        self.engage(0.0, self.drift);
+    }
+
+    /// Starts steering at plan time `tau`, on the plan (no offset), at its full rate and
+    /// with `drift`; the companions, the last decision and the ankles carry on.
+    fn engage(&mut self, tau: f64, drift: DVec2) {
         *self = Steer {
             engaged: true,
-            tau: 0.0,
+            tau,
             rate: 1.0,
             offset: DVec2::ZERO,
-            drift: self.drift,
+            drift,
             companions: std::mem::take(&mut self.companions),
             decision: self.decision,
-            target: (1.0, self.drift),
-            tau_before: 0.0,
+            target: (1.0, drift),
+            tau_before: tau,
             ankles: self.ankles,
         };
     }
@@ -215,6 +221,9 @@ impl Steer {
         let remaining = plan.end_time - pt;
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
+        // Those near, for the lanes and for avoidance (which adds those further ahead).
+        others.clear();
+        crowd.near(position, others);
         let mut preferred =
             if remaining >= 2.0 && lanes::in_counter_flow(ctx, position, along, others) {
                 lanes::preferred(planned, self.offset, along, gain)
@@ -276,22 +285,18 @@ impl Steer {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let position = body.position;
-        others.clear();
-        crowd.near(position, others);
-        // Those who may cross my way further ahead, for the give-way rule.
+        // Those who may cross my way further ahead, for the give-way rule, join those
+        // near (`others`, as `decide` gathered them).
         crowd.near(position + along * NEIGHBOUR_RANGE, others);
         others.sort_unstable();
         others.dedup();
+        others.retain(|&j| j != me && !self.companions.contains(&j));
         let near: Vec<Walker> = others
             .iter()
-            .filter(|&&j| j != me && !self.companions.contains(&j))
-            .map(|&j| {
-                let position = crowd.positions[j];
-                Walker {
-                    // The feet are found below, for the neighbours avoidance weighs.
-                    body: Agent::disc(position, crowd.velocities[j], crowd.radii[j]),
-                    facing: crowd.facings.get(j).copied().unwrap_or_default(),
-                }
+            .map(|&j| Walker {
+                // The feet are found below, for the neighbours avoidance weighs.
+                body: Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]),
+                facing: crowd.facings.get(j).copied().unwrap_or_default(),
             })
             .collect();
         // Where ways cross, one walker has the way (see `troupe_nav::way`): the other
@@ -299,7 +304,6 @@ impl Steer {
         let wait = wait_line(body, along, planned.length(), &near);
         let agents: Vec<Agent> = others
             .iter()
-            .filter(|&&j| j != me && !self.companions.contains(&j))
             .zip(&near)
             .filter(|(_, w)| (w.body.position - position).length() < NEIGHBOUR_RANGE)
             .map(|(&j, w)| Agent {
@@ -322,18 +326,7 @@ impl Steer {
             return;
         }
         if !self.engaged {
-            *self = Steer {
-                engaged: true,
-                tau: now,
-                rate: 1.0,
-                offset: DVec2::ZERO,
-                drift: DVec2::ZERO,
-                companions: std::mem::take(&mut self.companions),
-                decision: self.decision,
-                target: (1.0, DVec2::ZERO),
-                tau_before: now,
-                ankles: self.ankles,
-            };
+            self.engage(now, DVec2::ZERO);
         }
         let speed = planned.length();
         let side = along.perp();
