@@ -13,7 +13,7 @@ use troupe_scene::SceneConfig;
 pub struct TestArgs {
     /// Test files or folders (default `scripts/tests/`).
     pub paths: Vec<PathBuf>,
-    /// Longest a test may run, in simulated seconds.
+    /// Longest a test may run, in simulated seconds (a test's own `timeout` replaces it).
     #[arg(long, default_value_t = 120.0)]
     pub timeout: f64,
     /// Worker threads for stepping actors.
@@ -280,10 +280,13 @@ fn run_one(
     chunk: Option<usize>,
 ) -> Result<f64, String> {
     let mut s = session(file, threads, chunk).map_err(|e| format!("{e:#}"))?;
-    s.script_and_scene()
+    // A test's own timeout (`test(name, fn, { timeout })`) replaces the default.
+    let timeout = s
+        .script_and_scene()
         .0
         .start_test(index)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| e.to_string())?
+        .unwrap_or(timeout);
     let rate = s.scene().config().rate;
     let max_ticks = (timeout * rate).ceil() as u64;
     for _ in 0..=max_ticks {

@@ -167,3 +167,38 @@ fn run_warns_when_a_scene_defines_tests() {
     assert!(err.contains("defines 5 test(s)"), "{err}");
     assert!(err.contains("troupe test"), "{err}");
 }
+
+#[test]
+fn a_tests_own_timeout_replaces_the_default() {
+    // With a default of 2.5 s, the test that has 5 s of its own passes where the default
+    // would stop it, and the one that has 2 s fails at 2 s.
+    let out = troupe(&[
+        "test",
+        "tests/fixtures/runner/timeouts.lua",
+        "--timeout",
+        "2.5",
+    ]);
+    let text = stdout(&out);
+    assert!(!out.status.success(), "{text}");
+    assert!(
+        text.contains(
+            "ok   tests/fixtures/runner/timeouts.lua › needs 3 simulated seconds and has 5"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains(
+            "FAIL tests/fixtures/runner/timeouts.lua › needs 3 simulated seconds and has 2"
+        ),
+        "{text}"
+    );
+    assert!(
+        text.contains("timed out after 2 simulated seconds"),
+        "{text}"
+    );
+    assert!(
+        text.contains("ok   tests/fixtures/runner/timeouts.lua › a bad timeout is refused"),
+        "{text}"
+    );
+    assert!(text.contains("2 passed, 1 failed"), "{text}");
+}

@@ -147,13 +147,16 @@ impl Director {
         globals.set("require", lua.create_function(modules::require)?)?;
         globals.set(
             "test",
-            lua.create_function(|lua, (name, f): (String, Function)| {
-                let mut st = lua
-                    .app_data_mut::<Stage>()
-                    .ok_or_else(|| lua_err("no scene"))?;
-                st.tests.push((name, f));
-                Ok(())
-            })?,
+            lua.create_function(
+                |lua, (name, f, opts): (String, Function, Option<mlua::Table>)| {
+                    let timeout = test_timeout(&name, opts)?;
+                    let mut st = lua
+                        .app_data_mut::<Stage>()
+                        .ok_or_else(|| lua_err("no scene"))?;
+                    st.tests.push((name, f, timeout));
+                    Ok(())
+                },
+            )?,
         )?;
         api::install(lua)?;
         let troupe: mlua::Table = globals.get("troupe")?;
@@ -287,20 +290,21 @@ impl Director {
         self.stage_mut()
             .tests
             .iter()
-            .map(|(n, _)| n.clone())
+            .map(|(n, _, _)| n.clone())
             .collect()
     }
 
-    /// Starts registered test number `index` as a behavior without an actor.
-    pub fn start_test(&mut self, index: usize) -> Result<()> {
-        let f = self
+    /// Starts registered test number `index` as a behavior without an actor; returns the
+    /// test's own timeout (simulated seconds), if it gave one.
+    pub fn start_test(&mut self, index: usize) -> Result<Option<f64>> {
+        let (f, timeout) = self
             .stage_mut()
             .tests
             .get(index)
-            .map(|(_, f)| f.clone())
+            .map(|(_, f, timeout)| (f.clone(), *timeout))
             .ok_or_else(|| Error::Invalid(format!("no test #{index}")))?;
         add_behavior(&self.lua, None, f)
-            .map(drop)
+            .map(|_| timeout)
             .map_err(|e| Error::Invalid(e.to_string()))
     }
 
@@ -766,6 +770,23 @@ impl LuaSessionExt for LuaSession {
 
     fn lua(&self) -> &Lua {
         self.script().lua()
+    }
+}
+
+/// The `timeout` of `test(name, fn, { timeout = seconds })`: a positive number of
+/// simulated seconds, or none.
+fn test_timeout(name: &str, opts: Option<mlua::Table>) -> mlua::Result<Option<f64>> {
+    let Some(opts) = opts else {
+        return Ok(None);
+    };
+    let what = format!("test {name:?}");
+    args::check_keys(&opts, &what, &["timeout"])?;
+    match args::opt_number(&opts, &what, "timeout")? {
+        Some(t) if t <= 0.0 => Err(args::err(
+            &what,
+            format!("timeout must be a positive number of simulated seconds, got {t}"),
+        )),
+        t => Ok(t),
     }
 }
 

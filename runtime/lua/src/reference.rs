@@ -109,7 +109,7 @@ pub const API: &[Entry] = &[
     f("", "run", &["seconds: number"], "", "In a test: advances the simulation by `seconds`."),
     f("", "run_until", &["fn: fun(): any", "timeout?: number"], "boolean", "In a test: advances until `fn()` is true (false at the timeout)."),
     f("", "expect", &["cond: any", "message?: string"], "any", "Fails the test (or behavior) with `message` when `cond` is false or nil."),
-    f("", "test", &["name: string", "fn: fun()"], "", "Registers a scenario test (`troupe test`)."),
+    f("", "test", &["name: string", "fn: fun()", "opts?: { timeout?: number }"], "", "Registers a scenario test (`troupe test`); `timeout`: its own limit in simulated seconds (default `--timeout`, 120)."),
     f("", "require", &["name: string"], "any", "Loads a module from the scene's folder, else troupe's standard library (once)."),
     f("", "print", &["...: any"], "", "Logs the values with the actor's name."),
     // The troupe table.

@@ -106,7 +106,9 @@ pub(crate) struct Stage {
     pub current_actor: Option<usize>,
     /// Loaded sequences by path (and skeleton, for retargeted BVH).
     pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
-    pub tests: Vec<(String, Function)>,
+    /// `test(name, fn[, { timeout }])` calls, in order: the name, the function and the
+    /// test's own timeout (simulated seconds), if it gave one.
+    pub tests: Vec<(String, Function, Option<f64>)>,
     pub handler_failures: Vec<(usize, String)>,
     /// `troupe.subscribe` calls, in order: the key expression and the function to call.
     pub subscriptions: Vec<(String, Function)>,
