@@ -35,6 +35,7 @@ pub mod rig;
 pub mod route;
 pub mod shoulders;
 pub mod steer;
+pub mod surroundings;
 
 pub use cycle::{cycle_at, relative_cycle_length, CycleTimes};
 pub use goal::Goal;
@@ -51,7 +52,9 @@ use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
-use troupe_scene::space::Navigation;
+use troupe_scene::space::{
+    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, Navigation, Surroundings,
+};
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
@@ -467,11 +470,29 @@ impl Walk {
     }
 
     /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
-    /// half-width.
-    fn spot(&self, leg: usize, sample: &RootSample, width: f64) -> DVec2 {
+    /// half-width: beside the body, moved until the foot lands clear of what is `around`
+    /// (`troupe_nav::clearance::clear_foot`: the body is kept clear by its step's limit,
+    /// but a foot lands ahead of it).
+    fn spot(&self, around: &Surroundings, leg: usize, sample: &RootSample, width: f64) -> DVec2 {
         let left = DVec2::new(sample.heading.cos(), -sample.heading.sin());
         let side = if leg == 0 { 1.0 } else { -1.0 };
-        sample.position + left * (side * self.rig.hip_half_width * width)
+        let offset = left * (side * self.rig.hip_half_width * width);
+        let beside = sample.position + offset;
+        // Pinched there (between a body and an obstacle): a step in place, beside where
+        // the body stood on the last tick.
+        self.cleared(around, leg, beside, sample.heading)
+            .or_else(|| {
+                let home = self.last_floor? + offset;
+                self.cleared(around, leg, home, sample.heading)
+            })
+            .unwrap_or(beside)
+    }
+
+    /// Landing point `at` of foot `leg` heading `yaw`, moved clear of what is `around`
+    /// (`troupe_nav::clearance::clear_foot`); `None` if no such place was found.
+    fn cleared(&self, around: &Surroundings, leg: usize, at: DVec2, yaw: f64) -> Option<DVec2> {
+        let span = surroundings::foot_span(&self.rig.legs[leg], at, yaw);
+        clear_foot(span, around).map(|by| at + by)
     }
 
     /// The time at which the total phase reaches `target`, simulated forward from now with
@@ -495,16 +516,30 @@ impl Walk {
     }
 
     /// Plans the next landing of foot `leg` (whose local phase is now `lambda`).
-    fn plan_landing(&self, plan: &Plan, leg: usize, lambda: f64, from: DVec2) -> Landing {
+    fn plan_landing(
+        &self,
+        around: &Surroundings,
+        plan: &Plan,
+        leg: usize,
+        lambda: f64,
+        from: DVec2,
+    ) -> Landing {
         let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
-        self.landing_at(plan, leg, t_mid, from)
+        self.landing_at(around, plan, leg, t_mid, from)
     }
 
     /// The landing of foot `leg`, stepping from `from`, under the steered body at walk
-    /// time `t_mid`.
-    fn landing_at(&self, plan: &Plan, leg: usize, t_mid: f64, from: DVec2) -> Landing {
+    /// time `t_mid`, clear of what is `around` (see [`Walk::spot`]).
+    fn landing_at(
+        &self,
+        around: &Surroundings,
+        plan: &Plan,
+        leg: usize,
+        t_mid: f64,
+        from: DVec2,
+    ) -> Landing {
         let (sample, width) = if self.steer.plan_time(t_mid, self.t) >= plan.end_time {
             (self.end_sample(plan), 1.0)
         } else {
@@ -513,7 +548,7 @@ impl Walk {
                 self.options.step_width,
             )
         };
-        let plant = self.spot(leg, &sample, width);
+        let plant = self.spot(around, leg, &sample, width);
         let step = (plant - from).length();
         let q = (step / (0.8 * self.rig.thigh_height)).min(1.0);
         Landing {
@@ -528,7 +563,7 @@ impl Walk {
     /// steered body will be at its mid-support, at most [`RETARGET_SPEED`]: avoidance
     /// changes the pace and the sidestep after the foot lifted, and a landing chosen for
     /// the old ones would leave it a stride ahead of (or beside) a body that stopped.
-    fn follow_steering(&mut self, plan: &Plan, leg: usize, lambda: f64) {
+    fn follow_steering(&mut self, around: &Surroundings, plan: &Plan, leg: usize, lambda: f64) {
         let Foot::Swing { from, to, .. } = self.feet[leg] else {
             return;
         };
@@ -538,17 +573,33 @@ impl Walk {
         let cycle = self.cycle(self.cadence);
         let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
         let t_mid = self.t + ahead * cycle.cycle;
-        let fresh = self.landing_at(plan, leg, t_mid, DVec2::new(from.x, from.z));
+        let fresh = self.landing_at(around, plan, leg, t_mid, DVec2::new(from.x, from.z));
         let step = RETARGET_SPEED * self.dt;
         if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
             landing.plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
             landing.yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
         }
+        // Wherever the retargeting has got to, the foot lands clear (a jump of the
+        // landing, not of the foot, which swings towards it).
+        if let Foot::Swing { to: landing, .. } = self.feet[leg] {
+            if let Some(clear) = self.cleared(around, leg, landing.plant, landing.yaw) {
+                if let Foot::Swing { to, .. } = &mut self.feet[leg] {
+                    to.plant = clear;
+                }
+            }
+        }
     }
 
     /// Advances foot `leg` to local phase `lambda` (support fraction `sigma`) and returns
     /// its pose.
-    fn step_foot(&mut self, plan: &Plan, leg: usize, lambda: f64, sigma: f64) -> FootPose {
+    fn step_foot(
+        &mut self,
+        around: &Surroundings,
+        plan: &Plan,
+        leg: usize,
+        lambda: f64,
+        sigma: f64,
+    ) -> FootPose {
         let wrapped = lambda < self.lambda[leg];
         self.lambda[leg] = lambda;
         let rig = &self.rig;
@@ -587,7 +638,7 @@ impl Walk {
         } = self.feet[leg]
         {
             if roll.is_none() && lambda >= HEEL_OFF * sigma {
-                let landing = self.plan_landing(plan, leg, lambda, plant);
+                let landing = self.plan_landing(around, plan, leg, lambda, plant);
                 let still =
                     (landing.plant - plant).length() < 0.01 && wrap(landing.yaw - yaw).abs() < 0.05;
                 self.feet[leg] = Foot::Stance {
@@ -602,7 +653,7 @@ impl Walk {
                 let pose = self.poses[leg];
                 let to = match next {
                     Some(n) => n,
-                    None => self.plan_landing(plan, leg, lambda, plant),
+                    None => self.plan_landing(around, plan, leg, lambda, plant),
                 };
                 let in_place = (to.plant - plant).length() < 0.01
                     && wrap(to.yaw - yaw).abs() < 0.05
@@ -638,7 +689,7 @@ impl Walk {
             }
         }
         if self.steer.engaged {
-            self.follow_steering(plan, leg, lambda);
+            self.follow_steering(around, plan, leg, lambda);
         }
         let rig = &self.rig;
         match self.feet[leg] {
@@ -687,10 +738,31 @@ impl Walk {
                 // and meets it exactly at the phase boundaries.
                 let clearance = lift * 4.0 * w * (1.0 - w);
                 let mut ankle = from + (target - from) * s;
+                let mut yaw = from_yaw + wrap(to.yaw - from_yaw) * ease;
+                // A foot in the air closes on another body by at most half the gap, like
+                // the body's step (`troupe_nav::clearance`): held where it was, it swings
+                // on to its landing from there.
+                let before = self.poses[leg];
+                let span = |a: DVec3, yaw: f64| {
+                    surroundings::foot_span(&rig.legs[leg], DVec2::new(a.x, a.z), yaw)
+                };
+                if s < 1.0
+                    && ease < 1.0
+                    && !foot_may_move(&span(before.ankle, before.yaw), &span(ankle, yaw), around)
+                {
+                    ankle = DVec3::new(before.ankle.x, ankle.y, before.ankle.z);
+                    yaw = before.yaw;
+                    let rebased = (ankle - target * s) / (1.0 - s);
+                    if let Foot::Swing { from, from_yaw, .. } = &mut self.feet[leg] {
+                        from.x = rebased.x;
+                        from.z = rebased.z;
+                        *from_yaw = to.yaw + wrap(yaw - to.yaw) / (1.0 - ease);
+                    }
+                }
                 ankle.y = clearance - rig.lowest_offset(leg, pitch, toes);
                 FootPose {
                     ankle,
-                    yaw: from_yaw + wrap(to.yaw - from_yaw) * ease,
+                    yaw,
                     pitch,
                     toes,
                 }
@@ -739,8 +811,26 @@ impl Walk {
         (sway, vertical, [tilt, list, rot], spine, arms)
     }
 
+    /// This walker's body on the floor as the previous tick left it (see
+    /// `troupe_nav::clearance`): the crowd's capsule, or its disc.
+    fn body(&self, ctx: &GeneratorContext) -> Capsule {
+        let crowd = ctx.world.crowd;
+        crowd.bodies.get(ctx.actor).copied().unwrap_or(Capsule {
+            centre: crowd.positions.get(ctx.actor).copied().unwrap_or_default(),
+            axis: DVec2::ZERO,
+            half_length: 0.0,
+            radius: self.radius,
+        })
+    }
+
     /// Computes the whole pose for this tick and writes it.
-    fn pose(&mut self, plan: &Plan, out: &mut DofWriter) -> UpperValues {
+    fn pose(
+        &mut self,
+        ctx: &GeneratorContext,
+        around: &Surroundings,
+        plan: &Plan,
+        out: &mut DofWriter,
+    ) -> UpperValues {
         let sample = self.steer.sample(plan, self.t, self.t, self.heading);
         self.heading = sample.heading;
         let v = sample.speed;
@@ -751,7 +841,7 @@ impl Walk {
         let phi = self.phase.rem_euclid(1.0);
         for leg in 0..2 {
             let lambda = (self.phase - 0.5 * leg as f64).rem_euclid(1.0);
-            self.poses[leg] = self.step_foot(plan, leg, lambda, sigma);
+            self.poses[leg] = self.step_foot(around, plan, leg, lambda, sigma);
         }
         let rv = v / self.rig.thigh_height;
         let (sway, vertical, mut pelvis, spine, arms) = self.oscillations(phi, a, rv, sigma);
@@ -770,7 +860,23 @@ impl Walk {
         let lift = (vertical, a, k);
         let mut floor = sample.position + left * sway;
         let mut legs = self.legs_at(floor, heading, pelvis, lift);
-        // A steered body goes no further than its planted feet allow (see [`footing`]).
+        // Whatever the steering chose, the body closes on no other body or obstacle past
+        // the clearance limit (see `troupe_nav::clearance`).
+        let crowd = ctx.world.crowd;
+        if let (Route::Path { .. }, Some(&from)) = (&self.route, crowd.positions.get(ctx.actor)) {
+            let clear = from + limit_step(&self.body(ctx), floor - from, around);
+            if clear != floor {
+                if !self.steer.engaged {
+                    self.steer.engage(self.t, DVec2::ZERO);
+                }
+                self.steer.hold(plan, clear - floor);
+                floor = clear;
+                legs = self.legs_at(floor, heading, pelvis, lift);
+            }
+        }
+        // A steered body goes no further than its planted feet allow (see [`footing`]):
+        // between where it stood and where the clearance let it go, so still within the
+        // clearance's limits (each a half-plane that holds both).
         if self.steer.engaged {
             if let Some(last) = self.last_floor {
                 let held = footing::hold(last, floor, legs.strain, |p| {
@@ -966,13 +1072,21 @@ impl Generator for Walk {
             }
         }
         self.dt = ctx.dt;
-        let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
-        // whose swing would now go sideways into the other, hang still as they turn.
-        self.shoulders
-            .update(ctx, self.heading, &self.steer.companions);
+        let around = surroundings::gather(ctx, &self.steer.companions, &mut self.near);
+        let (root, pelvis, mut spine, mut arms) = self.pose(ctx, &around, &plan, out);
+        // The shoulders turn to pass someone close beside (see [`shoulders`]); the arms,
+        // whose swing would now go sideways into the other, hang still as they turn, and
+        // swing less as anything comes close.
+        let me = self.body(ctx);
+        self.shoulders.update(
+            ctx,
+            self.heading,
+            &self.steer.companions,
+            nearest_gap(&me, &around),
+        );
         spine[1] += self.shoulders.turn / 2.0;
         spine[2] += self.shoulders.turn / 2.0;
-        let swing = 1.0 - (self.shoulders.turn.abs() / shoulders::MAX_TURN).min(1.0);
+        let swing = self.shoulders.swing();
         for arm in &mut arms {
             arm[0] *= swing;
             arm[1] *= swing;
@@ -1028,7 +1142,7 @@ impl Generator for Walk {
             let end = self.end_sample(&plan);
             let settled = (0..2).all(|leg| match self.feet[leg] {
                 Foot::Stance { plant, .. } => {
-                    (plant - self.spot(leg, &end, 1.0)).length() < 0.01
+                    (plant - self.spot(&around, leg, &end, 1.0)).length() < 0.01
                         && self.poses[leg].pitch == 0.0
                 }
                 Foot::Swing { .. } => false,

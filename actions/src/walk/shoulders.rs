@@ -21,11 +21,31 @@ const ALONGSIDE: f64 = 0.9;
 /// Largest change of the turn (radians per second).
 const TURN_RATE: f64 = 1.5;
 
-/// How far the shoulders are turned now (radians, positive to the left).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+/// Gap (m) between the body and anything round it below which the arms swing less, and
+/// not at all at a third of it: a swinging hand reaches out of the body's disc, and
+/// swinging into a neighbour's it would move faster than the clearance looks (the body's
+/// capsule widens only as far as the wrists were out on the last tick).
+pub const ARMS_CLEAR: f64 = 0.3;
+/// Largest change of the arms' swing (fraction of the full swing per second).
+const ARMS_RATE: f64 = 3.0;
+
+/// How far the shoulders are turned now (radians, positive to the left), and how much the
+/// arms swing.
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Shoulders {
     /// The turn (radians about the vertical; positive turns the chest to the left).
     pub turn: f64,
+    /// The arms' swing, from 0 (held still) to 1 (the gait's own).
+    pub arms: f64,
+}
+
+impl Default for Shoulders {
+    fn default() -> Self {
+        Shoulders {
+            turn: 0.0,
+            arms: 1.0,
+        }
+    }
 }
 
 impl Shoulders {
@@ -72,10 +92,21 @@ impl Shoulders {
         best.1 * best.0 * MAX_TURN
     }
 
-    /// Turns towards [`Shoulders::wanted`] by at most [`TURN_RATE`] × `dt`.
-    pub fn update(&mut self, ctx: &GeneratorContext, heading: f64, companions: &[usize]) {
+    /// Turns towards [`Shoulders::wanted`] by at most [`TURN_RATE`] × `dt`, and lets the
+    /// arms swing as the least `gap` (m) between the body and what is round it allows
+    /// (see [`ARMS_CLEAR`]).
+    pub fn update(&mut self, ctx: &GeneratorContext, heading: f64, companions: &[usize], gap: f64) {
         let want = Shoulders::wanted(ctx, heading, companions);
         let step = TURN_RATE * ctx.dt;
         self.turn += (want - self.turn).clamp(-step, step);
+        let arms = smoothstep((gap / ARMS_CLEAR - 1.0 / 3.0) * 1.5);
+        let step = ARMS_RATE * ctx.dt;
+        self.arms += (arms - self.arms).clamp(-step, step);
+    }
+
+    /// How much of the gait's arm swing is left: less as the shoulders turn, and as
+    /// [`Shoulders::arms`] says.
+    pub fn swing(&self) -> f64 {
+        (1.0 - (self.turn.abs() / MAX_TURN).min(1.0)) * self.arms
     }
 }

@@ -158,7 +158,7 @@ impl Steer {
 
     /// Starts steering at plan time `tau`, on the plan (no offset), at its full rate and
     /// with `drift`; the companions, the last decision and the ankles carry on.
-    fn engage(&mut self, tau: f64, drift: DVec2) {
+    pub(super) fn engage(&mut self, tau: f64, drift: DVec2) {
         *self = Steer {
             engaged: true,
             tau,

@@ -3,6 +3,7 @@
 //! The scene rebuilds it once a tick, before the actors step, so every walker decides
 //! from the same world whatever the thread count.
 
+use crate::clearance::Capsule;
 use crate::footprint::Footprint;
 use troupe_body::glam::DVec2;
 
@@ -20,6 +21,9 @@ pub struct Crowd {
     pub radii: Vec<f64>,
     /// Which way each actor faces: the unit floor direction (x, z) of its root's +z.
     pub facings: Vec<DVec2>,
+    /// Each actor's body on the floor, its disc stretched to hold its feet (see
+    /// [`crate::clearance::Capsule`]).
+    pub bodies: Vec<Capsule>,
     /// Every obstacle's footprint, with the centre and radius of a circle around it.
     pub footprints: Vec<(Footprint, DVec2, f64)>,
     /// (cell, actor) sorted: the actors of a cell are a contiguous run.

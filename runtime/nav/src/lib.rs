@@ -9,6 +9,7 @@
 #![warn(missing_docs)]
 
 pub mod avoid;
+pub mod clearance;
 pub mod crowd;
 pub mod footprint;
 pub mod radius;
@@ -16,6 +17,9 @@ pub mod space;
 pub mod way;
 
 pub use avoid::{choose_velocity, Agent};
+pub use clearance::{
+    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, FootSpan, Surroundings,
+};
 pub use crowd::Crowd;
 pub use footprint::Footprint;
 pub use radius::body_radius;

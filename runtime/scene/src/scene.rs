@@ -131,6 +131,9 @@ pub struct Scene {
     crowd: troupe_nav::Crowd,
     /// Per actor: the DOF indices of root_x and root_z.
     root_dofs: Vec<(usize, usize)>,
+    /// Per actor: the joints that stretch or widen its body on the floor (see
+    /// [`crate::space::BodyJoints`]).
+    body_joints: Vec<crate::space::BodyJoints>,
     /// Per actor: the user's character it is dressed in, if any (drawn instead of the
     /// generated skin; it changes nothing in the simulation).
     looks: Vec<Option<Arc<Dressing>>>,
@@ -176,6 +179,7 @@ impl Scene {
             obstacle_flags: Vec::new(),
             crowd: troupe_nav::Crowd::default(),
             root_dofs: Vec::new(),
+            body_joints: Vec::new(),
             looks: Vec::new(),
         })
     }
@@ -241,14 +245,22 @@ impl Scene {
         crowd.positions.clear();
         crowd.velocities.clear();
         crowd.facings.clear();
-        for (state, &(x, z)) in self.states.iter().zip(&self.root_dofs) {
+        crowd.bodies.clear();
+        for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
-            crowd.positions.push(DVec2::new(root.x, root.z));
+            let root = DVec2::new(root.x, root.z);
+            crowd.positions.push(root);
             crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
             let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
-            crowd
-                .facings
-                .push(DVec2::new(forward.x, forward.z).normalize_or_zero());
+            let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
+            crowd.facings.push(facing);
+            let velocity = DVec2::new(state.qd[x], state.qd[z]);
+            crowd.bodies.push(self.body_joints[i].body(
+                &state.globals,
+                facing,
+                velocity,
+                crowd.radii[i],
+            ));
         }
         crowd.index();
         crowd.set_footprints(footprints);
@@ -461,6 +473,8 @@ impl Scene {
             .push((skeleton.dof("root_x")?, skeleton.dof("root_z")?));
         self.crowd.radii.push(troupe_nav::body_radius(&skeleton));
         let state = ActorState::new(&skeleton, q);
+        self.body_joints
+            .push(crate::space::BodyJoints::new(&skeleton, &state.globals));
         self.work.push(ActorWork {
             runtime: ActorRuntime::default(),
             next: state.clone(),

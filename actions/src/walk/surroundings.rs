@@ -1,0 +1,56 @@
+//! What a walk's clearance sees round its body each tick (`troupe_nav::clearance`): the
+//! other bodies (the crowd's capsules, which hold their feet) and the obstacles near, from
+//! the previous tick's world, gathered once per tick for the body's step and the feet's
+//! landings.
+
+use super::rig::Leg;
+use super::route::direction;
+use troupe_body::glam::DVec2;
+use troupe_scene::space::{FootSpan, Surroundings, FOOT_RADIUS};
+use troupe_scene::GeneratorContext;
+
+/// How far (m) past the touching of two bodies' discs a neighbour is looked at: a step
+/// and two strides.
+const RANGE: f64 = 1.0;
+/// How far (m) a body's feet may stand out of its disc, along the way it faces.
+const STRIDE: f64 = 0.6;
+
+/// The surroundings of actor `ctx.actor` this tick, leaving out `companions` (a hand
+/// held); `scratch` is reused space.
+pub fn gather<'a>(
+    ctx: &GeneratorContext<'a>,
+    companions: &[usize],
+    scratch: &mut Vec<usize>,
+) -> Surroundings<'a> {
+    let crowd = ctx.world.crowd;
+    let me = ctx.actor;
+    let mut around = Surroundings::default();
+    let (Some(&from), Some(&radius)) = (crowd.positions.get(me), crowd.radii.get(me)) else {
+        return around;
+    };
+    let reach = radius + STRIDE;
+    scratch.clear();
+    crowd.near(from, scratch);
+    for &j in scratch.iter() {
+        if j == me || companions.contains(&j) {
+            continue;
+        }
+        if (crowd.positions[j] - from).length() - reach - crowd.radii[j] - STRIDE > RANGE {
+            continue;
+        }
+        around.bodies.extend(crowd.bodies.get(j));
+    }
+    around.obstacles = crowd.footprints_near(from, reach + RANGE).collect();
+    around
+}
+
+/// The span of `leg`'s foot planted with the point under its ankle at `plant`, heading
+/// `yaw`.
+pub fn foot_span(leg: &Leg, plant: DVec2, yaw: f64) -> FootSpan {
+    let forward = direction(yaw);
+    FootSpan {
+        heel: plant + forward * leg.heel.z,
+        toe: plant + forward * (leg.ball.z + leg.toe_sole.z),
+        radius: FOOT_RADIUS,
+    }
+}

@@ -1,0 +1,680 @@
+//! The backstop behind avoidance: each tick, a walker's body moves towards no other body or
+//! obstacle further than keeps them apart, and its feet land clear of the obstacles,
+//! whatever avoidance chose.
+//!
+//! Avoidance ([`crate::avoid`]) weighs velocities; in a dense crowd the best of them may
+//! still close on a neighbour, and a walker held by its planted feet or stopped by the
+//! give-way rule may not go where it chose. Two rules, both from the previous tick's world:
+//!
+//! - **The body's step** ([`limit_step`]; conservative advancement, as in continuous
+//!   collision detection). A body on the floor is a [`Capsule`] along the way it faces:
+//!   its disc (the body's radius) stretched forwards and backwards as far as its feet
+//!   stand apart ([`Capsule::around`]). Against each
+//!   neighbour's capsule, the step from where the body stood may close at most **half**
+//!   the gap between the two, measured between their nearest points; the neighbour,
+//!   deciding from the same previous tick, closes at most the other half, so together
+//!   they never close more than the gap. Against an obstacle, which stands still, the
+//!   whole gap. A gap already closed may not close further. Sliding along a neighbour or a
+//!   wall stays free: only the part of the step towards it is limited. Each limit is a
+//!   half-plane of steps holding the zero step, so standing still always satisfies them
+//!   all; the step kept is the wanted one projected onto the half-planes it leaves, in a
+//!   fixed order, and shortened if some limit is still broken after a few rounds.
+//! - **A foot's landing** ([`clear_foot`]): the foot's span on the floor (heel to toe tip,
+//!   with its solid's radius round it) is moved out of the obstacles and the other bodies
+//!   before it lands. The capsule holds the feet where they stand, but a swinging foot
+//!   goes where its landing was planned, ahead of the body, under where the body was
+//!   headed before its step was limited.
+//!
+//! Pure functions of the previous tick's crowd: bit-identical with any thread count. What
+//! the capsule does not hold (an arm reaching out, a body turning on the spot against
+//! another) is left to the reach's detours and to avoidance.
+
+use crate::footprint::Footprint;
+use troupe_body::glam::DVec2;
+
+/// Gap (m) the step keeps between two bodies' capsules, and between a capsule and an
+/// obstacle: what a body's limbs move within a tick beyond the capsule the previous tick
+/// left (a foot swinging out to land, a knee coming forwards as the leg swings, a foot
+/// cutting the corner it walks round), and the capsule does not hold.
+pub const BODY_MARGIN: f64 = 0.02;
+/// See [`BODY_MARGIN`].
+pub const OBSTACLE_MARGIN: f64 = 0.02;
+
+/// How much further (m) a foot keeps from an obstacle, landing or in the air, than its
+/// own solid needs: the leg above it leans out towards the landing, and the knee of a
+/// foot lifted high comes out over it.
+pub const LEG_CLEARANCE: f64 = 0.08;
+
+/// A foot's span as it keeps from obstacles (see [`LEG_CLEARANCE`]).
+fn with_leg(span: &FootSpan) -> FootSpan {
+    FootSpan {
+        radius: span.radius + LEG_CLEARANCE,
+        ..*span
+    }
+}
+
+/// Farthest (m) a landing is moved to clear what is round it: further, the foot would land
+/// out of the legs' reach, and the walker steps in place instead.
+pub const LANDING_SHIFT: f64 = 0.15;
+
+/// Rounds of projection (of a step onto its limits, of a foot out of what it touches)
+/// before giving up on the nearest answer.
+const ROUNDS: usize = 4;
+
+/// A foot on the floor as the clearance sees it: the segment under it from the heel to the
+/// toe tip (x, z) and how far its solid reaches round that segment.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FootSpan {
+    /// The point under the heel.
+    pub heel: DVec2,
+    /// The point under the toe tip.
+    pub toe: DVec2,
+    /// How far (m) the foot's solid reaches from the segment.
+    pub radius: f64,
+}
+
+impl FootSpan {
+    /// The same span moved by `by`.
+    pub fn moved(&self, by: DVec2) -> FootSpan {
+        FootSpan {
+            heel: self.heel + by,
+            toe: self.toe + by,
+            ..*self
+        }
+    }
+}
+
+/// A body on the floor as the clearance sees it: the segment `centre ± axis·half_length`
+/// with `radius` round it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Capsule {
+    /// The middle of the segment (x, z): the body's root.
+    pub centre: DVec2,
+    /// The unit direction the body faces (x, z).
+    pub axis: DVec2,
+    /// Half the segment's length (m).
+    pub half_length: f64,
+    /// How far (m) the body reaches round the segment.
+    pub radius: f64,
+}
+
+impl Capsule {
+    /// The body of `radius` whose root stands at `root` facing `axis` (a unit vector; zero
+    /// for no facing) with its `feet` on the floor: its disc, stretched along `axis` by
+    /// `stride` either way (where a walker's legs swing) and further as far as it takes to
+    /// hold each foot (with the foot's radius) that lies within the disc's width. A foot
+    /// planted wider than that (a sidestep's wide stance) widens the capsule instead.
+    pub fn around(
+        root: DVec2,
+        axis: DVec2,
+        radius: f64,
+        stride: f64,
+        feet: &[FootSpan],
+    ) -> Capsule {
+        let (mut back, mut front) = if axis == DVec2::ZERO {
+            (0.0, 0.0)
+        } else {
+            (-stride, stride)
+        };
+        // A foot wider than the disc widens it.
+        let mut wide = radius;
+        if axis != DVec2::ZERO {
+            let side = axis.perp();
+            for foot in feet {
+                for p in [foot.heel, foot.toe] {
+                    let along = (p - root).dot(axis);
+                    let across = (p - root).dot(side).abs();
+                    let inner = radius - foot.radius;
+                    let room = (inner * inner - across * across).max(0.0).sqrt();
+                    front = front.max(along - room);
+                    back = back.min(along + room);
+                    wide = wide.max(across + foot.radius);
+                }
+            }
+        }
+        Capsule {
+            centre: root + axis * (front + back) / 2.0,
+            axis,
+            half_length: (front - back) / 2.0,
+            radius: wide,
+        }
+    }
+
+    /// Distance (m) from `p` to the segment (not to the surface round it).
+    pub fn distance(&self, p: DVec2) -> f64 {
+        let (a, b) = self.ends();
+        (p - nearest_on_segment(p, a, b)).length()
+    }
+
+    /// The segment's two ends.
+    fn ends(&self) -> (DVec2, DVec2) {
+        let half = self.axis * self.half_length;
+        (self.centre - half, self.centre + half)
+    }
+
+    /// The nearest points of this capsule's segment and `other`'s (on this, on `other`).
+    fn nearest_to(&self, other: &Capsule) -> (DVec2, DVec2) {
+        nearest_between(self.ends(), other.ends())
+    }
+}
+
+/// What is round a walker this tick, as the previous tick left it: the other bodies and
+/// the obstacles near.
+#[derive(Clone, Debug, Default)]
+pub struct Surroundings<'a> {
+    /// Other walkers' and standing actors' bodies.
+    pub bodies: Vec<Capsule>,
+    /// The obstacles near.
+    pub obstacles: Vec<&'a Footprint>,
+}
+
+/// A limit on the step `s`: `s · normal >= -allowed`, `allowed >= 0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Limit {
+    /// Unit vector from the other body (or the obstacle's nearest point) to the walker.
+    normal: DVec2,
+    /// How far (m) the step may go against `normal`.
+    allowed: f64,
+}
+
+impl Limit {
+    /// How far (m) step `s` goes past the limit (negative: within it).
+    fn excess(&self, s: DVec2) -> f64 {
+        -s.dot(self.normal) - self.allowed
+    }
+
+    /// The limit of a body at `from` whose disc is `gap` clear of something in direction
+    /// `-apart` (from it to the body, not normalised), of which the step may close
+    /// `share`; `None` when a step of `reach` cannot close it, or `apart` is zero.
+    fn of(apart: DVec2, gap: f64, share: f64, reach: f64) -> Option<Limit> {
+        let normal = apart.try_normalize()?;
+        (gap * share <= reach).then(|| Limit {
+            normal,
+            allowed: (gap * share).max(0.0),
+        })
+    }
+}
+
+/// The part of `step` (x, z) that body `me` (where it stood on the previous tick) may take
+/// this tick: `step` itself when it closes on nothing, else the nearest step that closes
+/// at most half the gap to each neighbour's body and the whole gap to each obstacle (see
+/// the module docs).
+pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
+    let reach = step.length();
+    if reach == 0.0 {
+        return step;
+    }
+    let mut limits: Vec<Limit> = Vec::new();
+    for other in &around.bodies {
+        let (mine, theirs) = me.nearest_to(other);
+        let apart = mine - theirs;
+        let gap = apart.length() - me.radius - other.radius - BODY_MARGIN;
+        // Segments that cross (bodies placed into each other): apart along their centres.
+        let apart = if apart.length_squared() > 0.0 {
+            apart
+        } else {
+            me.centre - other.centre
+        };
+        limits.extend(Limit::of(apart, gap, 0.5, reach));
+    }
+    let (a, b) = me.ends();
+    for f in &around.obstacles {
+        let span = FootSpan {
+            heel: a,
+            toe: b,
+            radius: me.radius,
+        };
+        let Some((point, nearest)) = nearest_to_footprint(f, &span) else {
+            continue;
+        };
+        // A convex footprint lies wholly behind the tangent at its nearest point: a body
+        // whose nearest point stays `radius` in front of the tangent stays clear of it.
+        let apart = point - nearest;
+        let gap = apart.length() - me.radius - OBSTACLE_MARGIN;
+        limits.extend(Limit::of(apart, gap, 1.0, reach));
+    }
+    within(step, &limits)
+}
+
+/// The least gap (m) between body `me` and the bodies and obstacles `around` (negative
+/// when they overlap); infinite with nothing around.
+pub fn nearest_gap(me: &Capsule, around: &Surroundings) -> f64 {
+    let bodies = around.bodies.iter().map(|other| {
+        let (mine, theirs) = me.nearest_to(other);
+        (mine - theirs).length() - me.radius - other.radius
+    });
+    let span = FootSpan {
+        heel: me.ends().0,
+        toe: me.ends().1,
+        radius: me.radius,
+    };
+    let obstacles = around.obstacles.iter().map(|f| {
+        nearest_to_footprint(f, &span).map_or(-me.radius, |(p, q)| (p - q).length() - me.radius)
+    });
+    bodies.chain(obstacles).fold(f64::INFINITY, f64::min)
+}
+
+/// Whether a foot in the air may move from span `from` to span `to` this tick: it closes
+/// on no body `around` by more than half the gap between them (the body may close the
+/// other half) and on no obstacle by more than the gap, and goes no deeper into either.
+pub fn foot_may_move(from: &FootSpan, to: &FootSpan, around: &Surroundings) -> bool {
+    let gap = |span: &FootSpan, body: &Capsule| {
+        let (mine, theirs) = nearest_between((span.heel, span.toe), body.ends());
+        (mine - theirs).length() - span.radius - body.radius
+    };
+    let bodies_ok = around.bodies.iter().all(|body| {
+        let (before, after) = (gap(from, body), gap(to, body));
+        after >= before || before - after <= (before / 2.0).max(0.0)
+    });
+    let depth = |span: &FootSpan, f: &Footprint| {
+        let span = with_leg(span);
+        footprint_overlap(f, &span).map_or(f64::NEG_INFINITY, |(_, d)| d + span.radius)
+    };
+    let obstacles_ok = around.obstacles.iter().all(|f| {
+        let after = depth(to, f);
+        after <= 0.0 || after <= depth(from, f)
+    });
+    bodies_ok && obstacles_ok
+}
+
+/// How far to move foot `foot` (about to land) so that it is clear of the bodies and the
+/// obstacles `around`: zero when it already is; `None` when no such move of at most
+/// [`LANDING_SHIFT`] was found (a foot pinched between a body and an obstacle, or among
+/// bodies). Each one the foot reaches into pushes it
+/// straight out by the overlap, in a fixed order (the bodies, then the obstacles, whose
+/// push comes last: a foot is never moved into furniture), for a few rounds.
+pub fn clear_foot(foot: FootSpan, around: &Surroundings) -> Option<DVec2> {
+    let mut by = DVec2::ZERO;
+    for _ in 0..ROUNDS {
+        let mut moved = false;
+        for body in &around.bodies {
+            let span = foot.moved(by);
+            let (mine, theirs) = nearest_between((span.heel, span.toe), body.ends());
+            let apart = mine - theirs;
+            let overlap = span.radius + body.radius - apart.length();
+            if overlap > 0.0 {
+                // A foot right across the other's segment: out sideways from its middle.
+                let out = apart
+                    .try_normalize()
+                    .or_else(|| (mine - body.centre).try_normalize())
+                    .unwrap_or(body.axis.perp());
+                by += out * overlap;
+                moved = true;
+            }
+        }
+        for f in &around.obstacles {
+            let span = with_leg(&foot.moved(by));
+            if let Some((out, depth)) = footprint_overlap(f, &span) {
+                by += out * (depth + span.radius);
+                moved = true;
+            }
+        }
+        if by.length() > LANDING_SHIFT {
+            return None;
+        }
+        if !moved {
+            return Some(by);
+        }
+    }
+    // Still moving after the last round: clear only if nothing is touched now.
+    let span = foot.moved(by);
+    let touches_body = around.bodies.iter().any(|body| {
+        let (mine, theirs) = nearest_between((span.heel, span.toe), body.ends());
+        (mine - theirs).length() < span.radius + body.radius - 1e-9
+    });
+    let touches_obstacle = around.obstacles.iter().any(|f| {
+        let span = with_leg(&span);
+        footprint_overlap(f, &span).is_some_and(|(_, d)| d + span.radius > 1e-9)
+    });
+    (!touches_body && !touches_obstacle).then_some(by)
+}
+
+/// The point of span `span`'s segment nearest footprint `f` (sampled every 5 cm) and the
+/// footprint's point nearest it; `None` if a sample is inside the footprint (no outward
+/// way to tell) or the footprint has no outline.
+fn nearest_to_footprint(f: &Footprint, span: &FootSpan) -> Option<(DVec2, DVec2)> {
+    let samples = ((span.toe - span.heel).length() / 0.05).ceil().max(1.0) as usize;
+    let mut best: Option<(DVec2, DVec2)> = None;
+    for k in 0..=samples {
+        let p = span.heel + (span.toe - span.heel) * (k as f64 / samples as f64);
+        if f.contains(p) {
+            return None;
+        }
+        let nearest = nearest_on_outline(f, p)?;
+        if best.is_none_or(|(q, n)| (p - nearest).length() < (q - n).length()) {
+            best = Some((p, nearest));
+        }
+    }
+    best
+}
+
+/// Whether foot span `span`'s segment comes within its radius of footprint `f`: the
+/// outward direction and how far (m) the segment is inside the footprint's border
+/// (negative: outside, by that much), for the segment point deepest in or nearest it;
+/// `None` when it is clear.
+fn footprint_overlap(f: &Footprint, span: &FootSpan) -> Option<(DVec2, f64)> {
+    // Points along the foot, heel to toe: a convex footprint's corner cannot reach
+    // further between two points 5 cm apart than the foot's radius covers.
+    let samples = ((span.toe - span.heel).length() / 0.05).ceil().max(1.0) as usize;
+    let mut worst: Option<(DVec2, f64)> = None;
+    for k in 0..=samples {
+        let p = span.heel + (span.toe - span.heel) * (k as f64 / samples as f64);
+        let Some(nearest) = nearest_on_outline(f, p) else {
+            continue;
+        };
+        let inside = f.contains(p);
+        let (out, depth) = if inside {
+            (nearest - p, (nearest - p).length())
+        } else {
+            (p - nearest, -(p - nearest).length())
+        };
+        if depth + span.radius <= 0.0 || worst.is_some_and(|(_, d)| d >= depth) {
+            continue;
+        }
+        // On the border itself: out from the footprint's centre.
+        let out = out
+            .try_normalize()
+            .or_else(|| (nearest - f.centre()).try_normalize())
+            .unwrap_or(DVec2::X);
+        worst = Some((out, depth));
+    }
+    worst
+}
+
+/// The nearest points of segments `a` and `b` (on `a`, on `b`); for segments that cross,
+/// their crossing point twice.
+fn nearest_between(a: (DVec2, DVec2), b: (DVec2, DVec2)) -> (DVec2, DVec2) {
+    let (da, db) = (a.1 - a.0, b.1 - b.0);
+    let denom = da.perp_dot(db);
+    if denom != 0.0 {
+        let s = (b.0 - a.0).perp_dot(db) / denom;
+        let t = (b.0 - a.0).perp_dot(da) / denom;
+        if (0.0..=1.0).contains(&s) && (0.0..=1.0).contains(&t) {
+            let at = a.0 + da * s;
+            return (at, at);
+        }
+    }
+    [
+        (a.0, nearest_on_segment(a.0, b.0, b.1)),
+        (a.1, nearest_on_segment(a.1, b.0, b.1)),
+        (nearest_on_segment(b.0, a.0, a.1), b.0),
+        (nearest_on_segment(b.1, a.0, a.1), b.1),
+    ]
+    .into_iter()
+    .min_by(|x, y| (x.0 - x.1).length().total_cmp(&(y.0 - y.1).length()))
+    .unwrap_or((a.0, b.0))
+}
+
+/// The point of segment `a`–`b` nearest `p`.
+fn nearest_on_segment(p: DVec2, a: DVec2, b: DVec2) -> DVec2 {
+    let ab = b - a;
+    let t = if ab.length_squared() > 0.0 {
+        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    a + ab * t
+}
+
+/// The point of footprint `f`'s outline nearest `p`; `None` if it has no outline.
+fn nearest_on_outline(f: &Footprint, p: DVec2) -> Option<DVec2> {
+    let n = f.outline.len();
+    (0..n)
+        .map(|i| nearest_on_segment(p, f.outline[i], f.outline[(i + 1) % n]))
+        .min_by(|x, y| {
+            (*x - p)
+                .length_squared()
+                .total_cmp(&(*y - p).length_squared())
+        })
+}
+
+/// The step nearest `wanted` (by projections in a fixed order) within every limit, each of
+/// which holds the zero step.
+fn within(wanted: DVec2, limits: &[Limit]) -> DVec2 {
+    if limits.iter().all(|l| l.excess(wanted) <= 0.0) {
+        return wanted;
+    }
+    let mut step = wanted;
+    for _ in 0..ROUNDS {
+        let mut moved = false;
+        for l in limits {
+            let excess = l.excess(step);
+            if excess > 0.0 {
+                step += l.normal * excess;
+                moved = true;
+            }
+        }
+        if !moved {
+            return step;
+        }
+    }
+    // Still past some limit (two neighbours pinching from both sides): shorten the step
+    // until it is within all; every limit holds the zero step, so this ends there at
+    // worst.
+    let scale = limits
+        .iter()
+        .filter(|l| l.excess(step) > 0.0)
+        .map(|l| l.allowed / -step.dot(l.normal))
+        .fold(1.0f64, f64::min)
+        .max(0.0);
+    step * scale
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A body of radius 0.3 at (x, z) facing +z, a stride of `half` either way.
+    fn body(x: f64, z: f64, half: f64) -> Capsule {
+        Capsule {
+            centre: DVec2::new(x, z),
+            axis: DVec2::Y,
+            half_length: half,
+            radius: 0.3,
+        }
+    }
+
+    fn bodies(list: &[Capsule]) -> Surroundings<'static> {
+        Surroundings {
+            bodies: list.to_vec(),
+            ..Surroundings::default()
+        }
+    }
+
+    fn square(name: &str, lo: (f64, f64), hi: (f64, f64)) -> Footprint {
+        Footprint::hull(
+            name,
+            &[
+                DVec2::new(lo.0, lo.1),
+                DVec2::new(hi.0, lo.1),
+                DVec2::new(hi.0, hi.1),
+                DVec2::new(lo.0, hi.1),
+            ],
+        )
+    }
+
+    #[test]
+    fn a_step_that_closes_on_nothing_is_kept_bit_for_bit() {
+        let step = DVec2::new(0.013, 0.004);
+        let around = bodies(&[body(2.0, 0.0, 0.2)]);
+        assert_eq!(limit_step(&body(0.0, 0.0, 0.2), step, &around), step);
+    }
+
+    #[test]
+    fn two_walkers_side_by_side_each_close_half_the_gap_and_never_overlap() {
+        // Capsules 0.04 m apart side by side (0.02 m past the margin), each stepping
+        // 0.013 m at the other.
+        let (a0, b0) = (body(0.0, 0.0, 0.2), body(0.64, 0.0, 0.2));
+        let a = limit_step(&a0, DVec2::new(0.013, 0.0), &bodies(&[b0]));
+        let b = limit_step(&b0, DVec2::new(-0.013, 0.0), &bodies(&[a0]));
+        assert!(
+            (a.x - 0.01).abs() < 1e-12 && (b.x + 0.01).abs() < 1e-12,
+            "{a} {b}"
+        );
+        let after = (b0.centre + b - a0.centre - a).length();
+        assert!(after >= 0.6 + BODY_MARGIN - 1e-12, "{after}");
+    }
+
+    #[test]
+    fn one_behind_another_keeps_the_strides_apart_too() {
+        // Facing the same way, 1.0 m apart: the strides (0.2 m each way) leave a gap of
+        // 1.0 - 0.4 - 0.6 = 0 between the capsules: no step forwards.
+        let (me, ahead) = (body(0.0, 0.0, 0.2), body(0.0, 1.0, 0.2));
+        let s = limit_step(&me, DVec2::new(0.0, 0.013), &bodies(&[ahead]));
+        assert!(s.y.abs() < 1e-12, "{s}");
+    }
+
+    #[test]
+    fn sliding_past_a_neighbour_stays_free_and_only_the_closing_part_is_cut() {
+        let around = bodies(&[body(0.6, 0.0, 0.2)]);
+        let me = body(0.0, 0.0, 0.2);
+        let s = limit_step(&me, DVec2::new(0.005, 0.012), &around);
+        assert_eq!(s, DVec2::new(0.0, 0.012));
+        let away = DVec2::new(-0.01, 0.0);
+        assert_eq!(limit_step(&me, away, &around), away);
+    }
+
+    #[test]
+    fn pinched_between_two_neighbours_the_step_shrinks_until_it_fits() {
+        let around = bodies(&[body(-0.3, 0.52, 0.0), body(0.3, 0.52, 0.0)]);
+        let me = body(0.0, 0.0, 0.0);
+        let s = limit_step(&me, DVec2::new(0.0, 0.013), &around);
+        for other in &around.bodies {
+            let n = (me.centre - other.centre).normalize();
+            let gap = (me.centre - other.centre).length() - 0.6;
+            assert!(-s.dot(n) <= (gap / 2.0).max(0.0) + 1e-12, "{s}");
+        }
+    }
+
+    #[test]
+    fn an_obstacle_is_closed_on_by_the_whole_gap_and_no_further() {
+        // A wall 0.01 m past the margin.
+        let wall = square("wall", (0.31 + OBSTACLE_MARGIN, -1.0), (0.5, 1.0));
+        let around = Surroundings {
+            obstacles: vec![&wall],
+            ..Surroundings::default()
+        };
+        let s = limit_step(&body(0.0, 0.0, 0.2), DVec2::new(0.013, 0.01), &around);
+        assert!((s.x - 0.01).abs() < 1e-12 && s.y == 0.01, "{s}");
+        assert!(wall.distance(s) >= 0.3 + OBSTACLE_MARGIN - 1e-12);
+        // Walking at a planter: the stride's front end stops short of it by the radius
+        // and the margin.
+        let planter = square("planter", (-1.0, 0.52 + OBSTACLE_MARGIN), (1.0, 1.0));
+        let around = Surroundings {
+            obstacles: vec![&planter],
+            ..Surroundings::default()
+        };
+        let s = limit_step(&body(0.0, 0.0, 0.2), DVec2::new(0.0, 0.03), &around);
+        assert!((s.y - 0.02).abs() < 1e-12, "{s}");
+    }
+
+    #[test]
+    fn a_foot_lands_clear_of_an_obstacle() {
+        let planter = square("planter", (0.0, 0.0), (1.0, 1.0));
+        // A foot pointing at the planter, its toe 1 cm inside.
+        let foot = FootSpan {
+            heel: DVec2::new(-0.3, 0.5),
+            toe: DVec2::new(0.01, 0.5),
+            radius: 0.04,
+        };
+        let around = Surroundings {
+            obstacles: vec![&planter],
+            ..Surroundings::default()
+        };
+        let by = clear_foot(foot, &around).unwrap();
+        let landed = foot.moved(by);
+        assert!(
+            planter.distance(landed.toe) >= 0.04 + LEG_CLEARANCE - 1e-9,
+            "{by}"
+        );
+        assert!(by.y.abs() < 1e-12 && by.x < 0.0, "{by}");
+        // Already clear: not moved.
+        assert_eq!(
+            clear_foot(foot.moved(DVec2::new(-0.3, 0.0)), &around),
+            Some(DVec2::ZERO)
+        );
+        // Pinched between the planter and a body beside it: no landing there.
+        let body = Capsule {
+            centre: DVec2::new(-0.25, 0.5),
+            axis: DVec2::Y,
+            half_length: 0.0,
+            radius: 0.28,
+        };
+        let around = Surroundings {
+            obstacles: vec![&planter],
+            bodies: vec![body],
+        };
+        let across = FootSpan {
+            heel: DVec2::new(-0.1, 0.4),
+            toe: DVec2::new(-0.1, 0.6),
+            radius: 0.04,
+        };
+        assert_eq!(clear_foot(across, &around), None);
+    }
+
+    #[test]
+    fn a_body_holds_its_feet_a_stride_apart() {
+        let foot = |z: f64| FootSpan {
+            heel: DVec2::new(0.1, z - 0.05),
+            toe: DVec2::new(0.1, z + 0.23),
+            radius: 0.05,
+        };
+        let feet = [foot(0.35), foot(-0.3)];
+        let c = Capsule::around(DVec2::ZERO, DVec2::Y, 0.28, 0.0, &feet);
+        let (a, b) = c.ends();
+        for f in &feet {
+            for p in [f.heel, f.toe] {
+                let d = (p - nearest_on_segment(p, a, b)).length();
+                assert!(d + f.radius <= 0.28 + 1e-12, "{p} {c:?}");
+            }
+        }
+        // Feet under the body: a disc.
+        let c = Capsule::around(
+            DVec2::ZERO,
+            DVec2::Y,
+            0.28,
+            0.0,
+            &[foot(-0.09), foot(-0.09)],
+        );
+        assert_eq!(c.half_length, 0.0);
+        assert_eq!(c.centre, DVec2::ZERO);
+        // Walking: at least the stride either way.
+        let c = Capsule::around(DVec2::ZERO, DVec2::Y, 0.28, 0.2, &[foot(-0.09)]);
+        assert_eq!((c.centre, c.half_length), (DVec2::ZERO, 0.2));
+    }
+
+    #[test]
+    fn a_foot_in_the_air_closes_on_a_body_by_half_the_gap_and_on_an_obstacle_by_all_of_it() {
+        let foot = |x: f64| FootSpan {
+            heel: DVec2::new(x, 0.0),
+            toe: DVec2::new(x, 0.25),
+            radius: 0.05,
+        };
+        // A body whose surface is 0.1 m to the right of the foot's.
+        let around = bodies(&[body(0.45, 0.1, 0.0)]);
+        assert!(foot_may_move(&foot(0.0), &foot(0.05), &around));
+        assert!(!foot_may_move(&foot(0.0), &foot(0.06), &around));
+        assert!(foot_may_move(&foot(0.0), &foot(-0.3), &around));
+        // An obstacle's edge 0.1 m from the foot's clearance.
+        let wall = square("wall", (0.15 + LEG_CLEARANCE, -1.0), (0.3, 1.0));
+        let around = Surroundings {
+            obstacles: vec![&wall],
+            ..Surroundings::default()
+        };
+        assert!(foot_may_move(&foot(0.0), &foot(0.099), &around));
+        assert!(!foot_may_move(&foot(0.0), &foot(0.11), &around));
+    }
+
+    #[test]
+    fn the_nearest_points_of_two_segments() {
+        let a = (DVec2::new(0.0, 0.0), DVec2::new(1.0, 0.0));
+        let b = (DVec2::new(0.5, 0.2), DVec2::new(0.5, 1.0));
+        assert_eq!(
+            nearest_between(a, b),
+            (DVec2::new(0.5, 0.0), DVec2::new(0.5, 0.2))
+        );
+        let crossing = (DVec2::new(0.5, -1.0), DVec2::new(0.5, 1.0));
+        let (p, q) = nearest_between(a, crossing);
+        assert_eq!(p, q);
+    }
+}
