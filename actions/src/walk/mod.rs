@@ -51,7 +51,7 @@ use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
-use troupe_scene::space::Navigation;
+use troupe_scene::space::{Navigation, Walking};
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// Fraction of its support at which a foot is under the body: where it lands is where the
@@ -957,8 +957,11 @@ impl Generator for Walk {
         let Some(mut plan) = self.plan.take() else {
             return Step::Failed("walk: stepped before it started".into());
         };
-        if matches!(self.route, Route::Path { .. }) {
-            self.steer.decide(ctx, &plan, self.t, &mut self.near);
+        let navigated = ctx.world.space.walking == Walking::Navigated;
+        // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
+        let mut gathered = false;
+        if navigated && matches!(self.route, Route::Path { .. }) {
+            gathered = self.steer.decide(ctx, &plan, self.t, &mut self.near);
             if self.steer.engaged && self.replan.due(self.t, self.steer.rate) {
                 if let Some(new) = self.new_route(ctx, &plan) {
                     plan = new;
@@ -967,9 +970,13 @@ impl Generator for Walk {
         }
         self.dt = ctx.dt;
         let (root, pelvis, mut spine, mut arms) = self.pose(&plan, out);
+        // The shoulders turn to pass someone close beside (see [`shoulders`]); the arms,
         // whose swing would now go sideways into the other, hang still as they turn.
-        self.shoulders
-            .update(ctx, self.heading, &self.steer.companions);
+        if navigated {
+            let near = gathered.then_some(self.near.as_slice());
+            self.shoulders
+                .update(ctx, self.heading, &self.steer.companions, near);
+        }
         spine[1] += self.shoulders.turn / 2.0;
         spine[2] += self.shoulders.turn / 2.0;
         let swing = 1.0 - (self.shoulders.turn.abs() / shoulders::MAX_TURN).min(1.0);

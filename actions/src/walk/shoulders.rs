@@ -30,8 +30,15 @@ pub struct Shoulders {
 
 impl Shoulders {
     /// The turn actor `ctx.actor`, heading `heading`, wants now: towards the closest
-    /// neighbour (not in `companions`) or obstacle beside it.
-    pub fn wanted(ctx: &GeneratorContext, heading: f64, companions: &[usize]) -> f64 {
+    /// neighbour (not in `companions`) or obstacle beside it. `near`, in actor order,
+    /// holds at least the actors the crowd finds near the body (`Crowd::near`) when the
+    /// steering has gathered them this tick; `None` looks them up.
+    pub fn wanted(
+        ctx: &GeneratorContext,
+        heading: f64,
+        companions: &[usize],
+        near: Option<&[usize]>,
+    ) -> f64 {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let (Some(&p), Some(&r)) = (crowd.positions.get(me), crowd.radii.get(me)) else {
@@ -46,9 +53,13 @@ impl Shoulders {
                 best = (need, side);
             }
         };
-        let mut near = Vec::new();
-        crowd.near(p, &mut near);
-        for j in near {
+        let mut found = Vec::new();
+        let near = near.unwrap_or_else(|| {
+            crowd.near(p, &mut found);
+            &found
+        });
+        // Those only the steering found (farther ahead) are too far to be beside.
+        for &j in near {
             if j == me || companions.contains(&j) {
                 continue;
             }
@@ -73,8 +84,14 @@ impl Shoulders {
     }
 
     /// Turns towards [`Shoulders::wanted`] by at most [`TURN_RATE`] × `dt`.
-    pub fn update(&mut self, ctx: &GeneratorContext, heading: f64, companions: &[usize]) {
-        let want = Shoulders::wanted(ctx, heading, companions);
+    pub fn update(
+        &mut self,
+        ctx: &GeneratorContext,
+        heading: f64,
+        companions: &[usize],
+        near: Option<&[usize]>,
+    ) {
+        let want = Shoulders::wanted(ctx, heading, companions, near);
         let step = TURN_RATE * ctx.dt;
         self.turn += (want - self.turn).clamp(-step, step);
     }

@@ -183,14 +183,16 @@ impl Steer {
     }
 
     /// Decides this tick's rate and drift from the crowd of the previous tick, for actor
-    /// `ctx.actor` walking `plan` at walk time `now`. `others` is scratch space.
+    /// `ctx.actor` walking `plan` at walk time `now`. `others` is scratch space; true
+    /// when it then holds, in actor order, every actor (but this one and its companions)
+    /// the crowd finds near the body (`Crowd::near`), and some farther ahead.
     pub fn decide(
         &mut self,
         ctx: &GeneratorContext,
         plan: &Plan,
         now: f64,
         others: &mut Vec<usize>,
-    ) {
+    ) -> bool {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let (Some(&position), Some(&velocity), Some(&radius)) = (
@@ -198,7 +200,7 @@ impl Steer {
             crowd.velocities.get(me),
             crowd.radii.get(me),
         ) else {
-            return;
+            return false;
         };
         let pt = self.plan_time(now, now);
         let dt = ctx.dt;
@@ -212,7 +214,7 @@ impl Steer {
             };
             self.drift += (back - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
             self.decision = None;
-            return;
+            return false;
         }
         let here = plan.sample(pt, 0.0);
         let ahead = plan.sample(pt + 0.1, 0.0);
@@ -242,7 +244,7 @@ impl Steer {
         };
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
         if !self.engaged {
-            return;
+            return true;
         }
         let (rate, drift) = self.target;
         self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
@@ -268,6 +270,7 @@ impl Steer {
                 }
             }
         }
+        true
     }
 
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,

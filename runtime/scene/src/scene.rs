@@ -236,8 +236,24 @@ impl Scene {
     /// the previous tick: what walkers avoid (see [`troupe_nav::Crowd`]).
     fn update_crowd(&mut self) {
         let _span = tracing::trace_span!("crowd", tick = self.tick).entered();
-        let footprints = self.world().obstacles();
-        let crowd = &mut self.crowd;
+        let mut crowd = std::mem::take(&mut self.crowd);
+        let world = self.world();
+        // The footprints are made again only when a wall or an object changed; walks
+        // that go straight use none.
+        let current = match self.space.walking {
+            troupe_nav::Walking::Navigated => crowd.footprints_current(
+                &self.space.walls,
+                (0..self.objects.len()).map(|i| world.obstacle_stamp(i)),
+            ),
+            troupe_nav::Walking::Straight => crowd.footprints_current(&[], std::iter::empty()),
+        };
+        if !current {
+            let footprints = match self.space.walking {
+                troupe_nav::Walking::Navigated => world.obstacles(),
+                troupe_nav::Walking::Straight => Vec::new(),
+            };
+            crowd.set_footprints(footprints);
+        }
         crowd.positions.clear();
         crowd.velocities.clear();
         crowd.facings.clear();
@@ -251,7 +267,7 @@ impl Scene {
                 .push(DVec2::new(forward.x, forward.z).normalize_or_zero());
         }
         crowd.index();
-        crowd.set_footprints(footprints);
+        self.crowd = crowd;
     }
 
     /// The crowd as of the last tick (see [`troupe_nav::Crowd`]).
