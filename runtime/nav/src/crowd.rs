@@ -22,6 +22,13 @@ pub struct Crowd {
     pub radii: Vec<f64>,
     /// Which way each actor faces: the unit floor direction (x, z) of its root's +z.
     pub facings: Vec<DVec2>,
+    /// The floor points (x, z) under each actor's ankles (left, right); its root's for
+    /// a body without them. Gathered once a tick for every walker's avoidance, which
+    /// looked them up in the neighbours' postures (a twentieth of the crowd
+    /// benchmark's tick, in cache misses).
+    pub feet: Vec<[DVec2; 2]>,
+    /// Each actor's ankle joints (left, right), if its skeleton has them.
+    pub ankles: Vec<[Option<usize>; 2]>,
     /// Every obstacle's footprint, as `World::obstacles` lists them (walls, then objects).
     pub footprints: Vec<Footprint>,
     /// The centre and radius of a circle round each footprint.

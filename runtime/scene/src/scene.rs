@@ -257,9 +257,18 @@ impl Scene {
         crowd.positions.clear();
         crowd.velocities.clear();
         crowd.facings.clear();
-        for (state, &(x, z)) in self.states.iter().zip(&self.root_dofs) {
+        crowd.feet.clear();
+        for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
-            crowd.positions.push(DVec2::new(root.x, root.z));
+            let under_root = DVec2::new(root.x, root.z);
+            let under = |joint: Option<usize>| {
+                joint
+                    .and_then(|j| state.globals.get(j))
+                    .map_or(under_root, |g| DVec2::new(g.translation.x, g.translation.z))
+            };
+            let ankles = crowd.ankles.get(i).copied().unwrap_or_default();
+            crowd.feet.push(ankles.map(under));
+            crowd.positions.push(under_root);
             crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
             let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
             crowd
@@ -476,6 +485,9 @@ impl Scene {
         self.root_dofs
             .push((skeleton.dof("root_x")?, skeleton.dof("root_z")?));
         self.crowd.radii.push(troupe_nav::body_radius(&skeleton));
+        self.crowd
+            .ankles
+            .push(["l_ankle", "r_ankle"].map(|name| skeleton.joint(name).ok()));
         let state = ActorState::new(&skeleton, q);
         self.work.push(ActorWork {
             runtime: ActorRuntime::default(),
