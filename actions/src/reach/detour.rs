@@ -25,9 +25,9 @@ const NEAR: f64 = 2.5;
 const SAMPLE: f64 = 0.01;
 
 /// What a reach by actor `me` must keep its hand out of: the bodies of the other actors
-/// and the obstacles near its start or `goal` (see [`NEAR`]); less every volume that a sphere of
-/// `radius` at the goal already enters (the hand is meant to end there: a partner's
-/// hand in a hand-over, the table under a cup).
+/// and the obstacles near its start or `goal` (see [`NEAR`]); less every volume that a
+/// sphere of `radius` at the goal already enters (the hand is meant to end there: a
+/// partner's hand in a hand-over, the table under a cup).
 pub fn volumes_around(
     world: &World,
     me: usize,
