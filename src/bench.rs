@@ -10,6 +10,7 @@ use std::path::PathBuf;
 use std::process::ExitCode;
 use std::time::{Duration, Instant};
 use troupe_lua::{Director, ScriptLimits};
+use troupe_scene::space::Walking;
 use troupe_scene::SceneConfig;
 
 /// The standard crowd scene; `BENCH.actors` sets its size.
@@ -38,6 +39,10 @@ pub struct BenchArgs {
     /// Seed of the scene's random choices.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// Navigation on (walks plan, avoid, give way, …), off (walks go straight to their
+    /// goals), or `on,off` to run both side by side and print what navigation costs.
+    #[arg(long, value_delimiter = ',', default_value = "on")]
+    navigation: Vec<Navigation>,
     /// Don't time the tick phases (removes the profiling clock reads, about 1 %).
     #[arg(long)]
     no_phases: bool,
@@ -50,14 +55,45 @@ pub struct BenchArgs {
     json: Option<PathBuf>,
 }
 
+/// Whether the crowd's walks navigate (see [`Walking`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+enum Navigation {
+    /// Walks plan round obstacles, avoid one another, give way, keep lanes, take new
+    /// routes and turn their shoulders to pass.
+    On,
+    /// Walks go straight to their goals (`Walking::Straight`): the rest of the tick's
+    /// work without navigation's.
+    Off,
+}
+
+impl Navigation {
+    fn walking(self) -> Walking {
+        match self {
+            Navigation::On => Walking::Navigated,
+            Navigation::Off => Walking::Straight,
+        }
+    }
+
+    fn name(self) -> &'static str {
+        match self {
+            Navigation::On => "on",
+            Navigation::Off => "off",
+        }
+    }
+}
+
 /// What one run measured.
 struct RunResult {
     actors: usize,
     threads: usize,
+    navigation: Navigation,
     ticks: usize,
     wall: Duration,
     tick_mean: Duration,
     tick_p99: Duration,
+    /// The process's CPU time (user + system) over the measured ticks: on a machine
+    /// shared with other work it moves far less with the load than the wall time does.
+    cpu: Option<Duration>,
     /// Shares of the measured time: scripts, scheduling, generators, blend + FK, collision.
     phases: Option<[f64; 5]>,
     peak_rss: Option<u64>,
@@ -68,6 +104,12 @@ struct RunResult {
 impl RunResult {
     fn actor_ticks_per_second(&self) -> f64 {
         (self.actors * self.ticks) as f64 / self.wall.as_secs_f64()
+    }
+
+    /// CPU time per actor-tick (µs), all threads together.
+    fn cpu_per_actor_tick(&self) -> Option<f64> {
+        self.cpu
+            .map(|c| c.as_secs_f64() * 1e6 / (self.actors * self.ticks) as f64)
     }
 }
 
@@ -97,14 +139,20 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
     }
     let measured = (args.seconds * args.rate).round().max(1.0) as usize;
     let warmup = (args.warmup * args.rate).round() as usize;
-    let runs: Vec<(usize, usize)> = args
+    if args.navigation.is_empty() {
+        bail!("--navigation needs on, off or both");
+    }
+    // Navigation on and off run one after the other for each size and thread count, so
+    // that a change in the machine's load touches both alike.
+    let runs: Vec<(usize, usize, Navigation)> = args
         .actors
         .iter()
         .flat_map(|&a| args.threads.iter().map(move |&t| (a, t)))
+        .flat_map(|(a, t)| args.navigation.iter().map(move |&n| (a, t, n)))
         .collect();
     let total: u64 = runs
         .iter()
-        .map(|&(a, _)| (a * (measured + warmup)) as u64)
+        .map(|&(a, _, _)| (a * (measured + warmup)) as u64)
         .sum();
     let bar = ProgressBar::new(total).with_style(
         ProgressStyle::with_template("{msg:>24} [{bar:30}] {percent:>3}% eta {eta}")
@@ -112,10 +160,13 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
             .progress_chars("=> "),
     );
     let mut results = Vec::new();
-    for &(actors, threads) in &runs {
-        bar.set_message(format!("{actors} actors, {threads} thr"));
-        let result = run_one(&args, actors, threads, warmup, measured, &bar)
-            .with_context(|| format!("crowd of {actors} actors on {threads} threads"))?;
+    for &(actors, threads, navigation) in &runs {
+        let nav = navigation.name();
+        bar.set_message(format!("{actors} actors, {threads} thr, nav {nav}"));
+        let result = run_one(&args, (actors, threads, navigation), warmup, measured, &bar)
+            .with_context(|| {
+                format!("crowd of {actors} actors on {threads} threads, navigation {nav}")
+            })?;
         results.push(result);
     }
     bar.finish_and_clear();
@@ -130,8 +181,7 @@ pub fn run(args: BenchArgs) -> Result<ExitCode> {
 
 fn run_one(
     args: &BenchArgs,
-    actors: usize,
-    threads: usize,
+    (actors, threads, navigation): (usize, usize, Navigation),
     warmup: usize,
     measured: usize,
     bar: &ProgressBar,
@@ -151,6 +201,7 @@ fn run_one(
         ScriptLimits::default(),
     )?;
     let (director, scene) = session.script_and_scene();
+    scene.set_walking(navigation.walking());
     {
         let lua = director.lua();
         let bench = lua.create_table()?;
@@ -172,6 +223,7 @@ fn run_one(
     session.set_phase_timing(profiling);
     session.take_phase_times();
     let mut tick_times = Vec::with_capacity(measured);
+    let cpu_before = cpu::used();
     let started = Instant::now();
     for _ in 0..measured {
         let t0 = Instant::now();
@@ -180,6 +232,9 @@ fn run_one(
         bar.inc(actors as u64);
     }
     let wall = started.elapsed();
+    let cpu = cpu::used()
+        .zip(cpu_before)
+        .and_then(|(after, before)| after.checked_sub(before));
     let profile = session.scene_mut().take_profile();
     let scripts = session.take_phase_times().script;
     let peak_rss = memory::peak_rss();
@@ -216,10 +271,12 @@ fn run_one(
     Ok(RunResult {
         actors,
         threads,
+        navigation,
         ticks: measured,
         wall,
         tick_mean: Duration::from_secs_f64(total.as_secs_f64() / measured as f64),
         tick_p99: p99,
+        cpu,
         phases,
         peak_rss,
         bytes_per_actor: peak_rss
@@ -239,14 +296,16 @@ fn print_table(args: &BenchArgs, results: &[RunResult]) {
     );
     println!("machine: {}", machine_description());
     println!(
-        "{:>7} {:>3} {:>13} {:>8} {:>10} {:>10} {:>7}  {:>7} {:>7} {:>7} {:>7} {:>7}  {:>9} {:>9}",
+        "{:>7} {:>3} {:>3} {:>13} {:>8} {:>10} {:>10} {:>7} {:>8}  {:>7} {:>7} {:>7} {:>7} {:>7}  {:>9} {:>9}",
         "actors",
         "thr",
+        "nav",
         "actor-ticks/s",
         "speedup",
         "mean tick",
         "p99 tick",
         "×rt",
+        "CPU/at",
         "scripts",
         "sched",
         "gens",
@@ -258,7 +317,7 @@ fn print_table(args: &BenchArgs, results: &[RunResult]) {
     for r in results {
         let single = results
             .iter()
-            .find(|o| o.actors == r.actors && o.threads == 1)
+            .find(|o| o.actors == r.actors && o.threads == 1 && o.navigation == r.navigation)
             .map(|o| o.actor_ticks_per_second());
         let speedup = single
             .map(|s| format!("{:.2}×", r.actor_ticks_per_second() / s))
@@ -271,14 +330,17 @@ fn print_table(args: &BenchArgs, results: &[RunResult]) {
             None => vec![format!("{:>7}", "-"); 5],
         };
         println!(
-            "{:>7} {:>3} {:>13.0} {:>8} {:>8.1}µs {:>8.1}µs {:>7.1}  {} {} {} {} {}  {:>9} {:>9}",
+            "{:>7} {:>3} {:>3} {:>13.0} {:>8} {:>8.1}µs {:>8.1}µs {:>7.1} {:>8}  {} {} {} {} {}  {:>9} {:>9}",
             r.actors,
             r.threads,
+            r.navigation.name(),
             r.actor_ticks_per_second(),
             speedup,
             r.tick_mean.as_secs_f64() * 1e6,
             r.tick_p99.as_secs_f64() * 1e6,
             r.actor_ticks_per_second() / (r.actors as f64 * args.rate),
+            r.cpu_per_actor_tick()
+                .map_or_else(|| "-".into(), |c| format!("{c:.2}µs")),
             phases[0],
             phases[1],
             phases[2],
@@ -290,7 +352,38 @@ fn print_table(args: &BenchArgs, results: &[RunResult]) {
                 .unwrap_or_else(|| "-".into()),
         );
     }
-    println!("(×rt: how many times faster than real time; speedup: against 1 thread)");
+    println!(
+        "(×rt: how many times faster than real time; speedup: against 1 thread; CPU/at: CPU time per actor-tick, all threads)"
+    );
+    print_navigation_cost(results);
+}
+
+/// For each size and thread count run with navigation on and off: how much navigation
+/// lowers the throughput, and its cost per actor-tick: the difference of the two runs'
+/// CPU time per actor-tick (or of their wall time per actor-tick, times the threads),
+/// and the drop of throughput that cost alone would make (from CPU times: what a machine
+/// without other work would see).
+fn print_navigation_cost(results: &[RunResult]) {
+    for on in results.iter().filter(|r| r.navigation == Navigation::On) {
+        let Some(off) = results.iter().find(|o| {
+            o.navigation == Navigation::Off && o.actors == on.actors && o.threads == on.threads
+        }) else {
+            continue;
+        };
+        let (a, b) = (on.actor_ticks_per_second(), off.actor_ticks_per_second());
+        let wall = on.threads as f64 * (1.0 / a - 1.0 / b) * 1e6;
+        let cpu = on.cpu_per_actor_tick().zip(off.cpu_per_actor_tick());
+        let cost = cpu.map_or(wall, |(c_on, c_off)| c_on - c_off);
+        let by_cpu = cpu.map_or_else(String::new, |(c_on, c_off)| {
+            format!(" ({:+.1} % by CPU time)", (c_off / c_on - 1.0) * 100.0)
+        });
+        println!(
+            "navigation, {} actors on {} thr: {cost:.2} µs of CPU per actor-tick; actor-ticks/s {:+.1} % against off{by_cpu}",
+            on.actors,
+            on.threads,
+            (a / b - 1.0) * 100.0,
+        );
+    }
 }
 
 fn write_json(path: &PathBuf, args: &BenchArgs, results: &[RunResult]) -> Result<()> {
@@ -308,6 +401,7 @@ fn write_json(path: &PathBuf, args: &BenchArgs, results: &[RunResult]) -> Result
                 "scene": scene_name(args),
                 "actors": r.actors,
                 "threads": r.threads,
+                "navigation": r.navigation.name(),
                 "rate_hz": args.rate,
                 "seed": args.seed,
                 "ticks": r.ticks,
@@ -315,6 +409,7 @@ fn write_json(path: &PathBuf, args: &BenchArgs, results: &[RunResult]) -> Result
                 "actor_ticks_per_second": r.actor_ticks_per_second(),
                 "tick_mean_us": r.tick_mean.as_secs_f64() * 1e6,
                 "tick_p99_us": r.tick_p99.as_secs_f64() * 1e6,
+                "cpu_per_actor_tick_us": r.cpu_per_actor_tick(),
                 "phase_shares": phases,
                 "peak_rss_bytes": r.peak_rss,
                 "bytes_per_actor": r.bytes_per_actor,
@@ -362,6 +457,33 @@ fn machine_description() -> String {
         })
         .unwrap_or_else(|| std::env::consts::ARCH.to_string());
     format!("{cores} logical CPUs, {model}")
+}
+
+/// The process's CPU time.
+mod cpu {
+    use std::time::Duration;
+
+    /// CPU time (user + system, every thread) the process has used so far; `None` where
+    /// the system does not say.
+    pub fn used() -> Option<Duration> {
+        #[cfg(unix)]
+        {
+            let mut usage = std::mem::MaybeUninit::<libc::rusage>::zeroed();
+            // SAFETY: getrusage fills the rusage it is pointed at and reads nothing else.
+            if unsafe { libc::getrusage(libc::RUSAGE_SELF, usage.as_mut_ptr()) } != 0 {
+                return None;
+            }
+            // SAFETY: getrusage returned 0, so it wrote the whole struct.
+            let usage = unsafe { usage.assume_init() };
+            let time = |t: libc::timeval| {
+                Duration::from_secs(t.tv_sec.max(0) as u64)
+                    + Duration::from_micros(t.tv_usec.max(0) as u64)
+            };
+            Some(time(usage.ru_utime) + time(usage.ru_stime))
+        }
+        #[cfg(not(unix))]
+        None
+    }
 }
 
 /// Process memory figures from Linux's /proc; `None` elsewhere.

@@ -272,6 +272,50 @@ fn bench_runs_the_crowd_and_writes_one_json_object_per_run() {
 }
 
 #[test]
+fn bench_runs_the_crowd_with_navigation_on_and_off_side_by_side() {
+    let json = temp("bench_navigation.json");
+    let out = succeeds(
+        troupe()
+            .args(["bench", "--actors", "4", "--threads", "1"])
+            .args([
+                "--navigation",
+                "on,off",
+                "--seconds",
+                "0.5",
+                "--warmup",
+                "0.2",
+            ])
+            .arg("--json")
+            .arg(&json),
+    );
+    let table = String::from_utf8_lossy(&out.stdout);
+    assert!(table.contains("CPU/at"), "{table}");
+    assert!(
+        table.contains("navigation, 4 actors on 1 thr:") && table.contains("µs of CPU"),
+        "{table}"
+    );
+    let runs: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let runs = runs.as_array().unwrap();
+    let navigation: Vec<&str> = runs
+        .iter()
+        .map(|r| r["navigation"].as_str().unwrap())
+        .collect();
+    assert_eq!(navigation, ["on", "off"]);
+    for run in runs {
+        let cpu = run["cpu_per_actor_tick_us"].as_f64().unwrap();
+        assert!(cpu > 0.0, "{run}");
+    }
+    // Anything but on and off is refused, naming the option.
+    let out = troupe()
+        .args(["bench", "--navigation", "maybe"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--navigation"));
+}
+
+#[test]
 fn run_records_joint_torques_that_seq_plot_draws() {
     // Fig. 3-8/3-9: an arm held forward by servos; the recorded shoulder torque is the
     // one inverse dynamics predicts for the still posture.

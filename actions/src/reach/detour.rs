@@ -9,6 +9,7 @@
 
 use troupe_body::collision::Volume;
 use troupe_body::glam::DVec3;
+use troupe_scene::space::Walking;
 use troupe_scene::World;
 
 use super::quintic;
@@ -18,15 +19,15 @@ pub const MAX_DETOURS: usize = 4;
 /// How far outside a volume a temporary goal puts the hand's surface (m).
 pub const DETOUR_CLEARANCE: f64 = 0.04;
 /// Another actor counts when its root is within this distance (m) of the reach's start
-/// or goal.
+/// or goal; an obstacle when a sphere round it is.
 const NEAR: f64 = 2.5;
 /// Path samples are this far apart (m).
 const SAMPLE: f64 = 0.01;
 
 /// What a reach by actor `me` must keep its hand out of: the bodies of the other actors
-/// near its start or `goal`, and the obstacles; less every volume that a sphere of
-/// `radius` at the goal already enters (the hand is meant to end there: a partner's
-/// hand in a hand-over, the table under a cup).
+/// and the obstacles near its start or `goal` (see [`NEAR`]); less every volume that a
+/// sphere of `radius` at the goal already enters (the hand is meant to end there: a
+/// partner's hand in a hand-over, the table under a cup).
 pub fn volumes_around(
     world: &World,
     me: usize,
@@ -48,6 +49,11 @@ pub fn volumes_around_except(
     except: Option<&str>,
 ) -> Vec<Volume> {
     let mut out = Vec::new();
+    // Where walks do not keep bodies apart, hands do not go round them either (see
+    // `Walking::Straight`: bodies stand in one another there).
+    if world.space.walking == Walking::Straight {
+        return out;
+    }
     for (j, state) in world.states.iter().enumerate() {
         let root = state.globals.first().map_or(DVec3::ZERO, |g| g.translation);
         let near = |p: DVec3| (root.x - p.x).hypot(root.z - p.z) < NEAR;
@@ -55,9 +61,11 @@ pub fn volumes_around_except(
             out.extend(world.body_capsules(j).into_iter().map(Volume::Capsule));
         }
     }
+    // Obstacles as near as the actors that count: among many (a field of pillars) the
+    // reach tested them all, every tick, each IK iteration, for each arm sensor.
     out.extend(
         world
-            .obstacle_volumes()
+            .obstacle_volumes_near(&[start, goal], NEAR)
             .into_iter()
             .filter(|(name, _)| Some(name.as_str()) != except)
             .map(|(_, v)| v),

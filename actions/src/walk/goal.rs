@@ -4,6 +4,7 @@
 
 use std::f64::consts::PI;
 use troupe_body::glam::DVec2;
+use troupe_scene::space::Walking;
 use troupe_scene::GeneratorContext;
 
 /// Default distance (m) from an object's footprint edge to the body's centre when walking
@@ -55,6 +56,11 @@ impl Goal {
     ) -> Result<Planned, String> {
         let world = ctx.world;
         let planned = match self {
+            // Walks that do not navigate go straight through the points.
+            Goal::Through(points) if world.space.walking == Walking::Straight => Planned {
+                points: points.iter().map(|&p| (p, false)).collect(),
+                heading: None,
+            },
             Goal::Through(points) => {
                 let mut route = Vec::new();
                 let mut from = start;
@@ -96,7 +102,7 @@ impl Goal {
 
 /// The first free standing point around `centre` (first on the side the body comes from,
 /// then turning away from it both ways, then a little further out), with the path to it
-/// and the heading that faces `centre`.
+/// (a straight line when walks do not navigate) and the heading that faces `centre`.
 fn stand_near(
     ctx: &GeneratorContext,
     start: DVec2,
@@ -105,7 +111,16 @@ fn stand_near(
     distance: impl Fn(DVec2) -> f64,
 ) -> Result<Planned, String> {
     let towards = (centre - start).try_normalize().unwrap_or(DVec2::Y);
-    let obstacles = ctx.world.obstacles();
+    // The crowd's footprints are the world's obstacles, made once for every walk; walks
+    // that go straight keep none there.
+    let made;
+    let obstacles = match ctx.world.space.walking {
+        Walking::Navigated => &ctx.world.crowd.footprints,
+        Walking::Straight => {
+            made = ctx.world.obstacles();
+            &made
+        }
+    };
     let inflated = radius + troupe_scene::space::CLEARANCE;
     let mut last = String::from("every side is blocked");
     for further in 0..=6 {
@@ -121,7 +136,12 @@ fn stand_near(
                 if obstacles.iter().any(|o| o.distance(stand) < inflated) {
                     continue;
                 }
-                match ctx.world.space.path(&obstacles, start, stand, radius) {
+                // Walks that do not navigate go there straight (see [`Walking`]).
+                let path = match ctx.world.space.walking {
+                    Walking::Navigated => ctx.world.space.path(obstacles, start, stand, radius),
+                    Walking::Straight => Ok(vec![stand]),
+                };
+                match path {
                     Ok(points) => {
                         let n = points.len();
                         return Ok(Planned {

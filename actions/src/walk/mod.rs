@@ -54,6 +54,7 @@ use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
 use troupe_scene::space::{
     clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, Navigation, Surroundings,
+    Walking,
 };
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
@@ -863,7 +864,10 @@ impl Walk {
         // Whatever the steering chose, the body closes on no other body or obstacle past
         // the clearance limit (see `troupe_nav::clearance`).
         let crowd = ctx.world.crowd;
-        if let (Route::Path { .. }, Some(&from)) = (&self.route, crowd.positions.get(ctx.actor)) {
+        let navigated = ctx.world.space.walking == Walking::Navigated;
+        if let (Route::Path { .. }, Some(&from), true) =
+            (&self.route, crowd.positions.get(ctx.actor), navigated)
+        {
             let clear = from + limit_step(&self.body(ctx), floor - from, around);
             if clear != floor {
                 if !self.steer.engaged {
@@ -1063,8 +1067,11 @@ impl Generator for Walk {
         let Some(mut plan) = self.plan.take() else {
             return Step::Failed("walk: stepped before it started".into());
         };
-        if matches!(self.route, Route::Path { .. }) {
-            self.steer.decide(ctx, &plan, self.t, &mut self.near);
+        let navigated = ctx.world.space.walking == Walking::Navigated;
+        // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
+        let mut gathered = false;
+        if navigated && matches!(self.route, Route::Path { .. }) {
+            gathered = self.steer.decide(ctx, &plan, self.t, &mut self.near);
             if self.steer.engaged && self.replan.due(self.t, self.steer.rate) {
                 if let Some(new) = self.new_route(ctx, &plan) {
                     plan = new;
@@ -1072,18 +1079,25 @@ impl Generator for Walk {
             }
         }
         self.dt = ctx.dt;
-        let around = surroundings::gather(ctx, &self.steer.companions, &mut self.near);
+        // What the clearance sees round the body (see [`surroundings`]); nothing when walks
+        // go straight, unnavigated.
+        let around = if navigated {
+            surroundings::gather(ctx, &self.steer.companions, &mut self.near, gathered)
+        } else {
+            Surroundings::default()
+        };
         let (root, pelvis, mut spine, mut arms) = self.pose(ctx, &around, &plan, out);
         // The shoulders turn to pass someone close beside (see [`shoulders`]); the arms,
         // whose swing would now go sideways into the other, hang still as they turn, and
         // swing less as anything comes close.
-        let me = self.body(ctx);
-        self.shoulders.update(
-            ctx,
-            self.heading,
-            &self.steer.companions,
-            nearest_gap(&me, &around),
-        );
+        if navigated {
+            let me = self.body(ctx);
+            let gap = nearest_gap(&me, &around);
+            // `gather` left this tick's neighbours in `self.near`.
+            let near = Some(self.near.as_slice());
+            self.shoulders
+                .update(ctx, self.heading, &self.steer.companions, near, gap);
+        }
         spine[1] += self.shoulders.turn / 2.0;
         spine[2] += self.shoulders.turn / 2.0;
         let swing = self.shoulders.swing();

@@ -113,11 +113,11 @@ impl Replan {
         // query builds a mesh of its own, and among many obstacles (a field of pillars)
         // the build took a quarter of the tick of `troupe bench`'s crowd.
         let window = RouteWindow::new(from, goal, radius + CLEARANCE);
-        let obstacles: Vec<Footprint> = ctx
-            .world
-            .obstacles()
-            .into_iter()
+        let obstacles: Vec<Footprint> = crowd
+            .footprints
+            .iter()
             .filter(|o| window.may_touch(o))
+            .cloned()
             .collect();
         let points = ctx
             .world

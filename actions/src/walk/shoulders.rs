@@ -50,8 +50,15 @@ impl Default for Shoulders {
 
 impl Shoulders {
     /// The turn actor `ctx.actor`, heading `heading`, wants now: towards the closest
-    /// neighbour (not in `companions`) or obstacle beside it.
-    pub fn wanted(ctx: &GeneratorContext, heading: f64, companions: &[usize]) -> f64 {
+    /// neighbour (not in `companions`) or obstacle beside it. `near`, in actor order,
+    /// holds at least the actors the crowd finds near the body (`Crowd::near`) when the
+    /// steering has gathered them this tick; `None` looks them up.
+    pub fn wanted(
+        ctx: &GeneratorContext,
+        heading: f64,
+        companions: &[usize],
+        near: Option<&[usize]>,
+    ) -> f64 {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let (Some(&p), Some(&r)) = (crowd.positions.get(me), crowd.radii.get(me)) else {
@@ -66,9 +73,13 @@ impl Shoulders {
                 best = (need, side);
             }
         };
-        let mut near = Vec::new();
-        crowd.near(p, &mut near);
-        for j in near {
+        let mut found = Vec::new();
+        let near = near.unwrap_or_else(|| {
+            crowd.near(p, &mut found);
+            &found
+        });
+        // Those only the steering found (farther ahead) are too far to be beside.
+        for &j in near {
             if j == me || companions.contains(&j) {
                 continue;
             }
@@ -95,8 +106,15 @@ impl Shoulders {
     /// Turns towards [`Shoulders::wanted`] by at most [`TURN_RATE`] × `dt`, and lets the
     /// arms swing as the least `gap` (m) between the body and what is round it allows
     /// (see [`ARMS_CLEAR`]).
-    pub fn update(&mut self, ctx: &GeneratorContext, heading: f64, companions: &[usize], gap: f64) {
-        let want = Shoulders::wanted(ctx, heading, companions);
+    pub fn update(
+        &mut self,
+        ctx: &GeneratorContext,
+        heading: f64,
+        companions: &[usize],
+        near: Option<&[usize]>,
+        gap: f64,
+    ) {
+        let want = Shoulders::wanted(ctx, heading, companions, near);
         let step = TURN_RATE * ctx.dt;
         self.turn += (want - self.turn).clamp(-step, step);
         let arms = smoothstep((gap / ARMS_CLEAR - 1.0 / 3.0) * 1.5);

@@ -66,9 +66,6 @@ pub struct Steer {
     /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
     /// past it.
     tau_before: f64,
-    /// The walker's ankle joints (left, right), to find the feet of the neighbours that
-    /// share its skeleton.
-    ankles: Option<[usize; 2]>,
 }
 
 impl Steer {
@@ -126,10 +123,8 @@ impl Steer {
                 j != me && (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP
             });
         }
-        let ankle = |name: &str| ctx.skeleton.joint(name).ok();
         Steer {
             companions,
-            ankles: ankle("l_ankle").zip(ankle("r_ankle")).map(|(l, r)| [l, r]),
             ..Steer::default()
         }
     }
@@ -157,7 +152,7 @@ impl Steer {
     }
 
     /// Starts steering at plan time `tau`, on the plan (no offset), at its full rate and
-    /// with `drift`; the companions, the last decision and the ankles carry on.
+    /// with `drift`; the companions and the last decision carry on.
     pub(super) fn engage(&mut self, tau: f64, drift: DVec2) {
         *self = Steer {
             engaged: true,
@@ -169,7 +164,6 @@ impl Steer {
             decision: self.decision,
             target: (1.0, drift),
             tau_before: tau,
-            ankles: self.ankles,
         };
     }
 
@@ -183,14 +177,16 @@ impl Steer {
     }
 
     /// Decides this tick's rate and drift from the crowd of the previous tick, for actor
-    /// `ctx.actor` walking `plan` at walk time `now`. `others` is scratch space.
+    /// `ctx.actor` walking `plan` at walk time `now`. `others` is scratch space; true
+    /// when it then holds, in actor order, every actor (but this one and its companions)
+    /// the crowd finds near the body (`Crowd::near`), and some farther ahead.
     pub fn decide(
         &mut self,
         ctx: &GeneratorContext,
         plan: &Plan,
         now: f64,
         others: &mut Vec<usize>,
-    ) {
+    ) -> bool {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let (Some(&position), Some(&velocity), Some(&radius)) = (
@@ -198,7 +194,7 @@ impl Steer {
             crowd.velocities.get(me),
             crowd.radii.get(me),
         ) else {
-            return;
+            return false;
         };
         let pt = self.plan_time(now, now);
         let dt = ctx.dt;
@@ -212,7 +208,7 @@ impl Steer {
             };
             self.drift += (back - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
             self.decision = None;
-            return;
+            return false;
         }
         let here = plan.sample(pt, 0.0);
         let ahead = plan.sample(pt + 0.1, 0.0);
@@ -238,11 +234,11 @@ impl Steer {
             position,
             velocity,
             radius,
-            feet: feet_of(ctx, me, self.ankles),
+            feet: feet_of(ctx, me),
         };
         self.decide_now(ctx, &body, preferred, (planned, along), now, others);
         if !self.engaged {
-            return;
+            return true;
         }
         let (rate, drift) = self.target;
         self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
@@ -268,6 +264,7 @@ impl Steer {
                 }
             }
         }
+        true
     }
 
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,
@@ -307,7 +304,7 @@ impl Steer {
             .zip(&near)
             .filter(|(_, w)| (w.body.position - position).length() < NEIGHBOUR_RANGE)
             .map(|(&j, w)| Agent {
-                feet: feet_of(ctx, j, self.ankles),
+                feet: feet_of(ctx, j),
                 ..w.body
             })
             .collect();
@@ -345,26 +342,14 @@ impl Steer {
 }
 
 /// The floor points under actor `j`'s ankles at the end of the previous tick (see
-/// [`Agent::feet`]); its root for a body without the humanoid's ankles. `ankles` are
-/// the ankle joints of the deciding walker's own skeleton, if known.
-fn feet_of(ctx: &GeneratorContext, j: usize, ankles: Option<[usize; 2]>) -> [DVec2; 2] {
-    let root = ctx.world.crowd.positions[j];
-    let (Some(info), Some(state)) = (ctx.world.actors.get(j), ctx.world.states.get(j)) else {
-        return [root; 2];
-    };
-    let under = |joint: Option<usize>| {
-        joint
-            .and_then(|i| state.globals.get(i))
-            .map_or(root, |g| DVec2::new(g.translation.x, g.translation.z))
-    };
-    // Most neighbours share the walker's skeleton: its ankles are found once per walk.
-    if std::ptr::eq(&*info.skeleton, ctx.skeleton) {
-        if let Some(ankles) = ankles {
-            return ankles.map(|a| under(Some(a)));
-        }
-    }
-    let ankle = |name: &str| under(info.skeleton.joint(name).ok());
-    [ankle("l_ankle"), ankle("r_ankle")]
+/// [`Agent::feet`], `Crowd::feet`).
+fn feet_of(ctx: &GeneratorContext, j: usize) -> [DVec2; 2] {
+    let crowd = ctx.world.crowd;
+    crowd
+        .feet
+        .get(j)
+        .copied()
+        .unwrap_or([crowd.positions[j]; 2])
 }
 
 #[cfg(test)]

@@ -16,11 +16,14 @@ const RANGE: f64 = 1.0;
 const STRIDE: f64 = 0.6;
 
 /// The surroundings of actor `ctx.actor` this tick, leaving out `companions` (a hand
-/// held); `scratch` is reused space.
+/// held). `near` holds the actors near when `gathered` (the steering found them this
+/// tick: every one within a grid cell and some further ahead); else it is filled here.
+/// Either way it then holds every actor the crowd finds near the body.
 pub fn gather<'a>(
     ctx: &GeneratorContext<'a>,
     companions: &[usize],
-    scratch: &mut Vec<usize>,
+    near: &mut Vec<usize>,
+    gathered: bool,
 ) -> Surroundings<'a> {
     let crowd = ctx.world.crowd;
     let me = ctx.actor;
@@ -29,9 +32,11 @@ pub fn gather<'a>(
         return around;
     };
     let reach = radius + STRIDE;
-    scratch.clear();
-    crowd.near(from, scratch);
-    for &j in scratch.iter() {
+    if !gathered {
+        near.clear();
+        crowd.near(from, near);
+    }
+    for &j in near.iter() {
         if j == me || companions.contains(&j) {
             continue;
         }

@@ -628,3 +628,41 @@ fn a_walk_reports_its_plan_ahead_and_its_avoidance_for_drawing() {
     assert!(first_length.unwrap() > 7.5, "{first_length:?}");
     assert!(swerved, "avoidance chose another velocity than the plan's");
 }
+
+#[test]
+fn walks_that_do_not_navigate_go_straight_through_a_table() {
+    // A 2 m × 1 m table across the way: a navigated walk goes round its end; one that
+    // goes straight (`Walking::Straight`, `troupe bench --navigation off`) through it.
+    let widest = |walking: Walking| {
+        let mut scene = adult_scene(100.0, 1);
+        scene.set_walking(walking);
+        let a = scene.add_actor(&ActorDesc::new("a")).unwrap();
+        scene
+            .add_object(troupe_body::object::Object {
+                name: "table".into(),
+                shape: troupe_body::Shape::Box {
+                    half_extents: DVec3::new(1.0, 0.4, 0.5),
+                },
+                position: DVec3::new(0.0, 0.4, 3.0),
+                rotation: troupe_body::glam::DQuat::IDENTITY,
+                mass: 30.0,
+            })
+            .unwrap();
+        let skeleton = scene.actors()[a].skeleton.clone();
+        let goal = Goal::Through(vec![DVec2::new(0.0, 6.0)]);
+        let walk = Walk::navigate(&skeleton, goal, WalkOptions::default()).unwrap();
+        let spec = ActionSpec::new("walk", walk.scope());
+        let id = scene.start_action(a, spec, Box::new(walk)).unwrap();
+        let mut widest: f64 = 0.0;
+        while scene.time() < 20.0 && !scene.action(id).unwrap().status.is_final() {
+            scene.step();
+            widest = widest.max(scene.states()[a].globals[0].translation.x.abs());
+        }
+        assert_eq!(scene.action(id).unwrap().status, Status::Completed);
+        widest
+    };
+    let round = widest(Walking::Navigated);
+    assert!(round > 1.0 + 0.28, "navigated: {round}");
+    let straight = widest(Walking::Straight);
+    assert!(straight < 0.1, "straight: {straight}");
+}

@@ -5,7 +5,9 @@
 
 use crate::clearance::Capsule;
 use crate::footprint::Footprint;
-use troupe_body::glam::DVec2;
+use crate::space::Wall;
+use troupe_body::glam::{DQuat, DVec2, DVec3};
+use troupe_body::solid::Shape;
 
 /// Side of a grid cell (m): at least the distance a walker looks around.
 pub const CELL: f64 = 3.0;
@@ -24,12 +26,43 @@ pub struct Crowd {
     /// Each actor's body on the floor, its disc stretched to hold its feet (see
     /// [`crate::clearance::Capsule`]).
     pub bodies: Vec<Capsule>,
-    /// Every obstacle's footprint, with the centre and radius of a circle around it.
-    pub footprints: Vec<(Footprint, DVec2, f64)>,
+    /// The floor points (x, z) under each actor's ankles (left, right); its root's for
+    /// a body without them. Gathered once a tick for every walker's avoidance, which
+    /// looked them up in the neighbours' postures (a twentieth of the crowd
+    /// benchmark's tick, in cache misses).
+    pub feet: Vec<[DVec2; 2]>,
+    /// Each actor's ankle joints (left, right), if its skeleton has them.
+    pub ankles: Vec<[Option<usize>; 2]>,
+    /// Every obstacle's footprint, as `World::obstacles` lists them (walls, then objects).
+    pub footprints: Vec<Footprint>,
+    /// The centre and radius of a circle round each footprint.
+    bounds: Vec<(DVec2, f64)>,
     /// (cell, actor) sorted: the actors of a cell are a contiguous run.
-    cells: Vec<((i64, i64), usize)>,
+    cells: Cells,
     /// (cell, footprint) sorted, for every cell a footprint's bounding box overlaps.
-    footprint_cells: Vec<((i64, i64), usize)>,
+    footprint_cells: Cells,
+    /// The walls and objects the footprints were made from (see
+    /// [`Crowd::footprints_current`]).
+    made_from: (Vec<Wall>, Vec<ObjectStamp>),
+}
+
+/// What an object's obstacle footprint is made from: while it stays the same, so does
+/// the footprint (see [`Crowd::footprints_current`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ObjectStamp {
+    /// Someone holds it: not an obstacle, wherever the hand takes it.
+    Held,
+    /// Nobody holds it: its shape, its pose and what the script said (`obstacle = …`).
+    Free {
+        /// Its shape.
+        shape: Shape,
+        /// Where its centre is.
+        position: DVec3,
+        /// How it is turned.
+        rotation: DQuat,
+        /// `obstacle = true | false`, or `None` for "when it stands on the floor".
+        forced: Option<bool>,
+    },
 }
 
 /// The grid cell of `p`.
@@ -40,27 +73,22 @@ fn cell_of(p: DVec2) -> (i64, i64) {
 impl Crowd {
     /// Rebuilds the grid after `positions` changed.
     pub fn index(&mut self) {
-        self.cells.clear();
-        self.cells.extend(
+        self.cells.entries.clear();
+        self.cells.entries.extend(
             self.positions
                 .iter()
                 .enumerate()
                 .map(|(i, p)| (cell_of(*p), i)),
         );
-        self.cells.sort_unstable();
+        self.cells.sort();
     }
 
     /// Sets the obstacles' footprints.
     pub fn set_footprints(&mut self, footprints: Vec<Footprint>) {
-        self.footprints = footprints
-            .into_iter()
-            .map(|f| {
-                let (c, r) = f.bounding_circle();
-                (f, c, r)
-            })
-            .collect();
-        self.footprint_cells.clear();
-        for (i, (f, _, _)) in self.footprints.iter().enumerate() {
+        self.bounds = footprints.iter().map(Footprint::bounding_circle).collect();
+        self.footprints = footprints;
+        self.footprint_cells.entries.clear();
+        for (i, f) in self.footprints.iter().enumerate() {
             let lowest = f.outline.iter().copied().reduce(DVec2::min);
             let highest = f.outline.iter().copied().reduce(DVec2::max);
             let (Some(lowest), Some(highest)) = (lowest, highest) else {
@@ -70,18 +98,54 @@ impl Crowd {
             let (x1, z1) = cell_of(highest);
             for x in x0..=x1 {
                 for z in z0..=z1 {
-                    self.footprint_cells.push(((x, z), i));
+                    self.footprint_cells.entries.push(((x, z), i));
                 }
             }
         }
-        self.footprint_cells.sort_unstable();
+        self.footprint_cells.sort();
+    }
+
+    /// Whether the footprints were made from these `walls` and objects (`stamps`, in
+    /// object order), and notes them as the ones the next footprints are made from.
+    /// Building every object's footprint and the grid of them each tick cost the crowd
+    /// benchmark 3 % of its tick; the scene rebuilds them only when this says no.
+    pub fn footprints_current(
+        &mut self,
+        walls: &[Wall],
+        stamps: impl Iterator<Item = ObjectStamp>,
+    ) -> bool {
+        let (made_walls, made_objects) = &mut self.made_from;
+        let mut same = made_walls.as_slice() == walls;
+        if !same {
+            *made_walls = walls.to_vec();
+        }
+        let mut count = 0;
+        for (i, stamp) in stamps.enumerate() {
+            count = i + 1;
+            match made_objects.get_mut(i) {
+                Some(made) if *made == stamp => {}
+                Some(made) => {
+                    *made = stamp;
+                    same = false;
+                }
+                None => {
+                    made_objects.push(stamp);
+                    same = false;
+                }
+            }
+        }
+        if made_objects.len() != count {
+            made_objects.truncate(count);
+            same = false;
+        }
+        same
     }
 
     /// Pushes onto `out` every actor within [`CELL`] of `p` (and possibly a little
     /// further), in actor order.
     pub fn near(&self, p: DVec2, out: &mut Vec<usize>) {
         let start = out.len();
-        around(&self.cells, p, out);
+        self.cells.around(p, out);
         out[start..].sort_unstable();
     }
 
@@ -89,31 +153,134 @@ impl Crowd {
     /// further, in the order they were set.
     pub fn footprints_near(&self, p: DVec2, range: f64) -> impl Iterator<Item = &Footprint> {
         let mut found = Vec::new();
-        around(&self.footprint_cells, p, &mut found);
+        self.footprint_cells.around(p, &mut found);
         found.sort_unstable();
         found.dedup();
         found
             .into_iter()
+            .filter(move |&i| {
+                let (c, r) = self.bounds[i];
+                (c - p).length() <= r + range
+            })
             .map(|i| &self.footprints[i])
-            .filter(move |(_, c, r)| (*c - p).length() <= r + range)
-            .map(|(f, _, _)| f)
     }
 }
 
-/// Pushes onto `out` the items of `cells` ((cell, item) sorted) in the 3 × 3 cells around
-/// `p`'s: for each of the three columns the three cells are one run of the sorted list.
-fn around(cells: &[((i64, i64), usize)], p: DVec2, out: &mut Vec<usize>) {
-    let (cx, cz) = cell_of(p);
-    for x in cx - 1..=cx + 1 {
-        let from = cells.partition_point(|e| e.0 < (x, cz - 1));
-        let to = from + cells[from..].partition_point(|e| e.0 <= (x, cz + 1));
-        out.extend(cells[from..to].iter().map(|e| e.1));
+/// Items on a grid of [`CELL`]-wide cells: (cell, item) pairs sorted, so that the items
+/// of a cell, and of a column's consecutive cells, are one run of the list; and where
+/// each cell's run starts, for a rectangle of cells round them all.
+#[derive(Clone, Debug, Default)]
+struct Cells {
+    /// (cell, item), sorted.
+    entries: Vec<((i64, i64), usize)>,
+    /// The rectangle's lowest cell and its size in cells (x, z).
+    origin: (i64, i64),
+    size: (i64, i64),
+    /// Where the run of each cell of the rectangle starts (x major), and the end; empty
+    /// when the items are too spread out for such a table to pay (then the runs are
+    /// found by binary search).
+    starts: Vec<u32>,
+}
+
+impl Cells {
+    /// Sorts the entries and finds where each cell's run starts. A lookup by binary
+    /// search over a thousand actors' cells took a tenth of the crowd benchmark's tick
+    /// (several look-ups per walker and tick).
+    fn sort(&mut self) {
+        self.entries.sort_unstable();
+        self.starts.clear();
+        let (Some(first), Some(last)) = (self.entries.first(), self.entries.last()) else {
+            return;
+        };
+        let (x0, x1) = (first.0 .0, last.0 .0);
+        let z0 = self.entries.iter().map(|e| e.0 .1).min().unwrap_or(0);
+        let z1 = self.entries.iter().map(|e| e.0 .1).max().unwrap_or(0);
+        let (nx, nz) = (x1.saturating_sub(x0) + 1, z1.saturating_sub(z0) + 1);
+        let fits = u32::try_from(self.entries.len()).is_ok()
+            && nx
+                .checked_mul(nz)
+                .is_some_and(|n| n <= 4 * self.entries.len() as i64 + 4096);
+        if !fits {
+            return;
+        }
+        self.origin = (x0, z0);
+        self.size = (nx, nz);
+        let cells = (nx * nz) as usize;
+        self.starts.resize(cells + 1, 0);
+        let mut at = 0;
+        for k in 0..cells {
+            self.starts[k] = at as u32;
+            let cell = (x0 + k as i64 / nz, z0 + k as i64 % nz);
+            while at < self.entries.len() && self.entries[at].0 <= cell {
+                at += 1;
+            }
+        }
+        self.starts[cells] = self.entries.len() as u32;
+    }
+
+    /// Pushes onto `out` the items in the 3 × 3 cells around `p`'s, column by column,
+    /// each column in the list's order.
+    fn around(&self, p: DVec2, out: &mut Vec<usize>) {
+        let (cx, cz) = cell_of(p);
+        let entries = &self.entries;
+        for x in cx - 1..=cx + 1 {
+            let (from, to) = if self.starts.is_empty() {
+                let from = entries.partition_point(|e| e.0 < (x, cz - 1));
+                (
+                    from,
+                    from + entries[from..].partition_point(|e| e.0 <= (x, cz + 1)),
+                )
+            } else {
+                let ((x0, z0), (nx, nz)) = (self.origin, self.size);
+                let (lo, hi) = ((cz - 1).max(z0), (cz + 1).min(z0 + nz - 1));
+                if x < x0 || x >= x0 + nx || lo > hi {
+                    continue;
+                }
+                let k = ((x - x0) * nz) as usize;
+                let from = self.starts[k + (lo - z0) as usize] as usize;
+                (from, self.starts[k + (hi - z0) as usize + 1] as usize)
+            };
+            out.extend(entries[from..to].iter().map(|e| e.1));
+        }
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_table_of_runs_finds_what_the_binary_search_finds() {
+        // A crowd on a field, a few far out (the table then would be too large).
+        for spread in [false, true] {
+            let mut positions: Vec<DVec2> = (0..200)
+                .map(|i| {
+                    let f = i as f64;
+                    DVec2::new((f * 7.31).sin() * 20.0, (f * 3.17).cos() * 20.0)
+                })
+                .collect();
+            if spread {
+                positions.push(DVec2::new(5.0e5, -5.0e5));
+            }
+            let mut crowd = Crowd {
+                positions,
+                ..Crowd::default()
+            };
+            crowd.index();
+            assert_eq!(crowd.cells.starts.is_empty(), spread);
+            let searched = Cells {
+                starts: Vec::new(),
+                ..crowd.cells.clone()
+            };
+            for k in 0..400 {
+                let p = DVec2::new(k as f64 * 0.13 - 26.0, (k as f64 * 0.71).sin() * 26.0);
+                let (mut a, mut b) = (Vec::new(), Vec::new());
+                crowd.cells.around(p, &mut a);
+                searched.around(p, &mut b);
+                assert_eq!(a, b, "{p}");
+            }
+        }
+    }
 
     #[test]
     fn near_finds_the_neighbours_in_actor_order() {
@@ -158,5 +325,52 @@ mod tests {
             .collect();
         assert_eq!(names, vec!["big", "near"]);
         assert_eq!(crowd.footprints_near(DVec2::new(10.0, 0.0), 2.0).count(), 0);
+    }
+
+    #[test]
+    fn footprints_stay_current_until_a_wall_or_an_object_changes() {
+        let mut crowd = Crowd::default();
+        let table = ObjectStamp::Free {
+            shape: Shape::Box {
+                half_extents: DVec3::new(1.0, 0.4, 0.5),
+            },
+            position: DVec3::new(0.0, 0.4, 2.0),
+            rotation: DQuat::IDENTITY,
+            forced: None,
+        };
+        let wall = Wall {
+            from: DVec2::ZERO,
+            to: DVec2::X,
+            thickness: 0.1,
+            height: 2.0,
+        };
+        // Nothing yet: the empty set of footprints is current.
+        assert!(crowd.footprints_current(&[], std::iter::empty()));
+        assert!(!crowd.footprints_current(&[], [table].into_iter()));
+        assert!(crowd.footprints_current(&[], [table].into_iter()));
+        // A wall added, an object moved, picked up, added or removed: not current.
+        let walls = std::slice::from_ref(&wall);
+        assert!(!crowd.footprints_current(walls, [table].into_iter()));
+        assert!(crowd.footprints_current(walls, [table].into_iter()));
+        let moved = match table {
+            ObjectStamp::Free {
+                shape,
+                rotation,
+                forced,
+                ..
+            } => ObjectStamp::Free {
+                shape,
+                position: DVec3::new(0.0, 0.4, 2.001),
+                rotation,
+                forced,
+            },
+            held => held,
+        };
+        assert!(!crowd.footprints_current(walls, [moved].into_iter()));
+        assert!(!crowd.footprints_current(walls, [ObjectStamp::Held].into_iter()));
+        assert!(crowd.footprints_current(walls, [ObjectStamp::Held].into_iter()));
+        let two = [ObjectStamp::Held, table];
+        assert!(!crowd.footprints_current(walls, two.into_iter()));
+        assert!(!crowd.footprints_current(walls, [ObjectStamp::Held].into_iter()));
     }
 }

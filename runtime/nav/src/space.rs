@@ -139,6 +139,24 @@ struct CachedMesh {
     mesh: Arc<Mesh>,
 }
 
+/// How walks get to their goals: navigated (the default) or straight, for measuring what
+/// navigation costs (`troupe bench --navigation on,off`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Walking {
+    /// Walks plan round the obstacles, avoid one another, give way, keep lanes, take new
+    /// routes and turn their shoulders to pass (`docs/navigation.md`).
+    #[default]
+    Navigated,
+    /// Walks go in a straight line to their goals (near an object or actor, to the same
+    /// free standing point as when navigating) and through whatever is in the way: no
+    /// path search, avoidance, give-way, lanes, new routes nor shoulder turn, and the
+    /// crowd keeps no obstacle footprints. Hands do not go round other bodies and
+    /// obstacles either (no temporary goals of `reach`, `grasp`, `give`): with bodies
+    /// standing in one another, that work would grow with the overlaps and no longer be
+    /// the crowd's without navigation. The rest of the tick's work is the same.
+    Straight,
+}
+
 /// Walls, the walkable floor and the navigation meshes built from them.
 #[derive(Default)]
 pub struct Space {
@@ -146,6 +164,8 @@ pub struct Space {
     pub walls: Vec<Wall>,
     /// The walkable floor; `None` is the open floor ([`Floor::open`]).
     pub floor: Option<Floor>,
+    /// Whether walks navigate or go straight (see [`Walking`]).
+    pub walking: Walking,
     cache: Mutex<Vec<CachedMesh>>,
     builds: std::sync::atomic::AtomicU64,
 }
@@ -155,6 +175,7 @@ impl Clone for Space {
         Space {
             walls: self.walls.clone(),
             floor: self.floor.clone(),
+            walking: self.walking,
             ..Space::default()
         }
     }
@@ -165,6 +186,7 @@ impl std::fmt::Debug for Space {
         f.debug_struct("Space")
             .field("walls", &self.walls)
             .field("floor", &self.floor)
+            .field("walking", &self.walking)
             .finish_non_exhaustive()
     }
 }

@@ -39,7 +39,16 @@ pub fn precedence(mine: DVec2, theirs: DVec2) -> Precedence {
     if theirs.length() < 1e-9 || mine.length() < 1e-9 {
         return Precedence::Shared;
     }
-    let (a, b) = (line_angle(mine), line_angle(theirs));
+    precedence_of_lines(line_angle(mine), theirs)
+}
+
+/// [`precedence`] for my line's rank `a` (see [`line_angle`]), found once for many
+/// neighbours, and a neighbour heading along `theirs`.
+fn precedence_of_lines(a: f64, theirs: DVec2) -> Precedence {
+    if theirs.length() < 1e-9 {
+        return Precedence::Shared;
+    }
+    let b = line_angle(theirs);
     let apart = (a - b).abs();
     if apart.min(PI - apart) < CROSSING {
         Precedence::Shared
@@ -94,9 +103,13 @@ pub struct Walker {
 /// there would block it).
 pub fn wait_line(me: &Agent, along: DVec2, speed: f64, others: &[Walker]) -> Option<f64> {
     let mut line: Option<f64> = None;
+    if along.length() < 1e-9 {
+        return line;
+    }
+    let mine = line_angle(along);
     for j in others {
         let moving = j.body.velocity.length();
-        if moving < MOVING || precedence(along, j.facing) != Precedence::Theirs {
+        if moving < MOVING || precedence_of_lines(mine, j.facing) != Precedence::Theirs {
             continue;
         }
         let velocity = j.facing * moving.max(ASSUMED_SPEED);

@@ -46,6 +46,24 @@ impl World<'_> {
     /// their height), then the objects that are obstacles now (see
     /// [`World::is_obstacle`]). Holes in the floor have no body and are not listed.
     pub fn obstacle_volumes(&self) -> Vec<(String, Volume)> {
+        self.obstacle_volumes_where(|_| true)
+    }
+
+    /// [`World::obstacle_volumes`] that come within `range` (m, measured on the floor)
+    /// of one of `points` (by a sphere round each volume): what a reach by a body there
+    /// can touch. Objects farther off are left out before their footprint is made.
+    pub fn obstacle_volumes_near(&self, points: &[DVec3], range: f64) -> Vec<(String, Volume)> {
+        self.obstacle_volumes_where(|v| {
+            let (centre, radius) = v.bound();
+            points
+                .iter()
+                .any(|p| (p.x - centre.x).hypot(p.z - centre.z) < range + radius)
+        })
+    }
+
+    /// The obstacles' volumes for which `wanted` holds (asked before an object is
+    /// checked for being an obstacle).
+    fn obstacle_volumes_where(&self, wanted: impl Fn(&Volume) -> bool) -> Vec<(String, Volume)> {
         let walls = self.space.walls.iter().enumerate().map(|(i, w)| {
             let along = w.to - w.from;
             let mid = (w.from + w.to) / 2.0;
@@ -64,18 +82,18 @@ impl World<'_> {
                     DVec3::new(mid.x, w.height / 2.0, mid.y),
                 ),
             };
-            (format!("wall {}", i + 1), volume)
+            (i, volume)
         });
-        let objects = (0..self.objects.len())
-            .filter(|&i| self.is_obstacle(i))
-            .map(|i| {
-                let o = &self.objects[i];
-                let volume = Volume::Shape {
-                    shape: o.shape,
-                    pose: Transform::new(o.rotation, o.position),
-                };
-                (o.name.clone(), volume)
-            });
+        let walls = walls
+            .filter(|(_, v)| wanted(v))
+            .map(|(i, v)| (format!("wall {}", i + 1), v));
+        let objects = self.objects.iter().enumerate().filter_map(|(i, o)| {
+            let volume = Volume::Shape {
+                shape: o.shape,
+                pose: Transform::new(o.rotation, o.position),
+            };
+            (wanted(&volume) && self.is_obstacle(i)).then(|| (o.name.clone(), volume))
+        });
         walls.chain(objects).collect()
     }
 

@@ -240,30 +240,64 @@ impl Scene {
     /// the previous tick: what walkers avoid (see [`troupe_nav::Crowd`]).
     fn update_crowd(&mut self) {
         let _span = tracing::trace_span!("crowd", tick = self.tick).entered();
-        let footprints = self.world().obstacles();
-        let crowd = &mut self.crowd;
+        let mut crowd = std::mem::take(&mut self.crowd);
+        let world = self.world();
+        // The footprints are made again only when a wall or an object changed; walks
+        // that go straight use none.
+        let current = match self.space.walking {
+            troupe_nav::Walking::Navigated => crowd.footprints_current(
+                &self.space.walls,
+                (0..self.objects.len()).map(|i| world.obstacle_stamp(i)),
+            ),
+            troupe_nav::Walking::Straight => crowd.footprints_current(&[], std::iter::empty()),
+        };
+        if !current {
+            let footprints = match self.space.walking {
+                troupe_nav::Walking::Navigated => world.obstacles(),
+                troupe_nav::Walking::Straight => Vec::new(),
+            };
+            crowd.set_footprints(footprints);
+        }
         crowd.positions.clear();
         crowd.velocities.clear();
         crowd.facings.clear();
+        crowd.feet.clear();
         crowd.bodies.clear();
         for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
-            let root = DVec2::new(root.x, root.z);
-            crowd.positions.push(root);
+            let under_root = DVec2::new(root.x, root.z);
+            let under = |joint: Option<usize>| {
+                joint
+                    .and_then(|j| state.globals.get(j))
+                    .map_or(under_root, |g| DVec2::new(g.translation.x, g.translation.z))
+            };
+            let ankles = crowd.ankles.get(i).copied().unwrap_or_default();
+            crowd.feet.push(ankles.map(under));
+            crowd.positions.push(under_root);
             crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
             let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
             let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
             crowd.facings.push(facing);
             let velocity = DVec2::new(state.qd[x], state.qd[z]);
-            crowd.bodies.push(self.body_joints[i].body(
-                &state.globals,
-                facing,
-                velocity,
-                crowd.radii[i],
-            ));
+            crowd.bodies.push(match self.space.walking {
+                troupe_nav::Walking::Navigated => self.body_joints[i].body(
+                    &state.globals,
+                    facing,
+                    velocity,
+                    crowd.radii[i],
+                ),
+                // Nothing keeps bodies apart: their discs will do for the record.
+                troupe_nav::Walking::Straight => troupe_nav::Capsule::around(
+                    under_root,
+                    facing,
+                    crowd.radii[i],
+                    0.0,
+                    &[],
+                ),
+            });
         }
         crowd.index();
-        crowd.set_footprints(footprints);
+        self.crowd = crowd;
     }
 
     /// The crowd as of the last tick (see [`troupe_nav::Crowd`]).
@@ -472,6 +506,9 @@ impl Scene {
         self.root_dofs
             .push((skeleton.dof("root_x")?, skeleton.dof("root_z")?));
         self.crowd.radii.push(troupe_nav::body_radius(&skeleton));
+        self.crowd
+            .ankles
+            .push(["l_ankle", "r_ankle"].map(|name| skeleton.joint(name).ok()));
         let state = ActorState::new(&skeleton, q);
         self.body_joints
             .push(crate::space::BodyJoints::new(&skeleton, &state.globals));

@@ -12,11 +12,12 @@ pub use troupe_nav::avoid::{choose_velocity, Agent, GAP};
 pub use troupe_nav::clearance::{
     clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, FootSpan, Surroundings,
 };
+pub use troupe_nav::crowd::ObjectStamp;
 pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
 pub use troupe_nav::footprint::ON_FLOOR;
 pub use troupe_nav::way::{wait_line, Walker};
 pub use troupe_nav::{
-    body_radius, path_length, Crowd, Floor, Footprint, NoPath, Space, Wall, CLEARANCE,
+    body_radius, path_length, Crowd, Floor, Footprint, NoPath, Space, Walking, Wall, CLEARANCE,
 };
 
 /// How far (m) a foot's solid reaches round the segment under it from its heel to its toe
@@ -153,6 +154,20 @@ impl World<'_> {
         self.obstacle_footprint(index).is_some()
     }
 
+    /// What object `index`'s obstacle footprint is made from (see [`ObjectStamp`]).
+    pub fn obstacle_stamp(&self, index: usize) -> ObjectStamp {
+        if self.holder(index).is_some() {
+            return ObjectStamp::Held;
+        }
+        let o = &self.objects[index];
+        ObjectStamp::Free {
+            shape: o.shape,
+            position: o.position,
+            rotation: o.rotation,
+            forced: self.obstacle_flags.get(index).copied().flatten(),
+        }
+    }
+
     /// Object `index`'s footprint if it is an obstacle now.
     fn obstacle_footprint(&self, index: usize) -> Option<Footprint> {
         if self.holder(index).is_some() {
@@ -184,6 +199,13 @@ impl World<'_> {
 }
 
 impl Scene {
+    /// Makes walks navigate (the default) or go straight to their goals (see
+    /// [`Walking`]): `troupe bench --navigation off` measures the crowd without
+    /// navigation this way.
+    pub fn set_walking(&mut self, walking: Walking) {
+        self.space_mut().walking = walking;
+    }
+
     /// Adds a wall; the next path query plans around it.
     pub fn add_wall(&mut self, wall: Wall) -> Result<usize> {
         let finite = wall.from.is_finite() && wall.to.is_finite();
