@@ -50,6 +50,12 @@ const TINY_EDGE: f64 = 0.5;
 /// `flips::quality`) have their longest edge flipped after the relaxation, when that
 /// makes both triangles of the pair better.
 const THIN: f64 = 0.3;
+/// Joints at the parent's end of a helper chain (`weights::Chains::new`): the clavicle
+/// and vt1, so that the armpit (shared by the arm and the chest) blends through the
+/// shoulder's helpers. With the trunk's human ranges this took the worst posture at half
+/// ranges from 10-26 inverted triangles to 1-8; a third joint (vt6) pulled the child's
+/// chest too far from its bones.
+const CHAIN_ENDS: usize = 2;
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -181,7 +187,9 @@ impl Skin {
             .collect();
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
-        let chains = weights::Chains::new(&helpers, joint_rest.len());
+        let joints = skeleton.joints();
+        let chains =
+            weights::Chains::new(&helpers, joint_rest.len(), CHAIN_ENDS, |j| joints[j].parent);
         let (joints, weights) =
             weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains)
                 .into_iter()
