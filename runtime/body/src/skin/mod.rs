@@ -56,6 +56,9 @@ const THIN: f64 = 0.3;
 /// ranges from 10-26 inverted triangles to 1-8; a third joint (vt6) pulled the child's
 /// chest too far from its bones.
 const CHAIN_ENDS: usize = 2;
+/// Joints whose volumes get wider bands of weights (`weights::WIDER`): the pelvis, the
+/// hips and the lower belly, where a flexed hip folds the groin.
+const WIDER_BANDS: [&str; 4] = ["sacroiliac", "l_hip", "r_hip", "vl5"];
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -188,10 +191,14 @@ impl Skin {
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
         let joints = skeleton.joints();
+        let wider: Vec<bool> = joints
+            .iter()
+            .map(|j| WIDER_BANDS.contains(&j.name.as_str()))
+            .collect();
         let chains =
             weights::Chains::new(&helpers, joint_rest.len(), CHAIN_ENDS, |j| joints[j].parent);
         let (joints, weights) =
-            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains)
+            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &wider)
                 .into_iter()
                 .unzip();
         Ok(Skin {
