@@ -89,7 +89,9 @@ test("two walkers pass in a 1.2 m corridor turning their shoulders, their solids
   expect(ok and walks[1].status == "completed" and walks[2].status == "completed",
     "both arrived: " .. tostring(walks[1].error) .. " / " .. tostring(walks[2].error))
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
-  expect(turned[1] > 20 and turned[2] > 20, string.format("the shoulders turned to pass: %.0f° and %.0f°", turned[1], turned[2]))
+  -- The walk turns the shoulders by vt12's and vt6's torsion, 10° each at a person's
+  -- range (runtime/body/src/template.rs, TRUNK), with the pelvis's own turn beside it.
+  expect(turned[1] > 15 and turned[2] > 15, string.format("the shoulders turned to pass: %.0f° and %.0f°", turned[1], turned[2]))
 end)
 
 test("a walker alone keeps its shoulders square", function()

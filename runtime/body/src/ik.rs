@@ -468,7 +468,12 @@ impl IkSolver {
                 let range = dof.max - dof.min;
                 if range > 1e-9 {
                     let mid = 0.5 * (dof.max + dof.min);
-                    self.dz[c] -= o.limit_avoidance * 2.0 * (q[d] - mid) / (range * range);
+                    // The gradient of Σ((q − mid)/range)² scaled by the gain, but never
+                    // past the middle in one step: on a narrow range (a spine joint's 8°)
+                    // the plain gradient overshot it (by 2.05 × at the default gain), and
+                    // the oscillation kept the main task from converging.
+                    let pull = (o.limit_avoidance * 2.0 / (range * range)).min(1.0);
+                    self.dz[c] -= pull * (q[d] - mid);
                 }
             }
             if let Some(r) = reference {
@@ -842,12 +847,16 @@ mod tests {
         // Iterated: a reference posture far away pulls the body through the null space;
         // the posture changes a lot, the hand stays on its goal.
         let mut reference = q.clone();
-        reference[s.dof("vt12_torsion").unwrap()] = 0.4;
+        // Within vt12's 10° of torsion (template.rs, TRUNK).
+        reference[s.dof("vt12_torsion").unwrap()] = 0.15;
         reference[s.dof("vl5_flexion").unwrap()] = 0.3;
         reference[s.dof("r_shoulder_twist").unwrap()] = 0.8;
         let before = q.clone();
+        // Without the limit avoidance, which pulls the trunk's narrow ranges to their middle
+        // as hard as the reference pulls them away.
         let mut o = IkOptions {
             posture_gain: 0.2,
+            limit_avoidance: 0.0,
             ..IkOptions::default()
         };
         o.max_iterations = 60;
@@ -866,7 +875,11 @@ mod tests {
         let err = (e.position(&g) - goal).length();
         assert!(moved > 0.5, "the posture moved by {moved} rad in all");
         assert!(err < 1e-5, "the main task error stays at {err} m");
-        assert!((q[s.dof("vt12_torsion").unwrap()] - 0.4).abs() < 0.2);
+        assert!(
+            (q[s.dof("vt12_torsion").unwrap()] - 0.15).abs() < 0.1,
+            "{}",
+            q[s.dof("vt12_torsion").unwrap()]
+        );
     }
 
     #[test]

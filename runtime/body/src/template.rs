@@ -220,6 +220,25 @@ const X: DVec3 = DVec3::X;
 const Y: DVec3 = DVec3::Y;
 const Z: DVec3 = DVec3::Z;
 
+/// The thoracolumbar spine's ranges, in degrees, per joint: (flexion's extension and
+/// flexion, lateral bend and torsion each way). A person's trunk flexes about 80°
+/// against the pelvis, extends 25°, bends 35° to each side and twists 45° each way
+/// (American Academy of Orthopaedic Surgeons, *Joint Motion: Method of Measuring and
+/// Recording*, 1965, the normal values also in Greene & Heckman, *The Clinical
+/// Measurement of Joint Motion*, AAOS 1994); the lumbar spine takes most of the flexion
+/// and little of the twist, the thoracic spine the reverse (White & Panjabi, *Clinical
+/// Biomechanics of the Spine*, 2nd ed. 1990, chapter 2). The four joints here
+/// add up to those ranges less the sacroiliac's 10° each way (the pelvis turning against
+/// the trunk): flexion 40 + 15 + 8 + 7 = 70, extension 10 + 5 = 15, lateral bend
+/// 8 + 7 + 5 + 5 = 25, torsion 5 + 10 + 10 + 10 = 35. (They were 60° of flexion and 30° of
+/// everything else per joint, which summed to a trunk bent double and twisted by 120°.)
+const TRUNK: [(&str, (f64, f64), f64, f64); 4] = [
+    ("vl5", (-10.0, 40.0), 8.0, 5.0),
+    ("vt12", (-5.0, 15.0), 7.0, 10.0),
+    ("vt6", (0.0, 8.0), 5.0, 10.0),
+    ("vt1", (0.0, 7.0), 5.0, 10.0),
+];
+
 fn deg(d: f64) -> f64 {
     d.to_radians()
 }
@@ -292,9 +311,11 @@ impl Body {
             Some("HumanoidRoot"),
             DVec3::new(0.0, root_y, 0.0),
         )?;
-        self.rot("sacroiliac_tilt", X, -30.0, 30.0)?;
-        self.rot("sacroiliac_obliquity", -Z, -20.0, 20.0)?;
-        self.rot("sacroiliac_rotation", Y, -30.0, 30.0)?;
+        // The pelvis turns against the trunk (whose spine hangs from the root too), so its
+        // range is part of the thoracolumbar spine's: see `TRUNK` in `spine_and_head`.
+        self.rot("sacroiliac_tilt", X, -10.0, 10.0)?;
+        self.rot("sacroiliac_obliquity", -Z, -10.0, 10.0)?;
+        self.rot("sacroiliac_rotation", Y, -10.0, 10.0)?;
 
         for side in [Side::Left, Side::Right] {
             self.leg(side)?;
@@ -315,8 +336,10 @@ impl Body {
         let j = |n: &str| format!("{s}{n}");
         let at = |v: DVec3| side.point(v);
         self.joint(&j("hip"), Some("sacroiliac"), at(DVec3::new(x, p.hip, 0.0)))?;
-        self.rot(&j("hip_flexion"), side.axis(-X), -30.0, 125.0)?;
-        self.rot(&j("hip_abduction"), side.axis(Z), -30.0, 50.0)?;
+        // The AAOS's normal ranges (see `TRUNK`): flexion 120°, extension 30°, abduction
+        // 45°, adduction 30°, rotation 45° each way.
+        self.rot(&j("hip_flexion"), side.axis(-X), -30.0, 120.0)?;
+        self.rot(&j("hip_abduction"), side.axis(Z), -30.0, 45.0)?;
         self.rot(&j("hip_twist"), side.axis(-Y), -45.0, 45.0)?;
         self.joint(&j("knee"), Some(&j("hip")), at(DVec3::new(x, p.knee, 0.0)))?;
         self.rot(&j("knee_flexion"), side.axis(X), 0.0, 150.0)?;
@@ -393,8 +416,11 @@ impl Body {
             let (flex, lat, tor) = match name {
                 "vc4" => ((-40.0, 40.0), 30.0, 40.0),
                 "skullbase" => ((-40.0, 40.0), 30.0, 50.0),
-                "vl5" => ((-30.0, 60.0), 30.0, 30.0),
-                _ => ((-25.0, 40.0), 25.0, 30.0),
+                _ => TRUNK
+                    .iter()
+                    .find(|(joint, ..)| *joint == name)
+                    .map(|&(_, flex, lat, tor)| (flex, lat, tor))
+                    .expect("every trunk joint has its range"),
             };
             self.rot(&format!("{name}_flexion"), X, flex.0, flex.1)?;
             self.rot(&format!("{name}_lateral_bend"), -Z, -lat, lat)?;

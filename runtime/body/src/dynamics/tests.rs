@@ -355,7 +355,7 @@ fn the_closed_loop_holds_the_upper_body_against_gravity() {
     q[s.dof("r_shoulder_flexion").unwrap()] = 1.2;
     q[s.dof("l_shoulder_abduction").unwrap()] = 1.0;
     q[s.dof("l_elbow_flexion").unwrap()] = 0.8;
-    q[s.dof("vt6_flexion").unwrap()] = 0.3;
+    q[s.dof("vt6_flexion").unwrap()] = 0.12;
     let dynamic: Vec<bool> = (0..n).map(|k| upper.contains(k)).collect();
     let mut sim = Simulation::new(&s, &q, &vec![0.0; n], &dynamic, SimParams::default()).unwrap();
     let zero = vec![0.0; n];

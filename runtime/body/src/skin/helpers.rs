@@ -17,7 +17,7 @@
 //! folds a smaller part of a band that is too short. At the shoulder (a range of 180° in
 //! every direction, a band that the surface smoothing makes long) helpers turned about
 //! 40 % fewer triangles over at full joint ranges; at the elbows, knees and wrists they
-//! changed nothing measurable, and at the hips (flexed to 125°, the band across the groin
+//! changed nothing measurable, and at the hips (flexed to 120°, the band across the groin
 //! far shorter than θ times its distance from the hip) they turned more over, not fewer.
 //!
 //! A helper is not a joint of the skeleton: its frame is computed from the posture each

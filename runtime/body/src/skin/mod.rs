@@ -50,6 +50,15 @@ const TINY_EDGE: f64 = 0.5;
 /// `flips::quality`) have their longest edge flipped after the relaxation, when that
 /// makes both triangles of the pair better.
 const THIN: f64 = 0.3;
+/// Joints at the parent's end of a helper chain (`weights::Chains::new`): the clavicle
+/// and vt1, so that the armpit (shared by the arm and the chest) blends through the
+/// shoulder's helpers. With the trunk's human ranges this took the worst posture at half
+/// ranges from 10-26 inverted triangles to 1-8; a third joint (vt6) pulled the child's
+/// chest too far from its bones.
+const CHAIN_ENDS: usize = 2;
+/// Joints whose volumes get wider bands of weights (`weights::WIDER`): the pelvis, the
+/// hips and the lower belly, where a flexed hip folds the groin.
+const WIDER_BANDS: [&str; 4] = ["sacroiliac", "l_hip", "r_hip", "vl5"];
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -181,9 +190,15 @@ impl Skin {
             .collect();
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
-        let chains = weights::Chains::new(&helpers, joint_rest.len());
+        let joints = skeleton.joints();
+        let wider: Vec<bool> = joints
+            .iter()
+            .map(|j| WIDER_BANDS.contains(&j.name.as_str()))
+            .collect();
+        let chains =
+            weights::Chains::new(&helpers, joint_rest.len(), CHAIN_ENDS, |j| joints[j].parent);
         let (joints, weights) =
-            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains)
+            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &wider)
                 .into_iter()
                 .unzip();
         Ok(Skin {
