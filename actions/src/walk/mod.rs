@@ -53,8 +53,7 @@ use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
 use troupe_scene::space::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, Navigation, Surroundings,
-    Walking,
+    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, Navigation, Surroundings, Walking,
 };
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
@@ -1092,7 +1091,7 @@ impl Generator for Walk {
         // swing less as anything comes close.
         if navigated {
             let me = self.body(ctx);
-            let gap = nearest_gap(&me, &around);
+            let gap = nearest_gap(&me, &around, shoulders::ARMS_CLEAR);
             // `gather` left this tick's neighbours in `self.near`.
             let near = Some(self.near.as_slice());
             self.shoulders

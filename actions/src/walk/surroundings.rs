@@ -9,8 +9,8 @@ use troupe_body::glam::DVec2;
 use troupe_scene::space::{FootSpan, Surroundings, FOOT_RADIUS};
 use troupe_scene::GeneratorContext;
 
-/// How far (m) past the touching of two bodies' discs a neighbour is looked at: a step
-/// and two strides.
+/// How far (m) past the touching of two bodies' discs a neighbour (or past the body's
+/// reach an obstacle) is looked at: a step and two strides.
 const RANGE: f64 = 1.0;
 /// How far (m) a body's feet may stand out of its disc, along the way it faces.
 const STRIDE: f64 = 0.6;

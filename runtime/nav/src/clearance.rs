@@ -74,6 +74,12 @@ pub struct FootSpan {
 }
 
 impl FootSpan {
+    /// A circle (centre, radius) that holds the span's solid.
+    fn bound(&self) -> (DVec2, f64) {
+        let mid = (self.heel + self.toe) / 2.0;
+        (mid, (self.toe - self.heel).length() / 2.0 + self.radius)
+    }
+
     /// The same span moved by `by`.
     pub fn moved(&self, by: DVec2) -> FootSpan {
         FootSpan {
@@ -140,6 +146,11 @@ impl Capsule {
         }
     }
 
+    /// A circle (centre, radius) that holds the capsule.
+    fn bound(&self) -> (DVec2, f64) {
+        (self.centre, self.half_length + self.radius)
+    }
+
     /// Distance (m) from `p` to the segment (not to the surface round it).
     pub fn distance(&self, p: DVec2) -> f64 {
         let (a, b) = self.ends();
@@ -156,6 +167,17 @@ impl Capsule {
     fn nearest_to(&self, other: &Capsule) -> (DVec2, DVec2) {
         nearest_between(self.ends(), other.ends())
     }
+}
+
+/// A lower bound (m) on the gap between two solids held by circles `a` and `b`: cheap, to
+/// leave out what is far before the exact distance.
+fn gap_bound(a: (DVec2, f64), b: (DVec2, f64)) -> f64 {
+    (a.0 - b.0).length() - a.1 - b.1
+}
+
+/// A lower bound (m) on the gap between a solid held by circle `a` and footprint `f`.
+fn footprint_gap_bound(a: (DVec2, f64), f: &Footprint) -> f64 {
+    f.distance(a.0) - a.1
 }
 
 /// What is round a walker this tick, as the previous tick left it: the other bodies and
@@ -206,6 +228,10 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
     }
     let mut limits: Vec<Limit> = Vec::new();
     for other in &around.bodies {
+        // A step closes at most its own length of half the gap.
+        if gap_bound(me.bound(), other.bound()) > 2.0 * reach + BODY_MARGIN {
+            continue;
+        }
         let (mine, theirs) = me.nearest_to(other);
         let apart = mine - theirs;
         let gap = apart.length() - me.radius - other.radius - BODY_MARGIN;
@@ -219,6 +245,9 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
     }
     let (a, b) = me.ends();
     for f in &around.obstacles {
+        if footprint_gap_bound(me.bound(), f) > reach + OBSTACLE_MARGIN {
+            continue;
+        }
         let span = FootSpan {
             heel: a,
             toe: b,
@@ -237,21 +266,29 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
 }
 
 /// The least gap (m) between body `me` and the bodies and obstacles `around` (negative
-/// when they overlap); infinite with nothing around.
-pub fn nearest_gap(me: &Capsule, around: &Surroundings) -> f64 {
-    let bodies = around.bodies.iter().map(|other| {
-        let (mine, theirs) = me.nearest_to(other);
-        (mine - theirs).length() - me.radius - other.radius
-    });
+/// when they overlap), or `within` if none is nearer than that.
+pub fn nearest_gap(me: &Capsule, around: &Surroundings, within: f64) -> f64 {
+    let bodies = around
+        .bodies
+        .iter()
+        .filter(|other| gap_bound(me.bound(), other.bound()) < within)
+        .map(|other| {
+            let (mine, theirs) = me.nearest_to(other);
+            (mine - theirs).length() - me.radius - other.radius
+        });
     let span = FootSpan {
         heel: me.ends().0,
         toe: me.ends().1,
         radius: me.radius,
     };
-    let obstacles = around.obstacles.iter().map(|f| {
-        nearest_to_footprint(f, &span).map_or(-me.radius, |(p, q)| (p - q).length() - me.radius)
-    });
-    bodies.chain(obstacles).fold(f64::INFINITY, f64::min)
+    let obstacles = around
+        .obstacles
+        .iter()
+        .filter(|f| footprint_gap_bound(me.bound(), f) < within)
+        .map(|f| {
+            nearest_to_footprint(f, &span).map_or(-me.radius, |(p, q)| (p - q).length() - me.radius)
+        });
+    bodies.chain(obstacles).fold(within, f64::min)
 }
 
 /// Whether a foot in the air may move from span `from` to span `to` this tick: it closes
@@ -262,7 +299,15 @@ pub fn foot_may_move(from: &FootSpan, to: &FootSpan, around: &Surroundings) -> b
         let (mine, theirs) = nearest_between((span.heel, span.toe), body.ends());
         (mine - theirs).length() - span.radius - body.radius
     };
+    // A move of at most `moved` closes at most that much: a body at least twice as far
+    // is not closed on by more than half its gap.
+    let moved = (to.heel - from.heel)
+        .length()
+        .max((to.toe - from.toe).length());
     let bodies_ok = around.bodies.iter().all(|body| {
+        if gap_bound(from.bound(), body.bound()) >= 2.0 * moved {
+            return true;
+        }
         let (before, after) = (gap(from, body), gap(to, body));
         after >= before || before - after <= (before / 2.0).max(0.0)
     });
@@ -271,6 +316,9 @@ pub fn foot_may_move(from: &FootSpan, to: &FootSpan, around: &Surroundings) -> b
         footprint_overlap(f, &span).map_or(f64::NEG_INFINITY, |(_, d)| d + span.radius)
     };
     let obstacles_ok = around.obstacles.iter().all(|f| {
+        if footprint_gap_bound(to.bound(), f) > LEG_CLEARANCE {
+            return true;
+        }
         let after = depth(to, f);
         after <= 0.0 || after <= depth(from, f)
     });
@@ -289,6 +337,9 @@ pub fn clear_foot(foot: FootSpan, around: &Surroundings) -> Option<DVec2> {
         let mut moved = false;
         for body in &around.bodies {
             let span = foot.moved(by);
+            if gap_bound(span.bound(), body.bound()) > 0.0 {
+                continue;
+            }
             let (mine, theirs) = nearest_between((span.heel, span.toe), body.ends());
             let apart = mine - theirs;
             let overlap = span.radius + body.radius - apart.length();
@@ -304,6 +355,9 @@ pub fn clear_foot(foot: FootSpan, around: &Surroundings) -> Option<DVec2> {
         }
         for f in &around.obstacles {
             let span = with_leg(&foot.moved(by));
+            if footprint_gap_bound(span.bound(), f) > 0.0 {
+                continue;
+            }
             if let Some((out, depth)) = footprint_overlap(f, &span) {
                 by += out * (depth + span.radius);
                 moved = true;

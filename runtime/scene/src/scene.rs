@@ -280,20 +280,13 @@ impl Scene {
             crowd.facings.push(facing);
             let velocity = DVec2::new(state.qd[x], state.qd[z]);
             crowd.bodies.push(match self.space.walking {
-                troupe_nav::Walking::Navigated => self.body_joints[i].body(
-                    &state.globals,
-                    facing,
-                    velocity,
-                    crowd.radii[i],
-                ),
+                troupe_nav::Walking::Navigated => {
+                    self.body_joints[i].body(&state.globals, facing, velocity, crowd.radii[i])
+                }
                 // Nothing keeps bodies apart: their discs will do for the record.
-                troupe_nav::Walking::Straight => troupe_nav::Capsule::around(
-                    under_root,
-                    facing,
-                    crowd.radii[i],
-                    0.0,
-                    &[],
-                ),
+                troupe_nav::Walking::Straight => {
+                    troupe_nav::Capsule::around(under_root, facing, crowd.radii[i], 0.0, &[])
+                }
             });
         }
         crowd.index();

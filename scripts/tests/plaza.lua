@@ -3,22 +3,20 @@
 -- goal within TIME_BOUND; the test prints the worst interpenetration of solids and of
 -- body discs and the mean detour (walked / straight − 1), and bounds them at what the
 -- walkers do today, so that a change that makes them worse fails. Today every walker
--- arrives, by 124 s; bodies still meet (solids 0.135 m deep, discs 0.303 m), far from
--- issue 18's 1 cm (docs/navigation.md). It needs more than the default 120 simulated
--- seconds and over a minute of a release build, so it is not in scripts/tests/ (whose
--- debug run is CI's). Run it with
---   troupe test --timeout 300 scripts/bench/plaza.lua
--- Where and why walkers stand: scripts/bench/plaza_jam.lua.
-local plaza = require("plaza_streams")
+-- arrives, by 139 s; bodies still meet by centimetres (a thigh or a hand in a planter,
+-- 0.059 m), short of issue 18's 1 cm (docs/navigation.md, Limits). It needs more than the
+-- default 120 simulated seconds (its own timeout below) and about two minutes of the
+-- debug build a run. Where and why walkers stand: scripts/tests/support/plaza_jam.lua.
+local plaza = require("support.plaza_streams")
 
 -- Seconds by which every walk must have ended.
 local TIME_BOUND = 150
 -- Deepest interpenetration (m) allowed: of two actors' solids or a solid and a planter,
 -- and of two body discs.
-local SOLIDS_BOUND = 0.15
-local DISCS_BOUND = 0.31
+local SOLIDS_BOUND = 0.06
+local DISCS_BOUND = 0.035
 -- Mean detour allowed.
-local DETOUR_BOUND = 0.2
+local DETOUR_BOUND = 0.22
 
 test("four streams of 50 cross a plaza: everyone arrives", function()
   local actors, walks, goals, walked, straight = {}, {}, {}, {}, {}
@@ -75,4 +73,4 @@ test("four streams of 50 cross a plaza: everyone arrives", function()
   expect(solids[1] <= SOLIDS_BOUND, string.format("solids interpenetrated %.3f m", solids[1]))
   expect(discs[1] <= DISCS_BOUND, string.format("discs interpenetrated %.3f m", discs[1]))
   expect(detour <= DETOUR_BOUND, string.format("mean detour %.1f %%", 100 * detour))
-end)
+end, { timeout = TIME_BOUND + 10 })

@@ -1,4 +1,5 @@
--- The plaza's scene, shared by plaza.lua, plaza_jam.lua and plaza_picture.lua: a planter
+-- The plaza's scene, shared by scripts/tests/plaza.lua and, beside this file, plaza_jam.lua and
+-- plaza_picture.lua: a planter
 -- near each corner of a square, and four streams of walkers, each starting in a block
 -- outside one edge, bound for the opposite edge. Nobody walks yet: the caller says how.
 local M = {}

@@ -1,9 +1,9 @@
 -- Where and why the plaza jams (docs/navigation.md, Limits): the scene of
--- scripts/bench/plaza.lua, run for DURATION (120 s), printing every 2.5 s how many walkers stand
+-- scripts/tests/plaza.lua, run for DURATION (120 s), printing every 2.5 s how many walkers stand
 -- (slower than 0.1 m/s, away from their goal) and, for each stream, who blocks whom:
 -- the nearest actor ahead of a standing walker (within 60° of the way to its goal), its
 -- stream, the gap between their body discs, and whether it stands too. Run it with
---   troupe test scripts/bench/plaza_jam.lua
+--   troupe test scripts/tests/support/plaza_jam.lua
 local RADIUS = 0.28
 -- Seconds to watch.
 local DURATION = 120
