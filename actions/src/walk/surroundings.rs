@@ -6,7 +6,8 @@
 use super::rig::Leg;
 use super::route::direction;
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{FootSpan, Surroundings, FOOT_RADIUS};
+use troupe_scene::bodies::FOOT_RADIUS;
+use troupe_scene::space::{FootSpan, Surroundings};
 use troupe_scene::GeneratorContext;
 
 /// How far (m) past the touching of two bodies' discs a neighbour (or past the body's

@@ -7,6 +7,7 @@
 pub mod action;
 pub mod blackboard;
 pub mod blend;
+pub mod bodies;
 pub mod collision;
 pub mod error;
 pub mod holding;

@@ -132,8 +132,8 @@ pub struct Scene {
     /// Per actor: the DOF indices of root_x and root_z.
     root_dofs: Vec<(usize, usize)>,
     /// Per actor: the joints that stretch or widen its body on the floor (see
-    /// [`crate::space::BodyJoints`]).
-    body_joints: Vec<crate::space::BodyJoints>,
+    /// [`crate::bodies::BodyJoints`]).
+    body_joints: Vec<crate::bodies::BodyJoints>,
     /// Per actor: the user's character it is dressed in, if any (drawn instead of the
     /// generated skin; it changes nothing in the simulation).
     looks: Vec<Option<Arc<Dressing>>>,
@@ -504,7 +504,7 @@ impl Scene {
             .push(["l_ankle", "r_ankle"].map(|name| skeleton.joint(name).ok()));
         let state = ActorState::new(&skeleton, q);
         self.body_joints
-            .push(crate::space::BodyJoints::new(&skeleton, &state.globals));
+            .push(crate::bodies::BodyJoints::new(&skeleton, &state.globals));
         self.work.push(ActorWork {
             runtime: ActorRuntime::default(),
             next: state.clone(),

@@ -1,0 +1,121 @@
+//! Each actor's body on the floor as the clearance that keeps walkers apart sees it
+//! (`troupe_nav::clearance`): a capsule along the way it faces, made each tick from its
+//! posture, its facing and its speed.
+
+use troupe_body::glam::DVec2;
+use troupe_body::{Skeleton, Transform};
+use troupe_nav::{Capsule, FootSpan};
+
+/// How far (m) a foot's solid reaches round the segment under it from its heel to its toe
+/// tip: the template's foot frustum (0.024 h at the ball) for bodies up to 2.08 m.
+pub const FOOT_RADIUS: f64 = 0.05;
+/// How far (m) a thigh's solid reaches round the point over its knee: the template's
+/// thigh frustum (0.030 h at the knee) for bodies up to 2.0 m.
+const KNEE_RADIUS: f64 = 0.06;
+/// The template foot's heel and toe tip, as fractions of the ankle-to-ball length from
+/// the point under the ankle (`troupe_body`'s template: heel at -0.2, ball at 0.69 and
+/// toe tip at 0.85 of the foot's length).
+const HEEL: f64 = 0.2 / 0.69;
+const TOE: f64 = 0.85 / 0.69;
+
+/// How far a walking body reaches forwards and backwards past its disc at
+/// [`STRIDE_SPEED`] or faster, as a fraction of its radius, besides where its feet stand:
+/// the swinging leg's knee and foot on their way to a landing the feet do not show yet
+/// (the template adult, radius 0.28 m: its front toe tip at heel strike and back heel at
+/// toe-off are about 0.5 m from its root, its hands swing about 0.37 m from it). Slower,
+/// the strides are shorter.
+const STRIDE: f64 = 0.9;
+/// The speed (m/s, along the way the body faces) from which the stride is full.
+const STRIDE_SPEED: f64 = 1.2;
+
+/// The joints that shape an actor's body on the floor beyond its disc
+/// ([`Capsule`]): the feet, which stretch it along the way it faces, and the
+/// wrists, which widen it as the arms swing out.
+#[derive(Clone, Debug, Default)]
+pub struct BodyJoints {
+    /// The ankle and ball joints of each foot (left, right), if it has them.
+    feet: Option<[[usize; 2]; 2]>,
+    /// The knee joints: a leg lifted to step (even in place) brings its knee forwards.
+    knees: Vec<usize>,
+    /// Each wrist joint and its horizontal distance from the root at rest, where the
+    /// body's radius holds the hand hanging from it.
+    wrists: Vec<(usize, f64)>,
+}
+
+impl BodyJoints {
+    /// The joints of `skeleton`, posed at rest at `globals`.
+    pub fn new(skeleton: &Skeleton, globals: &[Transform]) -> Self {
+        let j = |name: &str| skeleton.joint(name).ok();
+        let feet = (|| {
+            Some([
+                [j("l_ankle")?, j("l_metatarsal")?],
+                [j("r_ankle")?, j("r_metatarsal")?],
+            ])
+        })();
+        let knees = ["l_knee", "r_knee"].into_iter().filter_map(j).collect();
+        let root = floor_point(&globals[0]);
+        let wrists = ["l_wrist", "r_wrist"]
+            .into_iter()
+            .filter_map(j)
+            .filter_map(|w| Some((w, (floor_point(globals.get(w)?) - root).length())))
+            .collect();
+        BodyJoints {
+            feet,
+            knees,
+            wrists,
+        }
+    }
+
+    /// The body posed at `globals`, facing `facing` and going at `velocity` (x, z), of
+    /// disc `radius`: the disc stretched by the stride at that speed (see [`STRIDE`]) and
+    /// to hold its feet, widened by as far as a wrist is further out from it than at rest.
+    pub fn body(
+        &self,
+        globals: &[Transform],
+        facing: DVec2,
+        velocity: DVec2,
+        radius: f64,
+    ) -> Capsule {
+        let root = floor_point(&globals[0]);
+        let stride = STRIDE * radius * (velocity.dot(facing).abs() / STRIDE_SPEED).min(1.0);
+        let feet = self.foot_spans(globals);
+        let mut body = Capsule::around(root, facing, radius, stride, &feet);
+        for &(wrist, at_rest) in &self.wrists {
+            if let Some(w) = globals.get(wrist) {
+                let out = body.distance(floor_point(w)) - at_rest;
+                body.radius = body.radius.max(radius + out);
+            }
+        }
+        body
+    }
+
+    /// The legs on the floor of the body posed at `globals`: each foot's span and each
+    /// knee's point (none for a body without them).
+    pub fn foot_spans(&self, globals: &[Transform]) -> Vec<FootSpan> {
+        let feet = self.feet.into_iter().flatten().filter_map(|[ankle, ball]| {
+            let (a, b) = (
+                floor_point(globals.get(ankle)?),
+                floor_point(globals.get(ball)?),
+            );
+            Some(FootSpan {
+                heel: a - (b - a) * HEEL,
+                toe: a + (b - a) * TOE,
+                radius: FOOT_RADIUS,
+            })
+        });
+        let knees = self.knees.iter().filter_map(|&k| {
+            let at = floor_point(globals.get(k)?);
+            Some(FootSpan {
+                heel: at,
+                toe: at,
+                radius: KNEE_RADIUS,
+            })
+        });
+        feet.chain(knees).collect()
+    }
+}
+
+/// The floor point (x, z) under a joint.
+fn floor_point(g: &Transform) -> DVec2 {
+    DVec2::new(g.translation.x, g.translation.z)
+}
