@@ -14,7 +14,7 @@ use troupe_scene::GeneratorContext;
 /// reach an obstacle) is looked at: a step and two strides.
 const RANGE: f64 = 1.0;
 /// How far (m) a body's feet may stand out of its disc, along the way it faces.
-const STRIDE: f64 = 0.6;
+const FEET_OUT: f64 = 0.6;
 
 /// The surroundings of actor `ctx.actor` this tick, leaving out `companions` (a hand
 /// held). `near` holds the actors near when `gathered` (the steering found them this
@@ -32,7 +32,7 @@ pub fn gather<'a>(
     let (Some(&from), Some(&radius)) = (crowd.positions.get(me), crowd.radii.get(me)) else {
         return around;
     };
-    let reach = radius + STRIDE;
+    let reach = radius + FEET_OUT;
     if !gathered {
         near.clear();
         crowd.near(from, near);
@@ -41,7 +41,7 @@ pub fn gather<'a>(
         if j == me || companions.contains(&j) {
             continue;
         }
-        if (crowd.positions[j] - from).length() - reach - crowd.radii[j] - STRIDE > RANGE {
+        if (crowd.positions[j] - from).length() - reach - crowd.radii[j] - FEET_OUT > RANGE {
             continue;
         }
         around.bodies.extend(crowd.bodies.get(j));

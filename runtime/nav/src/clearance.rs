@@ -1,33 +1,39 @@
 //! The backstop behind avoidance: each tick, a walker's body moves towards no other body or
-//! obstacle further than keeps them apart, and its feet land clear of the obstacles,
+//! obstacle further than keeps them apart, and its feet land and swing clear of them,
 //! whatever avoidance chose.
 //!
 //! Avoidance ([`crate::avoid`]) weighs velocities; in a dense crowd the best of them may
 //! still close on a neighbour, and a walker held by its planted feet or stopped by the
-//! give-way rule may not go where it chose. Two rules, both from the previous tick's world:
+//! give-way rule may not go where it chose. Three rules, all from the previous tick's
+//! world:
 //!
 //! - **The body's step** ([`limit_step`]; conservative advancement, as in continuous
 //!   collision detection). A body on the floor is a [`Capsule`] along the way it faces:
-//!   its disc (the body's radius) stretched forwards and backwards as far as its feet
-//!   stand apart ([`Capsule::around`]). Against each
-//!   neighbour's capsule, the step from where the body stood may close at most **half**
-//!   the gap between the two, measured between their nearest points; the neighbour,
-//!   deciding from the same previous tick, closes at most the other half, so together
-//!   they never close more than the gap. Against an obstacle, which stands still, the
-//!   whole gap. A gap already closed may not close further. Sliding along a neighbour or a
-//!   wall stays free: only the part of the step towards it is limited. Each limit is a
-//!   half-plane of steps holding the zero step, so standing still always satisfies them
-//!   all; the step kept is the wanted one projected onto the half-planes it leaves, in a
-//!   fixed order, and shortened if some limit is still broken after a few rounds.
+//!   its disc (the body's radius) stretched forwards and backwards by its stride and as
+//!   far as its feet and knees stand, widened by a foot planted wide
+//!   ([`Capsule::around`]). Against each neighbour's capsule, the step from where the body
+//!   stood may close at most **half** the gap between the two (less [`BODY_MARGIN`]),
+//!   measured between their nearest points; the neighbour, deciding from the same
+//!   previous tick, closes at most the other half, so together they never close more than
+//!   the gap. Against an obstacle, which stands still, the whole gap (less
+//!   [`OBSTACLE_MARGIN`]). A gap already closed may not close further. Sliding along a
+//!   neighbour or a wall stays free: only the part of the step towards it is limited.
+//!   Each limit is a half-plane of steps holding the zero step, so standing still always
+//!   satisfies them all; the step kept is the wanted one projected onto the half-planes
+//!   it leaves, in a fixed order, and shortened if some limit is still broken after a few
+//!   rounds.
 //! - **A foot's landing** ([`clear_foot`]): the foot's span on the floor (heel to toe tip,
-//!   with its solid's radius round it) is moved out of the obstacles and the other bodies
-//!   before it lands. The capsule holds the feet where they stand, but a swinging foot
-//!   goes where its landing was planned, ahead of the body, under where the body was
-//!   headed before its step was limited.
+//!   with its solid's radius round it) is moved out of the other bodies and the
+//!   obstacles before it lands, by at most [`LANDING_SHIFT`]. The capsule holds the feet
+//!   where they stand, but a swinging foot goes where its landing was planned, ahead of
+//!   the body, under where the body was headed before its step was limited.
+//! - **A foot in the air** ([`foot_may_move`]) closes on a body by at most half the gap
+//!   and on an obstacle by the gap, like the body's step.
 //!
 //! Pure functions of the previous tick's crowd: bit-identical with any thread count. What
-//! the capsule does not hold (an arm reaching out, a body turning on the spot against
-//! another) is left to the reach's detours and to avoidance.
+//! the capsule does not hold and moves within a tick (a knee leading a foot lifted towards
+//! an obstacle, a hand hanging past it at a corner, an arm reaching out, a body turning on
+//! the spot) is left to the margins, the reach's detours and avoidance.
 
 use crate::footprint::Footprint;
 use troupe_body::glam::DVec2;
@@ -44,14 +50,6 @@ pub const OBSTACLE_MARGIN: f64 = 0.02;
 /// own solid needs: the leg above it leans out towards the landing, and the knee of a
 /// foot lifted high comes out over it.
 pub const LEG_CLEARANCE: f64 = 0.08;
-
-/// A foot's span as it keeps from obstacles (see [`LEG_CLEARANCE`]).
-fn with_leg(span: &FootSpan) -> FootSpan {
-    FootSpan {
-        radius: span.radius + LEG_CLEARANCE,
-        ..*span
-    }
-}
 
 /// Farthest (m) a landing is moved to clear what is round it: further, the foot would land
 /// out of the legs' reach, and the walker steps in place instead.
@@ -94,7 +92,7 @@ impl FootSpan {
 /// with `radius` round it.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Capsule {
-    /// The middle of the segment (x, z): the body's root.
+    /// The middle of the segment (x, z), on the line through the body's root along `axis`.
     pub centre: DVec2,
     /// The unit direction the body faces (x, z).
     pub axis: DVec2,
@@ -166,6 +164,14 @@ impl Capsule {
     /// The nearest points of this capsule's segment and `other`'s (on this, on `other`).
     fn nearest_to(&self, other: &Capsule) -> (DVec2, DVec2) {
         nearest_between(self.ends(), other.ends())
+    }
+}
+
+/// A foot's span as it keeps from obstacles (see [`LEG_CLEARANCE`]).
+fn with_leg(span: &FootSpan) -> FootSpan {
+    FootSpan {
+        radius: span.radius + LEG_CLEARANCE,
+        ..*span
     }
 }
 
