@@ -78,6 +78,15 @@ impl FootSpan {
         (mid, (self.toe - self.heel).length() / 2.0 + self.radius)
     }
 
+    /// Points along the span's segment, heel to toe, at most 5 cm apart: a convex
+    /// footprint's corner cannot reach further between two of them than a foot's radius
+    /// covers.
+    fn samples(&self) -> impl Iterator<Item = DVec2> {
+        let (heel, along) = (self.heel, self.toe - self.heel);
+        let n = (along.length() / 0.05).ceil().max(1.0) as usize;
+        (0..=n).map(move |k| heel + along * (k as f64 / n as f64))
+    }
+
     /// The same span moved by `by`.
     pub fn moved(&self, by: DVec2) -> FootSpan {
         FootSpan {
@@ -389,14 +398,12 @@ pub fn clear_foot(foot: FootSpan, around: &Surroundings) -> Option<DVec2> {
     (!touches_body && !touches_obstacle).then_some(by)
 }
 
-/// The point of span `span`'s segment nearest footprint `f` (sampled every 5 cm) and the
+/// The point of span `span`'s segment nearest footprint `f` (of its samples) and the
 /// footprint's point nearest it; `None` if a sample is inside the footprint (no outward
 /// way to tell) or the footprint has no outline.
 fn nearest_to_footprint(f: &Footprint, span: &FootSpan) -> Option<(DVec2, DVec2)> {
-    let samples = ((span.toe - span.heel).length() / 0.05).ceil().max(1.0) as usize;
     let mut best: Option<(DVec2, DVec2)> = None;
-    for k in 0..=samples {
-        let p = span.heel + (span.toe - span.heel) * (k as f64 / samples as f64);
+    for p in span.samples() {
         if f.contains(p) {
             return None;
         }
@@ -413,12 +420,8 @@ fn nearest_to_footprint(f: &Footprint, span: &FootSpan) -> Option<(DVec2, DVec2)
 /// (negative: outside, by that much), for the segment point deepest in or nearest it;
 /// `None` when it is clear.
 fn footprint_overlap(f: &Footprint, span: &FootSpan) -> Option<(DVec2, f64)> {
-    // Points along the foot, heel to toe: a convex footprint's corner cannot reach
-    // further between two points 5 cm apart than the foot's radius covers.
-    let samples = ((span.toe - span.heel).length() / 0.05).ceil().max(1.0) as usize;
     let mut worst: Option<(DVec2, f64)> = None;
-    for k in 0..=samples {
-        let p = span.heel + (span.toe - span.heel) * (k as f64 / samples as f64);
+    for p in span.samples() {
         let Some(nearest) = nearest_on_outline(f, p) else {
             continue;
         };

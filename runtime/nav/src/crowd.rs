@@ -31,8 +31,6 @@ pub struct Crowd {
     /// looked them up in the neighbours' postures (a twentieth of the crowd
     /// benchmark's tick, in cache misses).
     pub feet: Vec<[DVec2; 2]>,
-    /// Each actor's ankle joints (left, right), if its skeleton has them.
-    pub ankles: Vec<[Option<usize>; 2]>,
     /// Every obstacle's footprint, as `World::obstacles` lists them (walls, then objects).
     pub footprints: Vec<Footprint>,
     /// The centre and radius of a circle round each footprint.

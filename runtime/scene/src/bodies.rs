@@ -33,6 +33,9 @@ const STRIDE_SPEED: f64 = 1.2;
 /// wrists, which widen it as the arms swing out.
 #[derive(Clone, Debug, Default)]
 pub struct BodyJoints {
+    /// The ankle joints (left, right), each if the skeleton has it: the points under them
+    /// are what avoidance weighs of the feet (`troupe_nav::Crowd::feet`).
+    ankles: [Option<usize>; 2],
     /// The ankle and ball joints of each foot (left, right), if it has them.
     feet: Option<[[usize; 2]; 2]>,
     /// The knee joints: a leg lifted to step (even in place) brings its knee forwards.
@@ -60,6 +63,7 @@ impl BodyJoints {
             .filter_map(|w| Some((w, (floor_point(globals.get(w)?) - root).length())))
             .collect();
         BodyJoints {
+            ankles: [j("l_ankle"), j("r_ankle")],
             feet,
             knees,
             wrists,
@@ -87,6 +91,14 @@ impl BodyJoints {
             }
         }
         body
+    }
+
+    /// The floor points under the ankles (left, right) of the body posed at `globals`;
+    /// under its root for an ankle the skeleton lacks.
+    pub fn ankle_points(&self, globals: &[Transform]) -> [DVec2; 2] {
+        let root = floor_point(&globals[0]);
+        self.ankles
+            .map(|a| a.and_then(|a| globals.get(a)).map_or(root, floor_point))
     }
 
     /// The legs on the floor of the body posed at `globals`: each foot's span and each

@@ -266,13 +266,9 @@ impl Scene {
         for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
             let under_root = DVec2::new(root.x, root.z);
-            let under = |joint: Option<usize>| {
-                joint
-                    .and_then(|j| state.globals.get(j))
-                    .map_or(under_root, |g| DVec2::new(g.translation.x, g.translation.z))
-            };
-            let ankles = crowd.ankles.get(i).copied().unwrap_or_default();
-            crowd.feet.push(ankles.map(under));
+            crowd
+                .feet
+                .push(self.body_joints[i].ankle_points(&state.globals));
             crowd.positions.push(under_root);
             crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
             let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
@@ -499,9 +495,6 @@ impl Scene {
         self.root_dofs
             .push((skeleton.dof("root_x")?, skeleton.dof("root_z")?));
         self.crowd.radii.push(troupe_nav::body_radius(&skeleton));
-        self.crowd
-            .ankles
-            .push(["l_ankle", "r_ankle"].map(|name| skeleton.joint(name).ok()));
         let state = ActorState::new(&skeleton, q);
         self.body_joints
             .push(crate::bodies::BodyJoints::new(&skeleton, &state.globals));
