@@ -3,8 +3,9 @@
 -- goal within TIME_BOUND; the test prints the worst interpenetration of solids and of
 -- body discs and the mean detour (walked / straight − 1), and bounds them at what the
 -- walkers do today, so that a change that makes them worse fails. Today every walker
--- arrives, by 139 s; bodies still meet by centimetres (a thigh or a hand in a planter,
--- 0.059 m), short of issue 18's 1 cm (docs/navigation.md, Limits). It needs more than the
+-- arrives, by 138 s, their discs apart; limbs still meet by centimetres (one walker's
+-- foot on another's, 0.063 m; thighs and feet in planters), short of issue 18's 1 cm
+-- (docs/navigation.md, Limits). It needs more than the
 -- default 120 simulated seconds (its own timeout below) and about three minutes of the
 -- debug build a run. The scene is chaotic: a change that alters one walker's step in a
 -- rare case moves the worst figures by half (0.059 m of solids became 0.088 m, its discs
@@ -16,10 +17,10 @@ local plaza = require("support.plaza_streams")
 local TIME_BOUND = 150
 -- Deepest interpenetration (m) allowed: of two actors' solids or a solid and a planter,
 -- and of two body discs.
-local SOLIDS_BOUND = 0.06
-local DISCS_BOUND = 0.035
+local SOLIDS_BOUND = 0.065
+local DISCS_BOUND = 0.01
 -- Mean detour allowed.
-local DETOUR_BOUND = 0.22
+local DETOUR_BOUND = 0.24
 
 test("four streams of 50 cross a plaza: everyone arrives", function()
   local actors, walks, goals, walked, straight = {}, {}, {}, {}, {}

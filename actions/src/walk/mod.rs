@@ -811,11 +811,11 @@ impl Walk {
         (sway, vertical, [tilt, list, rot], spine, arms)
     }
 
-    /// This walker's body on the floor as the previous tick left it (see
-    /// `troupe_nav::clearance`): the crowd's capsule, or its disc.
+    /// The part of this walker's body its step carries, as the previous tick left it (see
+    /// `troupe_nav::clearance`): the crowd's core capsule, or its disc.
     fn body(&self, ctx: &GeneratorContext) -> Capsule {
         let crowd = ctx.world.crowd;
-        crowd.bodies.get(ctx.actor).copied().unwrap_or(Capsule {
+        crowd.cores.get(ctx.actor).copied().unwrap_or(Capsule {
             centre: crowd.positions.get(ctx.actor).copied().unwrap_or_default(),
             axis: DVec2::ZERO,
             half_length: 0.0,

@@ -16,7 +16,11 @@
 //!   measured between their nearest points; the neighbour, deciding from the same
 //!   previous tick, closes at most the other half, so together they never close more than
 //!   the gap. Against an obstacle, which stands still, the whole gap (less
-//!   [`OBSTACLE_MARGIN`]). A gap already closed may not close further. Sliding along a
+//!   [`OBSTACLE_MARGIN`]), for the capsule and for the disc round its middle (the
+//!   capsule stretches and turns from tick to tick, so one touching a corner could slide
+//!   its end along it while its middle closed in). A gap already closed may not close
+//!   further. The walker's own capsule is the part its step carries (the crowd's core,
+//!   without its planted feet); its neighbours' are whole. Sliding along a
 //!   neighbour or a wall stays free: only the part of the step towards it is limited.
 //!   Each limit is a half-plane of steps holding the zero step, so standing still always
 //!   satisfies them all; the step kept is the wanted one projected onto the half-planes
@@ -258,24 +262,33 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
         };
         limits.extend(Limit::of(apart, gap, 0.5, reach));
     }
-    let (a, b) = me.ends();
-    for f in &around.obstacles {
-        if footprint_gap_bound(me.bound(), f) > reach + OBSTACLE_MARGIN {
-            continue;
+    // Against obstacles, the capsule and the disc round its middle: the capsule's length
+    // changes with the stride and turns with the body, so one already touching could
+    // slide its end along an obstacle while its middle closed on it.
+    let disc = Capsule {
+        half_length: 0.0,
+        ..*me
+    };
+    for body in [me, &disc] {
+        let (a, b) = body.ends();
+        for f in &around.obstacles {
+            if footprint_gap_bound(body.bound(), f) > reach + OBSTACLE_MARGIN {
+                continue;
+            }
+            let span = FootSpan {
+                heel: a,
+                toe: b,
+                radius: body.radius,
+            };
+            let Some((point, nearest)) = nearest_to_footprint(f, &span) else {
+                continue;
+            };
+            // A convex footprint lies wholly behind the tangent at its nearest point: a
+            // body whose nearest point stays `radius` in front of the tangent stays clear.
+            let apart = point - nearest;
+            let gap = apart.length() - body.radius - OBSTACLE_MARGIN;
+            limits.extend(Limit::of(apart, gap, 1.0, reach));
         }
-        let span = FootSpan {
-            heel: a,
-            toe: b,
-            radius: me.radius,
-        };
-        let Some((point, nearest)) = nearest_to_footprint(f, &span) else {
-            continue;
-        };
-        // A convex footprint lies wholly behind the tangent at its nearest point: a body
-        // whose nearest point stays `radius` in front of the tangent stays clear of it.
-        let apart = point - nearest;
-        let gap = apart.length() - me.radius - OBSTACLE_MARGIN;
-        limits.extend(Limit::of(apart, gap, 1.0, reach));
     }
     within(step, &limits)
 }
@@ -606,6 +619,36 @@ mod tests {
             let n = (me.centre - other.centre).normalize();
             let gap = (me.centre - other.centre).length() - 0.6;
             assert!(-s.dot(n) <= (gap / 2.0).max(0.0) + 1e-12, "{s}");
+        }
+    }
+
+    #[test]
+    fn a_capsule_stretching_at_a_corner_does_not_carry_its_middle_in() {
+        // A walker heads past a planter's corner, its stride growing and its body turning
+        // towards the corner each tick, and keeps asking to go straight at it: its capsule
+        // soon touches the corner with its front end and may then only slide, but the disc
+        // round its middle still keeps the radius and the margin.
+        let planter = square("planter", (0.5, 0.4), (2.0, 2.0));
+        let around = Surroundings {
+            obstacles: vec![&planter],
+            ..Surroundings::default()
+        };
+        let mut root = DVec2::ZERO;
+        for tick in 0..120 {
+            let turn = 0.01 * tick as f64;
+            let me = Capsule {
+                centre: root,
+                axis: DVec2::new(turn.cos(), turn.sin()),
+                half_length: (0.05 + 0.01 * tick as f64).min(0.5),
+                radius: 0.3,
+            };
+            let towards = (DVec2::new(0.5, 0.4) - root).normalize() * 0.013;
+            root += limit_step(&me, towards, &around);
+            assert!(
+                planter.distance(root) >= 0.3 + OBSTACLE_MARGIN - 1e-9,
+                "tick {tick}: the middle {root} came {} from the planter",
+                planter.distance(root)
+            );
         }
     }
 

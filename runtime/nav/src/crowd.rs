@@ -26,6 +26,10 @@ pub struct Crowd {
     /// Each actor's body on the floor, its disc stretched to hold its feet (see
     /// [`crate::clearance::Capsule`]).
     pub bodies: Vec<Capsule>,
+    /// The part of each actor's body its root's step carries: its disc stretched by its
+    /// stride and widened by its wrists, without the feet planted on the floor, which
+    /// stay where they are as the body moves (see [`crate::clearance::limit_step`]).
+    pub cores: Vec<Capsule>,
     /// The floor points (x, z) under each actor's ankles (left, right); its root's for
     /// a body without them. Gathered once a tick for every walker's avoidance, which
     /// looked them up in the neighbours' postures (a twentieth of the crowd

@@ -71,26 +71,30 @@ impl BodyJoints {
     }
 
     /// The body posed at `globals`, facing `facing` and going at `velocity` (x, z), of
-    /// disc `radius`: the disc stretched by the stride at that speed (see [`STRIDE`]) and
-    /// to hold its feet, widened by as far as a wrist is further out from it than at rest.
+    /// disc `radius`, whole and carried: the disc stretched by the stride at that speed
+    /// (see [`STRIDE`]), widened by as far as a wrist is further out from it than at
+    /// rest, and, whole, stretched to hold its feet and knees as well. The carried body is
+    /// what the root's step moves (`Crowd::cores`); the planted feet stay behind.
     pub fn body(
         &self,
         globals: &[Transform],
         facing: DVec2,
         velocity: DVec2,
         radius: f64,
-    ) -> Capsule {
+    ) -> (Capsule, Capsule) {
         let root = floor_point(&globals[0]);
         let stride = STRIDE * radius * (velocity.dot(facing).abs() / STRIDE_SPEED).min(1.0);
         let feet = self.foot_spans(globals);
-        let mut body = Capsule::around(root, facing, radius, stride, &feet);
+        let mut whole = Capsule::around(root, facing, radius, stride, &feet);
+        let mut core = Capsule::around(root, facing, radius, stride, &[]);
         for &(wrist, at_rest) in &self.wrists {
             if let Some(w) = globals.get(wrist) {
-                let out = body.distance(floor_point(w)) - at_rest;
-                body.radius = body.radius.max(radius + out);
+                let w = floor_point(w);
+                whole.radius = whole.radius.max(radius + whole.distance(w) - at_rest);
+                core.radius = core.radius.max(radius + core.distance(w) - at_rest);
             }
         }
-        body
+        (whole, core)
     }
 
     /// The floor points under the ankles (left, right) of the body posed at `globals`;

@@ -263,6 +263,7 @@ impl Scene {
         crowd.facings.clear();
         crowd.feet.clear();
         crowd.bodies.clear();
+        crowd.cores.clear();
         for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
             let under_root = DVec2::new(root.x, root.z);
@@ -275,15 +276,19 @@ impl Scene {
             let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
             crowd.facings.push(facing);
             let velocity = DVec2::new(state.qd[x], state.qd[z]);
-            crowd.bodies.push(match self.space.walking {
+            let (whole, core) = match self.space.walking {
                 troupe_nav::Walking::Navigated => {
                     self.body_joints[i].body(&state.globals, facing, velocity, crowd.radii[i])
                 }
                 // Nothing keeps bodies apart: their discs will do for the record.
                 troupe_nav::Walking::Straight => {
-                    troupe_nav::Capsule::around(under_root, facing, crowd.radii[i], 0.0, &[])
+                    let disc =
+                        troupe_nav::Capsule::around(under_root, facing, crowd.radii[i], 0.0, &[]);
+                    (disc, disc)
                 }
-            });
+            };
+            crowd.bodies.push(whole);
+            crowd.cores.push(core);
         }
         crowd.index();
         self.crowd = crowd;
