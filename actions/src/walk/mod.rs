@@ -575,18 +575,14 @@ impl Walk {
         let t_mid = self.t + ahead * cycle.cycle;
         let fresh = self.landing_at(around, plan, leg, t_mid, DVec2::new(from.x, from.z));
         let step = RETARGET_SPEED * self.dt;
-        if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
-            landing.plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
-            landing.yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
-        }
+        let plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
+        let yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
         // Wherever the retargeting has got to, the foot lands clear (a jump of the
         // landing, not of the foot, which swings towards it).
-        if let Foot::Swing { to: landing, .. } = self.feet[leg] {
-            if let Some(clear) = self.cleared(around, leg, landing.plant, landing.yaw) {
-                if let Foot::Swing { to, .. } = &mut self.feet[leg] {
-                    to.plant = clear;
-                }
-            }
+        let plant = self.cleared(around, leg, plant, yaw).unwrap_or(plant);
+        if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
+            landing.plant = plant;
+            landing.yaw = yaw;
         }
     }
 
