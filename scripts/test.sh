@@ -1,19 +1,72 @@
 #!/usr/bin/env bash
 # The whole test suite: formatting, lints, Rust tests, then the Lua scenario tests on one
-# and on two threads.
+# and on two threads. How long each part takes, and why it is arranged so:
+# docs/PERFORMANCE.md, "The clean CI run".
 set -euo pipefail
 cd "$(dirname "$0")/.."
-scripts/setup.sh --tests
+
+# The set-up (system packages, and the tools the tests check troupe with) runs beside
+# formatting and compiling, which need none of it: building emmylua_check fills the core
+# that the workspace's chain of crates leaves idle. Its output is shown when it ends.
+setup_log="$(mktemp)"
+scripts/setup.sh --tests >"$setup_log" 2>&1 &
+setup_pid=$!
+
 cargo fmt --all -- --check
-cargo clippy --workspace --all-targets -- -D warnings
-# The default build has the zenoh feature (docs/distributed.md, "Build cost"): linted and
-# tested above. The build without it must still compile and lint: a check build (some
-# dependencies' features differ without zenoh, so a few are checked again).
-cargo clippy -p troupe --no-default-features --all-targets -- -D warnings
+
+# Clippy lints our crates while they are compiled for the tests: clippy-driver is the
+# compiler of the workspace's own crates, as under `cargo clippy`, with warnings denied.
+# `cargo clippy` compiles every dependency once more in check mode, which took a third
+# of a clean run; here each dependency is compiled once. The lints are the same: a lint
+# or a warning fails the build, and so this script.
+sysroot="$(rustc --print sysroot)"
+clippy_driver="$sysroot/bin/clippy-driver"
+[ -x "$clippy_driver" ] || { echo "test: clippy is required (rustup component add clippy)" >&2; exit 1; }
+export RUSTC_WORKSPACE_WRAPPER="$clippy_driver"
+export CLIPPY_ARGS="-Dwarnings"
+# The default build has the zenoh feature (docs/distributed.md, "Build cost"). The build
+# without it must still compile, lint and pass its unit tests; only src/ depends on the
+# feature. First, so that the binary the tests below run is the default build's.
+cargo test -p troupe --no-default-features --bin troupe
+cargo build -p troupe --no-default-features --bin troupe
+# Every target of the default build: benches and examples too, as `cargo clippy
+# --all-targets` lints them.
+cargo test --workspace --all-targets --no-run
+
+if ! wait "$setup_pid"; then
+  cat "$setup_log"
+  echo "test: scripts/setup.sh --tests failed" >&2
+  exit 1
+fi
+cat "$setup_log"
+
 cargo test --workspace
+# The `troupe` binary the integration tests just ran (their CARGO_BIN_EXE_troupe). Not
+# `cargo run`: without the other crates' dev-dependencies some dependencies resolve to
+# other features (regex-syntax without Unicode, for one), and `cargo run` would compile
+# them and every crate above them once more.
+target_dir="$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')"
+troupe="$target_dir/debug/troupe"
+[ -x "$troupe" ] || { echo "test: no troupe binary at $troupe" >&2; exit 1; }
+
 # Every Lua file of the repository, checked against the API's definitions (docs/editor.md).
-cargo run -q -- lua-defs .tools/lua/troupe.d.lua
+"$troupe" lua-defs .tools/lua/troupe.d.lua
 "${TROUPE_TOOLS:-$HOME/.cache/troupe-tools}/bin/emmylua_check" .
-cargo run -q -- test
-# Again with two threads stepping even the smallest scenes (one actor per chunk).
-cargo run -q -- test --threads 2 --chunk 1
+
+# The scenario tests, on one thread and again on two stepping even the smallest scenes
+# (one actor per chunk): both runs at once, since the one-thread run leaves a core free.
+# Each run's report is printed whole when it ends, and either failing fails the script.
+one="$(mktemp)"
+two="$(mktemp)"
+"$troupe" test >"$one" 2>&1 &
+one_pid=$!
+"$troupe" test --threads 2 --chunk 1 >"$two" 2>&1 &
+two_pid=$!
+status=0
+wait "$one_pid" || status=1
+echo "troupe test (1 thread):"
+cat "$one"
+wait "$two_pid" || status=1
+echo "troupe test --threads 2 --chunk 1:"
+cat "$two"
+exit "$status"
