@@ -16,9 +16,9 @@ cargo fmt --all -- --check
 
 # Clippy lints our crates while they are compiled for the tests: clippy-driver is the
 # compiler of the workspace's own crates, as under `cargo clippy`, with warnings denied.
-# `cargo clippy` compiles every dependency once more in check mode, which took a third
-# of a clean run; here each dependency is compiled once. The lints are the same: a lint
-# or a warning fails the build, and so this script.
+# `cargo clippy` would check every dependency once more (a check does not reuse a
+# build); here each is compiled once. The lints are the same: a lint or a warning fails
+# the build, and so this script.
 sysroot="$(rustc --print sysroot)"
 clippy_driver="$sysroot/bin/clippy-driver"
 [ -x "$clippy_driver" ] || { echo "test: clippy is required (rustup component add clippy)" >&2; exit 1; }
@@ -30,9 +30,9 @@ cargo test --workspace --all-targets --no-run
 # The default build has the zenoh feature (docs/distributed.md, "Build cost"). The build
 # without it must still compile and lint: `cargo clippy` of that package, a check build.
 # Zenoh turns on features of dependencies that the rest shares (serde's, rustix's…), so
-# without it most of them, wgpu and mlua among them, differ: compiled for a binary they
-# would take as long again as the build above, checked they take a third of that. Being
-# checked, not built, it leaves the default build's binary in place for the tests.
+# without it most of them, wgpu and mlua among them, differ: building them took 17 min
+# of a clean run, checking them 3 (docs/PERFORMANCE.md). Being a check, it also leaves
+# the default build's binary in place for the tests.
 cargo clippy -p troupe --no-default-features --all-targets -- -D warnings
 
 if ! wait "$setup_pid"; then
