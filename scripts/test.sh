@@ -43,12 +43,12 @@ fi
 cat "$setup_log"
 
 cargo test --workspace
-# The `troupe` binary the integration tests just ran (their CARGO_BIN_EXE_troupe). Not
-# `cargo run`: without the other crates' dev-dependencies some dependencies resolve to
-# other features (regex-syntax without Unicode, for one), and `cargo run` would compile
-# them and every crate above them once more.
-target_dir="$(cargo metadata --format-version 1 --no-deps | sed -n 's/.*"target_directory":"\([^"]*\)".*/\1/p')"
-troupe="$target_dir/debug/troupe"
+# The `troupe` binary the integration tests just ran (their CARGO_BIN_EXE_troupe), where
+# scripts/vrpn-server.sh finds the target folder too. Not `cargo run`: without the other
+# crates' dev-dependencies some dependencies resolve to other features (regex-syntax
+# without Unicode, for one), and `cargo run` would compile them and every crate above
+# them once more.
+troupe="${CARGO_TARGET_DIR:-target}/debug/troupe"
 [ -x "$troupe" ] || { echo "test: no troupe binary at $troupe" >&2; exit 1; }
 
 # Every Lua file of the repository, checked against the API's definitions (docs/editor.md).
@@ -64,11 +64,15 @@ two="$(mktemp)"
 one_pid=$!
 "$troupe" test --threads 2 --chunk 1 >"$two" 2>&1 &
 two_pid=$!
+# Waits for run PID, then prints TITLE and the run's report; fails as the run did.
+report() {
+  local pid=$1 file=$2 title=$3 status=0
+  wait "$pid" || status=1
+  echo "$title:"
+  cat "$file"
+  return "$status"
+}
 status=0
-wait "$one_pid" || status=1
-echo "troupe test (1 thread):"
-cat "$one"
-wait "$two_pid" || status=1
-echo "troupe test --threads 2 --chunk 1:"
-cat "$two"
+report "$one_pid" "$one" "troupe test (1 thread)" || status=1
+report "$two_pid" "$two" "troupe test --threads 2 --chunk 1" || status=1
 exit "$status"
