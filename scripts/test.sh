@@ -8,7 +8,11 @@ cd "$(dirname "$0")/.."
 # The set-up (system packages, and the tools the tests check troupe with) runs beside
 # formatting and compiling, which need none of it: building emmylua_check fills the core
 # that the workspace's chain of crates leaves idle. Its output is shown when it ends.
+# The logs of the runs in the background; removed however the script ends.
 setup_log="$(mktemp)"
+one="$(mktemp)"
+two="$(mktemp)"
+trap 'rm -f "$setup_log" "$one" "$two"' EXIT
 scripts/setup.sh --tests >"$setup_log" 2>&1 &
 setup_pid=$!
 
@@ -67,8 +71,6 @@ troupe="${CARGO_TARGET_DIR:-target}/debug/troupe"
 # The scenario tests, on one thread and again on two stepping even the smallest scenes
 # (one actor per chunk): both runs at once, since the one-thread run leaves a core free.
 # Each run's report is printed whole when it ends, and either failing fails the script.
-one="$(mktemp)"
-two="$(mktemp)"
 "$troupe" test >"$one" 2>&1 &
 one_pid=$!
 "$troupe" test --threads 2 --chunk 1 >"$two" 2>&1 &
