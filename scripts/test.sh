@@ -5,14 +5,15 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-# The set-up (system packages, and the tools the tests check troupe with) runs beside
-# formatting and compiling, which need none of it: building emmylua_check fills the core
-# that the workspace's chain of crates leaves idle. Its output is shown when it ends.
 # The logs of the runs in the background; removed however the script ends.
 setup_log="$(mktemp)"
 one="$(mktemp)"
 two="$(mktemp)"
 trap 'rm -f "$setup_log" "$one" "$two"' EXIT
+
+# The set-up (system packages, and the tools the tests check troupe with) runs beside
+# formatting and compiling, which need none of it: building emmylua_check fills the core
+# that the workspace's chain of crates leaves idle. Its output is shown when it ends.
 scripts/setup.sh --tests >"$setup_log" 2>&1 &
 setup_pid=$!
 
