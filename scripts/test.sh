@@ -10,6 +10,14 @@ setup_log="$(mktemp)"
 one="$(mktemp)"
 two="$(mktemp)"
 trap 'rm -f "$setup_log" "$one" "$two"' EXIT
+# Waits for run PID, then prints TITLE and the run's log FILE; fails as the run did.
+report() {
+  local pid=$1 file=$2 title=$3 status=0
+  wait "$pid" || status=1
+  echo "$title:"
+  cat "$file"
+  return "$status"
+}
 
 # The set-up (system packages, and the tools the tests check troupe with) runs beside
 # formatting and compiling, which need none of it: building emmylua_check fills the core
@@ -40,12 +48,8 @@ cargo test --workspace --all-targets --no-run
 # the default build's binary in place for the tests.
 cargo clippy -p troupe --no-default-features --all-targets -- -D warnings
 
-if ! wait "$setup_pid"; then
-  cat "$setup_log"
-  echo "test: scripts/setup.sh --tests failed" >&2
-  exit 1
-fi
-cat "$setup_log"
+report "$setup_pid" "$setup_log" "scripts/setup.sh --tests" ||
+  { echo "test: scripts/setup.sh --tests failed" >&2; exit 1; }
 
 # Every Rust test. cargo-nextest runs the tests of all the binaries side by side, each in
 # its own process (`cargo test` runs one binary at a time, and many of its tests wait on
@@ -76,14 +80,6 @@ troupe="${CARGO_TARGET_DIR:-target}/debug/troupe"
 one_pid=$!
 "$troupe" test --threads 2 --chunk 1 >"$two" 2>&1 &
 two_pid=$!
-# Waits for run PID, then prints TITLE and the run's report; fails as the run did.
-report() {
-  local pid=$1 file=$2 title=$3 status=0
-  wait "$pid" || status=1
-  echo "$title:"
-  cat "$file"
-  return "$status"
-}
 status=0
 report "$one_pid" "$one" "troupe test (1 thread)" || status=1
 report "$two_pid" "$two" "troupe test --threads 2 --chunk 1" || status=1
