@@ -32,32 +32,40 @@ pub fn strain(leg: &Leg, values: &[f64; 7], miss: f64) -> f64 {
 
 /// Where the root goes, between `last` (where it stood on the previous tick) and
 /// `wanted` (where the steering puts it, a planted leg then strained by `strain_wanted`),
-/// given the strain `strain_at` any point asks of the legs: `wanted` when that is within
-/// [`TOLERANCE`]; else the farthest point towards it within the tolerance; `wanted` still
-/// when even `last` is strained at least as much (nothing to hold on to).
-pub fn hold(
+/// given the legs `solve` finds for any point and the `strain` they ask: `None` when
+/// `wanted` stands, that is when it is within [`TOLERANCE`] or when even `last` is
+/// strained at least as much (nothing to hold on to); else the farthest point towards it
+/// within the tolerance (`last` itself when strained but less), with the legs solved there
+/// (the bisection has them already: solving them again would cost the walk a second
+/// solve of both legs).
+pub fn hold<T>(
     last: DVec2,
     wanted: DVec2,
     strain_wanted: f64,
-    strain_at: impl Fn(DVec2) -> f64,
-) -> DVec2 {
+    solve: impl Fn(DVec2) -> T,
+    strain: impl Fn(&T) -> f64,
+) -> Option<(DVec2, T)> {
     if strain_wanted <= TOLERANCE {
-        return wanted;
+        return None;
     }
-    let from = strain_at(last);
-    if from > TOLERANCE {
-        return if from < strain_wanted { last } else { wanted };
+    let from = solve(last);
+    let strain_from = strain(&from);
+    if strain_from > TOLERANCE {
+        return (strain_from < strain_wanted).then_some((last, from));
     }
     let (mut free, mut strained) = (0.0, 1.0);
+    let mut best = from;
     for _ in 0..HALVINGS {
         let mid = 0.5 * (free + strained);
-        if strain_at(last + (wanted - last) * mid) <= TOLERANCE {
+        let solved = solve(last + (wanted - last) * mid);
+        if strain(&solved) <= TOLERANCE {
             free = mid;
+            best = solved;
         } else {
             strained = mid;
         }
     }
-    last + (wanted - last) * free
+    Some((last + (wanted - last) * free, best))
 }
 
 #[cfg(test)]
@@ -69,13 +77,27 @@ mod tests {
         (p.length() - 0.5).max(0.0)
     }
 
+    /// [`hold`] for that leg, "solved" as the point itself: where the root goes.
+    fn held(last: DVec2, wanted: DVec2) -> DVec2 {
+        match hold(last, wanted, reach(wanted), |p| p, |&p| reach(p)) {
+            Some((at, solved)) => {
+                assert_eq!(
+                    at, solved,
+                    "the solution handed back is the one at the point"
+                );
+                at
+            }
+            None => wanted,
+        }
+    }
+
     #[test]
     fn a_free_step_is_taken_and_a_strained_one_stops_where_the_leg_reaches() {
         let last = DVec2::new(0.3, 0.0);
         let free = DVec2::new(0.4, 0.0);
-        assert_eq!(hold(last, free, reach(free), reach), free);
+        assert_eq!(held(last, free), free);
         let far = DVec2::new(0.7, 0.0);
-        let held = hold(last, far, reach(far), reach);
+        let held = held(last, far);
         assert!(reach(held) <= TOLERANCE, "{held}");
         assert!(held.x > 0.5 && held.x < 0.5 + TOLERANCE, "{held}");
     }
@@ -84,8 +106,8 @@ mod tests {
     fn a_body_already_strained_moves_only_to_ease_it() {
         let last = DVec2::new(0.8, 0.0);
         let easier = DVec2::new(0.7, 0.0);
-        assert_eq!(hold(last, easier, reach(easier), reach), easier);
+        assert_eq!(held(last, easier), easier);
         let worse = DVec2::new(0.9, 0.0);
-        assert_eq!(hold(last, worse, reach(worse), reach), last);
+        assert_eq!(held(last, worse), last);
     }
 }

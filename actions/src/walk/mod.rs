@@ -855,9 +855,10 @@ impl Walk {
         let left = DVec2::new(heading.cos(), -heading.sin());
         let lift = (vertical, a, k);
         let mut floor = sample.position + left * sway;
-        let mut legs = self.legs_at(floor, heading, pelvis, lift);
         // Whatever the steering chose, the body closes on no other body or obstacle past
-        // the clearance limit (see `troupe_nav::clearance`).
+        // the clearance limit (see `troupe_nav::clearance`). The legs are solved after it,
+        // once for where the body goes (solving both legs is about a fifth of the crowd
+        // benchmark's tick).
         let crowd = ctx.world.crowd;
         let navigated = ctx.world.space.walking == Walking::Navigated;
         if let (Route::Path { .. }, Some(&from), true) =
@@ -870,21 +871,25 @@ impl Walk {
                 }
                 self.steer.hold(plan, clear - floor);
                 floor = clear;
-                legs = self.legs_at(floor, heading, pelvis, lift);
             }
         }
+        let mut legs = self.legs_at(floor, heading, pelvis, lift);
         // A steered body goes no further than its planted feet allow (see [`footing`]):
         // between where it stood and where the clearance let it go, so still within the
         // clearance's limits (each a half-plane that holds both).
         if self.steer.engaged {
             if let Some(last) = self.last_floor {
-                let held = footing::hold(last, floor, legs.strain, |p| {
-                    self.legs_at(p, heading, pelvis, lift).strain
-                });
-                if held != floor {
+                let held = footing::hold(
+                    last,
+                    floor,
+                    legs.strain,
+                    |p| self.legs_at(p, heading, pelvis, lift),
+                    |legs| legs.strain,
+                );
+                if let Some((held, held_legs)) = held.filter(|(held, _)| *held != floor) {
                     self.steer.hold(plan, held - floor);
                     floor = held;
-                    legs = self.legs_at(floor, heading, pelvis, lift);
+                    legs = held_legs;
                 }
             }
         }
