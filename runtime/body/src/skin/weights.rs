@@ -126,11 +126,11 @@ impl Chains {
     /// The chains of `helpers`, whose slots start at `first_slot` (the number of joints),
     /// each with `ends` joints at its parent's end: the helped joint's parent and its next
     /// ancestors (`parent_of` gives a joint's parent); `bone` gives a helped joint's bone
-    /// at rest, from the joint to its child. At the shoulder the armpit is
-    /// shared between the arm and the chest (vt1, vt6), which are the clavicle's
-    /// ancestors: counted at the chain's parent end, their share of an armpit vertex
-    /// blends with the arm's through helpers a quarter of the bend apart, instead of a
-    /// straight blend of the chest and an arm turned by up to 180°.
+    /// at rest, from the joint to its child. At the shoulder the armpit is shared between
+    /// the arm and the chest (vt1, vt6), which are the clavicle's ancestors: counted at
+    /// the chain's parent end, their share of an armpit vertex blends with the arm's
+    /// through helpers a quarter of the bend apart, instead of a straight blend of the
+    /// chest and an arm turned by up to 180°.
     pub(crate) fn new(
         helpers: &[Helper],
         first_slot: usize,
@@ -172,10 +172,10 @@ impl Chains {
     }
 
     /// `row`, the weights of a vertex at rest position `p`, with the weights of each
-    /// helped joint and its parent's end moved onto their chain. A joint in several chains (vt1 at the parent's end of both shoulders')
-    /// splits its weight among them in proportion to its partner's weight in each, so the
-    /// routing is continuous over the surface: where a partner's weight fades to nothing
-    /// its chain's share does too.
+    /// helped joint and its parent's end moved onto their chain. A joint in several
+    /// chains (vt1 at the parent's end of both shoulders') splits its weight among them in
+    /// proportion to its partner's weight in each, so the routing is continuous over the
+    /// surface: where a partner's weight fades to nothing its chain's share does too.
     fn route(&self, row: &Row, p: DVec3) -> Row {
         let weight = |j: u16| row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
         let end_weight = |c: &Chain| c.parents.iter().map(|&p| weight(p)).sum::<f64>();
