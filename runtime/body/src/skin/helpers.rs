@@ -72,6 +72,10 @@ pub struct Helper {
     pub twist: f64,
     /// The bone's direction in the joint's own frame: the twist's axis.
     pub axis: DVec3,
+    /// The joint's rotation in its parent's frame in the pose the skin is made in (see
+    /// `volumes::bind_posture`): the helper turns by its fractions of the joint's
+    /// rotation from there, so that at the bind pose every helper lies with the joint.
+    pub bind: DQuat,
 }
 
 /// A rotation `q` split into a swing and a twist about unit `axis` (in the rotated
@@ -94,8 +98,10 @@ impl Helper {
     /// `joint_local`: its swing and twist each scaled by the helper's fraction (slerp
     /// from identity, the shorter way).
     pub fn local_rotation(&self, joint_local: DQuat) -> DQuat {
-        let (swing, twist) = swing_twist(joint_local, self.axis);
-        DQuat::IDENTITY.slerp(swing, self.swing) * DQuat::IDENTITY.slerp(twist, self.twist)
+        let (swing, twist) = swing_twist(self.bind.inverse() * joint_local, self.axis);
+        self.bind
+            * DQuat::IDENTITY.slerp(swing, self.swing)
+            * DQuat::IDENTITY.slerp(twist, self.twist)
     }
 
     /// The helper's frame among joint frames `globals`: at the joint's centre, turned
@@ -115,6 +121,7 @@ impl Helper {
 /// joint, then as listed.
 pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
     let rest = super::volumes::rest_globals(skeleton);
+    let bind_pose = super::volumes::bind_globals(skeleton);
     let mut out = Vec::new();
     for side in ["l_", "r_"] {
         for name in HELPED {
@@ -132,6 +139,7 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
             let axis = (rest[joint].rotation.inverse()
                 * (rest[child].translation - rest[joint].translation))
                 .normalize();
+            let bind = bind_pose[parent].rotation.inverse() * bind_pose[joint].rotation;
             for swing in SWING_FRACTIONS {
                 out.push(Helper {
                     name: format!("{name}_{:.0}", swing * 100.0),
@@ -140,6 +148,7 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
                     swing,
                     twist: 0.0,
                     axis,
+                    bind,
                 });
             }
             for twist in TWIST_FRACTIONS {
@@ -150,6 +159,7 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
                     swing: 1.0,
                     twist,
                     axis,
+                    bind,
                 });
             }
         }
@@ -170,6 +180,7 @@ mod tests {
             swing,
             twist,
             axis: -DVec3::Y,
+            bind: DQuat::IDENTITY,
         }
     }
 

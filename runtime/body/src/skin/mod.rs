@@ -2,9 +2,11 @@
 //! joints so that it deforms with the skeleton (thesis 6.5.2, Skinlib's layered model).
 //!
 //! [`Skin::build`] makes it from a template skeleton in three steps:
-//! 1. **volumes** ([`volumes`]): rounded cones and ellipsoids over the solids, in the
-//!    rest pose: torso, limbs, a palm and five fingers per hand, a head with jaw, nose,
-//!    ears, eye sockets and eyeballs;
+//! 1. **volumes** ([`volumes`]): rounded cones and ellipsoids over the solids, laid out
+//!    in the rest pose: torso, limbs, a palm and five fingers per hand, a head with jaw,
+//!    nose, ears, eye sockets and eyeballs; then each carried with its joint to the
+//!    **bind pose**, the arms raised 45° sideways ([`bind_posture`]), where the surface
+//!    and its weights are made;
 //! 2. **surface** (`surface`): the volumes blended into one signed distance field (smooth
 //!    unions where neighbouring joints meet, carving for the eye sockets), its zero level
 //!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
@@ -31,7 +33,7 @@ pub mod volumes;
 mod weights;
 
 pub use helpers::Helper;
-pub use volumes::{rest_globals, Region};
+pub use volumes::{bind_globals, bind_posture, rest_globals, Region, BIND_ABDUCTION};
 pub use weights::Influences;
 
 use crate::error::{Error, Result};
@@ -74,12 +76,13 @@ const WIDER_BANDS: [&str; 6] = [
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
-/// A skinned surface in the skeleton's rest pose (every DOF zero).
+/// A skinned surface in the skeleton's bind pose ([`bind_posture`]: the rest pose with
+/// the arms raised 45° sideways).
 #[derive(Clone, Debug)]
 pub struct Skin {
-    /// Rest-pose vertex positions (m).
+    /// Bind-pose vertex positions (m).
     pub positions: Vec<[f32; 3]>,
-    /// Rest-pose unit vertex normals.
+    /// Bind-pose unit vertex normals.
     pub normals: Vec<[f32; 3]>,
     /// Up to four skinning slots per vertex: the skeleton's joints, then the
     /// [`helpers`](Skin::helpers) (slot `joints + i` is helper `i`).
@@ -92,8 +95,7 @@ pub struct Skin {
     pub indices: Vec<u32>,
     /// Coarse triangles over the same vertices, for actors far away.
     pub far_indices: Vec<u32>,
-    /// Rest-pose frame of every slot, the skeleton's joints then the helpers: the bind
-    /// pose.
+    /// Bind-pose frame of every slot, the skeleton's joints then the helpers.
     pub rest: Vec<Transform>,
     /// Helper joints at the big joints, after the skeleton's joints among the slots.
     pub helpers: Vec<Helper>,
@@ -105,9 +107,10 @@ impl Skin {
     /// the first one missing.
     pub fn build(skeleton: &Skeleton) -> Result<Skin> {
         let helpers = helpers::helpers(skeleton)?;
-        let joint_rest = rest_globals(skeleton);
+        let joint_rest = volumes::bind_globals(skeleton);
         let rest = with_helpers(&joint_rest, &helpers);
-        let volumes = volumes::body_volumes(skeleton)?;
+        let mut volumes = volumes::body_volumes(skeleton)?;
+        volumes::to_bind(skeleton, &mut volumes);
         let neighbours = neighbour_test(skeleton, &volumes, 1);
         // Surfaces blend a generation further along the trunk, so that its stacked
         // volumes (on a chain of joints) round into one another; elsewhere a wider blend
@@ -264,7 +267,7 @@ impl Skin {
     }
 
     /// Skinning transforms for joint frames `globals`, one per slot (joints, then
-    /// helpers): `frame[s] · rest[s]⁻¹`, which carries a rest-pose point attached to slot
+    /// helpers): `frame[s] · rest[s]⁻¹`, which carries a bind-pose point attached to slot
     /// `s` to where the slot has moved it.
     pub fn skinning_transforms(&self, globals: &[Transform]) -> Vec<Transform> {
         self.frames(globals)

@@ -421,6 +421,7 @@ fn four_heaviest(row: &Row) -> Influences {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::DQuat;
 
     #[test]
     fn four_heaviest_is_continuous_where_the_fourth_and_fifth_trade_places() {
@@ -479,6 +480,7 @@ mod tests {
             swing,
             twist: 0.0,
             axis: DVec3::NEG_Y,
+            bind: DQuat::IDENTITY,
         }
     }
 

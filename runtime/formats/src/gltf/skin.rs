@@ -22,11 +22,24 @@ use troupe_body::{Skin, Transform};
 /// joints appended after its joints, in the skin's slot order, so that the skin's
 /// `JOINTS_0` slots are the rig's joints: each helper a child of its joint's parent, at
 /// the joint's rest offset, turned on every frame by [`troupe_body::skin::Helper::local_rotation`]
-/// of the joint's local rotation.
+/// of the joint's local rotation. The rig's rest becomes the skin's bind pose (the arms
+/// raised sideways, [`troupe_body::skin::bind_posture`]), so that the inverse bind
+/// matrices written from it bind the skin where it was made.
 pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
     let mut out = rig.clone();
+    for j in 0..rig.rest.len() {
+        let bind = match rig.parents[j] {
+            Some(p) => skin.rest[p].rotation.inverse() * skin.rest[j].rotation,
+            None => skin.rest[j].rotation,
+        };
+        // Only the joints the bind pose turns: the others keep their exact rest rotation
+        // (recomputed from the globals it would differ in the last bits).
+        if rig.rest[j].rotation.angle_between(bind) > 1e-9 {
+            out.rest[j].rotation = bind.normalize();
+        }
+    }
     for h in &skin.helpers {
-        let rest = rig.rest[h.joint];
+        let rest = out.rest[h.joint];
         out.names.push(h.name.clone());
         out.parents.push(Some(h.parent));
         out.rest.push(Transform::new(

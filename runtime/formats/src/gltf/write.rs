@@ -189,7 +189,8 @@ pub fn to_gltf_with_objects(
         let times: Vec<f32> = rig.times.iter().map(|&t| t as f32).collect();
         let input = b.floats(&times, Type::Scalar, frames, true);
         for j in 0..n {
-            if rig.rotations.iter().all(|f| f[j] == DQuat::IDENTITY) {
+            // A joint that stays at its rest rotation needs no channel: its node has it.
+            if rig.rotations.iter().all(|f| f[j] == rig.rest[j].rotation) {
                 continue;
             }
             let mut prev = DQuat::IDENTITY;
