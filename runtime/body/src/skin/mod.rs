@@ -64,7 +64,8 @@ const CHAIN_ENDS: usize = 2;
 /// (the shoulders' volumes), where an arm raised 180° folds the armpit. The upper arms'
 /// took the adults' worst full-range posture from 62-85 inverted triangles to 48-75
 /// (1.25 × and 1.75 × instead of 1.5 did worse: 87 for the 1.40 m adult, 107 for the
-/// 0.96 m child).
+/// 0.96 m child). Since the skin is made in the A-pose they matter less, but without
+/// them the 1.20 m child turns a triangle over at a quarter of the ranges.
 const WIDER_BANDS: [&str; 6] = [
     "sacroiliac",
     "l_hip",
