@@ -31,6 +31,12 @@
 //! triangles over the skin test's 50 full-range postures by about two thirds (419 to 139
 //! on the 1.75 m adult) and the children's worst posture from 56-69 to 36-45.
 //!
+//! Both are counted from the shoulder's rotation in the pose the skin is made in (the
+//! arms raised 45°, `volumes::bind_posture`), not from the rest pose, so that at the bind
+//! every helper lies with its joint and the band's vertices start unturned; counted from
+//! the rest, the A-pose skin still folded 29 triangles at the shoulders of the 1.75 m
+//! adult over the test's postures, none when counted from the bind.
+//!
 //! A helper is not a joint of the skeleton: its frame is computed from the posture each
 //! time the skin is deformed ([`Helper::frame`]) and written to glTF files as a node under
 //! the joint's parent whose rotation is animated ([`Helper::local_rotation`]), so the CPU,
@@ -95,8 +101,9 @@ pub fn swing_twist(q: DQuat, axis: DVec3) -> (DQuat, DQuat) {
 
 impl Helper {
     /// The helper's rotation in its parent's frame when the joint's rotation there is
-    /// `joint_local`: its swing and twist each scaled by the helper's fraction (slerp
-    /// from identity, the shorter way).
+    /// `joint_local`: the bind rotation, then the swing and twist of the joint's rotation
+    /// from it, each scaled by the helper's fraction (slerp from identity, the shorter
+    /// way).
     pub fn local_rotation(&self, joint_local: DQuat) -> DQuat {
         let (swing, twist) = swing_twist(self.bind.inverse() * joint_local, self.axis);
         self.bind
