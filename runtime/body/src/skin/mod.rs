@@ -74,6 +74,10 @@ const WIDER_BANDS: [&str; 6] = [
     "l_shoulder",
     "r_shoulder",
 ];
+/// Joints whose volumes get narrower bands of weights (`weights::NARROWER`): the root
+/// of the neck (vc4, vt1) and the head's skullbase, whose weight otherwise reaches the top
+/// of a child's shoulders.
+const NARROWER_BANDS: [&str; 3] = ["vt1", "vc4", "skullbase"];
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -207,9 +211,18 @@ impl Skin {
         smooth_regions(&mut regions, &indices);
         let normals = vertex_normals(&positions, &indices);
         let joints = skeleton.joints();
-        let wider: Vec<bool> = joints
+        let band: Vec<f64> = joints
             .iter()
-            .map(|j| WIDER_BANDS.contains(&j.name.as_str()))
+            .map(|j| {
+                let name = j.name.as_str();
+                if WIDER_BANDS.contains(&name) {
+                    weights::WIDER
+                } else if NARROWER_BANDS.contains(&name) {
+                    weights::NARROWER
+                } else {
+                    1.0
+                }
+            })
             .collect();
         let chains = weights::Chains::new(
             &helpers,
@@ -222,7 +235,7 @@ impl Skin {
             },
         );
         let (joints, weights) =
-            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &wider)
+            weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &band)
                 .into_iter()
                 .unzip();
         Ok(Skin {

@@ -44,13 +44,21 @@ const SMOOTHING_PER_REACH: f64 = 1.2;
 /// moving all the way to the neighbours' mean reach, the cap the weights were tuned
 /// with).
 const MOST_EDGES: f64 = 7.745_966_692_414_834;
-/// How much wider the bands are where a vertex's nearest volume is one of the `wider`
-/// joints given to [`skin_weights`] (the groin, the lower belly and the upper arms), in
+/// How much wider the bands are where a vertex's nearest volume is one of the joints
+/// given this `band` in [`skin_weights`] (the groin, the lower belly and the upper arms), in
 /// both the smoothing length and its cap: a hip flexed to 120° folds a band shorter than
 /// about twice the skin's distance from the hip. 1.5 took the children's worst full-range
 /// posture from 71-103 inverted triangles to 56-69 and changed nothing at half ranges;
 /// 2 did worse for the smallest child.
-const WIDER: f64 = 1.5;
+pub(crate) const WIDER: f64 = 1.5;
+/// How much narrower the bands are at the root of the neck and the chest beside it (the
+/// joints given this `band`): a child's neck is short, and smoothed over the usual length
+/// the head's weight (skullbase) reached the top of the shoulders, where a head turned
+/// 45° or an arm raised folded the skin between five joints. 0.6 took the triangles
+/// turned over at half ranges, summed over the skin test's six sizes and 50 postures,
+/// from 97 to 1, and at full ranges from 1,799 to 1,098; 0.45 and 0.75 did a little worse,
+/// vc4 and the skullbase without vt1 (or vt1 alone) much less.
+pub(crate) const NARROWER: f64 = 0.6;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
 /// neighbours' mean; enough for the widest band ((WIDER × MOST_EDGES)² = 135).
 const SMOOTHING_ROUNDS: usize = 150;
@@ -68,15 +76,16 @@ const NEGLIGIBLE: f64 = 1e-4;
 /// (less the negligible ones dropped).
 type Row = Vec<(u16, f64)>;
 
-/// The weights of every vertex of a closed surface (rest positions `positions`,
-/// triangles `indices`).
+/// The weights of every vertex of a closed surface (bind-pose positions `positions`,
+/// triangles `indices`); `band` scales the smoothing's length and cap for the vertices
+/// whose nearest volume is each joint's ([`WIDER`], [`NARROWER`] or 1).
 pub(crate) fn skin_weights(
     positions: &[DVec3],
     indices: &[u32],
     volumes: &[Volume],
     neighbours: &impl Fn(usize, usize) -> bool,
     chains: &Chains,
-    wider: &[bool],
+    band: &[f64],
 ) -> Vec<Influences> {
     let mut rows = Vec::with_capacity(positions.len());
     let mut smoothing = Vec::with_capacity(positions.len());
@@ -84,7 +93,7 @@ pub(crate) fn skin_weights(
         let (near, reach, home) = near_weights(p, volumes, neighbours);
         let total: f64 = near.iter().map(|(_, w)| w).sum();
         rows.push(near.iter().map(|&(j, w)| (j as u16, w / total)).collect());
-        let widen = if wider[home] { WIDER } else { 1.0 };
+        let widen = band[home];
         smoothing.push(Smoothing {
             length: SMOOTHING_PER_REACH * reach * widen,
             most_edges: MOST_EDGES * widen,
