@@ -265,10 +265,10 @@ fn check(skeleton: &Skeleton, label: &str) {
     // arm), the skin made with the arms raised 45° (so an arm overhead bends the armpit
     // by 135°, not 180°), the wider smoothing (wider still at the groin and the upper
     // arms), the tiny edges collapsed, the thin triangles evened out and a person's trunk
-    // and hip ranges, the narrower bands at the root of the neck: at the worst posture,
-    // 0.09-0.16 % of the triangles at full ranges (22-38), at most one at half ranges,
-    // none at a quarter; mostly at the groin and the chest beside the armpit (vt1). These
-    // bounds keep it there.
+    // and hip ranges, the narrower bands at the root of the neck and the clavicles: at the
+    // worst posture, 0.09-0.16 % of the triangles at full ranges (22-38), at most one at
+    // half ranges, none at a quarter; mostly at the groin, then the root of the neck (vt1).
+    // These bounds keep it there.
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
         fraction(worst_inverted) <= 0.0018
