@@ -122,8 +122,8 @@ impl Skin {
     /// the first one missing.
     pub fn build(skeleton: &Skeleton) -> Result<Skin> {
         let helpers = helpers::helpers(skeleton)?;
-        let joint_rest = volumes::bind_globals(skeleton);
-        let rest = with_helpers(&joint_rest, &helpers);
+        let joint_bind = volumes::bind_globals(skeleton);
+        let rest = with_helpers(&joint_bind, &helpers);
         let mut volumes = volumes::body_volumes(skeleton)?;
         volumes::to_bind(skeleton, &mut volumes);
         let neighbours = neighbour_test(skeleton, &volumes, 1);
@@ -236,12 +236,12 @@ impl Skin {
             .collect();
         let chains = weights::Chains::new(
             &helpers,
-            joint_rest.len(),
+            joint_bind.len(),
             CHAIN_ENDS,
             |j| joints[j].parent,
             |j| {
                 let child = joints.iter().position(|c| c.parent == Some(j)).unwrap_or(j);
-                (joint_rest[j].translation, joint_rest[child].translation)
+                (joint_bind[j].translation, joint_bind[child].translation)
             },
         );
         let (joints, weights) =
