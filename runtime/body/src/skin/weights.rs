@@ -228,12 +228,7 @@ impl Chains {
                 .chain(c.links.iter().map(|&(slot, f)| (Some(slot), f)))
                 .chain(std::iter::once((Some(c.joint), 1.0)))
                 .collect();
-            let k = stops
-                .windows(2)
-                .position(|w| share <= w[1].1)
-                .unwrap_or(stops.len() - 2);
-            let ((lo, at_lo), (hi, at_hi)) = (stops[k], stops[k + 1]);
-            let t = (share - at_lo) / (at_hi - at_lo);
+            let (lo, hi, t) = bracket(&stops, share);
             for (slot, w) in [(lo, total * (1.0 - t)), (hi, total * t)] {
                 match slot {
                     Some(slot) => add(&mut out, slot, w),
@@ -266,18 +261,24 @@ impl Chains {
                 .copied()
                 .chain(std::iter::once((c.joint, 1.0)))
                 .collect();
-            let k = stops
-                .windows(2)
-                .position(|s| twist <= s[1].1)
-                .unwrap_or(stops.len() - 2);
-            let ((lo, at_lo), (hi, at_hi)) = (stops[k], stops[k + 1]);
-            let t = ((twist - at_lo) / (at_hi - at_lo)).clamp(0.0, 1.0);
+            let (lo, hi, t) = bracket(&stops, twist);
             add(&mut out, lo, w * (1.0 - t));
             add(&mut out, hi, w * t);
         }
         out.retain(|&(_, w)| w > 0.0);
         out
     }
+}
+
+/// The two neighbouring stops of `stops` (at least two, ascending by position) that
+/// bracket position `x`, and how far `x` lies from the first to the second, in [0, 1].
+fn bracket<T: Copy>(stops: &[(T, f64)], x: f64) -> (T, T, f64) {
+    let k = stops
+        .windows(2)
+        .position(|s| x <= s[1].1)
+        .unwrap_or(stops.len() - 2);
+    let ((lo, at_lo), (hi, at_hi)) = (stops[k], stops[k + 1]);
+    (lo, hi, ((x - at_lo) / (at_hi - at_lo)).clamp(0.0, 1.0))
 }
 
 /// Adds `w` to joint `j`'s weight in `row`.
