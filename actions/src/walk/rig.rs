@@ -349,10 +349,16 @@ impl Rig {
         .clamp(-0.75, 0.75);
         let foot = DQuat::from_rotation_y(yaw) * DQuat::from_rotation_x(-pitch);
         let want = foot * DVec3::Z;
+        // What the passes share: the ankle in the thigh's frame with the knee bent, the
+        // way to the ankle and the foot's wanted heading. The compiler takes the knee's
+        // sine and cosine out of the loop itself, but not an `atan2`: found here, the
+        // crowd benchmark makes a fifth fewer of them.
+        let v = DVec3::new(0.0, -l1 - l2 * kappa.cos(), -l2 * kappa.sin());
+        let towards_ankle = d.z.atan2(d.y);
+        let want_heading = want.x.atan2(want.z);
         let (mut alpha, mut beta, mut delta, mut eps) = (0.0, 0.0, 0.0, 0.0);
         let mut prev: Option<(f64, f64)> = None;
         for pass in 0..6 {
-            let v = DVec3::new(0.0, -l1 - l2 * kappa.cos(), -l2 * kappa.sin());
             let w = DQuat::from_rotation_y(gamma) * v;
             // Abduction about +Z: bring w's x onto d's x.
             let r = w.x.hypot(w.y);
@@ -362,7 +368,7 @@ impl Rig {
             let y1 = w.x * sb + w.y * cb;
             let z1 = w.z;
             // Flexion about +X: turn (y1, z1) onto (d.y, d.z).
-            alpha = super::route::wrap(d.z.atan2(d.y) - z1.atan2(y1));
+            alpha = super::route::wrap(towards_ankle - z1.atan2(y1));
             let shank = pelvis
                 * DQuat::from_rotation_x(alpha)
                 * DQuat::from_rotation_z(beta)
@@ -376,7 +382,7 @@ impl Rig {
             // Where the foot really points with these angles, against where it should.
             let got =
                 shank * DQuat::from_rotation_x(delta) * DQuat::from_rotation_z(eps) * DVec3::Z;
-            let err = super::route::wrap(want.x.atan2(want.z) - got.x.atan2(got.z));
+            let err = super::route::wrap(want_heading - got.x.atan2(got.z));
             // The last pass keeps the twist its angles were solved with.
             if err.abs() < 1e-6 || pass == 5 {
                 break;
