@@ -294,6 +294,7 @@ impl Steer {
                 // The feet are found below, for the neighbours avoidance weighs.
                 body: Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]),
                 facing: crowd.facings.get(j).copied().unwrap_or_default(),
+                rank: crowd.ranks.get(j).copied().flatten(),
             })
             .collect();
         // Where ways cross, one walker has the way (see `troupe_nav::way`): the other

@@ -23,6 +23,9 @@ pub struct Crowd {
     pub radii: Vec<f64>,
     /// Which way each actor faces: the unit floor direction (x, z) of its root's +z.
     pub facings: Vec<DVec2>,
+    /// The rank of each actor's line of walking, for the give-way rule
+    /// ([`crate::way::line_rank`] of its facing), found by [`Crowd::index`].
+    pub ranks: Vec<Option<f64>>,
     /// Each actor's body on the floor, its disc stretched to hold its feet (see
     /// [`crate::clearance::Capsule`]).
     pub bodies: Vec<Capsule>,
@@ -73,8 +76,12 @@ fn cell_of(p: DVec2) -> (i64, i64) {
 }
 
 impl Crowd {
-    /// Rebuilds the grid after `positions` changed.
+    /// Rebuilds the grid after `positions` changed, and the lines' ranks after `facings`
+    /// did.
     pub fn index(&mut self) {
+        self.ranks.clear();
+        self.ranks
+            .extend(self.facings.iter().map(|&f| crate::way::line_rank(f)));
         self.cells.entries.clear();
         self.cells.entries.extend(
             self.positions
