@@ -37,6 +37,7 @@ pub fn gather<'a>(
         near.clear();
         crowd.near(from, near);
     }
+    around.bodies.reserve(near.len());
     for &j in near.iter() {
         if j == me || companions.contains(&j) {
             continue;

@@ -232,8 +232,11 @@ impl Cells {
     fn around(&self, p: DVec2, out: &mut Vec<usize>) {
         let (cx, cz) = cell_of(p);
         let entries = &self.entries;
-        for x in cx - 1..=cx + 1 {
-            let (from, to) = if self.starts.is_empty() {
+        // The three columns' runs, then room for all of them at once: growing the list
+        // run by run reallocated it (2 % of the crowd benchmark's instructions).
+        let mut runs = [(0, 0); 3];
+        for (x, run) in (cx - 1..=cx + 1).zip(&mut runs) {
+            *run = if self.starts.is_empty() {
                 let from = entries.partition_point(|e| e.0 < (x, cz - 1));
                 (
                     from,
@@ -249,6 +252,9 @@ impl Cells {
                 let from = self.starts[k + (lo - z0) as usize] as usize;
                 (from, self.starts[k + (hi - z0) as usize + 1] as usize)
             };
+        }
+        out.reserve(runs.iter().map(|(from, to)| to - from).sum());
+        for (from, to) in runs {
             out.extend(entries[from..to].iter().map(|e| e.1));
         }
     }
