@@ -91,8 +91,8 @@ pub struct Walker {
     /// The unit floor direction it faces.
     pub facing: DVec2,
     /// The rank of that line ([`line_rank`] of `facing`): the crowd finds every actor's
-    /// once a tick (`Crowd::ranks`) rather than each neighbour's decision (an `atan2`
-    /// per neighbour per decision, 2 % of the crowd benchmark's instructions).
+    /// once a tick (`Crowd::ranks`), rather than each decision for each neighbour (an
+    /// `atan2` per neighbour per decision, 2 % of the crowd benchmark's instructions).
     pub rank: Option<f64>,
 }
 
@@ -126,9 +126,11 @@ pub fn wait_line(me: &Agent, along: DVec2, speed: f64, others: &[Walker]) -> Opt
     let mine = line_angle(along);
     for j in others {
         let moving = j.body.velocity.length();
+        if moving < MOVING {
+            continue;
+        }
         // One facing nowhere crosses nobody's way.
-        let theirs = j.rank.map(|b| precedence_of_ranks(mine, b));
-        if moving < MOVING || theirs != Some(Precedence::Theirs) {
+        if j.rank.map(|b| precedence_of_ranks(mine, b)) != Some(Precedence::Theirs) {
             continue;
         }
         let velocity = j.facing * moving.max(ASSUMED_SPEED);
