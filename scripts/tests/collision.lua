@@ -131,6 +131,25 @@ test("a reaching arm bends round another actor's arm to a cup", function()
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
 end)
 
+-- Bob's arm reaches right across in front of Ann's chest, below her shoulder; the cup
+-- is above it. Her hand must come up behind his arm and go over it, and her elbow and
+-- forearm with it: a temporary goal that only cleared the hand put it in front of his
+-- arm, and her upper arm crossed his (73 mm).
+test("a hand going over another's arm takes its forearm over too", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.4}, facing = 90 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+    at = {-0.25, 1.65, 0.4}, obstacle = false }
+  local held = bob:reach{ hand = "left", target = {0.2, 1.3, 0.3}, duration = 1 }
+  held:wait()
+  expect(held.status == "completed", "bob holds his arm out: " .. tostring(held.error))
+  local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
+  local ok, deepest, between = watch(function() return solids.ended(r) end, 5)
+  print(string.format("reach over an arm: deepest %.4f m (%s), %d temporary goal(s)", deepest, between, r.detours))
+  expect(ok and r.status == "completed", "the reach completed: " .. tostring(r.error))
+  expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
+end)
+
 test("without detours the same reach passes through the arm", function()
   local ann, _, cup = arm_across()
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5, detour = false }

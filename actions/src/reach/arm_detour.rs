@@ -18,7 +18,7 @@
 //! action then holds the arm where that solve left it.
 
 use super::detour::{self, HandPath};
-use super::{quintic, COLLISION_MARGIN};
+use super::{quintic, COLLISION_MARGIN, EXTERNAL_MARGIN};
 use crate::error::{ActionError, Result};
 use troupe_body::collision::Volume;
 use troupe_body::glam::{DQuat, DVec3};
@@ -104,11 +104,12 @@ impl ArmDetour {
         if volumes.is_empty() {
             return Ok(None);
         }
-        // The arm's own sensors: the elbow, the forearm samples, the hand.
+        // The arm's own sensors: the upper arm's and the forearm's samples, the elbow,
+        // the hand.
         let mine: Vec<usize> = (0..sensors.sensors().len())
             .filter(|&i| {
                 let name = &sensors.sensors()[i].name;
-                ["elbow", "forearm", "hand"]
+                ["upper_arm", "elbow", "forearm", "hand"]
                     .iter()
                     .any(|part| name.starts_with(&format!("{prefix}{part}")))
             })
@@ -130,7 +131,8 @@ impl ArmDetour {
         if !blocked {
             return Ok(None);
         }
-        let via = detour::temporary_goals(start, &[], goal, radius, &volumes);
+        let arm_of = detour::Arm::of(sk, &sensors, wrist, g);
+        let via = detour::temporary_goals(start, &[], goal, radius, &volumes, arm_of);
         let scope = sk.scope(&format!("{}_arm", arm.side.name()))?;
         let options = IkOptions {
             max_iterations: TRACKING_ITERATIONS,
@@ -220,7 +222,7 @@ impl ArmDetour {
         options.max_iterations = if finishing { 200 } else { TRACKING_ITERATIONS };
         self.solver.set_options(options)?;
         let mut avoid = CollisionAvoidance::new(&self.sensors, COLLISION_MARGIN, vec![self.hand])
-            .with_external(&self.volumes)
+            .with_external(&self.volumes, EXTERNAL_MARGIN)
             .without_own_body();
         self.solver.solve(
             ctx.skeleton,

@@ -9,6 +9,8 @@
 
 use troupe_body::collision::Volume;
 use troupe_body::glam::DVec3;
+use troupe_body::self_collision::{BodySensors, SENSOR_SCALE};
+use troupe_body::{Skeleton, Transform};
 use troupe_scene::space::Walking;
 use troupe_scene::World;
 
@@ -193,15 +195,138 @@ pub(crate) fn deepest(
     best
 }
 
+/// The arm a reaching hand hangs from, so that a temporary goal keeps the arm as well as
+/// the hand out of what it goes round.
+#[derive(Clone, Copy, Debug)]
+pub struct Arm {
+    /// The shoulder's centre when the reach starts.
+    pub shoulder: DVec3,
+    /// The arm's radius (its thickest solid's).
+    pub radius: f64,
+}
+
+impl Arm {
+    /// The arm that effector joint `hand` ends, in joint frames `globals`: its shoulder is
+    /// the nearest ancestor called `…shoulder`, its radius the upper arm's sensor's at full
+    /// size. `None` for an effector that is not on an arm.
+    pub fn of(
+        skeleton: &Skeleton,
+        sensors: &BodySensors,
+        hand: usize,
+        globals: &[Transform],
+    ) -> Option<Arm> {
+        let joints = skeleton.joints();
+        let shoulder = std::iter::successors(Some(hand), |&j| joints[j].parent)
+            .find(|&j| joints[j].name.ends_with("shoulder"))?;
+        let side = joints[shoulder].name.strip_suffix("shoulder")?;
+        let sensor = sensors.index_of(&format!("{side}upper_arm_25"))?;
+        Some(Arm {
+            shoulder: globals[shoulder].translation,
+            radius: sensors.sensors()[sensor].radius / SENSOR_SCALE,
+        })
+    }
+}
+
+/// Where along the line from the shoulder to the hand the arm is sampled: the elbow's
+/// region and the forearm (the hand has its own sphere; nearer the shoulder the line
+/// hardly moves).
+const ARM_SAMPLES: [f64; 5] = [0.35, 0.5, 0.65, 0.8, 0.9];
+
+/// Directions round the hand's path a temporary goal is looked for in, when the arm
+/// decides between them.
+const DIRECTIONS: usize = 8;
+
+/// How far from the path's deepest point a temporary goal is looked for (m).
+const FARTHEST: f64 = 0.6;
+
+/// The deepest an arm held straight from `arm.shoulder` to the hand goes into `volumes`
+/// while the hand goes along the polyline `points` (0 when it stays clear): a straight
+/// line stands for the arm, so a hand that passes in front of another's arm from behind
+/// it shows the forearm trailing across.
+fn arm_depth(points: &[DVec3], arm: Arm, volumes: &[Volume]) -> f64 {
+    let mut worst = 0.0f64;
+    for pair in points.windows(2) {
+        let n = ((pair[1] - pair[0]).length() / (2.0 * SAMPLE))
+            .ceil()
+            .max(1.0) as usize;
+        for k in 0..=n {
+            let hand = pair[0].lerp(pair[1], k as f64 / n as f64);
+            for s in ARM_SAMPLES {
+                let p = arm.shoulder.lerp(hand, s);
+                for v in volumes {
+                    worst = worst.max(v.sphere_depth(p, arm.radius));
+                }
+            }
+        }
+    }
+    worst
+}
+
+/// A temporary goal for the path's deepest point `p` on segment `a`–`b`: pushed out of
+/// `volumes` along their normals; or, when an `arm` would cross a volume that way, the
+/// nearest clear point in one of [`DIRECTIONS`] round the segment that keeps the arm
+/// out (or in least), the shortest of those that do.
+fn temporary_goal(
+    (a, b): (DVec3, DVec3),
+    p: DVec3,
+    radius: f64,
+    volumes: &[Volume],
+    arm: Option<Arm>,
+) -> DVec3 {
+    let pushed = push_out(p, radius, DETOUR_CLEARANCE, volumes);
+    let Some(arm) = arm else {
+        return pushed;
+    };
+    let cost = |q: DVec3| {
+        let depth = arm_depth(&[a, q, b], arm, volumes);
+        // Millimetres: below that two ways are as good, and the shorter wins.
+        (
+            (depth * 1000.0).round(),
+            (q - a).length() + (b - q).length(),
+        )
+    };
+    let normal_way = cost(pushed);
+    if normal_way.0 == 0.0 {
+        return pushed;
+    }
+    let along = (b - a).normalize_or(DVec3::Y);
+    let e1 = along.any_orthonormal_vector();
+    let e2 = along.cross(e1);
+    let clear = |q: DVec3| {
+        volumes
+            .iter()
+            .all(|v| v.sphere_depth(q, radius) <= -DETOUR_CLEARANCE)
+    };
+    let mut best = (normal_way, pushed);
+    for k in 0..DIRECTIONS {
+        let angle = std::f64::consts::TAU * k as f64 / DIRECTIONS as f64;
+        let d = e1 * angle.cos() + e2 * angle.sin();
+        let steps = (FARTHEST / SAMPLE) as usize;
+        let Some(q) = (1..=steps)
+            .map(|m| p + d * (m as f64 * SAMPLE))
+            .find(|&q| clear(q))
+        else {
+            continue;
+        };
+        let c = cost(q);
+        if c.0 < best.0 .0 || (c.0 == best.0 .0 && c.1 < best.0 .1) {
+            best = (c, q);
+        }
+    }
+    best.1
+}
+
 /// The via points of a hand (a sphere of `radius`) going from `start` through `via` to
 /// `goal` with the temporary goals that keep it out of `volumes` inserted; `via` as given
-/// when the straight path is clear.
+/// when the straight path is clear. With the `arm` the hand hangs from, each temporary
+/// goal also keeps the arm out where it can (see [`temporary_goal`]).
 pub fn temporary_goals(
     start: DVec3,
     via: &[DVec3],
     goal: DVec3,
     radius: f64,
     volumes: &[Volume],
+    arm: Option<Arm>,
 ) -> Vec<DVec3> {
     let mut points: Vec<DVec3> = std::iter::once(start)
         .chain(via.iter().copied())
@@ -211,7 +336,7 @@ pub fn temporary_goals(
         let Some((seg, p, _)) = deepest(&points, radius, volumes) else {
             break;
         };
-        let q = push_out(p, radius, DETOUR_CLEARANCE, volumes);
+        let q = temporary_goal((points[seg], points[seg + 1]), p, radius, volumes, arm);
         if (q - p).length() < 1e-6 {
             break;
         }
@@ -259,14 +384,49 @@ mod tests {
         });
         let start = DVec3::new(-0.3, 0.9, 0.2);
         let goal = DVec3::new(-0.3, 1.8, 0.4);
-        let via = temporary_goals(start, &[], goal, 0.05, &[arm]);
+        let via = temporary_goals(start, &[], goal, 0.05, &[arm], None);
         assert!(!via.is_empty());
         let mut points = vec![start];
         points.extend(&via);
         points.push(goal);
         assert!(deepest(&points, 0.05, &[arm]).is_none(), "{points:?}");
         // A clear path is left alone.
-        let clear = temporary_goals(start, &[], DVec3::new(0.5, 1.8, 0.4), 0.05, &[arm]);
+        let clear = temporary_goals(start, &[], DVec3::new(0.5, 1.8, 0.4), 0.05, &[arm], None);
         assert!(clear.is_empty(), "{clear:?}");
+    }
+
+    #[test]
+    fn a_hand_going_over_an_arm_takes_its_own_arm_over_too() {
+        // Another's arm straight across in front of the chest (z 0.3, below the
+        // shoulder); the hand starts low and a little forward, and ends above it.
+        let other = Volume::Capsule(Capsule {
+            a: DVec3::new(-0.6, 1.3, 0.3),
+            b: DVec3::new(0.2, 1.3, 0.3),
+            ra: 0.045,
+            rb: 0.035,
+        });
+        let arm = Arm {
+            shoulder: DVec3::new(-0.2, 1.43, 0.0),
+            radius: 0.045,
+        };
+        let start = DVec3::new(-0.23, 0.95, 0.28);
+        let goal = DVec3::new(-0.25, 1.7, 0.4);
+        let path = |via: Vec<DVec3>| {
+            let mut points = vec![start];
+            points.extend(via);
+            points.push(goal);
+            points
+        };
+        // Pushed out along the arm's normal, the hand clears it but passes in front of it
+        // from behind: the line from the shoulder crosses it.
+        let pushed = path(temporary_goals(start, &[], goal, 0.05, &[other], None));
+        assert!(deepest(&pushed, 0.05, &[other]).is_none(), "{pushed:?}");
+        let trailing = arm_depth(&pushed, arm, &[other]);
+        assert!(trailing > 0.03, "{trailing}");
+        // With the arm known, the temporary goal keeps the hand behind the other's arm
+        // until it is above it.
+        let over = path(temporary_goals(start, &[], goal, 0.05, &[other], Some(arm)));
+        assert!(deepest(&over, 0.05, &[other]).is_none(), "{over:?}");
+        assert_eq!(arm_depth(&over, arm, &[other]), 0.0, "{over:?}");
     }
 }

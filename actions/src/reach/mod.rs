@@ -47,6 +47,12 @@ const TRACKING_ITERATIONS: usize = 10;
 const TRACKING_SETTLE_ITERATIONS: usize = 2;
 /// Self-collision correction keeps sensors this far from the body (metres).
 pub const COLLISION_MARGIN: f64 = 0.01;
+/// How far outside other bodies and obstacles the arm's sensors start to be pushed away
+/// (metres). The sensors are spheres a few centimetres apart and another's arm may pass
+/// between them within a tick: with the body's 1 cm, a forearm brushing past another's
+/// arm went 2-9 mm into it in six of the twelve layouts of docs/navigation.md ("A hand
+/// going over another's arm") and an elbow swinging over it 18 mm; with 3 cm, none.
+pub const EXTERNAL_MARGIN: f64 = 0.03;
 
 /// Where a target is: read from the world each tick.
 #[derive(Clone, Debug, PartialEq)]
@@ -329,8 +335,12 @@ impl Generator for Reach {
             self.volumes =
                 detour::volumes_around(ctx.world, ctx.actor, start, goal + offset, radius);
             let shifted: Vec<DVec3> = self.spec.via.iter().map(|p| *p + offset).collect();
+            let arm = self.sensors.as_ref().and_then(|sensors| {
+                let hand = self.spec.effector.joint;
+                detour::Arm::of(ctx.skeleton, sensors, hand, &ctx.posture.globals)
+            });
             let around =
-                detour::temporary_goals(start, &shifted, goal + offset, radius, &self.volumes);
+                detour::temporary_goals(start, &shifted, goal + offset, radius, &self.volumes, arm);
             self.detours = around.len() - shifted.len();
             via = around.into_iter().map(|p| p - offset).collect();
         }
@@ -429,7 +439,7 @@ impl Generator for Reach {
                 let external: &[troupe_body::collision::Volume] =
                     if self.spec.detour { &self.volumes } else { &[] };
                 let mut avoid = CollisionAvoidance::new(sensors, COLLISION_MARGIN, skip)
-                    .with_external(external);
+                    .with_external(external, EXTERNAL_MARGIN);
                 if !self.spec.self_collision {
                     avoid = avoid.without_own_body();
                 }

@@ -31,7 +31,8 @@ pub const SENSOR_SCALE: f64 = 0.85;
 #[derive(Clone, Debug, PartialEq)]
 pub struct Sensor {
     /// `l_elbow`, `r_hand`, `l_knee`, `r_ankle`, `l_foot`, or for the sampled segments of
-    /// figure 4-20 `l_forearm_50` (elbow–hand at 50 %) and `r_shank_25`.
+    /// figure 4-20 `l_forearm_50` (elbow–hand at 50 %) and `r_shank_25`; `l_upper_arm_50`
+    /// (shoulder–elbow), which keeps out of other bodies only.
     pub name: String,
     /// The joint the sensor moves with.
     pub joint: usize,
@@ -112,11 +113,13 @@ impl BodySensors {
             let leg = own(&format!("{side}hip"))?;
             let (_, forearm) = solid_by_name(skeleton, &format!("{side}forearm"))?;
             let (_, hand) = solid_by_name(skeleton, &format!("{side}hand"))?;
+            let (_, upper_arm) = solid_by_name(skeleton, &format!("{side}upper_arm"))?;
             let (_, shank) = solid_by_name(skeleton, &format!("{side}leg"))?;
             let (_, foot) = solid_by_name(skeleton, &format!("{side}foot"))?;
             let (fore_bottom, fore_top) = radii(&forearm.shape);
             let (shank_bottom, shank_top) = radii(&shank.shape);
             let (foot_bottom, _) = radii(&foot.shape);
+            let shoulder = skeleton.joint(&format!("{side}shoulder"))?;
             let elbow = skeleton.joint(&format!("{side}elbow"))?;
             let wrist = skeleton.joint(&format!("{side}wrist"))?;
             let knee = skeleton.joint(&format!("{side}knee"))?;
@@ -157,6 +160,12 @@ impl BodySensors {
             );
             // Figure 4-20: samples of the segments between related sensors.
             let wrist_in_elbow = skeleton.joints()[wrist].offset + hand.center;
+            let elbow_in_shoulder = skeleton.joints()[elbow].offset;
+            // The upper arm is not one of figure 4-19's sensors: hanging, it rests
+            // against the chest, so it ignores every solid of its own body and keeps out
+            // of other bodies and obstacles only (a reach's external volumes).
+            let (upper_bottom, upper_top) = radii(&upper_arm.shape);
+            let whole_body = vec![true; solids.len()];
             let ankle_in_knee = skeleton.joints()[ankle].offset;
             for pct in [25, 50, 75] {
                 let t = pct as f64 / 100.0;
@@ -166,6 +175,13 @@ impl BodySensors {
                     wrist_in_elbow * t,
                     fore_bottom,
                     &arm,
+                );
+                add(
+                    format!("{side}upper_arm_{pct}"),
+                    shoulder,
+                    elbow_in_shoulder * t,
+                    upper_top + (upper_bottom - upper_top) * t,
+                    &whole_body,
                 );
                 add(
                     format!("{side}shank_{pct}"),
@@ -307,6 +323,8 @@ pub struct CollisionAvoidance<'a> {
     /// Other bodies' and objects' volumes the sensors also keep out of (see
     /// [`CollisionAvoidance::with_external`]).
     external: &'a [Volume],
+    /// How far outside the external volumes the sensors start to be pushed (m).
+    external_margin: f64,
     /// Whether the body's own solids count (off: only the external volumes do).
     own_body: bool,
     margin: f64,
@@ -327,6 +345,7 @@ impl<'a> CollisionAvoidance<'a> {
         CollisionAvoidance {
             sensors,
             external: &[],
+            external_margin: margin,
             own_body: true,
             margin,
             skip,
@@ -339,9 +358,13 @@ impl<'a> CollisionAvoidance<'a> {
 
     /// Also keeps the sensors out of `external` volumes (other actors' bodies, obstacles:
     /// thesis 6.5.3, figure 6-22's correction with IK), each sensor at its limb's full
-    /// radius, the same response vector and sub-chain pseudo-inverse as for the body.
-    pub fn with_external(mut self, external: &'a [Volume]) -> Self {
+    /// radius, the same response vector and sub-chain pseudo-inverse as for the body;
+    /// each is pushed once it comes within `margin` of one. Other bodies and objects
+    /// want a wider margin than the body's own: the sensors sample the limbs sparsely,
+    /// and an elbow swinging round another's arm meets it between two samples of a tick.
+    pub fn with_external(mut self, external: &'a [Volume], margin: f64) -> Self {
         self.external = external;
+        self.external_margin = margin;
         self
     }
 
@@ -416,9 +439,9 @@ impl NullSpaceTask for CollisionAvoidance<'_> {
             let radius = sensors.sensors()[i].radius / SENSOR_SCALE;
             for k in 0..self.external.len() {
                 let p = self.external[k].sphere(c, radius);
-                if p.depth > -self.margin {
+                if p.depth > -self.external_margin {
                     penetrating |= p.depth > 0.0;
-                    self.respond(ctx, i, p.normal * (p.depth + self.margin), dz);
+                    self.respond(ctx, i, p.normal * (p.depth + self.external_margin), dz);
                 }
             }
         }
@@ -466,7 +489,8 @@ mod tests {
             let tpl = template(t).unwrap();
             let s = tpl.instantiate(tpl.default_params()).unwrap();
             let sensors = BodySensors::new(&s).unwrap();
-            assert_eq!(sensors.sensors().len(), 10 + 12);
+            // Figure 4-19's ten, the forearms' and shanks' samples, the upper arms'.
+            assert_eq!(sensors.sensors().len(), 10 + 12 + 6);
             let mut g = vec![Transform::IDENTITY; s.joints().len()];
             let mut q = vec![0.0; s.dof_count()];
             forward_kinematics(&s, &q, &mut g);
@@ -477,6 +501,13 @@ mod tests {
             forward_kinematics(&s, &q, &mut g);
             let (depth, contact) = sensors.deepest(&s, &g);
             assert!(depth > 0.0, "{t}: {contact:?}");
+            // The upper arm lies in the trunk too, but its samples keep out of other
+            // bodies only.
+            let mut contacts = Vec::new();
+            sensors.contacts(&s, &g, 0.0, |_| true, &mut contacts);
+            let names = |c: &Contact| sensors.sensors()[c.sensor].name.clone();
+            assert!(contacts.iter().any(|c| names(c).starts_with("r_elbow")));
+            assert!(!contacts.iter().any(|c| names(c).contains("upper_arm")));
         }
         let s = template("adult")
             .unwrap()
