@@ -150,6 +150,40 @@ test("a hand going over another's arm takes its forearm over too", function()
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
 end)
 
+-- In that sort of reach the shoulder girdle reaches its limit on the way and the IK
+-- turns the arm another way at once: the shoulder's abduction jumped 31° in one tick
+-- (10 ms). While the path runs no DOF of the arm turns faster than 8 rad/s.
+test("a reach round another's arm turns no joint faster than 8 rad/s", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.4}, facing = 90 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+    at = {-0.25, 1.75, 0.4}, obstacle = false }
+  bob:reach{ hand = "left", target = {0.0, 1.4, 0.3}, duration = 1 }:wait()
+  local names = ann:dofs("right_arm")
+  local function posture()
+    local q = {}
+    for i, n in ipairs(names) do q[i] = ann:dof(n) end
+    return q
+  end
+  local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
+  local dt = 1 / troupe.rate()
+  local last, fastest, where = posture(), 0, ""
+  while r.status ~= "completed" and r.status ~= "failed" do
+    wait(dt)
+    local q = posture()
+    if r.status == "active" then
+      for i, n in ipairs(names) do
+        local speed = math.abs(q[i] - last[i]) / dt
+        if speed > fastest then fastest, where = speed, n end
+      end
+    end
+    last = q
+  end
+  print(string.format("reach round an arm: fastest joint %.2f rad/s (%s)", fastest, where))
+  expect(r.status == "completed", "the reach completed: " .. tostring(r.error))
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
+end)
+
 test("without detours the same reach passes through the arm", function()
   local ann, _, cup = arm_across()
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5, detour = false }

@@ -201,7 +201,7 @@ pub(crate) fn deepest(
 pub struct Arm {
     /// The shoulder's centre when the reach starts.
     pub shoulder: DVec3,
-    /// The arm's radius (its thickest solid's).
+    /// The arm's radius: the upper arm's, a quarter of the way from the shoulder.
     pub radius: f64,
 }
 

@@ -53,6 +53,11 @@ pub const COLLISION_MARGIN: f64 = 0.01;
 /// arm went 2-9 mm into it in six of the twelve layouts of docs/navigation.md ("A hand
 /// going over another's arm") and an elbow swinging over it 18 mm; with 3 cm, none.
 pub const EXTERNAL_MARGIN: f64 = 0.03;
+/// The fastest a reach turns any of its DOFs while its path runs (rad/s; m/s for the
+/// root's height). Where a DOF locks at its limit the IK may find the arm another way at
+/// once: a shoulder's abduction jumped 31° in one tick (54 rad/s) going over another's
+/// arm. The last tick is not held to it, so the reach still ends on its target.
+const MAX_JOINT_SPEED: f64 = 8.0;
 
 /// Where a target is: read from the world each tick.
 #[derive(Clone, Debug, PartialEq)]
@@ -434,6 +439,7 @@ impl Generator for Reach {
             return Step::Failed("invalid IK options".into());
         }
         let skip: Vec<usize> = self.effector_sensor.into_iter().collect();
+        let before: Vec<f64> = dofs.iter().map(|&d| self.q[d]).collect();
         let report = match &self.sensors {
             Some(sensors) => {
                 let external: &[troupe_body::collision::Volume] =
@@ -452,6 +458,12 @@ impl Generator for Reach {
         };
         if let Err(e) = report {
             return Step::Failed(e.to_string());
+        }
+        if !finishing {
+            let most = MAX_JOINT_SPEED * ctx.dt;
+            for (&d, &was) in dofs.iter().zip(&before) {
+                self.q[d] = self.q[d].clamp(was - most, was + most);
+            }
         }
         for &d in &dofs {
             out.set(d, self.q[d]);
