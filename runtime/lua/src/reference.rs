@@ -151,8 +151,8 @@ pub const API: &[Entry] = &[
     field("Actor", "height", "number", "Its standing height in metres."),
     m("Actor", "behave", &["fn: fun(self: Actor)"], "Behavior", "Gives the actor a behavior (a coroutine started on the next tick); returns its handle."),
     m("Actor", "on", &["event: ActionEvent", "fn: fun(action: Action)"], "Handler", "Calls `fn` on the tick after one of the actor's action events; returns its handle."),
-    m("Actor", "position", &[], "number[]", "`{x, y, z}` of the actor's root (HumanoidRoot)."),
-    m("Actor", "joint_position", &["joint: string"], "number[]", "`{x, y, z}` of a joint."),
+    m("Actor", "position", &[], "Point", "`{x, y, z}` of the actor's root (HumanoidRoot)."),
+    m("Actor", "joint_position", &["joint: string"], "Point", "`{x, y, z}` of a joint."),
     m("Actor", "dof", &["name: string"], "number", "A DOF's value."),
     m("Actor", "dofs", &["scope: string"], "string[]", "The DOF names of a scope, in order."),
     m("Actor", "holding", &[], "Object[]", "The objects the actor holds."),
@@ -205,7 +205,7 @@ pub const API: &[Entry] = &[
     field("Object", "shape", "string", "`box`, `sphere`, `cylinder`, `frustum` or `ellipsoid`."),
     field("Object", "mass", "number", "Its mass in kg."),
     field("Object", "holder", "Actor?", "The actor holding it, or nil."),
-    m("Object", "position", &[], "number[]", "`{x, y, z}` of its centre."),
+    m("Object", "position", &[], "Point", "`{x, y, z}` of its centre."),
     field("Sequence", "name", "string", "Its name (`sequence@file:line` when made inline without one)."),
     field("Sequence", "duration", "number", "Its length in seconds."),
     field("Sequence", "loop", "boolean", "Whether it loops."),
@@ -388,6 +388,8 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
 
 /// Aliases and option classes the entries name.
 const TYPES: &str = r#"---@alias Vec3 number[]|{x: number, y: number, z: number}
+---A position troupe returns: `{x, y, z}`, always three numbers.
+---@alias Point [number, number, number]
 ---@alias ActionEvent "action_started"|"action_completed"|"action_failed"|"action_cancelled"|"action_narrowed"
 ---@alias ActionStatus "pending"|"initiating"|"active"|"terminating"|"completed"|"cancelled"|"failed"
 ---@alias BehaviorStatus "running"|"done"|"failed"|"stopped"
