@@ -44,6 +44,7 @@ local function must_yield(name)
   end
 end
 
+---@async
 function wait(seconds)
   must_yield("wait")
   seconds = seconds or 0
@@ -53,6 +54,7 @@ function wait(seconds)
   return yield("time", seconds)
 end
 
+---@async
 function wait_until(fn, timeout)
   must_yield("wait_until")
   if type(fn) ~= "function" then
@@ -71,22 +73,26 @@ local function handles(name, ...)
   return list
 end
 
+---@async
 function wait_all(...)
   must_yield("wait_all")
   return yield("all", handles("wait_all", ...))
 end
 
+---@async
 function wait_any(...)
   must_yield("wait_any")
   return yield("any", handles("wait_any", ...))
 end
 
 -- Scenario tests: run() and run_until() advance the simulation from inside a test.
+---@async
 function run(seconds)
   must_yield("run")
   return wait(seconds)
 end
 
+---@async
 function run_until(fn, timeout)
   must_yield("run_until")
   return wait_until(fn, timeout)
@@ -100,6 +106,7 @@ function expect(cond, message)
 end
 
 -- The method `action:wait()`; the director returns the action's final status.
+---@async
 __troupe_action_wait = function(self)
   must_yield("wait")
   return yield("action", self)
@@ -107,6 +114,7 @@ end
 
 -- The method `behavior:wait()`; the director returns the behavior's final status
 -- ("done", "failed" or "stopped") and its error.
+---@async
 __troupe_behavior_wait = function(self)
   must_yield("wait")
   return yield("behavior", self)

@@ -303,7 +303,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("to", "Vec3|Object|Actor"),
             ("path", "any"),
             ("velocity", "any"),
-            ("follow", "Actor|string"),
+            ("follow", "Sequence|string"),
             ("speed", "number"),
             ("heading", "any"),
             ("step_length", "number"),
