@@ -106,3 +106,39 @@ test("detour must be a boolean", function()
   local ok, e = pcall(function() return ann:grasp{ object = "cup", detour = "no" } end)
   expect(not ok and tostring(e):find("detour") ~= nil, "a bad detour names the option: " .. tostring(e))
 end)
+
+-- A grasp going round another's arm held across the front (as in collision.lua's reach
+-- over an arm): no DOF of the arm turns faster than 8 rad/s while its path runs, as a
+-- reach's (its elbow turned at 14.6 rad/s in one tick before).
+test("a grasp round another's arm turns no joint faster than 8 rad/s", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.4}, facing = 90 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+    at = {-0.25, 1.65, 0.4}, obstacle = false }
+  bob:reach{ hand = "left", target = {0.2, 1.3, 0.3}, duration = 1 }:wait()
+  local names = ann:dofs("right_arm")
+  local function posture()
+    local q = {}
+    for i, n in ipairs(names) do q[i] = ann:dof(n) end
+    return q
+  end
+  local g = ann:grasp{ object = cup, hand = "right", duration = 1.5 }
+  local dt = 1 / troupe.rate()
+  local last, fastest, where = posture(), 0, ""
+  while g.status ~= "completed" and g.status ~= "failed" do
+    wait(dt)
+    local q = posture()
+    if g.status == "active" then
+      for i, n in ipairs(names) do
+        local speed = math.abs(q[i] - last[i]) / dt
+        if speed > fastest then fastest, where = speed, n end
+      end
+    end
+    last = q
+  end
+  print(string.format("grasp round an arm: fastest joint %.2f rad/s (%s), %d temporary goal(s)",
+    fastest, where, g.detours))
+  expect(g.status == "completed", "the grasp completed: " .. tostring(g.error))
+  expect(g.detours >= 1, "it went round the arm")
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
+end)

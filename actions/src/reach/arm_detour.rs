@@ -18,7 +18,7 @@
 //! action then holds the arm where that solve left it.
 
 use super::detour::{self, HandPath};
-use super::{quintic, COLLISION_MARGIN, EXTERNAL_MARGIN};
+use super::{quintic, COLLISION_MARGIN, EXTERNAL_MARGIN, MAX_JOINT_SPEED};
 use crate::error::{ActionError, Result};
 use troupe_body::collision::Volume;
 use troupe_body::glam::{DQuat, DVec3};
@@ -231,7 +231,12 @@ impl ArmDetour {
             Some(&self.reference),
             Some(&mut avoid),
         )?;
+        // As a reach's: no DOF faster than the limit while the path runs.
+        let most = MAX_JOINT_SPEED * ctx.dt;
         for (v, &d) in self.arm.iter_mut().zip(self.solver.dofs()) {
+            if !finishing {
+                q[d] = q[d].clamp(*v - most, *v + most);
+            }
             *v = q[d];
         }
         if finishing {

@@ -53,11 +53,12 @@ pub const COLLISION_MARGIN: f64 = 0.01;
 /// arm went 2-9 mm into it in six of the twelve layouts of docs/navigation.md ("A hand
 /// going over another's arm") and an elbow swinging over it 18 mm; with 3 cm, none.
 pub const EXTERNAL_MARGIN: f64 = 0.03;
-/// The fastest a reach turns any of its DOFs while its path runs (rad/s; m/s for the
-/// root's height). Where a DOF locks at its limit the IK may find the arm another way at
-/// once: a shoulder's abduction jumped 31° in one tick (54 rad/s) going over another's
-/// arm. The last tick is not held to it, so the reach still ends on its target.
-const MAX_JOINT_SPEED: f64 = 8.0;
+/// The fastest a reach, or a grasp going round others, turns any of its DOFs while its
+/// path runs (rad/s; m/s for the root's height). Where a DOF locks at its limit the IK
+/// may find the arm another way at once: a shoulder's abduction jumped 31° in one tick
+/// (54 rad/s) going over another's arm. The last tick is not held to it, so the reach
+/// still ends on its target.
+pub(crate) const MAX_JOINT_SPEED: f64 = 8.0;
 
 /// Where a target is: read from the world each tick.
 #[derive(Clone, Debug, PartialEq)]
