@@ -159,26 +159,8 @@ test("a reach round another's arm turns no joint faster than 8 rad/s", function(
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
     at = {-0.25, 1.75, 0.4}, obstacle = false }
   bob:reach{ hand = "left", target = {0.0, 1.4, 0.3}, duration = 1 }:wait()
-  local names = ann:dofs("right_arm")
-  local function posture()
-    local q = {}
-    for i, n in ipairs(names) do q[i] = ann:dof(n) end
-    return q
-  end
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
-  local dt = 1 / troupe.rate()
-  local last, fastest, where = posture(), 0, ""
-  while r.status ~= "completed" and r.status ~= "failed" do
-    wait(dt)
-    local q = posture()
-    if r.status == "active" then
-      for i, n in ipairs(names) do
-        local speed = math.abs(q[i] - last[i]) / dt
-        if speed > fastest then fastest, where = speed, n end
-      end
-    end
-    last = q
-  end
+  local fastest, where = solids.fastest_dof(ann, "right_arm", r)
   print(string.format("reach round an arm: fastest joint %.2f rad/s (%s)", fastest, where))
   expect(r.status == "completed", "the reach completed: " .. tostring(r.error))
   expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))

@@ -116,26 +116,8 @@ test("a grasp round another's arm turns no joint faster than 8 rad/s", function(
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
     at = {-0.25, 1.65, 0.4}, obstacle = false }
   bob:reach{ hand = "left", target = {0.2, 1.3, 0.3}, duration = 1 }:wait()
-  local names = ann:dofs("right_arm")
-  local function posture()
-    local q = {}
-    for i, n in ipairs(names) do q[i] = ann:dof(n) end
-    return q
-  end
   local g = ann:grasp{ object = cup, hand = "right", duration = 1.5 }
-  local dt = 1 / troupe.rate()
-  local last, fastest, where = posture(), 0, ""
-  while g.status ~= "completed" and g.status ~= "failed" do
-    wait(dt)
-    local q = posture()
-    if g.status == "active" then
-      for i, n in ipairs(names) do
-        local speed = math.abs(q[i] - last[i]) / dt
-        if speed > fastest then fastest, where = speed, n end
-      end
-    end
-    last = q
-  end
+  local fastest, where = solids.fastest_dof(ann, "right_arm", g)
   print(string.format("grasp round an arm: fastest joint %.2f rad/s (%s), %d temporary goal(s)",
     fastest, where, g.detours))
   expect(g.status == "completed", "the grasp completed: " .. tostring(g.error))

@@ -1,5 +1,5 @@
 -- What the solids scenario tests share (require("support.solids")): watching the deepest
--- interpenetration of solids while something runs.
+-- interpenetration of solids while something runs, and how fast an action turns joints.
 local M = {}
 
 -- Runs `fn` every tick until it returns true (or `limit` s), watching the deepest solid
@@ -21,6 +21,32 @@ end
 -- Whether action `a` has ended (completed, failed or cancelled).
 function M.ended(a)
   return a.status ~= "active" and a.status ~= "pending"
+end
+
+-- Steps tick by tick until action `a` ends, measuring how fast the DOFs of `actor`'s
+-- scope `scope` turn while `a` is active (the tick it ends on left out): returns the
+-- fastest speed (rad/s) and the DOF.
+function M.fastest_dof(actor, scope, a)
+  local names = actor:dofs(scope)
+  local function posture()
+    local q = {}
+    for i, n in ipairs(names) do q[i] = actor:dof(n) end
+    return q
+  end
+  local dt = 1 / troupe.rate()
+  local last, fastest, where = posture(), 0, ""
+  while not M.ended(a) do
+    wait(dt)
+    local q = posture()
+    if a.status == "active" then
+      for i, n in ipairs(names) do
+        local speed = math.abs(q[i] - last[i]) / dt
+        if speed > fastest then fastest, where = speed, n end
+      end
+    end
+    last = q
+  end
+  return fastest, where
 end
 
 return M
