@@ -109,14 +109,7 @@ end)
 -- Bob holds his left arm straight out across the way; a cup hangs above it, within
 -- Ann's reach: her hand's straight path from her side to the cup crosses his arm.
 local function arm_across()
-  local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.5}, facing = 90 }
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
-    at = {-0.3, 1.78, 0.42}, obstacle = false }
-  local held = bob:reach{ hand = "left", target = {-0.12, 1.45, 0.3}, duration = 1 }
-  held:wait()
-  expect(held.status == "completed", "bob holds his arm out: " .. tostring(held.error))
-  return ann, bob, cup
+  return solids.arm_across(0.5, {-0.12, 1.45, 0.3}, {-0.3, 1.78, 0.42})
 end
 
 test("a reaching arm bends round another actor's arm to a cup", function()
@@ -136,13 +129,7 @@ end)
 -- forearm with it: a temporary goal that only cleared the hand put it in front of his
 -- arm, and her upper arm crossed his (73 mm).
 test("a hand going over another's arm takes its forearm over too", function()
-  local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.4}, facing = 90 }
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
-    at = {-0.25, 1.65, 0.4}, obstacle = false }
-  local held = bob:reach{ hand = "left", target = {0.2, 1.3, 0.3}, duration = 1 }
-  held:wait()
-  expect(held.status == "completed", "bob holds his arm out: " .. tostring(held.error))
+  local ann, _, cup = solids.arm_across(0.4, {0.2, 1.3, 0.3}, {-0.25, 1.65, 0.4})
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
   local ok, deepest, between = watch(function() return solids.ended(r) end, 5)
   print(string.format("reach over an arm: deepest %.4f m (%s), %d temporary goal(s)", deepest, between, r.detours))
@@ -154,11 +141,7 @@ end)
 -- turns the arm another way at once: the shoulder's abduction jumped 31° in one tick
 -- (10 ms). While the path runs no DOF of the arm turns faster than 8 rad/s.
 test("a reach round another's arm turns no joint faster than 8 rad/s", function()
-  local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.4}, facing = 90 }
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
-    at = {-0.25, 1.75, 0.4}, obstacle = false }
-  bob:reach{ hand = "left", target = {0.0, 1.4, 0.3}, duration = 1 }:wait()
+  local ann, _, cup = solids.arm_across(0.4, {0.0, 1.4, 0.3}, {-0.25, 1.75, 0.4})
   local r = ann:reach{ hand = "right", target = cup, duration = 1.5 }
   local fastest, where = solids.fastest_dof(ann, "right_arm", r)
   print(string.format("reach round an arm: fastest joint %.2f rad/s (%s)", fastest, where))

@@ -111,11 +111,7 @@ end)
 -- over an arm): no DOF of the arm turns faster than 8 rad/s while its path runs, as a
 -- reach's (its elbow turned at 14.6 rad/s in one tick before).
 test("a grasp round another's arm turns no joint faster than 8 rad/s", function()
-  local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, 0.4}, facing = 90 }
-  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
-    at = {-0.25, 1.65, 0.4}, obstacle = false }
-  bob:reach{ hand = "left", target = {0.2, 1.3, 0.3}, duration = 1 }:wait()
+  local ann, _, cup = solids.arm_across(0.4, {0.2, 1.3, 0.3}, {-0.25, 1.65, 0.4})
   local g = ann:grasp{ object = cup, hand = "right", duration = 1.5 }
   local fastest, where = solids.fastest_dof(ann, "right_arm", g)
   print(string.format("grasp round an arm: fastest joint %.2f rad/s (%s), %d temporary goal(s)",

@@ -18,6 +18,20 @@ function M.watch(fn, limit)
   return ok, deepest, between
 end
 
+-- Ann at the origin facing +Z; Bob 0.75 m to her right, `z` metres in front of her,
+-- facing across her front and holding his left hand out to `hand`; a cup (not an
+-- obstacle) at `cup`. Returns ann, bob and the cup once Bob's arm is out.
+function M.arm_across(z, hand, cup)
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.75, 0, z}, facing = 90 }
+  local object = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+    at = cup, obstacle = false }
+  local held = bob:reach{ hand = "left", target = hand, duration = 1 }
+  held:wait()
+  expect(held.status == "completed", "bob holds his arm out: " .. tostring(held.error))
+  return ann, bob, object
+end
+
 -- Whether action `a` has ended (completed, failed or cancelled).
 function M.ended(a)
   return a.status ~= "active" and a.status ~= "pending"
