@@ -94,3 +94,31 @@ test("troupe.deepest_overlap measures the two most overlapping body discs", func
   expect(math.abs(d - (2 * RADIUS - 0.3)) < 0.005 and a == "ann" and b == "cid",
     string.format("%.3f between %s and %s", d, tostring(a), tostring(b)))
 end)
+
+test("walkers crossing a small plaza turn their bodies no faster than 6 rad/s", function()
+  -- The plaza of docs/images/plaza.png (four streams of 12). A new route round people
+  -- standing that set off nearly behind a walker flipped its turn to the other side
+  -- between two ticks (up to 161 rad/s here), and a push along a route just set off ran
+  -- its clock, and the heading turning in with it, ahead by several ticks (37 rad/s).
+  local plaza = require("support.plaza_streams")
+  local walkers = plaza.build{ planter = 2.5, planter_size = {1.2, 0.7, 1.2}, per_stream = 12,
+                               columns = 4, back = 6, spread = 1.0 }
+  local last = {}
+  for i, w in ipairs(walkers) do
+    w.actor:walk{ to = { w.gx, 0, w.gz }, speed = 1.3 }
+    last[i] = w.actor:dof("root_yaw")
+  end
+  local dt = 1 / troupe.rate()
+  local fastest, who, when = 0, "nobody", 0
+  run_until(function()
+    for i, w in ipairs(walkers) do
+      local yaw = w.actor:dof("root_yaw")
+      local rate = math.abs(yaw - last[i]) / dt
+      if rate > fastest then fastest, who, when = rate, w.actor.name, troupe.time() end
+      last[i] = yaw
+    end
+    return false
+  end, 20)
+  print(string.format("small plaza: fastest body turn %.2f rad/s (%s at %.2f s)", fastest, who, when))
+  expect(fastest <= 6 + 1e-6, string.format("%s turned at %.1f rad/s at %.2f s", who, fastest, when))
+end)

@@ -79,6 +79,11 @@ pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
 pub const CADENCE_LOOKBACK: f64 = 0.6;
 
+/// Fastest the body turns about the vertical (rad/s), about a person's quick pivot: a
+/// little above the plan's own turns (a half turn over [`route::TURN_TIME`] peaks at
+/// 5.9 rad/s), so it holds back only a plan whose clock jumped (see [`Walk::pose`]).
+pub const MAX_TURN_RATE: f64 = 6.0;
+
 /// How fast (m/s) a swinging foot's landing follows the steered body (see
 /// [`Walk::follow_steering`]).
 pub const RETARGET_SPEED: f64 = 3.0;
@@ -827,7 +832,15 @@ impl Walk {
         plan: &Plan,
         out: &mut DofWriter,
     ) -> UpperValues {
-        let sample = self.steer.sample(plan, self.t, self.t, self.heading);
+        let mut sample = self.steer.sample(plan, self.t, self.t, self.heading);
+        // The body turns no faster than a person pivots: the plan's clock can jump ahead
+        // (a push along a route that has just set off, whose speed is still small, moves
+        // it by several ticks), and its heading, still turning in, with it.
+        let most = MAX_TURN_RATE * ctx.dt;
+        let turn = wrap(sample.heading - self.heading);
+        if turn.abs() > most {
+            sample.heading = self.heading + most.copysign(turn);
+        }
         self.heading = sample.heading;
         let v = sample.speed;
         let a = self.activity(v);

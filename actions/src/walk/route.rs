@@ -7,6 +7,7 @@
 //! where the body will be when a foot that is about to swing reaches mid-stance.
 
 use crate::error::OptionError;
+use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 use troupe_body::glam::DVec2;
 use troupe_body::math::smoothstep;
@@ -362,6 +363,9 @@ fn chaikin(points: &[DVec2], passes: usize) -> Vec<DVec2> {
 pub struct Plan {
     kind: PlanKind,
     start_heading: f64,
+    /// The turn (radians, within ±π) from the start heading to the route's first
+    /// direction: the side the body sets out to turn to, kept while it turns.
+    start_turn: f64,
     /// When the body stops (infinite for an open-ended walk).
     pub end_time: f64,
     /// A stop asked before the route's end (see [`Plan::stop_at`]).
@@ -456,6 +460,8 @@ impl Plan {
                 } else {
                     0.0
                 };
+                let start_turn =
+                    wrap(path_heading(&line, line.at(0.0).1, *end_heading, heading) - heading);
                 Plan {
                     kind: PlanKind::Along {
                         line,
@@ -463,6 +469,7 @@ impl Plan {
                         end_heading: *end_heading,
                     },
                     start_heading: heading,
+                    start_turn,
                     end_time: end,
                     stop: None,
                 }
@@ -496,6 +503,7 @@ impl Plan {
                         (profile, d)
                     }
                 };
+                let start_turn = wrap(path_heading(&line, line.at(0.0).1, None, heading) - heading);
                 Plan {
                     kind: PlanKind::Along {
                         line,
@@ -503,6 +511,7 @@ impl Plan {
                         end_heading: None,
                     },
                     start_heading: heading,
+                    start_turn,
                     end_time: end,
                     stop: None,
                 }
@@ -526,6 +535,8 @@ impl Plan {
                         yaw0: yaw0.unwrap_or(heading),
                     },
                     start_heading: heading,
+                    // A followed path takes its headings from the sequence.
+                    start_turn: 0.0,
                     end_time: seq.duration(),
                     stop: None,
                 }
@@ -589,12 +600,18 @@ impl Plan {
                     None => profile.at(t),
                 };
                 let (position, tangent) = line.at(s);
-                let mut path_heading = heading_of(tangent);
-                if line.total() < 1e-6 {
-                    path_heading = end_heading.unwrap_or(self.start_heading);
-                }
                 let k = smoothstep(t / TURN_TIME);
-                let heading = self.start_heading + wrap(path_heading - self.start_heading) * k;
+                let path = path_heading(line, tangent, *end_heading, self.start_heading);
+                let mut turn = wrap(path - self.start_heading);
+                // The body turns the way it set out to: a route that starts nearly behind
+                // it wavers across the back as the body sets off, and the nearer way round
+                // would flip sides between two ticks (a jump of 360° times `k`).
+                if turn - self.start_turn > PI {
+                    turn -= TAU;
+                } else if turn - self.start_turn < -PI {
+                    turn += TAU;
+                }
+                let heading = self.start_heading + turn * k;
                 RootSample {
                     position,
                     heading,
@@ -639,6 +656,21 @@ impl Plan {
                 }
             }
         }
+    }
+}
+
+/// The heading along `line` where its tangent is `tangent`; for a route of no length,
+/// `end_heading`, else `start_heading`.
+fn path_heading(
+    line: &Polyline,
+    tangent: DVec2,
+    end_heading: Option<f64>,
+    start_heading: f64,
+) -> f64 {
+    if line.total() < 1e-6 {
+        end_heading.unwrap_or(start_heading)
+    } else {
+        heading_of(tangent)
     }
 }
 
@@ -718,6 +750,33 @@ mod tests {
             assert_eq!(plan.speed(t).to_bits(), plan.sample(t, 0.0).speed.to_bits());
             t += 0.05;
         }
+    }
+
+    #[test]
+    fn a_route_setting_off_behind_the_body_turns_it_one_way_round() {
+        // The route leaves nearly straight behind the body (heading +z) and its direction
+        // then crosses the back: the heading must turn smoothly all the way, not flip to
+        // the other side as the nearer way round changes.
+        let route = Route::Path {
+            points: vec![DVec2::new(0.02, -1.0), DVec2::new(-0.4, -2.0)],
+            heading: None,
+            speed: 1.3,
+        };
+        let plan = Plan::new(&route, DVec2::ZERO, 0.0);
+        let dt = 0.01;
+        let mut last = plan.sample(0.0, 0.0).heading;
+        let mut fastest: f64 = 0.0;
+        for i in 1..=200 {
+            let h = plan.sample(i as f64 * dt, 0.0).heading;
+            fastest = fastest.max((h - last).abs() / dt);
+            last = h;
+        }
+        // The smoothstep over TURN_TIME turns 180° at 1.5 × π / 0.8 s ≈ 5.9 rad/s at most.
+        assert!(fastest < 6.5, "the heading turned at {fastest:.1} rad/s");
+        // And it ends facing along the route's last leg.
+        let end = plan.sample(plan.end_time, 0.0).heading;
+        let along = heading_of(DVec2::new(-0.42, -1.0));
+        assert!(wrap(end - along).abs() < 0.05, "{end} against {along}");
     }
 
     #[test]
