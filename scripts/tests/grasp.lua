@@ -6,6 +6,8 @@ end
 
 local function done(a) return a.status == "completed" end
 
+local solids = require("support.solids")
+
 test("plan_grasp returns the table's type, the hands and frames", function()
   local ann = troupe.actor{ name = "ann" }
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
@@ -55,6 +57,20 @@ test("manipulate with a function of time", function()
                                keys = function(t) return {-0.2, 1.15 - 0.1 * t / 0.28, 0.38} end }
   expect(run_until(function() return done(back) end, 2), "manipulate 0.28 s: " .. tostring(back.error))
   expect(math.abs(ball:position()[2] - 1.05) < 0.01, "put back down")
+end)
+
+test("manipulate overhead turns no joint faster than 8 rad/s", function()
+  -- The ball raised over the head: the shoulder's flexion locked at its limit and the IK
+  -- found the arm another way in one tick (89.8 rad/s).
+  local ann = troupe.actor{ name = "ann" }
+  local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.04, at = {-0.2, 1.05, 0.38} }
+  local g = ann:grasp{ object = ball, hand = "right" }
+  expect(g:wait() == "completed", "grasp: " .. tostring(g.error))
+  local m = ann:manipulate{ object = ball, keys = { { t = 1.0, at = {-0.2, 1.9, 0.2} } } }
+  local fastest, where = solids.fastest_dof(ann, "right_arm", m)
+  print(string.format("manipulate overhead: fastest DOF %.2f rad/s (%s)", fastest, where))
+  expect(m.status == "completed", "manipulate: " .. tostring(m.error))
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
 end)
 
 test("give a cup: the receiver holds it and both complete", function()
@@ -126,6 +142,26 @@ test("hold hands: the wrists stay within 1 cm while the active actor moves by ke
   h:cancel()
   follow:cancel()
   expect(run_until(function() return h.status == "cancelled" and follow.status == "cancelled" end, 1), "let go")
+end)
+
+test("a hand following another's turns no joint faster than 8 rad/s", function()
+  -- Ann steps towards Bob and back, holding his hand: his arm, folding, turned its
+  -- sternoclavicular joint at 16.4 rad/s in a tick where the IK found it another way.
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
+  local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
+  run(2.0)
+  expect(h.status == "active", "holding: " .. tostring(h.error))
+  local function gap()
+    local a, b = ann:joint_position("r_wrist"), bob:joint_position("l_wrist")
+    return {a[1] - b[1], a[2] - b[2], a[3] - b[3]}
+  end
+  local g0 = gap()
+  local moves = ann:play(troupe.sequence{ root_x = { {0, 0}, {1, -0.3}, {2, 0} } })
+  local fastest, where = solids.fastest_dof(bob, "left_arm", moves)
+  print(string.format("following a hand: fastest DOF %.2f rad/s (%s), the wrists %.4f m off after",
+    fastest, where, dist(gap(), g0)))
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
 end)
 
 test("shake hands facing each other: both complete", function()

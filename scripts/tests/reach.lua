@@ -1,5 +1,7 @@
 -- Reaching, inverse kinematics and looking.
 
+local solids = require("support.solids")
+
 local function dist(a, b)
   return math.sqrt((a[1] - b[1])^2 + (a[2] - b[2])^2 + (a[3] - b[3])^2)
 end
@@ -22,6 +24,22 @@ test("reach with via points and an orientation", function()
   local r = ann:reach{ hand = "left", target = {0.25, 1.2, 0.35}, via = {{0.4, 1.0, 0.2}},
                        orientation = {-90, 0, 0}, duration = 1.2 }
   expect(run_until(function() return r.status == "completed" end, 3), "completed: " .. tostring(r.error))
+end)
+
+test("a reach too quick for its arm catches up instead of jumping at the end", function()
+  -- An arm raised overhead in 0.4 s: held to 8 rad/s it lags, and on its last tick it
+  -- jumped onto the target (the shoulder's abduction at 75 rad/s). It now goes on until
+  -- it has caught up, and still ends on the target.
+  local ann = troupe.actor{ name = "ann" }
+  local target = {-0.2, 1.9, 0.1}
+  local r = ann:reach{ hand = "right", target = target, duration = 0.4 }
+  local fastest, where = solids.fastest_dof(ann, "right_arm", r, true)
+  print(string.format("quick reach overhead: fastest DOF %.2f rad/s (%s), ended at %.2f s",
+    fastest, where, troupe.time()))
+  expect(r.status == "completed", "completed: " .. tostring(r.error))
+  expect(dist(ann:joint_position("r_wrist"), target) < 0.1, "the hand is up there")
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
+  expect(troupe.time() <= 0.4 + 0.5 + 0.015, "caught up within 0.5 s")
 end)
 
 test("an unreachable target fails with the distance in error", function()

@@ -34,7 +34,7 @@ use crate::grasp::plan::{
 };
 use crate::grasp::GraspType;
 use crate::reach::arm_detour::{ArmDetour, PlannedArm};
-use crate::reach::quintic;
+use crate::reach::{hold_to_joint_speed, quintic};
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::jacobian::rotation_error;
 use troupe_body::sensors::{solid_distance, Side};
@@ -677,7 +677,7 @@ impl Generator for FollowHand {
             return Step::Finished;
         }
         if ctx.world.board.before(self.held, ctx.tick) {
-            for (d, v) in mine {
+            for &(d, v) in &mine {
                 self.q[d] = v;
             }
             let a = ctx.world.states[self.active].globals[self.active_wrist];
@@ -697,6 +697,9 @@ impl Generator for FollowHand {
             if let Err(e) = arm.solve(ctx.skeleton, &mut self.q, &goal) {
                 return Step::Failed(e.to_string());
             }
+            // As a reach's: the IK may find the arm another way at once where a DOF locks
+            // at its limit, or swing it between two ways with the hand out of reach.
+            hold_to_joint_speed(&mut self.q, mine, ctx.dt);
         }
         for d in out.scope().iter() {
             out.set(d, self.q[d]);

@@ -15,6 +15,7 @@ pub use options::ManipulateOptions;
 
 use crate::error::OptionError;
 use crate::grasp::plan::ArmIk;
+use crate::reach::{hold_to_joint_speed, CATCH_UP};
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::sensors::Side;
 use troupe_body::Transform;
@@ -125,10 +126,11 @@ impl Generator for Manipulate {
         // Start from the posture, with this action's arm DOFs as it last solved them.
         let mine: Vec<(usize, f64)> = out.scope().iter().map(|d| (d, self.q[d])).collect();
         self.q.copy_from_slice(&ctx.posture.q);
-        for (d, v) in mine {
+        for &(d, v) in &mine {
             self.q[d] = v;
         }
-        let last = t + 0.5 * ctx.dt >= self.keys.last().map(|k| k.time).unwrap_or(0.0);
+        let end = self.keys.last().map(|k| k.time).unwrap_or(0.0);
+        let last = t + 0.5 * ctx.dt >= end;
         let mut worst: f64 = 0.0;
         for (ik, wrist) in &mut self.arms {
             let target = delta.mul(wrist);
@@ -137,10 +139,14 @@ impl Generator for Manipulate {
                 Err(e) => return Step::Failed(e.to_string()),
             }
         }
+        // As a reach's: where a DOF locks at its limit the IK may turn the arm another way
+        // at once (a shoulder's flexion jumped 0.9 rad in a tick with the hands overhead);
+        // past the last key the arm catches up before the manipulation ends.
+        let held = (!last || t < end + CATCH_UP) && hold_to_joint_speed(&mut self.q, mine, ctx.dt);
         for d in out.scope().iter() {
             out.set(d, self.q[d]);
         }
-        if !last {
+        if !last || held {
             return Step::Running;
         }
         if worst > FOLLOW_TOLERANCE {

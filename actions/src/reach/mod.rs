@@ -53,12 +53,36 @@ pub const COLLISION_MARGIN: f64 = 0.01;
 /// arm went 2-9 mm into it in six of the twelve layouts of docs/navigation.md ("A hand
 /// going over another's arm") and an elbow swinging over it 18 mm; with 3 cm, none.
 pub const EXTERNAL_MARGIN: f64 = 0.03;
-/// The fastest a reach, or a grasp going round others, turns any of its DOFs while its
-/// path runs (rad/s; m/s for the root's height). Where a DOF locks at its limit the IK
-/// may find the arm another way at once: a shoulder's abduction jumped 31° in one tick
-/// (54 rad/s) going over another's arm. The last tick is not held to it, so the reach
-/// still ends on its target.
+/// The fastest a reach, or a grasp going round others, turns any of its DOFs (rad/s;
+/// m/s for the root's height). Where a DOF locks at its limit the IK may find the arm
+/// another way at once: a shoulder's abduction jumped 31° in one tick (54 rad/s) going
+/// over another's arm. A reach whose arm is still held back when its time is up goes on
+/// until it has caught up, for up to [`CATCH_UP`]; `manipulate` and a hand following
+/// another's are held to it too ([`hold_to_joint_speed`]).
 pub(crate) const MAX_JOINT_SPEED: f64 = 8.0;
+
+/// Longest a reach or a manipulation goes on past its duration (s) while its arm, held
+/// to [`MAX_JOINT_SPEED`], catches up with the posture that puts the hand on the goal;
+/// then the last tick solves onto it whatever the jump.
+pub(crate) const CATCH_UP: f64 = 0.5;
+
+/// Holds each DOF `d` of `before` (its value on the last tick) within
+/// [`MAX_JOINT_SPEED`] × `dt` of that value in `q`, which an IK has just solved; true if
+/// any was held back.
+pub(crate) fn hold_to_joint_speed(
+    q: &mut [f64],
+    before: impl IntoIterator<Item = (usize, f64)>,
+    dt: f64,
+) -> bool {
+    let most = MAX_JOINT_SPEED * dt;
+    let mut held = false;
+    for (d, was) in before {
+        let v = q[d].clamp(was - most, was + most);
+        held |= v != q[d];
+        q[d] = v;
+    }
+    held
+}
 
 /// Where a target is: read from the world each tick.
 #[derive(Clone, Debug, PartialEq)]
@@ -460,16 +484,14 @@ impl Generator for Reach {
         if let Err(e) = report {
             return Step::Failed(e.to_string());
         }
-        if !finishing {
-            let most = MAX_JOINT_SPEED * ctx.dt;
-            for (&d, &was) in dofs.iter().zip(&before) {
-                self.q[d] = self.q[d].clamp(was - most, was + most);
-            }
-        }
+        // Past its duration the reach goes on while the arm catches up, so that its last
+        // tick does not jump there.
+        let held = (!finishing || t < self.spec.duration + CATCH_UP)
+            && hold_to_joint_speed(&mut self.q, dofs.iter().copied().zip(before), ctx.dt);
         for &d in &dofs {
             out.set(d, self.q[d]);
         }
-        if !finishing {
+        if !finishing || held {
             return Step::Running;
         }
         let g = self.solver.globals();

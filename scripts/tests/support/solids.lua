@@ -38,9 +38,9 @@ function M.ended(a)
 end
 
 -- Steps tick by tick until action `a` ends, measuring how fast the DOFs of `actor`'s
--- scope `scope` turn while `a` is active (the tick it ends on left out): returns the
--- fastest speed (rad/s) and the DOF.
-function M.fastest_dof(actor, scope, a)
+-- scope `scope` turn while `a` is active (the tick it ends on left out, unless
+-- `with_last`): returns the fastest speed (rad/s) and the DOF.
+function M.fastest_dof(actor, scope, a, with_last)
   local names = actor:dofs(scope)
   local function posture()
     local q = {}
@@ -52,7 +52,7 @@ function M.fastest_dof(actor, scope, a)
   while not M.ended(a) do
     wait(dt)
     local q = posture()
-    if a.status == "active" then
+    if a.status == "active" or with_last then
       for i, n in ipairs(names) do
         local speed = math.abs(q[i] - last[i]) / dt
         if speed > fastest then fastest, where = speed, n end
