@@ -145,8 +145,8 @@ test("hold hands: the wrists stay within 1 cm while the active actor moves by ke
 end)
 
 test("a hand following another's turns no joint faster than 8 rad/s", function()
-  -- Ann steps towards Bob and back, holding his hand: his arm, folding, turned its
-  -- sternoclavicular joint at 16.4 rad/s in a tick where the IK found it another way.
+  -- Ann steps towards Bob and back, holding his hand: his arm's IK turned its
+  -- sternoclavicular joint at 16.4 rad/s in one tick.
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
   local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }

@@ -6,8 +6,9 @@
 -- arrives, by 150 s, their discs 1 mm deep at most; limbs still meet by centimetres
 -- (two walkers' feet, 0.029 m; thighs and feet in planters in other layouts, up to
 -- 0.080 m), short of issue 18's 1 cm (docs/navigation.md, Limits). The bound on the
--- solids stays at the 0.065 m of before, not at this layout's lucky 0.029 m. It needs more than the default 120 simulated seconds
--- (its own timeout below) and two to four minutes of the debug build a run
+-- solids stays at the 0.065 m of before, not at this layout's lucky 0.029 m. It needs
+-- more than the default 120 simulated seconds (its own timeout below) and two to four
+-- minutes of the debug build a run
 -- (docs/navigation.md, "Cost"). The scene is chaotic: a change that alters one walker's
 -- step in a rare case moves the worst figures by half (0.059 m of solids became 0.088 m,
 -- its discs 0.033 m became 0 with one such change), so a change that moves them
