@@ -109,7 +109,7 @@ test("walkers crossing a small plaza turn their bodies no faster than 6 rad/s", 
     last[i] = w.actor:dof("root_yaw")
   end
   local dt = 1 / troupe.rate()
-  local fastest, who, when = 0, "nobody", 0
+  local fastest, who, when = 0.0, "nobody", 0.0
   run_until(function()
     for i, w in ipairs(walkers) do
       local yaw = w.actor:dof("root_yaw")
