@@ -172,8 +172,13 @@ test("shake hands facing each other: both complete", function()
   expect(run_until(function() return done(offer) end, 2), "offered: " .. tostring(offer.error))
   local s = ann:shake_hands{ other = bob }
   local f = bob:actions()[#bob:actions()]
+  -- Ann's arm turns no joint faster than 8 rad/s: as the hand began to open, the arm
+  -- snapped from where the shake left it back to its planned posture (9.3 rad/s).
+  local fastest, where = solids.fastest_dof(ann, "right_arm", s)
+  print(string.format("shake hands: fastest DOF %.2f rad/s (%s)", fastest, where))
   expect(run_until(function() return done(s) and done(f) end, 6),
          "shake: " .. s.status .. " " .. tostring(s.error) .. ", follow: " .. f.status)
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
 end)
 
 test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold frees the follower", function()

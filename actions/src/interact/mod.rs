@@ -581,6 +581,12 @@ impl Generator for HoldHand {
                         return Step::Failed(e.to_string());
                     }
                     if t + ctx.dt >= SHAKE_SECONDS {
+                        // The hand opens where the shake left the arm: the per-tick solve
+                        // drifts from the planned posture, and going back to it in one
+                        // tick snapped the elbow (10 rad/s).
+                        for &d in arm.dofs() {
+                            self.goal_q[d] = self.q[d];
+                        }
                         self.phase = 3;
                         self.phase_start = ctx.local_time;
                         if let Some(p) = &mut self.pattern {
