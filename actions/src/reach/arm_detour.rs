@@ -18,7 +18,7 @@
 //! action then holds the arm where that solve left it.
 
 use super::detour::{self, HandPath};
-use super::{quintic, COLLISION_MARGIN, EXTERNAL_MARGIN, MAX_JOINT_SPEED};
+use super::{hold_to_joint_speed, quintic, COLLISION_MARGIN, EXTERNAL_MARGIN};
 use crate::error::{ActionError, Result};
 use troupe_body::collision::Volume;
 use troupe_body::glam::{DQuat, DVec3};
@@ -232,11 +232,16 @@ impl ArmDetour {
             Some(&mut avoid),
         )?;
         // As a reach's: no DOF faster than the limit while the path runs.
-        let most = MAX_JOINT_SPEED * ctx.dt;
+        if !finishing {
+            let before = self
+                .solver
+                .dofs()
+                .iter()
+                .copied()
+                .zip(self.arm.iter().copied());
+            hold_to_joint_speed(q, before, ctx.dt);
+        }
         for (v, &d) in self.arm.iter_mut().zip(self.solver.dofs()) {
-            if !finishing {
-                q[d] = q[d].clamp(*v - most, *v + most);
-            }
             *v = q[d];
         }
         if finishing {
