@@ -69,6 +69,17 @@ pub const HEEL_ROCKER: f64 = 0.15;
 pub const MAX_ROLL: f64 = 1.0;
 /// Fraction of the support at which the heel starts to rise.
 pub const HEEL_OFF: f64 = 0.55;
+/// How far (m) the pelvis may be lowered below the gait's height for the legs to reach
+/// their feet before the body counts as straining them (see [`footing::strain`]): a long
+/// step round a table lowers it by up to 0.1 m; a body that walked on from a planted
+/// foot dropped to the floor.
+pub const MAX_DROP: f64 = 0.1;
+/// The most (in thigh heights) the pelvis is lowered below the gait's height for the legs
+/// to reach their feet.
+pub const LOWEST: f64 = 0.2;
+/// The least part of a swing's time (a fraction of the usual) left for a foot that stayed
+/// down to lift after all; with less, it waits for its next support's end.
+pub const LATE_SWING: f64 = 0.5;
 /// Seconds to stand still, both feet down, before the walk reports it has finished.
 pub const SETTLE_TIME: f64 = 0.3;
 /// Seconds over which the spine, arms and pelvis go from the posture the actor had to the
@@ -128,6 +139,9 @@ enum Foot {
         lift: f64,
         /// Initial horizontal progress rate (per unit of swing).
         start_rate: f64,
+        /// Local phase at which the swing began, if after the support's end (a foot that
+        /// stayed down and then lifted: its swing is quicker).
+        begin: f64,
     },
 }
 
@@ -650,16 +664,22 @@ impl Walk {
                     next: Some(landing),
                     stays: still,
                 };
-            } else if lambda >= sigma && !stays {
+            } else if lambda >= sigma && (!stays || lambda <= 1.0 - LATE_SWING * (1.0 - sigma)) {
                 let pose = self.poses[leg];
                 let to = match next {
-                    Some(n) => n,
-                    None => self.plan_landing(around, plan, leg, lambda, plant),
+                    Some(n) if !stays => n,
+                    // A foot that chose to stay down (the body was to stand) lifts after
+                    // all once the body has moved on, while enough of its swing is left:
+                    // else the body walked on from it, the leg reached back for it and the
+                    // pelvis sank to the floor.
+                    _ => self.plan_landing(around, plan, leg, lambda, plant),
                 };
                 let in_place = (to.plant - plant).length() < 0.01
                     && wrap(to.yaw - yaw).abs() < 0.05
                     && pose.pitch == 0.0;
-                if in_place {
+                if stays && in_place {
+                    // Still where it should be.
+                } else if in_place {
                     // Already where it should land (a foot that started where the walk
                     // ends): it stays down rather than stepping in place.
                     if let Foot::Stance { stays, .. } = &mut self.feet[leg] {
@@ -685,6 +705,7 @@ impl Walk {
                         to,
                         lift,
                         start_rate,
+                        begin: if stays { lambda } else { 0.0 },
                     };
                 }
             }
@@ -725,8 +746,10 @@ impl Walk {
                 to,
                 lift,
                 start_rate,
+                begin,
             } => {
-                let w = ((lambda - sigma) / (1.0 - sigma)).clamp(0.0, 1.0);
+                let begin = begin.max(sigma);
+                let w = ((lambda - begin) / (1.0 - begin)).clamp(0.0, 1.0);
                 // Horizontal progress: a cubic that leaves at `start_rate` (the foot keeps
                 // up with the body, so the hip need not extend further) and arrives at rest.
                 let s = (w * w * w - 2.0 * w * w + w) * start_rate + (3.0 - 2.0 * w) * w * w;
@@ -952,14 +975,17 @@ impl Walk {
         // A body that starts lowered (crouched to pick something up) rises to the gait's
         // height as the pelvis blends in, rather than jumping up.
         let crouched = self.start_q[rig.root[1]];
-        let root_y = soft_min(highest, 0.006 * a) + crouched.min(0.0) * (1.0 - k);
+        // Never lower than a deep knee bend of both legs: a leg that cannot reach its
+        // foot from there misses it rather than pulling the body to the floor.
+        let lowered = soft_min(highest, 0.006 * a).max(vertical - LOWEST * rig.thigh_height);
+        let root_y = lowered + crouched.min(0.0) * (1.0 - k);
         let root = root0 + DVec3::Y * root_y;
         let pelvis_yaw = heading + pelvis[2];
         let mut legs = Legs {
             root_y,
             values: [[0.0; 7]; 2],
             miss: 0.0,
-            strain: 0.0,
+            strain: (vertical - lowered - MAX_DROP).max(0.0),
         };
         for leg in 0..2 {
             let hip = rig.hip_position(leg, root, heading, pelvis_rot);
