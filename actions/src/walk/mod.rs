@@ -139,8 +139,9 @@ enum Foot {
         lift: f64,
         /// Initial horizontal progress rate (per unit of swing).
         start_rate: f64,
-        /// Local phase at which the swing began, if after the support's end (a foot that
-        /// stayed down and then lifted: its swing is quicker).
+        /// Local phase at which the swing began when that was after the support's end (a
+        /// foot that stayed down and then lifted: its swing is quicker); 0 for a swing
+        /// that began with it.
         begin: f64,
     },
 }
@@ -975,8 +976,8 @@ impl Walk {
         // A body that starts lowered (crouched to pick something up) rises to the gait's
         // height as the pelvis blends in, rather than jumping up.
         let crouched = self.start_q[rig.root[1]];
-        // Never lower than a deep knee bend of both legs: a leg that cannot reach its
-        // foot from there misses it rather than pulling the body to the floor.
+        // Never more than `LOWEST` below the gait's height: a leg that cannot reach its
+        // foot from there misses it rather than pulling the body down to the floor.
         let lowered = soft_min(highest, 0.006 * a).max(vertical - LOWEST * rig.thigh_height);
         let root_y = lowered + crouched.min(0.0) * (1.0 - k);
         let root = root0 + DVec3::Y * root_y;
