@@ -101,7 +101,7 @@ test("walkers crossing a small plaza turn their bodies no faster than 6 rad/s an
   -- between two ticks (up to 161 rad/s here), and a push along a route just set off ran
   -- its clock, and the heading turning in with it, ahead by several ticks (37 rad/s).
   -- A walker whose body went on from a planted foot (one that had chosen to stay down,
-  -- or the steering's landing a metre ahead of a body held back) lowered its pelvis
+  -- or the steering's landing 0.9 m from a body held back) lowered its pelvis
   -- until the leg reached: to 0.55 m here, to 0.10 m (on the floor) in the big plaza.
   local plaza = require("support.plaza_streams")
   local walkers = plaza.build{ planter = 2.5, planter_size = {1.2, 0.7, 1.2}, per_stream = 12,
