@@ -678,11 +678,10 @@ impl Walk {
                 let in_place = (to.plant - plant).length() < 0.01
                     && wrap(to.yaw - yaw).abs() < 0.05
                     && pose.pitch == 0.0;
-                if stays && in_place {
-                    // Still where it should be.
-                } else if in_place {
+                if in_place {
                     // Already where it should land (a foot that started where the walk
-                    // ends): it stays down rather than stepping in place.
+                    // ends, or one staying down whose landing has not moved): it stays
+                    // down rather than stepping in place.
                     if let Foot::Stance { stays, .. } = &mut self.feet[leg] {
                         *stays = true;
                     }

@@ -460,8 +460,7 @@ impl Plan {
                 } else {
                     0.0
                 };
-                let start_turn =
-                    wrap(path_heading(&line, line.at(0.0).1, *end_heading, heading) - heading);
+                let start_turn = first_turn(&line, *end_heading, heading);
                 Plan {
                     kind: PlanKind::Along {
                         line,
@@ -503,7 +502,7 @@ impl Plan {
                         (profile, d)
                     }
                 };
-                let start_turn = wrap(path_heading(&line, line.at(0.0).1, None, heading) - heading);
+                let start_turn = first_turn(&line, None, heading);
                 Plan {
                     kind: PlanKind::Along {
                         line,
@@ -672,6 +671,12 @@ fn path_heading(
     } else {
         heading_of(tangent)
     }
+}
+
+/// The turn (within ±π) from `heading` to the route's first direction along `line` (see
+/// [`path_heading`]): the side a plan's body sets out to turn to.
+fn first_turn(line: &Polyline, end_heading: Option<f64>, heading: f64) -> f64 {
+    wrap(path_heading(line, line.at(0.0).1, end_heading, heading) - heading)
 }
 
 /// `p` turned by `a` radians about +Y (the floor's x, z).
