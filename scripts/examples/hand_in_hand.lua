@@ -15,7 +15,7 @@ ann:behave(function(self)
   -- Let the hold close before setting off.
   wait(2.0)
   local held = gap()
-  local worst = 0
+  local worst = 0.0
   -- Same route, 45 cm apart, same pace; the walks leave the arms to the hold.
   local a = self:walk{ path = { {0, 2}, {1, 4}, {1, 6} }, speed = 1.0, arms = false }
   local b = bob:walk{ path = { {-0.45, 2}, {0.55, 4}, {0.55, 6} }, speed = 1.0, arms = false }

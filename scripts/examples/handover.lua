@@ -10,7 +10,7 @@ local offered = false
 ann:behave(function(self)
   self:grasp{ object = cup, hand = "right" }:wait()
   local give = self:give{ object = cup, to = bob, hand = "right" }
-  print("give: " .. give:wait() .. ", the cup is held by " .. cup.holder.name)
+  print("give: " .. give:wait() .. ", the cup is held by " .. (cup.holder and cup.holder.name or "nobody"))
   wait_until(function() return offered end, 10)
   local s = self:shake_hands{ other = bob, hand = "left", other_hand = "left" }
   print("handshake: " .. s:wait() .. (s.error and (" (" .. s.error .. ")") or ""))

@@ -5,6 +5,7 @@ local d = math.rad
 
 -- Each pose is a sequence that eases from rest into the pose and holds it.
 local function strike(pose, seconds)
+  ---@type table<string, any>
   local tracks = { name = "pose" }
   for dof, degrees in pairs(pose) do
     tracks[dof] = { {0, 0}, {seconds, d(degrees)}, {seconds + 10, d(degrees)} }
@@ -32,7 +33,7 @@ for i, pose in ipairs(poses) do
 end
 
 -- The first performer waves while holding the pose.
-troupe.get_actor("performer1"):behave(function(self)
+assert(troupe.get_actor("performer1")):behave(function(self)
   wait(1.0)
   self:play("wave.trk", { mode = "weighted", weight = 0.4, scope = "r_elbow+r_wrist", ease_in = 0.3 })
 end)

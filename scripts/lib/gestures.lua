@@ -16,6 +16,7 @@ end
 -- `count` nods of the head, each `period` seconds long.
 function gestures.nod(count, period)
   count, period = count or 2, period or 0.6
+  ---@type number[][]
   local keys = { {0, 0} }
   for i = 1, count do
     keys[#keys + 1] = { (i - 0.5) * period, 0.35 }
