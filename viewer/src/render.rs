@@ -319,6 +319,7 @@ pub(crate) struct SceneRenderer {
     batches: Vec<(MeshKey, std::ops::Range<u32>)>,
     pub samples: u32,
     skin_pipeline: wgpu::RenderPipeline,
+    skin_by_vertex_pipeline: wgpu::RenderPipeline,
     skin_layout: wgpu::BindGroupLayout,
     skin_blocks: wgpu::Buffer,
     skin_bind_group: wgpu::BindGroup,
@@ -491,7 +492,8 @@ impl SceneRenderer {
                 label: Some("actor skin block"),
                 entries: &[wgpu::BindGroupLayoutEntry {
                     binding: 0,
-                    visibility: wgpu::ShaderStages::VERTEX,
+                    // The matrices skin the vertices; the colours are picked per pixel.
+                    visibility: wgpu::ShaderStages::VERTEX_FRAGMENT,
                     ty: wgpu::BindingType::Buffer {
                         ty: wgpu::BufferBindingType::Uniform,
                         has_dynamic_offset: true,
@@ -507,31 +509,38 @@ impl SceneRenderer {
             bind_group_layouts: &[Some(&layout), Some(&skin_layout)],
             immediate_size: 0,
         });
-        let skin_pipeline = device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
-            label: Some("skin"),
-            layout: Some(&skin_pipeline_layout),
-            vertex: wgpu::VertexState {
-                module: &shader,
-                entry_point: Some("vs_skin"),
-                compilation_options: Default::default(),
-                buffers: &[Some(wgpu::VertexBufferLayout {
-                    array_stride: std::mem::size_of::<SkinVertex>() as u64,
-                    step_mode: wgpu::VertexStepMode::Vertex,
-                    attributes: &skinned::VERTEX_ATTRIBUTES,
-                })],
-            },
-            primitive: wgpu::PrimitiveState::default(),
-            depth_stencil: depth(true),
-            multisample,
-            fragment: Some(wgpu::FragmentState {
-                module: &shader,
-                entry_point: Some("fs_mesh"),
-                compilation_options: Default::default(),
-                targets: &targets,
-            }),
-            multiview_mask: None,
-            cache: None,
-        });
+        // The near generated skin picks its colours per pixel (`fs_skin`); its far level
+        // of detail and users' characters by vertex, as the plain meshes (`vs_skin_by_vertex`).
+        let skin_pipeline_with = |label, vertex, fragment| {
+            device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
+                label: Some(label),
+                layout: Some(&skin_pipeline_layout),
+                vertex: wgpu::VertexState {
+                    module: &shader,
+                    entry_point: Some(vertex),
+                    compilation_options: Default::default(),
+                    buffers: &[Some(wgpu::VertexBufferLayout {
+                        array_stride: std::mem::size_of::<SkinVertex>() as u64,
+                        step_mode: wgpu::VertexStepMode::Vertex,
+                        attributes: &skinned::VERTEX_ATTRIBUTES,
+                    })],
+                },
+                primitive: wgpu::PrimitiveState::default(),
+                depth_stencil: depth(true),
+                multisample,
+                fragment: Some(wgpu::FragmentState {
+                    module: &shader,
+                    entry_point: Some(fragment),
+                    compilation_options: Default::default(),
+                    targets: &targets,
+                }),
+                multiview_mask: None,
+                cache: None,
+            })
+        };
+        let skin_pipeline = skin_pipeline_with("skin", "vs_skin", "fs_skin");
+        let skin_by_vertex_pipeline =
+            skin_pipeline_with("skin by vertex", "vs_skin_by_vertex", "fs_mesh");
         let lines = LineRenderer::new(
             device,
             &shader,
@@ -545,6 +554,7 @@ impl SceneRenderer {
         SceneRenderer {
             lines,
             skin_pipeline,
+            skin_by_vertex_pipeline,
             skin_layout,
             skin_blocks,
             skin_bind_group,
@@ -768,7 +778,6 @@ impl SceneRenderer {
             pass.draw_indexed(0..mesh.count, 0, range.clone());
         }
         if !self.skin_draws.is_empty() {
-            pass.set_pipeline(&self.skin_pipeline);
             for (i, (key, skeleton, far)) in self.skin_draws.iter().enumerate() {
                 let Some(skin) = self.skins.get_key(&gpu.device, key, skeleton) else {
                     continue;
@@ -778,6 +787,14 @@ impl SceneRenderer {
                 } else {
                     (&skin.indices, skin.count)
                 };
+                // Colours per pixel only where an edge between regions spans pixels.
+                let per_pixel = !*far && matches!(skin.source, skinned::SkinSource::Generated(_));
+                let pipeline = if per_pixel {
+                    &self.skin_pipeline
+                } else {
+                    &self.skin_by_vertex_pipeline
+                };
+                pass.set_pipeline(pipeline);
                 pass.set_bind_group(
                     1,
                     &self.skin_bind_group,

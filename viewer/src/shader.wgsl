@@ -44,15 +44,21 @@ fn vs_mesh(
     return out;
 }
 
-@fragment
-fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
-    let n = normalize(in.normal);
+// A surface of linear colour `color` facing `normal`, lit by the key light, a fill and
+// the sky.
+fn lit(color: vec3<f32>, normal: vec3<f32>) -> vec4<f32> {
+    let n = normalize(normal);
     let key = max(dot(n, globals.light_dir.xyz), 0.0);
     // Hemisphere ambient: brighter from the sky than from the floor.
     let ambient = mix(0.30, 0.55, n.y * 0.5 + 0.5);
     let fill = max(dot(n, normalize(vec3<f32>(-0.6, 0.2, -0.4))), 0.0) * 0.15;
     let shade = ambient + 0.65 * key + fill;
-    return vec4<f32>(in.color.rgb * shade, 1.0);
+    return vec4<f32>(color * shade, 1.0);
+}
+
+@fragment
+fn fs_mesh(in: MeshOut) -> @location(0) vec4<f32> {
+    return lit(in.color.rgb, in.normal);
 }
 
 struct FloorOut {
@@ -136,24 +142,114 @@ struct SkinBlock {
 
 @group(1) @binding(0) var<uniform> skin: SkinBlock;
 
-@vertex
-fn vs_skin(
+struct SkinOut {
+    @builtin(position) clip: vec4<f32>,
+    @location(0) normal: vec3<f32>,
+    // Distances from the volumes of bare skin, shirt, trousers and shoes.
+    @location(1) cloth: vec4<f32>,
+    // Distance from the nearest eyeball, and how far in front of its pupil's edge.
+    @location(2) eye: vec2<f32>,
+    // The vertex's colour slot: a region, or a hand (bare skin tinted by grasp states).
+    @location(3) @interpolate(flat) part: u32,
+};
+
+// A skin vertex as uploaded (`SkinVertex` in viewer/src/skinned.rs).
+struct SkinVertexIn {
     @location(0) pos: vec3<f32>,
     @location(1) normal: vec3<f32>,
     @location(2) joints: vec4<u32>,
     @location(3) weights: vec4<f32>,
+    // Its colour slot: a region, or a hand (bare skin tinted by grasp states).
     @location(4) part: u32,
+    // Multiplies the slot's colour: a user's character's own vertex colour.
     @location(5) tint: vec4<f32>,
-) -> MeshOut {
-    let m = skin.joints[joints.x] * weights.x + skin.joints[joints.y] * weights.y
-        + skin.joints[joints.z] * weights.z + skin.joints[joints.w] * weights.w;
+    @location(6) cloth: vec4<f32>,
+    @location(7) eye: vec2<f32>,
+};
+
+// A skin vertex moved by its joints' matrices blended by its weights: its clip position
+// and normal.
+fn skin_vertex(v: SkinVertexIn) -> MeshOut {
+    let m = skin.joints[v.joints.x] * v.weights.x + skin.joints[v.joints.y] * v.weights.y
+        + skin.joints[v.joints.z] * v.weights.z + skin.joints[v.joints.w] * v.weights.w;
+    let world = (m * vec4<f32>(v.pos, 1.0)).xyz;
     var out: MeshOut;
-    let world = (m * vec4<f32>(pos, 1.0)).xyz;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
     // Blended rotations are near-orthogonal: the normal goes through the same matrix.
-    out.normal = (m * vec4<f32>(normal, 0.0)).xyz;
-    out.color = skin.colors[part] * tint;
+    out.normal = (m * vec4<f32>(v.normal, 0.0)).xyz;
     return out;
+}
+
+@vertex
+fn vs_skin(v: SkinVertexIn) -> SkinOut {
+    let skinned = skin_vertex(v);
+    var out: SkinOut;
+    out.clip = skinned.clip;
+    out.normal = skinned.normal;
+    out.cloth = v.cloth;
+    out.eye = v.eye;
+    out.part = v.part;
+    return out;
+}
+
+// The far level of detail, a few hundred pixels tall at most, and users' characters:
+// coloured by vertex (a character by its own vertex colours, the tint), at the cost of
+// the plain meshes; the generated skin's edges between regions are then under a pixel
+// or two.
+@vertex
+fn vs_skin_by_vertex(v: SkinVertexIn) -> MeshOut {
+    var out = skin_vertex(v);
+    out.color = skin.colors[v.part] * v.tint;
+    return out;
+}
+
+// A candidate region `k` at distance `d` taken into the nearest two so far (`near`:
+// the nearest's distance and the second's; `index`: their regions), without branches.
+fn nearest_two(near: vec2<f32>, index: vec2<u32>, d: f32, k: u32) -> vec4<f32> {
+    let first = d < near.x;
+    let second = d < near.y;
+    let d2 = select(select(near.y, d, second), near.x, first);
+    let i2 = select(select(index.y, k, second), index.x, first);
+    let d1 = select(near.x, d, first);
+    let i1 = select(index.x, k, first);
+    return vec4<f32>(d1, d2, bitcast<f32>(i1), bitcast<f32>(i2));
+}
+
+// The colour of region `k` (bare skin, shirt, trousers, shoes, eye) for a fragment of
+// colour slot `part`: bare skin on a hand takes its hand's slot.
+fn region_color(k: u32, part: u32, eye: vec4<f32>) -> vec4<f32> {
+    let slot = select(k, select(0u, part, part >= 6u), k == 0u);
+    return select(skin.colors[min(slot, 7u)], eye, k == 4u);
+}
+
+// The skin's colour per pixel: the region whose volumes are nearest, from the
+// distances interpolated between the vertices, so that the edges between regions run
+// through the triangles where the volumes put them instead of zigzagging along the
+// triangles' edges. Across an edge the two regions' colours blend over about a pixel
+// (the screen-space change of the distances' difference), as multisampling does for the
+// outline.
+@fragment
+fn fs_skin(in: SkinOut) -> @location(0) vec4<f32> {
+    var n = vec4<f32>(in.cloth.x, 1e9, bitcast<f32>(0u), bitcast<f32>(0u));
+    n = nearest_two(n.xy, bitcast<vec2<u32>>(n.zw), in.cloth.y, 1u);
+    n = nearest_two(n.xy, bitcast<vec2<u32>>(n.zw), in.cloth.z, 2u);
+    n = nearest_two(n.xy, bitcast<vec2<u32>>(n.zw), in.cloth.w, 3u);
+    n = nearest_two(n.xy, bitcast<vec2<u32>>(n.zw), in.eye.x, 4u);
+    let index = bitcast<vec2<u32>>(n.zw);
+    let gap = n.y - n.x;
+    let pupil = in.eye.y;
+    let eye = mix(
+        skin.colors[4],
+        skin.colors[5],
+        clamp(pupil / max(fwidth(pupil), 1e-6) + 0.5, 0.0, 1.0),
+    );
+    let near = clamp(gap / max(fwidth(gap), 1e-6) + 0.5, 0.5, 1.0);
+    let color = mix(
+        region_color(index.y, in.part, eye),
+        region_color(index.x, in.part, eye),
+        near,
+    );
+    return lit(color.rgb, in.normal);
 }
 
 // Debug lines: a segment per instance, widened into a screen-space quad of `a.w` pixels

@@ -41,7 +41,18 @@ pub(crate) struct SkinVertex {
     /// Linear colour multiplying the slot's: white for the generated skin, the
     /// character's own colour for a user's character.
     tint: [f32; 4],
+    /// Distances from the regions' volumes (bare skin, shirt, trousers, shoes), so that
+    /// the fragment shader draws the edges between regions where the volumes put them,
+    /// between vertices (see `troupe_body::skin::RegionDistances`).
+    cloth: [f32; 4],
+    /// Distance from the nearest eyeball, and how far in front of its pupil's edge.
+    eye: [f32; 2],
 }
+
+/// Region distances of a user's character's vertices: it is coloured by vertex (its own
+/// colours as tints), and these make it bare skin, tinted the same, were it drawn per
+/// pixel.
+const BARE: ([f32; 4], [f32; 2]) = ([0.0, 1.0, 1.0, 1.0], [1.0, -1.0]);
 
 /// An actor's uniform block: colours and skinning matrices.
 #[repr(C)]
@@ -205,6 +216,8 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
             weights: skin.weights[i],
             part: parts[i],
             tint: [1.0; 4],
+            cloth: skin.region_distances[i].cloth,
+            eye: [skin.region_distances[i].eye, skin.region_distances[i].pupil],
         })
         .collect();
     let (indices, far) = (skin.indices.clone(), skin.far_indices.clone());
@@ -241,6 +254,8 @@ fn upload_character(
                 let c = dressing.colors[i].map(srgb_to_linear);
                 [c[0], c[1], c[2], 1.0]
             },
+            cloth: BARE.0,
+            eye: BARE.1,
         })
         .collect();
     upload_mesh(
@@ -298,8 +313,9 @@ fn upload_mesh(
 }
 
 /// Vertex attributes of [`SkinVertex`].
-pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 6] = wgpu::vertex_attr_array![
-    0 => Float32x3, 1 => Float32x3, 2 => Uint16x4, 3 => Float32x4, 4 => Uint32, 5 => Float32x4
+pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 8] = wgpu::vertex_attr_array![
+    0 => Float32x3, 1 => Float32x3, 2 => Uint16x4, 3 => Float32x4, 4 => Uint32, 5 => Float32x4,
+    6 => Float32x4, 7 => Float32x2
 ];
 
 /// The uniform block of one actor: `colors` by slot and the skinning matrices for its

@@ -27,12 +27,14 @@
 mod collapse;
 mod flips;
 pub mod helpers;
+mod regions;
 mod relax;
 mod surface;
 pub mod volumes;
 mod weights;
 
 pub use helpers::Helper;
+pub use regions::RegionDistances;
 pub use volumes::{bind_globals, bind_posture, rest_globals, Region, BIND_ABDUCTION};
 pub use weights::Influences;
 
@@ -40,7 +42,7 @@ use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
 use crate::transform::Transform;
 use glam::DVec3;
-use volumes::{Join, Volume};
+use volumes::Volume;
 
 /// The most triangles a skin has at full detail.
 pub const MAX_TRIANGLES: usize = 24_000;
@@ -106,6 +108,9 @@ pub struct Skin {
     pub weights: Vec<[f32; 4]>,
     /// What covers each vertex (skin, shirt, …), for colouring.
     pub regions: Vec<Region>,
+    /// How far each vertex lies from each region's volumes, for drawing the edges
+    /// between regions between the vertices (see [`RegionDistances`]).
+    pub region_distances: Vec<RegionDistances>,
     /// Full-detail triangles, counter-clockwise seen from outside.
     pub indices: Vec<u32>,
     /// Coarse triangles over the same vertices, for actors far away.
@@ -160,7 +165,7 @@ impl Skin {
         // waistband) along rows of vertices.
         let dense_regions: Vec<Region> = dense_positions
             .iter()
-            .map(|&p| region_at(p, &volumes))
+            .map(|&p| regions::distances_at(p, &volumes).region())
             .collect();
         let full = simplify_closed(&dense_indices, &adapter, &dense_regions, height)?;
         let far = meshopt::simplify(
@@ -219,6 +224,10 @@ impl Skin {
             .flatten()
             .collect();
         smooth_regions(&mut regions, &indices);
+        let region_distances = positions
+            .iter()
+            .map(|&p| regions::distances_at(p, &volumes))
+            .collect();
         let normals = vertex_normals(&positions, &indices);
         let joints = skeleton.joints();
         let band: Vec<f64> = joints
@@ -254,6 +263,7 @@ impl Skin {
             joints,
             weights,
             regions,
+            region_distances,
             indices,
             far_indices,
             rest,
@@ -285,7 +295,7 @@ impl Skin {
     /// Bytes held by the skin's arrays (what an actor's skin costs in memory).
     pub fn memory_bytes(&self) -> usize {
         let n = self.positions.len();
-        n * (12 + 12 + 8 + 16 + 1)
+        n * (12 + 12 + 8 + 16 + 1 + std::mem::size_of::<RegionDistances>())
             + (self.indices.len() + self.far_indices.len()) * 4
             + self.rest.len() * std::mem::size_of::<Transform>()
     }
@@ -484,26 +494,6 @@ fn vertex_normals(positions: &[DVec3], indices: &[u32]) -> Vec<[f32; 3]> {
         .iter()
         .map(|n| n.try_normalize().unwrap_or(DVec3::Y).as_vec3().to_array())
         .collect()
-}
-
-/// What covers the skin at `p`: the region of the volume whose surface is nearest; the
-/// front of an eyeball is its pupil.
-fn region_at(p: DVec3, volumes: &[Volume]) -> Region {
-    let nearest = volumes
-        .iter()
-        .filter(|v| v.join != Join::Carve)
-        .map(|v| (v.form.distance(p).abs(), v))
-        .min_by(|a, b| a.0.total_cmp(&b.0))
-        .map(|(_, v)| v)
-        .expect("a body has volumes");
-    match (nearest.region, nearest.form) {
-        (Region::Eye, volumes::Form::Ellipsoid { center, radii, .. })
-            if p.z - center.z > 0.75 * radii.z =>
-        {
-            Region::Pupil
-        }
-        (region, _) => region,
-    }
 }
 
 /// Whether the volumes of two joints blend (or share weights): the same joint, or one
