@@ -147,8 +147,8 @@ struct SkinOut {
     @location(0) normal: vec3<f32>,
     // Distances from the volumes of bare skin, shirt, trousers and shoes.
     @location(1) cloth: vec4<f32>,
-    // Distance from the nearest eyeball, and how far in front of its pupil's edge.
-    @location(2) eye: vec2<f32>,
+    // Distance from the nearest eyeball, and where on it (from its centre, in its radii).
+    @location(2) eye: vec4<f32>,
     // The vertex's colour slot: a region, or a hand (bare skin tinted by grasp states).
     @location(3) @interpolate(flat) part: u32,
 };
@@ -164,7 +164,7 @@ struct SkinVertexIn {
     // Multiplies the slot's colour: a user's character's own vertex colour.
     @location(5) tint: vec4<f32>,
     @location(6) cloth: vec4<f32>,
-    @location(7) eye: vec2<f32>,
+    @location(7) eye: vec4<f32>,
 };
 
 // A skin vertex moved by its joints' matrices blended by its weights: its clip position
@@ -237,7 +237,10 @@ fn fs_skin(in: SkinOut) -> @location(0) vec4<f32> {
     n = nearest_two(n.xy, bitcast<vec2<u32>>(n.zw), in.eye.x, 4u);
     let index = bitcast<vec2<u32>>(n.zw);
     let gap = n.y - n.x;
-    let pupil = in.eye.y;
+    // The pupil: the eyeball's front, cut by direction from its centre per pixel, so it
+    // is round however coarse the eyeball's triangles (PUPIL_EDGE in
+    // runtime/body/src/skin/regions.rs).
+    let pupil = normalize(in.eye.yzw).z - 0.75;
     let eye = mix(
         skin.colors[4],
         skin.colors[5],

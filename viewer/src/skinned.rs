@@ -45,14 +45,15 @@ pub(crate) struct SkinVertex {
     /// the fragment shader draws the edges between regions where the volumes put them,
     /// between vertices (see `troupe_body::skin::RegionDistances`).
     cloth: [f32; 4],
-    /// Distance from the nearest eyeball, and how far in front of its pupil's edge.
-    eye: [f32; 2],
+    /// Distance from the nearest eyeball, and where on it the vertex lies (see
+    /// `RegionDistances::on_eye`).
+    eye: [f32; 4],
 }
 
 /// Region distances of a user's character's vertices: it is coloured by vertex (its own
 /// colours as tints), and these make it bare skin, tinted the same, were it drawn per
 /// pixel.
-const BARE: ([f32; 4], [f32; 2]) = ([0.0, 1.0, 1.0, 1.0], [1.0, -1.0]);
+const BARE: ([f32; 4], [f32; 4]) = ([0.0, 1.0, 1.0, 1.0], [1.0, 0.0, 0.0, -1.0]);
 
 /// An actor's uniform block: colours and skinning matrices.
 #[repr(C)]
@@ -217,7 +218,10 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
             part: parts[i],
             tint: [1.0; 4],
             cloth: skin.region_distances[i].cloth,
-            eye: [skin.region_distances[i].eye, skin.region_distances[i].pupil],
+            eye: {
+                let d = &skin.region_distances[i];
+                [d.eye, d.on_eye[0], d.on_eye[1], d.on_eye[2]]
+            },
         })
         .collect();
     let (indices, far) = (skin.indices.clone(), skin.far_indices.clone());
@@ -315,7 +319,7 @@ fn upload_mesh(
 /// Vertex attributes of [`SkinVertex`].
 pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 8] = wgpu::vertex_attr_array![
     0 => Float32x3, 1 => Float32x3, 2 => Uint16x4, 3 => Float32x4, 4 => Uint32, 5 => Float32x4,
-    6 => Float32x4, 7 => Float32x2
+    6 => Float32x4, 7 => Float32x4
 ];
 
 /// The uniform block of one actor: `colors` by slot and the skinning matrices for its

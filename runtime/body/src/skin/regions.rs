@@ -23,9 +23,9 @@ pub struct RegionDistances {
     pub cloth: [f32; 4],
     /// From the nearest eyeball.
     pub eye: f32,
-    /// How far in front of that eyeball's pupil edge (a plane across its front): positive
-    /// on the pupil, negative on the white.
-    pub pupil: f32,
+    /// Where the vertex lies from that eyeball's centre, in its radii (a point of its
+    /// surface is a unit vector): the pupil is the front, beyond [`PUPIL_EDGE`] along z.
+    pub on_eye: [f32; 3],
 }
 
 impl RegionDistances {
@@ -40,7 +40,7 @@ impl RegionDistances {
             .map(|(i, &d)| (i, d))
             .expect("four distances");
         if self.eye < nearest {
-            if self.pupil > 0.0 {
+            if self.on_eye[2] as f64 > PUPIL_EDGE {
                 Region::Pupil
             } else {
                 Region::Eye
@@ -51,14 +51,15 @@ impl RegionDistances {
     }
 }
 
-/// The pupil covers an eyeball's front beyond this fraction of its depth.
-const PUPIL_EDGE: f64 = 0.75;
+/// The pupil covers an eyeball's front beyond this fraction of its depth (its edge a
+/// circle 41° from the front).
+pub const PUPIL_EDGE: f64 = 0.75;
 
 /// How far `p` lies from each region's `volumes` (carved volumes, the eye sockets, do
 /// not count).
 pub(crate) fn distances_at(p: DVec3, volumes: &[Volume]) -> RegionDistances {
     let mut cloth = [f64::INFINITY; 4];
-    let (mut eye, mut pupil) = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut eye, mut on_eye) = (f64::INFINITY, DVec3::splat(-1e3));
     for v in volumes.iter().filter(|v| v.join != Join::Carve) {
         let d = v.form.distance(p).abs();
         match v.region {
@@ -66,7 +67,7 @@ pub(crate) fn distances_at(p: DVec3, volumes: &[Volume]) -> RegionDistances {
                 if d < eye {
                     eye = d;
                     if let Form::Ellipsoid { center, radii, .. } = v.form {
-                        pupil = p.z - center.z - PUPIL_EDGE * radii.z;
+                        on_eye = (p - center) / radii;
                     }
                 }
             }
@@ -81,7 +82,7 @@ pub(crate) fn distances_at(p: DVec3, volumes: &[Volume]) -> RegionDistances {
     RegionDistances {
         cloth: cloth.map(finite),
         eye: finite(eye),
-        pupil: pupil.max(-1e3) as f32,
+        on_eye: on_eye.as_vec3().to_array(),
     }
 }
 
@@ -157,6 +158,6 @@ mod tests {
         let side = distances_at(DVec3::new(0.012, 0.0, 0.0), &volumes);
         assert_eq!(front.region(), Region::Pupil);
         assert_eq!(side.region(), Region::Eye);
-        assert!(front.pupil > 0.0 && side.pupil < 0.0);
+        assert!(front.on_eye[2] > 0.99 && side.on_eye[0] > 0.99);
     }
 }
