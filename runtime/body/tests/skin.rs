@@ -291,3 +291,83 @@ fn every_template_at_several_sizes_is_skinned_soundly() {
         }
     }
 }
+
+#[test]
+fn the_skin_cut_along_its_regions_is_the_same_surface_one_region_per_triangle() {
+    use troupe_body::skin::CutSkin;
+    let t = &templates()[0];
+    let skeleton = t
+        .instantiate(TemplateParams {
+            height: t.default_height,
+            mass: t.default_mass,
+        })
+        .unwrap();
+    let skin = Skin::build(&skeleton).unwrap();
+    let cut = CutSkin::new(&skin);
+    let tris = cut.indices.len() / 3;
+    let mixed = cut
+        .indices
+        .chunks_exact(3)
+        .filter(|t| {
+            let r = t
+                .iter()
+                .map(|&v| cut.regions[v as usize])
+                .collect::<Vec<_>>();
+            r[0] != r[1] || r[1] != r[2]
+        })
+        .count();
+    eprintln!(
+        "cut: {} vertices and {tris} triangles (the skin: {} and {}); {mixed} triangles where three regions meet",
+        cut.positions.len(),
+        skin.positions.len(),
+        skin.triangle_count()
+    );
+    assert!(tris > skin.triangle_count() && mixed * 500 < tris);
+    // The same surface: as much area, and closed once the copies on the edges are
+    // welded (every edge between two welded vertices once each way).
+    let area = |positions: &[[f32; 3]], indices: &[u32]| -> f64 {
+        indices
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] =
+                    [0, 1, 2].map(|k| DVec3::from(positions[t[k] as usize].map(f64::from)));
+                (b - a).cross(c - a).length() / 2.0
+            })
+            .sum()
+    };
+    let (before, after) = (
+        area(&skin.positions, &skin.indices),
+        area(&cut.positions, &cut.indices),
+    );
+    assert!(
+        (after - before).abs() < 1e-6 * before,
+        "area {before} m² became {after} m²"
+    );
+    let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
+    let id: Vec<u32> = cut
+        .positions
+        .iter()
+        .map(|p| {
+            let n = welded.len() as u32;
+            *welded.entry(p.map(f32::to_bits)).or_insert(n)
+        })
+        .collect();
+    let mut edges: HashMap<(u32, u32), u32> = HashMap::new();
+    for t in cut.indices.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            *edges.entry((id[a as usize], id[b as usize])).or_default() += 1;
+        }
+    }
+    for (&(a, b), &count) in &edges {
+        assert_eq!(count, 1, "welded edge {a}-{b} used {count} times");
+        assert_eq!(
+            edges.get(&(b, a)),
+            Some(&1),
+            "welded edge {a}-{b} has no twin"
+        );
+    }
+    for ws in &cut.weights {
+        let sum: f32 = ws.iter().sum();
+        assert!((sum - 1.0).abs() < 1e-5, "weights {ws:?}");
+    }
+}

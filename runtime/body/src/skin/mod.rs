@@ -34,7 +34,7 @@ pub mod volumes;
 mod weights;
 
 pub use helpers::Helper;
-pub use regions::{RegionDistances, PUPIL_EDGE};
+pub use regions::{CutSkin, RegionDistances, PUPIL_EDGE};
 pub use volumes::{bind_globals, bind_posture, rest_globals, Region, BIND_ABDUCTION};
 pub use weights::Influences;
 

@@ -7,8 +7,8 @@
 //! whose volumes are nearest. So each vertex also keeps how far it lies from each
 //! region's volumes ([`RegionDistances`]); interpolated across a triangle, the region
 //! nearest at each pixel gives an edge that runs through the triangles along the
-//! volumes' own boundary. The viewer colours the skin so; glTF files keep the vertex
-//! colours, which carry no more than one region per vertex.
+//! volumes' own boundary. The viewer colours the skin so; for files, which colour by
+//! vertex, the surface is cut along the same edges ([`CutSkin`]).
 
 use super::volumes::{Form, Join, Region, Volume};
 use glam::DVec3;
@@ -83,6 +83,171 @@ pub(crate) fn distances_at(p: DVec3, volumes: &[Volume]) -> RegionDistances {
         cloth: cloth.map(finite),
         eye: finite(eye),
         on_eye: on_eye.as_vec3().to_array(),
+    }
+}
+
+/// The skin's surface cut along the edges between its regions, for files that colour by
+/// vertex: every triangle lies in one region, and the edges run through the old
+/// triangles where the volumes put them (as the viewer draws them per pixel) instead of
+/// along their sides. A vertex on an edge is there twice, once per region, at the same
+/// place.
+#[derive(Clone, Debug, Default)]
+pub struct CutSkin {
+    /// Bind-pose positions.
+    pub positions: Vec<[f32; 3]>,
+    /// Unit normals.
+    pub normals: Vec<[f32; 3]>,
+    /// Skinning slots, as [`Skin::joints`](super::Skin::joints).
+    pub joints: Vec<[u16; 4]>,
+    /// Their weights, summing to one.
+    pub weights: Vec<[f32; 4]>,
+    /// Each vertex's region.
+    pub regions: Vec<Region>,
+    /// Triangles, counter-clockwise seen from outside.
+    pub indices: Vec<u32>,
+}
+
+/// Where between regions `a` and `b` a vertex at `d` lies: negative nearer `a`, positive
+/// nearer `b` (the rule of [`RegionDistances::region`]).
+fn gap(d: &RegionDistances, a: Region, b: Region) -> f64 {
+    let eyes = |r: Region| matches!(r, Region::Eye | Region::Pupil);
+    let distance = |r: Region| {
+        if eyes(r) {
+            d.eye
+        } else {
+            d.cloth[r as usize]
+        }
+    };
+    if eyes(a) && eyes(b) {
+        // White against pupil: the pupil is the front.
+        let front = d.on_eye[2] as f64 - PUPIL_EDGE;
+        return if a == Region::Pupil { -front } else { front };
+    }
+    (distance(a) - distance(b)) as f64
+}
+
+impl CutSkin {
+    /// Cuts `skin`'s full-detail surface along the edges between regions. A triangle
+    /// touching three regions (where three meet) is kept whole, its vertices each in its
+    /// own region.
+    pub fn new(skin: &super::Skin) -> CutSkin {
+        let regions: Vec<Region> = skin.region_distances.iter().map(|d| d.region()).collect();
+        let mut cut = CutSkin::default();
+        // Each skin vertex's copy in each region it is used in, and each edge's cut point
+        // per region: neighbouring triangles share them.
+        let mut copies: std::collections::HashMap<(u32, Region), u32> = Default::default();
+        let mut points: std::collections::HashMap<(u32, u32, Region), u32> = Default::default();
+        let corner = |cut: &mut CutSkin,
+                      copies: &mut std::collections::HashMap<(u32, Region), u32>,
+                      v: u32,
+                      region: Region| {
+            *copies.entry((v, region)).or_insert_with(|| {
+                let i = v as usize;
+                cut.push(
+                    skin.positions[i],
+                    skin.normals[i],
+                    (skin.joints[i], skin.weights[i]),
+                    region,
+                )
+            })
+        };
+        for t in skin.indices.chunks_exact(3) {
+            let r = [t[0], t[1], t[2]].map(|v| regions[v as usize]);
+            let lone = (0..3).find(|&k| r[(k + 1) % 3] == r[(k + 2) % 3] && r[k] != r[(k + 1) % 3]);
+            let Some(k) = lone else {
+                // One region, or three: as it is.
+                for k in 0..3 {
+                    let v = corner(&mut cut, &mut copies, t[k], r[k]);
+                    cut.indices.push(v);
+                }
+                continue;
+            };
+            // Vertex `k` alone in its region, the other two in another: the edge crosses
+            // the two sides from `k`, where the interpolated gap between them is zero.
+            let (alone, rest) = (r[k], r[(k + 1) % 3]);
+            let [o, p, q] = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]];
+            let mut cross = |cut: &mut CutSkin, to: u32, region: Region| {
+                let key = (o.min(to), o.max(to), region);
+                if let Some(&i) = points.get(&key) {
+                    return i;
+                }
+                let (ga, gb) = (
+                    gap(&skin.region_distances[o as usize], alone, rest),
+                    gap(&skin.region_distances[to as usize], alone, rest),
+                );
+                let s = (ga / (ga - gb)).clamp(0.0, 1.0) as f32;
+                let i = cut.push_between(skin, o as usize, to as usize, s, region);
+                points.insert(key, i);
+                i
+            };
+            let (op_a, oq_a) = (cross(&mut cut, p, alone), cross(&mut cut, q, alone));
+            let (op_b, oq_b) = (cross(&mut cut, p, rest), cross(&mut cut, q, rest));
+            let o = corner(&mut cut, &mut copies, o, alone);
+            let (p, q) = (
+                corner(&mut cut, &mut copies, p, rest),
+                corner(&mut cut, &mut copies, q, rest),
+            );
+            // The corner's triangle, and the quad on the other side in two.
+            cut.indices
+                .extend([o, op_a, oq_a, op_b, p, q, op_b, q, oq_b]);
+        }
+        cut
+    }
+
+    /// Appends a vertex; returns its index.
+    fn push(
+        &mut self,
+        position: [f32; 3],
+        normal: [f32; 3],
+        (joints, weights): ([u16; 4], [f32; 4]),
+        region: Region,
+    ) -> u32 {
+        self.positions.push(position);
+        self.normals.push(normal);
+        self.joints.push(joints);
+        self.weights.push(weights);
+        self.regions.push(region);
+        (self.positions.len() - 1) as u32
+    }
+
+    /// Appends the point `s` of the way from skin vertex `a` to `b`, its weights the
+    /// four heaviest of the two's blended and normalised; returns its index.
+    fn push_between(
+        &mut self,
+        skin: &super::Skin,
+        a: usize,
+        b: usize,
+        s: f32,
+        region: Region,
+    ) -> u32 {
+        let lerp = |x: [f32; 3], y: [f32; 3]| [0, 1, 2].map(|i| x[i] + (y[i] - x[i]) * s);
+        let normal = glam::Vec3::from(lerp(skin.normals[a], skin.normals[b]))
+            .normalize_or_zero()
+            .to_array();
+        let mut blend: Vec<(u16, f32)> = Vec::with_capacity(8);
+        for (v, share) in [(a, 1.0 - s), (b, s)] {
+            for (&j, &w) in skin.joints[v].iter().zip(&skin.weights[v]) {
+                match blend.iter_mut().find(|(k, _)| *k == j) {
+                    Some((_, total)) => *total += w * share,
+                    None => blend.push((j, w * share)),
+                }
+            }
+        }
+        blend.sort_by(|x, y| y.1.total_cmp(&x.1).then(x.0.cmp(&y.0)));
+        blend.truncate(4);
+        let sum: f32 = blend.iter().map(|(_, w)| w).sum();
+        let (mut joints, mut weights) = ([0u16; 4], [0f32; 4]);
+        // Unused slots are joint 0 with weight 0, as in the skin.
+        for (i, (j, w)) in blend.into_iter().filter(|(_, w)| *w > 0.0).enumerate() {
+            joints[i] = j;
+            weights[i] = w / sum;
+        }
+        self.push(
+            lerp(skin.positions[a], skin.positions[b]),
+            normal,
+            (joints, weights),
+            region,
+        )
     }
 }
 

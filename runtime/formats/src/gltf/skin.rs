@@ -15,7 +15,7 @@ use json::accessor::{ComponentType, GenericComponentType, Type};
 use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::collections::BTreeMap;
-use troupe_body::skin::Region;
+use troupe_body::skin::{CutSkin, Region};
 use troupe_body::{Skin, Transform};
 
 /// `rig` (a troupe skeleton's, joints in the skeleton's order) with `skin`'s helper
@@ -138,13 +138,16 @@ pub struct SkinnedMesh<'a> {
 /// the rig [`with_helper_joints`] makes). `bytes` is the document's one buffer; its length
 /// is updated.
 pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
+    // Coloured by vertex, the surface is cut along the edges between regions first, so
+    // that sleeves, waistband and collar run where troupe's viewer draws them.
+    let cut = CutSkin::new(skin);
     let mesh = SkinnedMesh {
-        positions: &skin.positions,
-        normals: &skin.normals,
-        colors: skin.regions.iter().map(|&r| region_color(r)).collect(),
-        joints: skin.joints.clone(),
-        weights: &skin.weights,
-        indices: &skin.indices,
+        positions: &cut.positions,
+        normals: &cut.normals,
+        colors: cut.regions.iter().map(|&r| region_color(r)).collect(),
+        joints: cut.joints.clone(),
+        weights: &cut.weights,
+        indices: &cut.indices,
     };
     add_skinned_mesh(root, bytes, &mesh, &format!("{name} skin"));
 }
