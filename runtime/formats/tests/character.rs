@@ -923,3 +923,29 @@ fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn vertex_colours_multiply_the_materials() {
+    // troupe's own skin, exported: a white material and a colour per region in COLOR_0.
+    let skel = default_skeleton("adult").unwrap();
+    let skin = troupe_body::Skin::build(&skel).unwrap();
+    let rig =
+        troupe_formats::Rig::from_sequence(&skel, &troupe_motion::sequence::Sequence::new("rest"))
+            .unwrap();
+    let path = std::env::temp_dir().join(format!("troupe-colours-{}.glb", std::process::id()));
+    troupe_formats::save_skinned(&path, &rig, Some(&skin), "adult").unwrap();
+    let c = read_character(&path, &[]).unwrap();
+    std::fs::remove_file(&path).ok();
+    // The shirt's linear colour (0.03, 0.23, 0.30) in sRGB, as characters' colours are.
+    let shirt = [0.03f32, 0.23, 0.30].map(|x| x.powf(1.0 / 2.2));
+    let shirted = c
+        .colors
+        .iter()
+        .filter(|rgb| rgb.iter().zip(shirt).all(|(a, b)| (a - b).abs() < 0.01))
+        .count();
+    assert!(
+        shirted * 5 > c.colors.len(),
+        "{shirted} of {} vertices in the shirt's colour",
+        c.colors.len()
+    );
+}

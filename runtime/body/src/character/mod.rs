@@ -100,7 +100,7 @@ pub struct Character {
     /// Bind-pose unit normals.
     pub normals: Vec<[f32; 3]>,
     /// sRGB colour of each vertex (its material's, sampled from its texture where the
-    /// reader could).
+    /// reader could, times its vertex colour where the file has one).
     pub colors: Vec<[f32; 3]>,
     /// Up to four bones per vertex (indices into `bones`).
     pub joints: Vec<[u16; 4]>,

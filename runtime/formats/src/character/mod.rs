@@ -427,6 +427,16 @@ fn read_primitive(
         2,
         "TEXCOORD_0",
     )?;
+    // Vertex colours (linear RGB or RGBA) multiply the material's, as glTF says.
+    let vertex_colors = match get(
+        ::gltf::Semantic::Colors(0),
+        &[Dimensions::Vec3, Dimensions::Vec4],
+    )? {
+        Some(c) if c.len() == n * 3 => Some((c, 3)),
+        Some(c) if c.len() == n * 4 => Some((c, 4)),
+        Some(c) => return Err(format!("COLOR_0 has {} values for {n} vertices", c.len())),
+        None => None,
+    };
     let mut sets = Vec::new();
     for set in 0..2 {
         let j = counted(
@@ -498,7 +508,13 @@ fn read_primitive(
             None => [0.0; 3],
         });
         let uv = uvs.as_ref().map(|t| [t[2 * v], t[2 * v + 1]]);
-        character.colors.push(color.at(uv));
+        let mut c = color.at(uv);
+        if let Some((colors, per)) = &vertex_colors {
+            for (k, c) in c.iter_mut().enumerate() {
+                *c *= srgb(colors[per * v + k] as f32);
+            }
+        }
+        character.colors.push(c);
     }
     character.indices.extend(indices.iter().map(|i| i + base));
     if normals.is_none() {
@@ -642,6 +658,12 @@ fn read_values(
     Ok(out)
 }
 
+/// A linear colour component as sRGB, the colours here being sRGB as the viewer's
+/// palette (a product of linear components is the product of their sRGB ones).
+fn srgb(c: f32) -> f32 {
+    c.clamp(0.0, 1.0).powf(1.0 / 2.2)
+}
+
 /// Decoded base-colour textures, by image index (only PNG images decode).
 struct Textures {
     images: HashMap<usize, image::RgbaImage>,
@@ -675,10 +697,8 @@ impl Textures {
     fn material_color(&self, material: ::gltf::Material<'_>) -> MaterialColor<'_> {
         let pbr = material.pbr_metallic_roughness();
         let f = pbr.base_color_factor();
-        // The factor is linear; colours here are sRGB, as the viewer's palette.
-        let to_srgb = |c: f32| c.clamp(0.0, 1.0).powf(1.0 / 2.2);
         MaterialColor {
-            factor: [to_srgb(f[0]), to_srgb(f[1]), to_srgb(f[2])],
+            factor: [srgb(f[0]), srgb(f[1]), srgb(f[2])],
             texture: pbr
                 .base_color_texture()
                 .and_then(|t| self.images.get(&t.texture().source().index())),
