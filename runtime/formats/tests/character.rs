@@ -924,18 +924,24 @@ fn a_character_exported_to_gltf_moves_as_troupe_poses_it() {
     std::fs::remove_dir_all(dir).ok();
 }
 
-#[test]
-fn vertex_colours_multiply_the_materials() {
-    // troupe's own skin, exported: a white material and a colour per region in COLOR_0.
+/// The adult's skin written as `troupe export gltf` writes it (to a temporary file named
+/// after `label`) and read back as a user's character.
+fn troupe_skin_read_back(label: &str) -> (Skeleton, troupe_body::Skin, troupe_body::Character) {
     let skel = default_skeleton("adult").unwrap();
     let skin = troupe_body::Skin::build(&skel).unwrap();
-    let rig =
-        troupe_formats::Rig::from_sequence(&skel, &troupe_motion::sequence::Sequence::new("rest"))
-            .unwrap();
-    let path = std::env::temp_dir().join(format!("troupe-colours-{}.glb", std::process::id()));
+    let rest = troupe_motion::sequence::Sequence::new("rest");
+    let rig = troupe_formats::Rig::from_sequence(&skel, &rest).unwrap();
+    let path = std::env::temp_dir().join(format!("troupe-{label}-{}.glb", std::process::id()));
     troupe_formats::save_skinned(&path, &rig, Some(&skin), "adult").unwrap();
     let c = read_character(&path, &[]).unwrap();
     std::fs::remove_file(&path).ok();
+    (skel, skin, c)
+}
+
+#[test]
+fn vertex_colours_multiply_the_materials() {
+    // troupe's own skin, exported: a white material and a colour per region in COLOR_0.
+    let (_, _, c) = troupe_skin_read_back("colours");
     // The shirt's linear colour (0.03, 0.23, 0.30) in sRGB, as characters' colours are.
     let shirt = [0.03f32, 0.23, 0.30].map(|x| x.powf(1.0 / 2.2));
     let shirted = c
@@ -947,5 +953,63 @@ fn vertex_colours_multiply_the_materials() {
         shirted * 5 > c.colors.len(),
         "{shirted} of {} vertices in the shirt's colour",
         c.colors.len()
+    );
+}
+
+#[test]
+fn a_character_troupe_exported_moves_as_troupes_own_skin() {
+    // troupe's skin written as `troupe export gltf` does, read back as a user's
+    // character and dressed on the same body: its shoulders' helper joints turn as the
+    // skin's do, so raised arms deform alike.
+    let (skel, skin, c) = troupe_skin_read_back("helpers");
+    let (low, high) = skin
+        .positions
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
+    let d = c.dress(&skel, (high - low) as f64).unwrap();
+    // The file's vertices that are the skin's own (the others lie on the edges between
+    // regions), by their exact bind positions.
+    let of: std::collections::HashMap<[u32; 3], usize> = skin
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(j, p)| (p.map(f32::to_bits), j))
+        .collect();
+    let pairs: Vec<(usize, usize)> = c
+        .positions
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| of.get(&p.map(f32::to_bits)).map(|&j| (i, j)))
+        .collect();
+    assert!(
+        pairs.len() == skin.positions.len(),
+        "{} shared vertices",
+        pairs.len()
+    );
+    let g = globals(
+        &skel,
+        &[
+            ("r_shoulder_abduction", 100.0),
+            ("r_shoulder_flexion", 40.0),
+            ("r_shoulder_twist", 30.0),
+            ("l_shoulder_flexion", 150.0),
+            ("r_elbow_flexion", 60.0),
+        ],
+    );
+    let (ours, theirs) = (skin.deform(&g), d.deform(&g));
+    // Placed on the floor, the dressing may stand a little apart: compare shapes.
+    let shift = pairs
+        .iter()
+        .map(|&(i, j)| theirs[i] - ours[j])
+        .sum::<DVec3>()
+        / pairs.len() as f64;
+    let worst = pairs
+        .iter()
+        .map(|&(i, j)| (theirs[i] - ours[j] - shift).length())
+        .fold(0.0, f64::max);
+    eprintln!("worst vertex {worst:.4} m from troupe's skin (shift {shift:?})");
+    assert!(
+        worst < 0.01,
+        "a vertex {worst:.3} m from where troupe's skin puts it"
     );
 }

@@ -42,7 +42,7 @@ mod feet;
 
 use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
-use crate::skin::rest_globals;
+use crate::skin::{rest_globals, Helper};
 use crate::transform::Transform;
 use feet::Leg;
 use glam::{DQuat, DVec3};
@@ -138,6 +138,9 @@ pub struct Dressing {
     rest: Vec<Transform>,
     /// The legs whose ankles are kept on troupe's feet.
     legs: Vec<Leg>,
+    /// The skin's helper joints that bones of the character are (see [`Rule::Helper`]),
+    /// each with its frame's rotation in the pose troupe's skin is bound in, inverted.
+    helpers: Vec<(Helper, DQuat)>,
 }
 
 /// How one bone is posed from troupe's joint frames.
@@ -162,6 +165,15 @@ enum Rule {
     },
     /// Keeps its bind pose relative to its parent.
     Follows { parent: usize },
+    /// One of the helper joints of troupe's own skin (a character troupe exported: its
+    /// shoulders' `l_shoulder_50`, `l_shoulder_twist_25`, …): turned from troupe's bind
+    /// pose as the helper turns (`Helper::frame`), placed along its parent at its bind
+    /// offset, so the skin it carries moves as troupe's does.
+    Helper {
+        helper: usize,
+        parent: usize,
+        offset: DVec3,
+    },
 }
 
 impl Character {
@@ -299,17 +311,36 @@ impl Character {
             align[b] = arc(from, to);
         }
 
+        // Bones named as the helper joints of troupe's skin for this skeleton.
+        let skin_helpers = crate::skin::helpers::helpers(skeleton).unwrap_or_default();
+        let bind_pose = crate::skin::bind_globals(skeleton);
+        let mut helpers: Vec<(Helper, DQuat)> = Vec::new();
         let bones: Vec<Posed> = (0..self.bones.len())
             .map(|b| {
                 let bind = binds[b];
+                let offset_from = |parent: usize| {
+                    binds[parent]
+                        .inverse()
+                        .transform_vector(bind.translation - binds[parent].translation)
+                };
+                let helper = skin_helpers.iter().find(|h| h.name == self.bones[b].name);
+                if let (None, Some(parent), Some(h)) = (joint_of[b], self.bones[b].parent, helper) {
+                    helpers.push((h.clone(), h.frame(&bind_pose).rotation.inverse()));
+                    return Posed {
+                        bind,
+                        rule: Rule::Helper {
+                            helper: helpers.len() - 1,
+                            parent,
+                            offset: offset_from(parent),
+                        },
+                    };
+                }
                 let rule = match (joint_of[b], self.bones[b].parent) {
                     (Some(joint), Some(parent)) if mapped_above[b].is_some() => Rule::Mapped {
                         joint,
                         align: align[b],
                         parent,
-                        offset: binds[parent]
-                            .inverse()
-                            .transform_vector(bind.translation - binds[parent].translation),
+                        offset: offset_from(parent),
                     },
                     (Some(joint), _) => Rule::Carried {
                         joint,
@@ -389,6 +420,7 @@ impl Character {
             slot_bones,
             rest,
             legs: Vec::new(),
+            helpers,
         };
         // Reconciling rest poses moves the mesh (legs bound apart hang straight, and
         // so reach lower): it stands on the floor in troupe's rest posture.
@@ -444,6 +476,7 @@ impl Dressing {
         loop {
             match self.bones[b].rule {
                 Rule::Carried { joint, .. } | Rule::Mapped { joint, .. } => return joint,
+                Rule::Helper { helper, .. } => return self.helpers[helper].0.joint,
                 Rule::Follows { parent } => b = parent,
             }
         }
@@ -512,6 +545,12 @@ impl Dressing {
     /// turned further by its entry of `turns` (bone, world rotation) if it has one.
     fn rotated_frames(&self, globals: &[Transform], turns: &[(usize, DQuat)]) -> Vec<Transform> {
         let mut frames: Vec<Transform> = Vec::with_capacity(self.bones.len());
+        // How far each helper has turned from troupe's bind pose.
+        let helpers_turned: Vec<DQuat> = self
+            .helpers
+            .iter()
+            .map(|(h, bind_inv)| h.frame(globals).rotation * *bind_inv)
+            .collect();
         for (b, bone) in self.bones.iter().enumerate() {
             let moved = |joint: usize| globals[joint].mul(&self.rest[joint].inverse());
             let turn = turns
@@ -538,6 +577,14 @@ impl Dressing {
                 Rule::Follows { parent } => {
                     frames[parent].mul(&self.bones[parent].bind.inverse().mul(&bone.bind))
                 }
+                Rule::Helper {
+                    helper,
+                    parent,
+                    offset,
+                } => Transform::new(
+                    helpers_turned[helper] * bone.bind.rotation,
+                    frames[parent].transform_point(offset),
+                ),
             };
             frames.push(frame);
         }
