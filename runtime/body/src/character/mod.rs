@@ -29,7 +29,8 @@
 //!    relative to its parent, so its skinning matrix is its nearest mapped ancestor's:
 //!    troupe joints with no bone (extra vertebrae, fingers of a character without finger
 //!    bones) are thereby folded into the nearest mapped bone, whose world rotation
-//!    includes theirs.
+//!    includes theirs. A bone named as one of the helper joints of troupe's own skin (a
+//!    character troupe exported) turns as that helper does.
 //! 4. **Feet on troupe's feet**: then each leg's knee and hip are bent by two-bone
 //!    inverse kinematics so that its ankle rides with troupe's foot where the leg can
 //!    reach ([`feet`]): a character of other proportions does not slide its planted
