@@ -112,13 +112,16 @@ fn export_gltf(a: GltfArgs) -> Result<ExitCode> {
     let skin = troupe_body::Skin::build(&skeleton)?;
     troupe_formats::save_skinned(&a.out, &rig, Some(&skin), &a.template)
         .with_context(|| format!("writing {}", a.out.display()))?;
+    // The file holds the skin cut along the edges between its regions (see
+    // `troupe_body::skin::CutSkin`): count what it holds.
+    let written = troupe_body::skin::CutSkin::new(&skin);
     eprintln!(
         "wrote {} ({} joints and {} helper joints, a skin of {} vertices and {} triangles)",
         a.out.display(),
         skeleton.joints().len(),
         skin.helpers.len(),
-        skin.positions.len(),
-        skin.triangle_count()
+        written.positions.len(),
+        written.indices.len() / 3
     );
     Ok(ExitCode::SUCCESS)
 }
