@@ -531,7 +531,10 @@ impl SceneRenderer {
                 fragment: Some(wgpu::FragmentState {
                     module: &shader,
                     entry_point: Some(fragment),
-                    compilation_options: Default::default(),
+                    compilation_options: wgpu::PipelineCompilationOptions {
+                        constants: &[("PUPIL_EDGE", troupe_body::skin::PUPIL_EDGE)],
+                        ..Default::default()
+                    },
                     targets: &targets,
                 }),
                 multiview_mask: None,

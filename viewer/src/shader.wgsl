@@ -67,6 +67,9 @@ struct FloorOut {
 };
 
 const FLOOR_HALF: f32 = 80.0;
+// Where the pupil begins on the eyeball's front, as a cosine from its axis: set by the
+// skin pipeline from `troupe_body::skin::PUPIL_EDGE`, the rule the regions use.
+override PUPIL_EDGE: f32;
 
 @vertex
 fn vs_floor(@builtin(vertex_index) i: u32) -> FloorOut {
@@ -238,9 +241,8 @@ fn fs_skin(in: SkinOut) -> @location(0) vec4<f32> {
     let index = bitcast<vec2<u32>>(n.zw);
     let gap = n.y - n.x;
     // The pupil: the eyeball's front, cut by direction from its centre per pixel, so it
-    // is round however coarse the eyeball's triangles (PUPIL_EDGE in
-    // runtime/body/src/skin/regions.rs).
-    let pupil = normalize(in.eye.yzw).z - 0.75;
+    // is round however coarse the eyeball's triangles.
+    let pupil = normalize(in.eye.yzw).z - PUPIL_EDGE;
     let eye = mix(
         skin.colors[4],
         skin.colors[5],
