@@ -109,7 +109,11 @@ fn export_gltf(a: GltfArgs) -> Result<ExitCode> {
         );
         return Ok(ExitCode::SUCCESS);
     }
-    let skin = troupe_body::Skin::build(&skeleton)?;
+    // Every height of a template shares one skin, scaled (as in the viewer and in
+    // recordings).
+    let skin = troupe_body::skin::SkinLibrary::default()
+        .get(&skeleton)?
+        .to_skin();
     troupe_formats::save_skinned(&a.out, &rig, Some(&skin), &a.template)
         .with_context(|| format!("writing {}", a.out.display()))?;
     // The file holds the skin cut along the edges between its regions (see

@@ -782,7 +782,7 @@ impl SceneRenderer {
         }
         if !self.skin_draws.is_empty() {
             for (i, (key, skeleton, far)) in self.skin_draws.iter().enumerate() {
-                let Some(skin) = self.skins.get_key(&gpu.device, key, skeleton) else {
+                let Some((skin, _)) = self.skins.get_key(&gpu.device, key, skeleton) else {
                     continue;
                 };
                 let (indices, count) = if *far {
@@ -891,8 +891,8 @@ impl SceneRenderer {
                     &skinned::SkinKey::of(actor),
                     &actor.skeleton,
                 ) {
-                    Some(skin) => {
-                        let block = skinned::block(&skin.source, actor, colors.slots());
+                    Some((skin, scale)) => {
+                        let block = skinned::block(&skin.source, actor, colors.slots(), scale);
                         self.skin_data.extend_from_slice(bytemuck::bytes_of(&block));
                         self.skin_data.resize(
                             self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize,

@@ -1,7 +1,8 @@
 //! The skin look: each actor's generated [`Skin`] deformed on the GPU by linear blend
-//! skinning. Skins are built once per skeleton (actors of one template instance share
-//! it) and kept on the GPU; each frame uploads only every actor's joint matrices and
-//! colours, one uniform block per actor, and draws its skin with that block.
+//! skinning. Skins are built once per template (`troupe_body::skin::SkinLibrary`: every
+//! height of a template shares its skin, scaled by its skinning matrices) and kept on
+//! the GPU; each frame uploads only every actor's joint matrices and colours, one
+//! uniform block per actor, and draws its skin with that block.
 //!
 //! An actor dressed in a user's character (`troupe_body::Dressing`) is drawn the same
 //! way from the character's own mesh, weights and vertex colours, its skinning matrices
@@ -16,7 +17,7 @@ use crate::frame::ActorFrame;
 use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
 use std::sync::Arc;
-use troupe_body::skin::Region;
+use troupe_body::skin::{Region, SharedSkin, SkinLibrary};
 use troupe_body::{Dressing, Skeleton, Skin};
 use wgpu::util::DeviceExt;
 
@@ -100,27 +101,44 @@ impl SkinKey {
     }
 }
 
-/// Skins built so far, by skeleton. The skeleton is kept alive with its skin, so its
-/// address is never reused for another while cached.
+/// Skins built so far. Skeletons are kept alive while cached, so their addresses are
+/// never reused for others.
 #[derive(Default)]
 pub(crate) struct SkinCache {
-    skins: HashMap<usize, (Arc<Skeleton>, Option<GpuSkin>)>,
+    library: SkinLibrary,
+    /// By skeleton: how its generated skin is drawn; `None` when it is drawn as solids.
+    skeletons: HashMap<usize, (Arc<Skeleton>, Option<Drawn>)>,
+    /// Generated skins on the GPU, by the address of their shared skin (kept alive in
+    /// their [`SkinSource`]).
+    generated: HashMap<usize, GpuSkin>,
     /// Characters' skins, by dressing (kept alive with it, as skeletons are).
     characters: HashMap<usize, (Arc<Dressing>, Option<GpuSkin>)>,
 }
 
+/// How a skeleton's generated skin is drawn.
+#[derive(Clone, Copy)]
+struct Drawn {
+    /// The address of its shared [`Skin`], a key of `SkinCache::generated`.
+    skin: usize,
+    /// What its lengths are, times the shared skin's.
+    scale: f64,
+}
+
 impl SkinCache {
-    /// The GPU skin of `key`, made on first use; `None` when it cannot be drawn so (a
-    /// skeleton that is not a template's, too many joints or slots): drawn as solids.
+    /// The GPU skin of `key`, made on first use, and the scale its vertices are drawn
+    /// at; `None` when it cannot be drawn so (a skeleton that is not a template's, too
+    /// many joints or slots): drawn as solids.
     pub fn get_key(
         &mut self,
         device: &wgpu::Device,
         key: &SkinKey,
         skeleton: &Skeleton,
-    ) -> Option<&GpuSkin> {
+    ) -> Option<(&GpuSkin, f64)> {
         match key {
             SkinKey::Generated(skeleton) => self.get(device, skeleton),
-            SkinKey::Character(dressing) => self.character(device, dressing, skeleton),
+            SkinKey::Character(dressing) => self
+                .character(device, dressing, skeleton)
+                .map(|skin| (skin, 1.0)),
         }
     }
 
@@ -148,30 +166,45 @@ impl SkinCache {
         entry.1.as_ref()
     }
 
-    /// The GPU skin of `skeleton`, built on first use; `None` when the skeleton cannot
-    /// be skinned (not a troupe template, or too many joints): it is drawn as solids.
-    pub fn get(&mut self, device: &wgpu::Device, skeleton: &Arc<Skeleton>) -> Option<&GpuSkin> {
+    /// The GPU skin of `skeleton` and its scale, built on first use (shared by every
+    /// height of a template); `None` when the skeleton cannot be skinned (not a troupe
+    /// template, or too many joints): it is drawn as solids.
+    pub fn get(
+        &mut self,
+        device: &wgpu::Device,
+        skeleton: &Arc<Skeleton>,
+    ) -> Option<(&GpuSkin, f64)> {
         let key = Arc::as_ptr(skeleton) as usize;
-        let entry = self.skins.entry(key).or_insert_with(|| {
-            let skin = match Skin::build(skeleton) {
+        if !self.skeletons.contains_key(&key) {
+            let drawn = match self.library.get(skeleton) {
                 // Slots: the skeleton's joints and the skin's helper joints.
-                Ok(skin) if skin.rest.len() > MAX_JOINTS => {
+                Ok(shared) if shared.skin.rest.len() > MAX_JOINTS => {
                     tracing::warn!(
                         "skeleton `{}` has {} joints and helpers, more than the {MAX_JOINTS} the skin look draws: drawing solids",
                         skeleton.name(),
-                        skin.rest.len()
+                        shared.skin.rest.len()
                     );
                     None
                 }
-                Ok(skin) => Some(upload(device, Arc::new(skin), skeleton)),
+                Ok(SharedSkin { skin, scale }) => {
+                    let at = Arc::as_ptr(&skin) as usize;
+                    self.generated
+                        .entry(at)
+                        .or_insert_with(|| upload(device, skin, skeleton));
+                    Some(Drawn { skin: at, scale })
+                }
                 Err(e) => {
-                    tracing::warn!("no skin for skeleton `{}` ({e}): drawing solids", skeleton.name());
+                    tracing::warn!(
+                        "no skin for skeleton `{}` ({e}): drawing solids",
+                        skeleton.name()
+                    );
                     None
                 }
             };
-            (skeleton.clone(), skin)
-        });
-        entry.1.as_ref()
+            self.skeletons.insert(key, (skeleton.clone(), drawn));
+        }
+        let drawn = self.skeletons[&key].1?;
+        Some((&self.generated[&drawn.skin], drawn.scale))
     }
 }
 
@@ -323,18 +356,23 @@ pub(crate) const VERTEX_ATTRIBUTES: [wgpu::VertexAttribute; 8] = wgpu::vertex_at
 ];
 
 /// The uniform block of one actor: `colors` by slot and the skinning matrices for its
-/// current joint frames.
+/// current joint frames, drawing the skin at `scale` (a shared skin at the actor's size).
 pub(crate) fn block(
     source: &SkinSource,
     actor: &ActorFrame,
     colors: [[f32; 4]; COLORS],
+    scale: f64,
 ) -> SkinBlock {
     let mut block = SkinBlock {
         colors,
         joints: [[[0.0; 4]; 4]; MAX_JOINTS],
     };
-    let transforms = match source {
-        SkinSource::Generated(skin) => skin.skinning_transforms(&actor.globals),
+    let matrices = match source {
+        SkinSource::Generated(skin) => SharedSkin {
+            skin: skin.clone(),
+            scale,
+        }
+        .skinning_matrices(&actor.globals),
         SkinSource::Character(dressing) => {
             // The character's own colours show through white slots; a hand keeps the
             // tint of its grasp state when it is not the plain skin colour.
@@ -344,13 +382,15 @@ pub(crate) fn block(
                     *color = [1.0; 4];
                 }
             }
-            dressing.skinning_transforms(&actor.globals)
+            dressing
+                .skinning_transforms(&actor.globals)
+                .iter()
+                .map(|t| glam::DMat4::from_rotation_translation(t.rotation, t.translation))
+                .collect()
         }
     };
-    for (slot, t) in block.joints.iter_mut().zip(transforms) {
-        let m =
-            glam::Mat4::from_rotation_translation(t.rotation.as_quat(), t.translation.as_vec3());
-        *slot = m.to_cols_array_2d();
+    for (slot, m) in block.joints.iter_mut().zip(matrices) {
+        *slot = m.as_mat4().to_cols_array_2d();
     }
     block
 }

@@ -496,3 +496,81 @@ fn the_edges_between_the_skins_regions_run_smoothly_between_the_vertices() {
     eprintln!("waistband rows {found:?}: worst step {worst} px, spread {spread} px");
     assert!(worst <= 1, "the waistband zigzags by {worst} px: {found:?}");
 }
+
+/// The topmost row in columns `columns` of `img` that is not the background.
+fn top_row(img: &RgbaImage, columns: std::ops::Range<u32>) -> Option<u32> {
+    let background = background_srgb();
+    (0..H).find(|&y| {
+        columns.clone().any(|x| {
+            let p = img.get_pixel(x, y).0;
+            !close([p[0], p[1], p[2]], background, 12)
+        })
+    })
+}
+
+#[test]
+fn actors_of_every_height_share_one_skin_drawn_at_their_own_size() {
+    // Two heights of one template: the skin is made once, at the template's height, and
+    // drawn scaled (`troupe_body::skin::SkinLibrary`); each head must be drawn where its
+    // own body's is, as the solids draw it.
+    let mut scene = Scene::new(SceneConfig::default()).unwrap();
+    for (name, height, x) in [("short", 1.45, -0.6), ("tall", 2.05, 0.6)] {
+        let mut desc = ActorDesc::new(name);
+        desc.height = Some(height);
+        desc.at = troupe_body::glam::DVec3::new(x, 0.0, 0.0);
+        scene.add_actor(&desc).unwrap();
+    }
+    let frame = Frame::from_scene(&scene);
+    let camera = Camera::fixed(Vec3::new(0.0, 1.2, 5.0), Vec3::new(0.0, 1.0, 0.0));
+    let mut r = renderer();
+    let plain = RenderOptions {
+        labels: false,
+        grid: false,
+        ..RenderOptions::default()
+    };
+    r.set_options(plain);
+    let skin = r.render(&frame, &camera).unwrap();
+    r.set_options(RenderOptions {
+        style: BodyStyle::Solids,
+        ..plain
+    });
+    let solids = r.render(&frame, &camera).unwrap();
+    let mut tops = Vec::new();
+    for name in ["short", "tall"] {
+        let head = frame
+            .actor(name)
+            .unwrap()
+            .solid_center("head_neck")
+            .unwrap();
+        let at = camera.project(&frame, W, H, head).unwrap();
+        let columns = (at.x as u32).saturating_sub(3)..(at.x as u32 + 4);
+        let (a, b) = (
+            top_row(&skin, columns.clone()).unwrap(),
+            top_row(&solids, columns).unwrap(),
+        );
+        assert!(
+            a.abs_diff(b) <= 2,
+            "{name}: the skin's head starts at row {a}, the solids' at {b}"
+        );
+        tops.push(a);
+    }
+    // And each body is drawn at its own size: the picture's halves (one actor each)
+    // hold areas in the ratio of the heights squared, as in the solids.
+    let area = |img: &RgbaImage, columns: std::ops::Range<u32>| {
+        let background = background_srgb();
+        columns
+            .flat_map(|x| (0..H).map(move |y| (x, y)))
+            .filter(|&(x, y)| {
+                let p = img.get_pixel(x, y).0;
+                !close([p[0], p[1], p[2]], background, 12)
+            })
+            .count() as f64
+    };
+    let ratio = area(&skin, W / 2..W) / area(&skin, 0..W / 2);
+    let want = (2.05f64 / 1.45).powi(2);
+    eprintln!("heads start at rows {tops:?}; the tall actor covers {ratio:.3} times the short one's pixels (heights squared: {want:.3})");
+    assert!(
+        (ratio / want - 1.0).abs() < 0.1,
+        "the tall actor covers {ratio:.2} times the short one's pixels, not about {want:.2}"
+    );
+}

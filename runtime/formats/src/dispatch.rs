@@ -20,6 +20,7 @@ use crate::rig::Rig;
 use crate::trk::{read_trk, read_trk_set, write_trk_file, TrkFile};
 use std::path::{Path, PathBuf};
 use troupe_body::skeleton::Skeleton;
+use troupe_body::skin::SkinLibrary;
 use troupe_body::{Dressing, Skin};
 use troupe_motion::object_motion::ObjectMotion;
 use troupe_motion::sequence::Sequence;
@@ -167,7 +168,7 @@ pub fn save_dressed_recording<'a>(
         path.with_file_name(format!("{stem}.{name}.{ext}"))
     };
     let mut written = Vec::new();
-    let mut skins: Vec<(*const Skeleton, Option<Skin>)> = Vec::new();
+    let mut skins = Skins::default();
     for (seq, (actor, skeleton, look)) in sequences.iter().zip(actors) {
         let out = if sequences.len() == 1 {
             path.to_path_buf()
@@ -187,7 +188,7 @@ pub fn save_dressed_recording<'a>(
                 match look {
                     Some(look) => write_character(&out, look, &rig, &with, actor)?,
                     None => {
-                        let skin = skin_of(&mut skins, skeleton, &out);
+                        let skin = skins.of(skeleton, &out);
                         if format == Format::Gltf {
                             write_gltf_with(&out, &rig, skin, &with, actor)?;
                         } else {
@@ -228,29 +229,36 @@ pub fn save_dressed_recording<'a>(
     Ok(written)
 }
 
-/// The generated skin of `skeleton`, built once per skeleton and kept in `skins` (actors
-/// of one body share theirs); `None`, with a warning naming `out`, for a skeleton that is
-/// not a troupe template's.
-fn skin_of<'s>(
-    skins: &'s mut Vec<(*const Skeleton, Option<Skin>)>,
-    skeleton: &Skeleton,
-    out: &Path,
-) -> Option<&'s Skin> {
-    let key: *const Skeleton = skeleton;
-    if !skins.iter().any(|(k, _)| *k == key) {
-        let skin = match Skin::build(skeleton) {
-            Ok(skin) => Some(skin),
-            Err(e) => {
-                tracing::warn!("{}: written without a skin: {e}", out.display());
-                None
+/// The generated skins of a recording's actors: made once per template
+/// ([`SkinLibrary`]: every height shares it) and scaled once per skeleton (actors of one
+/// body share theirs).
+#[derive(Default)]
+struct Skins {
+    library: SkinLibrary,
+    scaled: Vec<(*const Skeleton, Option<Skin>)>,
+}
+
+impl Skins {
+    /// The skin of `skeleton` at its size; `None`, with a warning naming `out`, for a
+    /// skeleton that is not a troupe template's.
+    fn of(&mut self, skeleton: &Skeleton, out: &Path) -> Option<&Skin> {
+        let key: *const Skeleton = skeleton;
+        let at = match self.scaled.iter().position(|(k, _)| *k == key) {
+            Some(at) => at,
+            None => {
+                let skin = match self.library.get(skeleton) {
+                    Ok(shared) => Some(shared.to_skin()),
+                    Err(e) => {
+                        tracing::warn!("{}: written without a skin: {e}", out.display());
+                        None
+                    }
+                };
+                self.scaled.push((key, skin));
+                self.scaled.len() - 1
             }
         };
-        skins.push((key, skin));
+        self.scaled[at].1.as_ref()
     }
-    skins
-        .iter()
-        .find(|(k, _)| *k == key)
-        .and_then(|(_, s)| s.as_ref())
 }
 
 /// Saves a rig and the skin of its skeleton as glTF (`.gltf` or `.glb` by `path`'s

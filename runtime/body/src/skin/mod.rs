@@ -27,6 +27,7 @@
 mod collapse;
 mod flips;
 pub mod helpers;
+mod library;
 mod regions;
 mod relax;
 mod surface;
@@ -34,6 +35,7 @@ pub mod volumes;
 mod weights;
 
 pub use helpers::Helper;
+pub use library::{template_scale, SharedSkin, SkinLibrary};
 pub use regions::{CutSkin, RegionDistances, PUPIL_EDGE};
 pub use volumes::{bind_globals, bind_posture, rest_globals, Region, BIND_ABDUCTION};
 pub use weights::Influences;
