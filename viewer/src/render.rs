@@ -785,10 +785,11 @@ impl SceneRenderer {
                 let Some((skin, _)) = self.skins.get_key(&gpu.device, key, skeleton) else {
                     continue;
                 };
-                let (indices, count) = if *far {
-                    (&skin.far_indices, skin.far_count)
+                let (vertices, indices, count) = if *far {
+                    let vertices = skin.far_vertices.as_ref().unwrap_or(&skin.vertices);
+                    (vertices, &skin.far_indices, skin.far_count)
                 } else {
-                    (&skin.indices, skin.count)
+                    (&skin.vertices, &skin.indices, skin.count)
                 };
                 // Colours per pixel only where an edge between regions spans pixels.
                 let per_pixel = !*far && matches!(skin.source, skinned::SkinSource::Generated(_));
@@ -803,7 +804,7 @@ impl SceneRenderer {
                     &self.skin_bind_group,
                     &[(i as u64 * BLOCK_STRIDE) as u32],
                 );
-                pass.set_vertex_buffer(0, skin.vertices.slice(..));
+                pass.set_vertex_buffer(0, vertices.slice(..));
                 pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
                 pass.draw_indexed(0..count, 0, 0..1);
             }

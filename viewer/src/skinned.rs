@@ -17,7 +17,7 @@ use crate::frame::ActorFrame;
 use bytemuck::{Pod, Zeroable};
 use std::collections::HashMap;
 use std::sync::Arc;
-use troupe_body::skin::{Region, SharedSkin, SkinLibrary};
+use troupe_body::skin::{CutSkin, Region, SharedSkin, SkinLibrary};
 use troupe_body::{Dressing, Skeleton, Skin};
 use wgpu::util::DeviceExt;
 
@@ -51,9 +51,9 @@ pub(crate) struct SkinVertex {
     eye: [f32; 4],
 }
 
-/// Region distances of a user's character's vertices: it is coloured by vertex (its own
-/// colours as tints), and these make it bare skin, tinted the same, were it drawn per
-/// pixel.
+/// Region distances of vertices coloured by vertex (a user's character, its own colours
+/// as tints; the generated skin's coarse level, cut along its regions): these make them
+/// bare skin, tinted the same, were they drawn per pixel.
 const BARE: ([f32; 4], [f32; 4]) = ([0.0, 1.0, 1.0, 1.0], [1.0, 0.0, 0.0, -1.0]);
 
 /// An actor's uniform block: colours and skinning matrices.
@@ -69,6 +69,9 @@ pub(crate) struct GpuSkin {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
     pub count: u32,
+    /// The coarse level's own vertices (the generated skin's, cut along the edges between
+    /// regions); `None`: it uses [`GpuSkin::vertices`].
+    pub far_vertices: Option<wgpu::Buffer>,
     pub far_indices: wgpu::Buffer,
     pub far_count: u32,
     pub source: SkinSource,
@@ -208,13 +211,14 @@ impl SkinCache {
     }
 }
 
-/// The colour slot of each vertex: its region, or a hand for bare skin moved mostly by a
-/// joint at or below a wrist (so grasp states can tint the hands).
-fn parts(skin: &Skin, skeleton: &Skeleton) -> Vec<u32> {
+/// The colour slot of each vertex of `regions` moved by `joints` (slots of `skin`): its
+/// region, or a hand for bare skin moved mostly by a joint at or below a wrist (so grasp
+/// states can tint the hands).
+fn parts(skin: &Skin, skeleton: &Skeleton, regions: &[Region], joints: &[[u16; 4]]) -> Vec<u32> {
     let hand_of = hand_slots(skeleton);
-    skin.regions
+    regions
         .iter()
-        .zip(&skin.joints)
+        .zip(joints)
         .map(
             |(&region, joints)| match (region, hand_of[skin.slot_joint(joints[0] as usize)]) {
                 (Region::Skin, Some(hand)) => hand,
@@ -241,14 +245,14 @@ fn hand_slots(skeleton: &Skeleton) -> Vec<Option<u32>> {
 }
 
 fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSkin {
-    let parts = parts(&skin, skeleton);
+    let near_parts = parts(&skin, skeleton, &skin.regions, &skin.joints);
     let vertices: Vec<SkinVertex> = (0..skin.positions.len())
         .map(|i| SkinVertex {
             pos: skin.positions[i],
             normal: skin.normals[i],
             joints: skin.joints[i],
             weights: skin.weights[i],
-            part: parts[i],
+            part: near_parts[i],
             tint: [1.0; 4],
             cloth: skin.region_distances[i].cloth,
             eye: {
@@ -257,12 +261,29 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
             },
         })
         .collect();
-    let (indices, far) = (skin.indices.clone(), skin.far_indices.clone());
+    // The coarse level is coloured by vertex (cheaper than per pixel, and its edges are
+    // a pixel or two wide), so it is cut along the edges between regions first, as a glTF
+    // export is: each triangle then has one colour, and an edge runs straight through
+    // the triangles it crosses instead of blurring across them.
+    let far = CutSkin::far(&skin);
+    let far_parts = parts(&skin, skeleton, &far.regions, &far.joints);
+    let far_vertices: Vec<SkinVertex> = (0..far.positions.len())
+        .map(|i| SkinVertex {
+            pos: far.positions[i],
+            normal: far.normals[i],
+            joints: far.joints[i],
+            weights: far.weights[i],
+            part: far_parts[i],
+            tint: [1.0; 4],
+            cloth: BARE.0,
+            eye: BARE.1,
+        })
+        .collect();
+    let indices = skin.indices.clone();
     upload_mesh(
         device,
-        &vertices,
-        &indices,
-        &far,
+        (&vertices, &indices),
+        Some((&far_vertices, &far.indices)),
         SkinSource::Generated(skin),
     )
 }
@@ -297,9 +318,8 @@ fn upload_character(
         .collect();
     upload_mesh(
         device,
-        &vertices,
-        &dressing.indices,
-        &dressing.indices,
+        (&vertices, &dressing.indices),
+        None,
         SkinSource::Character(dressing.clone()),
     )
 }
@@ -313,11 +333,12 @@ fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
+/// Uploads a skin's vertices and triangles, and those of its coarse level (`far`; the
+/// same triangles when it has none).
 fn upload_mesh(
     device: &wgpu::Device,
-    vertices: &[SkinVertex],
-    indices: &[u32],
-    far_indices: &[u32],
+    (vertices, indices): (&[SkinVertex], &[u32]),
+    far: Option<(&[SkinVertex], &[u32])>,
     source: SkinSource,
 ) -> GpuSkin {
     let buffer = |label, contents: &[u8], usage| {
@@ -327,6 +348,7 @@ fn upload_mesh(
             usage,
         })
     };
+    let far_indices = far.map_or(indices, |(_, i)| i);
     GpuSkin {
         vertices: buffer(
             "skin vertices",
@@ -339,6 +361,13 @@ fn upload_mesh(
             wgpu::BufferUsages::INDEX,
         ),
         count: indices.len() as u32,
+        far_vertices: far.map(|(v, _)| {
+            buffer(
+                "skin far vertices",
+                bytemuck::cast_slice(v),
+                wgpu::BufferUsages::VERTEX,
+            )
+        }),
         far_indices: buffer(
             "skin far triangles",
             bytemuck::cast_slice(far_indices),

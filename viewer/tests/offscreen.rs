@@ -497,6 +497,48 @@ fn the_edges_between_the_skins_regions_run_smoothly_between_the_vertices() {
     assert!(worst <= 1, "the waistband zigzags by {worst} px: {found:?}");
 }
 
+#[test]
+fn far_away_the_edges_between_the_skins_regions_stay_sharp() {
+    // The whole body in 240 pixels is drawn with the coarse level of detail, coloured
+    // by vertex: each of its triangles at the waist is 4-5 cm, 3-4 pixels, across.
+    let camera = Camera::fixed(Vec3::new(0.0, 0.9, 2.6), Vec3::new(0.0, 0.9, 0.0));
+    let frame = posed(&[]);
+    let img = renderer().render(&frame, &camera).unwrap();
+    let green = |x: u32, y: u32| img.get_pixel(x, y).0[1] as i32;
+    // The shirt 13 rows above the waistband, the hips 13 rows below it.
+    let (top, bottom) = (H / 2 - 28, H / 2 - 2);
+    // Down each column across the belly, the rows between the shirt's green and the
+    // trousers' (more than a fifth of the way from either): the edge's width.
+    let widths: Vec<usize> = (W / 2 - 14..W / 2 + 14)
+        .filter_map(|x| {
+            let (shirt, trousers) = (green(x, top), green(x, bottom));
+            if shirt - trousers < 40 {
+                return None;
+            }
+            let margin = (shirt - trousers) / 5;
+            Some(
+                (top..bottom)
+                    .filter(|&y| {
+                        let g = green(x, y);
+                        g < shirt - margin && g > trousers + margin
+                    })
+                    .count(),
+            )
+        })
+        .collect();
+    assert!(
+        widths.len() >= 20,
+        "the waistband crosses the belly: {widths:?}"
+    );
+    let widest = *widths.iter().max().unwrap();
+    let mean = widths.iter().sum::<usize>() as f64 / widths.len() as f64;
+    eprintln!("far waistband: {mean:.2} rows wide on average, at most {widest}: {widths:?}");
+    assert!(
+        widest <= 2,
+        "the waistband blurs over {widest} rows: {widths:?}"
+    );
+}
+
 /// The topmost row in columns `columns` of `img` that is not the background.
 fn top_row(img: &RgbaImage, columns: std::ops::Range<u32>) -> Option<u32> {
     let background = background_srgb();

@@ -131,6 +131,18 @@ impl CutSkin {
     /// touching three regions (where three meet) is kept whole, its vertices each in its
     /// own region.
     pub fn new(skin: &super::Skin) -> CutSkin {
+        Self::cutting(skin, &skin.indices)
+    }
+
+    /// Cuts `skin`'s coarse level of detail (its [`far_indices`](super::Skin::far_indices))
+    /// the same way: coloured by vertex, its triangles, several centimetres wide, blurred
+    /// and zigzagged the edges between regions across them.
+    pub fn far(skin: &super::Skin) -> CutSkin {
+        Self::cutting(skin, &skin.far_indices)
+    }
+
+    /// Cuts the surface of `skin`'s vertices made by `triangles`.
+    fn cutting(skin: &super::Skin, triangles: &[u32]) -> CutSkin {
         let regions: Vec<Region> = skin.region_distances.iter().map(|d| d.region()).collect();
         let mut cut = CutSkin::default();
         // Each skin vertex's copy in each region it is used in, and each edge's cut point
@@ -151,7 +163,7 @@ impl CutSkin {
                 )
             })
         };
-        for t in skin.indices.chunks_exact(3) {
+        for t in triangles.chunks_exact(3) {
             let r = [t[0], t[1], t[2]].map(|v| regions[v as usize]);
             let lone = (0..3).find(|&k| r[(k + 1) % 3] == r[(k + 2) % 3] && r[k] != r[(k + 1) % 3]);
             let Some(k) = lone else {
