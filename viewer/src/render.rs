@@ -320,6 +320,8 @@ pub(crate) struct SceneRenderer {
     pub samples: u32,
     skin_pipeline: wgpu::RenderPipeline,
     skin_by_vertex_pipeline: wgpu::RenderPipeline,
+    /// Users' characters: by vertex, both faces drawn.
+    character_pipeline: wgpu::RenderPipeline,
     skin_layout: wgpu::BindGroupLayout,
     skin_blocks: wgpu::Buffer,
     skin_bind_group: wgpu::BindGroup,
@@ -511,7 +513,10 @@ impl SceneRenderer {
         });
         // The near generated skin picks its colours per pixel (`fs_skin`); its far level
         // of detail and users' characters by vertex, as the plain meshes (`vs_skin_by_vertex`).
-        let skin_pipeline_with = |label, vertex, fragment| {
+        // The generated skin is closed and wound counter-clockwise seen from outside, so
+        // its back faces are hidden and need not be drawn; a user's character may be open
+        // (a cloak's hem, a single-sided sleeve) and is drawn whole.
+        let skin_pipeline_with = |label, vertex, fragment, cull_mode| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
                 layout: Some(&skin_pipeline_layout),
@@ -525,7 +530,10 @@ impl SceneRenderer {
                         attributes: &skinned::VERTEX_ATTRIBUTES,
                     })],
                 },
-                primitive: wgpu::PrimitiveState::default(),
+                primitive: wgpu::PrimitiveState {
+                    cull_mode,
+                    ..Default::default()
+                },
                 depth_stencil: depth(true),
                 multisample,
                 fragment: Some(wgpu::FragmentState {
@@ -541,9 +549,12 @@ impl SceneRenderer {
                 cache: None,
             })
         };
-        let skin_pipeline = skin_pipeline_with("skin", "vs_skin", "fs_skin");
+        let back = Some(wgpu::Face::Back);
+        let skin_pipeline = skin_pipeline_with("skin", "vs_skin", "fs_skin", back);
         let skin_by_vertex_pipeline =
-            skin_pipeline_with("skin by vertex", "vs_skin_by_vertex", "fs_mesh");
+            skin_pipeline_with("skin by vertex", "vs_skin_by_vertex", "fs_mesh", back);
+        let character_pipeline =
+            skin_pipeline_with("character", "vs_skin_by_vertex", "fs_mesh", None);
         let lines = LineRenderer::new(
             device,
             &shader,
@@ -558,6 +569,7 @@ impl SceneRenderer {
             lines,
             skin_pipeline,
             skin_by_vertex_pipeline,
+            character_pipeline,
             skin_layout,
             skin_blocks,
             skin_bind_group,
@@ -792,11 +804,10 @@ impl SceneRenderer {
                     (&skin.vertices, &skin.indices, skin.count)
                 };
                 // Colours per pixel only where an edge between regions spans pixels.
-                let per_pixel = !*far && matches!(skin.source, skinned::SkinSource::Generated(_));
-                let pipeline = if per_pixel {
-                    &self.skin_pipeline
-                } else {
-                    &self.skin_by_vertex_pipeline
+                let pipeline = match (&skin.source, *far) {
+                    (skinned::SkinSource::Generated(_), false) => &self.skin_pipeline,
+                    (skinned::SkinSource::Generated(_), true) => &self.skin_by_vertex_pipeline,
+                    (skinned::SkinSource::Character(_), _) => &self.character_pipeline,
                 };
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(

@@ -539,6 +539,40 @@ fn far_away_the_edges_between_the_skins_regions_stay_sharp() {
     );
 }
 
+#[test]
+fn the_skins_back_faces_are_not_drawn() {
+    // The generated skin is closed, so only its outside can be seen and its back faces
+    // are culled (a third or more of a frame's time). From inside the chest, looking
+    // out through it, nothing of the skin is drawn: the picture's middle is as in an
+    // empty scene.
+    let frame = posed(&[]);
+    let chest = frame
+        .actor("ann")
+        .unwrap()
+        .solid_center("up_torso")
+        .unwrap();
+    let camera = Camera::fixed(chest, chest + Vec3::new(0.0, 0.3, 4.0));
+    let mut r = renderer();
+    r.set_options(RenderOptions {
+        labels: false,
+        ..RenderOptions::default()
+    });
+    let img = r.render(&frame, &camera).unwrap();
+    let empty = r.render(&Frame::default(), &camera).unwrap();
+    let (middle, sky) = (
+        img.get_pixel(W / 2, H / 2).0,
+        empty.get_pixel(W / 2, H / 2).0,
+    );
+    assert!(
+        close(
+            [middle[0], middle[1], middle[2]],
+            [sky[0], sky[1], sky[2]],
+            6
+        ),
+        "seen from inside, the chest is drawn: {middle:?} where the empty scene has {sky:?}"
+    );
+}
+
 /// The topmost row in columns `columns` of `img` that is not the background.
 fn top_row(img: &RgbaImage, columns: std::ops::Range<u32>) -> Option<u32> {
     let background = background_srgb();
