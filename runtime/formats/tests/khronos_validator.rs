@@ -13,8 +13,9 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use troupe_body::glam::{DQuat, DVec3};
+use troupe_body::skin::SkinLibrary;
 use troupe_body::solid::Shape;
-use troupe_body::template::template;
+use troupe_body::template::{template, TemplateParams};
 use troupe_body::{Skeleton, Skin};
 use troupe_formats::bvh::read_bvh;
 use troupe_formats::character::read_character;
@@ -86,6 +87,20 @@ fn written_gltf_files_pass_the_khronos_validator() {
             write_glb_with(&glb, &rig, Some(&skin), &[], &stem).unwrap();
             files.extend([gltf, glb]);
         }
+    }
+    // Other heights: the template's skin made once and scaled to each (`SkinLibrary`),
+    // as the viewer and `run --record` use it.
+    let mut library = SkinLibrary::default();
+    for (template_name, height, mass) in [("adult", 1.6, 60.0), ("child", 1.05, 18.0)] {
+        let skeleton = template(template_name)
+            .unwrap()
+            .instantiate(TemplateParams { height, mass })
+            .unwrap();
+        let skin = library.get(&skeleton).unwrap().to_skin();
+        let stem = format!("{template_name}_{height}_wave");
+        let glb = dir.join(format!("{stem}.glb"));
+        write_glb_with(&glb, &troupe_rig(&skeleton), Some(&skin), &[], &stem).unwrap();
+        files.push(glb);
     }
     // A recording with an object, as `run --record` writes it: the skinned body and one
     // more animated node, with extras.
