@@ -513,9 +513,11 @@ impl SceneRenderer {
         });
         // The near generated skin picks its colours per pixel (`fs_skin`); its far level
         // of detail and users' characters by vertex, as the plain meshes (`vs_skin_by_vertex`).
-        // The generated skin is closed and wound counter-clockwise seen from outside, so
-        // its back faces are hidden and need not be drawn; a user's character may be open
-        // (a cloak's hem, a single-sided sleeve) and is drawn whole.
+        // The generated skin is closed (no edge without its twin, at either level) and
+        // wound counter-clockwise seen from outside, so its back faces are hidden and
+        // need not be drawn. (The few triangles turned over at rest lie inside small
+        // folds, under their neighbours.) A user's character may be open (a cloak's hem,
+        // a one-sided sleeve) and is drawn whole.
         let skin_pipeline_with = |label, vertex, fragment, cull_mode| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -797,12 +799,7 @@ impl SceneRenderer {
                 let Some((skin, _)) = self.skins.get_key(&gpu.device, key, skeleton) else {
                     continue;
                 };
-                let (vertices, indices, count) = if *far {
-                    let vertices = skin.far_vertices.as_ref().unwrap_or(&skin.vertices);
-                    (vertices, &skin.far_indices, skin.far_count)
-                } else {
-                    (&skin.vertices, &skin.indices, skin.count)
-                };
+                let level = if *far { &skin.far } else { &skin.near };
                 // Colours per pixel only where an edge between regions spans pixels.
                 let pipeline = match (&skin.source, *far) {
                     (skinned::SkinSource::Generated(_), false) => &self.skin_pipeline,
@@ -815,9 +812,9 @@ impl SceneRenderer {
                     &self.skin_bind_group,
                     &[(i as u64 * BLOCK_STRIDE) as u32],
                 );
-                pass.set_vertex_buffer(0, vertices.slice(..));
-                pass.set_index_buffer(indices.slice(..), wgpu::IndexFormat::Uint32);
-                pass.draw_indexed(0..count, 0, 0..1);
+                pass.set_vertex_buffer(0, level.vertices.slice(..));
+                pass.set_index_buffer(level.indices.slice(..), wgpu::IndexFormat::Uint32);
+                pass.draw_indexed(0..level.count, 0, 0..1);
             }
         }
         self.lines.draw(&mut pass);

@@ -178,7 +178,8 @@ fn skin_vertex(v: SkinVertexIn) -> MeshOut {
     let world = (m * vec4<f32>(v.pos, 1.0)).xyz;
     var out: MeshOut;
     out.clip = globals.view_proj * vec4<f32>(world, 1.0);
-    // Blended rotations are near-orthogonal: the normal goes through the same matrix.
+    // Blended rotations (times the skin's uniform scale) are near-orthogonal up to
+    // scale: the normal goes through the same matrix, and `lit` normalises it.
     out.normal = (m * vec4<f32>(v.normal, 0.0)).xyz;
     return out;
 }

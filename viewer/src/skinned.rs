@@ -52,8 +52,8 @@ pub(crate) struct SkinVertex {
 }
 
 /// Region distances of vertices coloured by vertex (a user's character, its own colours
-/// as tints; the generated skin's coarse level, cut along its regions): these make them
-/// bare skin, tinted the same, were they drawn per pixel.
+/// as tints; the generated skin's coarse level, cut along its regions). They are not
+/// drawn per pixel; were they, these would make them bare skin, tinted by their own.
 const BARE: ([f32; 4], [f32; 4]) = ([0.0, 1.0, 1.0, 1.0], [1.0, 0.0, 0.0, -1.0]);
 
 /// An actor's uniform block: colours and skinning matrices.
@@ -66,15 +66,20 @@ pub(crate) struct SkinBlock {
 
 /// A skin on the GPU.
 pub(crate) struct GpuSkin {
+    /// Full detail, for actors near the camera.
+    pub near: Level,
+    /// The coarse level, for actors far away (a character's is its full mesh again).
+    pub far: Level,
+    pub source: SkinSource,
+}
+
+/// One level of detail on the GPU: its vertices and the triangles over them.
+#[derive(Clone)]
+pub(crate) struct Level {
     pub vertices: wgpu::Buffer,
     pub indices: wgpu::Buffer,
+    /// Indices to draw.
     pub count: u32,
-    /// The coarse level's own vertices (the generated skin's, cut along the edges between
-    /// regions); `None`: it uses [`GpuSkin::vertices`].
-    pub far_vertices: Option<wgpu::Buffer>,
-    pub far_indices: wgpu::Buffer,
-    pub far_count: u32,
-    pub source: SkinSource,
 }
 
 /// What a GPU skin was made from.
@@ -123,14 +128,14 @@ pub(crate) struct SkinCache {
 struct Drawn {
     /// The address of its shared [`Skin`], a key of `SkinCache::generated`.
     skin: usize,
-    /// What its lengths are, times the shared skin's.
+    /// The skeleton's lengths divided by those of the body the skin was made for.
     scale: f64,
 }
 
 impl SkinCache {
     /// The GPU skin of `key`, made on first use, and the scale its vertices are drawn
-    /// at; `None` when it cannot be drawn so (a skeleton that is not a template's, too
-    /// many joints or slots): drawn as solids.
+    /// at; `None` when it cannot be drawn so (a skeleton lacking a joint or solid the
+    /// skin needs, too many joints or slots): drawn as solids.
     pub fn get_key(
         &mut self,
         device: &wgpu::Device,
@@ -170,8 +175,9 @@ impl SkinCache {
     }
 
     /// The GPU skin of `skeleton` and its scale, built on first use (shared by every
-    /// height of a template); `None` when the skeleton cannot be skinned (not a troupe
-    /// template, or too many joints): it is drawn as solids.
+    /// height of a template; any other skeleton gets its own); `None` when the skeleton
+    /// cannot be skinned (lacking a joint or solid the skin needs, or too many joints):
+    /// it is drawn as solids.
     pub fn get(
         &mut self,
         device: &wgpu::Device,
@@ -280,12 +286,11 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
         })
         .collect();
     let indices = skin.indices.clone();
-    upload_mesh(
-        device,
-        (&vertices, &indices),
-        Some((&far_vertices, &far.indices)),
-        SkinSource::Generated(skin),
-    )
+    GpuSkin {
+        near: upload_level(device, &vertices, &indices),
+        far: upload_level(device, &far_vertices, &far.indices),
+        source: SkinSource::Generated(skin),
+    }
 }
 
 /// Uploads a character's mesh: its colours as tints of a white slot, the vertices moved
@@ -316,12 +321,12 @@ fn upload_character(
             eye: BARE.1,
         })
         .collect();
-    upload_mesh(
-        device,
-        (&vertices, &dressing.indices),
-        None,
-        SkinSource::Character(dressing.clone()),
-    )
+    let near = upload_level(device, &vertices, &dressing.indices);
+    GpuSkin {
+        far: near.clone(),
+        near,
+        source: SkinSource::Character(dressing.clone()),
+    }
 }
 
 /// An sRGB component as linear light.
@@ -333,14 +338,8 @@ fn srgb_to_linear(c: f32) -> f32 {
     }
 }
 
-/// Uploads a skin's vertices and triangles, and those of its coarse level (`far`; the
-/// same triangles when it has none).
-fn upload_mesh(
-    device: &wgpu::Device,
-    (vertices, indices): (&[SkinVertex], &[u32]),
-    far: Option<(&[SkinVertex], &[u32])>,
-    source: SkinSource,
-) -> GpuSkin {
+/// Uploads one level of detail: `vertices` and the triangles `indices` over them.
+fn upload_level(device: &wgpu::Device, vertices: &[SkinVertex], indices: &[u32]) -> Level {
     let buffer = |label, contents: &[u8], usage| {
         device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(label),
@@ -348,8 +347,7 @@ fn upload_mesh(
             usage,
         })
     };
-    let far_indices = far.map_or(indices, |(_, i)| i);
-    GpuSkin {
+    Level {
         vertices: buffer(
             "skin vertices",
             bytemuck::cast_slice(vertices),
@@ -361,20 +359,6 @@ fn upload_mesh(
             wgpu::BufferUsages::INDEX,
         ),
         count: indices.len() as u32,
-        far_vertices: far.map(|(v, _)| {
-            buffer(
-                "skin far vertices",
-                bytemuck::cast_slice(v),
-                wgpu::BufferUsages::VERTEX,
-            )
-        }),
-        far_indices: buffer(
-            "skin far triangles",
-            bytemuck::cast_slice(far_indices),
-            wgpu::BufferUsages::INDEX,
-        ),
-        far_count: far_indices.len() as u32,
-        source,
     }
 }
 

@@ -391,6 +391,35 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
         open.len()
     );
     assert_eq!(open, open_before, "{level}: the cut opened or closed edges");
+    // No holes, though: every edge has its reverse (the viewer culls back faces, so a
+    // hole would show through the body).
+    let mut directed = std::collections::HashSet::new();
+    for t in triangles.chunks_exact(3) {
+        for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+            directed.insert((uncut_id[a as usize], uncut_id[b as usize]));
+        }
+    }
+    let holes = directed
+        .iter()
+        .filter(|(a, b)| !directed.contains(&(*b, *a)))
+        .count();
+    assert_eq!(holes, 0, "{level}: {holes} edges without their reverse");
+    // Triangles turned over at rest (facing against their vertices' normals): a few,
+    // inside small folds where a neighbour covers them, so culling them hides nothing.
+    let pos = |i: u32| DVec3::from(skin.positions[i as usize].map(f64::from));
+    let normal = |i: u32| DVec3::from(skin.normals[i as usize].map(f64::from));
+    let turned = triangles
+        .chunks_exact(3)
+        .filter(|t| {
+            let n = (pos(t[1]) - pos(t[0])).cross(pos(t[2]) - pos(t[0]));
+            n.dot(normal(t[0]) + normal(t[1]) + normal(t[2])) <= 0.0
+        })
+        .count();
+    eprintln!("{level} level: {turned} triangles turned over at rest");
+    assert!(
+        turned * 100 < triangles.len() / 3,
+        "{level}: {turned} turned over"
+    );
     for ws in &cut.weights {
         let sum: f32 = ws.iter().sum();
         assert!((sum - 1.0).abs() < 1e-5, "{level}: weights {ws:?}");

@@ -20,7 +20,7 @@ use crate::rig::Rig;
 use crate::trk::{read_trk, read_trk_set, write_trk_file, TrkFile};
 use std::path::{Path, PathBuf};
 use troupe_body::skeleton::Skeleton;
-use troupe_body::skin::SkinLibrary;
+use troupe_body::skin::{SharedSkin, SkinLibrary};
 use troupe_body::{Dressing, Skin};
 use troupe_motion::object_motion::ObjectMotion;
 use troupe_motion::sequence::Sequence;
@@ -188,11 +188,12 @@ pub fn save_dressed_recording<'a>(
                 match look {
                     Some(look) => write_character(&out, look, &rig, &with, actor)?,
                     None => {
-                        let skin = skins.of(skeleton, &out);
+                        // Scaled to the actor's size for this file only.
+                        let skin = skins.of(skeleton, &out).map(|s| s.to_skin());
                         if format == Format::Gltf {
-                            write_gltf_with(&out, &rig, skin, &with, actor)?;
+                            write_gltf_with(&out, &rig, skin.as_ref(), &with, actor)?;
                         } else {
-                            write_glb_with(&out, &rig, skin, &with, actor)?;
+                            write_glb_with(&out, &rig, skin.as_ref(), &with, actor)?;
                         }
                     }
                 }
@@ -230,34 +231,34 @@ pub fn save_dressed_recording<'a>(
 }
 
 /// The generated skins of a recording's actors: made once per template
-/// ([`SkinLibrary`]: every height shares it) and scaled once per skeleton (actors of one
+/// ([`SkinLibrary`]: every height shares it) and found once per skeleton (actors of one
 /// body share theirs).
 #[derive(Default)]
 struct Skins {
     library: SkinLibrary,
-    scaled: Vec<(*const Skeleton, Option<Skin>)>,
+    found: Vec<(*const Skeleton, Option<SharedSkin>)>,
 }
 
 impl Skins {
-    /// The skin of `skeleton` at its size; `None`, with a warning naming `out`, for a
-    /// skeleton that is not a troupe template's.
-    fn of(&mut self, skeleton: &Skeleton, out: &Path) -> Option<&Skin> {
+    /// The skin of `skeleton`; `None`, with a warning naming `out`, for a skeleton that is
+    /// not a troupe template's.
+    fn of(&mut self, skeleton: &Skeleton, out: &Path) -> Option<&SharedSkin> {
         let key: *const Skeleton = skeleton;
-        let at = match self.scaled.iter().position(|(k, _)| *k == key) {
+        let at = match self.found.iter().position(|(k, _)| *k == key) {
             Some(at) => at,
             None => {
                 let skin = match self.library.get(skeleton) {
-                    Ok(shared) => Some(shared.to_skin()),
+                    Ok(shared) => Some(shared),
                     Err(e) => {
                         tracing::warn!("{}: written without a skin: {e}", out.display());
                         None
                     }
                 };
-                self.scaled.push((key, skin));
-                self.scaled.len() - 1
+                self.found.push((key, skin));
+                self.found.len() - 1
             }
         };
-        self.scaled[at].1.as_ref()
+        self.found[at].1.as_ref()
     }
 }
 

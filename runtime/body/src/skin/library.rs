@@ -10,16 +10,16 @@
 //! ([`template_scale`]). Any other skeleton gets a skin of its own.
 
 use super::Skin;
-use crate::collision::Capsule;
 use crate::error::Result;
-use crate::skeleton::Skeleton;
+use crate::skeleton::{DofKind, Skeleton};
+use crate::solid::Shape;
 use crate::template::{templates, Template};
 use crate::transform::Transform;
 use glam::{DMat4, DVec3};
 use std::sync::Arc;
 
-/// How closely (relative to the body's size) a skeleton's lengths must match the
-/// template's scaled to be taken for it: rounding, not a different body.
+/// How closely (m, times the scale when it is over 1) a skeleton's lengths must match
+/// the template's scaled to be taken for it: rounding, not a different body.
 const TOLERANCE: f64 = 1e-9;
 
 /// A skin shared between sizes, and the factor that makes it the skin of one skeleton.
@@ -27,7 +27,7 @@ const TOLERANCE: f64 = 1e-9;
 pub struct SharedSkin {
     /// The skin as made (at the template's default height).
     pub skin: Arc<Skin>,
-    /// What the skeleton's lengths are, times the skin's skeleton's.
+    /// The skeleton's lengths divided by those of the body the skin was made for.
     pub scale: f64,
 }
 
@@ -114,15 +114,20 @@ fn is_scaled(base: &Skeleton, other: &Skeleton, scale: f64) -> bool {
         && base.joints().iter().zip(other.joints()).all(|(a, b)| {
             a.name == b.name && a.parent == b.parent && a.dofs == b.dofs && near(a.offset, b.offset)
         });
-    // Rotations make the bind pose; a translation's limits are lengths, which scale.
+    // A rotation's limits are angles; a translation's are lengths, which scale.
+    let limit = |a: f64, b: f64, kind: DofKind| match kind {
+        DofKind::Rotation => a == b,
+        DofKind::Translation if a.is_finite() => (a * scale - b).abs() <= tolerance,
+        DofKind::Translation => a == b,
+    };
     let dofs = base.dofs().len() == other.dofs().len()
         && base.dofs().iter().zip(other.dofs()).all(|(a, b)| {
             a.name == b.name
                 && a.joint == b.joint
                 && a.kind == b.kind
                 && a.axis == b.axis
-                && (a.kind != crate::skeleton::DofKind::Rotation
-                    || (a.min == b.min && a.max == b.max))
+                && limit(a.min, b.min, a.kind)
+                && limit(a.max, b.max, a.kind)
         });
     let end_sites = base.end_sites().len() == other.end_sites().len()
         && base
@@ -136,37 +141,46 @@ fn is_scaled(base: &Skeleton, other: &Skeleton, scale: f64) -> bool {
             .iter()
             .zip(other.solids())
             .all(|((ja, a), (jb, b))| {
-                let (ca, cb) = (
-                    Capsule::covering(&a.shape, a.center, a.orientation),
-                    Capsule::covering(&b.shape, b.center, b.orientation),
-                );
                 ja == jb
                     && a.name == b.name
-                    && a.shape.kind_name() == b.shape.kind_name()
-                    && near(ca.a, cb.a)
-                    && near(ca.b, cb.b)
-                    && (ca.ra * scale - cb.ra).abs() <= tolerance
-                    && (ca.rb * scale - cb.rb).abs() <= tolerance
+                    && near(a.center, b.center)
+                    && a.orientation.angle_between(b.orientation) <= TOLERANCE
+                    && shape_scaled(&a.shape, &b.shape, scale, tolerance)
             });
     joints && dofs && end_sites && solids
 }
 
-impl Skin {
-    /// The same skin with every length times `scale`: the skin of the skeleton scaled so.
-    pub fn scaled(&self, scale: f64) -> Skin {
-        let k = scale as f32;
-        let mut skin = self.clone();
-        for p in &mut skin.positions {
-            *p = p.map(|x| x * k);
-        }
-        for d in &mut skin.region_distances {
-            d.cloth = d.cloth.map(|x| x * k);
-            d.eye *= k;
-        }
-        for r in &mut skin.rest {
-            r.translation *= scale;
-        }
-        skin
+/// Whether shape `b` is shape `a` with every length times `scale` (within `tolerance`).
+fn shape_scaled(a: &Shape, b: &Shape, scale: f64, tolerance: f64) -> bool {
+    let same = |x: f64, y: f64| (x * scale - y).abs() <= tolerance;
+    let same3 = |x: DVec3, y: DVec3| (x * scale - y).abs().max_element() <= tolerance;
+    match (a, b) {
+        (Shape::Box { half_extents: x }, Shape::Box { half_extents: y }) => same3(*x, *y),
+        (Shape::Sphere { radius: x }, Shape::Sphere { radius: y }) => same(*x, *y),
+        (
+            Shape::Cylinder {
+                radius: r1,
+                height: h1,
+            },
+            Shape::Cylinder {
+                radius: r2,
+                height: h2,
+            },
+        ) => same(*r1, *r2) && same(*h1, *h2),
+        (
+            Shape::Frustum {
+                bottom_radius: b1,
+                top_radius: t1,
+                height: h1,
+            },
+            Shape::Frustum {
+                bottom_radius: b2,
+                top_radius: t2,
+                height: h2,
+            },
+        ) => same(*b1, *b2) && same(*t1, *t2) && same(*h1, *h2),
+        (Shape::Ellipsoid { radii: x }, Shape::Ellipsoid { radii: y }) => same3(*x, *y),
+        _ => false,
     }
 }
 
@@ -239,6 +253,36 @@ mod tests {
             assert!((s.translation - o.translation).length() < 1e-9);
             assert!(s.rotation.angle_between(o.rotation) < 1e-9);
         }
+        // And its surface is where that build puts the body's: the same bounds, within the
+        // surface grid's cell (height/400, 3.75 mm), and the same area within 1 %.
+        let bounds = |p: &[[f32; 3]]| {
+            p.iter()
+                .map(|v| DVec3::from(v.map(f64::from)))
+                .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), v| {
+                    (lo.min(v), hi.max(v))
+                })
+        };
+        let area = |skin: &Skin| -> f64 {
+            let p = |i: u32| DVec3::from(skin.positions[i as usize].map(f64::from));
+            skin.indices
+                .chunks_exact(3)
+                .map(|t| (p(t[1]) - p(t[0])).cross(p(t[2]) - p(t[0])).length() / 2.0)
+                .sum()
+        };
+        let ((lo, hi), (own_lo, own_hi)) = (bounds(&scaled.positions), bounds(&own.positions));
+        let worst = (lo - own_lo).abs().max((hi - own_hi).abs()).max_element();
+        let (area_scaled, area_own) = (area(&scaled), area(&own));
+        eprintln!(
+            "bounds within {worst:.4} m of the own build's; area {area_scaled:.4} against {area_own:.4} m²"
+        );
+        assert!(
+            worst < 1.5 / 400.0,
+            "bounds {lo}..{hi} against {own_lo}..{own_hi}"
+        );
+        assert!(
+            (area_scaled / area_own - 1.0).abs() < 0.01,
+            "area {area_scaled} against {area_own}"
+        );
         // Posed, the scaled skin is the shared skin's pose scaled, and the matrices the
         // viewer uploads take the shared vertices there.
         let q: Vec<f64> = short

@@ -313,6 +313,24 @@ impl Skin {
             .collect()
     }
 
+    /// The same skin with every length times `scale`: the skin of its skeleton scaled so
+    /// (see [`SkinLibrary`]).
+    pub fn scaled(&self, scale: f64) -> Skin {
+        let k = scale as f32;
+        let mut skin = self.clone();
+        for p in &mut skin.positions {
+            *p = p.map(|x| x * k);
+        }
+        for d in &mut skin.region_distances {
+            d.cloth = d.cloth.map(|x| x * k);
+            d.eye *= k;
+        }
+        for r in &mut skin.rest {
+            r.translation *= scale;
+        }
+        skin
+    }
+
     /// The skin's vertex positions for joint frames `globals`, by linear blend skinning.
     pub fn deform(&self, globals: &[Transform]) -> Vec<DVec3> {
         let m = self.skinning_transforms(globals);

@@ -135,8 +135,8 @@ impl CutSkin {
     }
 
     /// Cuts `skin`'s coarse level of detail (its [`far_indices`](super::Skin::far_indices))
-    /// the same way: coloured by vertex, its triangles, several centimetres wide, blurred
-    /// and zigzagged the edges between regions across them.
+    /// the same way, so that drawn coloured by vertex its edges between regions stay
+    /// sharp (across its triangles, several centimetres wide, they blurred).
     pub fn far(skin: &super::Skin) -> CutSkin {
         Self::cutting(skin, &skin.far_indices)
     }
