@@ -54,11 +54,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let start = Instant::now();
     let skin = troupe_body::Skin::build(&skeleton)?;
     println!(
-        "skin of one adult: built in {:.0} ms, {} vertices, {} triangles ({} far), {:.1} MB",
+        "skin of one adult: built in {:.0} ms, {} vertices, {} triangles ({} far, {} farthest), {:.1} MB",
         start.elapsed().as_secs_f64() * 1000.0,
         skin.positions.len(),
         skin.triangle_count(),
         skin.far_indices.len() / 3,
+        skin.farthest_indices.len() / 3,
         skin.memory_bytes() as f64 / 1e6
     );
     println!(

@@ -327,11 +327,11 @@ pub(crate) struct SceneRenderer {
     skin_bind_group: wgpu::BindGroup,
     skin_capacity: usize,
     skins: SkinCache,
-    /// This frame's skinned actors: skeleton key, whether far (coarse mesh).
+    /// This frame's skinned actors: skeleton key, the level of detail to draw.
     skin_draws: Vec<(
         skinned::SkinKey,
         std::sync::Arc<troupe_body::Skeleton>,
-        bool,
+        skinned::Detail,
     )>,
     skin_data: Vec<u8>,
     /// Debug lines (the navigation view).
@@ -795,15 +795,17 @@ impl SceneRenderer {
             pass.draw_indexed(0..mesh.count, 0, range.clone());
         }
         if !self.skin_draws.is_empty() {
-            for (i, (key, skeleton, far)) in self.skin_draws.iter().enumerate() {
+            for (i, (key, skeleton, detail)) in self.skin_draws.iter().enumerate() {
                 let Some((skin, _)) = self.skins.get_key(&gpu.device, key, skeleton) else {
                     continue;
                 };
-                let level = if *far { &skin.far } else { &skin.near };
+                let level = skin.level(*detail);
                 // Colours per pixel only where an edge between regions spans pixels.
-                let pipeline = match (&skin.source, *far) {
-                    (skinned::SkinSource::Generated(_), false) => &self.skin_pipeline,
-                    (skinned::SkinSource::Generated(_), true) => &self.skin_by_vertex_pipeline,
+                let pipeline = match (&skin.source, detail) {
+                    (skinned::SkinSource::Generated(_), skinned::Detail::Near) => {
+                        &self.skin_pipeline
+                    }
+                    (skinned::SkinSource::Generated(_), _) => &self.skin_by_vertex_pipeline,
                     (skinned::SkinSource::Character(_), _) => &self.character_pipeline,
                 };
                 pass.set_pipeline(pipeline);
@@ -907,11 +909,11 @@ impl SceneRenderer {
                             self.skin_draws.len().saturating_add(1) * BLOCK_STRIDE as usize,
                             0,
                         );
-                        let far = 1.8 * pixels_per_metre / distance < 360.0;
+                        let detail = skinned::Detail::for_height(1.8 * pixels_per_metre / distance);
                         self.skin_draws.push((
                             skinned::SkinKey::of(actor),
                             actor.skeleton.clone(),
-                            far,
+                            detail,
                         ));
                         continue;
                     }

@@ -70,7 +70,46 @@ pub(crate) struct GpuSkin {
     pub near: Level,
     /// The coarse level, for actors far away (a character's is its full mesh again).
     pub far: Level,
+    /// The coarsest level, for actors further still (a character's full mesh again).
+    pub farthest: Level,
     pub source: SkinSource,
+}
+
+/// How much of a skin's detail an actor needs, by its height on screen.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Detail {
+    /// Full detail, colours per pixel.
+    Near,
+    /// The coarse level.
+    Far,
+    /// The coarsest level.
+    Farthest,
+}
+
+impl Detail {
+    /// The detail an actor about `pixels` tall on screen needs: full detail from 360
+    /// pixels, where the coarse level's facets and its edges between regions begin to
+    /// show; the coarsest under 150.
+    pub fn for_height(pixels: f32) -> Detail {
+        if pixels >= 360.0 {
+            Detail::Near
+        } else if pixels >= 150.0 {
+            Detail::Far
+        } else {
+            Detail::Farthest
+        }
+    }
+}
+
+impl GpuSkin {
+    /// The level of detail to draw for `detail`.
+    pub fn level(&self, detail: Detail) -> &Level {
+        match detail {
+            Detail::Near => &self.near,
+            Detail::Far => &self.far,
+            Detail::Farthest => &self.farthest,
+        }
+    }
 }
 
 /// One level of detail on the GPU: its vertices and the triangles over them.
@@ -267,28 +306,34 @@ fn upload(device: &wgpu::Device, skin: Arc<Skin>, skeleton: &Skeleton) -> GpuSki
             },
         })
         .collect();
-    // The coarse level is coloured by vertex (cheaper than per pixel, and its edges are
-    // a pixel or two wide), so it is cut along the edges between regions first, as a glTF
-    // export is: each triangle then has one colour, and an edge runs straight through
-    // the triangles it crosses instead of blurring across them.
-    let far = CutSkin::far(&skin);
-    let far_parts = parts(&skin, skeleton, &far.regions, &far.joints);
-    let far_vertices: Vec<SkinVertex> = (0..far.positions.len())
-        .map(|i| SkinVertex {
-            pos: far.positions[i],
-            normal: far.normals[i],
-            joints: far.joints[i],
-            weights: far.weights[i],
-            part: far_parts[i],
-            tint: [1.0; 4],
-            cloth: BARE.0,
-            eye: BARE.1,
-        })
-        .collect();
-    let indices = skin.indices.clone();
+    // The coarse levels are coloured by vertex (cheaper than per pixel, and their edges
+    // are a pixel or two wide), so they are cut along the edges between regions first,
+    // as a glTF export is: each triangle then has one colour, and an edge runs straight
+    // through the triangles it crosses instead of blurring across them.
+    let coarse = |cut: CutSkin| {
+        let parts = parts(&skin, skeleton, &cut.regions, &cut.joints);
+        let vertices: Vec<SkinVertex> = (0..cut.positions.len())
+            .map(|i| SkinVertex {
+                pos: cut.positions[i],
+                normal: cut.normals[i],
+                joints: cut.joints[i],
+                weights: cut.weights[i],
+                part: parts[i],
+                tint: [1.0; 4],
+                cloth: BARE.0,
+                eye: BARE.1,
+            })
+            .collect();
+        upload_level(device, &vertices, &cut.indices)
+    };
+    let (far, farthest) = (
+        coarse(CutSkin::far(&skin)),
+        coarse(CutSkin::farthest(&skin)),
+    );
     GpuSkin {
-        near: upload_level(device, &vertices, &indices),
-        far: upload_level(device, &far_vertices, &far.indices),
+        near: upload_level(device, &vertices, &skin.indices),
+        far,
+        farthest,
         source: SkinSource::Generated(skin),
     }
 }
@@ -324,6 +369,7 @@ fn upload_character(
     let near = upload_level(device, &vertices, &dressing.indices);
     GpuSkin {
         far: near.clone(),
+        farthest: near.clone(),
         near,
         source: SkinSource::Character(dressing.clone()),
     }

@@ -500,43 +500,50 @@ fn the_edges_between_the_skins_regions_run_smoothly_between_the_vertices() {
 #[test]
 fn far_away_the_edges_between_the_skins_regions_stay_sharp() {
     // The whole body in 240 pixels is drawn with the coarse level of detail, coloured
-    // by vertex: each of its triangles at the waist is 4-5 cm, 3-4 pixels, across.
-    let camera = Camera::fixed(Vec3::new(0.0, 0.9, 2.6), Vec3::new(0.0, 0.9, 0.0));
-    let frame = posed(&[]);
-    let img = renderer().render(&frame, &camera).unwrap();
-    let green = |x: u32, y: u32| img.get_pixel(x, y).0[1] as i32;
-    // The shirt 13 rows above the waistband, the hips 13 rows below it.
-    let (top, bottom) = (H / 2 - 28, H / 2 - 2);
-    // Down each column across the belly, the rows between the shirt's green and the
-    // trousers' (more than a fifth of the way from either): the edge's width.
-    let widths: Vec<usize> = (W / 2 - 14..W / 2 + 14)
-        .filter_map(|x| {
-            let (shirt, trousers) = (green(x, top), green(x, bottom));
-            if shirt - trousers < 40 {
-                return None;
-            }
-            let margin = (shirt - trousers) / 5;
-            Some(
-                (top..bottom)
-                    .filter(|&y| {
-                        let g = green(x, y);
-                        g < shirt - margin && g > trousers + margin
-                    })
-                    .count(),
-            )
-        })
-        .collect();
-    assert!(
-        widths.len() >= 20,
-        "the waistband crosses the belly: {widths:?}"
-    );
-    let widest = *widths.iter().max().unwrap();
-    let mean = widths.iter().sum::<usize>() as f64 / widths.len() as f64;
-    eprintln!("far waistband: {mean:.2} rows wide on average, at most {widest}: {widths:?}");
-    assert!(
-        widest <= 2,
-        "the waistband blurs over {widest} rows: {widths:?}"
-    );
+    // by vertex: each of its triangles at the waist is 4-5 cm, 3-4 pixels, across. From
+    // twice as far (under 150 pixels), with the coarsest level.
+    for distance in [2.6f32, 5.2] {
+        let camera = Camera::fixed(Vec3::new(0.0, 0.9, distance), Vec3::new(0.0, 0.9, 0.0));
+        let frame = posed(&[]);
+        let img = renderer().render(&frame, &camera).unwrap();
+        let green = |x: u32, y: u32| img.get_pixel(x, y).0[1] as i32;
+        // From 2.6 m: the shirt 13 rows above the waistband, the hips 13 rows below it,
+        // the belly 28 columns wide; half of each from twice as far.
+        let k = |n: u32| (n as f32 * 2.6 / distance).round() as u32;
+        let (top, bottom) = (H / 2 - k(28), H / 2 - k(2));
+        // Down each column across the belly, the rows between the shirt's green and the
+        // trousers' (more than a fifth of the way from either): the edge's width.
+        let widths: Vec<usize> = (W / 2 - k(14)..W / 2 + k(14))
+            .filter_map(|x| {
+                let (shirt, trousers) = (green(x, top), green(x, bottom));
+                if shirt - trousers < 40 {
+                    return None;
+                }
+                let margin = (shirt - trousers) / 5;
+                Some(
+                    (top..bottom)
+                        .filter(|&y| {
+                            let g = green(x, y);
+                            g < shirt - margin && g > trousers + margin
+                        })
+                        .count(),
+                )
+            })
+            .collect();
+        assert!(
+            widths.len() as u32 >= k(20),
+            "{distance} m: the waistband crosses the belly: {widths:?}"
+        );
+        let widest = *widths.iter().max().unwrap();
+        let mean = widths.iter().sum::<usize>() as f64 / widths.len() as f64;
+        eprintln!(
+            "{distance} m: the waistband {mean:.2} rows wide on average, at most {widest}: {widths:?}"
+        );
+        assert!(
+            widest <= 2,
+            "{distance} m: the waistband blurs over {widest} rows: {widths:?}"
+        );
+    }
 }
 
 #[test]

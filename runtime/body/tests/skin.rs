@@ -308,6 +308,7 @@ fn the_skin_cut_along_its_regions_is_the_same_surface_one_region_per_triangle() 
     for (level, cut, triangles) in [
         ("full", CutSkin::new(&skin), &skin.indices),
         ("far", CutSkin::far(&skin), &skin.far_indices),
+        ("farthest", CutSkin::farthest(&skin), &skin.farthest_indices),
     ] {
         check_cut(level, &skin, &cut, triangles);
     }

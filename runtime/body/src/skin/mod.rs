@@ -50,6 +50,9 @@ use volumes::Volume;
 pub const MAX_TRIANGLES: usize = 24_000;
 /// Triangles of the coarse level of detail.
 pub const FAR_TRIANGLES: usize = 6_000;
+/// Triangles of the coarsest level of detail, for actors a couple of hundred pixels tall
+/// or less.
+pub const FARTHEST_TRIANGLES: usize = 1_500;
 /// Edges shorter than this many grid cells are collapsed after the simplification
 /// (see `collapse`).
 const TINY_EDGE: f64 = 0.5;
@@ -117,6 +120,8 @@ pub struct Skin {
     pub indices: Vec<u32>,
     /// Coarse triangles over the same vertices, for actors far away.
     pub far_indices: Vec<u32>,
+    /// Coarser still, over the same vertices, for actors further away.
+    pub farthest_indices: Vec<u32>,
     /// Bind-pose frame of every slot, the skeleton's joints then the helpers.
     pub rest: Vec<Transform>,
     /// Helper joints at the big joints, after the skeleton's joints among the slots.
@@ -169,7 +174,22 @@ impl Skin {
             .iter()
             .map(|&p| regions::distances_at(p, &volumes).region())
             .collect();
-        let full = simplify_closed(&dense_indices, &adapter, &dense_regions, height)?;
+        let full = simplify_closed(
+            &dense_indices,
+            &adapter,
+            &dense_regions,
+            MAX_TRIANGLES,
+            0.004 * height,
+            height,
+        )?;
+        let farthest = simplify_closed(
+            &full,
+            &adapter,
+            &dense_regions,
+            FARTHEST_TRIANGLES,
+            0.04 * height,
+            height,
+        )?;
         let far = meshopt::simplify(
             &full,
             &adapter,
@@ -217,14 +237,18 @@ impl Skin {
         relax::relax(&mut positions, &indices, &field, 10);
         flips::flip_slivers(&positions, &mut indices, THIN);
         relax::relax(&mut positions, &indices, &field, 5);
-        let far_indices: Vec<u32> = far
-            .chunks_exact(3)
-            .map(|t| {
-                [t[0], t[1], t[2]].map(|i| renumber[merged[remap[i as usize] as usize] as usize])
-            })
-            .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-            .flatten()
-            .collect();
+        let onto_kept = |coarse: &[u32]| -> Vec<u32> {
+            coarse
+                .chunks_exact(3)
+                .map(|t| {
+                    [t[0], t[1], t[2]]
+                        .map(|i| renumber[merged[remap[i as usize] as usize] as usize])
+                })
+                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
+                .flatten()
+                .collect()
+        };
+        let (far_indices, farthest_indices) = (onto_kept(&far), onto_kept(&farthest));
         smooth_regions(&mut regions, &indices);
         let region_distances = positions
             .iter()
@@ -268,6 +292,7 @@ impl Skin {
             region_distances,
             indices,
             far_indices,
+            farthest_indices,
             rest,
             helpers,
         })
@@ -298,7 +323,7 @@ impl Skin {
     pub fn memory_bytes(&self) -> usize {
         let n = self.positions.len();
         n * (12 + 12 + 8 + 16 + 1 + std::mem::size_of::<RegionDistances>())
-            + (self.indices.len() + self.far_indices.len()) * 4
+            + (self.indices.len() + self.far_indices.len() + self.farthest_indices.len()) * 4
             + self.rest.len() * std::mem::size_of::<Transform>()
     }
 
@@ -369,14 +394,16 @@ fn with_helpers(globals: &[Transform], helpers: &[Helper]) -> Vec<Transform> {
     frames
 }
 
-/// Simplifies the dense closed mesh to at most [`MAX_TRIANGLES`] triangles, keeping it
-/// closed. Edge collapse can pinch a thin part (a fingertip, an ear's rim) into an edge
+/// Simplifies the closed mesh `dense` to at most `triangles` triangles (moving the
+/// surface by at most `error` m where it can), keeping it closed. Edge collapse can pinch a thin part (a fingertip, an ear's rim) into an edge
 /// shared by four triangles; where that happens the vertices around it are locked and
 /// the simplification runs again, so those few spots keep their fine triangles.
 fn simplify_closed(
     dense: &[u32],
     adapter: &meshopt::VertexDataAdapter<'_>,
     regions: &[Region],
+    triangles: usize,
+    error: f64,
     height: f64,
 ) -> Result<Vec<u32>> {
     // One attribute per region, 1 where the vertex has it: changing region along a
@@ -398,8 +425,8 @@ fn simplify_closed(
             &weights,
             REGIONS * std::mem::size_of::<f32>(),
             &lock,
-            MAX_TRIANGLES * 3,
-            (0.004 * height) as f32,
+            triangles * 3,
+            error as f32,
             meshopt::SimplifyOptions::ErrorAbsolute | meshopt::SimplifyOptions::Regularize,
             None,
         );

@@ -141,6 +141,12 @@ impl CutSkin {
         Self::cutting(skin, &skin.far_indices)
     }
 
+    /// Cuts `skin`'s coarsest level of detail (its
+    /// [`farthest_indices`](super::Skin::farthest_indices)) the same way.
+    pub fn farthest(skin: &super::Skin) -> CutSkin {
+        Self::cutting(skin, &skin.farthest_indices)
+    }
+
     /// Cuts the surface of `skin`'s vertices made by `triangles`.
     fn cutting(skin: &super::Skin, triangles: &[u32]) -> CutSkin {
         let regions: Vec<Region> = skin.region_distances.iter().map(|d| d.region()).collect();
