@@ -58,12 +58,26 @@ pub(crate) fn shape_mesh(shape: &Shape) -> (MeshKey, Vec3) {
 
 /// Builds the vertices and triangle indices of a unit mesh.
 pub(crate) fn build(key: MeshKey) -> (Vec<Vertex>, Vec<u32>) {
-    match key {
+    let (vertices, mut indices) = match key {
         MeshKey::Cube => cube(),
         MeshKey::Sphere => sphere(12, 20),
         MeshKey::SphereLow => sphere(5, 8),
         MeshKey::CylinderLow => frustum(1.0, 1.0, 8),
         MeshKey::Frustum(b, t) => frustum(b as f32 / 1000.0, t as f32 / 1000.0, 24),
+    };
+    wind_outwards(&vertices, &mut indices);
+    (vertices, indices)
+}
+
+/// Turns every triangle of a convex mesh around the origin counter-clockwise seen from
+/// outside, so that the renderer may cull back faces (the sphere's poles and the
+/// frustum's caps are built the other way round).
+fn wind_outwards(vertices: &[Vertex], indices: &mut [u32]) {
+    for t in indices.chunks_exact_mut(3) {
+        let [a, b, c] = [t[0], t[1], t[2]].map(|k| Vec3::from(vertices[k as usize].pos));
+        if (b - a).cross(c - a).dot(a + b + c) < 0.0 {
+            t.swap(1, 2);
+        }
     }
 }
 
@@ -181,6 +195,16 @@ mod tests {
                 assert!((n.length() - 1.0).abs() < 1e-4, "{key:?}");
                 // Every vertex of these convex meshes sits at or past the origin along its normal.
                 assert!(p.dot(n) >= -1e-5, "{key:?} {p} {n}");
+            }
+            // Wound counter-clockwise seen from outside, as back-face culling needs:
+            // each triangle's normal by its winding points away from the origin.
+            for t in i.chunks_exact(3) {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|k| Vec3::from(v[k as usize].pos));
+                let n = (b - a).cross(c - a);
+                assert!(
+                    n.length() < 1e-9 || n.dot(a + b + c) > 0.0,
+                    "{key:?}: triangle {t:?} faces inwards"
+                );
             }
         }
     }

@@ -419,7 +419,12 @@ impl SceneRenderer {
                     }),
                 ],
             },
-            primitive: wgpu::PrimitiveState::default(),
+            // Every mesh is a closed convex shape wound counter-clockwise seen from outside
+            // (`mesh::build`): its back faces are hidden.
+            primitive: wgpu::PrimitiveState {
+                cull_mode: Some(wgpu::Face::Back),
+                ..Default::default()
+            },
             depth_stencil: depth(true),
             multisample,
             fragment: Some(wgpu::FragmentState {

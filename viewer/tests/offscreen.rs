@@ -547,11 +547,11 @@ fn far_away_the_edges_between_the_skins_regions_stay_sharp() {
 }
 
 #[test]
-fn the_skins_back_faces_are_not_drawn() {
-    // The generated skin is closed, so only its outside can be seen and its back faces
-    // are culled (a third or more of a frame's time). From inside the chest, looking
-    // out through it, nothing of the skin is drawn: the picture's middle is as in an
-    // empty scene.
+fn back_faces_are_not_drawn() {
+    // The generated skin and the solids are closed, so only their outsides can be seen
+    // and their back faces are culled (a third or more of a frame's time). From inside
+    // the chest, looking out through it, nothing of the body is drawn in either look:
+    // the picture's middle is as in an empty scene.
     let frame = posed(&[]);
     let chest = frame
         .actor("ann")
@@ -560,24 +560,27 @@ fn the_skins_back_faces_are_not_drawn() {
         .unwrap();
     let camera = Camera::fixed(chest, chest + Vec3::new(0.0, 0.3, 4.0));
     let mut r = renderer();
-    r.set_options(RenderOptions {
-        labels: false,
-        ..RenderOptions::default()
-    });
-    let img = r.render(&frame, &camera).unwrap();
-    let empty = r.render(&Frame::default(), &camera).unwrap();
-    let (middle, sky) = (
-        img.get_pixel(W / 2, H / 2).0,
-        empty.get_pixel(W / 2, H / 2).0,
-    );
-    assert!(
-        close(
-            [middle[0], middle[1], middle[2]],
-            [sky[0], sky[1], sky[2]],
-            6
-        ),
-        "seen from inside, the chest is drawn: {middle:?} where the empty scene has {sky:?}"
-    );
+    for style in [BodyStyle::Skin, BodyStyle::Solids] {
+        r.set_options(RenderOptions {
+            labels: false,
+            style,
+            ..RenderOptions::default()
+        });
+        let img = r.render(&frame, &camera).unwrap();
+        let empty = r.render(&Frame::default(), &camera).unwrap();
+        let (middle, sky) = (
+            img.get_pixel(W / 2, H / 2).0,
+            empty.get_pixel(W / 2, H / 2).0,
+        );
+        assert!(
+            close(
+                [middle[0], middle[1], middle[2]],
+                [sky[0], sky[1], sky[2]],
+                6
+            ),
+            "{style:?}: seen from inside, the chest is drawn: {middle:?} where the empty scene has {sky:?}"
+        );
+    }
 }
 
 /// The topmost row in columns `columns` of `img` that is not the background.
