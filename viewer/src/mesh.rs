@@ -58,26 +58,12 @@ pub(crate) fn shape_mesh(shape: &Shape) -> (MeshKey, Vec3) {
 
 /// Builds the vertices and triangle indices of a unit mesh.
 pub(crate) fn build(key: MeshKey) -> (Vec<Vertex>, Vec<u32>) {
-    let (vertices, mut indices) = match key {
+    match key {
         MeshKey::Cube => cube(),
         MeshKey::Sphere => sphere(12, 20),
         MeshKey::SphereLow => sphere(5, 8),
         MeshKey::CylinderLow => frustum(1.0, 1.0, 8),
         MeshKey::Frustum(b, t) => frustum(b as f32 / 1000.0, t as f32 / 1000.0, 24),
-    };
-    wind_outwards(&vertices, &mut indices);
-    (vertices, indices)
-}
-
-/// Turns every triangle of a convex mesh around the origin counter-clockwise seen from
-/// outside, so that the renderer may cull back faces (the sphere's poles and the
-/// frustum's caps are built the other way round).
-fn wind_outwards(vertices: &[Vertex], indices: &mut [u32]) {
-    for t in indices.chunks_exact_mut(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|k| Vec3::from(vertices[k as usize].pos));
-        if (b - a).cross(c - a).dot(a + b + c) < 0.0 {
-            t.swap(1, 2);
-        }
     }
 }
 
@@ -119,7 +105,15 @@ fn sphere(rings: u32, segments: u32) -> (Vec<Vertex>, Vec<u32>) {
         for s in 0..segments {
             let a = r * row + s;
             let b = a + row;
-            i.extend_from_slice(&[a, a + 1, b, a + 1, b + 1, b]);
+            // At a pole one side of the quad is a single point: only its other triangle
+            // has an area (the bottom pole's points differ by rounding, so the lost one
+            // would be a needle turned either way, and culled or not at random).
+            if r > 0 {
+                i.extend_from_slice(&[a, a + 1, b]);
+            }
+            if r + 1 < rings {
+                i.extend_from_slice(&[a + 1, b + 1, b]);
+            }
         }
     }
     (v, i)
@@ -164,7 +158,13 @@ fn frustum(bottom: f32, top: f32, segments: u32) -> (Vec<Vertex>, Vec<u32>) {
             });
         }
         for s in 0..segments {
-            i.extend_from_slice(&[center, center + 1 + s, center + 2 + s]);
+            // Counter-clockwise seen from outside: below the bottom cap, above the top one.
+            let (p, q) = (center + 1 + s, center + 2 + s);
+            if y < 0.0 {
+                i.extend_from_slice(&[center, p, q]);
+            } else {
+                i.extend_from_slice(&[center, q, p]);
+            }
         }
     }
     (v, i)

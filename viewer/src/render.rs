@@ -518,7 +518,7 @@ impl SceneRenderer {
         });
         // The near generated skin picks its colours per pixel (`fs_skin`); its far level
         // of detail and users' characters by vertex, as the plain meshes (`vs_skin_by_vertex`).
-        // The generated skin is closed (no edge without its twin, at either level) and
+        // The generated skin is closed (no edge without its twin, at any level) and
         // wound counter-clockwise seen from outside, so its back faces are hidden and
         // need not be drawn. (The few triangles turned over at rest lie inside small
         // folds, under their neighbours.) A user's character may be open (a cloak's hem,

@@ -395,9 +395,10 @@ fn with_helpers(globals: &[Transform], helpers: &[Helper]) -> Vec<Transform> {
 }
 
 /// Simplifies the closed mesh `dense` to at most `triangles` triangles (moving the
-/// surface by at most `error` m where it can), keeping it closed. Edge collapse can pinch a thin part (a fingertip, an ear's rim) into an edge
-/// shared by four triangles; where that happens the vertices around it are locked and
-/// the simplification runs again, so those few spots keep their fine triangles.
+/// surface by at most `error` m where it can), keeping it closed. Edge collapse can pinch
+/// a thin part (a fingertip, an ear's rim) into an edge shared by four triangles; where
+/// that happens the vertices around it are locked and the simplification runs again, so
+/// those few spots keep their fine triangles.
 fn simplify_closed(
     dense: &[u32],
     adapter: &meshopt::VertexDataAdapter<'_>,
