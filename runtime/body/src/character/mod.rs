@@ -530,7 +530,14 @@ impl Dressing {
     /// joints made (steps 3 and 4 of [the module](self)), then the legs bent so that the
     /// feet stay on troupe's.
     pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
-        let frames = self.rotated_frames(globals, &[]);
+        // How far each helper has turned from troupe's bind pose (the same for both
+        // passes below).
+        let helpers_turned: Vec<DQuat> = self
+            .helpers
+            .iter()
+            .map(|(h, bind_inv)| h.frame(globals).rotation * *bind_inv)
+            .collect();
+        let frames = self.rotated_frames(globals, &helpers_turned, &[]);
         if self.legs.is_empty() {
             return frames;
         }
@@ -539,19 +546,19 @@ impl Dressing {
             .iter()
             .flat_map(|leg| leg.reach(&frames, globals, &self.rest))
             .collect();
-        self.rotated_frames(globals, &turns)
+        self.rotated_frames(globals, &helpers_turned, &turns)
     }
 
-    /// Every bone's world frame with the rotations of troupe's joints, a mapped bone
-    /// turned further by its entry of `turns` (bone, world rotation) if it has one.
-    fn rotated_frames(&self, globals: &[Transform], turns: &[(usize, DQuat)]) -> Vec<Transform> {
+    /// Every bone's world frame with the rotations of troupe's joints and the helpers'
+    /// turns `helpers_turned`, a mapped bone turned further by its entry of `turns`
+    /// (bone, world rotation) if it has one.
+    fn rotated_frames(
+        &self,
+        globals: &[Transform],
+        helpers_turned: &[DQuat],
+        turns: &[(usize, DQuat)],
+    ) -> Vec<Transform> {
         let mut frames: Vec<Transform> = Vec::with_capacity(self.bones.len());
-        // How far each helper has turned from troupe's bind pose.
-        let helpers_turned: Vec<DQuat> = self
-            .helpers
-            .iter()
-            .map(|(h, bind_inv)| h.frame(globals).rotation * *bind_inv)
-            .collect();
         for (b, bone) in self.bones.iter().enumerate() {
             let moved = |joint: usize| globals[joint].mul(&self.rest[joint].inverse());
             let turn = turns
