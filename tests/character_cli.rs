@@ -53,13 +53,19 @@ fn succeeds(command: &mut Command) {
 /// Renders a scene holding one actor made with `options` (Lua table fields) and returns
 /// its pixels.
 fn render(name: &str, options: &str) -> image::RgbaImage {
+    render_from(name, options, "follow:cesium@0,10,2.5")
+}
+
+/// Renders, with camera `camera`, a scene holding one actor made with `options` (Lua
+/// table fields, none for an empty scene) and returns its pixels.
+fn render_from(name: &str, options: &str, camera: &str) -> image::RgbaImage {
     let dir = temp_dir();
     let scene = dir.join(format!("{name}.lua"));
-    std::fs::write(
-        &scene,
-        format!("troupe.actor{{ name = \"cesium\", height = 1.75{options} }}\n"),
-    )
-    .unwrap();
+    let actor = match options {
+        "" if name.starts_with("empty") => String::new(),
+        _ => format!("troupe.actor{{ name = \"cesium\", height = 1.75{options} }}\n"),
+    };
+    std::fs::write(&scene, actor).unwrap();
     let png = dir.join(format!("{name}.png"));
     succeeds(
         troupe()
@@ -73,11 +79,22 @@ fn render(name: &str, options: &str) -> image::RgbaImage {
                 "--size",
                 "320x240",
                 "--camera",
-                "follow:cesium@0,10,2.5",
+                camera,
                 "--no-labels",
             ]),
     );
     image::open(&png).unwrap().to_rgba8()
+}
+
+/// The `look` and `bones` options that dress the actor in the character file `file`.
+fn cesium_look(file: &std::path::Path) -> String {
+    format!(
+        ", look = {:?}, bones = {{ {} }}",
+        file.display().to_string(),
+        CESIUM_BONES
+            .map(|(key, node)| format!("{key} = {node:?}"))
+            .join(", ")
+    )
 }
 
 /// The green of the Cesium logo on CesiumMan's face.
@@ -88,16 +105,7 @@ fn logo_green(p: &image::Rgba<u8>) -> bool {
 
 #[test]
 fn a_dressed_actor_is_drawn_as_its_character() {
-    let look = format!(
-        ", look = {:?}, bones = {{ {} }}",
-        repo()
-            .join("tests/assets/characters/CesiumMan.glb")
-            .display()
-            .to_string(),
-        CESIUM_BONES
-            .map(|(key, node)| format!("{key} = {node:?}"))
-            .join(", ")
-    );
+    let look = cesium_look(&repo().join("tests/assets/characters/CesiumMan.glb"));
     let dressed = render("dressed", &look);
     let plain = render("plain", "");
     let differ = dressed
@@ -115,6 +123,53 @@ fn a_dressed_actor_is_drawn_as_its_character() {
         "CesiumMan's face shows its logo: {green} green pixels"
     );
     assert_eq!(plain.pixels().filter(|p| logo_green(p)).count(), 0);
+}
+
+#[test]
+fn a_characters_back_faces_are_drawn_only_when_its_file_asks() {
+    // CesiumMan's material is single-sided, so seen from inside its chest, looking out
+    // through its back, nothing of it is drawn: the picture is the empty scene's. Made
+    // double-sided, its inside fills the picture.
+    let cesium = repo().join("tests/assets/characters/CesiumMan.glb");
+    let bytes = std::fs::read(&cesium).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    let mut json = glb_json(&cesium);
+    for material in json["materials"].as_array_mut().unwrap() {
+        material["doubleSided"] = serde_json::Value::Bool(true);
+    }
+    let mut text = json.to_string().into_bytes();
+    text.resize(text.len().next_multiple_of(4), b' ');
+    let binary = &bytes[20 + len..];
+    let mut glb = b"glTF".to_vec();
+    glb.extend(2u32.to_le_bytes());
+    glb.extend(((20 + text.len() + binary.len()) as u32).to_le_bytes());
+    glb.extend((text.len() as u32).to_le_bytes());
+    glb.extend(b"JSON");
+    glb.extend(text);
+    glb.extend(binary);
+    let double = temp_dir().join("double_sided.glb");
+    std::fs::write(&double, glb).unwrap();
+    let inside = "fixed:0,1.1,0:0,1.1,-4";
+    let empty = render_from("empty_inside", "", inside);
+    let differing = |img: &image::RgbaImage| {
+        img.pixels()
+            .zip(empty.pixels())
+            .filter(|(a, b)| a != b)
+            .count()
+    };
+    let single = render_from("single_inside", &cesium_look(&cesium), inside);
+    let both = render_from("double_inside", &cesium_look(&double), inside);
+    let all = empty.pixels().len();
+    assert_eq!(
+        differing(&single),
+        0,
+        "the single-sided character's inside is drawn"
+    );
+    assert!(
+        differing(&both) * 2 > all,
+        "the double-sided character's inside covers {} of {all} pixels",
+        differing(&both)
+    );
 }
 
 #[test]

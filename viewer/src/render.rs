@@ -521,8 +521,9 @@ impl SceneRenderer {
         // The generated skin is closed (no edge without its twin, at any level) and
         // wound counter-clockwise seen from outside, so its back faces are hidden and
         // need not be drawn. (The few triangles turned over at rest lie inside small
-        // folds, under their neighbours.) A user's character may be open (a cloak's hem,
-        // a one-sided sleeve) and is drawn whole.
+        // folds, under their neighbours.) A user's character is drawn the same way, or
+        // with both faces when its file's materials are double-sided (an open mesh, a
+        // cloak's hem), as glTF asks.
         let skin_pipeline_with = |label, vertex, fragment, cull_mode| {
             device.create_render_pipeline(&wgpu::RenderPipelineDescriptor {
                 label: Some(label),
@@ -811,7 +812,12 @@ impl SceneRenderer {
                         &self.skin_pipeline
                     }
                     (skinned::SkinSource::Generated(_), _) => &self.skin_by_vertex_pipeline,
-                    (skinned::SkinSource::Character(_), _) => &self.character_pipeline,
+                    // A character's back faces are culled unless its file asks
+                    // for both faces (glTF's `doubleSided`).
+                    (skinned::SkinSource::Character(d), _) if d.double_sided => {
+                        &self.character_pipeline
+                    }
+                    (skinned::SkinSource::Character(_), _) => &self.skin_by_vertex_pipeline,
                 };
                 pass.set_pipeline(pipeline);
                 pass.set_bind_group(

@@ -1013,3 +1013,41 @@ fn a_character_troupe_exported_moves_as_troupes_own_skin() {
         "a vertex {worst:.3} m from where troupe's skin puts it"
     );
 }
+
+#[test]
+fn a_characters_materials_say_whether_both_faces_are_drawn_and_exports_keep_it() {
+    use troupe_formats::gltf::write_character;
+    use troupe_formats::Rig;
+    use troupe_motion::sequence::Sequence;
+    // CesiumMan's one material is single-sided (glTF's default): its back faces are
+    // culled. The same file with a double-sided material is drawn with both faces.
+    let single = asset("CesiumMan.glb");
+    let double = cesium_variant("double_sided.glb", |json, _| {
+        for material in json["materials"].as_array_mut().unwrap() {
+            material["doubleSided"] = json!(true);
+        }
+    });
+    let skel = default_skeleton("adult").unwrap();
+    let rig = Rig::from_sequence(&skel, &Sequence::new("still")).unwrap();
+    let dir = std::env::temp_dir().join(format!("troupe-sides-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (source, sided) in [(single, false), (double, true)] {
+        let c = read_character(&source, &cesium_map()).unwrap();
+        assert_eq!(c.double_sided, sided, "{}", source.display());
+        let d = c.dress(&skel, 1.75).unwrap();
+        assert_eq!(d.double_sided, sided);
+        // Written back out (`--record`, `troupe export gltf --look`), its material says
+        // the same.
+        let out = dir.join("sides.glb");
+        write_character(&out, &d, &rig, &[], "ann").unwrap();
+        let (json, _) = glb_parts(&std::fs::read(&out).unwrap());
+        let materials = json["materials"].as_array().unwrap();
+        assert_eq!(materials.len(), 1);
+        assert_eq!(
+            materials[0]["doubleSided"].as_bool().unwrap_or(false),
+            sided,
+            "{}",
+            source.display()
+        );
+    }
+}

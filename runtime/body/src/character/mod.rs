@@ -109,6 +109,10 @@ pub struct Character {
     pub weights: Vec<[f32; 4]>,
     /// Triangles, counter-clockwise from outside.
     pub indices: Vec<u32>,
+    /// Whether both faces of its triangles are to be drawn (a glTF material's
+    /// `doubleSided`, on any of its surfaces): an open mesh, a cloak's hem. Otherwise only
+    /// the faces seen from outside are, as glTF asks of single-sided materials.
+    pub double_sided: bool,
 }
 
 /// A character fitted to one skeleton and height, ready to follow its postures.
@@ -128,6 +132,8 @@ pub struct Dressing {
     pub weights: Vec<[f32; 4]>,
     /// Triangles.
     pub indices: Vec<u32>,
+    /// Whether both faces of its triangles are to be drawn ([`Character::double_sided`]).
+    pub double_sided: bool,
     /// Each bone's node name in the file.
     pub bone_names: Vec<String>,
     /// Each bone's parent bone (always a smaller index).
@@ -415,6 +421,7 @@ impl Character {
             slots,
             weights,
             indices: self.indices.clone(),
+            double_sided: self.double_sided,
             bone_names: self.bones.iter().map(|b| b.name.clone()).collect(),
             bone_parents: self.bones.iter().map(|b| b.parent).collect(),
             bones,
@@ -684,6 +691,7 @@ mod tests {
             joints: bone_of.iter().map(|&b| [b, 0, 0, 0]).collect(),
             weights: vec![[1.0, 0.0, 0.0, 0.0]; n],
             indices: vec![0, 1, 2],
+            double_sided: false,
             positions,
         }
     }

@@ -164,6 +164,7 @@ pub fn read_character(path: impl AsRef<Path>, bones: &[(String, String)]) -> Res
         joints: Vec::new(),
         weights: Vec::new(),
         indices: Vec::new(),
+        double_sided: false,
     };
     // The skin's joint order → bone order.
     let mut bone_of_joint = vec![0u16; joint_nodes.len()];
@@ -186,6 +187,7 @@ pub fn read_character(path: impl AsRef<Path>, bones: &[(String, String)]) -> Res
                 tracing::warn!("{file}: {what} is not made of triangles: left out");
                 continue;
             }
+            character.double_sided |= primitive.material().double_sided();
             read_primitive(
                 &primitive,
                 &buffers,

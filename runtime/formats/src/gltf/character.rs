@@ -7,7 +7,8 @@
 //!   the floor) as the node's rest transform; one skin over them whose inverse bind
 //!   matrices are the inverses of those bind frames.
 //! - **Mesh**: the character's placed vertices, normals and vertex colours (its material
-//!   and texture as the viewer draws them, converted to linear RGB), each vertex weighted
+//!   and texture as the viewer draws them, converted to linear RGB; double-sided if any
+//!   of its materials was), each vertex weighted
 //!   to the bones that move it (a bone that has no troupe joint moves with its nearest
 //!   moving ancestor, so its weights are that bone's).
 //! - **Animation**: each bone's local rotation (and translation, for bones that troupe's
@@ -94,6 +95,7 @@ pub fn add_character(root: &mut Root, bytes: &mut Vec<u8>, dressing: &Dressing, 
             .collect(),
         weights: &dressing.weights,
         indices: &dressing.indices,
+        double_sided: dressing.double_sided,
     };
     let file = std::path::Path::new(&dressing.source)
         .file_name()

@@ -130,6 +130,8 @@ pub struct SkinnedMesh<'a> {
     pub weights: &'a [[f32; 4]],
     /// Triangles.
     pub indices: &'a [u32],
+    /// Whether both faces are to be drawn (the material's `doubleSided`).
+    pub double_sided: bool,
 }
 
 /// Adds `skin` to a document written by [`super::to_gltf`] for the same skeleton: a mesh
@@ -148,6 +150,8 @@ pub fn add_skin(root: &mut Root, bytes: &mut Vec<u8>, skin: &Skin, name: &str) {
         joints: cut.joints.clone(),
         weights: &cut.weights,
         indices: &cut.indices,
+        // Closed and wound outwards: only its outside is ever seen.
+        double_sided: false,
     };
     add_skinned_mesh(root, bytes, &mesh, &format!("{name} skin"));
 }
@@ -241,6 +245,7 @@ pub fn add_skinned_mesh(
             roughness_factor: json::material::StrengthFactor(0.8),
             ..Default::default()
         },
+        double_sided: skin.double_sided,
         ..Default::default()
     });
     let attributes: BTreeMap<_, _> = [
