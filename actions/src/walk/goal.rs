@@ -111,28 +111,19 @@ fn stand_near(
     distance: impl Fn(DVec2) -> f64,
 ) -> Result<Planned, String> {
     let towards = (centre - start).try_normalize().unwrap_or(DVec2::Y);
-    // The crowd's footprints are the world's obstacles, made once for every walk; walks
-    // that go straight keep none there.
-    let made;
-    let obstacles = match ctx.world.space.walking {
-        Walking::Navigated => &ctx.world.crowd.footprints,
-        Walking::Straight => {
-            made = ctx.world.obstacles();
-            &made
-        }
-    };
+    // The crowd's footprints are the world's obstacles, made once for every walk
+    // (whether walks navigate or go straight).
+    let obstacles = &ctx.world.crowd.footprints;
     let inflated = radius + troupe_scene::space::CLEARANCE;
     // Whether a body standing at `stand` would touch an obstacle. The crowd's grid gives
     // the footprints that may come that close (every one whose bounding circle does),
     // rather than measuring all of them (in the crowd benchmark, 500 footprints for each
     // standing point tried: 3 % of its instructions).
-    let blocked = |stand: DVec2| match ctx.world.space.walking {
-        Walking::Navigated => ctx
-            .world
+    let blocked = |stand: DVec2| {
+        ctx.world
             .crowd
             .footprints_near(stand, inflated)
-            .any(|o| o.distance(stand) < inflated),
-        Walking::Straight => obstacles.iter().any(|o| o.distance(stand) < inflated),
+            .any(|o| o.distance(stand) < inflated)
     };
     let mut last = String::from("every side is blocked");
     for further in 0..=6 {

@@ -149,8 +149,9 @@ pub enum Walking {
     Navigated,
     /// Walks go in a straight line to their goals (near an object or actor, to the same
     /// free standing point as when navigating) and through whatever is in the way: no
-    /// path search, avoidance, give-way, lanes, new routes nor shoulder turn, and the
-    /// crowd keeps no obstacle footprints. Hands do not go round other bodies and
+    /// path search, avoidance, give-way, lanes, new routes nor shoulder turn (the crowd
+    /// keeps the obstacles' footprints all the same, for the standing points, as when
+    /// navigating). Hands do not go round other bodies and
     /// obstacles either (no temporary goals of `reach`, `grasp`, `give`): with bodies
     /// standing in one another, that work would grow with the overlaps and no longer be
     /// the crowd's without navigation. The rest of the tick's work is the same.

@@ -242,21 +242,15 @@ impl Scene {
         let _span = tracing::trace_span!("crowd", tick = self.tick).entered();
         let mut crowd = std::mem::take(&mut self.crowd);
         let world = self.world();
-        // The footprints are made again only when a wall or an object changed; walks
-        // that go straight use none.
-        let current = match self.space.walking {
-            troupe_nav::Walking::Navigated => crowd.footprints_current(
-                &self.space.walls,
-                (0..self.objects.len()).map(|i| world.obstacle_stamp(i)),
-            ),
-            troupe_nav::Walking::Straight => crowd.footprints_current(&[], std::iter::empty()),
-        };
+        // The footprints are made again only when a wall or an object changed. Walks that
+        // go straight keep them too: where they stand at their goal is chosen clear of
+        // the obstacles, from the same footprints as navigated walks.
+        let current = crowd.footprints_current(
+            &self.space.walls,
+            (0..self.objects.len()).map(|i| world.obstacle_stamp(i)),
+        );
         if !current {
-            let footprints = match self.space.walking {
-                troupe_nav::Walking::Navigated => world.obstacles(),
-                troupe_nav::Walking::Straight => Vec::new(),
-            };
-            crowd.set_footprints(footprints);
+            crowd.set_footprints(world.obstacles());
         }
         crowd.positions.clear();
         crowd.velocities.clear();
