@@ -53,18 +53,17 @@ fn succeeds(command: &mut Command) {
 /// Renders a scene holding one actor made with `options` (Lua table fields) and returns
 /// its pixels.
 fn render(name: &str, options: &str) -> image::RgbaImage {
-    render_from(name, options, "follow:cesium@0,10,2.5")
+    render_from(name, Some(options), "follow:cesium@0,10,2.5")
 }
 
 /// Renders, with camera `camera`, a scene holding one actor made with `options` (Lua
-/// table fields, none for an empty scene) and returns its pixels.
-fn render_from(name: &str, options: &str, camera: &str) -> image::RgbaImage {
+/// table fields), or nobody for `None`, and returns its pixels.
+fn render_from(name: &str, options: Option<&str>, camera: &str) -> image::RgbaImage {
     let dir = temp_dir();
     let scene = dir.join(format!("{name}.lua"));
-    let actor = match options {
-        "" if name.starts_with("empty") => String::new(),
-        _ => format!("troupe.actor{{ name = \"cesium\", height = 1.75{options} }}\n"),
-    };
+    let actor = options.map_or_else(String::new, |options| {
+        format!("troupe.actor{{ name = \"cesium\", height = 1.75{options} }}\n")
+    });
     std::fs::write(&scene, actor).unwrap();
     let png = dir.join(format!("{name}.png"));
     succeeds(
@@ -150,15 +149,15 @@ fn a_characters_back_faces_are_drawn_only_when_its_file_asks() {
     let double = temp_dir().join("double_sided.glb");
     std::fs::write(&double, glb).unwrap();
     let inside = "fixed:0,1.1,0:0,1.1,-4";
-    let empty = render_from("empty_inside", "", inside);
+    let empty = render_from("empty_inside", None, inside);
     let differing = |img: &image::RgbaImage| {
         img.pixels()
             .zip(empty.pixels())
             .filter(|(a, b)| a != b)
             .count()
     };
-    let single = render_from("single_inside", &cesium_look(&cesium), inside);
-    let both = render_from("double_inside", &cesium_look(&double), inside);
+    let single = render_from("single_inside", Some(&cesium_look(&cesium)), inside);
+    let both = render_from("double_inside", Some(&cesium_look(&double)), inside);
     let all = empty.pixels().len();
     assert_eq!(
         differing(&single),
