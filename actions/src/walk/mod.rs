@@ -26,6 +26,7 @@
 pub mod cycle;
 pub mod footing;
 pub mod goal;
+pub mod knees;
 pub mod lanes;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
@@ -199,6 +200,8 @@ pub struct Walk {
     shoulders: shoulders::Shoulders,
     /// The root's floor point on the previous tick, where the feet held it.
     last_floor: Option<DVec2>,
+    /// Each thigh on the previous tick, as [`knees`] sees it.
+    thighs: [Option<knees::Thigh>; 2],
     /// Per leg, the ankle target's correction for the subtalar offset (see
     /// [`Rig::subtalar_shift`]), from the previous tick's solution.
     subtalar: [DVec3; 2],
@@ -252,6 +255,7 @@ impl Walk {
             replan: replan::Replan::default(),
             shoulders: shoulders::Shoulders::default(),
             last_floor: None,
+            thighs: [None; 2],
             subtalar: [DVec3::ZERO; 2],
             dt: 0.01,
         })
@@ -748,12 +752,7 @@ impl Walk {
                 start_rate,
                 begin,
             } => {
-                let begin = begin.max(sigma);
-                let w = ((lambda - begin) / (1.0 - begin)).clamp(0.0, 1.0);
-                // Horizontal progress: a cubic that leaves at `start_rate` (the foot keeps
-                // up with the body, so the hip need not extend further) and arrives at rest.
-                let s = (w * w * w - 2.0 * w * w + w) * start_rate + (3.0 - 2.0 * w) * w * w;
-                let ease = smoothstep(w);
+                let (w, s, ease) = swing_progress(begin, sigma, lambda, start_rate);
                 let target = rig.ankle_from_plant(leg, to.plant, to.yaw, to.strike);
                 let pitch = from_pitch + (to.strike - from_pitch) * ease;
                 let toes = from_toes * (1.0 - smoothstep(w / 0.5));
@@ -871,6 +870,7 @@ impl Walk {
         let cycle = self.cycle(self.cadence);
         let sigma = cycle.support_fraction();
         let phi = self.phase.rem_euclid(1.0);
+        let before = self.poses;
         for leg in 0..2 {
             let lambda = (self.phase - 0.5 * leg as f64).rem_euclid(1.0);
             self.poses[leg] = self.step_foot(around, plan, leg, lambda, sigma);
@@ -929,6 +929,12 @@ impl Walk {
                 }
             }
         }
+        if !around.obstacles.is_empty() {
+            legs =
+                self.keep_knees_clear(around, before, sigma, floor, (heading, pelvis), lift, legs);
+        } else {
+            self.thighs = [None; 2];
+        }
         self.last_floor = Some(floor);
         let rig = &self.rig;
         let root_vals = [
@@ -952,6 +958,102 @@ impl Walk {
         }
         self.last_miss = legs.miss;
         (root_vals, pelvis, spine, arms)
+    }
+
+    /// The legs `legs` solved for the body over `floor` again where a thigh would close on
+    /// an obstacle (see [`knees`]): that leg's foot keeps its pose `before` of the previous
+    /// tick (a foot rolling onto its toes or swinging: a flat one bends no knee
+    /// forwards).
+    #[allow(clippy::too_many_arguments)]
+    fn keep_knees_clear(
+        &mut self,
+        around: &Surroundings,
+        before: [FootPose; 2],
+        sigma: f64,
+        floor: DVec2,
+        (heading, pelvis): (f64, [f64; 3]),
+        lift: (f64, f64, f64),
+        mut legs: Legs,
+    ) -> Legs {
+        // Beyond a thigh's reach from the body's floor point (with a step's slack), no
+        // obstacle can come within the margin of it this tick or the next: most ticks of
+        // a walker among furniture end here.
+        let rig = &self.rig;
+        let reach = rig.hip_half_width + rig.legs[0].thigh + rig.legs[0].thigh_radii[0] + 0.1;
+        if around.obstacles.iter().all(|f| f.distance(floor) > reach) {
+            self.thighs = [None; 2];
+            return legs;
+        }
+        let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
+        let thighs = |rig: &Rig, legs: &Legs| {
+            let root = rig.root_rest + DVec3::new(floor.x, legs.root_y, floor.y);
+            [0, 1].map(|leg| {
+                let hip = rig.hip_position(leg, root, heading, pelvis_rot);
+                knees::Thigh::of(rig, leg, pelvis_rot, hip, &legs.values[leg])
+            })
+        };
+        let mut now = thighs(&self.rig, &legs);
+        let mut held = false;
+        for leg in 0..2 {
+            let closes =
+                self.thighs[leg].is_some_and(|last| now[leg].closes(&last, &around.obstacles));
+            if closes && self.hold_foot(leg, before[leg], sigma) {
+                held = true;
+            }
+        }
+        if held {
+            legs = self.legs_at(floor, heading, pelvis, lift);
+            now = thighs(&self.rig, &legs);
+        }
+        self.thighs = now.map(Some);
+        legs
+    }
+
+    /// Keeps foot `leg` at its pose `pose` of the previous tick, if it is rolling onto its
+    /// toes or swinging; a swinging one then swings on to its landing from there. Whether
+    /// it was kept.
+    fn hold_foot(&mut self, leg: usize, pose: FootPose, sigma: f64) -> bool {
+        let rig = &self.rig;
+        let lambda = self.lambda[leg];
+        match &mut self.feet[leg] {
+            Foot::Stance { roll: Some(_), .. } => {}
+            Foot::Swing {
+                from,
+                from_pitch,
+                from_yaw,
+                from_toes,
+                to,
+                lift,
+                start_rate,
+                begin,
+            } => {
+                let (w, s, ease) = swing_progress(*begin, sigma, lambda, *start_rate);
+                if s >= 1.0 || ease >= 1.0 {
+                    return false;
+                }
+                // The swing's start moved so that this tick's progress gives the pose held.
+                let target = rig.ankle_from_plant(leg, to.plant, to.yaw, to.strike);
+                let rebased = (pose.ankle - target * s) / (1.0 - s);
+                from.x = rebased.x;
+                from.z = rebased.z;
+                *from_yaw = to.yaw + wrap(pose.yaw - to.yaw) / (1.0 - ease);
+                *from_pitch = (pose.pitch - to.strike * ease) / (1.0 - ease);
+                let toes_left = 1.0 - smoothstep(w / 0.5);
+                if toes_left > 1e-3 {
+                    *from_toes = pose.toes / toes_left;
+                }
+                // The height: the parabola through the held foot's, never higher than
+                // the swing's own.
+                let arc = 4.0 * w * (1.0 - w);
+                if arc > 0.05 {
+                    let above = pose.ankle.y + rig.lowest_offset(leg, pose.pitch, pose.toes);
+                    *lift = (above / arc).clamp(0.0, lift.max(above));
+                }
+            }
+            _ => return false,
+        }
+        self.poses[leg] = pose;
+        true
     }
 
     /// The legs for the root over floor point `floor` with heading `heading` and the pelvis
@@ -1023,6 +1125,18 @@ struct Legs {
     strain: f64,
 }
 
+/// How far a swing that began at local phase `begin` (or at the support's end `sigma`,
+/// whichever is later) has got at local phase `lambda`: `(w, s, ease)`, the swing's
+/// fraction, its horizontal progress and its eased progress (pitch and yaw).
+fn swing_progress(begin: f64, sigma: f64, lambda: f64, start_rate: f64) -> (f64, f64, f64) {
+    let begin = begin.max(sigma);
+    let w = ((lambda - begin) / (1.0 - begin)).clamp(0.0, 1.0);
+    // Horizontal progress: a cubic that leaves at `start_rate` (the foot keeps up with the
+    // body, so the hip need not extend further) and arrives at rest.
+    let s = (w * w * w - 2.0 * w * w + w) * start_rate + (3.0 - 2.0 * w) * w * w;
+    (w, s, smoothstep(w))
+}
+
 /// A smooth minimum of three values (log-sum-exp with temperature `k`); the plain minimum
 /// when `k` is 0. Never above the plain minimum.
 fn soft_min(x: [f64; 3], k: f64) -> f64 {
@@ -1082,6 +1196,7 @@ impl Generator for Walk {
         self.settle_since = None;
         self.twist = [None; 2];
         self.last_floor = None;
+        self.thighs = [None; 2];
         self.subtalar = [DVec3::ZERO; 2];
         self.steer = steer::Steer::start(ctx);
         self.replan = replan::Replan::default();

@@ -28,6 +28,8 @@ pub struct Leg {
     pub thigh: f64,
     /// Knee → ankle length.
     pub shank: f64,
+    /// The thigh solid's radius at the hip and at the knee.
+    pub thigh_radii: [f64; 2],
     /// Floor-projected foot points relative to the point under the ankle, in the foot's
     /// frame (x left, z forward): the heel on the floor.
     pub heel: DVec3,
@@ -151,6 +153,20 @@ impl Rig {
                     _ => None,
                 })
                 .unwrap_or(-0.3 * ball.z);
+            let thigh_radii = skeleton
+                .solids()
+                .iter()
+                .find(|(_, solid)| solid.name == n("thigh"))
+                .and_then(|(_, solid)| match solid.shape {
+                    // The frustum stands along the thigh: its top at the hip.
+                    troupe_body::Shape::Frustum {
+                        bottom_radius,
+                        top_radius,
+                        ..
+                    } => Some([top_radius, bottom_radius]),
+                    _ => None,
+                })
+                .unwrap_or([0.08, 0.053]);
             let tip = skeleton
                 .end_sites()
                 .iter()
@@ -163,6 +179,7 @@ impl Rig {
                 hip_offset: joints[hip].offset,
                 thigh: thigh_v.length(),
                 shank: shank_v.length(),
+                thigh_radii,
                 heel: DVec3::new(0.0, 0.0, heel_z - ankle_rest.z),
                 ball,
                 toe_sole: DVec3::new(tip.x, -mt_rest.y, tip.z),
@@ -258,6 +275,19 @@ impl Rig {
     pub fn hip_position(&self, leg: usize, root: DVec3, heading: f64, pelvis: DQuat) -> DVec3 {
         root + DQuat::from_rotation_y(heading) * self.sacro_offset
             + pelvis * self.legs[leg].hip_offset
+    }
+
+    /// World position of the knee of `leg` at DOF `values` (in [`Leg::dofs`] order), its
+    /// hip at `hip` under the pelvis' world rotation `pelvis`: the thigh hangs straight
+    /// down at rest (checked by [`Rig::new`]).
+    pub fn knee_position(&self, leg: usize, pelvis: DQuat, hip: DVec3, values: &[f64; 7]) -> DVec3 {
+        let l = &self.legs[leg];
+        let a = |i: usize| values[i] * l.signs[i];
+        hip + pelvis
+            * DQuat::from_rotation_x(a(0))
+            * DQuat::from_rotation_z(a(1))
+            * DQuat::from_rotation_y(a(2))
+            * DVec3::new(0.0, -l.thigh, 0.0)
     }
 
     /// World position of the ankle joint of a foot planted at floor point `plant` (under
@@ -464,6 +494,9 @@ mod tests {
                     (got - target).length() < 1e-9,
                     "leg {leg} pitch {pitch}: {got} vs {target}"
                 );
+                let knee = g[skeleton.joint(["l_knee", "r_knee"][leg]).unwrap()].translation;
+                let said = rig.knee_position(leg, pelvis, hip, &vals);
+                assert!((said - knee).length() < 1e-9, "knee {said} vs {knee}");
                 // The foot's forward direction has the wanted pitch.
                 let fwd = g[rig.legs[leg].joints[0]].rotation * DVec3::Z;
                 let got_pitch = fwd.y.atan2(fwd.x.hypot(fwd.z));

@@ -666,3 +666,70 @@ fn walks_that_do_not_navigate_go_straight_through_a_table() {
     let straight = widest(Walking::Straight);
     assert!(straight < 0.1, "straight: {straight}");
 }
+
+#[test]
+fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
+    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
+    let mut walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
+    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    let around = Surroundings::default();
+    let sigma = 0.6;
+    walk.feet[0] = Foot::Swing {
+        from: DVec3::new(0.1, 0.12, -0.1),
+        from_pitch: -0.5,
+        from_yaw: 0.0,
+        from_toes: -0.3,
+        to: Landing {
+            plant: DVec2::new(0.15, 0.45),
+            yaw: 0.2,
+            strike: 0.2,
+            roll: 0.3,
+        },
+        lift: 0.05,
+        start_rate: 0.5,
+        begin: 0.0,
+    };
+    walk.lambda[0] = 0.66;
+    let held = walk.step_foot(&around, &plan, 0, 0.68, sigma);
+    walk.poses[0] = held;
+    let unheld = walk.step_foot(&around, &plan, 0, 0.70, sigma);
+    assert!(walk.hold_foot(0, held, sigma));
+    assert_eq!(walk.poses[0].ankle, held.ankle);
+    // The swing, rebased, gives the held pose at the phase it was held at ...
+    let again = walk.step_foot(&around, &plan, 0, 0.70, sigma);
+    assert!(
+        (again.ankle - held.ankle).length() < 1e-9,
+        "{again:?} {held:?}"
+    );
+    for (a, b) in [
+        (again.yaw, held.yaw),
+        (again.pitch, held.pitch),
+        (again.toes, held.toes),
+    ] {
+        assert!((a - b).abs() < 1e-9, "{again:?} {held:?}");
+    }
+    // ... and moves on from there as a swing does, towards its landing: a tick's move no
+    // longer than the unheld swing's, and the landing reached at the swing's end.
+    let next = walk.step_foot(&around, &plan, 0, 0.72, sigma);
+    let step = |a: &FootPose, b: &FootPose| (a.ankle - b.ankle).length();
+    assert!(step(&next, &held) > 0.0);
+    assert!(
+        step(&next, &held) <= 1.5 * step(&unheld, &held),
+        "{next:?} {unheld:?}"
+    );
+    let landed = walk.step_foot(&around, &plan, 0, 0.999_999, sigma);
+    let target = walk
+        .rig
+        .ankle_from_plant(0, DVec2::new(0.15, 0.45), 0.2, 0.2);
+    assert!((landed.ankle - target).length() < 1e-3, "{landed:?}");
+    // A foot flat in its support is not held: it bends no knee forwards.
+    walk.feet[1] = Foot::Stance {
+        plant: DVec2::ZERO,
+        yaw: 0.0,
+        rocker: 0.0,
+        roll: None,
+        next: None,
+        stays: false,
+    };
+    assert!(!walk.hold_foot(1, held, sigma));
+}

@@ -35,9 +35,10 @@
 //!   and on an obstacle by the gap, like the body's step.
 //!
 //! Pure functions of the previous tick's crowd: bit-identical with any thread count. What
-//! the capsule does not hold and moves within a tick (a knee leading a foot lifted towards
-//! an obstacle, a hand hanging past it at a corner, an arm reaching out, a body turning on
-//! the spot) is left to the margins, the reach's detours and avoidance.
+//! the capsule does not hold and moves within a tick (a hand hanging past an obstacle at a
+//! corner, an arm reaching out, a body turning on the spot) is left to the margins, the
+//! reach's detours and avoidance; a knee bending forwards towards an obstacle, to the
+//! walk (`actions/src/walk/knees.rs`).
 
 use crate::footprint::Footprint;
 use troupe_body::glam::DVec2;
