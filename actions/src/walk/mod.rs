@@ -976,11 +976,18 @@ impl Walk {
         mut legs: Legs,
     ) -> Legs {
         // Beyond a thigh's reach from the body's floor point (with a step's slack), no
-        // obstacle can come within the margin of it this tick or the next: most ticks of
-        // a walker among furniture end here.
+        // obstacle can come within the margin of it this tick or the next: the thighs are
+        // measured against the obstacles within it alone, and most ticks of a walker
+        // among furniture end here.
         let rig = &self.rig;
         let reach = rig.hip_half_width + rig.legs[0].thigh + rig.legs[0].thigh_radii[0] + 0.1;
-        if around.obstacles.iter().all(|f| f.distance(floor) > reach) {
+        let near: Vec<_> = around
+            .obstacles
+            .iter()
+            .copied()
+            .filter(|f| f.distance(floor) <= reach)
+            .collect();
+        if near.is_empty() {
             self.thighs = [None; 2];
             return legs;
         }
@@ -995,8 +1002,7 @@ impl Walk {
         let mut now = thighs(&self.rig, &legs);
         let mut held = false;
         for leg in 0..2 {
-            let closes =
-                self.thighs[leg].is_some_and(|last| now[leg].closes(&last, &around.obstacles));
+            let closes = self.thighs[leg].is_some_and(|last| now[leg].closes(&last, &near));
             if closes && self.hold_foot(leg, before[leg], sigma) {
                 held = true;
             }
