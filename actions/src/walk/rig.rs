@@ -166,6 +166,7 @@ impl Rig {
                     } => Some([top_radius, bottom_radius]),
                     _ => None,
                 })
+                // A template whose thigh is not a frustum: a 1.75 m adult's.
                 .unwrap_or([0.08, 0.053]);
             let tip = skeleton
                 .end_sites()
