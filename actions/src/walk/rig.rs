@@ -432,7 +432,13 @@ impl Rig {
                 _ => 1.0,
             };
             prev = Some((gamma, err));
-            gamma = (gamma + err / slope).clamp(-0.75, 0.75);
+            let next = (gamma + err / slope).clamp(-0.75, 0.75);
+            // A twist held at its bound (the foot turned further than the hip twists)
+            // stays there: the passes left would solve the same angles again.
+            if next == gamma {
+                break;
+            }
+            gamma = next;
         }
         let s = l.signs;
         (
