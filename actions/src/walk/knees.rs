@@ -2,8 +2,8 @@
 //! core off an obstacle and a foot, landing or in the air, a leg's clearance from it; the
 //! knee, between the two, it does not see. Under a body that stands still or creeps in
 //! front of a planter, a heel rising as its support ends (the foot rolling onto its toes)
-//! or a foot lifted to step bends the knee forwards of the hip by up to half a thigh's
-//! length, and over the planter's edge: in the plaza, thighs went 2–8 cm into planters so.
+//! or a foot lifted to step brings the knee up to 0.3 m forwards of the hip, over the
+//! planter's edge: in the plaza, thighs went 2–8 cm into planters so.
 //!
 //! So once the legs are solved for where the body goes, a thigh that would come nearer an
 //! obstacle than [`OBSTACLE_MARGIN`] and nearer than it was on the previous tick keeps its
@@ -14,7 +14,8 @@
 //!
 //! The thigh is seen from above, as the obstacles are (footprints standing from the floor
 //! up): a few points along it from its middle to the knee, each with the solid's radius
-//! there; its upper half is within the body's disc, which the clearance keeps off.
+//! there; its upper half stays near the hip, as a rule within the body's disc, which the
+//! clearance keeps off.
 
 use super::rig::Rig;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
