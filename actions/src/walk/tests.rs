@@ -708,8 +708,9 @@ fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
     ] {
         assert!((a - b).abs() < 1e-9, "{again:?} {held:?}");
     }
-    // ... and moves on from there as a swing does, towards its landing: a tick's move no
-    // longer than the unheld swing's, and the landing reached at the swing's end.
+    // ... and moves on from there as a swing does, towards its landing: a tick's move
+    // about as long as the unheld swing's (at most half as long again), and the landing
+    // reached at the swing's end.
     let next = walk.step_foot(&around, &plan, 0, 0.72, sigma);
     let step = |a: &FootPose, b: &FootPose| (a.ankle - b.ankle).length();
     assert!(step(&next, &held) > 0.0);
