@@ -48,7 +48,7 @@ use crate::error::{OptionError, Result};
 use route::wrap;
 use std::f64::consts::TAU;
 use std::sync::Arc;
-use troupe_body::glam::{DVec2, DVec3};
+use troupe_body::glam::{DQuat, DVec2, DVec3};
 use troupe_body::math::smoothstep;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
@@ -775,11 +775,8 @@ impl Walk {
                 {
                     ankle = DVec3::new(before.ankle.x, ankle.y, before.ankle.z);
                     yaw = before.yaw;
-                    let rebased = (ankle - target * s) / (1.0 - s);
                     if let Foot::Swing { from, from_yaw, .. } = &mut self.feet[leg] {
-                        from.x = rebased.x;
-                        from.z = rebased.z;
-                        *from_yaw = to.yaw + wrap(yaw - to.yaw) / (1.0 - ease);
+                        swing_through(from, from_yaw, (&to, target), (s, ease), (ankle, yaw));
                     }
                 }
                 ankle.y = clearance - rig.lowest_offset(leg, pitch, toes);
@@ -945,9 +942,8 @@ impl Walk {
             0.0,
             0.0,
         ];
-        let pelvis_rot = self.rig.pelvis_rotation(heading, pelvis);
         for leg in 0..2 {
-            self.subtalar[leg] = self.rig.subtalar_shift(leg, pelvis_rot, &legs.values[leg]);
+            self.subtalar[leg] = self.rig.subtalar_shift(leg, legs.pelvis, &legs.values[leg]);
         }
         let rig = &self.rig;
         for leg in 0..2 {
@@ -991,12 +987,9 @@ impl Walk {
             self.thighs = [None; 2];
             return legs;
         }
-        let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
         let thighs = |rig: &Rig, legs: &Legs| {
-            let root = rig.root_rest + DVec3::new(floor.x, legs.root_y, floor.y);
             [0, 1].map(|leg| {
-                let hip = rig.hip_position(leg, root, heading, pelvis_rot);
-                knees::Thigh::of(rig, leg, pelvis_rot, hip, &legs.values[leg])
+                knees::Thigh::of(rig, leg, legs.pelvis, legs.hips[leg], &legs.values[leg])
             })
         };
         let mut now = thighs(&self.rig, &legs);
@@ -1039,10 +1032,13 @@ impl Walk {
                 }
                 // The swing's start moved so that this tick's progress gives the pose held.
                 let target = rig.ankle_from_plant(leg, to.plant, to.yaw, to.strike);
-                let rebased = (pose.ankle - target * s) / (1.0 - s);
-                from.x = rebased.x;
-                from.z = rebased.z;
-                *from_yaw = to.yaw + wrap(pose.yaw - to.yaw) / (1.0 - ease);
+                swing_through(
+                    from,
+                    from_yaw,
+                    (to, target),
+                    (s, ease),
+                    (pose.ankle, pose.yaw),
+                );
                 *from_pitch = (pose.pitch - to.strike * ease) / (1.0 - ease);
                 let toes_left = 1.0 - smoothstep(w / 0.5);
                 if toes_left > 1e-3 {
@@ -1094,9 +1090,12 @@ impl Walk {
             values: [[0.0; 7]; 2],
             miss: 0.0,
             strain: (vertical - lowered - MAX_DROP).max(0.0),
+            pelvis: pelvis_rot,
+            hips: [DVec3::ZERO; 2],
         };
         for leg in 0..2 {
             let hip = rig.hip_position(leg, root, heading, pelvis_rot);
+            legs.hips[leg] = hip;
             let p = self.poses[leg];
             let (values, miss) = rig.solve_leg(
                 leg,
@@ -1129,6 +1128,10 @@ struct Legs {
     miss: f64,
     /// How far a planted leg is asked past what it can do (see [`footing::strain`]).
     strain: f64,
+    /// The pelvis' world rotation the legs were solved under.
+    pelvis: DQuat,
+    /// Each hip's world position the legs were solved from.
+    hips: [DVec3; 2],
 }
 
 /// How far a swing that began at local phase `begin` (or at the support's end `sigma`,
@@ -1141,6 +1144,23 @@ fn swing_progress(begin: f64, sigma: f64, lambda: f64, start_rate: f64) -> (f64,
     // body, so the hip need not extend further) and arrives at rest.
     let s = (w * w * w - 2.0 * w * w + w) * start_rate + (3.0 - 2.0 * w) * w * w;
     (w, s, smoothstep(w))
+}
+
+/// Moves a swing's start (`from` on the floor, and `from_yaw`) so that at horizontal
+/// progress `s` and eased progress `ease` towards landing `to` (its ankle at `target`) the
+/// swing puts the ankle over `ankle` (x, z) and the foot at heading `yaw`: a foot held
+/// where it was swings on to its landing from there. Both progresses must be below 1.
+fn swing_through(
+    from: &mut DVec3,
+    from_yaw: &mut f64,
+    (to, target): (&Landing, DVec3),
+    (s, ease): (f64, f64),
+    (ankle, yaw): (DVec3, f64),
+) {
+    let rebased = (ankle - target * s) / (1.0 - s);
+    from.x = rebased.x;
+    from.z = rebased.z;
+    *from_yaw = to.yaw + wrap(yaw - to.yaw) / (1.0 - ease);
 }
 
 /// A smooth minimum of three values (log-sum-exp with temperature `k`); the plain minimum

@@ -282,13 +282,18 @@ impl Rig {
     /// hip at `hip` under the pelvis' world rotation `pelvis`: the thigh hangs straight
     /// down at rest (checked by [`Rig::new`]).
     pub fn knee_position(&self, leg: usize, pelvis: DQuat, hip: DVec3, values: &[f64; 7]) -> DVec3 {
+        hip + self.thigh_rotation(leg, pelvis, values) * DVec3::new(0.0, -self.legs[leg].thigh, 0.0)
+    }
+
+    /// The thigh's world rotation for `leg` at DOF `values` (in [`Leg::dofs`] order) under
+    /// the pelvis' world rotation `pelvis`: the hip's flexion, abduction and twist.
+    fn thigh_rotation(&self, leg: usize, pelvis: DQuat, values: &[f64; 7]) -> DQuat {
         let l = &self.legs[leg];
         let a = |i: usize| values[i] * l.signs[i];
-        hip + pelvis
+        pelvis
             * DQuat::from_rotation_x(a(0))
             * DQuat::from_rotation_z(a(1))
             * DQuat::from_rotation_y(a(2))
-            * DVec3::new(0.0, -l.thigh, 0.0)
     }
 
     /// World position of the ankle joint of a foot planted at floor point `plant` (under
@@ -328,10 +333,7 @@ impl Rig {
     pub fn subtalar_shift(&self, leg: usize, pelvis: DQuat, values: &[f64; 7]) -> DVec3 {
         let l = &self.legs[leg];
         let a = |i: usize| values[i] * l.signs[i];
-        let ankle = pelvis
-            * DQuat::from_rotation_x(a(0))
-            * DQuat::from_rotation_z(a(1))
-            * DQuat::from_rotation_y(a(2))
+        let ankle = self.thigh_rotation(leg, pelvis, values)
             * DQuat::from_rotation_x(a(3))
             * DQuat::from_rotation_x(a(4));
         let foot = ankle * DQuat::from_rotation_z(a(5));
