@@ -6,6 +6,7 @@
 //! which keeps clear of it. See `docs/navigation.md`, "The plaza".
 
 use troupe_body::glam::DVec2;
+use troupe_scene::space::FootprintsAround;
 use troupe_scene::GeneratorContext;
 
 /// Sideways speed (m/s, to the right) a walker keeps in a counter-flow.
@@ -27,17 +28,18 @@ const ONCOMING_COS: f64 = -0.9;
 /// counter-flow: two or more others face it within [`ONCOMING_RANGE`] ahead on its way
 /// (walking towards it or waiting to), and no obstacle is within [`LANE_CLEARANCE`].
 /// `around` are the actors the crowd finds near `position` (`Crowd::near`), which the
-/// steering gathers once a tick for this and for avoidance.
+/// steering gathers once a tick for this and for avoidance, and `footprints` the
+/// obstacles round it.
 pub fn in_counter_flow(
     ctx: &GeneratorContext,
     position: DVec2,
     along: DVec2,
-    around: &[usize],
+    (around, footprints): (&[usize], &FootprintsAround),
 ) -> bool {
     let crowd = ctx.world.crowd;
     let radius = crowd.radii.get(ctx.actor).copied().unwrap_or(0.0);
-    if crowd
-        .footprints_near(position, radius + LANE_CLEARANCE)
+    if footprints
+        .within(radius + LANE_CLEARANCE)
         .any(|f| f.distance(position) < radius + LANE_CLEARANCE)
     {
         return false;

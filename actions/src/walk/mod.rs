@@ -1248,10 +1248,18 @@ impl Generator for Walk {
             return Step::Failed("walk: stepped before it started".into());
         };
         let navigated = ctx.world.space.walking == Walking::Navigated;
+        // The obstacles round the body, found once for the steering, the clearance and the
+        // shoulders; none when walks go straight, unnavigated.
+        let crowd = ctx.world.crowd;
+        let footprints = navigated.then(|| {
+            let at = crowd.positions.get(ctx.actor).copied().unwrap_or_default();
+            crowd.footprints_around(at)
+        });
         // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
         let mut gathered = false;
-        if navigated && matches!(self.route, Route::Path { .. }) {
-            gathered = self.steer.decide(ctx, &plan, self.t, &mut self.near);
+        if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
+            let (t, near) = (self.t, &mut self.near);
+            gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
             if self.steer.engaged && self.replan.due(self.t, self.steer.rate) {
                 if let Some(new) = self.new_route(ctx, &plan) {
                     plan = new;
@@ -1259,24 +1267,25 @@ impl Generator for Walk {
             }
         }
         self.dt = ctx.dt;
-        // What the clearance sees round the body (see [`surroundings`]); nothing when walks
-        // go straight, unnavigated.
-        let around = if navigated {
-            surroundings::gather(ctx, &self.steer.companions, &mut self.near, gathered)
-        } else {
-            Surroundings::default()
+        // What the clearance sees round the body (see [`surroundings`]).
+        let around = match &footprints {
+            Some(footprints) => {
+                let near = (&mut self.near, gathered);
+                surroundings::gather(ctx, &self.steer.companions, near, footprints)
+            }
+            None => Surroundings::default(),
         };
         let (root, pelvis, mut spine, mut arms) = self.pose(ctx, &around, &plan, out);
         // The shoulders turn to pass someone close beside (see [`shoulders`]); the arms,
         // whose swing would now go sideways into the other, hang still as they turn, and
         // swing less as anything comes close.
-        if navigated {
+        if let Some(footprints) = &footprints {
             let me = self.body(ctx);
             let gap = nearest_gap(&me, &around, shoulders::ARMS_CLEAR);
             // `gather` left this tick's neighbours in `self.near`.
-            let near = Some(self.near.as_slice());
+            let around = (self.near.as_slice(), footprints);
             self.shoulders
-                .update(ctx, self.heading, &self.steer.companions, near, gap);
+                .update(ctx, self.heading, &self.steer.companions, around, gap);
         }
         spine[1] += self.shoulders.turn / 2.0;
         spine[2] += self.shoulders.turn / 2.0;

@@ -9,6 +9,7 @@
 use super::route::direction;
 use troupe_body::glam::DVec2;
 use troupe_body::math::smoothstep;
+use troupe_scene::space::FootprintsAround;
 use troupe_scene::GeneratorContext;
 
 /// Largest turn of the shoulders (radians, about 34°).
@@ -51,13 +52,13 @@ impl Default for Shoulders {
 impl Shoulders {
     /// The turn actor `ctx.actor`, heading `heading`, wants now: towards the closest
     /// neighbour (not in `companions`) or obstacle beside it. `near`, in actor order,
-    /// holds at least the actors the crowd finds near the body (`Crowd::near`) when the
-    /// steering has gathered them this tick; `None` looks them up.
+    /// holds at least the actors the crowd finds near the body (`Crowd::near`), and
+    /// `footprints` the obstacles round it.
     pub fn wanted(
         ctx: &GeneratorContext,
         heading: f64,
         companions: &[usize],
-        near: Option<&[usize]>,
+        (near, footprints): (&[usize], &FootprintsAround),
     ) -> f64 {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
@@ -73,11 +74,6 @@ impl Shoulders {
                 best = (need, side);
             }
         };
-        let mut found = Vec::new();
-        let near = near.unwrap_or_else(|| {
-            crowd.near(p, &mut found);
-            &found
-        });
         // Those only the steering found (farther ahead) are too far to be beside.
         for &j in near {
             if j == me || companions.contains(&j) {
@@ -93,7 +89,7 @@ impl Shoulders {
             }
         }
         let h = 0.05;
-        for f in crowd.footprints_near(p, r + CLEAR) {
+        for f in footprints.within(r + CLEAR) {
             let gap = f.distance(p) - r;
             // Which side it is on, and how much it is beside rather than ahead.
             let slope = (f.distance(p + left * h) - f.distance(p - left * h)) / (2.0 * h);
@@ -111,10 +107,10 @@ impl Shoulders {
         ctx: &GeneratorContext,
         heading: f64,
         companions: &[usize],
-        near: Option<&[usize]>,
+        around: (&[usize], &FootprintsAround),
         gap: f64,
     ) {
-        let want = Shoulders::wanted(ctx, heading, companions, near);
+        let want = Shoulders::wanted(ctx, heading, companions, around);
         let step = TURN_RATE * ctx.dt;
         self.turn += (want - self.turn).clamp(-step, step);
         let arms = smoothstep((gap / ARMS_CLEAR - 1.0 / 3.0) * 1.5);

@@ -15,7 +15,7 @@ use super::lanes;
 use super::route::{direction, Plan, RootSample};
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{
-    choose_velocity, wait_line, Agent, Footprint, Walker, GAP, NEIGHBOUR_RANGE,
+    choose_velocity, wait_line, Agent, Footprint, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
 };
 use troupe_scene::GeneratorContext;
 
@@ -177,13 +177,14 @@ impl Steer {
     }
 
     /// Decides this tick's rate and drift from the crowd of the previous tick, for actor
-    /// `ctx.actor` walking `plan` at walk time `now`. `others` is scratch space; true
-    /// when it then holds, in actor order, every actor (but this one and its companions)
-    /// the crowd finds near the body (`Crowd::near`), and some farther ahead.
+    /// `ctx.actor` walking `plan` at walk time `now`, among the obstacles round the body
+    /// (`footprints`). `others` is scratch space; true when it then holds, in actor
+    /// order, every actor (but this one and its companions) the crowd finds near the body
+    /// (`Crowd::near`), and some farther ahead.
     pub fn decide(
         &mut self,
         ctx: &GeneratorContext,
-        plan: &Plan,
+        (plan, footprints): (&Plan, &FootprintsAround),
         now: f64,
         others: &mut Vec<usize>,
     ) -> bool {
@@ -220,12 +221,13 @@ impl Steer {
         // Those near, for the lanes and for avoidance (which adds those further ahead).
         others.clear();
         crowd.near(position, others);
-        let mut preferred =
-            if remaining >= 2.0 && lanes::in_counter_flow(ctx, position, along, others) {
-                lanes::preferred(planned, self.offset, along, gain)
-            } else {
-                planned - self.offset * gain
-            };
+        let mut preferred = if remaining >= 2.0
+            && lanes::in_counter_flow(ctx, position, along, (others, footprints))
+        {
+            lanes::preferred(planned, self.offset, along, gain)
+        } else {
+            planned - self.offset * gain
+        };
         if self.engaged {
             let cap = planned.length().max(0.3);
             preferred = preferred.clamp_length_max(cap);
@@ -236,7 +238,8 @@ impl Steer {
             radius,
             feet: feet_of(ctx, me),
         };
-        self.decide_now(ctx, &body, preferred, (planned, along), now, others);
+        let around = (others, footprints);
+        self.decide_now(ctx, &body, preferred, (planned, along), now, around);
         if !self.engaged {
             return true;
         }
@@ -245,11 +248,7 @@ impl Steer {
         self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
         // The drift never takes the disc into an obstacle: the velocity it chose may,
         // while the drift changes within its limits, carry the body on sideways.
-        for f in ctx
-            .world
-            .crowd
-            .footprints_near(position, radius + WALL_GUARD)
-        {
+        for f in footprints.within(radius + WALL_GUARD) {
             let gap = f.distance(position) - radius;
             if gap < WALL_GUARD {
                 let h = 0.01;
@@ -269,7 +268,7 @@ impl Steer {
 
     /// Picks the velocity for `body` to go at, about `preferred`, from the crowd around,
     /// and turns it into the rate and drift to head for along the plan (`planned`
-    /// velocity, in direction `along`).
+    /// velocity, in direction `along`), among `others` and the obstacles round the body.
     fn decide_now(
         &mut self,
         ctx: &GeneratorContext,
@@ -277,7 +276,7 @@ impl Steer {
         preferred: DVec2,
         (planned, along): (DVec2, DVec2),
         now: f64,
-        others: &mut Vec<usize>,
+        (others, footprints): (&mut Vec<usize>, &FootprintsAround),
     ) {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
@@ -314,7 +313,7 @@ impl Steer {
             return;
         }
         let obstacles: Vec<&Footprint> = if self.engaged {
-            crowd.footprints_near(position, OBSTACLE_RANGE).collect()
+            footprints.within(OBSTACLE_RANGE).collect()
         } else {
             Vec::new()
         };

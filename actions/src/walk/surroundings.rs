@@ -7,7 +7,7 @@ use super::rig::Leg;
 use super::route::direction;
 use troupe_body::glam::DVec2;
 use troupe_scene::bodies::FOOT_RADIUS;
-use troupe_scene::space::{FootSpan, Surroundings};
+use troupe_scene::space::{FootSpan, FootprintsAround, Surroundings};
 use troupe_scene::GeneratorContext;
 
 /// How far (m) past the touching of two bodies' discs a neighbour (or past the body's
@@ -19,12 +19,13 @@ const FEET_OUT: f64 = 0.6;
 /// The surroundings of actor `ctx.actor` this tick, leaving out `companions` (a hand
 /// held). `near` holds the actors near when `gathered` (the steering found them this
 /// tick: every one within a grid cell and some further ahead); else it is filled here.
-/// Either way it then holds every actor the crowd finds near the body.
+/// Either way it then holds every actor the crowd finds near the body. `footprints` are
+/// the obstacles round the body.
 pub fn gather<'a>(
     ctx: &GeneratorContext<'a>,
     companions: &[usize],
-    near: &mut Vec<usize>,
-    gathered: bool,
+    (near, gathered): (&mut Vec<usize>, bool),
+    footprints: &FootprintsAround<'a>,
 ) -> Surroundings<'a> {
     let crowd = ctx.world.crowd;
     let me = ctx.actor;
@@ -47,7 +48,7 @@ pub fn gather<'a>(
         }
         around.bodies.extend(crowd.bodies.get(j));
     }
-    around.obstacles = crowd.footprints_near(from, reach + RANGE).collect();
+    around.obstacles = footprints.within(reach + RANGE).collect();
     around
 }
 

@@ -161,17 +161,67 @@ impl Crowd {
     /// Every footprint within `range` (at most [`CELL`]) of `p`, and maybe a few a little
     /// further, in the order they were set.
     pub fn footprints_near(&self, p: DVec2, range: f64) -> impl Iterator<Item = &Footprint> {
+        self.footprints_around(p).into_within(range)
+    }
+
+    /// The footprints near `p`, found once for several ranges round it (see
+    /// [`FootprintsAround::within`]): a walk looks for obstacles round its body five
+    /// times a tick, at five ranges.
+    pub fn footprints_around(&self, p: DVec2) -> FootprintsAround<'_> {
         let mut found = Vec::new();
         self.footprint_cells.around(p, &mut found);
         found.sort_unstable();
         found.dedup();
-        found
+        FootprintsAround {
+            crowd: self,
+            at: p,
+            found,
+        }
+    }
+}
+
+/// The footprints of the grid cells round a point (see [`Crowd::footprints_around`]).
+#[derive(Clone, Debug)]
+pub struct FootprintsAround<'a> {
+    /// The crowd they are of.
+    crowd: &'a Crowd,
+    /// The point.
+    at: DVec2,
+    /// Their indices, in the order they were set.
+    found: Vec<usize>,
+}
+
+impl<'a> FootprintsAround<'a> {
+    /// The point they are round.
+    pub fn at(&self) -> DVec2 {
+        self.at
+    }
+
+    /// Every footprint within `range` (at most [`CELL`]) of the point, and maybe a few a
+    /// little further, in the order they were set: what [`Crowd::footprints_near`] gives.
+    pub fn within(&self, range: f64) -> impl Iterator<Item = &'a Footprint> + '_ {
+        let (crowd, at) = (self.crowd, self.at);
+        self.found
+            .iter()
+            .filter(move |&&i| crowd.footprint_reaches(i, at, range))
+            .map(move |&i| &crowd.footprints[i])
+    }
+
+    /// [`FootprintsAround::within`], taking them.
+    fn into_within(self, range: f64) -> impl Iterator<Item = &'a Footprint> {
+        let (crowd, at) = (self.crowd, self.at);
+        self.found
             .into_iter()
-            .filter(move |&i| {
-                let (c, r) = self.bounds[i];
-                (c - p).length() <= r + range
-            })
-            .map(|i| &self.footprints[i])
+            .filter(move |&i| crowd.footprint_reaches(i, at, range))
+            .map(move |i| &crowd.footprints[i])
+    }
+}
+
+impl Crowd {
+    /// Whether footprint `i`'s bounding circle comes within `range` of `p`.
+    fn footprint_reaches(&self, i: usize, p: DVec2, range: f64) -> bool {
+        let (c, r) = self.bounds[i];
+        (c - p).length() <= r + range
     }
 }
 

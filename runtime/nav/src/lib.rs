@@ -20,7 +20,7 @@ pub use avoid::{choose_velocity, Agent};
 pub use clearance::{
     clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, FootSpan, Surroundings,
 };
-pub use crowd::Crowd;
+pub use crowd::{Crowd, FootprintsAround};
 pub use footprint::Footprint;
 pub use radius::body_radius;
 pub use space::{path_length, Floor, NoPath, Space, Walking, Wall, CLEARANCE};
