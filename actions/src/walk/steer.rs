@@ -287,25 +287,26 @@ impl Steer {
         crowd.near(position + along * NEIGHBOUR_RANGE, others);
         merge_runs(others, near_me);
         others.retain(|&j| j != me && !self.companions.contains(&j));
-        let near: Vec<Walker> = others
-            .iter()
-            .map(|&j| Walker {
-                // The feet are found below, for the neighbours avoidance weighs.
-                body: Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]),
-                facing: crowd.facings.get(j).copied().unwrap_or_default(),
-                rank: crowd.ranks.get(j).copied().flatten(),
-            })
-            .collect();
+        let near = |j: usize| Walker {
+            // The feet are found below, for the neighbours avoidance weighs.
+            body: Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]),
+            facing: crowd.facings.get(j).copied().unwrap_or_default(),
+            rank: crowd.ranks.get(j).copied().flatten(),
+        };
         // Where ways cross, one walker has the way (see `troupe_nav::way`): the other
         // waits before the crossing.
-        let wait = wait_line(body, along, planned.length(), &near);
+        let wait = wait_line(
+            body,
+            along,
+            planned.length(),
+            others.iter().map(|&j| near(j)),
+        );
         let agents: Vec<Agent> = others
             .iter()
-            .zip(&near)
-            .filter(|(_, w)| (w.body.position - position).length() < NEIGHBOUR_RANGE)
-            .map(|(&j, w)| Agent {
+            .filter(|&&j| (crowd.positions[j] - position).length() < NEIGHBOUR_RANGE)
+            .map(|&j| Agent {
                 feet: feet_of(ctx, j),
-                ..w.body
+                ..near(j).body
             })
             .collect();
         if agents.is_empty() && !self.engaged && wait.is_none() {

@@ -118,7 +118,12 @@ impl Walker {
 /// walker to cross first: the walker then stops where its disc stays [`WAIT_GAP`] clear
 /// of `j`'s as `j` passes. A walker already well onto `j`'s way goes on across (stopping
 /// there would block it).
-pub fn wait_line(me: &Agent, along: DVec2, speed: f64, others: &[Walker]) -> Option<f64> {
+pub fn wait_line(
+    me: &Agent,
+    along: DVec2,
+    speed: f64,
+    others: impl IntoIterator<Item = Walker>,
+) -> Option<f64> {
     let mut line: Option<f64> = None;
     if along.length() < 1e-9 {
         return line;
@@ -242,23 +247,23 @@ mod tests {
         // cross my way at (0, 0) in 2 s.
         let me = walker(-3.0, 0.0, DVec2::X, 1.3).body;
         let north = walker(0.0, -2.6, DVec2::Y, 1.3);
-        let line = wait_line(&me, DVec2::X, 1.3, &[north]).unwrap();
+        let line = wait_line(&me, DVec2::X, 1.3, [north]).unwrap();
         // Stopped there, my disc stays WAIT_GAP clear of its disc.
         assert!((line - (3.0 - (0.56 + WAIT_GAP))).abs() < 1e-9, "{line}");
         // It does not wait for me: my line comes after its.
         let it = north.body;
         let me_walking = walker(-3.0, 0.0, DVec2::X, 1.3);
-        assert_eq!(wait_line(&it, DVec2::Y, 1.3, &[me_walking]), None);
+        assert_eq!(wait_line(&it, DVec2::Y, 1.3, [me_walking]), None);
         // Far off (crossing in more than WAIT_HORIZON), past me, or standing: no wait.
         let far = walker(0.0, -6.0, DVec2::Y, 1.3);
         let past = walker(0.0, 2.5, DVec2::Y, 1.3);
         let standing = walker(0.0, -1.0, DVec2::Y, 0.0);
-        assert_eq!(wait_line(&me, DVec2::X, 1.3, &[far, past, standing]), None);
+        assert_eq!(wait_line(&me, DVec2::X, 1.3, [far, past, standing]), None);
         // Already well onto its way: go on across.
         let on_way = walker(-0.3, 0.0, DVec2::X, 1.3).body;
-        assert_eq!(wait_line(&on_way, DVec2::X, 1.3, &[north]), None);
+        assert_eq!(wait_line(&on_way, DVec2::X, 1.3, [north]), None);
         // Slowed down in a crowd, it still has the way, expected at ASSUMED_SPEED.
         let slow = walker(0.0, -2.6, DVec2::Y, 0.2);
-        assert!(wait_line(&me, DVec2::X, 1.3, &[slow]).is_some());
+        assert!(wait_line(&me, DVec2::X, 1.3, [slow]).is_some());
     }
 }
