@@ -90,6 +90,7 @@ impl Crowd {
                 .map(|(i, p)| (cell_of(*p), i)),
         );
         self.cells.sort();
+        self.cells.gather_blocks();
     }
 
     /// Sets the obstacles' footprints.
@@ -153,6 +154,10 @@ impl Crowd {
     /// Pushes onto `out` every actor within [`CELL`] of `p` (and possibly a little
     /// further), in actor order.
     pub fn near(&self, p: DVec2, out: &mut Vec<usize>) {
+        if let Some(block) = self.cells.block(p) {
+            out.extend_from_slice(block);
+            return;
+        }
         let start = out.len();
         self.cells.around(p, out);
         out[start..].sort_unstable();
@@ -239,6 +244,12 @@ struct Cells {
     /// when the items are too spread out for such a table to pay (then the runs are
     /// found by binary search).
     starts: Vec<u32>,
+    /// For each cell of the rectangle (x major), the items of the 3 × 3 cells round it,
+    /// in order, one list after another (see [`Cells::gather_blocks`]); empty when not
+    /// gathered.
+    blocks: Vec<usize>,
+    /// Where each cell's list in `blocks` starts, and the end.
+    block_starts: Vec<u32>,
 }
 
 impl Cells {
@@ -277,10 +288,79 @@ impl Cells {
         self.starts[cells] = self.entries.len() as u32;
     }
 
+    /// Gathers, for every cell of the rectangle, the items of the 3 × 3 cells round it
+    /// in order (see [`Cells::block`]): once a tick for all, where every walker looked
+    /// them up twice a tick and sorted them, and walkers in one cell share the list. Each
+    /// item, in order, joins the lists of the nine cells round its own, so every list
+    /// comes out in order without a sort. The items are `0..n`, each once (an actor).
+    fn gather_blocks(&mut self) {
+        let mut blocks = std::mem::take(&mut self.blocks);
+        let mut ends = std::mem::take(&mut self.block_starts);
+        blocks.clear();
+        ends.clear();
+        if !self.starts.is_empty() {
+            let ((x0, z0), (nx, nz)) = (self.origin, self.size);
+            // The rectangle's cells round each item's cell: columns `xs`, rows `zs`.
+            let mut round = vec![(0..0, 0..0); self.entries.len()];
+            let cells = (nx * nz) as usize;
+            ends.resize(cells + 1, 0);
+            for &((x, z), item) in &self.entries {
+                let (x, z) = ((x - x0) as usize, (z - z0) as usize);
+                let (nx, nz) = (nx as usize, nz as usize);
+                let xs = x.saturating_sub(1)..(x + 2).min(nx);
+                let zs = z.saturating_sub(1)..(z + 2).min(nz);
+                // Each list's length first (shifted by one: then where it starts).
+                for x in xs.clone() {
+                    for z in zs.clone() {
+                        ends[x * nz + z + 1] += 1;
+                    }
+                }
+                round[item] = (xs, zs);
+            }
+            for k in 0..cells {
+                ends[k + 1] += ends[k];
+            }
+            blocks.resize(ends[cells] as usize, 0);
+            let mut next = ends.clone();
+            for (item, (xs, zs)) in round.into_iter().enumerate() {
+                for x in xs {
+                    for z in zs.clone() {
+                        let k = x * nz as usize + z;
+                        blocks[next[k] as usize] = item;
+                        next[k] += 1;
+                    }
+                }
+            }
+        }
+        self.blocks = blocks;
+        self.block_starts = ends;
+    }
+
+    /// The items in the 3 × 3 cells around `p`'s, in order, when `p`'s cell is one of
+    /// the rectangle's and they were gathered.
+    fn block(&self, p: DVec2) -> Option<&[usize]> {
+        if self.block_starts.is_empty() {
+            return None;
+        }
+        let ((x0, z0), (nx, nz)) = (self.origin, self.size);
+        let (cx, cz) = cell_of(p);
+        if cx < x0 || cx >= x0 + nx || cz < z0 || cz >= z0 + nz {
+            return None;
+        }
+        let k = ((cx - x0) * nz + (cz - z0)) as usize;
+        let (from, to) = (self.block_starts[k], self.block_starts[k + 1]);
+        Some(&self.blocks[from as usize..to as usize])
+    }
+
     /// Pushes onto `out` the items in the 3 × 3 cells around `p`'s, column by column,
     /// each column in the list's order.
     fn around(&self, p: DVec2, out: &mut Vec<usize>) {
-        let (cx, cz) = cell_of(p);
+        self.around_cell(cell_of(p), out);
+    }
+
+    /// Pushes onto `out` the items in the 3 × 3 cells around cell `(cx, cz)`, column by
+    /// column, each column in the list's order.
+    fn around_cell(&self, (cx, cz): (i64, i64), out: &mut Vec<usize>) {
         let entries = &self.entries;
         // The three columns' runs, then room for all of them at once: growing the list
         // run by run reallocated it (2 % of the crowd benchmark's instructions).
@@ -345,6 +425,43 @@ mod tests {
                 assert_eq!(a, b, "{p}");
             }
         }
+    }
+
+    #[test]
+    fn the_gathered_blocks_give_what_looking_up_and_sorting_gives() {
+        // Clusters and gaps on a field; points on it, at its edges and off it.
+        let positions: Vec<DVec2> = (0..300)
+            .map(|i| {
+                let f = i as f64;
+                let cluster = DVec2::new(
+                    (f * 0.37).floor().sin() * 12.0,
+                    (f * 0.37).floor().cos() * 9.0,
+                );
+                cluster + DVec2::new((f * 7.31).sin(), (f * 3.17).cos()) * 2.5
+            })
+            .collect();
+        let mut crowd = Crowd {
+            positions,
+            ..Crowd::default()
+        };
+        crowd.index();
+        assert!(!crowd.cells.block_starts.is_empty());
+        let mut blocked = 0;
+        for k in 0..2000 {
+            let p = DVec2::new(
+                (k as f64 * 0.113).sin() * 17.0,
+                (k as f64 * 0.071).cos() * 14.0,
+            );
+            let mut near = Vec::new();
+            crowd.near(p, &mut near);
+            let mut looked_up = Vec::new();
+            crowd.cells.around(p, &mut looked_up);
+            looked_up.sort_unstable();
+            assert_eq!(near, looked_up, "{p}");
+            blocked += usize::from(crowd.cells.block(p).is_some());
+        }
+        // Most of the points are on the field, some off it.
+        assert!((500..2000).contains(&blocked), "{blocked}");
     }
 
     #[test]
