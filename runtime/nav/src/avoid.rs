@@ -103,13 +103,7 @@ pub fn choose_velocity(
             if known && deviation * base > best.1 + 1e-9 * base {
                 continue;
             }
-            // A positive turn is counter-clockwise seen from above (x, z): to the left of
-            // a walker facing +z is +x.
-            let dir = DVec2::new(
-                forward.x * c + forward.y * s,
-                -forward.x * s + forward.y * c,
-            );
-            let v = dir * base * k;
+            let v = candidate(forward, (s, c), base, *k);
             let p = world.penalty(v, best.1);
             if p < best.1 {
                 best = (v, p);
@@ -117,6 +111,18 @@ pub fn choose_velocity(
         }
     }
     (best.0, false)
+}
+
+/// The candidate velocity turned from the unit `forward` by the turn of sine and cosine
+/// `(s, c)`, at `k` times `base`.
+fn candidate(forward: DVec2, (s, c): (f64, f64), base: f64, k: f64) -> DVec2 {
+    // A positive turn is counter-clockwise seen from above (x, z): to the left of a
+    // walker facing +z is +x.
+    let dir = DVec2::new(
+        forward.x * c + forward.y * s,
+        -forward.x * s + forward.y * c,
+    );
+    dir * base * k
 }
 
 /// The sines and cosines of [`TURNS`].
@@ -411,12 +417,8 @@ mod tests {
             best = (DVec2::ZERO, still);
         }
         for k in SPEEDS {
-            for &(s, c) in FAN.iter() {
-                let dir = DVec2::new(
-                    forward.x * c + forward.y * s,
-                    -forward.x * s + forward.y * c,
-                );
-                let v = dir * base * k;
+            for &turn in FAN.iter() {
+                let v = candidate(forward, turn, base, k);
                 let p = world.penalty(v, best.1);
                 if p < best.1 {
                     best = (v, p);
