@@ -183,6 +183,12 @@ impl Crowd {
             found,
         }
     }
+
+    /// Whether footprint `i`'s bounding circle comes within `range` of `p`.
+    fn footprint_reaches(&self, i: usize, p: DVec2, range: f64) -> bool {
+        let (c, r) = self.bounds[i];
+        (c - p).length() <= r + range
+    }
 }
 
 /// The footprints of the grid cells round a point (see [`Crowd::footprints_around`]).
@@ -197,11 +203,6 @@ pub struct FootprintsAround<'a> {
 }
 
 impl<'a> FootprintsAround<'a> {
-    /// The point they are round.
-    pub fn at(&self) -> DVec2 {
-        self.at
-    }
-
     /// Every footprint within `range` (at most [`CELL`]) of the point, and maybe a few a
     /// little further, in the order they were set: what [`Crowd::footprints_near`] gives.
     pub fn within(&self, range: f64) -> impl Iterator<Item = &'a Footprint> + '_ {
@@ -219,14 +220,6 @@ impl<'a> FootprintsAround<'a> {
             .into_iter()
             .filter(move |&i| crowd.footprint_reaches(i, at, range))
             .map(move |i| &crowd.footprints[i])
-    }
-}
-
-impl Crowd {
-    /// Whether footprint `i`'s bounding circle comes within `range` of `p`.
-    fn footprint_reaches(&self, i: usize, p: DVec2, range: f64) -> bool {
-        let (c, r) = self.bounds[i];
-        (c - p).length() <= r + range
     }
 }
 
