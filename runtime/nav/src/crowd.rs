@@ -348,12 +348,7 @@ impl Cells {
     /// Pushes onto `out` the items in the 3 × 3 cells around `p`'s, column by column,
     /// each column in the list's order.
     fn around(&self, p: DVec2, out: &mut Vec<usize>) {
-        self.around_cell(cell_of(p), out);
-    }
-
-    /// Pushes onto `out` the items in the 3 × 3 cells around cell `(cx, cz)`, column by
-    /// column, each column in the list's order.
-    fn around_cell(&self, (cx, cz): (i64, i64), out: &mut Vec<usize>) {
+        let (cx, cz) = cell_of(p);
         let entries = &self.entries;
         // The three columns' runs, then room for all of them at once: growing the list
         // run by run reallocated it (2 % of the crowd benchmark's instructions).
