@@ -5,7 +5,8 @@
 -- line: who arrived and when, the deepest interpenetration of solids (and between what),
 -- of body discs, the mean detour, the lowest pelvis, and the contacts of solids deeper
 -- than 1 cm sampled every fifth tick, grouped into events (one pair's run of such
--- samples) by kind, with each kind's deepest. It checks nothing. Two at a time in a
+-- samples) by kind, with each kind's deepest; then each walker that has not arrived,
+-- where it stands, since when, and who is nearest. It checks nothing. Two at a time in a
 -- release build (about 35 s a layout on this kind of machine):
 --   troupe test scripts/tests/support/plaza_layouts.lua --shard 1/2 &
 --   troupe test scripts/tests/support/plaza_layouts.lua --shard 2/2
@@ -48,9 +49,12 @@ for _, layout in ipairs(LAYOUTS) do
     local o = {}
     for k, v in pairs(plaza.BUSY) do o[k] = v end
     o.back, o.spread = back, spread
-    local actors, walks, walked, straight, last = {}, {}, {}, {}, {}
+    local actors, walks, walked, straight, last, goals = {}, {}, {}, {}, {}, {}
+    -- When each walker last moved faster than 0.1 m/s (nil while it moves).
+    local still_since = {}
     for i, w in ipairs(plaza.build(o)) do
       actors[i] = w.actor
+      goals[i] = { w.gx, w.gz }
       walks[i] = w.actor:walk{ to = { w.gx, 0, w.gz }, speed = 1.3 }
       straight[i] = math.sqrt((w.gx - w.x)^2 + (w.gz - w.z)^2)
       walked[i] = 0
@@ -63,8 +67,14 @@ for _, layout in ipairs(LAYOUTS) do
       tick = tick + 1
       for i, a in ipairs(actors) do
         local p = a:position()
-        walked[i] = walked[i] + math.sqrt((p[1] - last[i][1])^2 + (p[3] - last[i][3])^2)
+        local step = math.sqrt((p[1] - last[i][1])^2 + (p[3] - last[i][3])^2)
+        walked[i] = walked[i] + step
         last[i] = p
+        if step > 0.1 / troupe.rate() then
+          still_since[i] = nil
+        elseif not still_since[i] then
+          still_since[i] = troupe.time()
+        end
       end
       if tick % 5 == 0 then
         local d, a, b, sa, sb = troupe.deepest_overlap()
@@ -104,6 +114,22 @@ for _, layout in ipairs(LAYOUTS) do
     for i in ipairs(actors) do
       if walks[i].status == "completed" then arrived = arrived + 1 end
       detour = detour + walked[i] / straight[i] - 1
+    end
+    -- Who has not arrived: where, since when it stands, and who is nearest.
+    for i, a in ipairs(actors) do
+      if walks[i].status ~= "completed" then
+        local p = a:position()
+        local nearest, gap = nil, math.huge
+        for j, b in ipairs(actors) do
+          local q = b:position()
+          local d = math.sqrt((p[1] - q[1])^2 + (p[3] - q[3])^2)
+          if j ~= i and d < gap then nearest, gap = j, d end
+        end
+        print(string.format("  %s (%s) at (%.2f, %.2f), %.2f m from its goal (%.2f, %.2f), standing since %.1f s; nearest %s, %.2f m, %s",
+          a.name, walks[i].status, p[1], p[3], math.sqrt((p[1] - goals[i][1])^2 + (p[3] - goals[i][2])^2),
+          goals[i][1], goals[i][2], still_since[i] or troupe.time(), actors[nearest].name, gap,
+          walks[nearest].status == "completed" and "arrived" or "walking"))
+      end
     end
     local kinds = {}
     for k, n in pairs(events) do kinds[#kinds + 1] = string.format("%s %d (%.3f)", k, n, deepest_of[k]) end
