@@ -13,8 +13,10 @@
 -- (docs/navigation.md, "Cost"). The scene is chaotic: a change that alters one walker's
 -- step in a rare case moves the worst figures by half (0.059 m of solids became 0.088 m,
 -- its discs 0.033 m became 0 with one such change), so a change that moves them
--- re-measures, on several layouts, and says so. Where and why walkers stand:
--- scripts/tests/support/plaza_jam.lua.
+-- re-measures, on several layouts, and says so: scripts/tests/support/plaza_layouts.lua
+-- (docs/navigation.md, "Measuring a change on twelve layouts", which also gives how far a
+-- change that changes nothing moves this layout's figures: every bound below can fail on
+-- such a draw). Where and why walkers stand: scripts/tests/support/plaza_jam.lua.
 local plaza = require("support.plaza_streams")
 
 -- Seconds by which every walk must have ended.
