@@ -74,17 +74,9 @@ test("four streams of 50 cross a plaza: everyone arrives", function()
         if y < lowest[1] then lowest[1], lowest[2] = y, a.name end
       end
     end
-    for _, w in ipairs(walks) do
-      if w.status ~= "completed" and w.status ~= "failed" then return false end
-    end
-    return true
+    return plaza.ended(walks)
   end, TIME_BOUND)
-  local detour, arrived = 0.0, 0
-  for i in ipairs(actors) do
-    if walks[i].status == "completed" then arrived = arrived + 1 end
-    detour = detour + walked[i] / straight[i] - 1
-  end
-  detour = detour / #actors
+  local arrived, detour = plaza.tally(walks, walked, straight)
   print(string.format("plaza: %d of %d arrived by t = %.1f s; deepest solids %.3f m (%s), discs %.3f m (%s); mean detour %.1f %%; lowest pelvis %.3f m (%s)",
     arrived, #actors, troupe.time(), solids[1], solids[2], discs[1], discs[2], 100 * detour, lowest[1], lowest[2]))
   expect(ok, "every walk ended within " .. TIME_BOUND .. " s")

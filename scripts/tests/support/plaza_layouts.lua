@@ -105,16 +105,9 @@ for _, layout in ipairs(LAYOUTS) do
         discs = math.max(discs, (troupe.deepest_overlap{ discs = true }))
         for _, actor in ipairs(actors) do lowest = math.min(lowest, actor:position()[2]) end
       end
-      for _, w in ipairs(walks) do
-        if w.status ~= "completed" and w.status ~= "failed" then return false end
-      end
-      return true
+      return plaza.ended(walks)
     end, TIME_BOUND)
-    local arrived, detour = 0, 0
-    for i in ipairs(actors) do
-      if walks[i].status == "completed" then arrived = arrived + 1 end
-      detour = detour + walked[i] / straight[i] - 1
-    end
+    local arrived, detour = plaza.tally(walks, walked, straight)
     -- Who has not arrived: where, since when it stands, and who is nearest.
     for i, a in ipairs(actors) do
       if walks[i].status ~= "completed" then
@@ -135,7 +128,7 @@ for _, layout in ipairs(LAYOUTS) do
     for k, n in pairs(events) do kinds[#kinds + 1] = string.format("%s %d (%.3f)", k, n, deepest_of[k]) end
     table.sort(kinds)
     print(string.format("layout %.2f/%.2f: %d of %d arrived by %.1f s; deepest solids %.3f m (%s), discs %.3f m; mean detour %.1f %%; lowest pelvis %.3f m; %d contacts over %.0f cm; events: %s",
-      back, spread, arrived, #actors, troupe.time(), solids[1], solids[2], discs, 100 * detour / #actors,
+      back, spread, arrived, #actors, troupe.time(), solids[1], solids[2], discs, 100 * detour,
       lowest, contacts, 100 * CONTACT, #kinds > 0 and table.concat(kinds, ", ") or "none"))
   end, { timeout = TIME_BOUND + 10 })
 end

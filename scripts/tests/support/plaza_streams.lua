@@ -1,5 +1,5 @@
--- The plaza's scene, shared by scripts/tests/plaza.lua and, beside this file, plaza_jam.lua and
--- plaza_picture.lua: a planter
+-- The plaza's scene, shared by scripts/tests/plaza.lua and, beside this file, plaza_jam.lua,
+-- plaza_layouts.lua and plaza_picture.lua: a planter
 -- near each corner of a square, and four streams of walkers, each starting in a block
 -- outside one edge, bound for the opposite edge. Nobody walks yet: the caller says how.
 local M = {}
@@ -39,6 +39,25 @@ function M.build(o)
     end
   end
   return walkers
+end
+
+-- Whether every walk in `walks` has ended (completed or failed).
+function M.ended(walks)
+  for _, w in ipairs(walks) do
+    if w.status ~= "completed" and w.status ~= "failed" then return false end
+  end
+  return true
+end
+
+-- How many of `walks` completed, and the mean detour over them (`walked[i]` /
+-- `straight[i]` − 1: the way walker i walked against the straight way to its goal).
+function M.tally(walks, walked, straight)
+  local arrived, detour = 0, 0.0
+  for i in ipairs(walks) do
+    if walks[i].status == "completed" then arrived = arrived + 1 end
+    detour = detour + walked[i] / straight[i] - 1
+  end
+  return arrived, detour / #walks
 end
 
 -- The plaza of plaza.lua and plaza_jam.lua: 20 m × 20 m, four streams of 50.
