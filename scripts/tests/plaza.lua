@@ -15,8 +15,9 @@
 -- its discs 0.033 m became 0 with one such change), so a change that moves them
 -- re-measures, on several layouts, and says so: scripts/tests/support/plaza_layouts.lua
 -- (docs/navigation.md, "Measuring a change on twelve layouts", which also gives how far a
--- change that changes nothing moves this layout's figures: every bound below can fail on
--- such a draw). Where and why walkers stand: scripts/tests/support/plaza_jam.lua.
+-- change that changes nothing moves this layout's figures: the bounds below can fail on
+-- such a draw, as arrivals and discs did in one). Where and why walkers stand:
+-- scripts/tests/support/plaza_jam.lua.
 local plaza = require("support.plaza_streams")
 
 -- Seconds by which every walk must have ended.
