@@ -8,6 +8,10 @@
 //!
 //! Each example also runs without a failed action or behavior, and the scenes run on two
 //! threads with one actor per chunk record the same bytes as on one thread.
+//!
+//! `TROUPE_GOLDEN_BIN` runs another `troupe` binary instead of the one built for the test:
+//! scripts/test.sh points it at a release build, which must record the same postures
+//! (docs/navigation.md, "Determinism").
 
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
@@ -24,6 +28,13 @@ const VALUES: &str = "tests/golden/examples.sha256";
 
 fn repo() -> &'static Path {
     Path::new(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The binary that records: `TROUPE_GOLDEN_BIN` if set, else the one built for the test.
+fn troupe() -> PathBuf {
+    std::env::var_os("TROUPE_GOLDEN_BIN")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| PathBuf::from(env!("CARGO_BIN_EXE_troupe")))
 }
 
 fn examples() -> Vec<PathBuf> {
@@ -43,7 +54,7 @@ fn record(example: &Path, threads: &[&str]) -> String {
     let dir = std::env::temp_dir().join(format!("troupe-golden-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let trk = dir.join(format!("{name}-{}.trk", threads.join("")));
-    let out = Command::new(env!("CARGO_BIN_EXE_troupe"))
+    let out = Command::new(troupe())
         .current_dir(repo())
         .args(["run", "--seconds", SECONDS, "--seed", SEED])
         .args(threads)
