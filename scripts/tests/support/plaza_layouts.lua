@@ -50,7 +50,7 @@ for _, layout in ipairs(LAYOUTS) do
     for k, v in pairs(plaza.BUSY) do o[k] = v end
     o.back, o.spread = back, spread
     local actors, walks, walked, straight, last, goals = {}, {}, {}, {}, {}, {}
-    -- When each walker last moved faster than 0.1 m/s (nil while it moves).
+    -- Since when each walker has stood (moving no faster than 0.1 m/s); nil while it moves.
     local still_since = {}
     for i, w in ipairs(plaza.build(o)) do
       actors[i] = w.actor
