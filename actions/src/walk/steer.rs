@@ -287,9 +287,10 @@ impl Steer {
         crowd.near(position + along * NEIGHBOUR_RANGE, others);
         merge_runs(others, near_me);
         others.retain(|&j| j != me && !self.companions.contains(&j));
+        // The feet are found below, for the neighbours avoidance weighs.
+        let disc = |j: usize| Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]);
         let near = |j: usize| Walker {
-            // The feet are found below, for the neighbours avoidance weighs.
-            body: Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]),
+            body: disc(j),
             facing: crowd.facings.get(j).copied().unwrap_or_default(),
             rank: crowd.ranks.get(j).copied().flatten(),
         };
@@ -306,7 +307,7 @@ impl Steer {
             .filter(|&&j| (crowd.positions[j] - position).length() < NEIGHBOUR_RANGE)
             .map(|&j| Agent {
                 feet: feet_of(ctx, j),
-                ..near(j).body
+                ..disc(j)
             })
             .collect();
         if agents.is_empty() && !self.engaged && wait.is_none() {

@@ -293,13 +293,13 @@ impl Cells {
         ends.clear();
         if !self.starts.is_empty() {
             let ((x0, z0), (nx, nz)) = (self.origin, self.size);
+            let (nx, nz) = (nx as usize, nz as usize);
             // The rectangle's cells round each item's cell: columns `xs`, rows `zs`.
             let mut round = vec![(0..0, 0..0); self.entries.len()];
-            let cells = (nx * nz) as usize;
+            let cells = nx * nz;
             ends.resize(cells + 1, 0);
             for &((x, z), item) in &self.entries {
                 let (x, z) = ((x - x0) as usize, (z - z0) as usize);
-                let (nx, nz) = (nx as usize, nz as usize);
                 let xs = x.saturating_sub(1)..(x + 2).min(nx);
                 let zs = z.saturating_sub(1)..(z + 2).min(nz);
                 // Each list's length first (shifted by one: then where it starts).
@@ -318,7 +318,7 @@ impl Cells {
             for (item, (xs, zs)) in round.into_iter().enumerate() {
                 for x in xs {
                     for z in zs.clone() {
-                        let k = x * nz as usize + z;
+                        let k = x * nz + z;
                         blocks[next[k] as usize] = item;
                         next[k] += 1;
                     }
