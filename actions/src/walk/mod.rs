@@ -100,6 +100,14 @@ pub const MAX_TURN_RATE: f64 = 6.0;
 /// [`Walk::follow_steering`]).
 pub const RETARGET_SPEED: f64 = 3.0;
 
+/// Below this speed (m/s) on the previous tick, a body whose plan goes on is stalled (see
+/// [`Walk::stalled`]).
+const STALLED_SPEED: f64 = 0.05;
+
+/// A swinging foot's landing farther than this (m) from where the steered body wants it,
+/// and getting no nearer, is stuck (see [`Walk::follow_steering`]).
+const STUCK_LANDING: f64 = 0.05;
+
 /// Seconds of plan between two points of the path a walk reports for drawing.
 const NAVIGATION_SAMPLE: f64 = 0.1;
 
@@ -288,8 +296,9 @@ impl Walk {
     }
 
     /// A new plan round the actors standing in the way, from where the body is now to
-    /// the route's end (see [`replan`]); `None` leaves the plan as it is.
-    fn new_route(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+    /// the route's end (see [`replan`]), the body `stalled` or not (see
+    /// [`Walk::stalled`]); `None` leaves the plan as it is.
+    fn new_route(&mut self, ctx: &GeneratorContext, plan: &Plan, stalled: bool) -> Option<Plan> {
         let Route::Path {
             points,
             heading,
@@ -307,7 +316,7 @@ impl Walk {
         let companions = &self.steer.companions;
         let points = self
             .replan
-            .route(ctx, self.t, ends, self.radius, companions)?;
+            .route(ctx, self.t, ends, self.radius, (companions, stalled))?;
         self.route = Route::Path {
             points,
             heading: *heading,
@@ -315,6 +324,19 @@ impl Walk {
         };
         self.steer.restart();
         Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// Whether the body stands (slower than [`STALLED_SPEED`] on the previous tick) while
+    /// its plan has not ended: held back by the clearance or its feet where the plan goes
+    /// on (see [`replan::Replan::route`]).
+    fn stalled(&self, ctx: &GeneratorContext, plan: &Plan) -> bool {
+        let speed = ctx
+            .world
+            .crowd
+            .velocities
+            .get(ctx.actor)
+            .map_or(0.0, |v| v.length());
+        speed < STALLED_SPEED && self.steer.plan_time(self.t, self.t) < plan.end_time
     }
 
     /// How many new routes the walk has taken round actors standing in its way.
@@ -603,7 +625,19 @@ impl Walk {
         let yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
         // Wherever the retargeting has got to, the foot lands clear (a jump of the
         // landing, not of the foot, which swings towards it).
-        let plant = self.cleared(around, leg, plant, yaw).unwrap_or(plant);
+        let mut plant = self.cleared(around, leg, plant, yaw).unwrap_or(plant);
+        let mut yaw = yaw;
+        // Across a corner of furniture from the body's new landing, the step towards it
+        // goes into the corner and clearing puts it back where it was: the landing stayed
+        // on the far side, the foot was held (its way crossed the corner) and came down
+        // there at the swing's end, through the corner (0.22 m deep in a planter). A
+        // landing that gets no nearer jumps to the new one, if that is clear.
+        let gap = (to.plant - fresh.plant).length();
+        if gap > STUCK_LANDING && (plant - fresh.plant).length() > gap - 0.25 * step {
+            if let Some(clear) = self.cleared(around, leg, fresh.plant, fresh.yaw) {
+                (plant, yaw) = (clear, fresh.yaw);
+            }
+        }
         if let Foot::Swing { to: landing, .. } = &mut self.feet[leg] {
             landing.plant = plant;
             landing.yaw = yaw;
@@ -1260,8 +1294,9 @@ impl Generator for Walk {
         if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
             let (t, near) = (self.t, &mut self.near);
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
-            if self.steer.engaged && self.replan.due(self.t, self.steer.rate) {
-                if let Some(new) = self.new_route(ctx, &plan) {
+            let stalled = self.stalled(ctx, &plan);
+            if self.steer.engaged && self.replan.due(self.t, self.steer.rate, stalled) {
+                if let Some(new) = self.new_route(ctx, &plan, stalled) {
                     plan = new;
                 }
             }

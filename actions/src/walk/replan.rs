@@ -11,7 +11,7 @@
 //! landings are placed on the new plan.
 
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{path_length, Footprint, CLEARANCE};
+use troupe_scene::space::{path_length, Footprint, Pressed, CLEARANCE};
 use troupe_scene::GeneratorContext;
 
 /// Seconds a walk waits, blocked, before it plans round those in its way.
@@ -32,6 +32,12 @@ const STANDING: f64 = 0.1;
 const AROUND: f64 = 4.0;
 /// Longest new route taken, in times the straight distance to the goal (plus a metre).
 const LONGEST: f64 = 1.5;
+/// Attempts in a row that found no route after which the next may step out of a
+/// standing body's inflation first ([`Pressed::StepOutIfStuck`]): the second attempt,
+/// after the walk has stood blocked 5 s. From the first, the twelve layouts of the plaza
+/// had more contacts between walkers than any draw of no change (docs/navigation.md,
+/// "Landings round corners, stalled bodies, slivers of mesh").
+const STEP_OUT_AFTER: u32 = 1;
 
 /// When a walk last stood blocked, and when it last planned anew.
 #[derive(Clone, Debug, Default)]
@@ -47,10 +53,11 @@ pub struct Replan {
 }
 
 impl Replan {
-    /// Notes whether the walk waits at walk time `now` (its plan clock `rate`), and says
-    /// whether it has waited long enough to look for a new route.
-    pub fn due(&mut self, now: f64, rate: f64) -> bool {
-        if rate >= WAITING_RATE {
+    /// Notes whether the walk waits at walk time `now` (its plan clock `rate`, or its
+    /// body `stalled`: see [`Replan::route`]), and says whether it has waited long enough
+    /// to look for a new route.
+    pub fn due(&mut self, now: f64, rate: f64, stalled: bool) -> bool {
+        if rate >= WAITING_RATE && !stalled {
             self.blocked_since = None;
             return false;
         }
@@ -64,16 +71,27 @@ impl Replan {
     /// actors standing within [`AROUND`] (but `companions`), from the previous tick's
     /// world; `None` when there is none (the walk then goes on waiting). Counts as an
     /// attempt at walk time `now`.
+    ///
+    /// With nobody standing near there is nothing new to plan round, unless the body is
+    /// `stalled`: it stands while its plan goes on, held back by the clearance or its
+    /// feet (a walker pressed against a planter's corner by a plan that ran into it stood
+    /// there for the last 75 s of the plaza). A route from where it stands then starts
+    /// with a step out of the obstacles' inflation.
     pub fn route(
         &mut self,
         ctx: &GeneratorContext,
         now: f64,
         (from, goal): (DVec2, DVec2),
         radius: f64,
-        companions: &[usize],
+        (companions, stalled): (&[usize], bool),
     ) -> Option<Vec<DVec2>> {
         self.last = Some(now);
-        let found = Self::find(ctx, (from, goal), radius, companions);
+        let pressed = if self.failures >= STEP_OUT_AFTER {
+            Pressed::StepOutIfStuck
+        } else {
+            Pressed::SearchFromHere
+        };
+        let found = Self::find(ctx, (from, goal), radius, (companions, stalled), pressed);
         match found {
             Some(_) => {
                 self.count += 1;
@@ -89,7 +107,8 @@ impl Replan {
         ctx: &GeneratorContext,
         (from, goal): (DVec2, DVec2),
         radius: f64,
-        companions: &[usize],
+        (companions, stalled): (&[usize], bool),
+        pressed: Pressed,
     ) -> Option<Vec<DVec2>> {
         let crowd = ctx.world.crowd;
         let mut near = Vec::new();
@@ -106,7 +125,7 @@ impl Replan {
                 Footprint::disc(name, crowd.positions[j], crowd.radii[j])
             })
             .collect();
-        if standing.is_empty() {
+        if standing.is_empty() && !stalled {
             return None;
         }
         // Only the obstacles that can bear on a route short enough to be taken: each
@@ -122,7 +141,7 @@ impl Replan {
         let points = ctx
             .world
             .space
-            .path_around(&obstacles, &standing, from, goal, radius)
+            .path_around(&obstacles, &standing, from, goal, radius, pressed)
             .ok()?;
         // Pressed against furniture or a wall, a route first steps out to the nearest
         // free point, which may lie beyond it (in a corridor with someone standing in
@@ -188,18 +207,31 @@ mod tests {
     #[test]
     fn a_new_route_is_due_after_waiting_and_not_too_often() {
         let mut r = Replan::default();
-        assert!(!r.due(0.0, 0.0));
-        assert!(!r.due(0.5, 0.05));
-        assert!(r.due(1.0, 0.0));
+        assert!(!r.due(0.0, 0.0, false));
+        assert!(!r.due(0.5, 0.05, false));
+        assert!(r.due(1.0, 0.0, false));
         r.last = Some(1.0);
         // Waiting on: not again before the interval.
-        assert!(!r.due(2.5, 0.0));
-        assert!(r.due(3.0, 0.0));
+        assert!(!r.due(2.5, 0.0, false));
+        assert!(r.due(3.0, 0.0, false));
         // Walking again resets the wait.
-        assert!(!r.due(5.0, 0.5));
-        assert!(!r.due(5.5, 0.0));
-        assert!(!r.due(6.0, 0.0));
-        assert!(r.due(6.5, 0.0));
+        assert!(!r.due(5.0, 0.5, false));
+        assert!(!r.due(5.5, 0.0, false));
+        assert!(!r.due(6.0, 0.0, false));
+        assert!(r.due(6.5, 0.0, false));
+    }
+
+    #[test]
+    fn a_stalled_body_counts_as_waiting_whatever_its_plan_clock() {
+        let mut r = Replan::default();
+        assert!(!r.due(0.0, 1.0, true));
+        assert!(!r.due(0.5, 1.0, true));
+        assert!(r.due(1.0, 1.0, true));
+        // Moving again resets the wait.
+        let mut r = Replan::default();
+        assert!(!r.due(0.0, 1.0, true));
+        assert!(!r.due(0.5, 1.0, false));
+        assert!(!r.due(1.0, 1.0, true));
     }
 
     #[test]
@@ -238,13 +270,13 @@ mod tests {
             failures: 1,
             ..Replan::default()
         };
-        assert!(!r.due(9.0, 0.0));
+        assert!(!r.due(9.0, 0.0, false));
         // One failure: 4 s, not 2.
-        assert!(!r.due(13.0, 0.0));
-        assert!(r.due(14.0, 0.0));
+        assert!(!r.due(13.0, 0.0, false));
+        assert!(r.due(14.0, 0.0, false));
         // Many: at most 16 s.
         r.failures = 30;
-        assert!(!r.due(25.0, 0.0));
-        assert!(r.due(26.0, 0.0));
+        assert!(!r.due(25.0, 0.0, false));
+        assert!(r.due(26.0, 0.0, false));
     }
 }

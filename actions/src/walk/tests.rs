@@ -7,6 +7,7 @@ use troupe_body::kinematics::forward_kinematics;
 use troupe_body::Transform;
 use troupe_motion::{Key, Track};
 use troupe_scene::action::Status;
+use troupe_scene::space::{Capsule, Footprint};
 use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 
 /// Points of one foot's sole: (joint, position in that joint's frame).
@@ -667,6 +668,20 @@ fn walks_that_do_not_navigate_go_straight_through_a_table() {
     assert!(straight < 0.1, "straight: {straight}");
 }
 
+/// A foot swinging from `from` (rolled onto its toes, 0.05 m lift) to landing `to`.
+fn swing(from: DVec3, to: Landing) -> Foot {
+    Foot::Swing {
+        from,
+        from_pitch: -0.5,
+        from_yaw: 0.0,
+        from_toes: -0.3,
+        to,
+        lift: 0.05,
+        start_rate: 0.5,
+        begin: 0.0,
+    }
+}
+
 #[test]
 fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
     let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
@@ -674,21 +689,15 @@ fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
     let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
     let around = Surroundings::default();
     let sigma = 0.6;
-    walk.feet[0] = Foot::Swing {
-        from: DVec3::new(0.1, 0.12, -0.1),
-        from_pitch: -0.5,
-        from_yaw: 0.0,
-        from_toes: -0.3,
-        to: Landing {
+    walk.feet[0] = swing(
+        DVec3::new(0.1, 0.12, -0.1),
+        Landing {
             plant: DVec2::new(0.15, 0.45),
             yaw: 0.2,
             strike: 0.2,
             roll: 0.3,
         },
-        lift: 0.05,
-        start_rate: 0.5,
-        begin: 0.0,
-    };
+    );
     walk.lambda[0] = 0.66;
     let held = walk.step_foot(&around, &plan, 0, 0.68, sigma);
     walk.poses[0] = held;
@@ -733,4 +742,83 @@ fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
         stays: false,
     };
     assert!(!walk.hold_foot(1, held, sigma));
+}
+
+#[test]
+fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() {
+    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
+    let mut walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
+    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    let lambda = 0.7;
+    // Where the body wants the left foot, in the open.
+    let fresh = {
+        let cycle = walk.cycle(walk.cadence);
+        let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
+        let t_mid = walk.t + ahead * cycle.cycle;
+        let open = Surroundings::default();
+        walk.landing_at(&open, &plan, 0, t_mid, DVec2::new(0.1, -0.3))
+    };
+    // The plaza, layout 11.1/1.42, at 83.2 s: s2_43's left foot was to land by planter 1's
+    // side, across its corner from where the body now wanted it, beside another walker;
+    // the landing stayed there while the body went round the corner, and the foot came
+    // down 0.22 m into the planter. That scene, turned and moved so that the body's spot
+    // is this walk's.
+    let (there, there_yaw) = (
+        DVec2::new(-3.8947816751207305, -2.6655615501522987),
+        -3.0667476739409665,
+    );
+    let turn = fresh.yaw - there_yaw;
+    let (sin, cos) = turn.sin_cos();
+    let rotate = |v: DVec2| DVec2::new(v.x * cos + v.y * sin, -v.x * sin + v.y * cos);
+    let here = |p: DVec2| fresh.plant + rotate(p - there);
+    let planter = Footprint::hull(
+        "planter1",
+        &[
+            here(DVec2::new(-4.75, -4.75)),
+            here(DVec2::new(-3.25, -4.75)),
+            here(DVec2::new(-3.25, -3.25)),
+            here(DVec2::new(-4.75, -3.25)),
+        ],
+    );
+    let walker = Capsule {
+        centre: here(DVec2::new(-3.2491204366805815, -2.917149769020532)),
+        axis: rotate(DVec2::new(-0.9876925467549307, 0.15640790608137242)),
+        half_length: 0.03811298390304806,
+        radius: 0.28811361059089663,
+    };
+    let around = Surroundings {
+        bodies: vec![walker],
+        obstacles: vec![&planter],
+    };
+    let by_face = here(DVec2::new(-3.103093344958247, -3.3009414295741357));
+    walk.feet[0] = swing(
+        DVec3::new(0.1, 0.12, -0.3),
+        Landing {
+            plant: by_face,
+            yaw: fresh.yaw,
+            strike: 0.26,
+            roll: 1.0,
+        },
+    );
+    walk.lambda[0] = lambda;
+    // A step towards the body's spot goes into the corner, and clearing puts it back.
+    let f = fresh.plant;
+    let step = RETARGET_SPEED * walk.dt;
+    let towards = by_face + (f - by_face).clamp_length_max(step);
+    let back_out = walk.cleared(&around, 0, towards, fresh.yaw).unwrap();
+    assert!(
+        (back_out - f).length() > (by_face - f).length() - 0.25 * step,
+        "{by_face} {back_out}"
+    );
+    // So the landing jumps to the body's spot, clear of both.
+    walk.follow_steering(&around, &plan, 0, lambda);
+    let Foot::Swing { to, .. } = walk.feet[0] else {
+        panic!()
+    };
+    assert!(
+        (to.plant - f).length() < 1e-9,
+        "{} stayed, not {f}",
+        to.plant
+    );
+    assert_eq!(to.yaw, fresh.yaw);
 }

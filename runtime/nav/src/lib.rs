@@ -23,5 +23,5 @@ pub use clearance::{
 pub use crowd::{Crowd, FootprintsAround};
 pub use footprint::Footprint;
 pub use radius::body_radius;
-pub use space::{path_length, Floor, NoPath, Space, Walking, Wall, CLEARANCE};
+pub use space::{path_length, Floor, NoPath, Pressed, Space, Walking, Wall, CLEARANCE};
 pub use way::{precedence, Precedence};

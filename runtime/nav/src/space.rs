@@ -93,6 +93,23 @@ fn inside(corners: &[DVec2], p: DVec2) -> bool {
     odd
 }
 
+/// What a search does when the body starts within an obstacle's inflation (closer to it
+/// than its radius and [`CLEARANCE`]) but on the mesh.
+///
+/// The mesh's inflation is polygonal, a little inside the exact one, so such a start is
+/// usually joined to the rest of the mesh; but it can lie in a sliver cut off from it
+/// (a walker pressed 1 cm into a standing one's inflated disc, between it and another:
+/// in the plaza it found no way to a goal 2 m off, the way round open, for 50 s).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pressed {
+    /// Search from where the body is, and fail if no path starts there.
+    SearchFromHere,
+    /// If no path starts where the body is, search again from the nearest point clear of
+    /// every inflation, and step there first, as from a start off the mesh. A last
+    /// resort: the step is towards whatever else is near by.
+    StepOutIfStuck,
+}
+
 /// Why there is no path.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum NoPath {
@@ -281,7 +298,9 @@ impl Space {
         to: DVec2,
         radius: f64,
     ) -> Result<Vec<DVec2>, NoPath> {
-        self.search(obstacles, from, to, radius, || self.mesh(obstacles, radius))
+        self.search(obstacles, from, to, radius, Pressed::SearchFromHere, || {
+            self.mesh(obstacles, radius)
+        })
     }
 
     /// The shortest path as [`Space::path`] finds it, round `temporary` obstacles too
@@ -294,9 +313,10 @@ impl Space {
         from: DVec2,
         to: DVec2,
         radius: f64,
+        pressed: Pressed,
     ) -> Result<Vec<DVec2>, NoPath> {
         let all: Vec<Footprint> = obstacles.iter().chain(temporary).cloned().collect();
-        self.search(&all, from, to, radius, || {
+        self.search(&all, from, to, radius, pressed, || {
             let inflated = inflation_mm(radius) as f32 / 1000.0;
             Arc::new(build_mesh(&self.floor(), &all, inflated))
         })
@@ -309,6 +329,7 @@ impl Space {
         from: DVec2,
         to: DVec2,
         radius: f64,
+        pressed: Pressed,
         mesh: impl FnOnce() -> Arc<Mesh>,
     ) -> Result<Vec<DVec2>, NoPath> {
         let floor = self.floor();
@@ -335,9 +356,17 @@ impl Space {
                 start = free;
             }
         }
-        let found = mesh
-            .path(v2(start), v2(to))
-            .ok_or_else(|| self.enclosed(obstacles, to, inflated))?;
+        let mut found = mesh.path(v2(start), v2(to));
+        let within = || obstacles.iter().any(|o| o.distance(from) < inflated);
+        if found.is_none() && pressed == Pressed::StepOutIfStuck && start == from && within() {
+            if let Some(free) = nearest_free(&mesh, obstacles, from, inflated) {
+                found = mesh.path(v2(free), v2(to));
+                if found.is_some() {
+                    points.push(free);
+                }
+            }
+        }
+        let found = found.ok_or_else(|| self.enclosed(obstacles, to, inflated))?;
         points.extend(
             found
                 .path
@@ -489,6 +518,44 @@ mod tests {
     }
 
     #[test]
+    fn a_start_in_a_sliver_of_the_mesh_steps_out_to_find_its_way() {
+        // Walkers standing on a 1.5 m grid east, north and south of a goal; a walker
+        // pressed against the one south of it, 1 cm inside its inflated disc, where the
+        // polygonal inflation leaves a pocket of mesh cut off from the rest (the plaza,
+        // `plaza_layouts.lua`, layout 11.2/1.5: it stood there for the last 50 s).
+        let standing: Vec<Footprint> = [
+            (-1.2050, 14.6999),
+            (-2.7003, 14.6950),
+            (-1.2004, 13.2000),
+            (-1.2000, 11.7000),
+            (-2.70036907988682, 11.703751558483862),
+            (-1.2030, 10.1961),
+            (-2.7014, 10.1984),
+        ]
+        .iter()
+        .enumerate()
+        .map(|(i, &(x, z))| Footprint::disc(format!("walker {i}"), DVec2::new(x, z), 0.28))
+        .collect();
+        let from = DVec2::new(-3.158332168407947, 11.27543325172803);
+        let goal = DVec2::new(-2.7, 13.2);
+        let inflated = 0.28 + CLEARANCE;
+        assert!(
+            standing[4].distance(from) < inflated,
+            "the start is within an inflation"
+        );
+        let path = Space::default()
+            .path_around(&[], &standing, from, goal, 0.28, Pressed::StepOutIfStuck)
+            .expect("the way round the west side is open");
+        assert_eq!(*path.last().unwrap(), goal);
+        // It steps out first, to a point clear of every inflation.
+        assert!(
+            standing.iter().all(|o| o.distance(path[0]) >= inflated),
+            "{path:?}"
+        );
+        assert!((path[0] - from).length() < 0.1, "{path:?}");
+    }
+
+    #[test]
     fn a_path_goes_around_a_table_keeping_the_radius() {
         let space = Space::default();
         let obstacles = [table()];
@@ -618,7 +685,14 @@ mod tests {
         let someone = Footprint::disc("someone", DVec2::new(3.0, 2.0), 0.28);
         let (from, to) = (DVec2::new(3.0, 0.0), DVec2::new(3.0, 4.0));
         let path = space
-            .path_around(&obstacles, std::slice::from_ref(&someone), from, to, 0.3)
+            .path_around(
+                &obstacles,
+                std::slice::from_ref(&someone),
+                from,
+                to,
+                0.3,
+                Pressed::SearchFromHere,
+            )
             .unwrap();
         assert!(path.len() >= 2, "{path:?}");
         assert!(closest(&someone, from, &path) >= 0.3 + CLEARANCE - 0.01);

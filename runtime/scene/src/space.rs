@@ -18,8 +18,8 @@ pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
 pub use troupe_nav::footprint::ON_FLOOR;
 pub use troupe_nav::way::{wait_line, Walker};
 pub use troupe_nav::{
-    body_radius, path_length, Crowd, Floor, Footprint, FootprintsAround, NoPath, Space, Walking,
-    Wall, CLEARANCE,
+    body_radius, path_length, Crowd, Floor, Footprint, FootprintsAround, NoPath, Pressed, Space,
+    Walking, Wall, CLEARANCE,
 };
 
 /// A walker's plan and its last avoidance decision, as a walking generator reports it
