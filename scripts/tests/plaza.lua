@@ -3,14 +3,17 @@
 -- goal within TIME_BOUND; the test prints the worst interpenetration of solids and of
 -- body discs and the mean detour (walked / straight − 1), and bounds them at what the
 -- walkers do today, so that a change that makes them worse fails. Today every walker
--- arrives, by 141 s, their discs 3 mm deep at most and every pelvis above 0.74 m; limbs
--- still meet by centimetres (a foot in a planter, 0.097 m; feet, legs and hands in
--- eleven other layouts, 0.021–0.061 m), short of issue 18's 1 cm (docs/navigation.md,
--- Limits). The bound on the solids is the deepest contact of any layout in any draw
--- measured (that section, below), 0.097 m, rounded up: this layout's own figure is one draw of a
--- chaotic scene (0.030 m before the change that drew 0.097 m here, which took the mean
--- over the twelve layouts from 0.052 to 0.042 m). It needs
--- more than the default 120 simulated seconds (its own timeout below) and two to four
+-- arrives, by 156 s, their discs apart and every pelvis above 0.77 m; limbs still meet
+-- by centimetres (two walkers' feet, 0.036 m; feet, legs and hands in eleven other
+-- layouts, 0.013–0.077 m), short of issue 18's 1 cm (docs/navigation.md, Limits). The
+-- bounds on the time, the solids and the detour are the largest of any layout in any
+-- draw measured (docs/navigation.md, "Landings round corners, stalled bodies, slivers of
+-- mesh"), rounded up, not this layout's own figures,
+-- which are one draw of a chaotic scene: the change that drew these (200 by 155.2 s,
+-- 0.036 m, 24.9 %) had drawn 130.2 s, 0.030 m and 19.2 % before, and other draws of
+-- no change put walkers past 150 s, a foot 0.094 m into a planter and the detour at
+-- 25.9 %. It needs
+-- more than the default 120 simulated seconds (its own timeout below) and three to five
 -- minutes of the debug build a run
 -- (docs/navigation.md, "Cost"). The scene is chaotic: a change that alters one walker's
 -- step in a rare case moves the worst figures by half (0.059 m of solids became 0.088 m,
@@ -22,14 +25,16 @@
 -- scripts/tests/support/plaza_jam.lua.
 local plaza = require("support.plaza_streams")
 
--- Seconds by which every walk must have ended.
-local TIME_BOUND = 150
--- Deepest interpenetration (m) allowed: of two actors' solids or a solid and a planter,
--- and of two body discs.
+-- Seconds by which every walk must have ended: walkers of several layouts and draws were
+-- still walking at 150 s.
+local TIME_BOUND = 180
+-- Deepest interpenetration (m) allowed: of two actors' solids or a solid and a planter
+-- (0.094 m the deepest of any layout in the draws of no change, 0.097 m in one of a
+-- version of the last change), and of two body discs.
 local SOLIDS_BOUND = 0.10
 local DISCS_BOUND = 0.01
--- Mean detour allowed.
-local DETOUR_BOUND = 0.24
+-- Mean detour allowed: 25.9 % the most of any layout in any draw.
+local DETOUR_BOUND = 0.26
 -- Deepest a thigh may go into a planter, of the contacts sampled (m): the knees keep off
 -- the furniture (docs/navigation.md, "Knees kept off the furniture"); before they did, a
 -- thigh was this layout's deepest contact, 0.056 m into a planter.

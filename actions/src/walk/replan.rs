@@ -73,10 +73,10 @@ impl Replan {
     /// attempt at walk time `now`.
     ///
     /// With nobody standing near there is nothing new to plan round, unless the body is
-    /// `stalled`: it stands while its plan goes on, held back by the clearance or its
-    /// feet (a walker pressed against a planter's corner by a plan that ran into it stood
-    /// there for the last 75 s of the plaza). A route from where it stands then starts
-    /// with a step out of the obstacles' inflation.
+    /// `stalled`: it stands alone while its plan goes on, held back by the clearance or
+    /// its feet (a walker pressed against a planter's corner by a plan that ran into it
+    /// stood there for the last 75 s of the plaza). A route from where it stands then
+    /// starts with a step out of the obstacles' inflation.
     pub fn route(
         &mut self,
         ctx: &GeneratorContext,
@@ -138,11 +138,15 @@ impl Replan {
             .filter(|o| window.may_touch(o))
             .cloned()
             .collect();
-        let points = ctx
-            .world
-            .space
-            .path_around(&obstacles, &standing, from, goal, radius, pressed)
-            .ok()?;
+        let space = &ctx.world.space;
+        let points = if standing.is_empty() {
+            // Stalled, with nobody standing near: the lasting obstacles' mesh, cached, as
+            // the walk's first plan had it, not a mesh of its own.
+            space.path(&crowd.footprints, from, goal, radius)
+        } else {
+            space.path_around(&obstacles, &standing, from, goal, radius, pressed)
+        }
+        .ok()?;
         // Pressed against furniture or a wall, a route first steps out to the nearest
         // free point, which may lie beyond it (in a corridor with someone standing in
         // it): a first leg through an obstacle is not taken.
