@@ -104,8 +104,8 @@ pub const RETARGET_SPEED: f64 = 3.0;
 /// [`Walk::stalled`]).
 const STALLED_SPEED: f64 = 0.05;
 
-/// A stalled body with nobody within this distance (m) is held by the furniture, not by
-/// the crowd (see [`Walk::stalled`]).
+/// A stalled body with nobody moving within this distance (m) is held by the furniture or
+/// by people standing, not by a crowd on the move (see [`Walk::stalled`]).
 const ALONE: f64 = 1.5;
 
 /// A swinging foot's landing farther than this (m) from where the steered body wants it,
@@ -331,11 +331,11 @@ impl Walk {
     }
 
     /// Whether the body stands (slower than [`STALLED_SPEED`] on the previous tick) while
-    /// its plan has not ended, with nobody within [`ALONE`]: held back by the clearance
-    /// against the furniture, or by its feet, where the plan goes on (see
-    /// [`replan::Replan::route`]). A body held by the crowd waits for it instead: counted
-    /// stalled too, bodies pressed in `troupe bench`'s crowd took new routes every 2 s and
-    /// cost it a fifth of its speed.
+    /// its plan has not ended, with nobody moving within [`ALONE`]: held back by the
+    /// clearance against the furniture or people standing, or by its feet, where the plan
+    /// goes on (see [`replan::Replan::route`]). A body held by a moving crowd waits for
+    /// it instead: counted stalled too, bodies pressed in `troupe bench`'s crowd took new
+    /// routes every 2 s and cost it a fifth of its speed.
     fn stalled(&self, ctx: &GeneratorContext, plan: &Plan) -> bool {
         let crowd = ctx.world.crowd;
         let (Some(&at), Some(velocity)) = (
@@ -351,8 +351,11 @@ impl Walk {
         }
         let mut near = Vec::new();
         crowd.near(at, &mut near);
-        near.iter()
-            .all(|&j| j == ctx.actor || (crowd.positions[j] - at).length() > ALONE)
+        near.iter().all(|&j| {
+            j == ctx.actor
+                || (crowd.positions[j] - at).length() > ALONE
+                || crowd.velocities[j].length() < replan::STANDING
+        })
     }
 
     /// How many new routes the walk has taken round actors standing in its way.

@@ -27,7 +27,7 @@ const LONGEST_INTERVAL: f64 = 16.0;
 /// Below this plan clock rate the walk counts as waiting.
 const WAITING_RATE: f64 = 0.1;
 /// Below this speed (m/s) an actor counts as standing: an obstacle for the new route.
-const STANDING: f64 = 0.1;
+pub const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.
 const AROUND: f64 = 4.0;
 /// Longest new route taken, in times the straight distance to the goal (plus a metre).
