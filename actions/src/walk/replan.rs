@@ -73,10 +73,10 @@ impl Replan {
     /// attempt at walk time `now`.
     ///
     /// With nobody standing near there is nothing new to plan round, unless the body is
-    /// `stalled`: it stands alone while its plan goes on, held back by the clearance or
-    /// its feet (a walker pressed against a planter's corner by a plan that ran into it
-    /// stood there for the last 75 s of the plaza). A route from where it stands then
-    /// starts with a step out of the obstacles' inflation.
+    /// `stalled`: it stands, with nobody moving near, while its plan goes on, held back
+    /// by the clearance or its feet (a walker pressed against a planter's corner by a
+    /// plan that ran into it stood there for the last 75 s of the plaza). A route from
+    /// where it stands then starts with a step out of the obstacles' inflation.
     pub fn route(
         &mut self,
         ctx: &GeneratorContext,

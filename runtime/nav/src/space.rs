@@ -543,7 +543,10 @@ mod tests {
             standing[4].distance(from) < inflated,
             "the start is within an inflation"
         );
-        let path = Space::default()
+        let space = Space::default();
+        let here = space.path_around(&[], &standing, from, goal, 0.28, Pressed::SearchFromHere);
+        assert!(here.is_err(), "from where it stands, no way: {here:?}");
+        let path = space
             .path_around(&[], &standing, from, goal, 0.28, Pressed::StepOutIfStuck)
             .expect("the way round the west side is open");
         assert_eq!(*path.last().unwrap(), goal);
