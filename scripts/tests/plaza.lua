@@ -29,8 +29,8 @@ local plaza = require("support.plaza_streams")
 -- still walking at 150 s.
 local TIME_BOUND = 180
 -- Deepest interpenetration (m) allowed: of two actors' solids or a solid and a planter
--- (0.094 m the deepest of any layout in the draws of no change, 0.097 m in one of a
--- version of the last change), and of two body discs.
+-- (0.094 m the deepest of any layout in the draws of no change, 0.097 m in a draw of
+-- the stall rule's first version), and of two body discs.
 local SOLIDS_BOUND = 0.10
 local DISCS_BOUND = 0.01
 -- Mean detour allowed: 25.9 % the most of any layout in any draw.
