@@ -641,11 +641,10 @@ impl Walk {
         let fresh = self.landing_at(around, plan, leg, t_mid, DVec2::new(from.x, from.z));
         let step = RETARGET_SPEED * self.dt;
         let plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
-        let yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
+        let mut yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
         // Wherever the retargeting has got to, the foot lands clear (a jump of the
         // landing, not of the foot, which swings towards it).
         let mut plant = self.cleared(around, leg, plant, yaw).unwrap_or(plant);
-        let mut yaw = yaw;
         // Across a corner of furniture from the body's new landing, the step towards it
         // goes into the corner and clearing puts it back where it was: the landing stayed
         // on the far side, the foot was held (its way crossed the corner) and came down
@@ -1313,10 +1312,13 @@ impl Generator for Walk {
         if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
             let (t, near) = (self.t, &mut self.near);
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
-            let stalled = self.stalled(ctx, &plan);
-            if self.steer.engaged && self.replan.due(self.t, self.steer.rate, stalled) {
-                if let Some(new) = self.new_route(ctx, &plan, stalled) {
-                    plan = new;
+            if self.steer.engaged {
+                // Only a steered walk plans anew: the stall is looked at only for one.
+                let stalled = self.stalled(ctx, &plan);
+                if self.replan.due(self.t, self.steer.rate, stalled) {
+                    if let Some(new) = self.new_route(ctx, &plan, stalled) {
+                        plan = new;
+                    }
                 }
             }
         }
