@@ -206,6 +206,8 @@ pub struct Walk {
     steer: steer::Steer,
     /// Scratch: the actors near this one.
     near: Vec<usize>,
+    /// Scratch for the steering's decisions (see [`steer::Scratch`]).
+    scratch: steer::Scratch,
     /// When the walk stood blocked and took new routes (see [`replan`]).
     replan: replan::Replan,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
@@ -264,6 +266,7 @@ impl Walk {
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
+            scratch: steer::Scratch::default(),
             replan: replan::Replan::default(),
             shoulders: shoulders::Shoulders::default(),
             last_floor: None,
@@ -1310,7 +1313,7 @@ impl Generator for Walk {
         // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
         let mut gathered = false;
         if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
-            let (t, near) = (self.t, &mut self.near);
+            let (t, near) = (self.t, (&mut self.near, &mut self.scratch));
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
             if self.steer.engaged {
                 // Only a steered walk plans anew: the stall is looked at only for one.

@@ -7,6 +7,7 @@
 //! where the body will be when a foot that is about to swing reaches mid-stance.
 
 use crate::error::OptionError;
+use std::cell::Cell;
 use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 use troupe_body::glam::DVec2;
@@ -370,6 +371,42 @@ pub struct Plan {
     pub end_time: f64,
     /// A stop asked before the route's end (see [`Plan::stop_at`]).
     stop: Option<Stop>,
+    /// The last samples taken (see [`Recent`]).
+    recent: Recent,
+}
+
+/// How many of a plan's last samples [`Recent`] keeps.
+const RECENT: usize = 4;
+
+/// The last few samples of a plan, by time: one tick of a steered walk asks for the plan
+/// at the clock's time four times over (the steering's decision, the pose, the cadence,
+/// the hold on the feet), each a search along the route, a heading and a speed, which
+/// was a tenth of what navigation costs the crowd benchmark. The same time gives the
+/// same sample, bit for bit.
+#[derive(Clone, Debug, Default)]
+struct Recent {
+    /// (time's bits, fallback heading's bits where it matters, the sample), oldest
+    /// replaced first.
+    slots: [Cell<Option<(u64, u64, RootSample)>>; RECENT],
+    /// The slot the next new sample goes in.
+    next: Cell<usize>,
+}
+
+impl Recent {
+    /// The sample at the time and fallback of bits `key`, if it is one of the last few.
+    fn get(&self, key: (u64, u64)) -> Option<RootSample> {
+        self.slots.iter().find_map(|slot| match slot.get() {
+            Some((t, f, sample)) if (t, f) == key => Some(sample),
+            _ => None,
+        })
+    }
+
+    /// Keeps `sample`, at the time and fallback of bits `key`, in place of the oldest.
+    fn keep(&self, key: (u64, u64), sample: RootSample) {
+        let next = self.next.get();
+        self.slots[next].set(Some((key.0, key.1, sample)));
+        self.next.set((next + 1) % RECENT);
+    }
 }
 
 /// Fastest a stop may bring the body to rest, in seconds from cruising speed: the
@@ -471,6 +508,7 @@ impl Plan {
                     start_turn,
                     end_time: end,
                     stop: None,
+                    recent: Recent::default(),
                 }
             }
             Route::Velocity { speed, duration } => {
@@ -513,6 +551,7 @@ impl Plan {
                     start_turn,
                     end_time: end,
                     stop: None,
+                    recent: Recent::default(),
                 }
             }
             Route::Follow(seq) => {
@@ -538,6 +577,7 @@ impl Plan {
                     start_turn: 0.0,
                     end_time: seq.duration(),
                     stop: None,
+                    recent: Recent::default(),
                 }
             }
         }
@@ -559,6 +599,8 @@ impl Plan {
             PlanKind::Along { profile, .. } => profile.at(t).0,
             PlanKind::Follow { .. } => 0.0,
         };
+        // The samples after `t` change.
+        self.recent = Recent::default();
         self.stop = Some(Stop {
             at: t,
             speed: from.speed,
@@ -584,6 +626,22 @@ impl Plan {
     /// The body's position, heading and speed `t` seconds after the start; `fallback` is
     /// the heading to keep where the route gives none (a followed path at rest).
     pub fn sample(&self, t: f64, fallback: f64) -> RootSample {
+        // Only a followed path's heading at rest depends on the fallback.
+        let fallback_bits = match self.kind {
+            PlanKind::Along { .. } => 0,
+            PlanKind::Follow { .. } => fallback.to_bits(),
+        };
+        let key = (t.to_bits(), fallback_bits);
+        if let Some(sample) = self.recent.get(key) {
+            return sample;
+        }
+        let sample = self.sample_anew(t, fallback);
+        self.recent.keep(key, sample);
+        sample
+    }
+
+    /// [`Plan::sample`], found from the route and the speed profile.
+    fn sample_anew(&self, t: f64, fallback: f64) -> RootSample {
         let stopping = self.stop.filter(|s| t > s.at);
         match &self.kind {
             PlanKind::Along {
