@@ -102,8 +102,10 @@ impl Footprint {
 
 impl Footprint {
     /// The outline of the floor kept clear of this footprint by a body of `radius`: the
-    /// polygon grown by `radius`, its corners rounded by arcs of at most 15° (for drawing
-    /// what the navigation mesh cuts out, `--debug nav`).
+    /// polygon grown by `radius`, its corners rounded by polygonal arcs whose sides touch
+    /// the circle and turn by at most [`CORNER_STEP`]. It holds every point within
+    /// `radius` of the footprint and reaches at most 2 % of `radius` further (at the
+    /// arcs' corners). The navigation mesh cuts these out, and `--debug nav` draws them.
     pub fn inflated(&self, radius: f64) -> Vec<DVec2> {
         let n = self.outline.len();
         if n < 3 {
@@ -125,17 +127,26 @@ impl Footprint {
         for i in 0..n {
             let (from, to) = (normal((i + n - 1) % n), normal(i));
             // The normals turn counter-clockwise round a convex, counter-clockwise outline.
+            // The arc's sides are tangent to the circle at `from`, at each step, and at
+            // `to`; its corners lie between, 1/cos(step/2) times the radius out. The first
+            // and last sides lie on the grown edges, which are exact.
             let turn = from.perp_dot(to).atan2(from.dot(to)).max(0.0);
-            let steps = (turn / 15f64.to_radians()).ceil().max(1.0) as usize;
+            let steps = (turn / CORNER_STEP).ceil().max(1.0);
+            let step = turn / steps;
+            let reach = radius / (step / 2.0).cos();
             let start = from.y.atan2(from.x);
-            for k in 0..=steps {
-                let a = start + turn * k as f64 / steps as f64;
-                out.push(self.outline[i] + DVec2::new(a.cos(), a.sin()) * radius);
+            for k in 0..steps as usize {
+                let a = start + step * (k as f64 + 0.5);
+                out.push(self.outline[i] + DVec2::new(a.cos(), a.sin()) * reach);
             }
         }
         out
     }
 }
+
+/// Largest turn (radians) between two sides of an [`Footprint::inflated`] outline's
+/// rounded corner: 22.5°, so that its corners lie within 2 % of the radius of the circle.
+const CORNER_STEP: f64 = std::f64::consts::PI / 8.0;
 
 /// Distance from `p` to the segment `a`–`b`.
 pub fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
@@ -272,7 +283,7 @@ mod tests {
     }
 
     #[test]
-    fn an_inflated_outline_keeps_the_radius_all_round() {
+    fn an_inflated_outline_holds_the_radius_all_round_and_little_more() {
         let table = Footprint::hull(
             "table",
             &[
@@ -282,17 +293,57 @@ mod tests {
                 DVec2::new(-1.0, 0.5),
             ],
         );
-        let grown = table.inflated(0.3);
-        // Four corners, each rounded by a 90° arc in 15° steps (7 points).
-        assert_eq!(grown.len(), 28);
-        for p in &grown {
-            assert!((table.distance(*p) - 0.3).abs() < 1e-9, "{p}");
+        let pillar = Footprint::disc("pillar", DVec2::new(3.0, 1.0), 0.2);
+        let post = Footprint::hull("post", &[DVec2::new(-2.0, 2.0)]);
+        let wedge = Footprint::hull(
+            "wedge",
+            &[
+                DVec2::new(0.0, 0.0),
+                DVec2::new(2.0, 0.0),
+                DVec2::new(0.0, 0.3),
+            ],
+        );
+        // Four corners of 90°, each in four steps of 22.5°.
+        assert_eq!(table.inflated(0.3).len(), 16);
+        for f in [&table, &pillar, &post, &wedge] {
+            for radius in [0.05, 0.3, 1.2] {
+                let grown = Footprint {
+                    name: "grown".into(),
+                    outline: f.inflated(radius),
+                };
+                let n = grown.outline.len();
+                // Convex and counter-clockwise, as a footprint.
+                for i in 0..n {
+                    let (a, b, c) = (
+                        grown.outline[i],
+                        grown.outline[(i + 1) % n],
+                        grown.outline[(i + 2) % n],
+                    );
+                    assert!((b - a).perp_dot(c - b) > 0.0, "{}: turns at {b}", f.name);
+                }
+                // Every corner within 2 % past the radius, and every side's nearest
+                // point to the footprint at the radius or further: the grown outline
+                // holds the footprint grown exactly.
+                for i in 0..n {
+                    let (a, b) = (grown.outline[i], grown.outline[(i + 1) % n]);
+                    let d = f.distance(a);
+                    assert!(d >= radius - 1e-9 && d <= radius * 1.02, "{}: {d}", f.name);
+                    for k in 0..=50 {
+                        let q = a.lerp(b, k as f64 / 50.0);
+                        assert!(f.distance(q) >= radius - 1e-9, "{}: {q}", f.name);
+                    }
+                }
+                // And nothing within the radius lies outside it.
+                for k in 0..360 {
+                    let dir = DVec2::from_angle((k as f64).to_radians());
+                    let c = f.centre();
+                    let mut t = 0.0;
+                    while f.distance(c + dir * t) < radius * 0.999 {
+                        t += 0.001;
+                    }
+                    assert!(grown.contains(c + dir * (t - 0.001)), "{}", f.name);
+                }
+            }
         }
-        // Round the outline once, counter-clockwise like the footprint.
-        let area: f64 = (0..grown.len())
-            .map(|i| grown[i].perp_dot(grown[(i + 1) % grown.len()]))
-            .sum::<f64>()
-            / 2.0;
-        assert!(area > 2.0 + 2.0 * 0.3 * 3.0, "{area}");
     }
 }
