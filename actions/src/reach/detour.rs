@@ -83,6 +83,10 @@ pub fn push_out(p: DVec3, radius: f64, clearance: f64, volumes: &[Volume]) -> DV
     for _ in 0..8 {
         let mut moved = false;
         for v in volumes {
+            // The point moves as it is pushed: each volume is judged from where it is.
+            if !v.may_reach(q, radius, clearance) {
+                continue;
+            }
             let pen = v.sphere(q, radius);
             if pen.depth > -clearance {
                 q += pen.normal * (pen.depth + clearance);
@@ -184,7 +188,7 @@ pub(crate) fn deepest(
         let n = ((pair[1] - pair[0]).length() / SAMPLE).ceil().max(1.0) as usize;
         for k in 0..=n {
             let p = pair[0].lerp(pair[1], k as f64 / n as f64);
-            for v in volumes {
+            for v in volumes.iter().filter(|v| v.may_reach(p, radius, 0.0)) {
                 let depth = v.sphere_depth(p, radius);
                 if depth > 0.0 && best.is_none_or(|b| depth > b.2) {
                     best = Some((seg, p, depth));
@@ -253,7 +257,7 @@ fn arm_depth(points: &[DVec3], arm: Arm, volumes: &[Volume]) -> f64 {
             let hand = pair[0].lerp(pair[1], k as f64 / n as f64);
             for s in ARM_SAMPLES {
                 let p = arm.shoulder.lerp(hand, s);
-                for v in volumes {
+                for v in volumes.iter().filter(|v| v.may_reach(p, arm.radius, 0.0)) {
                     worst = worst.max(v.sphere_depth(p, arm.radius));
                 }
             }
@@ -293,9 +297,10 @@ fn temporary_goal(
     let e1 = along.any_orthonormal_vector();
     let e2 = along.cross(e1);
     let clear = |q: DVec3| {
-        volumes
-            .iter()
-            .all(|v| v.sphere_depth(q, radius) <= -DETOUR_CLEARANCE)
+        volumes.iter().all(|v| {
+            !v.may_reach(q, radius, DETOUR_CLEARANCE)
+                || v.sphere_depth(q, radius) <= -DETOUR_CLEARANCE
+        })
     };
     let mut best = (normal_way, pushed);
     for k in 0..DIRECTIONS {
