@@ -143,14 +143,17 @@ fn the_overlay_of_a_scene_holds_its_mesh_and_inflated_footprints() {
     assert!((nav.radius - 0.28).abs() < 0.01, "{}", nav.radius);
     assert_eq!(nav.footprints.len(), 1);
     assert_eq!(nav.footprints[0].len(), 4);
-    // The inflated outline keeps the radius and the clearance from the table.
+    // The inflated outline keeps the radius and the clearance from the table: its
+    // corners lie at that distance or at most 2 % further (the sides of its rounded
+    // corners touch the circle).
     let keep = nav.radius + CLEARANCE as f32;
     for p in &nav.inflated[0] {
         let outside = Vec2::new(
             (p.x.abs() - 1.0).max(0.0),
             ((p.y - 3.0).abs() - 0.5).max(0.0),
         );
-        assert!((outside.length() - keep).abs() < 1e-3, "{p}");
+        let d = outside.length();
+        assert!(d > keep - 1e-3 && d < keep * 1.02 + 1e-3, "{p}");
     }
     // The mesh is cut round the table: some edge ends on its inflated outline.
     assert!(nav.mesh.len() >= 8);
