@@ -379,10 +379,9 @@ pub struct Plan {
 const RECENT: usize = 4;
 
 /// The last few samples of a plan, by time: one tick of a steered walk asks for the plan
-/// at the clock's time four times over (the steering's decision, the pose, the cadence,
-/// the hold on the feet), each a search along the route, a heading and a speed, which
-/// was a tenth of what navigation costs the crowd benchmark. The same time gives the
-/// same sample, bit for bit.
+/// at the clock's time up to four times (the steering's decision, the pose, the cadence,
+/// the hold on the feet), each a search along the route, a heading and a speed. The same
+/// time gives the same sample, bit for bit.
 #[derive(Clone, Debug, Default)]
 struct Recent {
     /// (time's bits, fallback heading's bits where it matters, the sample), oldest
