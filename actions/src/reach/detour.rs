@@ -7,7 +7,7 @@
 //! and the arm's sensors are kept out of them by the IK's secondary task
 //! ([`troupe_body::self_collision::CollisionAvoidance::with_external`]).
 
-use troupe_body::collision::Volume;
+use troupe_body::collision::{sphere_beyond, Volume};
 use troupe_body::glam::DVec3;
 use troupe_body::self_collision::{BodySensors, SENSOR_SCALE};
 use troupe_body::{Skeleton, Transform};
@@ -79,15 +79,20 @@ pub fn volumes_around_except(
 /// Moves a sphere (centre `p`, `radius`) out of every volume until its surface is
 /// `clearance` outside each (a few rounds: leaving one may enter another).
 pub fn push_out(p: DVec3, radius: f64, clearance: f64, volumes: &[Volume]) -> DVec3 {
+    push_out_of(p, radius, clearance, &Around::new(volumes))
+}
+
+/// [`push_out`] out of volumes whose bounds are found.
+fn push_out_of(p: DVec3, radius: f64, clearance: f64, around: &Around) -> DVec3 {
     let mut q = p;
     for _ in 0..8 {
         let mut moved = false;
-        for v in volumes {
+        for k in 0..around.volumes.len() {
             // The point moves as it is pushed: each volume is judged from where it is.
-            if !v.may_reach(q, radius, clearance) {
+            if !around.may_reach(k, q, radius, clearance) {
                 continue;
             }
-            let pen = v.sphere(q, radius);
+            let pen = around.volumes[k].sphere(q, radius);
             if pen.depth > -clearance {
                 q += pen.normal * (pen.depth + clearance);
                 moved = true;
@@ -98,6 +103,45 @@ pub fn push_out(p: DVec3, radius: f64, clearance: f64, volumes: &[Volume]) -> DV
         }
     }
     q
+}
+
+/// Volumes a hand goes round, each capsule with the sphere that holds it
+/// ([`troupe_body::collision::Capsule::bounding_sphere`]), found once: planning the
+/// temporary goals tests hundreds of thousands of points against a few hundred capsules
+/// in a crowd, nearly all of them far (finding each bound at each test took 370 M
+/// instructions a reach's start in the crowd benchmark).
+struct Around<'a> {
+    /// The volumes.
+    volumes: &'a [Volume],
+    /// Per volume, a capsule's bounding sphere (centre, radius); `None` for a shape.
+    bounds: Vec<Option<(DVec3, f64)>>,
+}
+
+impl<'a> Around<'a> {
+    /// The bounds of `volumes`.
+    fn new(volumes: &'a [Volume]) -> Around<'a> {
+        let bounds = volumes
+            .iter()
+            .map(|v| match v {
+                Volume::Capsule(k) => Some(k.bounding_sphere()),
+                Volume::Shape { .. } => None,
+            })
+            .collect();
+        Around { volumes, bounds }
+    }
+
+    /// [`Volume::may_reach`] for volume `k`: false only when a sphere (centre `c`,
+    /// `radius`) surely stays more than `margin` outside it.
+    fn may_reach(&self, k: usize, c: DVec3, radius: f64, margin: f64) -> bool {
+        self.bounds[k].is_none_or(|bounds| !sphere_beyond(c, radius, margin, bounds))
+    }
+
+    /// The volumes a sphere (centre `c`, `radius`) may come within `margin` of.
+    fn near(&self, c: DVec3, radius: f64, margin: f64) -> impl Iterator<Item = &'a Volume> + '_ {
+        (0..self.volumes.len())
+            .filter(move |&k| self.may_reach(k, c, radius, margin))
+            .map(|k| &self.volumes[k])
+    }
 }
 
 /// A hand's path from its start through via points to a goal, each segment travelled
@@ -176,19 +220,16 @@ impl HandPath {
     }
 }
 
-/// The deepest point of the polyline `points` for a sphere of `radius` into `volumes`:
+/// The deepest point of the polyline `points` for a sphere of `radius` into the volumes
+/// `around`:
 /// the segment's index, the point and the depth; `None` when it stays clear.
-pub(crate) fn deepest(
-    points: &[DVec3],
-    radius: f64,
-    volumes: &[Volume],
-) -> Option<(usize, DVec3, f64)> {
+fn deepest(points: &[DVec3], radius: f64, around: &Around) -> Option<(usize, DVec3, f64)> {
     let mut best: Option<(usize, DVec3, f64)> = None;
     for (seg, pair) in points.windows(2).enumerate() {
         let n = ((pair[1] - pair[0]).length() / SAMPLE).ceil().max(1.0) as usize;
         for k in 0..=n {
             let p = pair[0].lerp(pair[1], k as f64 / n as f64);
-            for v in volumes.iter().filter(|v| v.may_reach(p, radius, 0.0)) {
+            for v in around.near(p, radius, 0.0) {
                 let depth = v.sphere_depth(p, radius);
                 if depth > 0.0 && best.is_none_or(|b| depth > b.2) {
                     best = Some((seg, p, depth));
@@ -243,11 +284,11 @@ const DIRECTIONS: usize = 8;
 /// How far from the path's deepest point a temporary goal is looked for (m).
 const FARTHEST: f64 = 0.6;
 
-/// The deepest an arm held straight from `arm.shoulder` to the hand goes into `volumes`
-/// while the hand goes along the polyline `points` (0 when it stays clear): a straight
+/// The deepest an arm held straight from `arm.shoulder` to the hand goes into the volumes
+/// `around` while the hand goes along the polyline `points` (0 when it stays clear): a straight
 /// line stands for the arm, so a hand that passes in front of another's arm from behind
 /// it shows the forearm trailing across.
-fn arm_depth(points: &[DVec3], arm: Arm, volumes: &[Volume]) -> f64 {
+fn arm_depth(points: &[DVec3], arm: Arm, around: &Around) -> f64 {
     let mut worst = 0.0f64;
     for pair in points.windows(2) {
         let n = ((pair[1] - pair[0]).length() / (2.0 * SAMPLE))
@@ -257,7 +298,7 @@ fn arm_depth(points: &[DVec3], arm: Arm, volumes: &[Volume]) -> f64 {
             let hand = pair[0].lerp(pair[1], k as f64 / n as f64);
             for s in ARM_SAMPLES {
                 let p = arm.shoulder.lerp(hand, s);
-                for v in volumes.iter().filter(|v| v.may_reach(p, arm.radius, 0.0)) {
+                for v in around.near(p, arm.radius, 0.0) {
                     worst = worst.max(v.sphere_depth(p, arm.radius));
                 }
             }
@@ -267,22 +308,22 @@ fn arm_depth(points: &[DVec3], arm: Arm, volumes: &[Volume]) -> f64 {
 }
 
 /// A temporary goal for the path's deepest point `p` on segment `a`–`b`: pushed out of
-/// `volumes` along their normals; or, when an `arm` would cross a volume that way, the
+/// the volumes `around` along their normals; or, when an `arm` would cross a volume that way, the
 /// nearest clear point in one of [`DIRECTIONS`] round the segment that keeps the arm
 /// out (or in least), the shortest of those that do.
 fn temporary_goal(
     (a, b): (DVec3, DVec3),
     p: DVec3,
     radius: f64,
-    volumes: &[Volume],
+    around: &Around,
     arm: Option<Arm>,
 ) -> DVec3 {
-    let pushed = push_out(p, radius, DETOUR_CLEARANCE, volumes);
+    let pushed = push_out_of(p, radius, DETOUR_CLEARANCE, around);
     let Some(arm) = arm else {
         return pushed;
     };
     let cost = |q: DVec3| {
-        let depth = arm_depth(&[a, q, b], arm, volumes);
+        let depth = arm_depth(&[a, q, b], arm, around);
         // Millimetres: below that two ways are as good, and the shorter wins.
         (
             (depth * 1000.0).round(),
@@ -297,10 +338,9 @@ fn temporary_goal(
     let e1 = along.any_orthonormal_vector();
     let e2 = along.cross(e1);
     let clear = |q: DVec3| {
-        volumes.iter().all(|v| {
-            !v.may_reach(q, radius, DETOUR_CLEARANCE)
-                || v.sphere_depth(q, radius) <= -DETOUR_CLEARANCE
-        })
+        around
+            .near(q, radius, DETOUR_CLEARANCE)
+            .all(|v| v.sphere_depth(q, radius) <= -DETOUR_CLEARANCE)
     };
     let mut best = (normal_way, pushed);
     for k in 0..DIRECTIONS {
@@ -337,11 +377,12 @@ pub fn temporary_goals(
         .chain(via.iter().copied())
         .chain(std::iter::once(goal))
         .collect();
+    let around = Around::new(volumes);
     for _ in 0..MAX_DETOURS {
-        let Some((seg, p, _)) = deepest(&points, radius, volumes) else {
+        let Some((seg, p, _)) = deepest(&points, radius, &around) else {
             break;
         };
-        let q = temporary_goal((points[seg], points[seg + 1]), p, radius, volumes, arm);
+        let q = temporary_goal((points[seg], points[seg + 1]), p, radius, &around, arm);
         if (q - p).length() < 1e-6 {
             break;
         }
@@ -394,7 +435,10 @@ mod tests {
         let mut points = vec![start];
         points.extend(&via);
         points.push(goal);
-        assert!(deepest(&points, 0.05, &[arm]).is_none(), "{points:?}");
+        assert!(
+            deepest(&points, 0.05, &Around::new(&[arm])).is_none(),
+            "{points:?}"
+        );
         // A clear path is left alone.
         let clear = temporary_goals(start, &[], DVec3::new(0.5, 1.8, 0.4), 0.05, &[arm], None);
         assert!(clear.is_empty(), "{clear:?}");
@@ -425,13 +469,14 @@ mod tests {
         // Pushed out along the arm's normal, the hand clears it but passes in front of it
         // from behind: the line from the shoulder crosses it.
         let pushed = path(temporary_goals(start, &[], goal, 0.05, &[other], None));
-        assert!(deepest(&pushed, 0.05, &[other]).is_none(), "{pushed:?}");
-        let trailing = arm_depth(&pushed, arm, &[other]);
+        let around = Around::new(std::slice::from_ref(&other));
+        assert!(deepest(&pushed, 0.05, &around).is_none(), "{pushed:?}");
+        let trailing = arm_depth(&pushed, arm, &around);
         assert!(trailing > 0.03, "{trailing}");
         // With the arm known, the temporary goal keeps the hand behind the other's arm
         // until it is above it.
         let over = path(temporary_goals(start, &[], goal, 0.05, &[other], Some(arm)));
-        assert!(deepest(&over, 0.05, &[other]).is_none(), "{over:?}");
-        assert_eq!(arm_depth(&over, arm, &[other]), 0.0, "{over:?}");
+        assert!(deepest(&over, 0.05, &around).is_none(), "{over:?}");
+        assert_eq!(arm_depth(&over, arm, &around), 0.0, "{over:?}");
     }
 }
