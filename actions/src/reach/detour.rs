@@ -108,8 +108,8 @@ fn push_out_of(p: DVec3, radius: f64, clearance: f64, around: &Around) -> DVec3 
 /// Volumes a hand goes round, each capsule with the sphere that holds it
 /// ([`troupe_body::collision::Capsule::bounding_sphere`]), found once: planning the
 /// temporary goals tests hundreds of thousands of points against a few hundred capsules
-/// in a crowd, nearly all of them far (finding each bound at each test took 370 M
-/// instructions a reach's start in the crowd benchmark).
+/// in a crowd, nearly all of them far (finding each bound at each test was 105 M of the
+/// 145 M instructions a plan took in the crowd benchmark).
 struct Around<'a> {
     /// The volumes.
     volumes: &'a [Volume],
@@ -130,8 +130,8 @@ impl<'a> Around<'a> {
         Around { volumes, bounds }
     }
 
-    /// [`Volume::may_reach`] for volume `k`: false only when a sphere (centre `c`,
-    /// `radius`) surely stays more than `margin` outside it.
+    /// Whether a sphere (centre `c`, `radius`) may come within `margin` of volume `k`:
+    /// false only when it surely stays farther (see [`sphere_beyond`]).
     fn may_reach(&self, k: usize, c: DVec3, radius: f64, margin: f64) -> bool {
         self.bounds[k].is_none_or(|bounds| !sphere_beyond(c, radius, margin, bounds))
     }
@@ -221,8 +221,7 @@ impl HandPath {
 }
 
 /// The deepest point of the polyline `points` for a sphere of `radius` into the volumes
-/// `around`:
-/// the segment's index, the point and the depth; `None` when it stays clear.
+/// `around`: the segment's index, the point and the depth; `None` when it stays clear.
 fn deepest(points: &[DVec3], radius: f64, around: &Around) -> Option<(usize, DVec3, f64)> {
     let mut best: Option<(usize, DVec3, f64)> = None;
     for (seg, pair) in points.windows(2).enumerate() {
@@ -285,9 +284,9 @@ const DIRECTIONS: usize = 8;
 const FARTHEST: f64 = 0.6;
 
 /// The deepest an arm held straight from `arm.shoulder` to the hand goes into the volumes
-/// `around` while the hand goes along the polyline `points` (0 when it stays clear): a straight
-/// line stands for the arm, so a hand that passes in front of another's arm from behind
-/// it shows the forearm trailing across.
+/// `around` while the hand goes along the polyline `points` (0 when it stays clear): a
+/// straight line stands for the arm, so a hand that passes in front of another's arm from
+/// behind it shows the forearm trailing across.
 fn arm_depth(points: &[DVec3], arm: Arm, around: &Around) -> f64 {
     let mut worst = 0.0f64;
     for pair in points.windows(2) {
@@ -308,9 +307,9 @@ fn arm_depth(points: &[DVec3], arm: Arm, around: &Around) -> f64 {
 }
 
 /// A temporary goal for the path's deepest point `p` on segment `a`–`b`: pushed out of
-/// the volumes `around` along their normals; or, when an `arm` would cross a volume that way, the
-/// nearest clear point in one of [`DIRECTIONS`] round the segment that keeps the arm
-/// out (or in least), the shortest of those that do.
+/// the volumes `around` along their normals; or, when an `arm` would cross a volume that
+/// way, the nearest clear point in one of [`DIRECTIONS`] round the segment that keeps
+/// the arm out (or in least), the shortest of those that do.
 fn temporary_goal(
     (a, b): (DVec3, DVec3),
     p: DVec3,
