@@ -103,7 +103,7 @@ impl Footprint {
 impl Footprint {
     /// The outline of the floor kept clear of this footprint by a body of `radius`: the
     /// polygon grown by `radius`, its corners rounded by polygonal arcs whose sides touch
-    /// the circle and turn by at most [`CORNER_STEP`]. It holds every point within
+    /// the circle and turn by at most 22.5° each. It holds every point within
     /// `radius` of the footprint and reaches at most 2 % of `radius` further (at the
     /// arcs' corners). The navigation mesh cuts these out, and `--debug nav` draws them.
     pub fn inflated(&self, radius: f64) -> Vec<DVec2> {

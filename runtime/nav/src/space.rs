@@ -96,10 +96,12 @@ fn inside(corners: &[DVec2], p: DVec2) -> bool {
 /// What a search does when the body starts within an obstacle's inflation (closer to it
 /// than its radius and [`CLEARANCE`]) but on the mesh.
 ///
-/// The mesh's inflation is polygonal, a little inside the exact one, so such a start is
-/// usually joined to the rest of the mesh; but it can lie in a sliver cut off from it
-/// (a walker pressed 1 cm into a standing one's inflated disc, between it and another:
-/// in the plaza it found no way to a goal 2 m off, the way round open, for 50 s).
+/// The mesh's inflation ([`Footprint::inflated`]) holds the exact one, so such a start
+/// is off the mesh and steps out to the nearest free point whatever this says; it counts
+/// as on the mesh only within the search's 5 mm of the mesh's edge. When the crate
+/// inflated the obstacles, its arcs inside the circle left slivers of mesh cut off from
+/// the rest, and a walker pressed 1 cm into a standing one's inflated disc found no way
+/// to a goal 2 m off, the way round open, for 50 s of the plaza.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pressed {
     /// Search from where the body is, and fail if no path starts there.
