@@ -7,7 +7,7 @@
 //! and the arm's sensors are kept out of them by the IK's secondary task
 //! ([`troupe_body::self_collision::CollisionAvoidance::with_external`]).
 
-use troupe_body::collision::{sphere_beyond, Volume};
+use troupe_body::collision::{Volume, VolumesAround};
 use troupe_body::glam::DVec3;
 use troupe_body::self_collision::{BodySensors, SENSOR_SCALE};
 use troupe_body::{Skeleton, Transform};
@@ -79,11 +79,11 @@ pub fn volumes_around_except(
 /// Moves a sphere (centre `p`, `radius`) out of every volume until its surface is
 /// `clearance` outside each (a few rounds: leaving one may enter another).
 pub fn push_out(p: DVec3, radius: f64, clearance: f64, volumes: &[Volume]) -> DVec3 {
-    push_out_of(p, radius, clearance, &Around::new(volumes))
+    push_out_of(p, radius, clearance, &VolumesAround::new(volumes))
 }
 
 /// [`push_out`] out of volumes whose bounds are found.
-fn push_out_of(p: DVec3, radius: f64, clearance: f64, around: &Around) -> DVec3 {
+fn push_out_of(p: DVec3, radius: f64, clearance: f64, around: &VolumesAround) -> DVec3 {
     let mut q = p;
     for _ in 0..8 {
         let mut moved = false;
@@ -103,45 +103,6 @@ fn push_out_of(p: DVec3, radius: f64, clearance: f64, around: &Around) -> DVec3 
         }
     }
     q
-}
-
-/// Volumes a hand goes round, each capsule with the sphere that holds it
-/// ([`troupe_body::collision::Capsule::bounding_sphere`]), found once: planning the
-/// temporary goals tests hundreds of thousands of points against a few hundred capsules
-/// in a crowd, nearly all of them far (finding each bound at each test was 105 M of the
-/// 145 M instructions a plan took in the crowd benchmark).
-struct Around<'a> {
-    /// The volumes.
-    volumes: &'a [Volume],
-    /// Per volume, a capsule's bounding sphere (centre, radius); `None` for a shape.
-    bounds: Vec<Option<(DVec3, f64)>>,
-}
-
-impl<'a> Around<'a> {
-    /// The bounds of `volumes`.
-    fn new(volumes: &'a [Volume]) -> Around<'a> {
-        let bounds = volumes
-            .iter()
-            .map(|v| match v {
-                Volume::Capsule(k) => Some(k.bounding_sphere()),
-                Volume::Shape { .. } => None,
-            })
-            .collect();
-        Around { volumes, bounds }
-    }
-
-    /// Whether a sphere (centre `c`, `radius`) may come within `margin` of volume `k`:
-    /// false only when it surely stays farther (see [`sphere_beyond`]).
-    fn may_reach(&self, k: usize, c: DVec3, radius: f64, margin: f64) -> bool {
-        self.bounds[k].is_none_or(|bounds| !sphere_beyond(c, radius, margin, bounds))
-    }
-
-    /// The volumes a sphere (centre `c`, `radius`) may come within `margin` of.
-    fn near(&self, c: DVec3, radius: f64, margin: f64) -> impl Iterator<Item = &'a Volume> + '_ {
-        (0..self.volumes.len())
-            .filter(move |&k| self.may_reach(k, c, radius, margin))
-            .map(|k| &self.volumes[k])
-    }
 }
 
 /// A hand's path from its start through via points to a goal, each segment travelled
@@ -222,7 +183,7 @@ impl HandPath {
 
 /// The deepest point of the polyline `points` for a sphere of `radius` into the volumes
 /// `around`: the segment's index, the point and the depth; `None` when it stays clear.
-fn deepest(points: &[DVec3], radius: f64, around: &Around) -> Option<(usize, DVec3, f64)> {
+fn deepest(points: &[DVec3], radius: f64, around: &VolumesAround) -> Option<(usize, DVec3, f64)> {
     let mut best: Option<(usize, DVec3, f64)> = None;
     for (seg, pair) in points.windows(2).enumerate() {
         let n = ((pair[1] - pair[0]).length() / SAMPLE).ceil().max(1.0) as usize;
@@ -287,7 +248,7 @@ const FARTHEST: f64 = 0.6;
 /// `around` while the hand goes along the polyline `points` (0 when it stays clear): a
 /// straight line stands for the arm, so a hand that passes in front of another's arm from
 /// behind it shows the forearm trailing across.
-fn arm_depth(points: &[DVec3], arm: Arm, around: &Around) -> f64 {
+fn arm_depth(points: &[DVec3], arm: Arm, around: &VolumesAround) -> f64 {
     let mut worst = 0.0f64;
     for pair in points.windows(2) {
         let n = ((pair[1] - pair[0]).length() / (2.0 * SAMPLE))
@@ -314,7 +275,7 @@ fn temporary_goal(
     (a, b): (DVec3, DVec3),
     p: DVec3,
     radius: f64,
-    around: &Around,
+    around: &VolumesAround,
     arm: Option<Arm>,
 ) -> DVec3 {
     let pushed = push_out_of(p, radius, DETOUR_CLEARANCE, around);
@@ -376,7 +337,7 @@ pub fn temporary_goals(
         .chain(via.iter().copied())
         .chain(std::iter::once(goal))
         .collect();
-    let around = Around::new(volumes);
+    let around = VolumesAround::new(volumes);
     for _ in 0..MAX_DETOURS {
         let Some((seg, p, _)) = deepest(&points, radius, &around) else {
             break;
@@ -435,7 +396,7 @@ mod tests {
         points.extend(&via);
         points.push(goal);
         assert!(
-            deepest(&points, 0.05, &Around::new(&[arm])).is_none(),
+            deepest(&points, 0.05, &VolumesAround::new(&[arm])).is_none(),
             "{points:?}"
         );
         // A clear path is left alone.
@@ -468,7 +429,7 @@ mod tests {
         // Pushed out along the arm's normal, the hand clears it but passes in front of it
         // from behind: the line from the shoulder crosses it.
         let pushed = path(temporary_goals(start, &[], goal, 0.05, &[other], None));
-        let around = Around::new(std::slice::from_ref(&other));
+        let around = VolumesAround::new(std::slice::from_ref(&other));
         assert!(deepest(&pushed, 0.05, &around).is_none(), "{pushed:?}");
         let trailing = arm_depth(&pushed, arm, &around);
         assert!(trailing > 0.03, "{trailing}");

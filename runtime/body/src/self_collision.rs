@@ -13,7 +13,7 @@
 //! while the end effector keeps to its goal. See [`CollisionAvoidance`].
 
 pub use crate::collision::signed_distance;
-use crate::collision::{outward, sphere_beyond, Volume};
+use crate::collision::{outward, Volume, VolumesAround};
 use crate::error::{Error, Result};
 use crate::ik::{NullSpaceContext, NullSpaceTask};
 use crate::jacobian::{fill_jacobian, Effector};
@@ -322,12 +322,9 @@ pub struct CollisionAvoidance<'a> {
     sensors: &'a BodySensors,
     /// Other bodies' and objects' volumes the sensors also keep out of (see
     /// [`CollisionAvoidance::with_external`]).
-    external: &'a [Volume],
+    external: VolumesAround<'a>,
     /// How far outside the external volumes the sensors start to be pushed (m).
     external_margin: f64,
-    /// Per external volume that is a capsule, a sphere that holds it (see
-    /// [`crate::collision::Capsule::bounding_sphere`]); found on the first step.
-    external_bounds: Vec<Option<(DVec3, f64)>>,
     /// Whether the body's own solids count (off: only the external volumes do).
     own_body: bool,
     margin: f64,
@@ -347,9 +344,8 @@ impl<'a> CollisionAvoidance<'a> {
     pub fn new(sensors: &'a BodySensors, margin: f64, skip: Vec<usize>) -> Self {
         CollisionAvoidance {
             sensors,
-            external: &[],
+            external: VolumesAround::default(),
             external_margin: margin,
-            external_bounds: Vec::new(),
             own_body: true,
             margin,
             skip,
@@ -367,9 +363,8 @@ impl<'a> CollisionAvoidance<'a> {
     /// want a wider margin than the body's own: the sensors sample the limbs sparsely,
     /// and an elbow swinging round another's arm meets it between two samples of a tick.
     pub fn with_external(mut self, external: &'a [Volume], margin: f64) -> Self {
-        self.external = external;
+        self.external = VolumesAround::new(external);
         self.external_margin = margin;
-        self.external_bounds.clear();
         self
     }
 
@@ -436,34 +431,20 @@ impl NullSpaceTask for CollisionAvoidance<'_> {
             self.respond(ctx, c.sensor, c.normal * (c.depth + self.margin), dz);
         }
         self.contacts = contacts;
-        if self.external_bounds.len() != self.external.len() {
-            self.external_bounds = self
-                .external
-                .iter()
-                .map(|v| match v {
-                    Volume::Capsule(k) => Some(k.bounding_sphere()),
-                    Volume::Shape { .. } => None,
-                })
-                .collect();
-        }
         for i in 0..sensors.sensors().len() {
-            if self.external.is_empty() || !self.movable[i] {
+            if self.external.volumes.is_empty() || !self.movable[i] {
                 continue;
             }
             let c = sensors.center(i, ctx.globals);
             let radius = sensors.sensors()[i].radius / SENSOR_SCALE;
-            for k in 0..self.external.len() {
+            for k in 0..self.external.volumes.len() {
                 // A sensor farther than the margin from a capsule's bounding sphere is
-                // farther from the capsule: no push. A reach in a crowd has a few hundred
-                // capsules round it, and measuring each against every sensor at every
-                // iteration took 5 M instructions a tick of the reach
-                // (docs/PERFORMANCE.md).
-                if let Some(bounds) = self.external_bounds[k] {
-                    if sphere_beyond(c, radius, self.external_margin, bounds) {
-                        continue;
-                    }
+                // farther from the capsule: no push (a reach's tick in a crowd took 5 M
+                // instructions measuring them all).
+                if !self.external.may_reach(k, c, radius, self.external_margin) {
+                    continue;
                 }
-                let p = self.external[k].sphere(c, radius);
+                let p = self.external.volumes[k].sphere(c, radius);
                 if p.depth > -self.external_margin {
                     penetrating |= p.depth > 0.0;
                     self.respond(ctx, i, p.normal * (p.depth + self.external_margin), dz);
