@@ -47,6 +47,9 @@ cargo test --workspace --all-targets --no-run
 # of a clean run, checking them 3 (docs/PERFORMANCE.md). Being a check, it also leaves
 # the default build's binary in place for the tests.
 cargo clippy -p troupe --no-default-features --all-targets -- -D warnings
+# The API docs: every intra-doc link resolves and no public item's doc links to a private
+# one. It reuses that check build of the dependencies: seconds.
+RUSTDOCFLAGS="-D warnings" cargo doc --no-deps --workspace --no-default-features
 
 report "$setup_pid" "$setup_log" "scripts/setup.sh --tests" ||
   { echo "test: scripts/setup.sh --tests failed" >&2; exit 1; }

@@ -45,7 +45,7 @@ struct ProbeArgs {
     /// Serial port (FoB, CyberGlove) or hidraw path (SpaceMouse; default: the first found).
     #[arg(long)]
     port: Option<String>,
-    /// VRPN device: Tracker0@host[:port] or Tracker0@tcp://host:port.
+    /// VRPN device: `Tracker0@host[:port]` or `Tracker0@tcp://host:port`.
     #[arg(long)]
     device: Option<String>,
     /// VRPN: also read these button or analog devices of the same server (comma-separated).

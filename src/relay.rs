@@ -25,7 +25,7 @@ pub struct RelayArgs {
     /// first SpaceMouse found).
     #[arg(long)]
     pub port: Option<String>,
-    /// VRPN: the server's device, Tracker0@host[:port] (or Tracker0@tcp://host:port).
+    /// VRPN: the server's device, `Tracker0@host[:port]` (or `Tracker0@tcp://host:port`).
     #[arg(long)]
     pub device: Option<String>,
     /// VMC: the UDP address the sender sends to (host:port).

@@ -68,7 +68,7 @@ pub struct RunArgs {
     #[arg(long, default_value = "1280x720")]
     pub size: String,
     /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ (fit and follow take
-    /// @YAW,PITCH[,DISTANCE]).
+    /// `@YAW,PITCH[,DISTANCE]`).
     #[arg(long, default_value = "fit")]
     pub camera: String,
     /// Show the run in a window (needs a display) instead of running headless; --record,

@@ -49,7 +49,7 @@ pub struct ViewArgs {
     #[arg(long, default_value_t = 4, value_name = "N")]
     every: u64,
     /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ; fit and follow take
-    /// @YAW,PITCH[,DISTANCE]. The default follows a lone actor at a steady distance and
+    /// `@YAW,PITCH[,DISTANCE]`. The default follows a lone actor at a steady distance and
     /// fits several.
     #[arg(long)]
     camera: Option<String>,
@@ -103,7 +103,7 @@ pub struct SnapshotArgs {
     #[arg(long, default_value = "1280x720")]
     size: String,
     /// Camera: fit, follow:NAME or fixed:EX,EY,EZ:TX,TY,TZ; fit and follow take
-    /// @YAW,PITCH[,DISTANCE].
+    /// `@YAW,PITCH[,DISTANCE]`.
     #[arg(long, default_value = "fit")]
     camera: String,
     /// How actors are drawn: the generated skin, the body solids, or bones.

@@ -35,7 +35,7 @@ fn offer_offset(hs: &HandSensors, rest_wrist: &Transform, extent: f64) -> DVec3 
 }
 
 /// Where a giver brings `object` so that `receiver`'s open hand `side` can close on it:
-/// in front of that hand's palm (see [`offer_offset`]), from the last tick's posture.
+/// in front of that hand's palm (see `offer_offset`), from the last tick's posture.
 pub fn offer_point(
     world: &World,
     receiver: usize,

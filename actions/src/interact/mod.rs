@@ -7,7 +7,7 @@
 //!
 //! - **give**: the giver carries the held object to a meeting point between the actors
 //!   (the object leads, the arm follows by IK as in 4.4), raises `arrived`; the receiver
-//!   (a gated [`Grasp`] allowed to take the object from the giver) plans its grasp on the
+//!   (a gated [`Grasp`](crate::grasp::Grasp) allowed to take the object from the giver) plans its grasp on the
 //!   object there, reaches, closes and attaches; once the snapshot shows the receiver
 //!   holding it, the giver opens its hand and completes. Both arms bend round a third
 //!   actor's body or an obstacle in their way through temporary goals

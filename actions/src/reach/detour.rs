@@ -27,7 +27,7 @@ const NEAR: f64 = 2.5;
 const SAMPLE: f64 = 0.01;
 
 /// What a reach by actor `me` must keep its hand out of: the bodies of the other actors
-/// and the obstacles near its start or `goal` (see [`NEAR`]); less every volume that a
+/// and the obstacles near its start or `goal` (see `NEAR`); less every volume that a
 /// sphere of `radius` at the goal already enters (the hand is meant to end there: a
 /// partner's hand in a hand-over, the table under a cup).
 pub fn volumes_around(
@@ -324,7 +324,7 @@ fn temporary_goal(
 /// The via points of a hand (a sphere of `radius`) going from `start` through `via` to
 /// `goal` with the temporary goals that keep it out of `volumes` inserted; `via` as given
 /// when the straight path is clear. With the `arm` the hand hangs from, each temporary
-/// goal also keeps the arm out where it can (see [`temporary_goal`]).
+/// goal also keeps the arm out where it can (see `temporary_goal`).
 pub fn temporary_goals(
     start: DVec3,
     via: &[DVec3],

@@ -25,8 +25,8 @@ const ONCOMING_WIDTH: f64 = 1.2;
 const ONCOMING_COS: f64 = -0.9;
 
 /// Whether actor `ctx.actor` at `position`, going along the unit `along`, walks in a
-/// counter-flow: two or more others face it within [`ONCOMING_RANGE`] ahead on its way
-/// (walking towards it or waiting to), and no obstacle is within [`LANE_CLEARANCE`].
+/// counter-flow: two or more others face it within `ONCOMING_RANGE` ahead on its way
+/// (walking towards it or waiting to), and no obstacle is within `LANE_CLEARANCE`.
 /// `around` are the actors the crowd finds near `position` (`Crowd::near`), which the
 /// steering gathers once a tick for this and for avoidance, and `footprints` the
 /// obstacles round it.
@@ -61,8 +61,8 @@ pub fn in_counter_flow(
 }
 
 /// The velocity a walker in a counter-flow would like: its `planned` one, the part of
-/// its `offset` from the plan that lies outside the lane (0 to [`LANE_WIDTH`] to the
-/// right of `along`) returning at `gain`, and a drift to the right of [`LANE_BIAS`]
+/// its `offset` from the plan that lies outside the lane (0 to `LANE_WIDTH` to the
+/// right of `along`) returning at `gain`, and a drift to the right of `LANE_BIAS`
 /// that fades as the lane's edge nears.
 pub fn preferred(planned: DVec2, offset: DVec2, along: DVec2, gain: f64) -> DVec2 {
     let right = along.perp();

@@ -93,11 +93,11 @@ pub const CADENCE_LOOKBACK: f64 = 0.6;
 
 /// Fastest the body turns about the vertical (rad/s), about a person's quick pivot: a
 /// little above the plan's own turns (a half turn over [`route::TURN_TIME`] peaks at
-/// 5.9 rad/s), so it holds back only a plan whose clock jumped (see [`Walk::pose`]).
+/// 5.9 rad/s), so it holds back only a plan whose clock jumped (see `Walk::pose`).
 pub const MAX_TURN_RATE: f64 = 6.0;
 
 /// How fast (m/s) a swinging foot's landing follows the steered body (see
-/// [`Walk::follow_steering`]).
+/// `Walk::follow_steering`).
 pub const RETARGET_SPEED: f64 = 3.0;
 
 /// Below this speed (m/s) on the previous tick, a body whose plan goes on is stalled (see
@@ -1428,7 +1428,7 @@ impl Generator for Walk {
         }
     }
 
-    /// The plan ahead, sampled every [`NAVIGATION_SAMPLE`] seconds from where its clock
+    /// The plan ahead, sampled every `NAVIGATION_SAMPLE` seconds from where its clock
     /// is now, and the last avoidance decision; walks along a path only (`to`, `path`).
     fn navigation(&self) -> Option<Navigation> {
         let plan = self.plan.as_ref()?;

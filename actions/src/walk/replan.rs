@@ -71,7 +71,7 @@ impl Replan {
     }
 
     /// A route from `from` to `goal` for a body of `radius` round the obstacles and the
-    /// actors standing within [`AROUND`] (but `companions`), from the previous tick's
+    /// actors standing within `AROUND` (but `companions`), from the previous tick's
     /// world; `None` when there is none (the walk then goes on waiting). Counts as an
     /// attempt at walk time `now`.
     ///

@@ -3,7 +3,7 @@
 //! turns towards it about the spine's vertical axis, so that the shoulders, the widest
 //! part of a body seen from above, take less room across the way. The turn grows as the
 //! side gap shrinks below [`CLEAR`], fades with the neighbour's distance ahead or behind,
-//! and changes no faster than [`TURN_RATE`]. It reads the previous tick's crowd, so it
+//! and changes no faster than `TURN_RATE`. It reads the previous tick's crowd, so it
 //! is the same whatever the thread count.
 
 use super::route::direction;
@@ -99,7 +99,7 @@ impl Shoulders {
         best.1 * best.0 * MAX_TURN
     }
 
-    /// Turns towards [`Shoulders::wanted`] by at most [`TURN_RATE`] × `dt`, and lets the
+    /// Turns towards [`Shoulders::wanted`] by at most `TURN_RATE` × `dt`, and lets the
     /// arms swing as the least `gap` (m) between the body and what is round it allows
     /// (see [`ARMS_CLEAR`]).
     pub fn update(

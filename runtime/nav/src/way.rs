@@ -67,7 +67,7 @@ fn line_angle(d: DVec2) -> f64 {
     (d.y.atan2(d.x) - CUT).rem_euclid(PI)
 }
 
-/// The rank of the line along `d` (see [`line_angle`]), or `None` for a zero direction,
+/// The rank of the line along `d` (see `line_angle`), or `None` for a zero direction,
 /// which crosses nobody's way.
 pub fn line_rank(d: DVec2) -> Option<f64> {
     (d.length() >= 1e-9).then(|| line_angle(d))
@@ -113,7 +113,7 @@ impl Walker {
 /// The walker is at `me` (its `velocity` is unused), heading along the unit `along` at
 /// its planned `speed`. A neighbour `j` that moves (faster than [`MOVING`]) and faces a
 /// line with the way makes the walker wait when `j`, going on the way it faces at its
-/// speed or at least [`ASSUMED_SPEED`] (a walker slowed in a crowd will speed up again),
+/// speed or at least `ASSUMED_SPEED` (a walker slowed in a crowd will speed up again),
 /// comes within [`WAIT_HORIZON`] of crossing the walker's way ahead, too soon for the
 /// walker to cross first: the walker then stops where its disc stays [`WAIT_GAP`] clear
 /// of `j`'s as `j` passes. A walker already well onto `j`'s way goes on across (stopping

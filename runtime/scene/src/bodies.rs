@@ -72,7 +72,7 @@ impl BodyJoints {
 
     /// The body posed at `globals`, facing `facing` and going at `velocity` (x, z), of
     /// disc `radius`, whole and carried: the disc stretched by the stride at that speed
-    /// (see [`STRIDE`]), widened by as far as a wrist is further out from it than at
+    /// (see `STRIDE`), widened by as far as a wrist is further out from it than at
     /// rest, and, whole, stretched to hold its feet and knees as well. The carried body is
     /// what the root's step moves (`Crowd::cores`); the planted feet stay behind.
     pub fn body(

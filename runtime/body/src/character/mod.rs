@@ -33,7 +33,7 @@
 //!    character troupe exported) turns as that helper does.
 //! 4. **Feet on troupe's feet**: then each leg's knee and hip are bent by two-bone
 //!    inverse kinematics so that its ankle rides with troupe's foot where the leg can
-//!    reach ([`feet`]): a character of other proportions does not slide its planted
+//!    reach (`feet`): a character of other proportions does not slide its planted
 //!    feet.
 //!
 //! The skin deforms by linear blend skinning with the file's weights (at most four per

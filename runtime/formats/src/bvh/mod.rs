@@ -17,7 +17,7 @@
 //! [`crate::retarget`]).
 //!
 //! One concept per file: [`channel`] (axes, channels, rotation orders), [`motion`] (the
-//! hierarchy and its frames), [`kinematics`], [`read`], [`write`], [`channels`] (a BVH's
+//! hierarchy and its frames), [`kinematics`], [`read`], [`write`](mod@write), [`channels`] (a BVH's
 //! channels as a troupe sequence) and [`rig`] (to and from the one [`Rig`](crate::Rig)).
 
 pub mod channel;

@@ -124,7 +124,7 @@ pub fn to_gltf(rig: &Rig, name: &str, bin_uri: Option<&str>) -> (Root, Vec<u8>) 
 }
 
 /// [`to_gltf`] with recorded objects: each a node of the scene animated on the rig's
-/// frames (see [`super::objects`]); `objects` pairs each object with its one-joint rig
+/// frames (see `objects`); `objects` pairs each object with its one-joint rig
 /// ([`Rig::from_object`] on the body rig's times).
 pub fn to_gltf_with_objects(
     rig: &Rig,
