@@ -207,7 +207,9 @@ pub fn heading_of(d: DVec2) -> f64 {
 /// `a` wrapped to (−π, π].
 pub fn wrap(a: f64) -> f64 {
     let t = std::f64::consts::TAU;
-    let mut x = a % t;
+    // The remainder of a value smaller than the divisor is that value, exactly; most
+    // angles wrapped are, and `%` is a call to `fmod` (0.6 % of the crowd benchmark's tick).
+    let mut x = if a.abs() < t { a } else { a % t };
     if x > std::f64::consts::PI {
         x -= t;
     } else if x <= -std::f64::consts::PI {
@@ -777,6 +779,56 @@ fn filtered_profile(samples: &[f64], duration: f64) -> Profile {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn wrapping_skips_the_remainder_only_where_it_changes_nothing() {
+        // What `wrap` was before it skipped `%` for angles within a turn.
+        let by_remainder = |a: f64| {
+            let t = TAU;
+            let mut x = a % t;
+            if x > PI {
+                x -= t;
+            } else if x <= -PI {
+                x += t;
+            }
+            x
+        };
+        let mut angles = vec![
+            0.0,
+            -0.0,
+            1e-300,
+            -1e-300,
+            PI,
+            -PI,
+            TAU,
+            -TAU,
+            1e9,
+            -1e9,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+            f64::MAX,
+            f64::MIN_POSITIVE,
+        ];
+        for edge in [PI, TAU, 3.0 * PI] {
+            let mut below = edge;
+            let mut above = edge;
+            for _ in 0..4 {
+                below = below.next_down();
+                above = above.next_up();
+                angles.extend([below, above, -below, -above]);
+            }
+        }
+        // And a sweep over ten turns either way.
+        angles.extend((-20_000..=20_000).map(|i| i as f64 * 0.003_141_7));
+        for a in angles {
+            let (got, want) = (wrap(a), by_remainder(a));
+            assert!(
+                got.to_bits() == want.to_bits() || (got.is_nan() && want.is_nan()),
+                "wrap({a:e}) = {got:e}, by the remainder {want:e}"
+            );
+        }
+    }
 
     #[test]
     fn trapezoid_ends_at_the_goal_with_zero_speed() {
