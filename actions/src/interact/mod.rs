@@ -7,11 +7,11 @@
 //!
 //! - **give**: the giver carries the held object to a meeting point between the actors
 //!   (the object leads, the arm follows by IK as in 4.4), raises `arrived`; the receiver
-//!   (a gated [`Grasp`](crate::grasp::Grasp) allowed to take the object from the giver) plans its grasp on the
-//!   object there, reaches, closes and attaches; once the snapshot shows the receiver
-//!   holding it, the giver opens its hand and completes. Both arms bend round a third
-//!   actor's body or an obstacle in their way through temporary goals
-//!   ([`ArmDetour`], thesis 4.6.3), unless `detour` is off.
+//!   (a gated [`Grasp`](crate::grasp::Grasp) allowed to take the object from the
+//!   giver) plans its grasp on the object there, reaches, closes and attaches; once
+//!   the snapshot shows the receiver holding it, the giver opens its hand and completes.
+//!   Both arms bend round a third actor's body or an obstacle in their way through
+//!   temporary goals ([`ArmDetour`], thesis 4.6.3), unless `detour` is off.
 //! - **hold hands**: the active actor reaches the other's hand (grasp frame from the other
 //!   hand's palm, origin search against the other's body solids, its bounding volumes),
 //!   closes its fingers around it (sensors against the other's body) and raises `held`;

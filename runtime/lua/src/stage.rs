@@ -156,7 +156,8 @@ pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua
 }
 
 /// Reads the scene of the Lua state `lua` (for functions registered with
-/// [`ActionKinds::register_function`](crate::kinds::ActionKinds::register_function)). Do not call Lua from inside `f`.
+/// [`ActionKinds::register_function`](crate::kinds::ActionKinds::register_function)).
+/// Do not call Lua from inside `f`.
 pub fn with_scene<R>(lua: &Lua, f: impl FnOnce(&Scene) -> R) -> mlua::Result<R> {
     let stage = lua
         .app_data_ref::<Stage>()

@@ -17,8 +17,9 @@
 //! [`crate::retarget`]).
 //!
 //! One concept per file: [`channel`] (axes, channels, rotation orders), [`motion`] (the
-//! hierarchy and its frames), [`kinematics`], [`read`], [`write`](mod@write), [`channels`] (a BVH's
-//! channels as a troupe sequence) and [`rig`] (to and from the one [`Rig`](crate::Rig)).
+//! hierarchy and its frames), [`kinematics`], [`read`], [`write`](mod@write),
+//! [`channels`] (a BVH's channels as a troupe sequence) and [`rig`] (to and from the
+//! one [`Rig`](crate::Rig)).
 
 pub mod channel;
 pub mod channels;
