@@ -192,4 +192,51 @@ mod tests {
         assert!(defs.contains("function troupe.actor(opts) end"));
         assert!(defs.contains("---@field status BehaviorStatus"));
     }
+
+    /// Whether `code` calls `path` (`wait`, `troupe.actor`, `:walk`): followed by `(` or
+    /// `{`, and for a global not the end of a longer name (`b:wait(` is not `wait(`).
+    fn calls(code: &str, path: &str) -> bool {
+        code.match_indices(path).any(|(at, _)| {
+            let before = code[..at].chars().next_back();
+            let after = code[at + path.len()..]
+                .trim_start_matches(' ')
+                .chars()
+                .next();
+            let whole = path.starts_with(':')
+                || path.contains('.')
+                || !before.is_some_and(|c| c.is_alphanumeric() || "_.:".contains(c));
+            whole && matches!(after, Some('(' | '{'))
+        })
+    }
+
+    #[test]
+    fn every_function_and_method_has_an_example_in_the_lua_api_doc() {
+        let doc = include_str!("../docs/lua-api.md");
+        // The text of every Lua code block.
+        let code: String = doc
+            .split("```lua")
+            .skip(1)
+            .filter_map(|block| block.split("```").next())
+            .collect();
+        let missing: Vec<String> = API
+            .iter()
+            .filter_map(|e| {
+                let path = match (e.item, e.owner) {
+                    (Item::Field(_), _) => return None,
+                    (Item::Method, _) => format!(":{}", e.name),
+                    (Item::Function, "") => e.name.to_string(),
+                    (Item::Function, owner) => format!("{owner}.{}", e.name),
+                };
+                (!calls(&code, &path)).then_some(path)
+            })
+            .collect();
+        assert!(
+            missing.is_empty(),
+            "docs/lua-api.md has no Lua example calling {missing:?}"
+        );
+        // The check itself: a method call is not a global's, nor a longer name's.
+        assert!(calls("b:wait()", ":wait") && !calls("b:wait()", "wait"));
+        assert!(!calls("wait_until(f)", "wait") && calls("x = wait (1)", "wait"));
+        assert!(calls("troupe.devices.glove(pat)", "troupe.devices.glove"));
+    }
 }
