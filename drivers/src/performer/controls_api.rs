@@ -60,7 +60,9 @@ pub(crate) fn install_lua(lua: &Lua, devices: &Table) -> mlua::Result<()> {
     for (key, is_button) in [("on_button", true), ("on_analog", false)] {
         devices.set(
             key,
-            lua.create_function(move |lua, (pat, f): (String, Function)| {
+            // A nil pattern matches every control, as for `buttons` and `analogs`.
+            lua.create_function(move |lua, (pat, f): (Option<String>, Function)| {
+                let pat = pat.unwrap_or_else(|| "*".into());
                 let h = lua
                     .app_data_ref::<Handlers>()
                     .map(|h| h.clone())

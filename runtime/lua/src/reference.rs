@@ -123,7 +123,7 @@ pub const API: &[Entry] = &[
     f("troupe", "actors", &[], "Actor[]", "Every actor, in creation order."),
     f("troupe", "get_actor", &["name: string"], "Actor?", "The actor called `name`, or nil."),
     f("troupe", "get_object", &["name: string"], "Object?", "The object called `name`, or nil."),
-    f("troupe", "plan_grasp", &["actor: Actor|string", "object: Object|string", "opts?: table"], "table?", "How `actor` would grasp `object` (hand, pattern, …), or nil when it cannot."),
+    f("troupe", "plan_grasp", &["actor: Actor|string", "object: Object|string", "opts?: table"], "table?, string?", "How `actor` would grasp `object` (hand, pattern, …), or nil and why it cannot."),
     f("troupe", "performer", &["opts: table"], "Actor", "An actor driven live by motion-capture devices (docs/devices.md)."),
     f("troupe", "wall", &["opts: { from: number[], to: number[], thickness?: number, height?: number }"], "integer", "Adds a wall between two floor points `{x, z}`: an obstacle to walkers (docs/navigation.md)."),
     f("troupe", "floor", &["opts: { outline: number[][], holes?: number[][][] }"], "", "Sets the walkable floor: an outline of `{x, z}` points, with holes."),
