@@ -22,22 +22,25 @@ fn pages() -> Vec<PathBuf> {
     pages
 }
 
-/// `text` without its fenced code blocks and inline code spans, whose brackets and
-/// hashes are code, not links or headings.
+/// The lines of `text` outside its fenced code blocks, whose brackets and hashes are
+/// code, not links or headings.
+fn outside_fences(text: &str) -> impl Iterator<Item = &str> {
+    let mut fenced = false;
+    text.lines().filter(move |line| {
+        let fence = line.trim_start().starts_with("```");
+        fenced ^= fence;
+        !fence && !fenced
+    })
+}
+
+/// `text` without its fenced code blocks and inline code spans.
 fn prose(text: &str) -> String {
     let mut out = String::new();
-    let mut fenced = false;
-    for line in text.lines() {
-        if line.trim_start().starts_with("```") {
-            fenced = !fenced;
-            continue;
-        }
-        if !fenced {
-            // Split on backticks: the odd pieces are code spans.
-            let plain: String = line.split('`').step_by(2).collect();
-            out.push_str(&plain);
-            out.push('\n');
-        }
+    for line in outside_fences(text) {
+        // Split on backticks: the odd pieces are code spans.
+        let plain: String = line.split('`').step_by(2).collect();
+        out.push_str(&plain);
+        out.push('\n');
     }
     out
 }
@@ -95,15 +98,7 @@ fn slug(heading: &str) -> String {
 fn anchors(text: &str) -> BTreeSet<String> {
     let mut found = BTreeSet::new();
     let mut seen: BTreeMap<String, usize> = BTreeMap::new();
-    let mut fenced = false;
-    for line in text.lines() {
-        if line.trim_start().starts_with("```") {
-            fenced = !fenced;
-            continue;
-        }
-        if fenced {
-            continue;
-        }
+    for line in outside_fences(text) {
         let hashes = line.chars().take_while(|&c| c == '#').count();
         if (1..=6).contains(&hashes) && line[hashes..].starts_with(' ') {
             let base = slug(&line[hashes..].replace('`', ""));
@@ -127,13 +122,12 @@ fn anchors(text: &str) -> BTreeSet<String> {
 
 /// The broken relative links of `pages`: (page, link, what is wrong).
 fn broken(pages: &[PathBuf]) -> Vec<(String, String, &'static str)> {
-    let texts: BTreeMap<PathBuf, String> = pages
-        .iter()
-        .map(|p| (p.clone(), std::fs::read_to_string(p).unwrap()))
-        .collect();
+    // Each linked page's anchors, found once.
+    let mut anchors_of: BTreeMap<PathBuf, BTreeSet<String>> = BTreeMap::new();
     let mut bad = Vec::new();
-    for (page, text) in &texts {
-        for link in links(&prose(text)) {
+    for page in pages {
+        let text = std::fs::read_to_string(page).unwrap();
+        for link in links(&prose(&text)) {
             if link.contains(':') || link.is_empty() {
                 continue; // https:, mailto:, …
             }
@@ -156,11 +150,10 @@ fn broken(pages: &[PathBuf]) -> Vec<(String, String, &'static str)> {
             if anchor.is_empty() || target.extension().is_none_or(|e| e != "md") {
                 continue;
             }
-            let target_text = match texts.get(&target) {
-                Some(t) => t.clone(),
-                None => std::fs::read_to_string(&target).unwrap(),
-            };
-            if !anchors(&target_text).contains(anchor) {
+            let known = anchors_of
+                .entry(target.canonicalize().unwrap())
+                .or_insert_with_key(|path| anchors(&std::fs::read_to_string(path).unwrap()));
+            if !known.contains(anchor) {
                 bad.push((name(), link.to_string(), "no such heading or <a id>"));
             }
         }
