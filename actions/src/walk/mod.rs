@@ -96,6 +96,19 @@ pub const CADENCE_LOOKBACK: f64 = 0.6;
 /// 5.9 rad/s), so it holds back only a plan whose clock jumped (see `Walk::pose`).
 pub const MAX_TURN_RATE: f64 = 6.0;
 
+/// Farthest (radians) the body turns from a planted foot's heading: the hip twists 45°
+/// each way (the leg solve stops at 43°), less what the pelvis' own rotation and the
+/// hip's flexion take of it. Past it the leg cannot turn the foot with the body, which
+/// then pivoted about the ankle (a walk to a point behind the actor slid a sole 1 m and
+/// put it 16 cm into the floor). See `Walk::turn_on_planted_feet`.
+pub const TURN_ON_PLANTED: f64 = 0.55;
+/// The cadence (as a walking speed, m/s) of the steps that turn a body on the spot (see
+/// [`route::SPOT_TURN_RATE`]).
+pub const TURNING_CADENCE: f64 = 1.0;
+/// Farthest (radians) a landing turns from the other foot's heading: a step takes the
+/// body round by at most about this much, twice [`TURN_ON_PLANTED`] less a margin.
+pub const STEP_TURN: f64 = 0.9;
+
 /// How fast (m/s) a swinging foot's landing follows the steered body (see
 /// `Walk::follow_steering`).
 pub const RETARGET_SPEED: f64 = 3.0;
@@ -347,8 +360,9 @@ impl Walk {
         ) else {
             return false;
         };
-        if velocity.length() >= STALLED_SPEED
-            || self.steer.plan_time(self.t, self.t) >= plan.end_time
+        let tau = self.steer.plan_time(self.t, self.t);
+        // Turning on the spot, the body stands as its plan goes on.
+        if velocity.length() >= STALLED_SPEED || tau >= plan.end_time || plan.turns_on_the_spot(tau)
         {
             return false;
         }
@@ -532,9 +546,16 @@ impl Walk {
         let now = speed(t);
         let ahead = speed(t + CADENCE_LOOKAHEAD);
         let behind = speed((t - CADENCE_LOOKBACK).max(0.0));
+        // Turning on the spot, the feet step round at a walk's cadence.
+        let turning = if plan.turns_on_the_spot(self.steer.plan_time(t, self.t)) {
+            TURNING_CADENCE
+        } else {
+            0.0
+        };
         now.max(ahead)
             .max(behind)
             .max(self.steer.cadence_floor(plan, t, self.t))
+            .max(turning)
     }
 
     /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
@@ -561,6 +582,41 @@ impl Walk {
     fn cleared(&self, around: &Surroundings, leg: usize, at: DVec2, yaw: f64) -> Option<DVec2> {
         let span = surroundings::foot_span(&self.rig.legs[leg], at, yaw);
         clear_foot(span, around).map(|by| at + by)
+    }
+
+    /// The part of a body turn of `turn` radians (from its heading now) that its planted
+    /// feet allow: the body stays within [`TURN_ON_PLANTED`] of each planted foot's
+    /// heading, or, already further, turns no further from it. A body that must turn
+    /// more steps round, each landing turned from the other foot (see
+    /// [`Walk::landing_yaw`]).
+    fn turn_on_planted_feet(&self, turn: f64) -> f64 {
+        self.feet.iter().fold(turn, |turn, foot| match *foot {
+            Foot::Stance { yaw, .. } => {
+                let off = wrap(self.heading - yaw);
+                if turn > 0.0 {
+                    turn.min((TURN_ON_PLANTED - off).max(0.0))
+                } else {
+                    turn.max(-(TURN_ON_PLANTED + off).max(0.0))
+                }
+            }
+            Foot::Swing { .. } => turn,
+        })
+    }
+
+    /// The heading foot `leg` lands with when the body is to face `wanted` then: within
+    /// [`STEP_TURN`] of the other foot's (planted, or where it lands), so that the body
+    /// can face between the two.
+    fn landing_yaw(&self, leg: usize, wanted: f64) -> f64 {
+        let other = match self.feet[1 - leg] {
+            Foot::Stance { yaw, .. } => yaw,
+            Foot::Swing { to, .. } => to.yaw,
+        };
+        let turn = wrap(wanted - other);
+        if turn.abs() > STEP_TURN {
+            other + STEP_TURN.copysign(turn)
+        } else {
+            wanted
+        }
     }
 
     /// The time at which the total phase reaches `target`, simulated forward from now with
@@ -621,7 +677,7 @@ impl Walk {
         let q = (step / (0.8 * self.rig.thigh_height)).min(1.0);
         Landing {
             plant,
-            yaw: sample.heading,
+            yaw: self.landing_yaw(leg, sample.heading),
             strike: 0.26 * q,
             roll: MAX_ROLL * q,
         }
@@ -909,11 +965,13 @@ impl Walk {
         let mut sample = self.steer.sample(plan, self.t, self.t, self.heading);
         // The body turns no faster than a person pivots: the plan's clock can jump ahead
         // (a push along a route that has just set off, whose speed is still small, moves
-        // it by several ticks), and its heading, still turning in, with it.
+        // it by several ticks), and its heading, still turning in, with it; and no further
+        // from a planted foot than the hip twists.
         let most = MAX_TURN_RATE * ctx.dt;
         let turn = wrap(sample.heading - self.heading);
-        if turn.abs() > most {
-            sample.heading = self.heading + most.copysign(turn);
+        let allowed = self.turn_on_planted_feet(turn.clamp(-most, most));
+        if allowed != turn {
+            sample.heading = self.heading + allowed;
         }
         self.heading = sample.heading;
         let v = sample.speed;
@@ -1403,9 +1461,11 @@ impl Generator for Walk {
         if self.steer.plan_time(self.t, self.t) >= plan.end_time {
             let end = self.end_sample(&plan);
             let settled = (0..2).all(|leg| match self.feet[leg] {
-                Foot::Stance { plant, .. } => {
+                // Its heading too: a turn larger than a step takes more steps.
+                Foot::Stance { plant, yaw, .. } => {
                     (plant - self.spot(&around, leg, &end, 1.0)).length() < 0.01
                         && self.poses[leg].pitch == 0.0
+                        && wrap(yaw - end.heading).abs() < 0.05
                 }
                 Foot::Swing { .. } => false,
             });

@@ -19,6 +19,19 @@ use troupe_motion::{Sequence, Track};
 pub const RAMP_TIME: f64 = 1.0;
 /// Seconds over which the body turns from its initial heading onto the route.
 pub const TURN_TIME: f64 = 0.8;
+/// Largest turn (radians) from the way a route arrives to its requested end heading that
+/// the route takes by a last straight leg along that heading; past it that leg would be a
+/// hairpin (the body going beyond the goal and coming back to it backwards), so the body
+/// arrives as it comes and turns on the spot ([`EndTurn`]).
+pub const LARGEST_APPROACH_TURN: f64 = std::f64::consts::FRAC_PI_2;
+/// Largest turn (radians) from the body's heading to the route's first direction that
+/// the body takes while setting off (over [`TURN_TIME`], the speed rising); past it the
+/// body turns on the spot first, stepping round, and then sets off.
+pub const LARGEST_SETTING_OFF_TURN: f64 = std::f64::consts::FRAC_PI_3;
+/// How fast (rad/s) a plan turns the body on the spot, before setting off or after its
+/// route's end: a half turn in about 2.6 s, stepping round (each step turns the body at
+/// most [`super::STEP_TURN`]).
+pub const SPOT_TURN_RATE: f64 = 1.2;
 /// Corner-cutting passes applied to a polyline path (Chaikin); three passes round a
 /// corner over about a quarter of the shorter adjacent segment.
 const SMOOTHING_PASSES: usize = 3;
@@ -438,12 +451,25 @@ impl Stop {
     }
 }
 
+/// A turn on the spot after a route's end, onto the requested heading: from `at` the
+/// heading turns by `turn` more (radians) along a smoothstep over `duration` seconds.
+#[derive(Clone, Copy, Debug)]
+struct EndTurn {
+    at: f64,
+    turn: f64,
+    duration: f64,
+}
+
 #[derive(Clone, Debug)]
 enum PlanKind {
     Along {
         line: Polyline,
         profile: Profile,
         end_heading: Option<f64>,
+        end_turn: Option<EndTurn>,
+        /// Seconds the body turns on the spot before it sets off (0: it turns as it
+        /// sets off, over [`TURN_TIME`]); the speed profile starts after them.
+        first_turn: f64,
     },
     Follow {
         seq: Arc<Sequence>,
@@ -474,14 +500,23 @@ impl Plan {
                         pts.push(*p);
                     }
                 }
+                let prev = *pts.last().expect("non-empty");
+                let arrival = goal - prev;
+                // Whether the body turns onto the requested heading on the spot.
+                let mut turns_at_end = false;
                 if let Some(h) = end_heading {
-                    // Arrive along the requested heading: the last leg is straight and
-                    // points that way, so the body faces it when it stops.
-                    let prev = *pts.last().expect("non-empty");
-                    let d = ((goal - prev).length() * 0.4).min(0.8);
-                    let approach = goal - direction(*h) * d;
-                    if d > 1e-3 && (approach - prev).length() > 1e-3 {
-                        pts.push(approach);
+                    if arrival.length() > 1e-3
+                        && wrap(*h - heading_of(arrival)).abs() > LARGEST_APPROACH_TURN
+                    {
+                        turns_at_end = true;
+                    } else {
+                        // Arrive along the requested heading: the last leg is straight
+                        // and points that way, so the body faces it when it stops.
+                        let d = (arrival.length() * 0.4).min(0.8);
+                        let approach = goal - direction(*h) * d;
+                        if d > 1e-3 && (approach - prev).length() > 1e-3 {
+                            pts.push(approach);
+                        }
                     }
                 }
                 if (goal - *pts.last().expect("non-empty")).length() > 1e-4 || pts.len() == 1 {
@@ -499,15 +534,40 @@ impl Plan {
                     0.0
                 };
                 let start_turn = first_turn(&line, *end_heading, heading);
+                // A route of no length is a turn on the spot onto its heading, however small.
+                let setting_off = if start_turn.abs() > LARGEST_SETTING_OFF_TURN || end == 0.0 {
+                    start_turn.abs() / SPOT_TURN_RATE
+                } else {
+                    0.0
+                };
+                let end = end + setting_off;
+                let end_turn = match end_heading {
+                    Some(h) if turns_at_end => {
+                        let arrived = heading_of(line.at(line.total()).1);
+                        let turn = wrap(h - arrived);
+                        Some(EndTurn {
+                            at: end,
+                            turn,
+                            duration: turn.abs() / SPOT_TURN_RATE,
+                        })
+                    }
+                    _ => None,
+                };
                 Plan {
                     kind: PlanKind::Along {
                         line,
-                        profile: Profile::Trapezoid { v, ramp, end },
+                        profile: Profile::Trapezoid {
+                            v,
+                            ramp,
+                            end: end - setting_off,
+                        },
                         end_heading: *end_heading,
+                        end_turn,
+                        first_turn: setting_off,
                     },
                     start_heading: heading,
                     start_turn,
-                    end_time: end,
+                    end_time: end + end_turn.map_or(0.0, |e| e.duration),
                     stop: None,
                     recent: Recent::default(),
                 }
@@ -547,6 +607,8 @@ impl Plan {
                         line,
                         profile,
                         end_heading: None,
+                        end_turn: None,
+                        first_turn: 0.0,
                     },
                     start_heading: heading,
                     start_turn,
@@ -597,7 +659,11 @@ impl Plan {
             return;
         }
         let s = match &self.kind {
-            PlanKind::Along { profile, .. } => profile.at(t).0,
+            PlanKind::Along {
+                profile,
+                first_turn,
+                ..
+            } => profile.at(t - first_turn).0,
             PlanKind::Follow { .. } => 0.0,
         };
         // The samples after `t` change.
@@ -612,6 +678,20 @@ impl Plan {
         self.end_time = t + ramp;
     }
 
+    /// Whether the body turns on the spot at `t` seconds after the start: onto the
+    /// route before setting off (see [`LARGEST_SETTING_OFF_TURN`]), or onto the requested
+    /// heading after the route's end ([`EndTurn`]).
+    pub fn turns_on_the_spot(&self, t: f64) -> bool {
+        match &self.kind {
+            PlanKind::Along {
+                end_turn,
+                first_turn,
+                ..
+            } => t < *first_turn || end_turn.is_some_and(|e| t > e.at && t < e.at + e.duration),
+            PlanKind::Follow { .. } => false,
+        }
+    }
+
     /// The body's speed `t` seconds after the start: [`Plan::sample`]'s `speed`, without
     /// finding the position and heading (the cadence asks for several speeds a tick).
     pub fn speed(&self, t: f64) -> f64 {
@@ -619,7 +699,11 @@ impl Plan {
             return stop.at(t).1;
         }
         match &self.kind {
-            PlanKind::Along { profile, .. } => profile.at(t).1,
+            PlanKind::Along {
+                profile,
+                first_turn,
+                ..
+            } => profile.at(t - first_turn).1,
             PlanKind::Follow { .. } => self.sample(t, 0.0).speed,
         }
     }
@@ -649,16 +733,22 @@ impl Plan {
                 line,
                 profile,
                 end_heading,
+                end_turn,
+                first_turn,
             } => {
                 let (s, speed) = match stopping {
                     Some(stop) => {
                         let (d, v) = stop.at(t);
                         (stop.s + d, v)
                     }
-                    None => profile.at(t),
+                    None => profile.at(t - first_turn),
                 };
                 let (position, tangent) = line.at(s);
-                let k = smoothstep(t / TURN_TIME);
+                let k = if *first_turn > 0.0 {
+                    smoothstep(t / first_turn)
+                } else {
+                    smoothstep(t / TURN_TIME)
+                };
                 let path = path_heading(line, tangent, *end_heading, self.start_heading);
                 let mut turn = wrap(path - self.start_heading);
                 // The body turns the way it set out to: a route that starts nearly behind
@@ -669,7 +759,10 @@ impl Plan {
                 } else if turn - self.start_turn < -PI {
                     turn += TAU;
                 }
-                let heading = self.start_heading + turn * k;
+                let mut heading = self.start_heading + turn * k;
+                if let Some(e) = end_turn.filter(|e| t > e.at) {
+                    heading += e.turn * smoothstep((t - e.at) / e.duration);
+                }
                 RootSample {
                     position,
                     heading,

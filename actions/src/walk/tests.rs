@@ -158,6 +158,56 @@ fn arrives_facing_a_requested_heading() {
     assert!(wrap(last.q[r.rig.root[3]] - heading).abs() < 0.05);
 }
 
+#[test]
+fn turns_on_the_spot_step_round_with_the_feet_planted() {
+    // Goals behind, beside and ahead of an actor facing +Z, and requested headings at the
+    // end from 45° to a half turn. Before the body was held by its planted feet, a walk
+    // to a point behind slid a sole 1.02 m and put it 16 cm into the floor; a half turn
+    // at the end, 0.90 m and 17 cm.
+    for (name, to, heading) in [
+        ("behind", DVec3::new(0.3, 0.0, -2.5), None),
+        ("beside", DVec3::new(2.5, 0.0, 0.0), None),
+        ("ahead, then 45°", DVec3::new(0.0, 0.0, 3.0), Some(45f64)),
+        ("ahead, then 90°", DVec3::new(0.0, 0.0, 3.0), Some(90.0)),
+        ("ahead, then 180°", DVec3::new(0.0, 0.0, 3.0), Some(180.0)),
+        (
+            "behind, then 100°",
+            DVec3::new(-1.5, 0.0, -2.5),
+            Some(100.0),
+        ),
+        ("where it stands, then 120°", DVec3::ZERO, Some(120.0)),
+    ] {
+        let heading = heading.map(f64::to_radians);
+        let r = run(100.0, ActorDesc::new("a"), 20.0, |s| {
+            let options = WalkOptions {
+                heading,
+                ..WalkOptions::default()
+            };
+            Walk::to(s, to, options).unwrap()
+        });
+        assert_eq!(r.status, Status::Completed, "{name}");
+        let last = r.frames.last().unwrap();
+        let goal = DVec2::new(to.x, to.z);
+        assert!((root_floor(&r, last) - goal).length() < 0.05, "{name}");
+        if let Some(h) = heading {
+            let facing = last.q[r.rig.root[3]];
+            assert!(wrap(facing - h).abs() < 0.05, "{name}: faces {facing}");
+        }
+        let (slide, lowest) = skating(&r);
+        println!(
+            "{name}: largest slide {:.2} mm, lowest sole point {:.2} mm, {:.2} s",
+            slide * 1e3,
+            lowest * 1e3,
+            last.t
+        );
+        assert!(slide <= 0.012, "{name}: a planted foot slid {slide} m");
+        assert!(
+            lowest >= -1e-3,
+            "{name}: a foot went {lowest} m below the floor"
+        );
+    }
+}
+
 /// Contact of a foot: a sole point within `eps` of the floor.
 fn contact(f: &Frame, leg: usize, eps: f64) -> bool {
     f.soles[leg].iter().any(|p| p.y < eps)
