@@ -361,8 +361,11 @@ impl Walk {
             return false;
         };
         let tau = self.steer.plan_time(self.t, self.t);
-        // Turning on the spot, the body stands as its plan goes on.
-        if velocity.length() >= STALLED_SPEED || tau >= plan.end_time || plan.turns_on_the_spot(tau)
+        // A plan that itself goes slower (turning on the spot, or round a sharp corner)
+        // does not stall the body.
+        if velocity.length() >= STALLED_SPEED
+            || tau >= plan.end_time
+            || plan.speed(tau) < STALLED_SPEED
         {
             return false;
         }

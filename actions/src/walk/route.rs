@@ -29,9 +29,16 @@ pub const LARGEST_APPROACH_TURN: f64 = std::f64::consts::FRAC_PI_2;
 /// body turns on the spot first, stepping round, and then sets off.
 pub const LARGEST_SETTING_OFF_TURN: f64 = std::f64::consts::FRAC_PI_3;
 /// How fast (rad/s) a plan turns the body on the spot, before setting off or after its
-/// route's end: a half turn in about 2.6 s, stepping round (each step turns the body at
+/// route's end: a half turn in about 2.1 s, stepping round (each step turns the body at
 /// most [`super::STEP_TURN`]).
-pub const SPOT_TURN_RATE: f64 = 1.2;
+pub const SPOT_TURN_RATE: f64 = 1.5;
+/// Fastest (rad/s) a route's corners turn the body: the speed drops where the route
+/// turns faster than this at the planned pace (see [`slowed_for_corners`]). The feet
+/// step the body round at most [`super::STEP_TURN`] a step, about half a second at a
+/// walking pace.
+pub const CORNER_TURN_RATE: f64 = 1.5;
+/// Braking and speeding up (m/s²) before and after a corner that slows the body.
+const CORNER_ACCELERATION: f64 = 0.8;
 /// Corner-cutting passes applied to a polyline path (Chaikin); three passes round a
 /// corner over about a quarter of the shorter adjacent segment.
 const SMOOTHING_PASSES: usize = 3;
@@ -352,6 +359,112 @@ impl Polyline {
     }
 }
 
+/// The speed profile of `trapezoid` (ending at `end`) slowed so that the body turns no
+/// faster than [`CORNER_TURN_RATE`] along `line`'s corners, braking before each and
+/// speeding up after at [`CORNER_ACCELERATION`]; `None` when no corner asks for less than
+/// the trapezoid's speed (the plan keeps it, bit for bit). Else the samples of the new
+/// profile and its end.
+fn slowed_for_corners(line: &Polyline, trapezoid: &Profile, end: f64) -> Option<(Profile, f64)> {
+    const DS: f64 = 0.01;
+    let total = line.total();
+    let n = line.points.len();
+    if n < 3 || total < 2.0 * DS || !end.is_finite() {
+        return None;
+    }
+    let cruise = trapezoid.at(0.5 * end).1.max(1e-9);
+    // The tangent turns at a constant rate from one segment's middle to the next one's
+    // (`Polyline::at`): over that stretch the heading turns by the angle at the vertex
+    // between them. Each grid cell (DS long, centred on its point) sums the turns of the
+    // stretches over it, so that a corner shorter than a cell, or several in one, asks
+    // for the time all of its turn takes, and no more.
+    let steps = (total / DS).ceil() as usize;
+    let ds = total / steps as f64;
+    let mut turning = vec![0.0; steps + 1];
+    let dir = |k: usize| (line.points[k] - line.points[k - 1]).normalize_or(DVec2::Y);
+    let cell = |x: f64| ((x / ds + 0.5).floor().max(0.0) as usize).min(steps);
+    for k in 1..n - 1 {
+        let angle = dir(k).angle_to(dir(k + 1)).abs();
+        if angle <= 0.0 {
+            continue;
+        }
+        let from = line.length[k] - 0.5 * (line.length[k] - line.length[k - 1]);
+        let to = line.length[k] + 0.5 * (line.length[k + 1] - line.length[k]);
+        if to - from < 1e-12 {
+            turning[cell(from)] += angle;
+            continue;
+        }
+        let first = cell(from);
+        for (j, turn) in (first..).zip(&mut turning[first..=cell(to)]) {
+            let (lo, hi) = ((j as f64 - 0.5) * ds, (j as f64 + 0.5) * ds);
+            let overlap = hi.min(to) - lo.max(from);
+            if overlap > 0.0 {
+                *turn += angle * overlap / (to - from);
+            }
+        }
+    }
+    // The fastest through each cell: its turn in no less than turn / CORNER_TURN_RATE.
+    let limit: Vec<f64> = turning
+        .iter()
+        .map(|&turn| {
+            if turn > 0.0 {
+                CORNER_TURN_RATE * ds / turn
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    let slowed = limit.iter().any(|&l| l < cruise);
+    if !slowed {
+        return None;
+    }
+    // The trapezoid's own speed at each arc length (it ramps up and down at the ends).
+    let mut speed = vec![0.0; steps + 1];
+    let (mut t, dt) = (0.0, 0.002);
+    let mut at = trapezoid.at(0.0);
+    for (j, v) in speed.iter_mut().enumerate() {
+        let s = j as f64 * ds;
+        while at.0 < s && t < end {
+            t += dt;
+            at = trapezoid.at(t);
+        }
+        *v = at.1.min(limit[j]);
+    }
+    speed[0] = 0.0;
+    speed[steps] = 0.0;
+    // Brake before and speed up after each slow stretch (v² changes by 2·a·ds a step).
+    let dv2 = 2.0 * CORNER_ACCELERATION * ds;
+    for j in 1..=steps {
+        speed[j] = speed[j].min((speed[j - 1] * speed[j - 1] + dv2).sqrt());
+    }
+    for j in (0..steps).rev() {
+        speed[j] = speed[j].min((speed[j + 1] * speed[j + 1] + dv2).sqrt());
+    }
+    // Time at each arc length (constant acceleration within a step), then samples of
+    // distance and speed every PROFILE_DT.
+    let mut time = vec![0.0; steps + 1];
+    for j in 1..=steps {
+        time[j] = time[j - 1] + 2.0 * ds / (speed[j - 1] + speed[j]).max(1e-9);
+    }
+    let end = time[steps];
+    let count = (end / PROFILE_DT).ceil() as usize;
+    let (mut s, mut v) = (Vec::with_capacity(count + 1), Vec::with_capacity(count + 1));
+    let mut j = 0;
+    for i in 0..count {
+        let t = i as f64 * PROFILE_DT;
+        while j + 1 < steps && time[j + 1] <= t {
+            j += 1;
+        }
+        let span = time[j + 1] - time[j];
+        let a = (speed[j + 1] - speed[j]) / span.max(1e-12);
+        let u = t - time[j];
+        s.push(j as f64 * ds + speed[j] * u + 0.5 * a * u * u);
+        v.push(speed[j] + a * u);
+    }
+    s.push(total);
+    v.push(0.0);
+    Some((Profile::Samples { s, v }, count as f64 * PROFILE_DT))
+}
+
 /// Chaikin corner cutting, keeping both ends (and so the first and last directions).
 fn chaikin(points: &[DVec2], passes: usize) -> Vec<DVec2> {
     let mut pts = points.to_vec();
@@ -533,6 +646,9 @@ impl Plan {
                 } else {
                     0.0
                 };
+                let trapezoid = Profile::Trapezoid { v, ramp, end };
+                let (profile, end) =
+                    slowed_for_corners(&line, &trapezoid, end).unwrap_or((trapezoid, end));
                 let start_turn = first_turn(&line, *end_heading, heading);
                 // A route of no length is a turn on the spot onto its heading, however small.
                 let setting_off = if start_turn.abs() > LARGEST_SETTING_OFF_TURN || end == 0.0 {
@@ -556,11 +672,7 @@ impl Plan {
                 Plan {
                     kind: PlanKind::Along {
                         line,
-                        profile: Profile::Trapezoid {
-                            v,
-                            ramp,
-                            end: end - setting_off,
-                        },
+                        profile,
                         end_heading: *end_heading,
                         end_turn,
                         first_turn: setting_off,
@@ -978,12 +1090,137 @@ mod tests {
             fastest = fastest.max((h - last).abs() / dt);
             last = h;
         }
-        // The smoothstep over TURN_TIME turns 180° at 1.5 × π / 0.8 s ≈ 5.9 rad/s at most.
-        assert!(fastest < 6.5, "the heading turned at {fastest:.1} rad/s");
+        // Turned on the spot first (more than 60°): a smoothstep over the turn at
+        // SPOT_TURN_RATE peaks at 1.5 times that rate.
+        assert!(
+            fastest < 1.5 * SPOT_TURN_RATE + 0.05,
+            "the heading turned at {fastest:.2} rad/s"
+        );
         // And it ends facing along the route's last leg.
         let end = plan.sample(plan.end_time, 0.0).heading;
         let along = heading_of(DVec2::new(-0.42, -1.0));
         assert!(wrap(end - along).abs() < 0.05, "{end} against {along}");
+    }
+
+    #[test]
+    fn corners_slow_the_plan_so_that_it_turns_no_faster_than_the_feet_follow() {
+        let square = |speed: f64| Route::Path {
+            points: vec![
+                DVec2::new(0.0, 2.0),
+                DVec2::new(2.0, 2.0),
+                DVec2::new(2.0, 0.0),
+                DVec2::new(0.0, 0.0),
+            ],
+            heading: None,
+            speed,
+        };
+        // (Its rounded corners turn 90° over about 0.5 m: at 0.8 m/s the heading turns
+        // at about 1.3 rad/s and the plan keeps the trapezoid.)
+        for speed in [1.2, 1.6, 2.0] {
+            let plan = Plan::new(&square(speed), DVec2::ZERO, 0.0);
+            assert!(matches!(
+                plan.kind,
+                PlanKind::Along {
+                    profile: Profile::Samples { .. },
+                    ..
+                }
+            ));
+            let dt = 0.01;
+            let mut last = plan.sample(0.0, 0.0);
+            let (mut fastest_turn, mut fastest): (f64, f64) = (0.0, 0.0);
+            let mut t = dt;
+            while t <= plan.end_time {
+                let now = plan.sample(t, 0.0);
+                // Past the setting off's turn (over TURN_TIME).
+                if t > TURN_TIME {
+                    fastest_turn = fastest_turn.max(wrap(now.heading - last.heading).abs() / dt);
+                }
+                fastest = fastest.max(now.speed);
+                last = now;
+                t += dt;
+            }
+            assert!(
+                fastest_turn < CORNER_TURN_RATE * 1.1,
+                "{speed} m/s: the heading turned at {fastest_turn:.2} rad/s"
+            );
+            assert!(fastest <= speed + 1e-9, "{speed} m/s: {fastest}");
+            let end = plan.sample(plan.end_time, 0.0);
+            assert!(
+                end.position.length() < 1e-9,
+                "{speed} m/s: ends at {}",
+                end.position
+            );
+            assert_eq!(end.speed, 0.0);
+        }
+        // A straight route keeps the trapezoid: those plans are as they were, bit for bit.
+        let straight = Route::Path {
+            points: vec![DVec2::new(0.0, 5.0)],
+            heading: None,
+            speed: 1.4,
+        };
+        let plan = Plan::new(&straight, DVec2::ZERO, 0.0);
+        assert!(matches!(
+            plan.kind,
+            PlanKind::Along {
+                profile: Profile::Trapezoid { .. },
+                ..
+            }
+        ));
+    }
+
+    #[test]
+    fn any_route_ends_at_its_goal_in_the_time_its_length_and_turns_ask() {
+        // Random routes of 2-5 points, some only centimetres apart (a new route round
+        // people standing has such legs): a corner shorter than the grid of
+        // `slowed_for_corners` once spread its turn's limit over whole cells and held a
+        // plaza walker nearly still for 20 s on a 2 m route.
+        let mut seed = 12345u64;
+        let mut random = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for case in 0..2000 {
+            let count = 2 + (random() * 4.0) as usize;
+            let mut points = Vec::new();
+            let mut p = DVec2::ZERO;
+            for _ in 0..count {
+                let scale = if random() < 0.3 { 0.05 } else { 1.0 };
+                p += DVec2::new(random() * 4.0 - 2.0, random() * 4.0 - 2.0) * scale;
+                points.push(p);
+            }
+            let goal = p;
+            let route = Route::Path {
+                points,
+                heading: None,
+                speed: 1.3,
+            };
+            let plan = Plan::new(&route, DVec2::ZERO, random() * 6.0);
+            let PlanKind::Along { line, .. } = &plan.kind else {
+                unreachable!("a path's plan is along a line");
+            };
+            // The whole turn of the route at the corners' rate (half as long again for the
+            // braking and speeding up round them), a half turn on the spot to set off, and
+            // the rest at a third of the pace.
+            let dir = |k: usize| (line.points[k] - line.points[k - 1]).normalize_or(DVec2::Y);
+            let turns: f64 = (1..line.points.len() - 1)
+                .map(|k| dir(k).angle_to(dir(k + 1)).abs())
+                .sum();
+            let bound = line.total() / (1.3 / 3.0)
+                + 2.0 * RAMP_TIME
+                + 1.5 * turns / CORNER_TURN_RATE
+                + PI / SPOT_TURN_RATE;
+            assert!(
+                plan.end_time <= bound,
+                "case {case}: {:.2} s for {:.2} m turning {turns:.2} rad (bound {bound:.2} s)",
+                plan.end_time,
+                line.total()
+            );
+            let end = plan.sample(plan.end_time, 0.0);
+            assert!((end.position - goal).length() < 1e-9, "case {case}");
+            assert!(end.speed.abs() < 1e-9, "case {case}: {}", end.speed);
+        }
     }
 
     #[test]
