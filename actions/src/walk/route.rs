@@ -22,7 +22,7 @@ pub const TURN_TIME: f64 = 0.8;
 /// Largest turn (radians) from the way a route arrives to its requested end heading that
 /// the route takes by a last straight leg along that heading; past it that leg would be a
 /// hairpin (the body going beyond the goal and coming back to it backwards), so the body
-/// arrives as it comes and turns on the spot ([`EndTurn`]).
+/// arrives as it comes and turns on the spot (`EndTurn`).
 pub const LARGEST_APPROACH_TURN: f64 = std::f64::consts::FRAC_PI_2;
 /// Largest turn (radians) from the body's heading to the route's first direction that
 /// the body takes while setting off (over [`TURN_TIME`], the speed rising); past it the
@@ -33,7 +33,7 @@ pub const LARGEST_SETTING_OFF_TURN: f64 = std::f64::consts::FRAC_PI_3;
 /// most [`super::STEP_TURN`]).
 pub const SPOT_TURN_RATE: f64 = 1.5;
 /// Fastest (rad/s) a route's corners turn the body: the speed drops where the route
-/// turns faster than this at the planned pace (see [`slowed_for_corners`]). The feet
+/// turns faster than this at the planned pace (see `slowed_for_corners`). The feet
 /// step the body round at most [`super::STEP_TURN`] a step, about half a second at a
 /// walking pace.
 pub const CORNER_TURN_RATE: f64 = 1.5;
@@ -792,7 +792,7 @@ impl Plan {
 
     /// Whether the body turns on the spot at `t` seconds after the start: onto the
     /// route before setting off (see [`LARGEST_SETTING_OFF_TURN`]), or onto the requested
-    /// heading after the route's end ([`EndTurn`]).
+    /// heading after the route's end (`EndTurn`).
     pub fn turns_on_the_spot(&self, t: f64) -> bool {
         match &self.kind {
             PlanKind::Along {
