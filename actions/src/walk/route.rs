@@ -582,7 +582,7 @@ enum PlanKind {
         end_turn: Option<EndTurn>,
         /// Seconds the body turns on the spot before it sets off (0: it turns as it
         /// sets off, over [`TURN_TIME`]); the speed profile starts after them.
-        first_turn: f64,
+        spot_turn: f64,
     },
     Follow {
         seq: Arc<Sequence>,
@@ -675,7 +675,7 @@ impl Plan {
                         profile,
                         end_heading: *end_heading,
                         end_turn,
-                        first_turn: setting_off,
+                        spot_turn: setting_off,
                     },
                     start_heading: heading,
                     start_turn,
@@ -720,7 +720,7 @@ impl Plan {
                         profile,
                         end_heading: None,
                         end_turn: None,
-                        first_turn: 0.0,
+                        spot_turn: 0.0,
                     },
                     start_heading: heading,
                     start_turn,
@@ -772,10 +772,8 @@ impl Plan {
         }
         let s = match &self.kind {
             PlanKind::Along {
-                profile,
-                first_turn,
-                ..
-            } => profile.at(t - first_turn).0,
+                profile, spot_turn, ..
+            } => profile.at(t - spot_turn).0,
             PlanKind::Follow { .. } => 0.0,
         };
         // The samples after `t` change.
@@ -797,9 +795,9 @@ impl Plan {
         match &self.kind {
             PlanKind::Along {
                 end_turn,
-                first_turn,
+                spot_turn,
                 ..
-            } => t < *first_turn || end_turn.is_some_and(|e| t > e.at && t < e.at + e.duration),
+            } => t < *spot_turn || end_turn.is_some_and(|e| t > e.at && t < e.at + e.duration),
             PlanKind::Follow { .. } => false,
         }
     }
@@ -812,10 +810,8 @@ impl Plan {
         }
         match &self.kind {
             PlanKind::Along {
-                profile,
-                first_turn,
-                ..
-            } => profile.at(t - first_turn).1,
+                profile, spot_turn, ..
+            } => profile.at(t - spot_turn).1,
             PlanKind::Follow { .. } => self.sample(t, 0.0).speed,
         }
     }
@@ -846,18 +842,18 @@ impl Plan {
                 profile,
                 end_heading,
                 end_turn,
-                first_turn,
+                spot_turn,
             } => {
                 let (s, speed) = match stopping {
                     Some(stop) => {
                         let (d, v) = stop.at(t);
                         (stop.s + d, v)
                     }
-                    None => profile.at(t - first_turn),
+                    None => profile.at(t - spot_turn),
                 };
                 let (position, tangent) = line.at(s);
-                let k = if *first_turn > 0.0 {
-                    smoothstep(t / first_turn)
+                let k = if *spot_turn > 0.0 {
+                    smoothstep(t / spot_turn)
                 } else {
                     smoothstep(t / TURN_TIME)
                 };
