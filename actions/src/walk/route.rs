@@ -1110,8 +1110,8 @@ mod tests {
             heading: None,
             speed,
         };
-        // (Its rounded corners turn 90° over about 0.5 m: at 0.8 m/s the heading turns
-        // at about 1.3 rad/s and the plan keeps the trapezoid.)
+        // (Its rounded corners turn 90° over about 1 m of the route: at 0.8 m/s the
+        // heading turns at about 1.3 rad/s and the plan keeps the trapezoid.)
         for speed in [1.2, 1.6, 2.0] {
             let plan = Plan::new(&square(speed), DVec2::ZERO, 0.0);
             assert!(matches!(
@@ -1168,8 +1168,8 @@ mod tests {
     fn any_route_ends_at_its_goal_in_the_time_its_length_and_turns_ask() {
         // Random routes of 2-5 points, some only centimetres apart (a new route round
         // people standing has such legs): a corner shorter than the grid of
-        // `slowed_for_corners` once spread its turn's limit over whole cells and held a
-        // plaza walker nearly still for 20 s on a 2 m route.
+        // `slowed_for_corners` once spread its turn's limit over whole cells: a plaza
+        // walker 5 m from its goal got plans of 20-24 s and stood for over 100 s.
         let mut seed = 12345u64;
         let mut random = || {
             seed = seed
