@@ -344,18 +344,27 @@ impl Polyline {
         } else {
             0.0
         };
-        let dir = |k: usize| (self.points[k] - self.points[k - 1]).normalize_or(DVec2::Y);
         // The tangent turns linearly from one segment's middle to the next one's, so the
         // heading has no jump at the vertices.
-        let here = dir(i);
+        let here = self.direction(i);
         let tangent = if u < 0.5 && i > 1 {
-            dir(i - 1).lerp(here, 0.5 + u)
+            self.direction(i - 1).lerp(here, 0.5 + u)
         } else if u >= 0.5 && i + 1 < n {
-            here.lerp(dir(i + 1), u - 0.5)
+            here.lerp(self.direction(i + 1), u - 0.5)
         } else {
             here
         };
         (a + (b - a) * u, tangent.normalize_or(here))
+    }
+
+    /// The unit direction of segment `k` (from point `k − 1` to point `k`).
+    fn direction(&self, k: usize) -> DVec2 {
+        (self.points[k] - self.points[k - 1]).normalize_or(DVec2::Y)
+    }
+
+    /// How far (radians, unsigned) the route turns at inner point `k`.
+    fn turn_at(&self, k: usize) -> f64 {
+        self.direction(k).angle_to(self.direction(k + 1)).abs()
     }
 }
 
@@ -380,10 +389,9 @@ fn slowed_for_corners(line: &Polyline, trapezoid: &Profile, end: f64) -> Option<
     let steps = (total / DS).ceil() as usize;
     let ds = total / steps as f64;
     let mut turning = vec![0.0; steps + 1];
-    let dir = |k: usize| (line.points[k] - line.points[k - 1]).normalize_or(DVec2::Y);
     let cell = |x: f64| ((x / ds + 0.5).floor().max(0.0) as usize).min(steps);
     for k in 1..n - 1 {
-        let angle = dir(k).angle_to(dir(k + 1)).abs();
+        let angle = line.turn_at(k);
         if angle <= 0.0 {
             continue;
         }
@@ -1199,10 +1207,7 @@ mod tests {
             // The whole turn of the route at the corners' rate (half as long again for the
             // braking and speeding up round them), a half turn on the spot to set off, and
             // the rest at a third of the pace.
-            let dir = |k: usize| (line.points[k] - line.points[k - 1]).normalize_or(DVec2::Y);
-            let turns: f64 = (1..line.points.len() - 1)
-                .map(|k| dir(k).angle_to(dir(k + 1)).abs())
-                .sum();
+            let turns: f64 = (1..line.points.len() - 1).map(|k| line.turn_at(k)).sum();
             let bound = line.total() / (1.3 / 3.0)
                 + 2.0 * RAMP_TIME
                 + 1.5 * turns / CORNER_TURN_RATE
