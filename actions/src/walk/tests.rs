@@ -193,18 +193,7 @@ fn turns_on_the_spot_step_round_with_the_feet_planted() {
             let facing = last.q[r.rig.root[3]];
             assert!(wrap(facing - h).abs() < 0.05, "{name}: faces {facing}");
         }
-        let (slide, lowest) = skating(&r);
-        println!(
-            "{name}: largest slide {:.2} mm, lowest sole point {:.2} mm, {:.2} s",
-            slide * 1e3,
-            lowest * 1e3,
-            last.t
-        );
-        assert!(slide <= 0.0067, "{name}: a planted foot slid {slide} m");
-        assert!(
-            lowest >= -1e-3,
-            "{name}: a foot went {lowest} m below the floor"
-        );
+        assert_feet_planted(&r, name, 0.0067);
     }
 }
 
@@ -241,21 +230,7 @@ fn sharp_corners_slow_the_walk_so_that_the_feet_stay_planted() {
                 Walk::path(s, points.clone(), options).unwrap()
             });
             assert_eq!(r.status, Status::Completed, "{name} at {speed} m/s");
-            let (slide, lowest) = skating(&r);
-            println!(
-                "{name} at {speed} m/s: largest slide {:.2} mm, lowest sole point {:.2} mm, {:.2} s",
-                slide * 1e3,
-                lowest * 1e3,
-                r.frames.last().unwrap().t
-            );
-            assert!(
-                slide <= 0.0067,
-                "{name} at {speed} m/s: a planted foot slid {slide} m"
-            );
-            assert!(
-                lowest >= -1e-3,
-                "{name} at {speed} m/s: a sole went {lowest} m below the floor"
-            );
+            assert_feet_planted(&r, &format!("{name} at {speed} m/s"), 0.0067);
         }
     }
 }
@@ -363,6 +338,23 @@ fn skating(r: &Run) -> (f64, f64) {
     (worst, lowest)
 }
 
+/// Prints `what`'s largest slide and lowest sole point (see [`skating`]) and holds the
+/// slide to `bound` (m) and every sole point to at most 1 mm below the floor.
+fn assert_feet_planted(r: &Run, what: &str, bound: f64) {
+    let (slide, lowest) = skating(r);
+    println!(
+        "{what}: largest slide {:.2} mm, lowest sole point {:.2} mm, {:.2} s",
+        slide * 1e3,
+        lowest * 1e3,
+        r.frames.last().map_or(0.0, |f| f.t)
+    );
+    assert!(slide <= bound, "{what}: a planted foot slid {slide} m");
+    assert!(
+        lowest >= -1e-3,
+        "{what}: a foot went {lowest} m below the floor"
+    );
+}
+
 #[test]
 fn planted_feet_do_not_skate_nor_go_below_the_floor() {
     // Straight walks over the speed range, and a path with turns.
@@ -377,17 +369,7 @@ fn planted_feet_do_not_skate_nor_go_below_the_floor() {
             )
             .unwrap()
         });
-        let (slide, lowest) = skating(&r);
-        println!(
-            "rv {rv}: largest slide {:.2} mm, lowest sole point {:.2} mm",
-            slide * 1e3,
-            lowest * 1e3
-        );
-        assert!(slide <= 0.01, "rv {rv}: a planted foot slid {slide} m");
-        assert!(
-            lowest >= -1e-3,
-            "rv {rv}: a foot went {lowest} m below the floor"
-        );
+        assert_feet_planted(&r, &format!("rv {rv}"), 0.01);
     }
     let r = run(200.0, ActorDesc::new("a"), 30.0, |s| {
         let pts = vec![
@@ -399,17 +381,7 @@ fn planted_feet_do_not_skate_nor_go_below_the_floor() {
         Walk::path(s, pts, WalkOptions::default()).unwrap()
     });
     assert_eq!(r.status, Status::Completed);
-    let (slide, lowest) = skating(&r);
-    println!(
-        "path: largest slide {:.2} mm, lowest sole point {:.2} mm",
-        slide * 1e3,
-        lowest * 1e3
-    );
-    assert!(slide <= 0.01, "path: a planted foot slid {slide} m");
-    assert!(
-        lowest >= -1e-3,
-        "path: a foot went {lowest} m below the floor"
-    );
+    assert_feet_planted(&r, "path", 0.01);
 }
 
 #[test]
