@@ -94,6 +94,35 @@ test("two walkers pass in a 1.2 m corridor turning their shoulders, their solids
   expect(turned[1] > 15 and turned[2] > 15, string.format("the shoulders turned to pass: %.0f° and %.0f°", turned[1], turned[2]))
 end)
 
+-- Ann squeezes between a wall and Bob standing: her chest turns towards him, and the walk
+-- bends her elbows. A forearm bent from the turned chest pointed at him, her wrist 2–3 cm
+-- further out than at rest (0.247–0.259 m from her root against 0.228 m; in the plaza a
+-- walker's hand went 2 cm into a standing one's so); each upper arm is twisted back by
+-- the turn, so the forearms keep along the way.
+test("a walker squeezing past a standing actor turns its shoulders and keeps its hands in", function()
+  troupe.wall{ from = {-0.69, -3}, to = {-0.69, 5}, thickness = 0.1 }
+  local bob = troupe.actor{ name = "bob", at = {0.3, 0, 1} }
+  local ann = troupe.actor{ name = "ann", at = {-0.24, 0, -2} }
+  local function out() return ann:joint_position("l_wrist")[1] - ann:position()[1] end
+  local rest = out()
+  local w = ann:walk{ to = {-0.24, 0, 4} }
+  local turn, widest = 0, 0
+  local ok, deepest, between = watch(function()
+    local z = ann:position()[3]
+    if z > 0 and z < 2 then
+      turn = math.max(turn, ann:dof("vt12_torsion") + ann:dof("vt6_torsion"))
+      widest = math.max(widest, out())
+    end
+    return w.status == "completed"
+  end, 20)
+  print(string.format("squeezing past: chest turned %.0f°, left wrist %.3f m out (%.3f m at rest), deepest %.4f m (%s)",
+    math.deg(turn), widest, rest, deepest, between))
+  expect(ok and w.status == "completed", "arrived: " .. tostring(w.error))
+  expect(turn > 0.2, string.format("the chest turned towards bob: %.2f rad", turn))
+  expect(widest < rest + 0.01, string.format("the wrist %.3f m out, %.3f m at rest", widest, rest))
+  expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
+end)
+
 test("a walker alone keeps its shoulders square", function()
   local ann = troupe.actor{ name = "ann" }
   local w = ann:walk{ to = {0, 0, 6} }

@@ -236,8 +236,8 @@ pub struct Walk {
     dt: f64,
 }
 
-/// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×6].
-type UpperValues = ([f64; 6], [f64; 3], [f64; 4], [[f64; 3]; 2]);
+/// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×8].
+type UpperValues = ([f64; 6], [f64; 3], [f64; 4], [[f64; 4]; 2]);
 
 impl Walk {
     /// A walk of `route` by a body built from a humanoid template.
@@ -912,7 +912,7 @@ impl Walk {
         a: f64,
         rv: f64,
         sigma: f64,
-    ) -> (f64, f64, [f64; 3], [f64; 4], [[f64; 3]; 2]) {
+    ) -> (f64, f64, [f64; 3], [f64; 4], [[f64; 4]; 2]) {
         let o = &self.options;
         let ht = self.rig.thigh_height;
         let c1 = (TAU * phi).cos();
@@ -937,10 +937,10 @@ impl Walk {
         // Arms swing against the legs: the right arm forward with the left foot.
         let swing = (0.12 + 0.10 * rv) * a * o.arm_swing;
         let elbow0 = (0.2 + 0.08 * rv) * a + 1.2 * o.run * a;
-        let mut arms = [[0.0; 3]; 2];
+        let mut arms = [[0.0; 4]; 2];
         for (i, sign) in [(0usize, -1.0), (1, 1.0)] {
             let flex = sign * swing * c1 + 0.03 * a;
-            arms[i] = [flex, 0.06 * a, elbow0 + 0.6 * flex.max(0.0)];
+            arms[i] = [flex, 0.06 * a, elbow0 + 0.6 * flex.max(0.0), 0.0];
         }
         (sway, vertical, [tilt, list, rot], spine, arms)
     }
@@ -1397,8 +1397,9 @@ impl Generator for Walk {
         };
         let (root, pelvis, mut spine, mut arms) = self.pose(ctx, &around, &plan, out);
         // The shoulders turn to pass someone close beside (see [`shoulders`]); the arms,
-        // whose swing would now go sideways into the other, hang still as they turn, and
-        // swing less as anything comes close.
+        // whose swing would now go sideways into the other, hang still as they turn,
+        // twisted back so that the bent elbows keep the forearms along the way and not
+        // towards the other, and swing less as anything comes close.
         if let Some(footprints) = &footprints {
             let me = self.body(ctx);
             let gap = nearest_gap(&me, &around, shoulders::ARMS_CLEAR);
@@ -1410,9 +1411,10 @@ impl Generator for Walk {
         spine[1] += self.shoulders.turn / 2.0;
         spine[2] += self.shoulders.turn / 2.0;
         let swing = self.shoulders.swing();
-        for arm in &mut arms {
+        for (arm, twist) in arms.iter_mut().zip(self.shoulders.arm_twists()) {
             arm[0] *= swing;
             arm[1] *= swing;
+            arm[3] = twist;
         }
         let rig = &self.rig;
         for (&d, &v) in rig.root.iter().zip(&root) {

@@ -62,8 +62,9 @@ pub struct Rig {
     pub legs: [Leg; 2],
     /// Spine DOFs: vl5 flexion, vt12 torsion, vt6 torsion, vl5 lateral bend.
     pub spine: [usize; 4],
-    /// Per arm (left, right): shoulder flexion, shoulder abduction, elbow flexion.
-    pub arms: [[usize; 3]; 2],
+    /// Per arm (left, right): shoulder flexion, shoulder abduction, elbow flexion,
+    /// shoulder twist.
+    pub arms: [[usize; 4]; 2],
     /// Thigh height Ht: from the hip's flexion axis to the sole, standing (thesis 2.6).
     pub thigh_height: f64,
     /// Height of the ankle joint above the sole.
@@ -232,11 +233,13 @@ impl Rig {
                     d("l_shoulder_flexion")?,
                     d("l_shoulder_abduction")?,
                     d("l_elbow_flexion")?,
+                    d("l_shoulder_twist")?,
                 ],
                 [
                     d("r_shoulder_flexion")?,
                     d("r_shoulder_abduction")?,
                     d("r_elbow_flexion")?,
+                    d("r_shoulder_twist")?,
                 ],
             ],
             thigh_height: 0.5 * (l_hip.y + r_hip.y),

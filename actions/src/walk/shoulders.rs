@@ -118,6 +118,15 @@ impl Shoulders {
         self.arms += (arms - self.arms).clamp(-step, step);
     }
 
+    /// The shoulder twists (left, right, as the template's DOF values) that turn each
+    /// upper arm back by the shoulders' turn: the walk bends the elbows, and a forearm bent
+    /// from a chest turned towards a neighbour points at the neighbour (2.5 cm further out
+    /// at the wrist in the plaza, where hands met by 2 to 3 cm); twisted back it points
+    /// the way the body goes. The left twist's axis is −Y and the right's +Y.
+    pub fn arm_twists(&self) -> [f64; 2] {
+        [self.turn, -self.turn]
+    }
+
     /// How much of the gait's arm swing is left: less as the shoulders turn, and as
     /// [`Shoulders::arms`] says.
     pub fn swing(&self) -> f64 {
