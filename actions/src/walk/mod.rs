@@ -876,9 +876,9 @@ impl Walk {
                 let clearance = lift * 4.0 * w * (1.0 - w);
                 let mut ankle = from + (target - from) * s;
                 let mut yaw = from_yaw + wrap(to.yaw - from_yaw) * ease;
-                // A foot in the air closes on another body by at most half the gap, like
-                // the body's step (`troupe_nav::clearance`): held where it was, it swings
-                // on to its landing from there.
+                // A foot in the air closes on another body or foot by at most half the
+                // gap, like the body's step (`troupe_nav::clearance`): held where it was,
+                // it swings on to its landing from there.
                 let before = self.poses[leg];
                 let span = |a: DVec3, yaw: f64| {
                     surroundings::foot_span(&rig.legs[leg], DVec2::new(a.x, a.z), yaw)

@@ -47,6 +47,9 @@ pub fn gather<'a>(
             continue;
         }
         around.bodies.extend(crowd.bodies.get(j));
+        if let Some(Some(feet)) = crowd.soles.get(j) {
+            around.feet.extend(feet);
+        }
     }
     around.obstacles = footprints.within(reach + RANGE).collect();
     around

@@ -206,6 +206,9 @@ fn footprint_gap_bound(a: (DVec2, f64), f: &Footprint) -> f64 {
 pub struct Surroundings<'a> {
     /// Other walkers' and standing actors' bodies.
     pub bodies: Vec<Capsule>,
+    /// Their feet (see `Crowd::soles`), which a foot in the air keeps from as from a
+    /// body.
+    pub feet: Vec<FootSpan>,
     /// The obstacles near.
     pub obstacles: Vec<&'a Footprint>,
 }
@@ -321,25 +324,36 @@ pub fn nearest_gap(me: &Capsule, around: &Surroundings, within: f64) -> f64 {
 }
 
 /// Whether a foot in the air may move from span `from` to span `to` this tick: it closes
-/// on no body `around` by more than half the gap between them (the body may close the
-/// other half) and on no obstacle by more than the gap, and goes no deeper into either.
+/// on no body or foot `around` by more than half the gap between them (the other may
+/// close the other half) and on no obstacle by more than the gap, and goes no deeper into
+/// any. The feet count besides their bodies' capsules: a foot already inside a capsule
+/// widened by a foot planted wide (the capsule is then mostly floor) could go on along
+/// it, no deeper, into that foot.
 pub fn foot_may_move(from: &FootSpan, to: &FootSpan, around: &Surroundings) -> bool {
-    let gap = |span: &FootSpan, body: &Capsule| {
-        let (mine, theirs) = nearest_between((span.heel, span.toe), body.ends());
-        (mine - theirs).length() - span.radius - body.radius
+    let gap = |span: &FootSpan, (ends, radius): ((DVec2, DVec2), f64)| {
+        let (mine, theirs) = nearest_between((span.heel, span.toe), ends);
+        (mine - theirs).length() - span.radius - radius
     };
     // A move of at most `moved` closes at most that much: a body at least twice as far
     // is not closed on by more than half its gap.
     let moved = (to.heel - from.heel)
         .length()
         .max((to.toe - from.toe).length());
-    let bodies_ok = around.bodies.iter().all(|body| {
-        if gap_bound(from.bound(), body.bound()) >= 2.0 * moved {
+    let closes_at_most_half = |bound: (DVec2, f64), other: ((DVec2, DVec2), f64)| {
+        if gap_bound(from.bound(), bound) >= 2.0 * moved {
             return true;
         }
-        let (before, after) = (gap(from, body), gap(to, body));
+        let (before, after) = (gap(from, other), gap(to, other));
         after >= before || before - after <= (before / 2.0).max(0.0)
-    });
+    };
+    let bodies_ok = around
+        .bodies
+        .iter()
+        .all(|body| closes_at_most_half(body.bound(), (body.ends(), body.radius)));
+    let feet_ok = around
+        .feet
+        .iter()
+        .all(|foot| closes_at_most_half(foot.bound(), ((foot.heel, foot.toe), foot.radius)));
     let depth = |span: &FootSpan, f: &Footprint| {
         let span = with_leg(span);
         footprint_overlap(f, &span).map_or(f64::NEG_INFINITY, |(_, d)| d + span.radius)
@@ -351,7 +365,7 @@ pub fn foot_may_move(from: &FootSpan, to: &FootSpan, around: &Surroundings) -> b
         let after = depth(to, f);
         after <= 0.0 || after <= depth(from, f)
     });
-    bodies_ok && obstacles_ok
+    bodies_ok && feet_ok && obstacles_ok
 }
 
 /// How far to move foot `foot` (about to land) so that it is clear of the bodies and the
@@ -710,6 +724,7 @@ mod tests {
         let around = Surroundings {
             obstacles: vec![&planter],
             bodies: vec![body],
+            ..Surroundings::default()
         };
         let across = FootSpan {
             heel: DVec2::new(-0.1, 0.4),
@@ -770,6 +785,37 @@ mod tests {
         };
         assert!(foot_may_move(&foot(0.0), &foot(0.099), &around));
         assert!(!foot_may_move(&foot(0.0), &foot(0.11), &around));
+    }
+
+    #[test]
+    fn a_foot_in_the_air_inside_a_wide_capsule_keeps_from_the_foot_that_widened_it() {
+        let foot = |x: f64, z: f64| FootSpan {
+            heel: DVec2::new(x, z),
+            toe: DVec2::new(x, z + 0.25),
+            radius: 0.05,
+        };
+        // A body at the origin walking along +z with its left foot planted 0.45 m out,
+        // and another's foot in the air inside the capsule that foot widened, 0.1 m
+        // behind that foot and coming on along the capsule.
+        let planted = foot(0.45, 0.0);
+        let capsule = Capsule::around(DVec2::ZERO, DVec2::Y, 0.28, 0.5, &[planted]);
+        let (from, to) = (foot(0.45, -0.45), foot(0.45, -0.39));
+        let capsule_only = bodies(&[capsule]);
+        assert!(
+            foot_may_move(&from, &to, &capsule_only),
+            "along the capsule, no deeper into it"
+        );
+        let with_feet = Surroundings {
+            bodies: vec![capsule],
+            feet: vec![planted],
+            ..Surroundings::default()
+        };
+        assert!(foot_may_move(&from, &foot(0.45, -0.45 + 0.049), &with_feet));
+        assert!(
+            !foot_may_move(&from, &to, &with_feet),
+            "half the feet's gap at most"
+        );
+        assert!(foot_may_move(&from, &foot(0.45, -0.6), &with_feet));
     }
 
     #[test]

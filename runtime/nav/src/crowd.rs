@@ -3,7 +3,7 @@
 //! The scene rebuilds it once a tick, before the actors step, so every walker decides
 //! from the same world whatever the thread count.
 
-use crate::clearance::Capsule;
+use crate::clearance::{Capsule, FootSpan};
 use crate::footprint::Footprint;
 use crate::space::Wall;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
@@ -38,6 +38,11 @@ pub struct Crowd {
     /// looked them up in the neighbours' postures (a twentieth of the crowd
     /// benchmark's tick, in cache misses).
     pub feet: Vec<[DVec2; 2]>,
+    /// Each actor's feet (left, right) seen from above, heel to toe tip, if it has them:
+    /// its capsule holds them only roughly (a foot planted wide widens the whole capsule,
+    /// which is then mostly floor), so a foot in the air keeps from them as well (see
+    /// [`crate::clearance::foot_may_move`]).
+    pub soles: Vec<Option<[FootSpan; 2]>>,
     /// Every obstacle's footprint, as `World::obstacles` lists them (walls, then objects).
     pub footprints: Vec<Footprint>,
     /// The centre and radius of a circle round each footprint.

@@ -105,10 +105,11 @@ impl BodyJoints {
             .map(|a| a.and_then(|a| globals.get(a)).map_or(root, floor_point))
     }
 
-    /// The legs on the floor of the body posed at `globals`: each foot's span and each
-    /// knee's point (none for a body without them).
-    pub fn foot_spans(&self, globals: &[Transform]) -> Vec<FootSpan> {
-        let feet = self.feet.into_iter().flatten().filter_map(|[ankle, ball]| {
+    /// The feet (left, right) of the body posed at `globals` seen from above: each the span
+    /// under it from the heel to the toe tip, on the floor or in the air (none for a body
+    /// without them).
+    pub fn sole_spans(&self, globals: &[Transform]) -> Option<[FootSpan; 2]> {
+        let span = |[ankle, ball]: [usize; 2]| {
             let (a, b) = (
                 floor_point(globals.get(ankle)?),
                 floor_point(globals.get(ball)?),
@@ -118,7 +119,15 @@ impl BodyJoints {
                 toe: a + (b - a) * TOE,
                 radius: FOOT_RADIUS,
             })
-        });
+        };
+        let [left, right] = self.feet?;
+        Some([span(left)?, span(right)?])
+    }
+
+    /// The legs on the floor of the body posed at `globals`: each foot's span and each
+    /// knee's point (none for a body without them).
+    pub fn foot_spans(&self, globals: &[Transform]) -> Vec<FootSpan> {
+        let feet = self.sole_spans(globals).into_iter().flatten();
         let knees = self.knees.iter().filter_map(|&k| {
             let at = floor_point(globals.get(k)?);
             Some(FootSpan {

@@ -256,6 +256,7 @@ impl Scene {
         crowd.velocities.clear();
         crowd.facings.clear();
         crowd.feet.clear();
+        crowd.soles.clear();
         crowd.bodies.clear();
         crowd.cores.clear();
         for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
@@ -264,6 +265,9 @@ impl Scene {
             crowd
                 .feet
                 .push(self.body_joints[i].ankle_points(&state.globals));
+            crowd
+                .soles
+                .push(self.body_joints[i].sole_spans(&state.globals));
             crowd.positions.push(under_root);
             crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
             let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
