@@ -26,8 +26,10 @@
 local plaza = require("support.plaza_streams")
 
 -- Seconds by which every walk must have ended: walkers of several layouts and draws were
--- still walking at 150 s.
-local TIME_BOUND = 180
+-- still walking at 150 s, and in a draw of no change since the swinging feet keep off the
+-- others' feet (docs/navigation.md, "Hands kept in, feet kept off feet") this layout's
+-- last walker arrived at 183.6 s.
+local TIME_BOUND = 200
 -- Deepest interpenetration (m) allowed: of two actors' solids or a solid and a planter
 -- (0.094 m the deepest of any layout in the draws of no change, 0.097 m in a draw of
 -- the stall rule's first version), and of two body discs (0.034 m the deepest of any
@@ -35,8 +37,8 @@ local TIME_BOUND = 180
 -- obstacles' inflation changed by millimetres).
 local SOLIDS_BOUND = 0.10
 local DISCS_BOUND = 0.035
--- Mean detour allowed: 25.9 % the most of any layout in any draw.
-local DETOUR_BOUND = 0.26
+-- Mean detour allowed: 26.0 % the most of any layout in any draw (that same draw).
+local DETOUR_BOUND = 0.27
 -- Deepest a thigh may go into a planter, of the contacts sampled (m): the knees keep off
 -- the furniture (docs/navigation.md, "Knees kept off the furniture"); before they did, a
 -- thigh was this layout's deepest contact, 0.056 m into a planter.
