@@ -70,7 +70,8 @@ impl BodyJoints {
         }
     }
 
-    /// The body posed at `globals`, facing `facing` and going at `velocity` (x, z), of
+    /// The body posed at `globals` (its feet `soles`, as [`BodyJoints::sole_spans`] finds
+    /// them there), facing `facing` and going at `velocity` (x, z), of
     /// disc `radius`, whole and carried: the disc stretched by the stride at that speed
     /// (see `STRIDE`), widened by as far as a wrist is further out from it than at
     /// rest, and, whole, stretched to hold its feet and knees as well. The carried body is
@@ -78,13 +79,14 @@ impl BodyJoints {
     pub fn body(
         &self,
         globals: &[Transform],
+        soles: Option<[FootSpan; 2]>,
         facing: DVec2,
         velocity: DVec2,
         radius: f64,
     ) -> (Capsule, Capsule) {
         let root = floor_point(&globals[0]);
         let stride = STRIDE * radius * (velocity.dot(facing).abs() / STRIDE_SPEED).min(1.0);
-        let feet = self.foot_spans(globals);
+        let feet = self.foot_spans(globals, soles);
         let mut whole = Capsule::around(root, facing, radius, stride, &feet);
         let mut core = Capsule::around(root, facing, radius, stride, &[]);
         for &(wrist, at_rest) in &self.wrists {
@@ -124,10 +126,10 @@ impl BodyJoints {
         Some([span(left)?, span(right)?])
     }
 
-    /// The legs on the floor of the body posed at `globals`: each foot's span and each
-    /// knee's point (none for a body without them).
-    pub fn foot_spans(&self, globals: &[Transform]) -> Vec<FootSpan> {
-        let feet = self.sole_spans(globals).into_iter().flatten();
+    /// The legs on the floor of the body posed at `globals` (its feet `soles`): each
+    /// foot's span and each knee's point (none for a body without them).
+    fn foot_spans(&self, globals: &[Transform], soles: Option<[FootSpan; 2]>) -> Vec<FootSpan> {
+        let feet = soles.into_iter().flatten();
         let knees = self.knees.iter().filter_map(|&k| {
             let at = floor_point(globals.get(k)?);
             Some(FootSpan {

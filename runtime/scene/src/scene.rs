@@ -265,19 +265,23 @@ impl Scene {
             crowd
                 .feet
                 .push(self.body_joints[i].ankle_points(&state.globals));
-            crowd
-                .soles
-                .push(self.body_joints[i].sole_spans(&state.globals));
+            // Kept for the swinging feet, and the capsule's own.
+            let soles = self.body_joints[i].sole_spans(&state.globals);
+            crowd.soles.push(soles);
             crowd.positions.push(under_root);
-            crowd.velocities.push(DVec2::new(state.qd[x], state.qd[z]));
+            let velocity = DVec2::new(state.qd[x], state.qd[z]);
+            crowd.velocities.push(velocity);
             let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
             let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
             crowd.facings.push(facing);
-            let velocity = DVec2::new(state.qd[x], state.qd[z]);
             let (whole, core) = match self.space.walking {
-                troupe_nav::Walking::Navigated => {
-                    self.body_joints[i].body(&state.globals, facing, velocity, crowd.radii[i])
-                }
+                troupe_nav::Walking::Navigated => self.body_joints[i].body(
+                    &state.globals,
+                    soles,
+                    facing,
+                    velocity,
+                    crowd.radii[i],
+                ),
                 // Nothing keeps bodies apart: their discs will do for the record.
                 troupe_nav::Walking::Straight => {
                     let disc =
