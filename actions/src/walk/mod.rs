@@ -221,6 +221,10 @@ pub struct Walk {
     near: Vec<usize>,
     /// Scratch for the steering's decisions (see [`steer::Scratch`]).
     scratch: steer::Scratch,
+    /// Scratch for what the clearance sees round the body (see [`surroundings::Lists`]).
+    lists: surroundings::Lists,
+    /// Scratch: the obstacles' footprints near (see `Crowd::footprints_around`).
+    found: Vec<usize>,
     /// When the walk stood blocked and took new routes (see [`replan`]).
     replan: replan::Replan,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
@@ -280,6 +284,8 @@ impl Walk {
             steer: steer::Steer::default(),
             near: Vec::new(),
             scratch: steer::Scratch::default(),
+            lists: surroundings::Lists::default(),
+            found: Vec::new(),
             replan: replan::Replan::default(),
             shoulders: shoulders::Shoulders::default(),
             last_floor: None,
@@ -1369,7 +1375,7 @@ impl Generator for Walk {
         let crowd = ctx.world.crowd;
         let footprints = navigated.then(|| {
             let at = crowd.positions.get(ctx.actor).copied().unwrap_or_default();
-            crowd.footprints_around(at)
+            crowd.footprints_around(at, std::mem::take(&mut self.found))
         });
         // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
         let mut gathered = false;
@@ -1391,7 +1397,8 @@ impl Generator for Walk {
         let around = match &footprints {
             Some(footprints) => {
                 let near = (&mut self.near, gathered);
-                surroundings::gather(ctx, &self.steer.companions, near, footprints)
+                let lists = &mut self.lists;
+                surroundings::gather(ctx, &self.steer.companions, near, footprints, lists)
             }
             None => Surroundings::default(),
         };
@@ -1480,6 +1487,10 @@ impl Generator for Walk {
             } else {
                 self.settle_since = None;
             }
+        }
+        self.lists.keep(around);
+        if let Some(footprints) = footprints {
+            self.found = footprints.into_found();
         }
         // Advance the clock and the phase (dφ = dt / Dc, eq. 2-5).
         self.phase += ctx.dt / self.cycle(self.cadence).cycle;

@@ -171,14 +171,15 @@ impl Crowd {
     /// Every footprint within `range` (at most [`CELL`]) of `p`, and maybe a few a little
     /// further, in the order they were set.
     pub fn footprints_near(&self, p: DVec2, range: f64) -> impl Iterator<Item = &Footprint> {
-        self.footprints_around(p).into_within(range)
+        self.footprints_around(p, Vec::new()).into_within(range)
     }
 
     /// The footprints near `p`, found once for several ranges round it (see
     /// [`FootprintsAround::within`]): a walk looks for obstacles round its body five
-    /// times a tick, at five ranges.
-    pub fn footprints_around(&self, p: DVec2) -> FootprintsAround<'_> {
-        let mut found = Vec::new();
+    /// times a tick, at five ranges. They are listed in `found` (its contents dropped),
+    /// which [`FootprintsAround::into_found`] gives back for the next time.
+    pub fn footprints_around(&self, p: DVec2, mut found: Vec<usize>) -> FootprintsAround<'_> {
+        found.clear();
         self.footprint_cells.around(p, &mut found);
         found.sort_unstable();
         found.dedup();
@@ -216,6 +217,11 @@ impl<'a> FootprintsAround<'a> {
             .iter()
             .filter(move |&&i| crowd.footprint_reaches(i, at, range))
             .map(move |&i| &crowd.footprints[i])
+    }
+
+    /// The list the footprints were found in, to find them in again.
+    pub fn into_found(self) -> Vec<usize> {
+        self.found
     }
 
     /// [`FootprintsAround::within`], taking them.
