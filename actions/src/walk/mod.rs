@@ -881,25 +881,24 @@ impl Walk {
                 // and meets it exactly at the phase boundaries.
                 let clearance = lift * 4.0 * w * (1.0 - w);
                 let mut ankle = from + (target - from) * s;
-                let mut yaw = from_yaw + wrap(to.yaw - from_yaw) * ease;
+                let yaw = from_yaw + wrap(to.yaw - from_yaw) * ease;
                 // A foot in the air closes on another body or foot by at most half the
                 // gap, like the body's step (`troupe_nav::clearance`): held where it was,
-                // it swings on to its landing from there.
+                // it swings on to its landing from there. Held whole, its pitch, toes and
+                // height too: the clearance sees a foot from above as if it were flat, so
+                // a foot rolled onto its toes that went on flattening where it was held
+                // put its toes into what held it (a planter's corner, another's foot).
                 let before = self.poses[leg];
                 let span = |a: DVec3, yaw: f64| {
                     surroundings::foot_span(&rig.legs[leg], DVec2::new(a.x, a.z), yaw)
                 };
-                if s < 1.0
+                let blocked = s < 1.0
                     && ease < 1.0
-                    && !foot_may_move(&span(before.ankle, before.yaw), &span(ankle, yaw), around)
-                {
-                    ankle = DVec3::new(before.ankle.x, ankle.y, before.ankle.z);
-                    yaw = before.yaw;
-                    if let Foot::Swing { from, from_yaw, .. } = &mut self.feet[leg] {
-                        swing_through(from, from_yaw, (&to, target), (s, ease), (ankle, yaw));
-                    }
+                    && !foot_may_move(&span(before.ankle, before.yaw), &span(ankle, yaw), around);
+                if blocked && self.hold_foot(leg, before, sigma) {
+                    return before;
                 }
-                ankle.y = clearance - rig.lowest_offset(leg, pitch, toes);
+                ankle.y = clearance - self.rig.lowest_offset(leg, pitch, toes);
                 FootPose {
                     ankle,
                     yaw,

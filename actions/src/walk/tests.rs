@@ -7,7 +7,7 @@ use troupe_body::kinematics::forward_kinematics;
 use troupe_body::Transform;
 use troupe_motion::{Key, Track};
 use troupe_scene::action::Status;
-use troupe_scene::space::{Capsule, Footprint};
+use troupe_scene::space::{Capsule, FootSpan, Footprint};
 use troupe_scene::{ActionSpec, ActorDesc, Scene, SceneConfig};
 
 /// Points of one foot's sole: (joint, position in that joint's frame).
@@ -816,6 +816,69 @@ fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
         stays: false,
     };
     assert!(!walk.hold_foot(1, held, sigma));
+}
+
+#[test]
+fn a_swinging_foot_held_by_the_clearance_keeps_its_whole_pose() {
+    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
+    let mut walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
+    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    let sigma = 0.6;
+    let landing = Landing {
+        plant: DVec2::new(0.15, 0.45),
+        yaw: 0.2,
+        strike: 0.2,
+        roll: 0.3,
+    };
+    walk.feet[0] = swing(DVec3::new(0.1, 0.12, -0.1), landing);
+    walk.lambda[0] = 0.66;
+    let open = Surroundings::default();
+    let before = walk.step_foot(&open, &plan, 0, 0.68, sigma);
+    walk.poses[0] = before;
+    // Unheld, the next tick moves the foot on and flattens it from its toes.
+    let swinging = walk.feet[0];
+    let free = walk.step_foot(&open, &plan, 0, 0.70, sigma);
+    (walk.feet[0], walk.lambda[0]) = (swinging, 0.68);
+    assert!(
+        free.pitch > before.pitch + 1e-3 && free.toes > before.toes,
+        "{free:?}"
+    );
+    // Another's foot lies across the way, 2 cm beyond the toes: the next tick's move
+    // would close more than half of that.
+    let span = surroundings::foot_span(
+        &walk.rig.legs[0],
+        DVec2::new(before.ankle.x, before.ankle.z),
+        before.yaw,
+    );
+    let way = (DVec2::new(free.ankle.x, free.ankle.z) - DVec2::new(before.ankle.x, before.ankle.z))
+        .normalize();
+    let middle = span.toe + way * (2.0 * span.radius + 0.02);
+    let across = FootSpan {
+        heel: middle - way.perp() * 0.12,
+        toe: middle + way.perp() * 0.12,
+        radius: span.radius,
+    };
+    let around = Surroundings {
+        feet: vec![across],
+        ..Surroundings::default()
+    };
+    let held = walk.step_foot(&around, &plan, 0, 0.70, sigma);
+    // Held whole: where it was, and no flatter (the clearance sees a foot as if flat, so
+    // toes flattening where the ankle was held went into what held it).
+    assert_eq!(held.ankle, before.ankle);
+    assert_eq!(
+        (held.yaw, held.pitch, held.toes),
+        (before.yaw, before.pitch, before.toes)
+    );
+    // Once the way is clear it swings on to its landing from there.
+    walk.poses[0] = held;
+    let on = walk.step_foot(&open, &plan, 0, 0.72, sigma);
+    assert!((on.ankle - held.ankle).length() > 1e-3, "{on:?}");
+    let landed = walk.step_foot(&open, &plan, 0, 0.999_999, sigma);
+    let target = walk
+        .rig
+        .ankle_from_plant(0, landing.plant, landing.yaw, landing.strike);
+    assert!((landed.ankle - target).length() < 1e-3, "{landed:?}");
 }
 
 #[test]
