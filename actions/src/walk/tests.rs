@@ -742,6 +742,15 @@ fn walks_that_do_not_navigate_go_straight_through_a_table() {
     assert!(straight < 0.1, "straight: {straight}");
 }
 
+/// An adult's walk 3 m straight ahead, not started, and its plan: for a foot's steps
+/// driven one at a time.
+fn adult_walk_ahead() -> (Walk, Plan) {
+    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
+    let walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
+    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    (walk, plan)
+}
+
 /// A foot swinging from `from` (rolled onto its toes, 0.05 m lift) to landing `to`.
 fn swing(from: DVec3, to: Landing) -> Foot {
     Foot::Swing {
@@ -758,9 +767,7 @@ fn swing(from: DVec3, to: Landing) -> Foot {
 
 #[test]
 fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
-    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
-    let mut walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
-    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    let (mut walk, plan) = adult_walk_ahead();
     let around = Surroundings::default();
     let sigma = 0.6;
     walk.feet[0] = swing(
@@ -820,9 +827,7 @@ fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
 
 #[test]
 fn a_swinging_foot_held_by_the_clearance_keeps_its_whole_pose() {
-    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
-    let mut walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
-    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    let (mut walk, plan) = adult_walk_ahead();
     let sigma = 0.6;
     let landing = Landing {
         plant: DVec2::new(0.15, 0.45),
@@ -883,9 +888,7 @@ fn a_swinging_foot_held_by_the_clearance_keeps_its_whole_pose() {
 
 #[test]
 fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() {
-    let skeleton = troupe_body::template::default_skeleton("adult").unwrap();
-    let mut walk = Walk::to(&skeleton, DVec3::new(0.0, 0.0, 3.0), WalkOptions::default()).unwrap();
-    let plan = Plan::new(&walk.route, DVec2::ZERO, 0.0);
+    let (mut walk, plan) = adult_walk_ahead();
     let lambda = 0.7;
     // Where the body wants the left foot, in the open.
     let fresh = {
