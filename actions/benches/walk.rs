@@ -38,6 +38,7 @@ fn generator_step(c: &mut Criterion) {
         states: &states,
         objects: &[],
         holders: &[],
+        held: &[],
         board: &Blackboard::default(),
         input_poses: &[],
         space: &Default::default(),

@@ -511,7 +511,7 @@ impl Walk {
     fn held_by_arm(ctx: &GeneratorContext, i: usize) -> Option<Holder> {
         let prefix = if i == 0 { "l_" } else { "r_" };
         let joints = ctx.skeleton.joints();
-        ctx.world.holders.iter().flatten().copied().find(|h| {
+        ctx.world.held.iter().map(|&(_, h)| h).find(|h| {
             h.actor == ctx.actor
                 && joints
                     .get(h.joint)

@@ -115,6 +115,8 @@ pub struct Scene {
     work: Vec<ActorWork>,
     objects: Vec<Object>,
     holders: Vec<Option<Holder>>,
+    /// The objects held, in object order, with their holders (see [`World::held`]).
+    held: Vec<(usize, Holder)>,
     board: Blackboard,
     input_poses: Vec<Option<InputPose>>,
     next_action: u64,
@@ -164,6 +166,7 @@ impl Scene {
             work: Vec::new(),
             objects: Vec::new(),
             holders: Vec::new(),
+            held: Vec::new(),
             board: Blackboard::default(),
             input_poses: Vec::new(),
             next_action: 1,
@@ -318,6 +321,7 @@ impl Scene {
             states: &self.states,
             objects: &self.objects,
             holders: &self.holders,
+            held: &self.held,
             board: &self.board,
             input_poses: &self.input_poses,
             space: &self.space,
@@ -415,6 +419,7 @@ impl Scene {
             &self.states,
         );
         holding::follow(&self.holders, &mut self.objects, &self.states);
+        holding::list_held(&self.holders, &mut self.held);
         done
     }
 
@@ -791,6 +796,7 @@ impl Scene {
                 states: &self.states,
                 objects: &self.objects,
                 holders: &self.holders,
+                held: &self.held,
                 board: &self.board,
                 input_poses: &self.input_poses,
                 space: &self.space,
@@ -837,6 +843,7 @@ impl Scene {
             }
         }
         holding::follow(&self.holders, &mut self.objects, &self.states);
+        holding::list_held(&self.holders, &mut self.held);
         if let (Some(started), Some(joined), Some(published)) = (started, joined, published) {
             self.profile.step_wall += joined - started;
             self.profile.publish_wall += published - joined;

@@ -32,6 +32,8 @@ pub struct World<'a> {
     pub objects: &'a [Object],
     /// Who holds each object, by object index (see [`crate::holding`]).
     pub holders: &'a [Option<crate::holding::Holder>],
+    /// The objects held, in object order, each with its holder.
+    pub held: &'a [(usize, crate::holding::Holder)],
     /// What actions told one another up to the previous tick (see [`crate::blackboard`]).
     pub board: &'a crate::blackboard::Blackboard,
     /// What devices ask of each actor this tick, by actor index (see
