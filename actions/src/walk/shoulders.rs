@@ -74,7 +74,6 @@ impl Shoulders {
                 best = (need, side);
             }
         };
-        // Those only the steering found (farther ahead) are too far to be beside.
         for &j in near {
             if j == me || companions.contains(&j) {
                 continue;

@@ -46,8 +46,9 @@ const WALL_GUARD: f64 = 0.02;
 /// benchmark).
 #[derive(Clone, Debug, Default)]
 pub struct Scratch {
-    /// The actors near, as the two looks of a decision merge them (see [`merge_runs`]).
-    merged: Vec<usize>,
+    /// The actors a decision's look further ahead adds to those near the body, for the
+    /// give-way rule (see `Crowd::near_beyond`).
+    beyond: Vec<usize>,
     /// The neighbours avoidance weighs.
     agents: Vec<Agent>,
 }
@@ -190,8 +191,7 @@ impl Steer {
     /// Decides this tick's rate and drift from the crowd of the previous tick, for actor
     /// `ctx.actor` walking `plan` at walk time `now`, among the obstacles round the body
     /// (`footprints`). `others` and `scratch` are scratch space; true when `others` then
-    /// holds, in actor order, every actor (but this one and its companions) the crowd
-    /// finds near the body (`Crowd::near`), and some farther ahead.
+    /// holds, in actor order, every actor the crowd finds near the body (`Crowd::near`).
     pub fn decide(
         &mut self,
         ctx: &GeneratorContext,
@@ -229,7 +229,8 @@ impl Steer {
         let remaining = plan.end_time - pt;
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
         let along = planned.try_normalize().unwrap_or(direction(here.heading));
-        // Those near, for the lanes and for avoidance (which adds those further ahead).
+        // Those near, for the lanes and for avoidance (whose give-way rule also looks
+        // further ahead).
         others.clear();
         crowd.near(position, others);
         let mut preferred = if remaining >= 2.0
@@ -249,7 +250,7 @@ impl Steer {
             radius,
             feet: feet_of(ctx, me),
         };
-        let around = (others, footprints, scratch);
+        let around = (others.as_slice(), footprints, scratch);
         self.decide_now(ctx, &body, preferred, (planned, along), now, around);
         if !self.engaged {
             return true;
@@ -288,17 +289,20 @@ impl Steer {
         preferred: DVec2,
         (planned, along): (DVec2, DVec2),
         now: f64,
-        (others, footprints, scratch): (&mut Vec<usize>, &FootprintsAround, &mut Scratch),
+        (others, footprints, scratch): (&[usize], &FootprintsAround, &mut Scratch),
     ) {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let position = body.position;
-        // Those who may cross my way further ahead, for the give-way rule, join those
+        // Those who may cross my way further ahead, for the give-way rule, besides those
         // near (`others`, as `decide` gathered them).
-        let near_me = others.len();
-        crowd.near(position + along * NEIGHBOUR_RANGE, others);
-        merge_runs(others, near_me, &mut scratch.merged);
-        others.retain(|&j| j != me && !self.companions.contains(&j));
+        let beyond = &mut scratch.beyond;
+        beyond.clear();
+        crowd.near_beyond(position + along * NEIGHBOUR_RANGE, position, beyond);
+        // Neither this walker nor its companions are avoided: passed over as they are
+        // read (taking them out of the lists first cost a decision 150 instructions
+        // more).
+        let avoided = |j: &&usize| **j != me && !self.companions.contains(j);
         // The feet are found below, for the neighbours avoidance weighs.
         let disc = |j: usize| Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]);
         let near = |j: usize| Walker {
@@ -307,18 +311,26 @@ impl Steer {
             rank: crowd.ranks.get(j).copied().flatten(),
         };
         // Where ways cross, one walker has the way (see `troupe_nav::way`): the other
-        // waits before the crossing.
+        // waits before the crossing. (The line is the nearest of those each one asks
+        // for, so the two lists need no merging.)
         let wait = wait_line(
             body,
             along,
             planned.length(),
-            others.iter().map(|&j| near(j)),
+            others
+                .iter()
+                .chain(beyond.iter())
+                .filter(avoided)
+                .map(|&j| near(j)),
         );
+        // Everyone within range is near the body (`Crowd::near` finds every actor
+        // within a cell).
         let agents = &mut scratch.agents;
         agents.clear();
         agents.extend(
             others
                 .iter()
+                .filter(avoided)
                 .filter(|&&j| (crowd.positions[j] - position).length() < NEIGHBOUR_RANGE)
                 .map(|&j| Agent {
                     feet: feet_of(ctx, j),
@@ -358,30 +370,6 @@ impl Steer {
     }
 }
 
-/// Makes `v`, two ascending runs of indices (`v[..mid]` and `v[mid..]`, as two
-/// `Crowd::near` calls leave them), one ascending run without repeats: what sorting and
-/// removing the repeats gives, in one pass (sorting took half of a decision's own
-/// instructions). `spare` is scratch space: `v`'s old list ends up there.
-fn merge_runs(v: &mut Vec<usize>, mid: usize, spare: &mut Vec<usize>) {
-    let (a, b) = v.split_at(mid);
-    let merged = spare;
-    merged.clear();
-    let (mut i, mut j) = (0, 0);
-    while i < a.len() || j < b.len() {
-        let next = if j == b.len() || (i < a.len() && a[i] <= b[j]) {
-            i += 1;
-            a[i - 1]
-        } else {
-            j += 1;
-            b[j - 1]
-        };
-        if merged.last() != Some(&next) {
-            merged.push(next);
-        }
-    }
-    std::mem::swap(v, merged);
-}
-
 /// The floor points under actor `j`'s ankles at the end of the previous tick (see
 /// [`Agent::feet`], `Crowd::feet`).
 fn feet_of(ctx: &GeneratorContext, j: usize) -> [DVec2; 2] {
@@ -397,25 +385,6 @@ fn feet_of(ctx: &GeneratorContext, j: usize) -> [DVec2; 2] {
 mod tests {
     use super::*;
     use crate::walk::route::Route;
-
-    #[test]
-    fn two_runs_merge_into_one_without_repeats() {
-        for (v, mid, want) in [
-            (vec![1, 4, 7, 2, 4, 9], 3, vec![1, 2, 4, 7, 9]),
-            (vec![3, 5, 3, 5], 2, vec![3, 5]),
-            (vec![2, 8], 2, vec![2, 8]),
-            (vec![6, 0, 1], 1, vec![0, 1, 6]),
-            (vec![], 0, vec![]),
-        ] {
-            let mut v = v;
-            let mut sorted = v.clone();
-            sorted.sort_unstable();
-            sorted.dedup();
-            merge_runs(&mut v, mid, &mut vec![9, 9, 9]);
-            assert_eq!(v, want);
-            assert_eq!(v, sorted);
-        }
-    }
 
     #[test]
     fn a_steered_walk_keeps_a_quick_cadence_however_slow_its_rate() {

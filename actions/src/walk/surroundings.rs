@@ -37,10 +37,9 @@ impl Lists {
 
 /// The surroundings of actor `ctx.actor` this tick, leaving out `companions` (a hand
 /// held), gathered in `lists` (give them back with [`Lists::keep`]). `near` holds the
-/// actors near when `gathered` (the steering found them this tick: every one within a
-/// grid cell and some further ahead); else it is filled here. Either way it then holds
-/// every actor the crowd finds near the body. `footprints` are the obstacles round the
-/// body.
+/// actors near when `gathered` (the steering found them this tick); else it is filled
+/// here. Either way it then holds every actor the crowd finds near the body.
+/// `footprints` are the obstacles round the body.
 pub fn gather<'a>(
     ctx: &GeneratorContext<'a>,
     companions: &[usize],

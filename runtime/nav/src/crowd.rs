@@ -168,6 +168,15 @@ impl Crowd {
         out[start..].sort_unstable();
     }
 
+    /// Pushes onto `out` the actors [`Crowd::near`] finds round `p` but not round
+    /// `seen` (those of the grid cells round `p` that are not round `seen`), in no set
+    /// order: a look further ahead, without listing again the ones a look round `seen`
+    /// found (merging the two lists, and the longer list the walk's clearance and
+    /// shoulders then read, cost a walker about 1,000 instructions a tick).
+    pub fn near_beyond(&self, p: DVec2, seen: DVec2, out: &mut Vec<usize>) {
+        self.cells.around_except(p, seen, out);
+    }
+
     /// Every footprint within `range` (at most [`CELL`]) of `p`, and maybe a few a little
     /// further, in the order they were set.
     pub fn footprints_near(&self, p: DVec2, range: f64) -> impl Iterator<Item = &Footprint> {
@@ -241,6 +250,8 @@ impl<'a> FootprintsAround<'a> {
 struct Cells {
     /// (cell, item), sorted.
     entries: Vec<((i64, i64), usize)>,
+    /// The entries' items alone, in the same order: runs of them are copied out whole.
+    items: Vec<usize>,
     /// The rectangle's lowest cell and its size in cells (x, z).
     origin: (i64, i64),
     size: (i64, i64),
@@ -262,6 +273,8 @@ impl Cells {
     /// (several look-ups per walker and tick).
     fn sort(&mut self) {
         self.entries.sort_unstable();
+        self.items.clear();
+        self.items.extend(self.entries.iter().map(|e| e.1));
         self.starts.clear();
         let (Some(first), Some(last)) = (self.entries.first(), self.entries.last()) else {
             return;
@@ -360,31 +373,63 @@ impl Cells {
     /// each column in the list's order.
     fn around(&self, p: DVec2, out: &mut Vec<usize>) {
         let (cx, cz) = cell_of(p);
-        let entries = &self.entries;
-        // The three columns' runs, then room for all of them at once: growing the list
-        // run by run reallocated it (2 % of the crowd benchmark's instructions).
         let mut runs = [(0, 0); 3];
         for (x, run) in (cx - 1..=cx + 1).zip(&mut runs) {
-            *run = if self.starts.is_empty() {
-                let from = entries.partition_point(|e| e.0 < (x, cz - 1));
-                (
-                    from,
-                    from + entries[from..].partition_point(|e| e.0 <= (x, cz + 1)),
-                )
-            } else {
-                let ((x0, z0), (nx, nz)) = (self.origin, self.size);
-                let (lo, hi) = ((cz - 1).max(z0), (cz + 1).min(z0 + nz - 1));
-                if x < x0 || x >= x0 + nx || lo > hi {
-                    continue;
-                }
-                let k = ((x - x0) * nz) as usize;
-                let from = self.starts[k + (lo - z0) as usize] as usize;
-                (from, self.starts[k + (hi - z0) as usize + 1] as usize)
-            };
+            *run = self.column_run(x, cz - 1, cz + 1);
         }
+        self.extend_with_runs(&runs, out);
+    }
+
+    /// Pushes onto `out` the items in the 3 × 3 cells around `p`'s that are not among
+    /// the 3 × 3 cells around `seen`'s, column by column.
+    fn around_except(&self, p: DVec2, seen: DVec2, out: &mut Vec<usize>) {
+        let (cx, cz) = cell_of(p);
+        let (sx, sz) = cell_of(seen);
+        // Each column whole where it is not beside `seen`'s, else the rows below and
+        // above those beside `seen`'s.
+        let mut runs = [(0, 0); 6];
+        for (x, pair) in (cx - 1..=cx + 1).zip(runs.chunks_exact_mut(2)) {
+            if (x - sx).abs() > 1 {
+                pair[0] = self.column_run(x, cz - 1, cz + 1);
+            } else {
+                pair[0] = self.column_run(x, cz - 1, (cz + 1).min(sz - 2));
+                pair[1] = self.column_run(x, (cz - 1).max(sz + 2), cz + 1);
+            }
+        }
+        self.extend_with_runs(&runs, out);
+    }
+
+    /// Where the items of column `x`'s cells from row `lo` to row `hi` lie in the
+    /// entries: one run, since the entries are sorted by cell (empty when there are none).
+    fn column_run(&self, x: i64, lo: i64, hi: i64) -> (usize, usize) {
+        let entries = &self.entries;
+        if lo > hi {
+            return (0, 0);
+        }
+        if self.starts.is_empty() {
+            let from = entries.partition_point(|e| e.0 < (x, lo));
+            return (
+                from,
+                from + entries[from..].partition_point(|e| e.0 <= (x, hi)),
+            );
+        }
+        let ((x0, z0), (nx, nz)) = (self.origin, self.size);
+        let (lo, hi) = (lo.max(z0), hi.min(z0 + nz - 1));
+        if x < x0 || x >= x0 + nx || lo > hi {
+            return (0, 0);
+        }
+        let k = ((x - x0) * nz) as usize;
+        let from = self.starts[k + (lo - z0) as usize] as usize;
+        (from, self.starts[k + (hi - z0) as usize + 1] as usize)
+    }
+
+    /// Pushes onto `out` the items of the entries' `runs`, in turn. Room for all of them
+    /// is made at once: growing the list run by run reallocated it (2 % of the crowd
+    /// benchmark's instructions).
+    fn extend_with_runs(&self, runs: &[(usize, usize)], out: &mut Vec<usize>) {
         out.reserve(runs.iter().map(|(from, to)| to - from).sum());
-        for (from, to) in runs {
-            out.extend(entries[from..to].iter().map(|e| e.1));
+        for &(from, to) in runs {
+            out.extend_from_slice(&self.items[from..to]);
         }
     }
 }
@@ -461,6 +506,45 @@ mod tests {
         }
         // Most of the points are on the field, some off it.
         assert!((500..2000).contains(&blocked), "{blocked}");
+    }
+
+    #[test]
+    fn a_look_beyond_finds_what_one_look_adds_to_another() {
+        // A crowd on a field, and once with one far out (no table of runs then).
+        for spread in [false, true] {
+            let mut positions: Vec<DVec2> = (0..300)
+                .map(|i| {
+                    let f = i as f64;
+                    DVec2::new((f * 7.31).sin() * 15.0, (f * 3.17).cos() * 15.0)
+                })
+                .collect();
+            if spread {
+                positions.push(DVec2::new(5.0e5, -5.0e5));
+            }
+            let mut crowd = Crowd {
+                positions,
+                ..Crowd::default()
+            };
+            crowd.index();
+            assert_eq!(crowd.cells.starts.is_empty(), spread);
+            let mut added = 0;
+            for k in 0..500 {
+                let k = k as f64;
+                let seen = DVec2::new((k * 0.113).sin() * 16.0, (k * 0.071).cos() * 16.0);
+                // 3 m ahead, as a walker looks, or nearer and further.
+                let ahead = seen + DVec2::new((k * 0.9).cos(), (k * 0.9).sin()) * (k % 7.0);
+                let (mut here, mut there, mut beyond) = (Vec::new(), Vec::new(), Vec::new());
+                crowd.near(seen, &mut here);
+                crowd.near(ahead, &mut there);
+                crowd.near_beyond(ahead, seen, &mut beyond);
+                beyond.sort_unstable();
+                let only_there: Vec<usize> =
+                    there.into_iter().filter(|j| !here.contains(j)).collect();
+                assert_eq!(beyond, only_there, "{seen} {ahead}");
+                added += beyond.len();
+            }
+            assert!(added > 1000, "{added}");
+        }
     }
 
     #[test]
