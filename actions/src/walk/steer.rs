@@ -15,7 +15,7 @@ use super::lanes;
 use super::route::{direction, Plan, RootSample};
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{
-    choose_velocity, wait_line, Agent, Footprint, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
+    choose_velocity, wait_line, Agent, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
 };
 use troupe_scene::GeneratorContext;
 
@@ -341,12 +341,12 @@ impl Steer {
             self.decision = Some((preferred, preferred));
             return;
         }
-        let obstacles: Vec<&Footprint> = if self.engaged {
-            footprints.within(OBSTACLE_RANGE).collect()
+        let (v, free) = if self.engaged {
+            let obstacles = footprints.within(OBSTACLE_RANGE);
+            choose_velocity(body, preferred, agents, obstacles)
         } else {
-            Vec::new()
+            choose_velocity(body, preferred, agents, [])
         };
-        let (v, free) = choose_velocity(body, preferred, agents, &obstacles);
         self.decision = Some((preferred, v));
         if free && !self.engaged && wait.is_none() {
             return;

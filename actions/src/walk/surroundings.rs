@@ -52,7 +52,7 @@ pub fn gather<'a>(
     let mut around = Surroundings {
         bodies: std::mem::take(&mut lists.bodies),
         feet: std::mem::take(&mut lists.feet),
-        obstacles: Vec::new(),
+        obstacles: Default::default(),
     };
     around.bodies.clear();
     around.feet.clear();

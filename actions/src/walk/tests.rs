@@ -928,7 +928,7 @@ fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() 
     };
     let around = Surroundings {
         bodies: vec![walker],
-        obstacles: vec![&planter],
+        obstacles: vec![&planter].into(),
         ..Surroundings::default()
     };
     let by_face = here(DVec2::new(-3.103093344958247, -3.3009414295741357));

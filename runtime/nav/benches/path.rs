@@ -120,10 +120,10 @@ fn avoidance(c: &mut Criterion) {
     let boxes = obstacles(&mut rng);
     let near: Vec<&Footprint> = boxes.iter().take(2).collect();
     c.bench_function("avoidance decision, 6 neighbours, 2 obstacles", |b| {
-        b.iter(|| choose_velocity(&me, DVec2::new(0.0, 1.2), &others, &near))
+        b.iter(|| choose_velocity(&me, DVec2::new(0.0, 1.2), &others, near.iter().copied()))
     });
     c.bench_function("avoidance decision, nobody near", |b| {
-        b.iter(|| choose_velocity(&me, DVec2::new(0.0, 1.2), &[], &[]))
+        b.iter(|| choose_velocity(&me, DVec2::new(0.0, 1.2), &[], []))
     });
     let mut crowd = Crowd::default();
     crowd.positions = (0..1000)

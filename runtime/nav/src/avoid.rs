@@ -7,6 +7,7 @@
 //! of the previous tick's world: bit-identical with any thread count.
 
 use crate::footprint::Footprint;
+use smallvec::SmallVec;
 use troupe_body::glam::DVec2;
 
 /// Seconds ahead a collision matters.
@@ -58,6 +59,7 @@ impl Agent {
 
     /// How far (m) the body reaches from its position along the unit vector `towards`:
     /// its radius, or further where a foot reaches out that way (by [`FOOT`] past it).
+    #[inline]
     pub fn reach(&self, towards: DVec2) -> f64 {
         self.feet
             .iter()
@@ -69,11 +71,11 @@ impl Agent {
 /// The velocity `me` should take to go about `preferred` without running into `others`
 /// or `obstacles`; `preferred` itself when nothing is in the way (then the second value is
 /// true).
-pub fn choose_velocity(
+pub fn choose_velocity<'a>(
     me: &Agent,
     preferred: DVec2,
     others: &[Agent],
-    obstacles: &[&Footprint],
+    obstacles: impl IntoIterator<Item = &'a Footprint>,
 ) -> (DVec2, bool) {
     let speed = preferred.length();
     let base = if speed > 1e-6 { speed } else { 0.5 };
@@ -81,36 +83,18 @@ pub fn choose_velocity(
         Some(forward) if speed > 1e-6 => forward,
         _ => DVec2::Y,
     };
-    let world = Surroundings::new(me, preferred, base, others, obstacles);
-    let mut best = (preferred, world.penalty(preferred, f64::INFINITY));
-    if best.1 <= 0.0 {
-        return (preferred, true);
-    }
-    // Standing still is always a candidate, then the fan of directions and speeds.
-    let still = world.penalty(DVec2::ZERO, best.1);
-    if still < best.1 {
-        best = (DVec2::ZERO, still);
-    }
-    // How far a candidate is from the preferred velocity depends only on its speed
-    // factor and turn (`DEVIATIONS`, in units of the preferred speed). A candidate that
-    // deviates more than the best penalty so far has lost before any neighbour is
-    // weighed (its penalty starts at its deviation), and most of the fan has: they are
-    // passed over on the table's figure, with a margin far above the rounding of the
-    // deviation that `Surroundings::penalty` computes, so the same ones lose.
-    let known = speed > 1e-6;
-    for (k, deviations) in SPEEDS.iter().zip(DEVIATIONS.iter()) {
-        for (&(s, c), &deviation) in FAN.iter().zip(deviations) {
-            if known && deviation * base > best.1 + 1e-9 * base {
-                continue;
-            }
-            let v = candidate(forward, (s, c), base, *k);
-            let p = world.penalty(v, best.1);
-            if p < best.1 {
-                best = (v, p);
-            }
-        }
-    }
-    (best.0, false)
+    let spare = SPARE_NEIGHBOURS.take();
+    let mut world = Surroundings::new(me, preferred, base, (others, spare), obstacles);
+    let chosen = world.best(base, forward, speed > 1e-6);
+    SPARE_NEIGHBOURS.set(std::mem::take(&mut world.neighbours));
+    chosen
+}
+
+thread_local! {
+    /// A list of neighbours kept on each thread from one decision to the next, so that a
+    /// decision does not allocate one (see `docs/PERFORMANCE.md`, "One look beyond").
+    static SPARE_NEIGHBOURS: std::cell::Cell<Vec<Neighbour>> =
+        const { std::cell::Cell::new(Vec::new()) };
 }
 
 /// The candidate velocity turned from the unit `forward` by the turn of sine and cosine
@@ -185,48 +169,47 @@ struct Surroundings<'a> {
     preferred: DVec2,
     /// The walkers and standers near me.
     neighbours: Vec<Neighbour>,
-    /// The obstacles some candidate could reach.
-    obstacles: Vec<Near<'a>>,
+    /// The obstacles some candidate could reach (the usual few on the stack).
+    obstacles: SmallVec<[Near<'a>; 8]>,
 }
 
 impl<'a> Surroundings<'a> {
-    /// What `me` sees, for candidates no faster than `fastest`.
+    /// What `me` sees, for candidates no faster than `fastest`, of the `others` (listed
+    /// in `list`, its contents dropped) and the `obstacles`.
     fn new(
         me: &Agent,
         preferred: DVec2,
         fastest: f64,
-        others: &[Agent],
-        obstacles: &[&'a Footprint],
+        (others, mut list): (&[Agent], Vec<Neighbour>),
+        obstacles: impl IntoIterator<Item = &'a Footprint>,
     ) -> Surroundings<'a> {
-        let neighbours = others
-            .iter()
-            .map(|o| {
-                let offset = o.position - me.position;
-                // Each body reaches towards the other as far as its disc or its feet.
-                let towards = offset.normalize_or_zero();
-                let reach = me.reach(towards) + o.reach(-towards) + GAP;
-                // Reciprocal: I take half the change and they are assumed to take the
-                // other half, unless they stand still: then I go round them alone.
-                let (share, shift) = if o.velocity.length() > STANDING {
-                    (2.0, me.velocity + o.velocity)
-                } else {
-                    (1.0, o.velocity)
-                };
-                Neighbour {
-                    offset,
-                    distance: offset.length(),
-                    velocity: o.velocity,
-                    touching: offset.length() < reach,
-                    share,
-                    shift,
-                    clearance: offset.length_squared() - reach * reach,
-                }
-            })
-            .collect();
+        list.clear();
+        list.extend(others.iter().map(|o| {
+            let offset = o.position - me.position;
+            // Each body reaches towards the other as far as its disc or its feet.
+            let towards = offset.normalize_or_zero();
+            let reach = me.reach(towards) + o.reach(-towards) + GAP;
+            // Reciprocal: I take half the change and they are assumed to take the
+            // other half, unless they stand still: then I go round them alone.
+            let (share, shift) = if o.velocity.length() > STANDING {
+                (2.0, me.velocity + o.velocity)
+            } else {
+                (1.0, o.velocity)
+            };
+            Neighbour {
+                offset,
+                distance: offset.length(),
+                velocity: o.velocity,
+                touching: offset.length() < reach,
+                share,
+                shift,
+                clearance: offset.length_squared() - reach * reach,
+            }
+        }));
         let reach = me.radius + fastest * OBSTACLE_LOOKAHEAD;
         let obstacles = obstacles
-            .iter()
-            .filter_map(|&footprint| {
+            .into_iter()
+            .filter_map(|footprint| {
                 let (centre, bound) = footprint.bounding_circle();
                 // No candidate comes within my radius of it in time: leave it out.
                 if (centre - me.position).length() - bound >= reach {
@@ -244,9 +227,44 @@ impl<'a> Surroundings<'a> {
             position: me.position,
             radius: me.radius,
             preferred,
-            neighbours,
+            neighbours: list,
             obstacles,
         }
+    }
+
+    /// The velocity to go at among these surroundings, `base` being the preferred speed
+    /// (or a stand-in when it is zero, then not `known`) and `forward` its direction:
+    /// the preferred velocity itself when nothing is in the way (then true), else the
+    /// first best of standing still and the fan of candidates.
+    fn best(&self, base: f64, forward: DVec2, known: bool) -> (DVec2, bool) {
+        let preferred = self.preferred;
+        let mut best = (preferred, self.penalty(preferred, f64::INFINITY));
+        if best.1 <= 0.0 {
+            return (preferred, true);
+        }
+        let still = self.penalty(DVec2::ZERO, best.1);
+        if still < best.1 {
+            best = (DVec2::ZERO, still);
+        }
+        // How far a candidate is from the preferred velocity depends only on its speed
+        // factor and turn (`DEVIATIONS`, in units of the preferred speed). A candidate
+        // that deviates more than the best penalty so far has lost before any neighbour
+        // is weighed (its penalty starts at its deviation), and most of the fan has: they
+        // are passed over on the table's figure, with a margin far above the rounding of
+        // the deviation that `Surroundings::penalty` computes, so the same ones lose.
+        for (k, deviations) in SPEEDS.iter().zip(DEVIATIONS.iter()) {
+            for (&(s, c), &deviation) in FAN.iter().zip(deviations) {
+                if known && deviation * base > best.1 + 1e-9 * base {
+                    continue;
+                }
+                let v = candidate(forward, (s, c), base, *k);
+                let p = self.penalty(v, best.1);
+                if p < best.1 {
+                    best = (v, p);
+                }
+            }
+        }
+        (best.0, false)
     }
 
     /// Deviation from the preferred velocity plus urgency over the time to the first
@@ -333,7 +351,7 @@ mod tests {
     fn nothing_in_the_way_keeps_the_preferred_velocity() {
         let me = agent(0.0, 0.0, 0.0, 1.2);
         let aside = agent(3.0, 0.0, 0.0, 1.2);
-        let (v, free) = choose_velocity(&me, DVec2::new(0.0, 1.2), &[aside], &[]);
+        let (v, free) = choose_velocity(&me, DVec2::new(0.0, 1.2), &[aside], []);
         assert!(free);
         assert_eq!(v, DVec2::new(0.0, 1.2));
     }
@@ -342,8 +360,8 @@ mod tests {
     fn head_on_walkers_both_keep_right() {
         let a = agent(0.0, 0.0, 0.0, 1.2);
         let b = agent(0.0, 3.0, 0.0, -1.2);
-        let (va, _) = choose_velocity(&a, DVec2::new(0.0, 1.2), &[b], &[]);
-        let (vb, _) = choose_velocity(&b, DVec2::new(0.0, -1.2), &[a], &[]);
+        let (va, _) = choose_velocity(&a, DVec2::new(0.0, 1.2), &[b], []);
+        let (vb, _) = choose_velocity(&b, DVec2::new(0.0, -1.2), &[a], []);
         // a faces +z: its right is −x; b faces −z: its right is +x.
         assert!(va.x < 0.0 && vb.x > 0.0, "{va} {vb}");
         // Mirror images: the choice depends only on the geometry.
@@ -362,13 +380,13 @@ mod tests {
         // she may only keep her distance.
         let bob = agent(0.0, 0.8, 0.0, 0.0);
         let ann = agent(0.0, 0.0, 0.0, 1.2);
-        let (v, _) = choose_velocity(&ann, DVec2::new(0.0, 1.2), &[bob], &[]);
+        let (v, _) = choose_velocity(&ann, DVec2::new(0.0, 1.2), &[bob], []);
         assert!(v.y > 0.0, "{v}");
         let ann = Agent {
             feet: [DVec2::new(0.09, 0.4), DVec2::new(-0.09, -0.1)],
             ..ann
         };
-        let (v, _) = choose_velocity(&ann, DVec2::new(0.0, 1.2), &[bob], &[]);
+        let (v, _) = choose_velocity(&ann, DVec2::new(0.0, 1.2), &[bob], []);
         assert!(v.y <= 0.0, "{v}");
     }
 
@@ -376,7 +394,7 @@ mod tests {
     fn overlapping_bodies_never_close_in() {
         let me = agent(0.0, 0.0, 0.0, 1.0);
         let other = agent(0.0, 0.5, 0.0, 0.0);
-        let (v, _) = choose_velocity(&me, DVec2::new(0.0, 1.0), &[other], &[]);
+        let (v, _) = choose_velocity(&me, DVec2::new(0.0, 1.0), &[other], []);
         assert!(v.y <= 0.0, "{v}");
     }
 
@@ -392,7 +410,7 @@ mod tests {
             ],
         );
         let me = agent(0.0, 0.0, 0.0, 1.0);
-        let (v, _) = choose_velocity(&me, DVec2::new(0.0, 1.0), &[], &[&wall]);
+        let (v, _) = choose_velocity(&me, DVec2::new(0.0, 1.0), &[], [&wall]);
         assert!(v.y < 0.5, "{v}");
     }
 
@@ -407,7 +425,13 @@ mod tests {
         let base = if speed > 1e-6 { speed } else { 0.5 };
         let forward = preferred.try_normalize().filter(|_| speed > 1e-6);
         let forward = forward.unwrap_or(DVec2::Y);
-        let world = Surroundings::new(me, preferred, base, others, obstacles);
+        let world = Surroundings::new(
+            me,
+            preferred,
+            base,
+            (others, Vec::new()),
+            obstacles.iter().copied(),
+        );
         let mut best = (preferred, world.penalty(preferred, f64::INFINITY));
         if best.1 <= 0.0 {
             return preferred;
@@ -459,7 +483,7 @@ mod tests {
             let speed = if case % 50 == 0 { 0.0 } else { random() * 1.6 };
             let way = random() * std::f64::consts::TAU;
             let preferred = DVec2::new(way.sin(), way.cos()) * speed;
-            let (v, _) = choose_velocity(&me, preferred, &others, &obstacles);
+            let (v, _) = choose_velocity(&me, preferred, &others, obstacles.iter().copied());
             let every = weighing_every_candidate(&me, preferred, &others, &obstacles);
             assert_eq!(v, every, "case {case}");
             if v != preferred && v != DVec2::ZERO {

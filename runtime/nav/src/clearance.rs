@@ -41,6 +41,7 @@
 //! walk (`actions/src/walk/knees.rs`).
 
 use crate::footprint::Footprint;
+use smallvec::SmallVec;
 use troupe_body::glam::DVec2;
 
 /// Gap (m) the step keeps between two bodies' capsules, and between a capsule and an
@@ -209,8 +210,8 @@ pub struct Surroundings<'a> {
     /// Their feet (see `Crowd::soles`), which a foot in the air keeps from as from a
     /// body.
     pub feet: Vec<FootSpan>,
-    /// The obstacles near.
-    pub obstacles: Vec<&'a Footprint>,
+    /// The obstacles near (the usual few on the stack, as each tick gathers them).
+    pub obstacles: SmallVec<[&'a Footprint; 8]>,
 }
 
 /// A limit on the step `s`: `s · normal >= -allowed`, `allowed >= 0`.
@@ -249,7 +250,8 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
     if reach == 0.0 {
         return step;
     }
-    let mut limits: Vec<Limit> = Vec::new();
+    // On the stack: a list on the heap cost each tick's step an allocation.
+    let mut limits: SmallVec<[Limit; 16]> = SmallVec::new();
     for other in &around.bodies {
         // A step closes at most its own length of half the gap.
         if gap_bound(me.bound(), other.bound()) > 2.0 * reach + BODY_MARGIN {
@@ -554,6 +556,7 @@ fn within(wanted: DVec2, limits: &[Limit]) -> DVec2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use smallvec::smallvec;
 
     /// A body of radius 0.3 at (x, z) facing +z, a stride of `half` either way.
     fn body(x: f64, z: f64, half: f64) -> Capsule {
@@ -645,7 +648,7 @@ mod tests {
         // round its middle still keeps the radius and the margin.
         let planter = square("planter", (0.5, 0.4), (2.0, 2.0));
         let around = Surroundings {
-            obstacles: vec![&planter],
+            obstacles: smallvec![&planter],
             ..Surroundings::default()
         };
         let mut root = DVec2::ZERO;
@@ -672,7 +675,7 @@ mod tests {
         // A wall 0.01 m past the margin.
         let wall = square("wall", (0.31 + OBSTACLE_MARGIN, -1.0), (0.5, 1.0));
         let around = Surroundings {
-            obstacles: vec![&wall],
+            obstacles: smallvec![&wall],
             ..Surroundings::default()
         };
         let s = limit_step(&body(0.0, 0.0, 0.2), DVec2::new(0.013, 0.01), &around);
@@ -682,7 +685,7 @@ mod tests {
         // and the margin.
         let planter = square("planter", (-1.0, 0.52 + OBSTACLE_MARGIN), (1.0, 1.0));
         let around = Surroundings {
-            obstacles: vec![&planter],
+            obstacles: smallvec![&planter],
             ..Surroundings::default()
         };
         let s = limit_step(&body(0.0, 0.0, 0.2), DVec2::new(0.0, 0.03), &around);
@@ -699,7 +702,7 @@ mod tests {
             radius: 0.04,
         };
         let around = Surroundings {
-            obstacles: vec![&planter],
+            obstacles: smallvec![&planter],
             ..Surroundings::default()
         };
         let by = clear_foot(foot, &around).unwrap();
@@ -722,7 +725,7 @@ mod tests {
             radius: 0.28,
         };
         let around = Surroundings {
-            obstacles: vec![&planter],
+            obstacles: smallvec![&planter],
             bodies: vec![body],
             ..Surroundings::default()
         };
@@ -780,7 +783,7 @@ mod tests {
         // An obstacle's edge 0.1 m from the foot's clearance.
         let wall = square("wall", (0.15 + LEG_CLEARANCE, -1.0), (0.3, 1.0));
         let around = Surroundings {
-            obstacles: vec![&wall],
+            obstacles: smallvec![&wall],
             ..Surroundings::default()
         };
         assert!(foot_may_move(&foot(0.0), &foot(0.099), &around));
