@@ -438,25 +438,31 @@ impl Cells {
 mod tests {
     use super::*;
 
+    /// `count` actors spread over a field `half` metres either way of the origin, and
+    /// when `spread` one more far out (then the table of runs would be too large), indexed.
+    fn field(count: usize, half: f64, spread: bool) -> Crowd {
+        let mut positions: Vec<DVec2> = (0..count)
+            .map(|i| {
+                let f = i as f64;
+                DVec2::new((f * 7.31).sin() * half, (f * 3.17).cos() * half)
+            })
+            .collect();
+        if spread {
+            positions.push(DVec2::new(5.0e5, -5.0e5));
+        }
+        let mut crowd = Crowd {
+            positions,
+            ..Crowd::default()
+        };
+        crowd.index();
+        assert_eq!(crowd.cells.starts.is_empty(), spread);
+        crowd
+    }
+
     #[test]
     fn the_table_of_runs_finds_what_the_binary_search_finds() {
-        // A crowd on a field, a few far out (the table then would be too large).
         for spread in [false, true] {
-            let mut positions: Vec<DVec2> = (0..200)
-                .map(|i| {
-                    let f = i as f64;
-                    DVec2::new((f * 7.31).sin() * 20.0, (f * 3.17).cos() * 20.0)
-                })
-                .collect();
-            if spread {
-                positions.push(DVec2::new(5.0e5, -5.0e5));
-            }
-            let mut crowd = Crowd {
-                positions,
-                ..Crowd::default()
-            };
-            crowd.index();
-            assert_eq!(crowd.cells.starts.is_empty(), spread);
+            let crowd = field(200, 20.0, spread);
             let searched = Cells {
                 starts: Vec::new(),
                 ..crowd.cells.clone()
@@ -510,23 +516,8 @@ mod tests {
 
     #[test]
     fn a_look_beyond_finds_what_one_look_adds_to_another() {
-        // A crowd on a field, and once with one far out (no table of runs then).
         for spread in [false, true] {
-            let mut positions: Vec<DVec2> = (0..300)
-                .map(|i| {
-                    let f = i as f64;
-                    DVec2::new((f * 7.31).sin() * 15.0, (f * 3.17).cos() * 15.0)
-                })
-                .collect();
-            if spread {
-                positions.push(DVec2::new(5.0e5, -5.0e5));
-            }
-            let mut crowd = Crowd {
-                positions,
-                ..Crowd::default()
-            };
-            crowd.index();
-            assert_eq!(crowd.cells.starts.is_empty(), spread);
+            let crowd = field(300, 15.0, spread);
             let mut added = 0;
             for k in 0..500 {
                 let k = k as f64;
