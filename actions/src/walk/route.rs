@@ -309,19 +309,31 @@ impl Profile {
 struct Polyline {
     points: Vec<DVec2>,
     length: Vec<f64>,
+    /// The unit direction of each segment, by the index of its end point (the first
+    /// unused): found once, where [`Polyline::at`] found two each time (a walk samples
+    /// its plan a dozen times a tick and more).
+    directions: Vec<DVec2>,
 }
 
 impl Polyline {
     fn new(points: Vec<DVec2>) -> Polyline {
         let mut length = Vec::with_capacity(points.len());
+        let mut directions = Vec::with_capacity(points.len());
         let mut total = 0.0;
         for (i, p) in points.iter().enumerate() {
             if i > 0 {
                 total += (*p - points[i - 1]).length();
+                directions.push((*p - points[i - 1]).normalize_or(DVec2::Y));
+            } else {
+                directions.push(DVec2::Y);
             }
             length.push(total);
         }
-        Polyline { points, length }
+        Polyline {
+            points,
+            length,
+            directions,
+        }
     }
 
     fn total(&self) -> f64 {
@@ -359,7 +371,7 @@ impl Polyline {
 
     /// The unit direction of segment `k` (from point `k − 1` to point `k`).
     fn direction(&self, k: usize) -> DVec2 {
-        (self.points[k] - self.points[k - 1]).normalize_or(DVec2::Y)
+        self.directions[k]
     }
 
     /// How far (radians, unsigned) the route turns at inner point `k`.
