@@ -298,3 +298,53 @@ fn grasp_is_identical_with_one_and_two_threads() {
     assert_eq!(postures[0], postures[1]);
     let _ = DQuat::IDENTITY;
 }
+
+#[test]
+fn the_world_lists_the_objects_held_in_object_order_as_holders_change() {
+    use troupe_scene::holding::HoldRequest;
+    let mut s = scene(1);
+    s.add_actor(&ActorDesc {
+        at: DVec3::new(1.0, 0.0, 0.0),
+        ..ActorDesc::new("bob")
+    })
+    .unwrap();
+    let ball = |s: &mut Scene, name: &str, x: f64| {
+        let shape = Shape::Sphere { radius: 0.04 };
+        s.add_object(Scene::object(name, shape, DVec3::new(x, 1.05, 0.38), 0.3))
+            .unwrap()
+    };
+    // `c` within reach of alice's right hand, for a grasp at the end.
+    let (a, b, c) = (
+        ball(&mut s, "a", 0.8),
+        ball(&mut s, "b", 0.4),
+        ball(&mut s, "c", -0.2),
+    );
+    let wrist = s.actors()[0].skeleton.joint("r_wrist").unwrap();
+    let attach = |object| HoldRequest::Attach {
+        object,
+        joint: wrist,
+        from: None,
+    };
+    let held = |s: &Scene| -> Vec<(usize, usize)> {
+        s.world().held.iter().map(|(o, h)| (*o, h.actor)).collect()
+    };
+    assert!(held(&s).is_empty());
+    // Taken in the order c, a (bob), then b: listed by object.
+    assert!(s.request_hold(0, attach(c)));
+    assert!(s.request_hold(1, attach(a)));
+    assert!(s.request_hold(0, attach(b)));
+    assert_eq!(held(&s), vec![(a, 1), (b, 0), (c, 0)]);
+    // What the holders say, object by object.
+    for (object, holder) in s.world().held {
+        assert_eq!(s.holder(*object), Some(*holder));
+    }
+    // Let go: gone from the list, the rest kept; a tick keeps it as it is.
+    assert!(s.request_hold(0, HoldRequest::Release { object: b }));
+    s.step();
+    assert_eq!(held(&s), vec![(a, 1), (c, 0)]);
+    // A grasp's own attachment, made in a tick, is listed too.
+    assert!(s.request_hold(0, HoldRequest::Release { object: c }));
+    let id = start_grasp(&mut s, 0, c, vec![Side::Right]);
+    assert_eq!(run(&mut s, id, 400), Status::Completed);
+    assert_eq!(held(&s), vec![(a, 1), (c, 0)]);
+}
