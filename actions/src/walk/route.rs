@@ -310,8 +310,8 @@ struct Polyline {
     points: Vec<DVec2>,
     length: Vec<f64>,
     /// The unit direction of each segment, by the index of its end point (the first
-    /// unused): found once, where [`Polyline::at`] found two each time (a walk samples
-    /// its plan a dozen times a tick and more).
+    /// entry, before any segment, unused): found once, where [`Polyline::at`] found two
+    /// each time (a walk samples its plan a dozen times a tick and more).
     directions: Vec<DVec2>,
 }
 

@@ -120,9 +120,9 @@ pub(crate) fn apply(
     }
 }
 
-/// The objects `holders` has held, in object order, each with its holder, in `out` (its
-/// contents dropped): a walk asks each tick what its hands hold, and looking through every
-/// object's holder for it cost the crowd benchmark 6 % of its instructions.
+/// Lists in `out` (its contents dropped) the objects `holders` says are held, in object
+/// order, each with its holder: a walk asks each tick what its hands hold, and looking
+/// through every object's holder for it cost the crowd benchmark 6 % of its instructions.
 pub(crate) fn list_held(holders: &[Option<Holder>], out: &mut Vec<(usize, Holder)>) {
     out.clear();
     out.extend(
