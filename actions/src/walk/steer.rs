@@ -300,8 +300,7 @@ impl Steer {
         beyond.clear();
         crowd.near_beyond(position + along * NEIGHBOUR_RANGE, position, beyond);
         // Neither this walker nor its companions are avoided: passed over as they are
-        // read (taking them out of the lists first cost a decision 150 instructions
-        // more).
+        // read (taking them out of the lists first cost a little more).
         let avoided = |j: &&usize| **j != me && !self.companions.contains(j);
         // The feet are found below, for the neighbours avoidance weighs.
         let disc = |j: usize| Agent::disc(crowd.positions[j], crowd.velocities[j], crowd.radii[j]);
