@@ -403,9 +403,18 @@ impl Scene {
 
     /// The objects `actor` holds, in object order.
     pub fn held_by(&self, actor: usize) -> Vec<usize> {
-        (0..self.holders.len())
-            .filter(|&o| self.holders[o].is_some_and(|h| h.actor == actor))
+        self.held
+            .iter()
+            .filter(|(_, h)| h.actor == actor)
+            .map(|&(object, _)| object)
             .collect()
+    }
+
+    /// After holders changed: moves the held objects to their hands and lists them again
+    /// (see [`World::held`]).
+    fn holders_changed(&mut self) {
+        holding::follow(&self.holders, &mut self.objects, &self.states);
+        holding::list_held(&self.holders, &mut self.held);
     }
 
     /// Applies an attach/release/place request as if `actor`'s action had made it, then
@@ -418,8 +427,7 @@ impl Scene {
             &mut self.objects,
             &self.states,
         );
-        holding::follow(&self.holders, &mut self.objects, &self.states);
-        holding::list_held(&self.holders, &mut self.held);
+        self.holders_changed();
         done
     }
 
@@ -842,8 +850,7 @@ impl Scene {
                 self.board.apply(i, stamp, vec![note]);
             }
         }
-        holding::follow(&self.holders, &mut self.objects, &self.states);
-        holding::list_held(&self.holders, &mut self.held);
+        self.holders_changed();
         if let (Some(started), Some(joined), Some(published)) = (started, joined, published) {
             self.profile.step_wall += joined - started;
             self.profile.publish_wall += published - joined;
