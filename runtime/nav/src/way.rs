@@ -73,6 +73,22 @@ pub fn line_rank(d: DVec2) -> Option<f64> {
     (d.length() >= 1e-9).then(|| line_angle(d))
 }
 
+/// Whether a walker heading along `mine` steps back for one heading along `theirs` when
+/// the two stand face to face, each in the other's way (a stand-off in a corridor or a
+/// knot of walkers, `docs/navigation.md`, "Stand-offs"): the one whose heading comes
+/// later round the whole turn from 22.5° (the cut of the lines' ranks) does. The order
+/// is total over headings, so in any knot one walker at least keeps its place, and it
+/// reads only the two headings: a stream meeting another head-on steps back as one.
+pub fn backs_off_for(mine: DVec2, theirs: DVec2) -> bool {
+    heading_key(mine) > heading_key(theirs)
+}
+
+/// The place of the heading along `d` in the order of [`backs_off_for`]: its angle from
+/// [`CUT`], in [0, 2π).
+fn heading_key(d: DVec2) -> f64 {
+    (d.y.atan2(d.x) - CUT).rem_euclid(2.0 * PI)
+}
+
 /// Gap (m) a waiting walker keeps from the discs of those that have the way as they pass.
 pub const WAIT_GAP: f64 = 1.5;
 /// How far (m) a walker may have come onto the way of one that has it and still stop
@@ -193,6 +209,28 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn of_two_walkers_face_to_face_exactly_one_steps_back() {
+        for a in (0..72).map(|k| k as f64 * 5.0 + 0.3) {
+            let mine = DVec2::from_angle(a.to_radians());
+            for off in [180.0f64, 150.0, 210.0, 135.0] {
+                let theirs = DVec2::from_angle((a + off).to_radians()) * 1.7;
+                assert_ne!(
+                    backs_off_for(mine, theirs),
+                    backs_off_for(theirs, mine),
+                    "{a} {off}"
+                );
+            }
+        }
+        // A total order: of three walkers, one steps back for none of the others.
+        let dirs = [0.2f64, 2.3, 4.4].map(DVec2::from_angle);
+        let keeps = dirs
+            .iter()
+            .filter(|&&d| dirs.iter().all(|&e| !backs_off_for(d, e)))
+            .count();
+        assert_eq!(keeps, 1);
     }
 
     #[test]
