@@ -35,6 +35,7 @@ pub mod replan;
 pub mod rig;
 pub mod route;
 pub mod shoulders;
+pub mod standoff;
 pub mod steer;
 pub mod surroundings;
 

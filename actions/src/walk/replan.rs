@@ -25,7 +25,7 @@ const REPLAN_INTERVAL: f64 = 2.0;
 /// took a quarter of the tick (`troupe bench --actors 1000`).
 const LONGEST_INTERVAL: f64 = 16.0;
 /// Below this plan clock rate the walk counts as waiting.
-const WAITING_RATE: f64 = 0.1;
+pub const WAITING_RATE: f64 = 0.1;
 /// Below this speed (m/s) an actor counts as standing: an obstacle for the new route.
 pub const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.

@@ -3,7 +3,8 @@
 //!
 //! The plan stays a function of time; steering bends how it is followed: the plan's
 //! clock runs at a `rate` between 0 (wait) and 1 (as planned), and the body keeps an
-//! `offset` from the planned path that drifts sideways (a sidestep) and returns to it.
+//! `offset` from the planned path that drifts sideways (a sidestep), or back in a
+//! corridor's stand-off ([`super::standoff`]), and returns to it.
 //! Each tick the walk picks a velocity from the previous tick's crowd and turns it into a
 //! new rate and drift, both changing no faster than the legs can follow; the foot
 //! placement reads the same steered plan, so the feet stay planted. Until avoidance first
@@ -13,6 +14,7 @@
 
 use super::lanes;
 use super::route::{direction, Plan, RootSample};
+use super::standoff::Standoff;
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{
     choose_velocity, wait_line, Agent, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
@@ -75,6 +77,9 @@ pub struct Steer {
     pub decision: Option<(DVec2, DVec2)>,
     /// The rate and drift that velocity asks for.
     target: (f64, DVec2),
+    /// Whether the walk stands face to face with someone in its way, and steps back (see
+    /// [`super::standoff`]).
+    standoff: Standoff,
     /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
     /// past it.
     tau_before: f64,
@@ -176,6 +181,7 @@ impl Steer {
             decision: self.decision,
             target: (1.0, drift),
             tau_before: tau,
+            standoff: Standoff::default(),
         };
     }
 
@@ -233,7 +239,17 @@ impl Steer {
         // further ahead).
         others.clear();
         crowd.near(position, others);
-        let mut preferred = if remaining >= 2.0
+        let backing = self.engaged
+            && self.standoff.update(
+                ctx,
+                (position, along),
+                (others, &self.companions, footprints),
+                self.rate,
+                now,
+            );
+        let mut preferred = if backing {
+            Standoff::preferred(position, along, radius, footprints)
+        } else if remaining >= 2.0
             && lanes::in_counter_flow(ctx, position, along, (others, footprints))
         {
             lanes::preferred(planned, self.offset, along, gain)
@@ -364,7 +380,13 @@ impl Steer {
             // Slow down so as to stop at the line: v² = 2·a·d.
             rate = rate.min((2.0 * WAIT_BRAKING * d).sqrt() / speed);
         }
-        let drift = side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT);
+        // Stepping back, the body drifts back as well as sideways (the plan's clock
+        // stands: `rate` is 0 for a velocity back along the way).
+        let drift = if self.standoff.backing {
+            v.clamp_length_max(MAX_DRIFT)
+        } else {
+            side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT)
+        };
         self.target = (rate, drift);
     }
 }

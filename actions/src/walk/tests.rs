@@ -678,6 +678,90 @@ fn steered_feet_stay_planted_when_two_walkers_pass_head_on() {
     assert!(lowest >= -1e-3, "a foot went {lowest} m below the floor");
 }
 
+/// Two pairs walking abreast meet head-on in a corridor too narrow for four abreast
+/// (1.6 m between the walls): neither can step aside, and avoidance alone had them all
+/// stand for good. One pair steps back (see [`super::standoff`]) and all four pass,
+/// their discs apart. (Their feet are not held to the head-on bound here: squeezed past
+/// one another, a foot held in the air jumps to its landing; docs/navigation.md,
+/// "Stand-offs".)
+#[test]
+fn two_pairs_face_to_face_in_a_corridor_step_back_and_pass() {
+    use troupe_scene::space::{body_radius, Wall};
+    let mut scene = adult_scene(200.0, 1);
+    for x in [-0.9, 0.9] {
+        scene
+            .add_wall(Wall {
+                from: DVec2::new(x, -6.0),
+                to: DVec2::new(x, 6.0),
+                thickness: 0.2,
+                height: 2.0,
+            })
+            .unwrap();
+    }
+    // (start x, start z, facing, goal x, goal z): the pairs 0.65 m apart, 7 m apart.
+    let walkers = [
+        (-0.325, -3.5, 0.0, -0.4, 8.0),
+        (0.325, -3.5, 0.0, 0.4, 8.0),
+        (-0.325, 3.5, 180.0, -0.4, -8.0),
+        (0.325, 3.5, 180.0, 0.4, -8.0),
+    ];
+    let mut ids = Vec::new();
+    for (k, &(x, z, facing, gx, gz)) in walkers.iter().enumerate() {
+        let a = scene
+            .add_actor(&ActorDesc {
+                at: DVec3::new(x, 0.0, z),
+                facing_degrees: facing,
+                ..ActorDesc::new(format!("w{k}"))
+            })
+            .unwrap();
+        let skeleton = scene.actors()[a].skeleton.clone();
+        let goal = Goal::Through(vec![DVec2::new(gx, gz)]);
+        let walk = Walk::navigate(&skeleton, goal, WalkOptions::default()).unwrap();
+        let spec = ActionSpec::new("walk", walk.scope());
+        ids.push(scene.start_action(a, spec, Box::new(walk)).unwrap());
+    }
+    let radius = body_radius(&scene.actors()[0].skeleton);
+    // Per walker, the furthest it has come along its way (+z for the first pair, −z for
+    // the second), and the most any walker stepped back from there; the least distance
+    // between two bodies' centres.
+    let mut furthest = [f64::NEG_INFINITY; 4];
+    let mut stepped_back: f64 = 0.0;
+    let mut closest = f64::INFINITY;
+    while scene.time() < 60.0
+        && !ids
+            .iter()
+            .all(|id| scene.action(*id).unwrap().status.is_final())
+    {
+        scene.step();
+        let roots: Vec<DVec2> = (0..4)
+            .map(|a| {
+                let p = scene.states()[a].globals[0].translation;
+                DVec2::new(p.x, p.z)
+            })
+            .collect();
+        for a in 0..4 {
+            let along = if a < 2 { roots[a].y } else { -roots[a].y };
+            furthest[a] = furthest[a].max(along);
+            stepped_back = stepped_back.max(furthest[a] - along);
+            for b in a + 1..4 {
+                closest = closest.min((roots[a] - roots[b]).length());
+            }
+        }
+    }
+    for id in &ids {
+        assert_eq!(scene.action(*id).unwrap().status, Status::Completed);
+    }
+    println!(
+        "two pairs in a corridor: all passed by {:.1} s, the most a walker stepped back {stepped_back:.2} m, closest centres {closest:.3} m",
+        scene.time()
+    );
+    assert!(stepped_back > 0.1, "nobody stepped back: {stepped_back}");
+    assert!(
+        closest >= 2.0 * radius - 0.01,
+        "discs overlapped: {closest}"
+    );
+}
+
 #[test]
 fn a_walk_reports_its_plan_ahead_and_its_avoidance_for_drawing() {
     let mut scene = adult_scene(100.0, 1);

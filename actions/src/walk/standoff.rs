@@ -1,0 +1,200 @@
+//! Stand-offs in corridors: walkers that stand face to face, each in the other's way,
+//! where neither can step aside (two pairs abreast meeting in a 1.6 m corridor, two
+//! groups tied into a knot in a 2.3 m one). Avoidance only slows a walk along its plan
+//! and drifts it sideways, so both would wait for good; new routes round people
+//! standing find none where the people fill the way. In a passage narrower than 2.6 m
+//! (obstacle to obstacle), after [`BACK_OFF_AFTER`] of waiting with someone face to
+//! face in its way, the walker that comes later in the order of headings
+//! (`troupe_nav::way::backs_off_for`, the same for a whole stream) steps back, and to
+//! its right where there is room, until nobody it backs off for is in its way; one of
+//! its own stream standing behind it steps back with it. See `docs/navigation.md`,
+//! "Stand-offs".
+
+use super::replan::WAITING_RATE;
+use troupe_body::glam::DVec2;
+use troupe_scene::space::{backs_off_for, FootprintsAround, GAP};
+use troupe_scene::GeneratorContext;
+
+/// Seconds a walk waits with someone face to face in its way before it may step back.
+pub const BACK_OFF_AFTER: f64 = 2.0;
+/// Speed (m/s) at which a walker steps back.
+pub const BACK_SPEED: f64 = 0.3;
+/// Largest gap (m) between two discs for the other to count as in my way.
+const IN_THE_WAY: f64 = 0.6;
+/// The same while I step back: a little further, so that a step back is not undone by
+/// the next tick's sway.
+const STILL_IN_THE_WAY: f64 = 0.9;
+/// Shortest step back (s): once begun, a step back goes on this long at least.
+const SHORTEST_STEP_BACK: f64 = 0.6;
+/// Largest cosine between my way and the way another faces for it to face me.
+const FACE_TO_FACE: f64 = -0.7;
+/// Smallest cosine between my way and the way another faces for it to go my way.
+const SAME_WAY: f64 = 0.7;
+/// Speed (m/s) backwards along my way of one of my own stream ahead that steps back
+/// (half of [`BACK_SPEED`]: a walk's sway as it stands moves the body by less).
+const STEPPING_BACK: f64 = 0.15;
+/// Largest gap (m) between two discs for one of my own stream stepping back to step
+/// back into me.
+const BACKED_INTO: f64 = 0.3;
+/// Widest passage (m, from obstacle to obstacle across the way) in which a walker steps
+/// back: a corridor, where nobody can step aside far. In the open a stand-off clears as
+/// the others sidestep; stepping back there as well (after 2, 4 or 6 s, beside the
+/// furniture or anywhere) put more limbs into one another in the plaza
+/// (docs/navigation.md, "Stand-offs").
+const PASSAGE: f64 = 2.6;
+/// Step (m) at which the passage's width is measured.
+const PASSAGE_STEP: f64 = 0.1;
+/// Furthest (m) looked to the right for room to step aside into.
+const ASIDE: f64 = 0.5;
+/// Step (m) at which that room is measured, and the gap it keeps from an obstacle.
+const ASIDE_STEP: f64 = 0.1;
+
+/// Whether a walk stands in a stand-off, and since when it has waited.
+#[derive(Clone, Debug, Default)]
+pub struct Standoff {
+    /// Walk time since which the plan's clock has run slower than [`WAITING_RATE`].
+    waiting_since: Option<f64>,
+    /// Walk time since which the walk has stepped back, while it does.
+    backing_since: Option<f64>,
+    /// Whether the walk steps back this tick.
+    pub backing: bool,
+}
+
+impl Standoff {
+    /// Decides whether actor `ctx.actor` at `position`, going along the unit `along`,
+    /// steps back this tick (then true), from the previous tick's crowd: those near it
+    /// (`others`, but its `companions`) and its plan clock's `rate`; `now` is the walk's
+    /// time.
+    pub fn update(
+        &mut self,
+        ctx: &GeneratorContext,
+        (position, along): (DVec2, DVec2),
+        (others, companions, footprints): (&[usize], &[usize], &FootprintsAround),
+        rate: f64,
+        now: f64,
+    ) -> bool {
+        if rate < WAITING_RATE {
+            self.waiting_since.get_or_insert(now);
+        } else {
+            self.waiting_since = None;
+            if !self.backing {
+                // Neither waiting nor stepping back: nothing to look at (most ticks).
+                return false;
+            }
+        }
+        let waited = self
+            .waiting_since
+            .is_some_and(|since| now - since >= BACK_OFF_AFTER);
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        let radius = crowd.radii[me];
+        let in_the_way = if self.backing {
+            STILL_IN_THE_WAY
+        } else {
+            IN_THE_WAY
+        };
+        let (mut face_to_face, mut backed_into) = (false, false);
+        for &j in others {
+            if j == me || companions.contains(&j) {
+                continue;
+            }
+            let offset = crowd.positions[j] - position;
+            let reach = radius + crowd.radii[j] + GAP;
+            // Ahead, on my way, and near.
+            if offset.dot(along) <= 0.0
+                || along.perp_dot(offset).abs() >= reach
+                || offset.length() - reach > in_the_way
+            {
+                continue;
+            }
+            let Some(&facing) = crowd.facings.get(j) else {
+                continue;
+            };
+            let towards = facing.dot(along);
+            if towards < FACE_TO_FACE && backs_off_for(along, facing) {
+                face_to_face = true;
+            } else if towards > SAME_WAY
+                && crowd.velocities[j].dot(along) < -STEPPING_BACK
+                && offset.length() - reach < BACKED_INTO
+            {
+                backed_into = true;
+            }
+        }
+        let begun = self
+            .backing_since
+            .is_some_and(|since| now - since < SHORTEST_STEP_BACK);
+        let in_a_passage = || passage_width(position, along, footprints) < PASSAGE;
+        let stand_off = backed_into || (face_to_face && (self.backing || waited));
+        self.backing = begun || (stand_off && in_a_passage());
+        self.backing_since = match (self.backing, self.backing_since) {
+            (true, Some(since)) => Some(since),
+            (true, None) => Some(now),
+            (false, _) => None,
+        };
+        self.backing
+    }
+
+    /// The velocity a body of `radius` at `position`, going along the unit `along`,
+    /// would like as it steps back: back along its way at [`BACK_SPEED`], and as much to
+    /// its right as the `footprints` round it leave room (up to 0.5 m, keeping 0.1 m);
+    /// avoidance then keeps it off those behind and beside it.
+    pub fn preferred(
+        position: DVec2,
+        along: DVec2,
+        radius: f64,
+        footprints: &FootprintsAround,
+    ) -> DVec2 {
+        let room = room_on_the_right(position, along, radius, footprints);
+        let aside = (room / (2.0 * ASIDE_STEP)).min(1.0);
+        (-along + along.perp() * aside).normalize() * BACK_SPEED
+    }
+}
+
+/// How far (m, at most [`ASIDE`]) a body of `radius` at `position` may move to the right
+/// of `along` before its disc comes within [`ASIDE_STEP`] of one of the `footprints`
+/// round it, measured every [`ASIDE_STEP`]: in a corridor, none for the walker by the
+/// wall on its right.
+fn room_on_the_right(
+    position: DVec2,
+    along: DVec2,
+    radius: f64,
+    footprints: &FootprintsAround,
+) -> f64 {
+    let right = along.perp();
+    let keep = radius + ASIDE_STEP;
+    let mut room = ASIDE;
+    for f in footprints.within(keep + ASIDE) {
+        let mut d = 0.0;
+        while d < room {
+            let next = (d + ASIDE_STEP).min(room);
+            if f.distance(position + right * next) < keep {
+                room = d;
+                break;
+            }
+            d = next;
+        }
+    }
+    room
+}
+
+/// The width (m, up to [`PASSAGE`] or more) of the passage across `along` at `position`:
+/// how far to the left and to the right the first of the `footprints` is, measured every
+/// [`PASSAGE_STEP`] up to [`PASSAGE`] each way.
+fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> f64 {
+    let side = along.perp();
+    let free = |towards: DVec2| {
+        let mut d = PASSAGE_STEP;
+        while d < PASSAGE {
+            let at = position + towards * d;
+            if footprints
+                .within(d + PASSAGE_STEP)
+                .any(|f| f.distance(at) < PASSAGE_STEP / 2.0)
+            {
+                return d;
+            }
+            d += PASSAGE_STEP;
+        }
+        PASSAGE
+    };
+    free(side) + free(-side)
+}
