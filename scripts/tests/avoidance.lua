@@ -135,7 +135,7 @@ test("two pairs meet head-on in a 1.6 m corridor: one pair steps back and all pa
 end)
 
 test("two groups of five meet head-on in a 2.3 m corridor: they pass", function()
-  -- Avoidance alone tied seven of them into a knot in the middle for good.
+  -- Avoidance alone tied eight of them into a knot in the middle for good.
   groups_pass("two groups of five in 2.3 m", 5, 2.3, 5, 0.7)
 end)
 
