@@ -56,11 +56,14 @@ pub struct Standoff {
     waiting_since: Option<f64>,
     /// Walk time since which the walk has stepped back, while it does.
     backing_since: Option<f64>,
-    /// Whether the walk steps back this tick.
-    pub backing: bool,
 }
 
 impl Standoff {
+    /// Whether the walk steps back this tick (as the last [`Standoff::update`] decided).
+    pub fn backing(&self) -> bool {
+        self.backing_since.is_some()
+    }
+
     /// Decides whether actor `ctx.actor` at `position`, going along the unit `along`,
     /// steps back this tick (then true), from the previous tick's crowd: those near it
     /// (`others`, but its `companions`) and its plan clock's `rate`; `now` is the walk's
@@ -77,7 +80,7 @@ impl Standoff {
             self.waiting_since.get_or_insert(now);
         } else {
             self.waiting_since = None;
-            if !self.backing {
+            if !self.backing() {
                 // Neither waiting nor stepping back: nothing to look at (most ticks).
                 return false;
             }
@@ -88,7 +91,7 @@ impl Standoff {
         let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let radius = crowd.radii[me];
-        let in_the_way = if self.backing {
+        let in_the_way = if self.backing() {
             STILL_IN_THE_WAY
         } else {
             IN_THE_WAY
@@ -124,14 +127,14 @@ impl Standoff {
             .backing_since
             .is_some_and(|since| now - since < SHORTEST_STEP_BACK);
         let in_a_passage = || passage_width(position, along, footprints) < PASSAGE;
-        let stand_off = backed_into || (face_to_face && (self.backing || waited));
-        self.backing = begun || (stand_off && in_a_passage());
-        self.backing_since = match (self.backing, self.backing_since) {
-            (true, Some(since)) => Some(since),
-            (true, None) => Some(now),
-            (false, _) => None,
+        let stand_off = backed_into || (face_to_face && (self.backing() || waited));
+        let backing = begun || (stand_off && in_a_passage());
+        self.backing_since = if backing {
+            self.backing_since.or(Some(now))
+        } else {
+            None
         };
-        self.backing
+        backing
     }
 
     /// The velocity a body of `radius` at `position`, going along the unit `along`,

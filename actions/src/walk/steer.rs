@@ -382,7 +382,7 @@ impl Steer {
         }
         // Stepping back, the body drifts back as well as sideways (the plan's clock
         // stands: `rate` is 0 for a velocity back along the way).
-        let drift = if self.standoff.backing {
+        let drift = if self.standoff.backing() {
             v.clamp_length_max(MAX_DRIFT)
         } else {
             side * v.dot(side).clamp(-MAX_DRIFT, MAX_DRIFT)
