@@ -84,34 +84,12 @@ test("two actors head-on in a 1.2 m corridor pass each other", function()
   expect(frozen <= 3, string.format("someone stood still %.1f s", frozen))
 end)
 
--- Two groups of `n` meet head-on in a corridor `width` m wide (walls along z from −6 to
--- 6 m), in rows 0.9 m apart of as many abreast as fit 0.6 m apart, the first rows 8 m
--- apart; each walker bound 8 m beyond the middle (0.9 m more a row back), their goals
--- `spread` m apart. Returns the actors, their walks and goals {x, z}.
-local function groups_in_a_corridor(width, n, spread)
-  local h = width / 2 + 0.1
-  troupe.wall{ from = { -h, -6 }, to = { -h, 6 }, thickness = 0.2 }
-  troupe.wall{ from = { h, -6 }, to = { h, 6 }, thickness = 0.2 }
-  local cols = math.max(1, math.floor((width - 0.3) / 0.6))
-  local actors, walks, goals = {}, {}, {}
-  for i = 1, 2 * n do
-    local side = i <= n and -1 or 1
-    local k = (i - 1) % n
-    local col, row = k % cols, k // cols
-    local x, z = (col - (cols - 1) / 2) * 0.6, side * (4 + row * 0.9)
-    actors[i] = troupe.actor{ name = (side < 0 and "a" or "b") .. (k + 1), at = { x, 0, z },
-                              facing = side < 0 and 0 or 180 }
-    goals[i] = { (k - (n - 1) / 2) * spread, -side * (8 + row * 0.9) }
-  end
-  for i, a in ipairs(actors) do walks[i] = a:walk{ to = { goals[i][1], 0, goals[i][2] } } end
-  return actors, walks, goals
-end
-
--- Runs `groups_in_a_corridor(...)` until every walk has ended, and checks that all
--- arrive, with no bodies' discs or solids 1 cm into each other and nobody standing more
--- than `longest` s.
-local function groups_pass(label, longest, ...)
-  local actors, walks, goals = groups_in_a_corridor(...)
+-- Two groups meet head-on in a corridor `width` m wide, `n` a side 0.6 m apart abreast,
+-- the first rows 8 m apart, their goals `spread` m apart (support/corridor_groups.lua):
+-- runs until every walk has ended, and checks that all arrive, with no bodies' discs or
+-- solids 1 cm into each other and nobody standing more than `longest` s.
+local function groups_pass(label, longest, width, n, spread)
+  local actors, walks, goals = require("support.corridor_groups")(width, n, spread, 0.6, 4)
   local solids = 0.0
   local deepest, frozen, ok = watch(actors, walks, goals, 90, function()
     solids = math.max(solids, (troupe.deepest_overlap()))

@@ -5,27 +5,13 @@
 -- 40 s on this kind of machine):
 --   troupe test scripts/tests/support/corridors.lua --shard 1/2 &
 --   troupe test scripts/tests/support/corridors.lua --shard 2/2
--- A scene is a corridor `width` m wide (walls along z from −6 to 6 m), `n` walkers a
--- side in rows 0.9 m apart of as many abreast as fit 0.65 m apart, the first rows 7 m
--- apart, each bound 8 m beyond the middle (0.9 m more a row back), the goals `spread` m
--- apart.
+-- A scene is a corridor `width` m wide, `n` walkers a side 0.65 m apart abreast, the
+-- first rows 7 m apart, the goals `spread` m apart (support/corridor_groups.lua).
+local groups = require("corridor_groups")
+
 local function scene(name, width, n, spread)
   test(name, function()
-    local h = width / 2 + 0.1
-    troupe.wall{ from = { -h, -6 }, to = { -h, 6 }, thickness = 0.2, height = 2 }
-    troupe.wall{ from = { h, -6 }, to = { h, 6 }, thickness = 0.2, height = 2 }
-    local actors, walks = {}, {}
-    local cols = math.max(1, math.floor((width - 0.3) / 0.65))
-    for i = 1, 2 * n do
-      local side = i <= n and -1 or 1
-      local k = (i - 1) % n
-      local col, row = k % cols, k // cols
-      local x = (col - (cols - 1) / 2) * 0.65
-      local z = side * (3.5 + row * 0.9)
-      actors[i] = troupe.actor{ name = (side < 0 and "a" or "b") .. (k + 1), at = { x, 0, z }, facing = side < 0 and 0 or 180 }
-      local gx = (k - (n - 1) / 2) * spread
-      walks[i] = actors[i]:walk{ to = { gx, 0, -side * (8 + row * 0.9) } }
-    end
+    local actors, walks = groups(width, n, spread, 0.65, 3.5)
     local t, solids, longest, still, last = 0, 0.0, 0.0, {}, {}
     for i, a in ipairs(actors) do local p = a:position(); last[i] = { p[1], p[3] }; still[i] = 0 end
     run_until(function()
