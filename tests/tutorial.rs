@@ -1,5 +1,6 @@
-//! docs/first-behavior.md works as written: its Lua blocks, saved as the tutorial says,
-//! run, render and pass their test.
+//! The worked examples of the docs work as written: docs/first-behavior.md's Lua blocks,
+//! saved as the tutorial says, run, render and pass their test; docs/navigation.md's room
+//! prints what the page says it prints.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -19,16 +20,27 @@ fn troupe(dir: &Path, args: &[&str]) -> Output {
     out
 }
 
-/// The ```lua blocks of the tutorial, in order.
-fn lua_blocks() -> Vec<String> {
-    let doc = std::fs::read_to_string(
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/first-behavior.md"),
+/// The text of `docs/PAGE`.
+fn page(page: &str) -> String {
+    std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("docs")
+            .join(page),
     )
-    .unwrap();
-    doc.split("```lua\n")
+    .unwrap()
+}
+
+/// The code blocks of `doc` that open with FENCE (```lua, or ``` for plain text), in order.
+fn blocks(doc: &str, fence: &str) -> Vec<String> {
+    doc.split(&format!("{fence}\n"))
         .skip(1)
         .map(|b| b.split("```").next().unwrap().to_string())
         .collect()
+}
+
+/// The ```lua blocks of the tutorial, in order.
+fn lua_blocks() -> Vec<String> {
+    blocks(&page("first-behavior.md"), "```lua")
 }
 
 #[test]
@@ -75,5 +87,38 @@ fn the_tutorial_runs_as_written() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed, 0 failed"));
     troupe(&dir, &["lua-defs", "types/troupe.d.lua"]);
     assert!(dir.join("types/troupe.d.lua").is_file());
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn the_navigation_guides_room_prints_what_the_guide_says() {
+    let doc = page("navigation.md");
+    let scene = &blocks(&doc, "```lua")[0];
+    // The plain block after "it prints": the lines the run must print.
+    let printed = doc
+        .split("it prints")
+        .nth(1)
+        .expect("the guide says what it prints");
+    let expected = &blocks(printed, "```")[0];
+    let dir = std::env::temp_dir().join(format!("troupe-nav-guide-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    std::fs::write(dir.join("room.lua"), scene).unwrap();
+    for threads in ["1", "2"] {
+        let out = troupe(
+            &dir,
+            &["run", "room.lua", "--seconds", "25", "--threads", threads],
+        );
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+        for line in expected.lines() {
+            assert!(
+                text.contains(line),
+                "{threads} thread(s): no `{line}` in:\n{text}"
+            );
+        }
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
