@@ -60,6 +60,42 @@ test("cancel of a velocity walk also stops well, and ends cancelled", function()
   expect(w.status == "cancelled" and w.error == "cancelled", w.status .. " " .. tostring(w.error))
 end)
 
+test("walks held short of their goal by someone standing on it end soon after cancel() and stop()", function()
+  standing_ankle()
+  troupe.actor{ name = "bob" }
+  local ann = troupe.actor{ name = "ann", at = {-3, 0, 0} }
+  local cy = troupe.actor{ name = "cy", at = {3, 0, 0} }
+  local a, c = ann:walk{ to = {0, 0, 0} }, cy:walk{ to = {0, 0, 0} }
+  run(10)
+  expect(a.status == "active" and c.status == "active", "both wait by bob: " .. a.status .. ", " .. c.status)
+  a:cancel()
+  c:stop()
+  local t0 = troupe.time()
+  expect(run_until(function() return a.status == "cancelled" and c.status == "completed" end, 4),
+         string.format("ended within 4 s: %s, %s", a.status, c.status))
+  print(string.format("held walks ended %.2f s after cancel() and stop()", troupe.time() - t0))
+  run(0.5)
+  for _, who in ipairs({ ann, cy }) do
+    local ok, l, r = feet_down(who)
+    expect(ok, string.format("%s stands on both feet (ankles %.3f and %.3f m)", who.name, l, r))
+  end
+end)
+
+test("a walk cancelled during its turn on the spot stops turning part way round", function()
+  standing_ankle()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {-2, 0, -2} }   -- 135° behind: it turns on the spot first
+  run(0.5)
+  w:cancel()
+  expect(run_until(function() return w.status == "cancelled" end, 3.5), "ended within 3.5 s: " .. w.status)
+  local yaw = ann:dof("root_yaw")
+  expect(math.abs(yaw) > 0.3 and math.abs(yaw) < 1.5,
+         string.format("turned part way (%.2f rad of %.2f)", yaw, -math.rad(135)))
+  run(0.5)
+  local ok, l, r = feet_down(ann)
+  expect(ok, string.format("both feet down (ankles %.3f and %.3f m)", l, r))
+end)
+
 test("a velocity walk with a duration ends with both feet down", function()
   standing_ankle()
   local ann = troupe.actor{ name = "ann" }

@@ -84,6 +84,21 @@ pub const LOWEST: f64 = 0.2;
 pub const LATE_SWING: f64 = 0.5;
 /// Seconds to stand still, both feet down, before the walk reports it has finished.
 pub const SETTLE_TIME: f64 = 0.3;
+/// Seconds after a stop (`stop()`, `cancel()`, a pre-emption) by which a walk that has
+/// not finished as on arrival finishes once both its feet are down near each other
+/// ([`STOP_STANCE`]), wherever they stand.
+/// A walk held where it stands (by someone in its way, or the clearance) has its plan's
+/// clock held too, so its stop's deceleration would never run out; an unhindered stop
+/// finishes within 2 s (0.8 s of slowing down, the feet catching up, 0.3 s settling).
+pub const STOP_DEADLINE: f64 = 2.5;
+/// Seconds after [`STOP_DEADLINE`] by which a stopped walk finishes however its feet
+/// stand (an unhindered stop in the middle of setting off, at the slowest cadence, takes
+/// up to 4.2 s).
+pub const STOP_GRACE: f64 = 3.0;
+/// Farthest apart (m) two planted feet may be for a stopped walk past [`STOP_DEADLINE`]
+/// to finish where it stands: beside each other, not in mid-stride (feet side by side
+/// stand about 0.2 m apart, a stride's 0.6–0.8 m).
+pub const STOP_STANCE: f64 = 0.45;
 /// Seconds over which the spine, arms and pelvis go from the posture the actor had to the
 /// walk's.
 pub const BLEND_IN_TIME: f64 = 0.4;
@@ -199,6 +214,8 @@ pub struct Walk {
     heading: f64,
     start_q: Vec<f64>,
     settle_since: Option<f64>,
+    /// The walk time at which the walk was asked to stop, if it was (see [`STOP_DEADLINE`]).
+    stopped_at: Option<f64>,
     last_miss: f64,
     /// Each hip's twist on the previous tick (the leg IK's starting guess).
     twist: [Option<f64>; 2],
@@ -274,6 +291,7 @@ impl Walk {
             heading: 0.0,
             start_q: Vec::new(),
             settle_since: None,
+            stopped_at: None,
             last_miss: 0.0,
             twist: [None; 2],
             cadence: 0.0,
@@ -1342,6 +1360,7 @@ impl Generator for Walk {
             });
         }
         self.settle_since = None;
+        self.stopped_at = None;
         self.twist = [None; 2];
         self.last_floor = None;
         self.thighs = [None; 2];
@@ -1359,6 +1378,7 @@ impl Generator for Walk {
         match &mut self.plan {
             Some(plan) => {
                 plan.stop_at(self.steer.plan_time(self.t, self.t));
+                self.stopped_at.get_or_insert(self.t);
                 true
             }
             None => false,
@@ -1487,6 +1507,18 @@ impl Generator for Walk {
             } else {
                 self.settle_since = None;
             }
+        }
+        if let Some(stopped_at) = self.stopped_at {
+            // A walk held where it stands (its plan's clock, or its body, held by someone in
+            // its way or by the clearance) steps towards spots it never reaches.
+            let since = self.t - stopped_at;
+            let standing = match self.feet {
+                [Foot::Stance { plant: l, .. }, Foot::Stance { plant: r, .. }] => {
+                    (l - r).length() < STOP_STANCE
+                }
+                _ => false,
+            };
+            done |= since >= STOP_DEADLINE + STOP_GRACE || (since >= STOP_DEADLINE && standing);
         }
         self.lists.keep(around);
         if let Some(footprints) = footprints {

@@ -577,10 +577,23 @@ struct Stop {
 impl Stop {
     /// Distance covered since `at`, and the speed, at `t`.
     fn at(&self, t: f64) -> (f64, f64) {
-        let u = ((t - self.at) / self.ramp).clamp(0.0, 1.0);
+        (
+            self.eased(t, self.speed),
+            self.speed * (1.0 - smoothstep(self.u(t))),
+        )
+    }
+
+    /// How far something going at `rate` at `at` has gone by `t`, slowing down as the body
+    /// does: its rate falls along the same smoothstep over the ramp.
+    fn eased(&self, t: f64, rate: f64) -> f64 {
+        let u = self.u(t);
         // ∫(1 − smoothstep) = u − ∫smoothstep.
-        let d = self.speed * self.ramp * (u - smoothstep_integral(u));
-        (d, self.speed * (1.0 - smoothstep(u)))
+        rate * self.ramp * (u - smoothstep_integral(u))
+    }
+
+    /// The part of the ramp gone by `t`.
+    fn u(&self, t: f64) -> f64 {
+        ((t - self.at) / self.ramp).clamp(0.0, 1.0)
     }
 }
 
@@ -873,7 +886,16 @@ impl Plan {
                 };
                 let (position, tangent) = line.at(s);
                 let k = if *spot_turn > 0.0 {
-                    smoothstep(t / spot_turn)
+                    match stopping {
+                        // Stopped during the turn on the spot: the turn slows down with
+                        // the body and ends part way (it would take up to 3 s more).
+                        Some(stop) if stop.at < *spot_turn => {
+                            let u = stop.at / spot_turn;
+                            let rate = 6.0 * u * (1.0 - u) / spot_turn;
+                            (smoothstep(u) + stop.eased(t, rate)).min(1.0)
+                        }
+                        _ => smoothstep(t / spot_turn),
+                    }
                 } else {
                     smoothstep(t / TURN_TIME)
                 };
