@@ -183,6 +183,24 @@ test("a grasp during a walk starts at once and the walk keeps walking", function
   expect(w.status == "active", "walk goes on: " .. w.status)
   expect(run_until(function() return g.status ~= "active" end, 4), "grasp ended")
   expect(w.status == "active" or done(w), "the walk was never stopped: " .. w.status)
+  -- The arm followed the cup as the body walked on: the hand holds it, not a cup in the air.
+  expect(g.status == "completed" and cup.holder == ann, "grasped: " .. g.status .. " " .. tostring(g.error))
+  local c, h = cup:position(), ann:joint_position("r_wrist")
+  local d = math.sqrt((c[1] - h[1])^2 + (c[2] - h[2])^2 + (c[3] - h[3])^2)
+  expect(d < 0.15, string.format("the cup is in the hand: %.3f m from the wrist", d))
+end)
+
+test("a crouching grasp whose legs a walk takes fails, saying where the hand closed", function()
+  local ann = troupe.actor{ name = "ann" }
+  local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.1, at = {0.15, 0.1, 0.45},
+                              obstacle = false }
+  local g = ann:grasp{ object = ball, duration = 1.5 }
+  run(0.7)
+  local w = ann:walk{ to = {0, 0, 3} }   -- the grasp yields its legs to the walk: no crouch
+  expect(run_until(function() return g.status ~= "active" end, 4), "grasp ended: " .. g.status)
+  expect(g.status == "failed" and ball.holder == nil, "not held at a distance: " .. g.status)
+  expect(tostring(g.error):find("the hand closed [%d.]+ m from `ball`") ~= nil, tostring(g.error))
+  w:cancel()
 end)
 
 -- Ann grasps a cup, then `walk(ann)` starts a walk and `until_done(w, track)` runs it

@@ -10,6 +10,7 @@
 
 use super::body::BodyReach;
 use super::close::HandModel;
+use super::follow::FollowBody;
 use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
 use crate::error::{OptionError, Result};
@@ -28,6 +29,11 @@ use troupe_scene::{
 pub const CLOSE_SECONDS: f64 = 0.6;
 /// Seconds the fingers take to open.
 pub const OPEN_SECONDS: f64 = 0.4;
+/// Farthest (m) the palm's centre may be from the object's surface when the fingers have
+/// closed for the grasp to hold it; further, the hand missed it (the object or the body
+/// moved beyond the arm's reach during the grasp) and the grasp fails rather than holding
+/// the object at a distance.
+pub const PALM_REACH: f64 = 0.1;
 
 /// The DOFs a grasp with these hands drives: arms and hands.
 pub fn grasp_scope(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope> {
@@ -123,6 +129,8 @@ pub struct Grasp {
     detour: bool,
     /// Per planned hand, its motion round other bodies when the interpolation is blocked.
     detours: Vec<Option<ArmDetour>>,
+    /// The arms' targets, solved again while the body moves on (a grasp during a walk).
+    follow: Option<FollowBody>,
 }
 
 impl Grasp {
@@ -155,6 +163,7 @@ impl Grasp {
             gave_up: None,
             detour: true,
             detours: Vec::new(),
+            follow: None,
         })
     }
 
@@ -257,6 +266,7 @@ impl Grasp {
             }
         }
         self.start_q = ctx.posture.q.clone();
+        self.follow = Some(FollowBody::new(ctx.skeleton, &ctx.posture.q, &plan.hands)?);
         self.plan = Some(plan);
         self.phase = Phase::Reach;
         self.phase_start = ctx.local_time;
@@ -356,8 +366,15 @@ impl Generator for Grasp {
                 let u = quintic(tau);
                 let finished = u >= 1.0 - 1e-12;
                 self.q.copy_from_slice(&ctx.posture.q);
-                for h in &plan.hands {
-                    for &(d, v) in &h.arm {
+                for i in 0..plan.hands.len() {
+                    let arm = match &mut self.follow {
+                        Some(f) => match f.arm(ctx.skeleton, &ctx.posture.q, &plan.hands, i) {
+                            Ok(arm) => arm,
+                            Err(e) => return Step::Failed(e.to_string()),
+                        },
+                        None => &plan.hands[i].arm,
+                    };
+                    for &(d, v) in arm {
                         self.q[d] = self.start_q[d] + (v - self.start_q[d]) * u;
                     }
                 }
@@ -388,8 +405,15 @@ impl Generator for Grasp {
                     return Step::Failed("the object is gone".into());
                 };
                 self.q.copy_from_slice(&ctx.posture.q);
-                for h in &plan.hands {
-                    for &(d, v) in &h.arm {
+                for i in 0..plan.hands.len() {
+                    let arm = match &mut self.follow {
+                        Some(f) => match f.arm(ctx.skeleton, &ctx.posture.q, &plan.hands, i) {
+                            Ok(arm) => arm,
+                            Err(e) => return Step::Failed(e.to_string()),
+                        },
+                        None => &plan.hands[i].arm,
+                    };
+                    for &(d, v) in arm {
                         self.q[d] = v;
                     }
                 }
@@ -421,6 +445,27 @@ impl Generator for Grasp {
                 let Some(first) = self.closing.first() else {
                     return Step::Failed("grasp: no plan".into());
                 };
+                let Some(obj) = ctx.world.objects.get(self.object) else {
+                    return Step::Failed("the object is gone".into());
+                };
+                let sensors = &first.model.sensors;
+                let palm = ctx.posture.globals[sensors.wrist].transform_point(sensors.palm);
+                let gap = object_distance(obj, palm);
+                if gap > PALM_REACH {
+                    let moved = self
+                        .follow
+                        .as_ref()
+                        .is_some_and(|f| f.moved(&ctx.posture.q));
+                    return Step::Failed(format!(
+                        "the hand closed {gap:.2} m from `{}`{}",
+                        obj.name,
+                        if moved {
+                            ": the body moved on beyond the arm's reach"
+                        } else {
+                            ": the object moved beyond the arm's reach"
+                        }
+                    ));
+                }
                 out.request(HoldRequest::Attach {
                     object: self.object,
                     joint: first.model.sensors.wrist,

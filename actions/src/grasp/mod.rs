@@ -7,6 +7,7 @@ pub mod automaton;
 pub mod body;
 pub mod close;
 pub mod decision;
+pub mod follow;
 pub mod handover;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
