@@ -43,6 +43,26 @@ test("grasp a cup, it follows the hand, then place it", function()
   expect(dist(cup:position(), {-0.2, 1.05, 0.4}) < 0.01, "put down where asked")
 end)
 
+test("a hand that holds something grasps nothing else; auto takes the free hand", function()
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.0, 0.38} }
+  local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.04, at = {-0.3, 1.0, 0.4} }
+  local pen = troupe.object{ name = "pen", shape = "cylinder", radius = 0.01, height = 0.14,
+                             at = {0.2, 1.0, 0.4} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "the cup in the right hand")
+  local cup_at = cup:position()
+  local same = ann:grasp{ object = ball, hand = "right" }
+  expect(same:wait() == "failed" and same.error == "the right hand already holds `cup`: place or release it first",
+         tostring(same.error))
+  expect(dist(cup:position(), cup_at) < 1e-9 and ball.holder == nil, "nothing moved, nothing taken")
+  local auto = ann:grasp{ object = ball }   -- nearer the right hand, which is full
+  expect(auto:wait() == "completed" and ball.holder == ann, "auto took the left hand: " .. tostring(auto.error))
+  expect(dist(ball:position(), ann:joint_position("l_wrist")) < 0.15, "the ball is in the left hand")
+  local full = ann:grasp{ object = pen }
+  expect(full:wait() == "failed" and full.error:find("both hands are full") ~= nil, tostring(full.error))
+end)
+
 test("manipulate with a function of time", function()
   local ann = troupe.actor{ name = "ann" }
   local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.04, at = {-0.2, 1.05, 0.38} }

@@ -302,6 +302,19 @@ fn candidates(
     out
 }
 
+/// The name of what the `side` hand of `actor` holds in `world`, if it holds anything.
+fn held_in<'w>(world: &'w World, skeleton: &Skeleton, actor: usize, side: Side) -> Option<&'w str> {
+    world.held.iter().find_map(|&(object, h)| {
+        let on_side = skeleton
+            .joints()
+            .get(h.joint)
+            .is_some_and(|j| j.name.starts_with(side.prefix()));
+        (h.actor == actor && on_side)
+            .then(|| world.objects.get(object).map(|o| o.name.as_str()))
+            .flatten()
+    })
+}
+
 /// Plans a grasp of `object` by `actor` (posture `posture`) in `world`.
 pub fn plan_grasp(
     skeleton: &Skeleton,
@@ -342,7 +355,7 @@ pub fn plan_grasp(
         let j = skeleton.joint(&format!("{}shoulder", side.prefix()))?;
         Ok(g[j].translation)
     };
-    let sides: Vec<Side> = match options.hand {
+    let mut sides: Vec<Side> = match options.hand {
         HandChoice::Right => vec![Side::Right],
         HandChoice::Left => vec![Side::Left],
         HandChoice::Both => vec![Side::Right, Side::Left],
@@ -357,6 +370,27 @@ pub fn plan_grasp(
             }
         }
     };
+    // A hand that holds something grasps nothing else: one of two takes the free one.
+    let full = |side: Side| held_in(world, skeleton, actor, side);
+    if options.hand == HandChoice::Auto && decision.hands != 2 {
+        sides.retain(|&side| full(side).is_none());
+        if sides.is_empty() {
+            return Err(crate::error::ActionError::Unfit(format!(
+                "both hands are full (`{}` and `{}`): place or release one first",
+                full(Side::Right).unwrap_or("?"),
+                full(Side::Left).unwrap_or("?")
+            )));
+        }
+    }
+    if let Some((side, held)) = sides
+        .iter()
+        .find_map(|&side| full(side).map(|held| (side, held)))
+    {
+        return Err(crate::error::ActionError::Unfit(format!(
+            "the {} hand already holds `{held}`: place or release it first",
+            side.name()
+        )));
+    }
     let two = match options.hand {
         HandChoice::Both => true,
         HandChoice::Auto => decision.hands == 2,
