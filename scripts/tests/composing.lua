@@ -241,6 +241,18 @@ test("carrying: the cup stays at carrying height when the walk is stopped mid-st
           end)
 end)
 
+test("a walk that a counter as high as its carrying hand holds back fails as stuck, naming it", function()
+  local ann = troupe.actor{ name = "ann", at = {0, 0, 0.86} }
+  troupe.object{ name = "counter", shape = "box", size = {0.8, 0.95, 0.5}, at = {3, 0.475, -1}, mass = 20 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {0, 1.0, 1.35}, mass = 0.3 }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local w = ann:walk{ to = troupe.get_object("counter") }
+  expect(run_until(function() return w.status ~= "active" end, 30), "the walk ended: " .. w.status)
+  expect(w.status == "failed" and tostring(w.error):find("^stuck [%d.]+ m from its goal for 10 s, held by counter$") ~= nil,
+         w.status .. ": " .. tostring(w.error))
+end)
+
 test("give and receive start at once during walks, which go on narrowed", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }

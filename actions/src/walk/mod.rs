@@ -55,7 +55,8 @@ use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
 use troupe_scene::space::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, Navigation, Surroundings, Walking,
+    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, FootprintsAround, Navigation,
+    Surroundings, Walking,
 };
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
@@ -137,6 +138,18 @@ const STALLED_SPEED: f64 = 0.05;
 /// by people standing, not by a crowd on the move (see [`Walk::stalled`]).
 const ALONE: f64 = 1.5;
 
+/// Seconds a navigated walk may go without coming [`PROGRESS`] nearer its goal, with no
+/// other actor within [`UNATTENDED`], before it fails as stuck: held by the furniture or
+/// the walls where it cannot pass (a cup carried out in front against a counter as high
+/// as the hand), with nobody there who might move out of its way.
+pub const STUCK_TIME: f64 = 10.0;
+/// How much nearer (m) its goal a walk must come to count as getting on (see
+/// [`STUCK_TIME`]).
+const PROGRESS: f64 = 0.05;
+/// With another actor within this distance (m), a walk that gets no nearer its goal may
+/// be waiting for them (to pass, to move off its goal), and is not stuck.
+const UNATTENDED: f64 = 3.0;
+
 /// A swinging foot's landing farther than this (m) from where the steered body wants it,
 /// and getting no nearer, is stuck (see [`Walk::follow_steering`]).
 const STUCK_LANDING: f64 = 0.05;
@@ -214,6 +227,9 @@ pub struct Walk {
     heading: f64,
     start_q: Vec<f64>,
     settle_since: Option<f64>,
+    /// The nearest the body has come to its goal (m), and the walk time it came there
+    /// (see [`STUCK_TIME`]).
+    progress: Option<(f64, f64)>,
     /// The walk time at which the walk was asked to stop, if it was (see [`STOP_DEADLINE`]).
     stopped_at: Option<f64>,
     last_miss: f64,
@@ -291,6 +307,7 @@ impl Walk {
             heading: 0.0,
             start_q: Vec::new(),
             settle_since: None,
+            progress: None,
             stopped_at: None,
             last_miss: 0.0,
             twist: [None; 2],
@@ -338,6 +355,47 @@ impl Walk {
             end.position += self.steer.offset;
         }
         end
+    }
+
+    /// Why the walk is stuck, if it is (see [`STUCK_TIME`]): how far from its goal, and the
+    /// obstacle nearest the body, among `footprints`.
+    fn stuck(
+        &mut self,
+        ctx: &GeneratorContext,
+        plan: &Plan,
+        footprints: &FootprintsAround,
+    ) -> Option<String> {
+        let crowd = ctx.world.crowd;
+        let at = *crowd.positions.get(ctx.actor)?;
+        let left = (self.end_sample(plan).position - at).length();
+        match self.progress {
+            Some((nearest, _)) if left > nearest - PROGRESS => {}
+            _ => {
+                self.progress = Some((left, self.t));
+                return None;
+            }
+        }
+        let (_, since) = self.progress?;
+        if self.t - since < STUCK_TIME || self.stopped_at.is_some() {
+            return None;
+        }
+        let mut near = Vec::new();
+        crowd.near(at, &mut near);
+        if near
+            .iter()
+            .any(|&j| j != ctx.actor && (crowd.positions[j] - at).length() < UNATTENDED)
+        {
+            return None;
+        }
+        let against = footprints
+            .within(1.0)
+            .map(|f| (f.distance(at), &f.name))
+            .min_by(|a, b| a.0.total_cmp(&b.0))
+            .map(|(_, name)| format!(", held by {name}"))
+            .unwrap_or_default();
+        Some(format!(
+            "stuck {left:.2} m from its goal for {STUCK_TIME} s{against}"
+        ))
     }
 
     /// A new plan round the actors standing in the way, from where the body is now to
@@ -973,11 +1031,9 @@ impl Walk {
     /// `troupe_nav::clearance`): the crowd's core capsule, or its disc.
     fn body(&self, ctx: &GeneratorContext) -> Capsule {
         let crowd = ctx.world.crowd;
-        crowd.cores.get(ctx.actor).copied().unwrap_or(Capsule {
-            centre: crowd.positions.get(ctx.actor).copied().unwrap_or_default(),
-            axis: DVec2::ZERO,
-            half_length: 0.0,
-            radius: self.radius,
+        crowd.cores.get(ctx.actor).copied().unwrap_or_else(|| {
+            let at = crowd.positions.get(ctx.actor).copied().unwrap_or_default();
+            Capsule::around(at, DVec2::ZERO, self.radius, 0.0, &[])
         })
     }
 
@@ -1360,6 +1416,7 @@ impl Generator for Walk {
             });
         }
         self.settle_since = None;
+        self.progress = None;
         self.stopped_at = None;
         self.twist = [None; 2];
         self.last_floor = None;
@@ -1410,6 +1467,12 @@ impl Generator for Walk {
                         plan = new;
                     }
                 }
+            }
+        }
+        if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
+            if let Some(why) = self.stuck(ctx, &plan, footprints) {
+                self.plan = Some(plan);
+                return Step::Failed(why);
             }
         }
         self.dt = ctx.dt;

@@ -1009,6 +1009,8 @@ fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() 
         axis: rotate(DVec2::new(-0.9876925467549307, 0.15640790608137242)),
         half_length: 0.03811298390304806,
         radius: 0.28811361059089663,
+        bare: 0.28811361059089663,
+        hands: [None; 2],
     };
     let around = Surroundings {
         bodies: vec![walker],

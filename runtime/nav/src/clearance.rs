@@ -103,6 +103,18 @@ impl FootSpan {
     }
 }
 
+/// How far (m) above an obstacle a hand passes over it: lower, the hand counts against it.
+pub const HAND_OVER: f64 = 0.05;
+
+/// A hand that widens a body on the floor beyond its [`Capsule::bare`] radius.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HandReach {
+    /// The radius (m) round the capsule's segment that the hand reaches.
+    pub radius: f64,
+    /// How low (m above the floor) the hand, and what it holds, reach.
+    pub lowest: f64,
+}
+
 /// A body on the floor as the clearance sees it: the segment `centre ± axis·half_length`
 /// with `radius` round it.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -113,8 +125,12 @@ pub struct Capsule {
     pub axis: DVec2,
     /// Half the segment's length (m).
     pub half_length: f64,
-    /// How far (m) the body reaches round the segment.
+    /// How far (m) the body reaches round the segment, its hands included.
     pub radius: f64,
+    /// How far (m) it reaches without its hands: the disc and the feet.
+    pub bare: f64,
+    /// The hands that widen it (see [`Capsule::radius_against`]).
+    pub hands: [Option<HandReach>; 2],
 }
 
 impl Capsule {
@@ -156,7 +172,28 @@ impl Capsule {
             axis,
             half_length: (front - back) / 2.0,
             radius: wide,
+            bare: wide,
+            hands: [None; 2],
         }
+    }
+
+    /// The same body with its hand `i` (0 or 1) reaching as `hand` says: a hand further
+    /// out than the body reaches widens it.
+    pub fn with_hand(mut self, i: usize, hand: HandReach) -> Capsule {
+        self.radius = self.radius.max(hand.radius);
+        self.hands[i] = Some(hand);
+        self
+    }
+
+    /// How far (m) the body reaches round its segment towards an obstacle `top` metres
+    /// high: its radius, but a hand carried [`HAND_OVER`] or more above the obstacle
+    /// passes over it (a cup carried to a table).
+    pub fn radius_against(&self, top: f64) -> f64 {
+        self.hands
+            .iter()
+            .flatten()
+            .filter(|h| h.lowest < top + HAND_OVER)
+            .fold(self.bare, |radius, h| radius.max(h.radius))
     }
 
     /// A circle (centre, radius) that holds the capsule.
@@ -281,10 +318,11 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
             if footprint_gap_bound(body.bound(), f) > reach + OBSTACLE_MARGIN {
                 continue;
             }
+            let radius = body.radius_against(f.top);
             let span = FootSpan {
                 heel: a,
                 toe: b,
-                radius: body.radius,
+                radius,
             };
             let Some((point, nearest)) = nearest_to_footprint(f, &span) else {
                 continue;
@@ -292,7 +330,7 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
             // A convex footprint lies wholly behind the tangent at its nearest point: a
             // body whose nearest point stays `radius` in front of the tangent stays clear.
             let apart = point - nearest;
-            let gap = apart.length() - body.radius - OBSTACLE_MARGIN;
+            let gap = apart.length() - radius - OBSTACLE_MARGIN;
             limits.extend(Limit::of(apart, gap, 1.0, reach));
         }
     }
@@ -320,7 +358,9 @@ pub fn nearest_gap(me: &Capsule, around: &Surroundings, within: f64) -> f64 {
         .iter()
         .filter(|f| footprint_gap_bound(me.bound(), f) < within)
         .map(|f| {
-            nearest_to_footprint(f, &span).map_or(-me.radius, |(p, q)| (p - q).length() - me.radius)
+            let radius = me.radius_against(f.top);
+            let span = FootSpan { radius, ..span };
+            nearest_to_footprint(f, &span).map_or(-radius, |(p, q)| (p - q).length() - radius)
         });
     bodies.chain(obstacles).fold(within, f64::min)
 }
@@ -565,6 +605,8 @@ mod tests {
             axis: DVec2::Y,
             half_length: half,
             radius: 0.3,
+            bare: 0.3,
+            hands: [None; 2],
         }
     }
 
@@ -659,6 +701,8 @@ mod tests {
                 axis: DVec2::new(turn.cos(), turn.sin()),
                 half_length: (0.05 + 0.01 * tick as f64).min(0.5),
                 radius: 0.3,
+                bare: 0.3,
+                hands: [None; 2],
             };
             let towards = (DVec2::new(0.5, 0.4) - root).normalize() * 0.013;
             root += limit_step(&me, towards, &around);
@@ -666,6 +710,37 @@ mod tests {
                 planter.distance(root) >= 0.3 + OBSTACLE_MARGIN - 1e-9,
                 "tick {tick}: the middle {root} came {} from the planter",
                 planter.distance(root)
+            );
+        }
+    }
+
+    #[test]
+    fn a_hand_carried_above_an_obstacle_passes_over_it() {
+        // A body with a hand carried 0.4 m out in front, as low as 0.9 m; a table's edge
+        // 0.2 m in front of the disc (past the margin).
+        let hand = HandReach {
+            radius: 0.7,
+            lowest: 0.9,
+        };
+        let me = body(0.0, 0.0, 0.0).with_hand(1, hand);
+        assert_eq!((me.radius, me.bare), (0.7, 0.3));
+        let edge = (0.5 + OBSTACLE_MARGIN, -1.0);
+        let step = DVec2::new(0.1, 0.0);
+        for (top, passes) in [(0.75, true), (0.85, true), (0.86, false), (0.95, false)] {
+            let table = square("table", edge, (1.5, 1.0)).with_top(top);
+            let around = Surroundings {
+                obstacles: smallvec![&table],
+                ..Surroundings::default()
+            };
+            let s = limit_step(&me, step, &around);
+            // Over a low table the disc closes on it as if the hand were not there; as high
+            // as the hand (and 5 cm above it), the hand keeps the body back.
+            assert_eq!(s == step, passes, "a table {top} m high: step {s}");
+            let gap = nearest_gap(&me, &around, 2.0);
+            let expected = if passes { 0.2 } else { -0.2 } + OBSTACLE_MARGIN;
+            assert!(
+                (gap - expected).abs() < 1e-9,
+                "a table {top} m high: gap {gap}"
             );
         }
     }
@@ -723,6 +798,8 @@ mod tests {
             axis: DVec2::Y,
             half_length: 0.0,
             radius: 0.28,
+            bare: 0.28,
+            hands: [None; 2],
         };
         let around = Surroundings {
             obstacles: smallvec![&planter],

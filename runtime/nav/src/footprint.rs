@@ -17,15 +17,26 @@ pub struct Footprint {
     pub name: String,
     /// Corners in (x, z), counter-clockwise about +Y.
     pub outline: Vec<DVec2>,
+    /// How high (m) the obstacle reaches above the floor: a hand carried higher passes
+    /// over it (see [`crate::clearance::Capsule::radius_against`]); infinite when not
+    /// known.
+    pub top: f64,
 }
 
 impl Footprint {
-    /// The footprint of the convex hull of `points` (x, z), called `name`.
+    /// The footprint of the convex hull of `points` (x, z), called `name`, of unknown
+    /// height.
     pub fn hull(name: impl Into<String>, points: &[DVec2]) -> Footprint {
         Footprint {
             name: name.into(),
             outline: convex_hull(points),
+            top: f64::INFINITY,
         }
+    }
+
+    /// The same footprint, `top` metres high.
+    pub fn with_top(self, top: f64) -> Footprint {
+        Footprint { top, ..self }
     }
 
     /// A disc of `radius` around `centre`, as a polygon that contains the disc.
@@ -34,12 +45,17 @@ impl Footprint {
         Footprint::hull(name, &points)
     }
 
-    /// The footprint of `object` seen from above, and the height of its lowest point.
+    /// The footprint of `object` seen from above, as high as its highest point, and the
+    /// height of its lowest point.
     pub fn of_object(object: &Object) -> (Footprint, f64) {
         let points = surface_points(&object.shape, object.rotation, object.position);
         let lowest = points.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+        let top = points.iter().map(|p| p.y).fold(f64::NEG_INFINITY, f64::max);
         let flat: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.x, p.z)).collect();
-        (Footprint::hull(object.name.clone(), &flat), lowest)
+        (
+            Footprint::hull(object.name.clone(), &flat).with_top(top),
+            lowest,
+        )
     }
 
     /// Whether `p` is inside the polygon (or on its border).
@@ -310,6 +326,7 @@ mod tests {
                 let grown = Footprint {
                     name: "grown".into(),
                     outline: f.inflated(radius),
+                    top: f64::INFINITY,
                 };
                 let n = grown.outline.len();
                 // Convex and counter-clockwise, as a footprint.

@@ -29,7 +29,7 @@ pub struct Wall {
     pub to: DVec2,
     /// Its thickness (m).
     pub thickness: f64,
-    /// Its height (m), for drawing.
+    /// Its height (m): for drawing, and what a carried hand passes over.
     pub height: f64,
 }
 
@@ -47,6 +47,7 @@ impl Wall {
                 self.from + side,
             ],
         )
+        .with_top(self.height)
     }
 }
 

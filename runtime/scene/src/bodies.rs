@@ -4,7 +4,7 @@
 
 use troupe_body::glam::DVec2;
 use troupe_body::{Skeleton, Transform};
-use troupe_nav::{Capsule, FootSpan};
+use troupe_nav::{Capsule, FootSpan, HandReach};
 
 /// How far (m) a foot's solid reaches round the segment under it from its heel to its toe
 /// tip: the template's foot frustum (0.024 h at the ball) for bodies up to 2.08 m.
@@ -17,6 +17,8 @@ const KNEE_RADIUS: f64 = 0.06;
 /// toe tip at 0.85 of the foot's length).
 const HEEL: f64 = 0.2 / 0.69;
 const TOE: f64 = 0.85 / 0.69;
+/// How far (m) a finger's tip reaches past its last joint.
+const FINGERTIP: f64 = 0.02;
 
 /// How far a walking body reaches forwards and backwards past its disc at
 /// [`STRIDE_SPEED`] or faster, as a fraction of its radius, besides where its feet stand:
@@ -40,9 +42,10 @@ pub struct BodyJoints {
     feet: Option<[[usize; 2]; 2]>,
     /// The knee joints: a leg lifted to step (even in place) brings its knee forwards.
     knees: Vec<usize>,
-    /// Each wrist joint and its horizontal distance from the root at rest, where the
-    /// body's radius holds the hand hanging from it.
-    wrists: Vec<(usize, f64)>,
+    /// Each wrist joint, its horizontal distance from the root at rest, where the body's
+    /// radius holds the hand hanging from it, and how far the hand reaches from it (to
+    /// the farthest fingertip).
+    wrists: Vec<(usize, f64, f64)>,
 }
 
 impl BodyJoints {
@@ -57,10 +60,30 @@ impl BodyJoints {
         })();
         let knees = ["l_knee", "r_knee"].into_iter().filter_map(j).collect();
         let root = floor_point(&globals[0]);
+        let joints = skeleton.joints();
+        // A joint's ancestors come before it: one pass marks each wrist's hand.
+        let hand_reach = |w: usize| {
+            let mut in_hand = vec![false; joints.len()];
+            in_hand[w] = true;
+            let mut reach: f64 = 0.0;
+            for (i, joint) in joints.iter().enumerate().skip(w + 1) {
+                if joint.parent.is_some_and(|p| in_hand[p]) {
+                    in_hand[i] = true;
+                    let at = globals
+                        .get(i)
+                        .map_or(0.0, |g| (g.translation - globals[w].translation).length());
+                    reach = reach.max(at);
+                }
+            }
+            reach + FINGERTIP
+        };
         let wrists = ["l_wrist", "r_wrist"]
             .into_iter()
             .filter_map(j)
-            .filter_map(|w| Some((w, (floor_point(globals.get(w)?) - root).length())))
+            .filter_map(|w| {
+                let at_rest = (floor_point(globals.get(w)?) - root).length();
+                Some((w, at_rest, hand_reach(w)))
+            })
             .collect();
         BodyJoints {
             ankles: [j("l_ankle"), j("r_ankle")],
@@ -74,15 +97,16 @@ impl BodyJoints {
     /// them there), facing `facing` and going at `velocity` (x, z), of
     /// disc `radius`, whole and carried: the disc stretched by the stride at that speed
     /// (see `STRIDE`), widened by as far as a wrist is further out from it than at
-    /// rest, and, whole, stretched to hold its feet and knees as well. The carried body is
+    /// rest (each hand with how low it reaches: the fingertips, or the lowest point of
+    /// what it holds, `held` giving the holding joints and those points' heights), and,
+    /// whole, stretched to hold its feet and knees as well. The carried body is
     /// what the root's step moves (`Crowd::cores`); the planted feet stay behind.
     pub fn body(
         &self,
         globals: &[Transform],
         soles: Option<[FootSpan; 2]>,
-        facing: DVec2,
-        velocity: DVec2,
-        radius: f64,
+        (facing, velocity, radius): (DVec2, DVec2, f64),
+        held: &[(usize, f64)],
     ) -> (Capsule, Capsule) {
         let root = floor_point(&globals[0]);
         let stride = STRIDE * radius * (velocity.dot(facing).abs() / STRIDE_SPEED).min(1.0);
@@ -90,11 +114,20 @@ impl BodyJoints {
         let feet = &spans[..count];
         let mut whole = Capsule::around(root, facing, radius, stride, feet);
         let mut core = Capsule::around(root, facing, radius, stride, &[]);
-        for &(wrist, at_rest) in &self.wrists {
+        for (i, &(wrist, at_rest, reach)) in self.wrists.iter().enumerate() {
             if let Some(w) = globals.get(wrist) {
+                // How low the hand reaches, and what it holds.
+                let lowest = held
+                    .iter()
+                    .filter(|&&(joint, _)| joint == wrist)
+                    .fold(w.translation.y - reach, |low, &(_, y)| low.min(y));
                 let w = floor_point(w);
-                whole.radius = whole.radius.max(radius + whole.distance(w) - at_rest);
-                core.radius = core.radius.max(radius + core.distance(w) - at_rest);
+                let hand = |body: &Capsule| HandReach {
+                    radius: radius + body.distance(w) - at_rest,
+                    lowest,
+                };
+                whole = whole.with_hand(i, hand(&whole));
+                core = core.with_hand(i, hand(&core));
             }
         }
         (whole, core)

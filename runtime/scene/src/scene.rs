@@ -262,6 +262,16 @@ impl Scene {
         crowd.soles.clear();
         crowd.bodies.clear();
         crowd.cores.clear();
+        // What each holding hand holds reaches as low as its lowest point.
+        let held: Vec<(usize, usize, f64)> = self
+            .held
+            .iter()
+            .map(|&(o, h)| {
+                let lowest = troupe_nav::Footprint::of_object(&self.objects[o]).1;
+                (h.actor, h.joint, lowest)
+            })
+            .collect();
+        let mut holds: Vec<(usize, f64)> = Vec::new();
         for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
             let under_root = DVec2::new(root.x, root.z);
@@ -278,13 +288,12 @@ impl Scene {
             let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
             crowd.facings.push(facing);
             let (whole, core) = match self.space.walking {
-                troupe_nav::Walking::Navigated => self.body_joints[i].body(
-                    &state.globals,
-                    soles,
-                    facing,
-                    velocity,
-                    crowd.radii[i],
-                ),
+                troupe_nav::Walking::Navigated => {
+                    holds.clear();
+                    holds.extend(held.iter().filter(|h| h.0 == i).map(|h| (h.1, h.2)));
+                    let motion = (facing, velocity, crowd.radii[i]);
+                    self.body_joints[i].body(&state.globals, soles, motion, &holds)
+                }
                 // Nothing keeps bodies apart: their discs will do for the record.
                 troupe_nav::Walking::Straight => {
                     let disc =
