@@ -241,6 +241,28 @@ test("carrying: the cup stays at carrying height when the walk is stopped mid-st
           end)
 end)
 
+test("carrying a cup to a table: the hand passes over the table, the walk arrives, the cup goes down on it", function()
+  local ann = troupe.actor{ name = "ann" }
+  -- Taken from a stand at arm's length, the cup is carried out in front, over the table.
+  troupe.object{ name = "stand", shape = "box", size = {0.8, 0.95, 0.4}, at = {0, 0.475, 0.8}, mass = 20 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.15, 1.0, 0.65} }
+  local tab = troupe.object{ name = "table", shape = "box", size = {1.2, 0.75, 0.6}, at = {3, 0.375, 3.3},
+                             mass = 20 }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local w = ann:walk{ to = tab }
+  expect(run_until(function() return w.status ~= "active" end, 20), "the walk ended")
+  expect(w.status == "completed", "arrived beside the table: " .. w.status .. " " .. tostring(w.error))
+  local c = cup:position()
+  -- Out in front of the body and 0.25 m down onto the table top: the body leans to reach.
+  local put = ann:place{ object = cup, at = {c[1], 0.80, c[3] + 0.15} }
+  expect(run_until(function() return put.status ~= "active" end, 4), "placed")
+  expect(put.status == "completed" and cup.holder == nil, "on the table: " .. put.status .. " " .. tostring(put.error))
+  c = cup:position()
+  expect(math.abs(c[2] - 0.80) < 0.01 and c[3] > 3.0,
+         string.format("the cup stands on the table top at (%.3f, %.3f, %.3f)", c[1], c[2], c[3]))
+end)
+
 test("a walk that a counter as high as its carrying hand holds back fails as stuck, naming it", function()
   local ann = troupe.actor{ name = "ann", at = {0, 0, 0.86} }
   troupe.object{ name = "counter", shape = "box", size = {0.8, 0.95, 0.5}, at = {3, 0.475, -1}, mass = 20 }

@@ -9,6 +9,7 @@
 //! the hand goes round it through temporary goals instead ([`ArmDetour`], 4.6.3).
 
 use super::body::BodyReach;
+use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 use super::close::HandModel;
 use super::follow::FollowBody;
 use super::pattern::{BoundPattern, HandPattern};
@@ -509,7 +510,11 @@ pub struct Release {
     object: usize,
     place: Option<(Transform, f64)>,
     sides: Vec<Side>,
-    arms: Vec<(ArmIk, Transform)>,
+    /// The DOFs a place moves, from `start_q` to `goal_q`: the arms', and the spine's and
+    /// legs' when it leans or crouches.
+    moving: Scope,
+    /// The DOFs it writes: the holding arms and hands, and what it moves.
+    writes: Scope,
     start_q: Vec<f64>,
     goal_q: Vec<f64>,
     patterns: Vec<BoundPattern>,
@@ -538,7 +543,8 @@ impl Release {
             object,
             place,
             sides,
-            arms: Vec::new(),
+            moving: Scope::EMPTY,
+            writes: Scope::EMPTY,
             start_q: Vec::new(),
             goal_q: Vec::new(),
             patterns: Vec::new(),
@@ -579,6 +585,7 @@ impl Generator for Release {
             let p = self.patterns.last_mut().expect("just pushed");
             p.restart_from(&ctx.posture.q);
         }
+        self.writes = grasp_scope(ctx.skeleton, &self.sides)?;
         if let Some((goal, _)) = self.place {
             // Every holding arm moves by the object's displacement (thesis 4.4).
             let obj = &ctx.world.objects[self.object];
@@ -587,15 +594,40 @@ impl Generator for Release {
             for &s in &self.sides {
                 let mut ik = ArmIk::new(ctx.skeleton, s, 200)?;
                 let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
+                self.moving = self.moving.union(&ik.dofs().iter().copied().collect());
                 let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
-                if miss > super::plan::REACH_TOLERANCE || angle > super::plan::REACH_ANGLE {
+                if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
+                    continue;
+                }
+                // The arm alone cannot: lean, then crouch, as a grasp does.
+                let allowed = ctx
+                    .scope
+                    .intersection(&BodyReach::body_scope(ctx.skeleton)?);
+                let body = BodyReach::new(ctx.skeleton, allowed)?;
+                let mut reached = None;
+                for stage in body.stages().into_iter().skip(1) {
+                    if let Ok(r) = body.reach(&ctx.posture.q, &[(s, wrist_goal)], stage)? {
+                        reached = Some(r);
+                        break;
+                    }
+                }
+                let Some(reached) = reached else {
+                    let how = if allowed.is_empty() {
+                        ""
+                    } else {
+                        " (even leaning and crouching)"
+                    };
                     return Err(crate::error::ActionError::Unfit(format!(
-                        "the place for `{name}` is out of reach of the {} hand (misses by {miss:.3} m)",
+                        "the place for `{name}` is out of reach of the {} hand{how} (the arm alone misses by {miss:.3} m)",
                         s.name()
                     )).into());
+                };
+                for &(d, v) in &reached.changed {
+                    self.goal_q[d] = v;
+                    self.moving.insert(d);
                 }
-                self.arms.push((ik, wrist_goal));
             }
+            self.writes = self.writes.union(&self.moving);
         } else {
             self.phase = 1;
         }
@@ -608,20 +640,16 @@ impl Generator for Release {
         if self.phase == 0 {
             let seconds = self.place.map(|p| p.1).unwrap_or(1.0);
             let u = quintic(t / seconds);
-            for (ik, _) in &self.arms {
-                for &d in ik.dofs() {
-                    self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
-                }
+            for d in self.moving.iter() {
+                self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
             }
             if u >= 1.0 - 1e-12 {
                 self.phase = 1;
                 self.phase_start = ctx.local_time;
             }
         } else {
-            for (ik, _) in &self.arms {
-                for &d in ik.dofs() {
-                    self.q[d] = self.goal_q[d];
-                }
+            for d in self.moving.iter() {
+                self.q[d] = self.goal_q[d];
             }
             if !self.released {
                 if let (Some((goal, _)), Some(obj)) =
@@ -646,7 +674,7 @@ impl Generator for Release {
                     self.q[d] = v;
                 }
             }
-            for d in out.scope().iter() {
+            for d in out.scope().intersection(&self.writes).iter() {
                 out.set(d, self.q[d]);
             }
             return if s >= 1.0 {
@@ -655,7 +683,7 @@ impl Generator for Release {
                 Step::Running
             };
         }
-        for d in out.scope().iter() {
+        for d in out.scope().intersection(&self.writes).iter() {
             out.set(d, self.q[d]);
         }
         Step::Running

@@ -87,10 +87,13 @@ fn release_like(
         place,
     };
     // Not holding it: the action fails at its start with the reason.
-    let (release, scope) = ctx
+    let (release, scope, body) = ctx
         .with_scene(|s| options.release(s, ctx.actor))?
         .map_err(|e| err(m, e))?;
-    Ok((Box::new(release), open_ended(common, m, scope)))
+    Ok((
+        Box::new(release),
+        yielding(open_ended(common, m, scope), body),
+    ))
 }
 
 /// `actor:release{object = OBJ, <common options>}`.

@@ -98,18 +98,24 @@ impl ReleaseOptions {
         }
     }
 
-    /// The release generator for `actor` of `scene` and the DOFs it drives: the hand
-    /// that holds the object (the right one when none does: the action then fails at its
-    /// start, saying so).
-    pub fn release(&self, scene: &Scene, actor: usize) -> Result<(Release, Scope)> {
+    /// The release generator for `actor` of `scene`, the DOFs it drives and the part of
+    /// them it yields: the arm and hand that hold the object (the right ones when none
+    /// does: the action then fails at its start, saying so); a place also the spine, the
+    /// legs and `root_y`, to lean or crouch for a place the arm alone cannot reach, as a
+    /// grasp does, and yields them (during a walk it places with the arm alone).
+    pub fn release(&self, scene: &Scene, actor: usize) -> Result<(Release, Scope, Scope)> {
         self.validate()?;
         let side = holding_side(scene, actor, self.object).unwrap_or(Side::Right);
         let place = self.place.map(|p| {
             let rotation = p.rotation.unwrap_or(scene.objects()[self.object].rotation);
             (Transform::new(rotation, p.at), p.duration)
         });
-        let scope = grasp_scope(&scene.actors()[actor].skeleton, &[side])?;
-        Ok((Release::new(self.object, vec![side], place)?, scope))
+        let skeleton = &scene.actors()[actor].skeleton;
+        let (scope, body) = match place {
+            Some(_) => reach_scope(skeleton, &[side])?,
+            None => (grasp_scope(skeleton, &[side])?, Scope::EMPTY),
+        };
+        Ok((Release::new(self.object, vec![side], place)?, scope, body))
     }
 }
 
