@@ -30,6 +30,10 @@ test("holding still needs the weight at the root", function()
   expect(not ok and tostring(e):find("r_elbow_flexion"), "NaN is refused: " .. tostring(e))
   ok, e = pcall(function() return ann:forward_dynamics{ torque = {} } end)
   expect(not ok and tostring(e):find("unknown field `torque`"), tostring(e))
+  -- A step so short that a tick would never end is refused, not run.
+  ok, e = pcall(function() return ann:simulate{ small_time_step = 1e-9 } end)
+  expect(not ok and tostring(e):find("small_time_step", 1, true) and tostring(e):find("at least 1e-5 s", 1, true),
+         tostring(e))
 end)
 
 test("a released body falls and comes to rest on the floor", function()

@@ -151,6 +151,21 @@ test("bad walls, floors and paths are refused naming what", function()
   expect(not ok and tostring(e):find("thickness"), tostring(e))
   ok, e = pcall(troupe.floor, { outline = { {0, 0}, {1, 0} } })
   expect(not ok and tostring(e):find("3 finite points"), tostring(e))
+  -- Each named once, as what it is.
+  local function refused(f, arg, wanted)
+    local ok2, e2 = pcall(f, arg)
+    e2 = tostring(e2)
+    expect(not ok2 and e2:find(wanted, 1, true) ~= nil and not e2:find("floor: floor:", 1, true), e2)
+  end
+  refused(troupe.floor, "square", "floor: expects one table of options, got string")
+  refused(troupe.wall, 1, "wall: expects one table of options, got integer")
+  refused(troupe.floor, { outline = { {-1e9, -1e9}, {1e9, -1e9}, {1e9, 1e9}, {-1e9, 1e9} } },
+          "floor: the outline reaches [-1000000000, -1000000000], beyond 100 km of the origin")
+  refused(troupe.floor, { outline = { {0, 0}, {1, 1}, {2, 2} } }, "floor: the outline encloses no area")
+  refused(troupe.floor, { outline = { {0, 0}, {2, 2}, {2, 0}, {0, 2} } },
+          "floor: the outline crosses itself (its edges 1 and 3)")
+  refused(troupe.floor, { outline = { {-5, -5}, {5, -5}, {5, 5}, {-5, 5} },
+                          holes = { { {0, 0}, {1, 1}, {1, 0}, {0, 1} } } }, "floor: hole 1 crosses itself")
   ok, e = pcall(troupe.path, {0, 0}, "x")
   expect(not ok and tostring(e):find("to"), tostring(e))
   local ann = troupe.actor{ name = "ann" }

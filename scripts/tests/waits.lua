@@ -109,3 +109,19 @@ test("queries", function()
   run(0.01)
   expect(#ann:actions() == 1 and ann:actions()[1] == a, "actions() lists the running one")
 end)
+
+test("a wait inside a coroutine the behavior made is an error, not a silent return", function()
+  local ann = troupe.actor{ name = "ann" }
+  local t0 = troupe.time()
+  for _, inner in ipairs({
+    function() wait(2.0) end,
+    function() ann:play(troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }):wait() end,
+    function() wait_until(function() return false end, 1) end,
+  }) do
+    local ok, e = pcall(coroutine.wrap(inner))
+    expect(not ok and tostring(e):find("not in a coroutine it made", 1, true), tostring(e))
+  end
+  expect(troupe.time() == t0, "no time passed")
+  run(0.5)   -- the test's own waits still wait
+  expect(troupe.time() > t0, "the test waited")
+end)

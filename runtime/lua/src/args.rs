@@ -23,7 +23,13 @@ pub(crate) fn lua_err(e: impl std::fmt::Display) -> mlua::Error {
 
 /// A Lua runtime error `"{method}: {message}"`.
 pub fn err(method: &str, message: impl std::fmt::Display) -> mlua::Error {
-    lua_err_message(format!("{method}: {message}"))
+    let message = message.to_string();
+    // An error of the scene's may name the method already ("floor: …").
+    if message.starts_with(&format!("{method}: ")) {
+        lua_err_message(message)
+    } else {
+        lua_err_message(format!("{method}: {message}"))
+    }
 }
 
 /// What a value is, for "got …" in messages: its type, or `nan`, `inf`, `-inf` for a

@@ -5,15 +5,27 @@
 //!
 //! [`Mailbox`]: troupe_scene::Mailbox
 
-use crate::args::lua_err;
+use crate::args::{bad_arg, lua_err};
 use crate::stage::stage;
-use mlua::{Function, Lua, LuaSerdeExt, Table, Value};
+use mlua::{Lua, LuaSerdeExt, Table, Value};
+
+/// How deep in nested tables [`non_finite`] looks.
+const NESTING: usize = 64;
 
 /// Adds `publish` and `subscribe` to the `troupe` table.
 pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     troupe.set(
         "publish",
-        lua.create_function(|lua, (key, value): (String, Value)| {
+        lua.create_function(|lua, (key, value): (Value, Value)| {
+            let Value::String(key) = key else {
+                return Err(bad_arg("publish", "argument 1 (the key)", "a string", &key));
+            };
+            let key = key.to_str()?.to_string();
+            if let Some(path) = non_finite(&value, String::new()) {
+                return Err(lua_err(format!(
+                    "publish {key}: value{path} is not a finite number (JSON has none)"
+                )));
+            }
             let json = to_json(lua, value).map_err(|e| lua_err(format!("publish {key}: {e}")))?;
             stage(lua)?
                 .scene
@@ -24,7 +36,24 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     )?;
     troupe.set(
         "subscribe",
-        lua.create_function(|lua, (expr, f): (String, Function)| {
+        lua.create_function(|lua, (expr, f): (Value, Value)| {
+            let Value::String(expr) = expr else {
+                return Err(bad_arg(
+                    "subscribe",
+                    "argument 1 (the key expression)",
+                    "a string",
+                    &expr,
+                ));
+            };
+            let expr = expr.to_str()?.to_string();
+            let Value::Function(f) = f else {
+                return Err(bad_arg(
+                    "subscribe",
+                    "argument 2",
+                    "a function(value, key)",
+                    &f,
+                ));
+            };
             let mut st = stage(lua)?;
             st.scene
                 .mailbox_mut()
@@ -35,6 +64,25 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
         })?,
     )?;
     Ok(())
+}
+
+/// Where in `value` (`path` so far: `[2].x`) a number is not finite (NaN or infinite),
+/// which JSON cannot carry, if one is. Looks [`NESTING`] tables deep at most (a table
+/// that holds itself is refused by the conversion to JSON).
+fn non_finite(value: &Value, path: String) -> Option<String> {
+    match value {
+        Value::Number(n) if !n.is_finite() => Some(path),
+        Value::Table(_) if path.matches(['[', '.']).count() >= NESTING => None,
+        Value::Table(t) => t.pairs::<Value, Value>().flatten().find_map(|(k, v)| {
+            let key = match &k {
+                Value::Integer(i) => format!("[{i}]"),
+                Value::String(s) => format!(".{}", s.to_string_lossy()),
+                other => format!("[{}]", other.type_name()),
+            };
+            non_finite(&v, format!("{path}{key}"))
+        }),
+        _ => None,
+    }
 }
 
 /// A Lua value as JSON: tables with keys 1..n are arrays, other tables objects (string

@@ -38,9 +38,19 @@ coroutine.close = function(co)
   return caught(raw_close(co))
 end
 
+-- The coroutines of behaviors and tests (the director's), weakly: a coroutine a behavior
+-- makes itself would take the director's requests to wait as its own values.
+local running = coroutine.running
+local own = setmetatable({}, { __mode = "k" })
+__troupe_own_thread = function(co) own[co] = true end
+
 local function must_yield(name)
   if not isyieldable() then
     error(name .. "() can only be called inside a behavior or a test", 3)
+  end
+  if not own[running()] then
+    error(name .. "() waits only in a behavior or a test itself, not in a coroutine it made: "
+      .. "call it there", 3)
   end
 end
 

@@ -1,7 +1,7 @@
 //! The shared space in Lua: `troupe.wall{…}`, `troupe.floor{…}` and
 //! `troupe.path(from, to[, { radius }])`, and `troupe.deepest_overlap([{ discs }])`.
 
-use crate::args::{check_keys, err, floor_point, opt_number};
+use crate::args::{check_keys, err, floor_point, opt_number, table_arg};
 use crate::stage::stage;
 use mlua::{Lua, Table, Value};
 use troupe_body::glam::DVec2;
@@ -36,7 +36,8 @@ fn default_radius() -> mlua::Result<f64> {
 pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     troupe.set(
         "wall",
-        lua.create_function(|lua, t: Table| {
+        lua.create_function(|lua, args: mlua::MultiValue| {
+            let t = table_arg("wall", args)?;
             check_keys(&t, "wall", &["from", "to", "thickness", "height"])?;
             let wall = Wall {
                 from: floor_point(&t.get("from")?, "wall", "`from`")?,
@@ -49,7 +50,8 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     )?;
     troupe.set(
         "floor",
-        lua.create_function(|lua, t: Table| {
+        lua.create_function(|lua, args: mlua::MultiValue| {
+            let t = table_arg("floor", args)?;
             check_keys(&t, "floor", &["outline", "holes"])?;
             let outline = polygon(&t.get("outline")?, "floor", "`outline`")?;
             let holes = match t.get::<Value>("holes")? {

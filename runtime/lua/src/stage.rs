@@ -140,6 +140,9 @@ fn not_lent() -> mlua::Error {
 /// Returns its index (behaviors are never removed, so it names it for good).
 pub(crate) fn add_behavior(lua: &Lua, actor: Option<usize>, f: Function) -> mlua::Result<usize> {
     let thread = lua.create_thread(f.clone())?;
+    // Its waits are the director's to answer (see the prelude's `must_yield`).
+    let own: Function = lua.named_registry_value("troupe.own_thread")?;
+    own.call::<()>(&thread)?;
     let mut st = lua
         .app_data_mut::<Stage>()
         .ok_or_else(|| mlua::Error::runtime("troupe: no scene is loaded"))?;

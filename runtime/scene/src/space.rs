@@ -86,6 +86,28 @@ impl World<'_> {
     }
 }
 
+/// Farthest (m) a floor's outline or holes may reach from the origin along x or z: the
+/// navigation mesh's triangulation loses its precision far beyond (a floor 10,000 km
+/// wide failed inside it); the open floor is 1 km wide.
+pub const FLOOR_REACH: f64 = 100_000.0;
+
+/// The first two edges of `polygon` (edge i from point i to the next) that cross or
+/// touch, not counting neighbours meeting at their shared corner.
+fn crossing_edges(polygon: &[DVec2]) -> Option<(usize, usize)> {
+    let n = polygon.len();
+    let edge = |i: usize| (polygon[i], polygon[(i + 1) % n]);
+    let side = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
+    (0..n).find_map(|i| {
+        ((i + 2)..n)
+            .filter(|&j| !(i == 0 && j == n - 1))
+            .find(|&j| {
+                let ((a, b), (c, d)) = (edge(i), edge(j));
+                side(a, b, c) * side(a, b, d) <= 0.0 && side(c, d, a) * side(c, d, b) <= 0.0
+            })
+            .map(|j| (i, j))
+    })
+}
+
 impl Scene {
     /// Makes walks navigate (the default) or go straight to their goals (see
     /// [`Walking`]): `troupe bench --navigation off` measures the crowd without
@@ -126,6 +148,29 @@ impl Scene {
                     "floor: {what} needs at least 3 finite points (got {})",
                     polygon.len()
                 )));
+            }
+            if let Some(p) = polygon.iter().find(|p| p.abs().max_element() > FLOOR_REACH) {
+                return Err(Error::Invalid(format!(
+                    "floor: {what} reaches {p}, beyond {} km of the origin",
+                    FLOOR_REACH / 1000.0
+                )));
+            }
+            if let Some((a, b)) = crossing_edges(polygon) {
+                return Err(Error::Invalid(format!(
+                    "floor: {what} crosses itself (its edges {} and {})",
+                    a + 1,
+                    b + 1
+                )));
+            }
+            // The shoelace formula: twice the signed area.
+            let n = polygon.len();
+            let area = (0..n)
+                .map(|i| polygon[i].perp_dot(polygon[(i + 1) % n]))
+                .sum::<f64>()
+                .abs()
+                / 2.0;
+            if area < 1e-6 {
+                return Err(Error::Invalid(format!("floor: {what} encloses no area")));
             }
         }
         self.space_mut().floor = Some(floor);

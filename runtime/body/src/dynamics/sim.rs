@@ -88,6 +88,11 @@ pub enum Control<'a> {
     },
 }
 
+/// The shortest integration step (s) accepted: shorter ones make a tick take seconds
+/// (1e-5 s already costs about 5 s of CPU per simulated second for one actor) and
+/// `1e-9` would never end it.
+pub const MIN_SMALL_TIME_STEP: f64 = 1e-5;
+
 /// Simulation parameters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SimParams {
@@ -135,6 +140,13 @@ impl SimParams {
             }
         };
         positive("small_time_step", self.small_time_step)?;
+        if self.small_time_step < MIN_SMALL_TIME_STEP {
+            return Err(Error::invalid_value(
+                "small_time_step",
+                self.small_time_step,
+                "at least 1e-5 s (10 µs: a tick of 10 ms then takes 1,000 sub-steps)",
+            ));
+        }
         positive("time_step", self.time_step)?;
         positive("limit_frequency", self.limit_frequency)?;
         positive("max_speed", self.max_speed)?;
