@@ -37,6 +37,30 @@ test("nor by a coroutine", function()
   end, "instruction budget exceeded")
 end)
 
+test("a string pattern that would backtrack for ever is refused before it runs", function()
+  -- 40 repetitions sharing 40 letters: some 10^22 ways, inside Lua's C matcher, where no
+  -- instruction is counted (the tick never ended).
+  local ok, e = pcall(string.find, string.rep("a", 40), string.rep("a*", 40) .. "b")
+  expect(not ok and tostring(e):find("string.find: the pattern could take over 5e8 steps on a 40-byte string", 1, true),
+         tostring(e))
+  ok, e = pcall(function() return ("a"):rep(40):gsub(("a*"):rep(40) .. "b", "") end)
+  expect(not ok and tostring(e):find("string.gsub: the pattern could take", 1, true), tostring(e))
+  -- The usual patterns pass, on long strings too.
+  local long = string.rep("word ", 20000)
+  expect(select(2, long:gsub("%w+", "")) == 20000, "gsub over 100 kB")
+  expect(long:match("^%s*(.-)%s*$") == long:sub(1, -2), "trim of 100 kB")
+  local t = {}
+  for k, v in ("a=1, b=2"):gmatch("(%w+)=(%w+)") do t[#t + 1] = k .. v end
+  expect(table.concat(t, ",") == "a1,b2", table.concat(t, ","))
+end)
+
+test("passes over long strings count in the instruction budget", function()
+  fails_with(function()
+    local s = string.rep("a", 1e6)
+    for _ = 1, 1000 do s:gsub("a", "b") end   -- 10 s of C work in one resume before
+  end, "instruction budget exceeded")
+end)
+
 test("a string.rep bomb inside pcall fails the behavior", function()
   fails_with(function()
     local ok = pcall(string.rep, "x", 1 << 30)

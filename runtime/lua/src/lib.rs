@@ -19,6 +19,7 @@ mod handles;
 pub mod kinds;
 mod messages;
 pub mod modules;
+pub mod patterns;
 pub mod reference;
 mod sandbox;
 pub mod settings;
@@ -85,6 +86,7 @@ impl Director {
         let lua =
             Lua::new_with(libs, LuaOptions::new()).map_err(|e| Error::Invalid(e.to_string()))?;
         let sandbox = Sandbox::install(&lua, limits).map_err(|e| Error::Invalid(e.to_string()))?;
+        patterns::guard(&lua, &sandbox).map_err(|e| Error::Invalid(e.to_string()))?;
         let director = Director {
             lua,
             sandbox,

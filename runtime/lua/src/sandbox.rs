@@ -78,12 +78,7 @@ impl Sandbox {
                 }
                 let source = debug.source();
                 let place = location(source.short_src.as_deref(), debug.current_line());
-                let msg = format!(
-                    "{place}instruction budget exceeded: a resume may run {} VM instructions \
-                     (--instruction-budget; runaway loop?)",
-                    hook.limits.instructions
-                );
-                Err(mlua::Error::runtime(hook.trip(msg)))
+                Err(mlua::Error::runtime(hook.trip(hook.budget_message(&place))))
             },
         )?;
         let limit = sandbox.clone();
@@ -117,6 +112,35 @@ impl Sandbox {
         })?;
         lua.globals().raw_set("__troupe_limit", check)?;
         Ok(sandbox)
+    }
+
+    /// What an exceeded instruction budget says, hit at `place` (`file:line: `).
+    fn budget_message(&self, place: &str) -> String {
+        format!(
+            "{place}instruction budget exceeded: a resume may run {} VM instructions \
+             (--instruction-budget; runaway loop?)",
+            self.limits.instructions
+        )
+    }
+
+    /// Charges `instructions` of work done inside Lua's C library (a string function's
+    /// pass over its subject, which the hook does not count) to the resume under way;
+    /// returns the limit's message, tripping it, once the budget is spent.
+    pub(crate) fn charge(&self, lua: &Lua, instructions: u64) -> Option<String> {
+        let used = self.instructions.fetch_add(instructions, Ordering::Relaxed) + instructions;
+        if let Some(msg) = self.tripped() {
+            return Some(msg);
+        }
+        if used <= self.limits.instructions {
+            return None;
+        }
+        // Level 0 is the string function, 1 the script that called it.
+        let place = lua
+            .inspect_stack(1, |d| {
+                location(d.source().short_src.as_deref(), d.current_line())
+            })
+            .unwrap_or_default();
+        Some(self.trip(self.budget_message(&place)))
     }
 
     fn tripped(&self) -> Option<String> {
