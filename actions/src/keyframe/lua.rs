@@ -2,8 +2,8 @@
 
 use super::KeyframeOptions;
 use mlua::{MultiValue, Value};
-use troupe_lua::api::{load_sequence, SequenceRef};
-use troupe_lua::args::{err, opt_bool};
+use troupe_lua::api::{load_part, SequenceRef};
+use troupe_lua::args::{err, opt_bool, opt_string};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
@@ -15,8 +15,31 @@ pub fn build_play(
     let m = "play";
     let mut args = args.into_iter();
     let expected = "the first argument must be a sequence or a file path";
-    let sequence = match args.next() {
-        Some(Value::String(path)) => load_sequence(ctx.lua, &path.to_str()?, Some(&ctx.skeleton))?,
+    let first = args.next();
+    let opts = match args.next() {
+        None | Some(Value::Nil) => None,
+        Some(Value::Table(t)) => Some(t),
+        Some(other) => {
+            return Err(err(
+                m,
+                format!(
+                    "the second argument must be a table of options, got {}",
+                    other.type_name()
+                ),
+            ))
+        }
+    };
+    // A recording of several actors plays this actor's part, or the one `part` names.
+    let part = match &opts {
+        Some(t) => opt_string(t, m, "part")?,
+        None => None,
+    };
+    let sequence = match first {
+        Some(Value::String(path)) => {
+            let mine = ctx.with_scene(|s| s.actors()[ctx.actor].name.clone())?;
+            let part = part.unwrap_or(mine);
+            load_part(ctx.lua, &path.to_str()?, Some(&ctx.skeleton), &part)?
+        }
         Some(Value::UserData(u)) => match u.borrow::<SequenceRef>() {
             Ok(s) => s.0.clone(),
             Err(_) => return Err(err(m, expected)),
@@ -31,20 +54,7 @@ pub fn build_play(
             ))
         }
     };
-    let opts = match args.next() {
-        None | Some(Value::Nil) => None,
-        Some(Value::Table(t)) => Some(t),
-        Some(other) => {
-            return Err(err(
-                m,
-                format!(
-                    "the second argument must be a table of options, got {}",
-                    other.type_name()
-                ),
-            ))
-        }
-    };
-    let common = CommonOptions::parse(ctx, m, opts.as_ref(), &["loop"])?;
+    let common = CommonOptions::parse(ctx, m, opts.as_ref(), &["loop", "part"])?;
     let options = KeyframeOptions {
         looping: match &opts {
             Some(t) => opt_bool(t, m, "loop")?,

@@ -470,6 +470,45 @@ pub fn load_sequence(
     Ok(seq)
 }
 
+/// The sequence of file `path` for the actor called `part`: of a `.trk` that records
+/// several actors (`troupe run --record`), the sequence named after that actor; of any
+/// other file, its one sequence, as [`load_sequence`] loads it.
+pub fn load_part(
+    lua: &Lua,
+    path: &str,
+    skeleton: Option<&Arc<Skeleton>>,
+    part: &str,
+) -> mlua::Result<Arc<Sequence>> {
+    let base = stage(lua)?.base_dir.clone();
+    let full = resolve_path(&base, path)?;
+    if troupe_formats::Format::of(&full).map_err(lua_err)? != troupe_formats::Format::Trk {
+        return load_sequence(lua, path, skeleton);
+    }
+    let cached = stage(lua)?.recordings.get(&full).cloned();
+    let set = match cached {
+        Some(set) => set,
+        None => {
+            let read = troupe_formats::trk::read_trk_set(&full).map_err(lua_err)?;
+            let set = Arc::new(read.into_iter().map(Arc::new).collect::<Vec<_>>());
+            let mut st = stage(lua)?;
+            st.loaded_files.push(full.clone());
+            st.recordings.insert(full, set.clone());
+            set
+        }
+    };
+    if let [one] = set.as_slice() {
+        return Ok(one.clone());
+    }
+    set.iter().find(|s| s.name == part).cloned().ok_or_else(|| {
+        let names: Vec<&str> = set.iter().map(|s| s.name.as_str()).collect();
+        lua_err(format!(
+            "`{path}` records {} actors ({}), none of them `{part}`: choose one with `part = …`",
+            set.len(),
+            names.join(", ")
+        ))
+    })
+}
+
 /// The `interpolation` option of `troupe.sequence`, if given.
 fn sequence_interpolation(t: &Table) -> mlua::Result<Option<Interpolation>> {
     opt_string(t, "sequence", "interpolation")?

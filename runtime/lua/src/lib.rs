@@ -116,6 +116,7 @@ impl Director {
             base_dir: PathBuf::from("."),
             current_actor: None,
             sequences: HashMap::new(),
+            recordings: HashMap::new(),
             tests: Vec::new(),
             handler_failures: Vec::new(),
             subscriptions: Vec::new(),

@@ -225,7 +225,11 @@ pub type KindOptions = (
 /// its option class, and each option's name and EmmyLua type. A test holds them to the
 /// options each builder accepts (the list its "unknown option" error gives).
 pub const KIND_OPTIONS: &[KindOptions] = &[
-    ("play", "PlayOptions", &[("loop", "boolean")]),
+    (
+        "play",
+        "PlayOptions",
+        &[("loop", "boolean"), ("part", "string")],
+    ),
     (
         "simulate",
         "SimulateOptions",

@@ -106,6 +106,9 @@ pub(crate) struct Stage {
     pub current_actor: Option<usize>,
     /// Loaded sequences by path (and skeleton, for retargeted BVH).
     pub sequences: HashMap<(PathBuf, Option<usize>), Arc<Sequence>>,
+    /// The sequences of `.trk` files read for one actor's part (a recording of several
+    /// actors: see [`crate::api::load_part`]), by path.
+    pub recordings: HashMap<PathBuf, Arc<Vec<Arc<Sequence>>>>,
     /// `test(name, fn[, { timeout }])` calls, in order: the name, the function and the
     /// test's own timeout (simulated seconds), if it gave one.
     pub tests: Vec<(String, Function, Option<f64>)>,
