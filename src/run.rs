@@ -129,6 +129,10 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         memory: args.memory_limit,
         heap: args.lua_memory,
     };
+    // A recording's format is known from its name: refused now, not after the whole run.
+    if let Some(path) = &args.record {
+        troupe_formats::Format::of(path).with_context(|| format!("--record {}", path.display()))?;
+    }
     if let Some(path) = &args.record_torques {
         if !path
             .extension()

@@ -112,6 +112,28 @@ fn a_failing_behavior_makes_run_fail_and_is_reported() {
 }
 
 #[test]
+fn a_recording_of_an_unknown_format_is_refused_before_the_scene_runs() {
+    // A scene that would print if it ran: the refusal comes first, in a moment.
+    let scene = temp("long.lua");
+    std::fs::write(&scene, "print('the scene ran')\n").unwrap();
+    let out = troupe()
+        .args(["run", "--seconds", "3600", "--record", "out.xyz"])
+        .arg(&scene)
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    assert!(
+        stderr.contains("--record out.xyz") && stderr.contains(".xyz"),
+        "{stderr}"
+    );
+    assert!(!stdout.contains("the scene ran"), "{stdout}");
+}
+
+#[test]
 fn bad_scene_files_give_clear_errors() {
     let out = troupe()
         .args(["run", "no/such/scene.lua"])

@@ -100,3 +100,18 @@ test("device options have the same wording and types", function()
   says(function() troupe.performer{ name = "pat", calibrate = {} } end,
     "performer: option `calibrate` must be a string, got table")
 end)
+
+test("the test helpers name themselves and what they got", function()
+  local function said(f, ...)
+    local ok, e = pcall(f, ...)
+    expect(not ok, "refused")
+    return tostring(e)
+  end
+  expect(said(expect, false, { 1, 2 }):find("expectation failed: table: ", 1, true), "a table message is shown")
+  expect(said(run, -1):find("run: seconds must be a number >= 0, got -1", 1, true), "run names itself")
+  expect(said(run, 0 / 0):find("got nan", 1, true), "nan, on every platform")
+  expect(said(run_until, 5):find("run_until: the first argument must be a function, got number", 1, true),
+         "run_until names itself")
+  expect(said(test, "inner", function() end):find("test() defines a test at the scene's top level", 1, true),
+         "a test inside a test would never run")
+end)

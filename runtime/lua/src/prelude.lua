@@ -59,7 +59,8 @@ function wait(seconds)
   must_yield("wait")
   seconds = seconds or 0
   if type(seconds) ~= "number" or seconds < 0 or seconds ~= seconds then
-    error("wait: seconds must be a number >= 0, got " .. tostring(seconds), 2)
+    local got = seconds ~= seconds and "nan" or tostring(seconds)
+    error("wait: seconds must be a number >= 0, got " .. got, 2)
   end
   return yield("time", seconds)
 end
@@ -99,20 +100,41 @@ end
 ---@async
 function run(seconds)
   must_yield("run")
-  return wait(seconds)
+  seconds = seconds or 0
+  if type(seconds) ~= "number" or seconds < 0 or seconds ~= seconds then
+    local got = seconds ~= seconds and "nan" or tostring(seconds)
+    error("run: seconds must be a number >= 0, got " .. got, 2)
+  end
+  return yield("time", seconds)
 end
 
 ---@async
 function run_until(fn, timeout)
   must_yield("run_until")
-  return wait_until(fn, timeout)
+  if type(fn) ~= "function" then
+    error("run_until: the first argument must be a function, got " .. type(fn), 2)
+  end
+  if timeout ~= nil and (type(timeout) ~= "number" or timeout < 0 or timeout ~= timeout) then
+    error("run_until: timeout must be a number >= 0 or nil, got " .. tostring(timeout), 2)
+  end
+  return yield("until", fn, timeout)
 end
 
 function expect(cond, message)
   if not cond then
-    error("expectation failed: " .. (message or "(no message)"), 2)
+    error("expectation failed: " .. (message == nil and "(no message)" or tostring(message)), 2)
   end
   return cond
+end
+
+-- Tests are defined at the scene's top level: one defined inside a test or a behavior
+-- would never run.
+local define_test = test
+function test(name, fn, opts)
+  if own[running()] then
+    error("test() defines a test at the scene's top level, not inside a test or a behavior", 2)
+  end
+  return define_test(name, fn, opts)
 end
 
 -- The method `action:wait()`; the director returns the action's final status.
