@@ -114,3 +114,13 @@ test("bad input is a clear error", function()
   expect(err{ to = {1, 0, 1}, stride = 2 }:find("unknown option") ~= nil, "unknown option")
   expect(err{ follow = troupe.sequence{ l_knee_flexion = {{0, 0}, {1, 1}} } }:find("root_x") ~= nil, "follow without root track")
 end)
+
+test("a walk starts on its feet: from a body lying where it fell it fails, saying so", function()
+  local ann = troupe.actor{ name = "ann" }
+  expect(ann:simulate{ duration = 3 }:wait() == "completed", "fell")
+  local w = ann:walk{ to = {2, 0, 2} }
+  expect(w:wait() == "failed", "refused: " .. w.status)
+  expect(tostring(w.error):find("^walk: the body is not on its feet %(tilted") ~= nil, tostring(w.error))
+  -- Nothing snapped: the body still lies where it fell.
+  expect(math.abs(ann:dof("root_roll")) + math.abs(ann:dof("root_pitch")) > 0.6, "still lying")
+end)

@@ -83,6 +83,14 @@ pub const LOWEST: f64 = 0.2;
 /// The least part of a swing's time (a fraction of the usual) left for a foot that stayed
 /// down to lift after all; with less, it waits for its next support's end.
 pub const LATE_SWING: f64 = 0.5;
+/// Farthest (rad) the body may lean, forwards or sideways, for a walk to start from it.
+pub const UPRIGHT: f64 = 0.6;
+/// Lowest the pelvis may stand, as a part of its height at rest, for a walk to start: the
+/// deepest crouch of a grasp (0.6 m down, to 0.36 of 0.96 m for the adult; a child's legs
+/// bend less far) stands up as it walks off; a body sitting or lying on the floor (its
+/// pelvis a tenth of that up) does not.
+pub const LOWEST_START: f64 = 0.2;
+
 /// Seconds to stand still, both feet down, before the walk reports it has finished.
 pub const SETTLE_TIME: f64 = 0.3;
 /// Seconds after a stop (`stop()`, `cancel()`, a pre-emption) by which a walk that has
@@ -1379,6 +1387,20 @@ impl Generator for Walk {
             rig.root_rest.z + q[rig.root[2]],
         );
         let heading = q[rig.root[3]];
+        // A walk starts on its feet: from a body lying on the floor (after a fall) it
+        // would snap the body upright in one tick, a foot through the floor.
+        let (pitch, roll) = (q[rig.root[4]], q[rig.root[5]]);
+        let pelvis = rig.root_rest.y + q[rig.root[1]];
+        if pitch.abs() > UPRIGHT || roll.abs() > UPRIGHT || pelvis < LOWEST_START * rig.root_rest.y
+        {
+            return Err(format!(
+                "walk: the body is not on its feet (tilted {:.2} rad forwards and {:.2} rad \
+                 sideways, its pelvis {pelvis:.2} m above the floor): a walk starts standing \
+                 (pose the actor up first)",
+                pitch, roll
+            )
+            .into());
+        }
         self.yaw = heading;
         self.heading = heading;
         if let Some(goal) = &self.goal {
