@@ -367,15 +367,13 @@ impl Walk {
 
     /// Why the walk is stuck, if it is (see [`STUCK_TIME`]): how far from its goal, and the
     /// obstacle nearest the body, among `footprints`.
-    fn stuck(
-        &mut self,
-        ctx: &GeneratorContext,
-        plan: &Plan,
-        footprints: &FootprintsAround,
-    ) -> Option<String> {
+    fn stuck(&mut self, ctx: &GeneratorContext, footprints: &FootprintsAround) -> Option<String> {
+        let Route::Path { points, .. } = &self.route else {
+            return None;
+        };
         let crowd = ctx.world.crowd;
         let at = *crowd.positions.get(ctx.actor)?;
-        let left = (self.end_sample(plan).position - at).length();
+        let left = (*points.last()? - at).length();
         match self.progress {
             Some((nearest, _)) if left > nearest - PROGRESS => {}
             _ => {
@@ -1492,7 +1490,7 @@ impl Generator for Walk {
             }
         }
         if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
-            if let Some(why) = self.stuck(ctx, &plan, footprints) {
+            if let Some(why) = self.stuck(ctx, footprints) {
                 self.plan = Some(plan);
                 return Step::Failed(why);
             }

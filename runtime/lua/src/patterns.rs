@@ -327,7 +327,7 @@ fn check(method: &str, args: &MultiValue) -> mlua::Result<u64> {
         Some(Value::Number(x)) => Some(x.to_string().into_bytes()),
         _ => None,
     };
-    let (Some(subject), Some(pattern)) = (text(args.get(0)), text(args.get(1))) else {
+    let (Some(subject), Some(pattern)) = (text(args.front()), text(args.get(1))) else {
         // Lua says what is wrong with them.
         return Ok(0);
     };
