@@ -274,6 +274,30 @@ impl Grasp {
         Ok(())
     }
 
+    /// Sets each planned hand's arm in `self.q`: the part `u` of the way from where the
+    /// grasp started to its target, or (`None`) the target itself; the targets follow the
+    /// body as it moves on (see [`FollowBody`]).
+    fn set_arms(&mut self, ctx: &GeneratorContext, u: Option<f64>) -> Result<(), String> {
+        let Some(plan) = &self.plan else {
+            return Err("grasp: no plan".into());
+        };
+        for i in 0..plan.hands.len() {
+            let arm = match &mut self.follow {
+                Some(f) => f
+                    .arm(ctx.skeleton, &ctx.posture.q, &plan.hands, i)
+                    .map_err(|e| e.to_string())?,
+                None => &plan.hands[i].arm,
+            };
+            for &(d, v) in arm {
+                self.q[d] = match u {
+                    Some(u) => self.start_q[d] + (v - self.start_q[d]) * u,
+                    None => v,
+                };
+            }
+        }
+        Ok(())
+    }
+
     /// From the end of a reach round other bodies on, the arms stay where its last solve
     /// put them (at the planned wrist poses, the joints as the path left them).
     fn hold_detoured_arms(&mut self) {
@@ -360,24 +384,12 @@ impl Generator for Grasp {
                 self.step(ctx, out)
             }
             Phase::Reach => {
-                let Some(plan) = &self.plan else {
-                    return Step::Failed("grasp: no plan".into());
-                };
                 let tau = (ctx.local_time - self.phase_start) / self.reach_seconds;
                 let u = quintic(tau);
                 let finished = u >= 1.0 - 1e-12;
                 self.q.copy_from_slice(&ctx.posture.q);
-                for i in 0..plan.hands.len() {
-                    let arm = match &mut self.follow {
-                        Some(f) => match f.arm(ctx.skeleton, &ctx.posture.q, &plan.hands, i) {
-                            Ok(arm) => arm,
-                            Err(e) => return Step::Failed(e.to_string()),
-                        },
-                        None => &plan.hands[i].arm,
-                    };
-                    for &(d, v) in arm {
-                        self.q[d] = self.start_q[d] + (v - self.start_q[d]) * u;
-                    }
+                if let Err(e) = self.set_arms(ctx, Some(u)) {
+                    return Step::Failed(e);
                 }
                 for arm in self.detours.iter_mut().flatten() {
                     let tau = if finished { 1.0 } else { tau };
@@ -399,24 +411,12 @@ impl Generator for Grasp {
                 Step::Running
             }
             Phase::Close => {
-                let Some(plan) = &self.plan else {
-                    return Step::Failed("grasp: no plan".into());
-                };
                 let Some(obj) = ctx.world.objects.get(self.object) else {
                     return Step::Failed("the object is gone".into());
                 };
                 self.q.copy_from_slice(&ctx.posture.q);
-                for i in 0..plan.hands.len() {
-                    let arm = match &mut self.follow {
-                        Some(f) => match f.arm(ctx.skeleton, &ctx.posture.q, &plan.hands, i) {
-                            Ok(arm) => arm,
-                            Err(e) => return Step::Failed(e.to_string()),
-                        },
-                        None => &plan.hands[i].arm,
-                    };
-                    for &(d, v) in arm {
-                        self.q[d] = v;
-                    }
+                if let Err(e) = self.set_arms(ctx, None) {
+                    return Step::Failed(e);
                 }
                 self.globals.clear();
                 self.globals.extend_from_slice(&ctx.posture.globals);

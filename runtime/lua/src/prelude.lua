@@ -54,15 +54,20 @@ local function must_yield(name)
   end
 end
 
----@async
-function wait(seconds)
-  must_yield("wait")
+-- `seconds` for `name` (none: 0), or the error of its caller's caller.
+local function duration(name, seconds)
   seconds = seconds or 0
   if type(seconds) ~= "number" or seconds < 0 or seconds ~= seconds then
     local got = seconds ~= seconds and "nan" or tostring(seconds)
-    error("wait: seconds must be a number >= 0, got " .. got, 2)
+    error(name .. ": seconds must be a number >= 0, got " .. got, 3)
   end
-  return yield("time", seconds)
+  return seconds
+end
+
+---@async
+function wait(seconds)
+  must_yield("wait")
+  return yield("time", duration("wait", seconds))
 end
 
 ---@async
@@ -100,12 +105,7 @@ end
 ---@async
 function run(seconds)
   must_yield("run")
-  seconds = seconds or 0
-  if type(seconds) ~= "number" or seconds < 0 or seconds ~= seconds then
-    local got = seconds ~= seconds and "nan" or tostring(seconds)
-    error("run: seconds must be a number >= 0, got " .. got, 2)
-  end
-  return yield("time", seconds)
+  return yield("time", duration("run", seconds))
 end
 
 ---@async
