@@ -153,10 +153,10 @@ const ALONE: f64 = 1.5;
 pub const STUCK_TIME: f64 = 10.0;
 /// How much nearer (m) its goal a walk must come to count as getting on (see
 /// [`STUCK_TIME`]).
-const PROGRESS: f64 = 0.05;
+pub const PROGRESS: f64 = 0.05;
 /// With another actor within this distance (m), a walk that gets no nearer its goal may
 /// be waiting for them (to pass, to move off its goal), and is not stuck.
-const UNATTENDED: f64 = 3.0;
+pub const UNATTENDED: f64 = 3.0;
 
 /// A swinging foot's landing farther than this (m) from where the steered body wants it,
 /// and getting no nearer, is stuck (see [`Walk::follow_steering`]).

@@ -1,6 +1,6 @@
 //! Lua string patterns whose matching would run away, refused before they run.
 //!
-//! The sandbox counts VM instructions (see [`crate::sandbox`]), but `string.find`,
+//! The sandbox counts VM instructions (`runtime/lua/src/sandbox.rs`), but `string.find`,
 //! `string.match`, `string.gmatch` and `string.gsub` match inside Lua's C library, where
 //! no instruction is counted: `("a"):rep(40):find(("a*"):rep(40) .. "b")` backtracks
 //! through some 10²² ways of sharing 40 letters among 40 repetitions, and the tick never
