@@ -177,12 +177,11 @@ impl Capsule {
         }
     }
 
-    /// The same body with its hand `i` (0 or 1) reaching as `hand` says: a hand further
-    /// out than the body reaches widens it.
-    pub fn with_hand(mut self, i: usize, hand: HandReach) -> Capsule {
+    /// Its hand `i` (0 or 1) reaches as `hand` says: a hand further out than the body
+    /// reaches widens it.
+    pub fn add_hand(&mut self, i: usize, hand: HandReach) {
         self.radius = self.radius.max(hand.radius);
         self.hands[i] = Some(hand);
-        self
     }
 
     /// How far (m) the body reaches round its segment towards an obstacle `top` metres
@@ -722,7 +721,8 @@ mod tests {
             radius: 0.7,
             lowest: 0.9,
         };
-        let me = body(0.0, 0.0, 0.0).with_hand(1, hand);
+        let mut me = body(0.0, 0.0, 0.0);
+        me.add_hand(1, hand);
         assert_eq!((me.radius, me.bare), (0.7, 0.3));
         let edge = (0.5 + OBSTACLE_MARGIN, -1.0);
         let step = DVec2::new(0.1, 0.0);

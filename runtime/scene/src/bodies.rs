@@ -122,12 +122,16 @@ impl BodyJoints {
                     .filter(|&&(joint, _)| joint == wrist)
                     .fold(w.translation.y - reach, |low, &(_, y)| low.min(y));
                 let w = floor_point(w);
-                let hand = |body: &Capsule| HandReach {
-                    radius: radius + body.distance(w) - at_rest,
-                    lowest,
-                };
-                whole = whole.with_hand(i, hand(&whole));
-                core = core.with_hand(i, hand(&core));
+                for body in [&mut whole, &mut core] {
+                    let out = radius + body.distance(w) - at_rest;
+                    body.add_hand(
+                        i,
+                        HandReach {
+                            radius: out,
+                            lowest,
+                        },
+                    );
+                }
             }
         }
         (whole, core)
