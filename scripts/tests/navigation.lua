@@ -166,6 +166,10 @@ test("bad walls, floors and paths are refused naming what", function()
           "floor: the outline crosses itself (its edges 1 and 3)")
   refused(troupe.floor, { outline = { {-5, -5}, {5, -5}, {5, 5}, {-5, 5} },
                           holes = { { {0, 0}, {1, 1}, {1, 0}, {0, 1} } } }, "floor: hole 1 crosses itself")
+  -- Edges along one line that do not overlap, and a first point repeated last, are fine.
+  expect(pcall(troupe.floor, { outline = { {0, 0}, {4, 0}, {4, 3}, {3, 3}, {3, 1}, {1, 1}, {1, 3}, {0, 3} } }),
+         "a U-shaped room")
+  expect(pcall(troupe.floor, { outline = { {-5, -5}, {5, -5}, {5, 5}, {-5, 5}, {-5, -5} } }), "a closed outline")
   ok, e = pcall(troupe.path, {0, 0}, "x")
   expect(not ok and tostring(e):find("to"), tostring(e))
   local ann = troupe.actor{ name = "ann" }

@@ -58,6 +58,11 @@ test("bad keys and values are refused with a message", function()
   expect(err:find("publish cue/nan: value is not a finite number", 1, true), err)
   err = refusal(troupe.publish, "cue/t", { x = 1, y = { 2, 1/0 } })
   expect(err:find("value.y[2] is not a finite number", 1, true), err)
+  -- One table held twice at every level: looked into once (2^64 visits before).
+  local shared = {}
+  shared[1], shared[2] = shared, shared
+  err = refusal(troupe.publish, "cue/shared", shared)
+  expect(err:find("publish cue/shared", 1, true), err)
   err = refusal(troupe.subscribe, "cue/x", 5)
   expect(err:find("subscribe: argument 2 must be a function(value, key), got integer", 1, true), err)
   err = refusal(troupe.publish, 5, 1)

@@ -45,6 +45,11 @@ test("a string pattern that would backtrack for ever is refused before it runs",
          tostring(e))
   ok, e = pcall(function() return ("a"):rep(40):gsub(("a*"):rep(40) .. "b", "") end)
   expect(not ok and tostring(e):find("string.gsub: the pattern could take", 1, true), tostring(e))
+  -- Whatever follows a balance, and a caret that gmatch takes as a character, count too.
+  ok, e = pcall(string.find, "()" .. string.rep("a", 30), "%b()" .. string.rep("a*", 30) .. "b")
+  expect(not ok and tostring(e):find("the pattern could take", 1, true), tostring(e))
+  ok, e = pcall(function() return string.gmatch("^" .. string.rep("a", 30), "^" .. string.rep("a*", 30) .. "b")() end)
+  expect(not ok and tostring(e):find("string.gmatch: the pattern could take", 1, true), tostring(e))
   -- The usual patterns pass, on long strings too.
   local long = string.rep("word ", 20000)
   expect(select(2, long:gsub("%w+", "")) == 20000, "gsub over 100 kB")

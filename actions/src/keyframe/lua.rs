@@ -36,9 +36,17 @@ pub fn build_play(
     };
     let sequence = match first {
         Some(Value::String(path)) => {
+            let chosen = part.is_some();
             let mine = ctx.with_scene(|s| s.actors()[ctx.actor].name.clone())?;
             let part = part.unwrap_or(mine);
-            load_part(ctx.lua, &path.to_str()?, Some(&ctx.skeleton), &part)?
+            let skeleton = Some(&ctx.skeleton);
+            load_part(ctx.lua, &path.to_str()?, skeleton, (&part, chosen))?
+        }
+        Some(Value::UserData(_)) if part.is_some() => {
+            return Err(err(
+                m,
+                "`part` chooses an actor's part of a recording file, not of a sequence",
+            ))
         }
         Some(Value::UserData(u)) => match u.borrow::<SequenceRef>() {
             Ok(s) => s.0.clone(),

@@ -101,8 +101,8 @@ pub const SETTLE_TIME: f64 = 0.3;
 /// finishes within 2 s (0.8 s of slowing down, the feet catching up, 0.3 s settling).
 pub const STOP_DEADLINE: f64 = 2.5;
 /// Seconds after [`STOP_DEADLINE`] by which a stopped walk finishes however its feet
-/// stand (an unhindered stop in the middle of setting off, at the slowest cadence, takes
-/// up to 4.2 s).
+/// stand (an unhindered stop in the middle of setting off after a turn on the spot, at
+/// the slowest cadence, took up to 3.6 s).
 pub const STOP_GRACE: f64 = 3.0;
 /// Farthest apart (m) two planted feet may be for a stopped walk past [`STOP_DEADLINE`]
 /// to finish where it stands: beside each other, not in mid-stride (feet side by side
@@ -146,13 +146,13 @@ const STALLED_SPEED: f64 = 0.05;
 /// by people standing, not by a crowd on the move (see [`Walk::stalled`]).
 const ALONE: f64 = 1.5;
 
-/// Seconds a navigated walk may go without coming [`PROGRESS`] nearer its goal, with no
-/// other actor within [`UNATTENDED`], before it fails as stuck: held by the furniture or
-/// the walls where it cannot pass (a cup carried out in front against a counter as high
-/// as the hand), with nobody there who might move out of its way.
+/// Seconds a navigated walk's body may stay within [`PROGRESS`] of where it stood, with
+/// no other actor within [`UNATTENDED`] when it gives up, before the walk fails as stuck:
+/// held by the furniture or the walls where it cannot pass (a cup carried out in front
+/// against a counter as high as the hand), with nobody there who might move out of its
+/// way.
 pub const STUCK_TIME: f64 = 10.0;
-/// How much nearer (m) its goal a walk must come to count as getting on (see
-/// [`STUCK_TIME`]).
+/// How far (m) a walk's body must move to count as getting on (see [`STUCK_TIME`]).
 pub const PROGRESS: f64 = 0.05;
 /// With another actor within this distance (m), a walk that gets no nearer its goal may
 /// be waiting for them (to pass, to move off its goal), and is not stuck.
@@ -235,9 +235,9 @@ pub struct Walk {
     heading: f64,
     start_q: Vec<f64>,
     settle_since: Option<f64>,
-    /// The nearest the body has come to its goal (m), and the walk time it came there
-    /// (see [`STUCK_TIME`]).
-    progress: Option<(f64, f64)>,
+    /// Where the body last stood [`PROGRESS`] away from where it stood before, and the
+    /// walk time it did (see [`STUCK_TIME`]).
+    progress: Option<(DVec2, f64)>,
     /// The walk time at which the walk was asked to stop, if it was (see [`STOP_DEADLINE`]).
     stopped_at: Option<f64>,
     last_miss: f64,
@@ -373,11 +373,11 @@ impl Walk {
         };
         let crowd = ctx.world.crowd;
         let at = *crowd.positions.get(ctx.actor)?;
-        let left = (*points.last()? - at).length();
         match self.progress {
-            Some((nearest, _)) if left > nearest - PROGRESS => {}
+            // Along the way, not towards the goal: a path may lead away from its end.
+            Some((stood, _)) if (at - stood).length() < PROGRESS => {}
             _ => {
-                self.progress = Some((left, self.t));
+                self.progress = Some((at, self.t));
                 return None;
             }
         }
@@ -391,8 +391,11 @@ impl Walk {
             .iter()
             .any(|&j| j != ctx.actor && (crowd.positions[j] - at).length() < UNATTENDED)
         {
+            // Waiting for someone, who may move: the time counts again from now.
+            self.progress = Some((at, self.t));
             return None;
         }
+        let left = (*points.last()? - at).length();
         let against = footprints
             .within(1.0)
             .map(|f| (f.distance(at), &f.name))

@@ -470,18 +470,24 @@ pub fn load_sequence(
     Ok(seq)
 }
 
-/// The sequence of file `path` for the actor called `part`: of a `.trk` that records
-/// several actors (`troupe run --record`), the sequence named after that actor; of any
-/// other file, its one sequence, as [`load_sequence`] loads it.
+/// The sequence of file `path` for the actor called `part` (`chosen`: named by the
+/// script, else the actor's own name): of a `.trk` that records several actors (`troupe
+/// run --record`), the sequence named so; of any other file, its one sequence, as
+/// [`load_sequence`] loads it. A part chosen that the file does not hold is an error.
 pub fn load_part(
     lua: &Lua,
     path: &str,
     skeleton: Option<&Arc<Skeleton>>,
-    part: &str,
+    (part, chosen): (&str, bool),
 ) -> mlua::Result<Arc<Sequence>> {
     let base = stage(lua)?.base_dir.clone();
     let full = resolve_path(&base, path)?;
     if troupe_formats::Format::of(&full).map_err(lua_err)? != troupe_formats::Format::Trk {
+        if chosen {
+            return Err(lua_err(format!(
+                "`part` chooses an actor's part of a .trk recording; `{path}` holds one motion"
+            )));
+        }
         return load_sequence(lua, path, skeleton);
     }
     let cached = stage(lua)?.recordings.get(&full).cloned();
@@ -497,6 +503,12 @@ pub fn load_part(
         }
     };
     if let [one] = set.as_slice() {
+        if chosen && one.name != part {
+            return Err(lua_err(format!(
+                "`{path}` holds one sequence, `{}`, not `{part}`",
+                one.name
+            )));
+        }
         return Ok(one.clone());
     }
     set.iter().find(|s| s.name == part).cloned().ok_or_else(|| {

@@ -9,9 +9,6 @@ use crate::args::{bad_arg, lua_err};
 use crate::stage::stage;
 use mlua::{Lua, LuaSerdeExt, Table, Value};
 
-/// How deep in nested tables [`non_finite`] looks.
-const NESTING: usize = 64;
-
 /// Adds `publish` and `subscribe` to the `troupe` table.
 pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     troupe.set(
@@ -21,7 +18,7 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
                 return Err(bad_arg("publish", "argument 1 (the key)", "a string", &key));
             };
             let key = key.to_str()?.to_string();
-            if let Some(path) = non_finite(&value, String::new()) {
+            if let Some(path) = non_finite(&value, String::new(), &mut Default::default()) {
                 return Err(lua_err(format!(
                     "publish {key}: value{path} is not a finite number (JSON has none)"
                 )));
@@ -67,19 +64,24 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
 }
 
 /// Where in `value` (`path` so far: `[2].x`) a number is not finite (NaN or infinite),
-/// which JSON cannot carry, if one is. Looks [`NESTING`] tables deep at most (a table
-/// that holds itself is refused by the conversion to JSON).
-fn non_finite(value: &Value, path: String) -> Option<String> {
+/// which JSON cannot carry, if one is. Each table is looked into once (`seen`), so a
+/// table that holds itself, or one table held many times, costs one visit; the conversion
+/// to JSON then refuses a cycle.
+fn non_finite(
+    value: &Value,
+    path: String,
+    seen: &mut std::collections::HashSet<usize>,
+) -> Option<String> {
     match value {
         Value::Number(n) if !n.is_finite() => Some(path),
-        Value::Table(_) if path.matches(['[', '.']).count() >= NESTING => None,
+        Value::Table(t) if !seen.insert(t.to_pointer() as usize) => None,
         Value::Table(t) => t.pairs::<Value, Value>().flatten().find_map(|(k, v)| {
             let key = match &k {
                 Value::Integer(i) => format!("[{i}]"),
                 Value::String(s) => format!(".{}", s.to_string_lossy()),
                 other => format!("[{}]", other.type_name()),
             };
-            non_finite(&v, format!("{path}{key}"))
+            non_finite(&v, format!("{path}{key}"), seen)
         }),
         _ => None,
     }

@@ -38,11 +38,18 @@ enum Item {
     Some(Class),
     /// One or none (`?`).
     Maybe(Class),
-    /// An item that does not branch and whose length is known only when matching (`%bxy`,
-    /// a back-reference): counted as one attempt that ends the count.
-    Opaque,
+    /// An item that does not branch but whose length is known only when matching (`%bxy`,
+    /// which scans on to its closing character, or a back-reference): counted as ending
+    /// wherever the rest costs most.
+    Unknown {
+        /// Whether it scans the subject to find its end (`%b`).
+        scans: bool,
+    },
     /// An item that matches no character and does not branch (`%f[set]`, the end anchor).
     Empty,
+    /// A malformed item: Lua raises its error when the matcher reaches it, after trying
+    /// everything before it.
+    Malformed,
 }
 
 /// A character class.
@@ -105,12 +112,20 @@ fn escape_matches(e: u8, c: u8) -> bool {
     }
 }
 
-/// A pattern's items, and whether it is anchored at the start (`^`); `None` for a
-/// pattern Lua would refuse (it then says why itself).
-fn parse(pattern: &[u8]) -> Option<(Vec<Item>, bool)> {
-    let anchored = pattern.first() == Some(&b'^');
-    let mut p = usize::from(anchored);
+/// A pattern's items, and whether it is anchored at the start (`^`, which only `find`,
+/// `match` and `gsub` read as an anchor: `gmatch` takes it as the character); a
+/// malformed item ends the list.
+fn parse(pattern: &[u8], anchors: bool) -> (Vec<Item>, bool) {
+    let anchored = anchors && pattern.first() == Some(&b'^');
     let mut items = Vec::new();
+    if parse_items(pattern, usize::from(anchored), &mut items).is_none() {
+        items.push(Item::Malformed);
+    }
+    (items, anchored)
+}
+
+/// Appends the items of `pattern` from byte `p` on to `items`; `None` at a malformed one.
+fn parse_items(pattern: &[u8], mut p: usize, items: &mut Vec<Item>) -> Option<()> {
     while p < pattern.len() {
         let class = match pattern[p] {
             b'(' | b')' => {
@@ -126,7 +141,7 @@ fn parse(pattern: &[u8]) -> Option<(Vec<Item>, bool)> {
                 match e {
                     b'b' => {
                         pattern.get(p + 3)?;
-                        items.push(Item::Opaque);
+                        items.push(Item::Unknown { scans: true });
                         p += 4;
                         continue;
                     }
@@ -140,7 +155,7 @@ fn parse(pattern: &[u8]) -> Option<(Vec<Item>, bool)> {
                         continue;
                     }
                     b'0'..=b'9' => {
-                        items.push(Item::Opaque);
+                        items.push(Item::Unknown { scans: false });
                         p += 2;
                         continue;
                     }
@@ -176,7 +191,7 @@ fn parse(pattern: &[u8]) -> Option<(Vec<Item>, bool)> {
         p += 1;
         items.push(item);
     }
-    Some((items, anchored))
+    Some(())
 }
 
 /// The set class starting at `pattern[open]` (`[`), and the index past its `]`.
@@ -216,17 +231,27 @@ fn set(pattern: &[u8], open: usize) -> Option<(Class, usize)> {
     }
 }
 
-/// How many item attempts Lua's matcher makes in the worst case matching `pattern` in
-/// `subject` from byte `init` on (each start position in turn unless anchored), up to
-/// `limit` (the count stops growing there); 0 for a pattern Lua would refuse.
-pub fn worst_attempts(subject: &[u8], pattern: &[u8], init: usize, limit: f64) -> f64 {
-    let Some((items, anchored)) = parse(pattern) else {
-        return 0.0;
-    };
+/// How many item attempts (and characters a balance scans) Lua's matcher makes in the
+/// worst case matching `pattern` in `subject` from byte `init` on (each start position in
+/// turn unless anchored, `anchors` saying whether a leading `^` anchors), up to `limit`
+/// (the count stops growing there).
+pub fn worst_attempts(
+    subject: &[u8],
+    pattern: &[u8],
+    init: usize,
+    anchors: bool,
+    limit: f64,
+) -> f64 {
+    let (items, anchored) = parse(pattern, anchors);
     let n = subject.len();
-    let branches = |item: &Item| matches!(item, Item::Any(_) | Item::Some(_) | Item::Maybe(_));
+    let branches = |item: &Item| {
+        matches!(
+            item,
+            Item::Any(_) | Item::Some(_) | Item::Maybe(_) | Item::Unknown { scans: true }
+        )
+    };
     if !items.iter().any(branches) {
-        // Each start tries each item at most once.
+        // Each start tries each item at most once (none scans).
         let starts = if anchored {
             1
         } else {
@@ -241,10 +266,11 @@ pub fn worst_attempts(subject: &[u8], pattern: &[u8], init: usize, limit: f64) -
     let mut sums = vec![0.0f64; n + 3];
     // The run of `class` starting at each position (computed from the end).
     let mut run = vec![0usize; n + 1];
+    let mut most = vec![0.0f64; n + 2];
     for item in items.iter().rev() {
         let class = match item {
             Item::One(c) | Item::Any(c) | Item::Some(c) | Item::Maybe(c) => Some(c),
-            Item::Opaque | Item::Empty => None,
+            Item::Unknown { .. } | Item::Empty | Item::Malformed => None,
         };
         if let Some(class) = class {
             run[n] = 0;
@@ -259,6 +285,13 @@ pub fn worst_attempts(subject: &[u8], pattern: &[u8], init: usize, limit: f64) -
         sums[0] = 0.0;
         for p in 0..=n {
             sums[p + 1] = (sums[p] + after[p]).min(limit);
+        }
+        // The most the rest costs from p or later (for an item of unknown length).
+        if matches!(item, Item::Unknown { .. }) {
+            most[n + 1] = 0.0;
+            for p in (0..=n).rev() {
+                most[p] = most[p + 1].max(after[p]);
+            }
         }
         // Attempts at positions p..=p+len of the next items (a sum that reached the limit
         // stays there: its difference would undercount).
@@ -281,7 +314,8 @@ pub fn worst_attempts(subject: &[u8], pattern: &[u8], init: usize, limit: f64) -
                     Item::Maybe(_) if r > 0 => after[p] + after[p + 1],
                     Item::Maybe(_) => after[p],
                     Item::Empty => after[p],
-                    Item::Opaque => 0.0,
+                    Item::Unknown { scans } => most[p] + if *scans { (n - p) as f64 } else { 0.0 },
+                    Item::Malformed => 0.0,
                 };
             now[p] = now[p].min(limit);
         }
@@ -306,8 +340,8 @@ pub(crate) fn guard(lua: &Lua, sandbox: &Arc<Sandbox>) -> mlua::Result<()> {
         let method = format!("string.{name}");
         let sandbox = sandbox.clone();
         let guarded = lua.create_function(move |lua, args: MultiValue| {
-            let length = check(&method, &args)?;
-            if let Some(limit) = sandbox.charge(lua, length) {
+            let work = check(&method, &args)?;
+            if let Some(limit) = sandbox.charge(lua, work) {
                 return Err(mlua::Error::runtime(limit));
             }
             original.call::<MultiValue>(args)
@@ -318,8 +352,9 @@ pub(crate) fn guard(lua: &Lua, sandbox: &Arc<Sandbox>) -> mlua::Result<()> {
 }
 
 /// Refuses the call of `method` with `args` (subject, pattern, init, plain) if its
-/// matching could take more than [`PATTERN_STEPS`] attempts; else the subject's length,
-/// which the call will pass over at least.
+/// matching could take more than [`PATTERN_STEPS`] attempts; else the work to charge to
+/// the budget: the subject's length, which the call passes over at least, or a tenth of
+/// its worst case if more (so that a loop of calls each just under the bound is stopped).
 fn check(method: &str, args: &MultiValue) -> mlua::Result<u64> {
     let text = |v: Option<&Value>| match v {
         Some(Value::String(s)) => Some(s.as_bytes().to_vec()),
@@ -332,8 +367,11 @@ fn check(method: &str, args: &MultiValue) -> mlua::Result<u64> {
         return Ok(0);
     };
     let length = subject.len() as u64;
-    let plain =
-        method == "string.find" && args.get(3).is_some_and(|v| v.as_boolean() == Some(true));
+    // Lua's truth: anything but nil and false.
+    let plain = method == "string.find"
+        && args
+            .get(3)
+            .is_some_and(|v| !matches!(v, Value::Nil | Value::Boolean(false)));
     if plain {
         return Ok(length);
     }
@@ -351,7 +389,21 @@ fn check(method: &str, args: &MultiValue) -> mlua::Result<u64> {
     } else {
         0
     };
-    let attempts = worst_attempts(&subject, &pattern, init as usize, PATTERN_STEPS * 10.0);
+    // The count itself takes a pass over the subject per item.
+    let anchors = method != "string.gmatch";
+    let items = parse(&pattern, anchors).0.len();
+    if items as f64 * (subject.len() as f64 + 1.0) > PATTERN_STEPS {
+        return Err(err(
+            method,
+            format!(
+                "a pattern of {items} items on a {}-byte string is more than a script may \
+                 match in one call ({PATTERN_STEPS:e} steps)",
+                subject.len()
+            ),
+        ));
+    }
+    let limit = PATTERN_STEPS * 10.0;
+    let attempts = worst_attempts(&subject, &pattern, init as usize, anchors, limit);
     if attempts > PATTERN_STEPS {
         return Err(err(
             method,
@@ -368,7 +420,7 @@ fn check(method: &str, args: &MultiValue) -> mlua::Result<u64> {
             ),
         ));
     }
-    Ok(length)
+    Ok(length.max((attempts / 10.0) as u64))
 }
 
 #[cfg(test)]
@@ -376,7 +428,7 @@ mod tests {
     use super::*;
 
     fn attempts(subject: &str, pattern: &str) -> f64 {
-        worst_attempts(subject.as_bytes(), pattern.as_bytes(), 0, 1e30)
+        worst_attempts(subject.as_bytes(), pattern.as_bytes(), 0, true, 1e30)
     }
 
     #[test]
@@ -403,14 +455,14 @@ mod tests {
 
     #[test]
     fn sets_escapes_captures_and_anchors_parse_as_lua_reads_them() {
-        let (items, anchored) = parse(b"^([%a_][%w_]*)%s*=%f[%w]%b()%1.?$").unwrap();
+        let (items, anchored) = parse(b"^([%a_][%w_]*)%s*=%f[%w]%b()%1.?$", true);
         assert!(anchored);
         assert_eq!(items.len(), 9, "{items:?}");
         assert!(matches!(items[1], Item::Any(Class::Set { .. })));
         assert_eq!(items[2], Item::Any(Class::Escape(b's')));
         assert_eq!(items[4], Item::Empty); // %f
-        assert_eq!(items[5], Item::Opaque); // %b()
-        assert_eq!(items[6], Item::Opaque); // %1
+        assert_eq!(items[5], Item::Unknown { scans: true }); // %b()
+        assert_eq!(items[6], Item::Unknown { scans: false }); // %1
         assert_eq!(items[7], Item::Maybe(Class::Any));
         assert_eq!(items[8], Item::Empty); // $
                                            // A set with `]` first, a range and an escape.
@@ -419,8 +471,30 @@ mod tests {
         for (c, yes) in [(b']', true), (b'b', true), (b'7', true), (b'x', false)] {
             assert_eq!(class.matches(c), yes, "{}", c as char);
         }
-        // Malformed: Lua refuses it, and the count leaves that to Lua.
-        assert!(parse(b"[abc").is_none());
-        assert_eq!(worst_attempts(b"abc", b"%", 0, 1e9), 0.0);
+        // Malformed: Lua raises its error only when the matcher gets there.
+        assert_eq!(parse(b"a*[abc", true).0.last(), Some(&Item::Malformed));
+        // gmatch reads a leading `^` as the character.
+        let caret = vec![
+            Item::One(Class::Literal(b'^')),
+            Item::One(Class::Literal(b'a')),
+        ];
+        assert_eq!(parse(b"^a", false), (caret, false));
+    }
+
+    #[test]
+    fn what_follows_a_malformed_item_a_balance_or_a_back_reference_is_still_counted() {
+        let stars = "a*".repeat(30);
+        let letters = "a".repeat(30);
+        // The repetitions before a malformed item are tried before Lua reaches it.
+        assert!(attempts(&letters, &format!("{stars}b%")) > 1e15);
+        // After a balance or a back-reference, the rest is counted where it costs most.
+        assert!(attempts(&format!("(){letters}"), &format!("%b(){stars}b")) > 1e15);
+        assert!(attempts(&letters, &format!("(a)%1{stars}b")) > 1e15);
+        // A balance scans on to its closing character: that is counted too.
+        assert!(attempts(&"(".repeat(10_000), "%b()") > 1e7);
+        // gmatch does not anchor: every start is tried.
+        let caret = format!("^{letters}");
+        let pattern = format!("^{stars}b");
+        assert!(worst_attempts(caret.as_bytes(), pattern.as_bytes(), 0, false, 1e30) > 1e15);
     }
 }

@@ -267,7 +267,7 @@ impl Scene {
             .held
             .iter()
             .map(|&(o, h)| {
-                let lowest = troupe_nav::Footprint::of_object(&self.objects[o]).1;
+                let lowest = troupe_nav::Footprint::lowest_of(&self.objects[o]);
                 (h.actor, h.joint, lowest)
             })
             .collect();

@@ -92,18 +92,30 @@ impl World<'_> {
 pub const FLOOR_REACH: f64 = 100_000.0;
 
 /// The first two edges of `polygon` (edge i from point i to the next) that cross or
-/// touch, not counting neighbours meeting at their shared corner.
+/// touch, not counting neighbours meeting at their shared corner; a last point that
+/// repeats the first closes the polygon and is not an edge of its own.
 fn crossing_edges(polygon: &[DVec2]) -> Option<(usize, usize)> {
+    let polygon = match polygon {
+        [first, .., last] if first == last => &polygon[..polygon.len() - 1],
+        _ => polygon,
+    };
     let n = polygon.len();
     let edge = |i: usize| (polygon[i], polygon[(i + 1) % n]);
     let side = |a: DVec2, b: DVec2, p: DVec2| (b - a).perp_dot(p - a);
+    let meet = |(a, b): (DVec2, DVec2), (c, d): (DVec2, DVec2)| {
+        let (abc, abd, cda, cdb) = (side(a, b, c), side(a, b, d), side(c, d, a), side(c, d, b));
+        if abc == 0.0 && abd == 0.0 {
+            // On one line: they meet only if their spans along it overlap.
+            let along = |p: DVec2| (p - a).dot(b - a);
+            let (lo, hi) = (along(c).min(along(d)), along(c).max(along(d)));
+            return hi >= 0.0 && lo <= (b - a).length_squared();
+        }
+        abc * abd <= 0.0 && cda * cdb <= 0.0
+    };
     (0..n).find_map(|i| {
         ((i + 2)..n)
             .filter(|&j| !(i == 0 && j == n - 1))
-            .find(|&j| {
-                let ((a, b), (c, d)) = (edge(i), edge(j));
-                side(a, b, c) * side(a, b, d) <= 0.0 && side(c, d, a) * side(c, d, b) <= 0.0
-            })
+            .find(|&j| meet(edge(i), edge(j)))
             .map(|j| (i, j))
     })
 }
@@ -162,7 +174,7 @@ impl Scene {
                     b + 1
                 )));
             }
-            // The shoelace formula: twice the signed area.
+            // The shoelace formula.
             let n = polygon.len();
             let area = (0..n)
                 .map(|i| polygon[i].perp_dot(polygon[(i + 1) % n]))
