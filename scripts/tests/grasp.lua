@@ -63,6 +63,24 @@ test("a hand that holds something grasps nothing else; auto takes the free hand"
   expect(full:wait() == "failed" and full.error:find("both hands are full") ~= nil, tostring(full.error))
 end)
 
+test("every pattern takes small things with the palm within reach of them", function()
+  -- A hand that closes more than 0.1 m from its object fails (PALM_REACH): fingertip
+  -- grasps of small things must still pass.
+  local ann = troupe.actor{ name = "ann" }
+  local small = {
+    troupe.object{ name = "pen", shape = "cylinder", radius = 0.006, height = 0.14, at = {-0.2, 1.0, 0.38} },
+    troupe.object{ name = "coin", shape = "cylinder", radius = 0.012, height = 0.003, at = {-0.25, 1.0, 0.35} },
+    troupe.object{ name = "marble", shape = "sphere", radius = 0.008, at = {-0.2, 1.05, 0.4} },
+  }
+  for _, thing in ipairs(small) do
+    for _, pattern in ipairs({ "pinch", "tripod", "lateral" }) do
+      local g = ann:grasp{ object = thing, hand = "right", pattern = pattern }
+      expect(g:wait() == "completed", thing.name .. ", " .. pattern .. ": " .. tostring(g.error))
+      expect(ann:release{ object = thing }:wait() == "completed", "released")
+    end
+  end
+end)
+
 test("manipulate with a function of time", function()
   local ann = troupe.actor{ name = "ann" }
   local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.04, at = {-0.2, 1.05, 0.38} }
