@@ -203,16 +203,26 @@ impl Skeleton {
             .collect()
     }
 
-    /// The scope of the joints in the subtree rooted at `joint` (the joint included).
-    pub fn subtree_scope(&self, joint: usize) -> Scope {
+    /// The joints of the subtree rooted at `joint` (the joint included), in index order.
+    pub fn subtree(&self, joint: usize) -> Vec<usize> {
+        // Parents come before their children: one pass marks the subtree.
         let mut inside = vec![false; self.joints.len()];
-        let mut scope = Scope::EMPTY;
+        let mut joints = Vec::new();
         for (j, jt) in self.joints.iter().enumerate() {
             inside[j] = j == joint || jt.parent.is_some_and(|p| inside[p]);
             if inside[j] {
-                for d in jt.dofs.clone() {
-                    scope.insert(d);
-                }
+                joints.push(j);
+            }
+        }
+        joints
+    }
+
+    /// The scope of the joints in the subtree rooted at `joint` (the joint included).
+    pub fn subtree_scope(&self, joint: usize) -> Scope {
+        let mut scope = Scope::EMPTY;
+        for j in self.subtree(joint) {
+            for d in self.joints[j].dofs.clone() {
+                scope.insert(d);
             }
         }
         scope

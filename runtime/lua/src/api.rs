@@ -441,7 +441,15 @@ pub fn load_sequence(
     skeleton: Option<&Arc<Skeleton>>,
 ) -> mlua::Result<Arc<Sequence>> {
     let base = stage(lua)?.base_dir.clone();
-    let full = resolve_path(&base, path)?;
+    load_resolved(lua, resolve_path(&base, path)?, skeleton)
+}
+
+/// [`load_sequence`] of the file at `full`, its path resolved.
+fn load_resolved(
+    lua: &Lua,
+    full: std::path::PathBuf,
+    skeleton: Option<&Arc<Skeleton>>,
+) -> mlua::Result<Arc<Sequence>> {
     stage(lua)?.loaded_files.push(full.clone());
     // BVH and glTF motions are bound to a body when loaded; .trk keeps DOF names. The
     // cache key names the body (none: a .trk, or the default adult).
@@ -488,7 +496,7 @@ pub fn load_part(
                 "`part` chooses an actor's part of a .trk recording; `{path}` holds one motion"
             )));
         }
-        return load_sequence(lua, path, skeleton);
+        return load_resolved(lua, full, skeleton);
     }
     let cached = stage(lua)?.recordings.get(&full).cloned();
     let set = match cached {

@@ -14,10 +14,7 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     troupe.set(
         "publish",
         lua.create_function(|lua, (key, value): (Value, Value)| {
-            let Value::String(key) = key else {
-                return Err(bad_arg("publish", "argument 1 (the key)", "a string", &key));
-            };
-            let key = key.to_str()?.to_string();
+            let key = string_arg("publish", "argument 1 (the key)", key)?;
             if let Some(path) = non_finite(&value, String::new(), &mut Default::default()) {
                 return Err(lua_err(format!(
                     "publish {key}: value{path} is not a finite number (JSON has none)"
@@ -34,15 +31,7 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
     troupe.set(
         "subscribe",
         lua.create_function(|lua, (expr, f): (Value, Value)| {
-            let Value::String(expr) = expr else {
-                return Err(bad_arg(
-                    "subscribe",
-                    "argument 1 (the key expression)",
-                    "a string",
-                    &expr,
-                ));
-            };
-            let expr = expr.to_str()?.to_string();
+            let expr = string_arg("subscribe", "argument 1 (the key expression)", expr)?;
             let Value::Function(f) = f else {
                 return Err(bad_arg(
                     "subscribe",
@@ -61,6 +50,14 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
         })?,
     )?;
     Ok(())
+}
+
+/// Argument `what` of `method`, which must be a string.
+fn string_arg(method: &str, what: &str, v: Value) -> mlua::Result<String> {
+    match v {
+        Value::String(s) => Ok(s.to_str()?.to_string()),
+        other => Err(bad_arg(method, what, "a string", &other)),
+    }
 }
 
 /// Where in `value` (`path` so far: `[2].x`) a number is not finite (NaN or infinite),

@@ -243,6 +243,11 @@ pub fn worst_attempts(
     limit: f64,
 ) -> f64 {
     let (items, anchored) = parse(pattern, anchors);
+    count(subject, (&items, anchored), init, limit)
+}
+
+/// [`worst_attempts`] of the parsed pattern `items` (`anchored` or not).
+fn count(subject: &[u8], (items, anchored): (&[Item], bool), init: usize, limit: f64) -> f64 {
     let n = subject.len();
     let branches = |item: &Item| {
         matches!(
@@ -390,20 +395,20 @@ fn check(method: &str, args: &MultiValue) -> mlua::Result<u64> {
         0
     };
     // The count itself takes a pass over the subject per item.
-    let anchors = method != "string.gmatch";
-    let items = parse(&pattern, anchors).0.len();
-    if items as f64 * (subject.len() as f64 + 1.0) > PATTERN_STEPS {
+    let (items, anchored) = parse(&pattern, method != "string.gmatch");
+    if items.len() as f64 * (subject.len() as f64 + 1.0) > PATTERN_STEPS {
         return Err(err(
             method,
             format!(
-                "a pattern of {items} items on a {}-byte string is more than a script may \
+                "a pattern of {} items on a {}-byte string is more than a script may \
                  match in one call ({PATTERN_STEPS:e} steps)",
+                items.len(),
                 subject.len()
             ),
         ));
     }
     let limit = PATTERN_STEPS * 10.0;
-    let attempts = worst_attempts(&subject, &pattern, init as usize, anchors, limit);
+    let attempts = count(&subject, (&items, anchored), init as usize, limit);
     if attempts > PATTERN_STEPS {
         return Err(err(
             method,

@@ -60,22 +60,19 @@ impl BodyJoints {
         })();
         let knees = ["l_knee", "r_knee"].into_iter().filter_map(j).collect();
         let root = floor_point(&globals[0]);
-        let joints = skeleton.joints();
-        // A joint's ancestors come before it: one pass marks each wrist's hand.
+        // The hand: the wrist's subtree, to its farthest joint and a fingertip past it.
         let hand_reach = |w: usize| {
-            let mut in_hand = vec![false; joints.len()];
-            in_hand[w] = true;
-            let mut reach: f64 = 0.0;
-            for (i, joint) in joints.iter().enumerate().skip(w + 1) {
-                if joint.parent.is_some_and(|p| in_hand[p]) {
-                    in_hand[i] = true;
-                    let at = globals
-                        .get(i)
-                        .map_or(0.0, |g| (g.translation - globals[w].translation).length());
-                    reach = reach.max(at);
-                }
-            }
-            reach + FINGERTIP
+            let from = |i: usize| {
+                globals
+                    .get(i)
+                    .map_or(0.0, |g| g.translation.distance(globals[w].translation))
+            };
+            skeleton
+                .subtree(w)
+                .into_iter()
+                .map(from)
+                .fold(0.0, f64::max)
+                + FINGERTIP
         };
         let wrists = ["l_wrist", "r_wrist"]
             .into_iter()
