@@ -244,6 +244,7 @@ fn out_of_reach_and_held_by_another_fail_with_reasons() {
         troupe_scene::holding::HoldRequest::Attach {
             object: cup,
             joint: wrist,
+            also: None,
             from: None
         }
     ));
@@ -323,6 +324,7 @@ fn the_world_lists_the_objects_held_in_object_order_as_holders_change() {
     let attach = |object| HoldRequest::Attach {
         object,
         joint: wrist,
+        also: None,
         from: None,
     };
     let held = |s: &Scene| -> Vec<(usize, usize)> {

@@ -1,6 +1,6 @@
 -- A café (issue 16: actions that compose). The waiter walks to the counter and picks up
--- a cup, carries it past a standing guest (the carrying arm stays out of the swing, the
--- cup level) to a second guest, and hands it over; the guest drinks, lifting the cup to
+-- a cup, carries it past a standing guest (the walk brings it in to the body and carries
+-- it upright) to a second guest, and hands it over; the guest drinks, lifting the cup to
 -- the mouth, and puts it down on the bar table beside her. No action fails.
 -- Run: troupe run scripts/examples/cafe.lua --until-idle
 local waiter = troupe.actor{ name = "waiter" }

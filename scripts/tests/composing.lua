@@ -146,9 +146,10 @@ test("every priority mode against a walk's yieldable arm swing", function()
     if mode == "weighted" then
       expect(w.yielded == 0 and narrowed == 0, mode .. ": blends, takes nothing")
     else
-      -- The shoulder's flexion, abduction and twist and the elbow's flexion.
-      expect(w.yielded == 4 and w.dofs == dofs - 4,
-             string.format("%s: the walk yields the right arm's 4 swing DOFs (%d yielded, %d of %d left)",
+      -- The whole right arm, which the walk swings or carries with: the clavicle's 2 DOFs,
+      -- the shoulder's 3, the elbow's 2 and the wrist's 2.
+      expect(w.yielded == 9 and w.dofs == dofs - 9,
+             string.format("%s: the walk yields the right arm's 9 DOFs (%d yielded, %d of %d left)",
                            mode, w.yielded, w.dofs, dofs))
       if keeps then expect(narrowed == 1, mode .. ": reported as action_narrowed once: " .. narrowed) end
     end
@@ -203,35 +204,55 @@ test("a crouching grasp whose legs a walk takes fails, saying where the hand clo
   w:cancel()
 end)
 
--- Ann grasps a cup, then `walk(ann)` starts a walk and `until_done(w, track)` runs it
--- (calling `track` every tick) until it has ended; the cup's height range is checked.
+-- How far (degrees) an object's own up axis leans from the vertical.
+local function tilt(object)
+  return math.deg(math.acos(math.min(1, object:up()[2])))
+end
+
+-- Horizontal distance (m) from the actor's root to a point.
+local function from_root(actor, p)
+  local r = actor:position()
+  return math.sqrt((p[1] - r[1])^2 + (p[3] - r[3])^2)
+end
+
+-- Ann grasps a cup at arm's length from a stand, then `walk(ann)` starts a walk and `until_done(w, track)`
+-- runs it (calling `track` every tick) until it has ended. The cup comes in to the body
+-- over the carrying time (1 s), upright all along, and is then carried at one height.
 local function carries(what, walk, until_done)
   local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "stand", shape = "box", size = {0.6, 0.95, 0.4}, at = {-0.2, 0.475, 0.8}, mass = 20 }
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
-                             at = {-0.2, 1.05, 0.38} }
+                             at = {-0.15, 1.0, 0.65} }
   expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
-  local h0 = cup:position()[2]
-  local lo, hi = h0, h0
+  local reach = from_root(ann, cup:position())
+  local t0, lo, hi, leaned, out = troupe.time(), math.huge, -math.huge, 0, 0
   local function track()
-    local y = cup:position()[2]
-    lo, hi = math.min(lo, y), math.max(hi, y)
+    leaned = math.max(leaned, tilt(cup))
+    if troupe.time() - t0 > 1.3 then
+      local y = cup:position()[2]
+      lo, hi = math.min(lo, y), math.max(hi, y)
+      out = math.max(out, from_root(ann, cup:position()))
+    end
   end
   local w = walk(ann)
   until_done(w, track)
   expect(w.status == "completed", "walked: " .. w.status .. " " .. tostring(w.error))
   expect(cup.holder == ann, "still holds it")
-  print(string.format("carrying, %s: %+.3f to %+.3f m from %.3f m", what, lo - h0, hi - h0, h0))
-  expect(h0 - lo < 0.05 and hi - h0 < 0.05,
-         string.format("carrying height %.3f m, walked between %.3f and %.3f", h0, lo, hi))
+  print(string.format("carrying, %s: the cup %.2f m out when grasped, at most %.2f m out " ..
+                      "once carried, at %.3f to %.3f m, leaning %.1f° at most",
+                      what, reach, out, lo, hi, leaned))
+  expect(leaned < 5, string.format("the cup stays upright: it leaned %.1f°", leaned))
+  expect(out < reach - 0.1, string.format("carried nearer the body (%.2f m) than grasped (%.2f m)", out, reach))
+  expect(hi - lo < 0.02, string.format("carried at one height: %.3f to %.3f m", lo, hi))
 end
 
-test("carrying: a held cup stays at carrying height while walking, turning and stopping", function()
+test("carrying: a held cup comes in to the body and stays upright at one height while walking and turning", function()
   carries("along a turning path",
           function(ann) return ann:walk{ path = {{0, 2}, {2, 3}, {2, 1}}, speed = 1.2 } end,
           function(w, track) run_until(function() track(); return w.status == "completed" end, 20) end)
 end)
 
-test("carrying: the cup stays at carrying height when the walk is stopped mid-stride", function()
+test("carrying: the cup stays upright at one height when the walk is stopped mid-stride", function()
   carries("stopped mid-stride",
           function(ann) return ann:walk{ velocity = 1.3 } end,
           function(w, track)
@@ -239,6 +260,33 @@ test("carrying: the cup stays at carrying height when the walk is stopped mid-st
             w:stop()
             run_until(function() track(); return w.status == "completed" end, 4)
           end)
+end)
+
+test("carrying a box in both hands: both stay on it, level, as the walk brings it in and turns", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "stand", shape = "box", size = {0.8, 0.75, 0.5}, at = {0, 0.375, 0.75}, mass = 20 }
+  local box = troupe.object{ name = "box", shape = "box", size = {0.35, 0.25, 0.25}, at = {0, 0.875, 0.6},
+                             mass = 2 }
+  local g = ann:grasp{ object = box, hand = "both" }
+  expect(g:wait() == "completed", "grasped: " .. g.status .. " " .. tostring(g.error))
+  local function gap(wrist)
+    local p, b = ann:joint_position(wrist), box:position()
+    return math.sqrt((p[1] - b[1])^2 + (p[2] - b[2])^2 + (p[3] - b[3])^2)
+  end
+  local l0, r0 = gap("l_wrist"), gap("r_wrist")
+  local slip, leaned = 0, 0
+  local w = ann:walk{ path = {{-0.5, -1}, {-2, -2}, {-3, 0}}, speed = 1.0 }
+  run_until(function()
+    slip = math.max(slip, math.abs(gap("l_wrist") - l0), math.abs(gap("r_wrist") - r0))
+    leaned = math.max(leaned, tilt(box))
+    return w.status == "completed"
+  end, 25)
+  expect(w.status == "completed", "walked: " .. w.status .. " " .. tostring(w.error))
+  print(string.format("a box in both hands: the wrists moved %.1f mm on it at most, the box leaned %.1f° at most",
+                      1000 * slip, leaned))
+  expect(slip < 0.01, string.format("both hands stay on the box: a wrist moved %.3f m on it", slip))
+  expect(leaned < 5, string.format("the box stays level: it leaned %.1f°", leaned))
+  expect(box.holder == ann, "still held")
 end)
 
 test("carrying a cup to a table: the hand passes over the table, the walk arrives, the cup goes down on it", function()

@@ -63,6 +63,25 @@ test("a hand that holds something grasps nothing else; auto takes the free hand"
   expect(full:wait() == "failed" and full.error:find("both hands are full") ~= nil, tostring(full.error))
 end)
 
+test("a box held in both hands fills both: neither grasps anything else", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "stand", shape = "box", size = {0.8, 0.75, 0.5}, at = {0, 0.375, 0.75}, mass = 20 }
+  local box = troupe.object{ name = "box", shape = "box", size = {0.35, 0.25, 0.25}, at = {0, 0.875, 0.6},
+                             mass = 2 }
+  local pen = troupe.object{ name = "pen", shape = "cylinder", radius = 0.01, height = 0.14,
+                             at = {0.3, 0.8, 0.6} }
+  local g = ann:grasp{ object = box, hand = "both" }
+  expect(g:wait() == "completed" and box.holder == ann, "the box in both hands: " .. tostring(g.error))
+  for _, hand in ipairs({ "left", "right" }) do
+    local other = ann:grasp{ object = pen, hand = hand }
+    expect(other:wait() == "failed" and other.error == "the " .. hand .. " hand already holds `box`: place or release it first",
+           hand .. ": " .. tostring(other.error))
+  end
+  local auto = ann:grasp{ object = pen }
+  expect(auto:wait() == "failed" and auto.error:find("both hands are full") ~= nil, tostring(auto.error))
+  expect(pen.holder == nil, "the pen is left")
+end)
+
 test("every pattern takes small things with the palm within reach of them", function()
   -- A hand that closes more than 0.1 m from its object fails (PALM_REACH): fingertip
   -- grasps of small things must still pass.

@@ -134,6 +134,7 @@ impl GloveHand {
                 out.request(HoldRequest::Attach {
                     object: o,
                     joint: self.wrist,
+                    also: None,
                     from,
                 });
             }

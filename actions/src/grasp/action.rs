@@ -470,6 +470,7 @@ impl Generator for Grasp {
                 out.request(HoldRequest::Attach {
                     object: self.object,
                     joint: first.model.sensors.wrist,
+                    also: self.closing.get(1).map(|c| c.model.sensors.wrist),
                     from: self.options.from,
                 });
                 let q = std::mem::take(&mut self.q);

@@ -305,10 +305,12 @@ fn candidates(
 /// The name of what the `side` hand of `actor` holds in `world`, if it holds anything.
 fn held_in<'w>(world: &'w World, skeleton: &Skeleton, actor: usize, side: Side) -> Option<&'w str> {
     world.held.iter().find_map(|&(object, h)| {
-        let on_side = skeleton
-            .joints()
-            .get(h.joint)
-            .is_some_and(|j| j.name.starts_with(side.prefix()));
+        let on_side = h.wrists().any(|wrist| {
+            skeleton
+                .joints()
+                .get(wrist)
+                .is_some_and(|j| j.name.starts_with(side.prefix()))
+        });
         (h.actor == actor && on_side)
             .then(|| world.objects.get(object).map(|o| o.name.as_str()))
             .flatten()

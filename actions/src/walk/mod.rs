@@ -23,6 +23,7 @@
 //! side by side under the hips, the oscillations fade with the speed, and the action
 //! finishes once the body stands.
 
+pub mod carry;
 pub mod cycle;
 pub mod footing;
 pub mod goal;
@@ -245,13 +246,8 @@ pub struct Walk {
     twist: [Option<f64>; 2],
     /// The cadence speed of this tick (see [`Walk::cadence_speed`]).
     cadence: f64,
-    /// Per arm (as in [`Rig::arms`]): the height to keep while its hand carries something,
-    /// the joint that holds it and the carried object's centre in that joint's frame (see
-    /// [`Walk::carry`]).
-    carry: [Option<(f64, usize, DVec3)>; 2],
-    /// Scratch posture and transforms for the carrying arms' kinematics.
-    carry_q: Vec<f64>,
-    carry_globals: Vec<troupe_body::Transform>,
+    /// What the hands hold, carried (see [`carry`]).
+    carrying: carry::Carrying,
     /// Where a planned walk goes: the route is planned around the obstacles when it
     /// starts. `None` walks the route as given.
     goal: Option<Goal>,
@@ -320,9 +316,7 @@ impl Walk {
             last_miss: 0.0,
             twist: [None; 2],
             cadence: 0.0,
-            carry: [None; 2],
-            carry_q: Vec::new(),
-            carry_globals: Vec::new(),
+            carrying: carry::Carrying::default(),
             goal: None,
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
@@ -535,61 +529,17 @@ impl Walk {
         self.dofs.iter().copied().collect()
     }
 
-    /// The part of its scope the walk can give up and keep walking: the arm swing and the
-    /// spine's lean and counter-rotation. The root, pelvis and legs are essential.
+    /// The part of its scope the walk can give up and keep walking: the arms (their swing
+    /// and carrying) and the spine's lean and counter-rotation. The root, pelvis and legs are essential.
     pub fn yields(&self) -> Scope {
         let rig = &self.rig;
-        let upper = rig.spine.iter().chain(rig.arms.iter().flatten()).copied();
+        let arms = rig
+            .arms
+            .iter()
+            .flatten()
+            .chain(rig.carrying_arms.iter().flatten());
+        let upper = rig.spine.iter().chain(arms).copied();
         upper.collect::<Scope>().intersection(&self.scope())
-    }
-
-    /// Keeps what each carrying arm holds at the height it had when the walk started: the
-    /// elbow takes up the pelvis' bounce and the spine's lean, so that a carried cup stays
-    /// level. `upper` are this tick's root, pelvis and spine values as written.
-    fn carry(&mut self, ctx: &GeneratorContext, upper: &[(usize, f64)], out: &mut DofWriter) {
-        if self.carry.iter().all(Option::is_none) {
-            return;
-        }
-        let sk = ctx.skeleton;
-        self.carry_q.clear();
-        self.carry_q.extend_from_slice(&ctx.posture.q);
-        for &(d, v) in upper {
-            self.carry_q[d] = v;
-        }
-        self.carry_globals
-            .resize(sk.joints().len(), troupe_body::Transform::IDENTITY);
-        for i in 0..2 {
-            let Some((target, joint, point)) = self.carry[i] else {
-                continue;
-            };
-            if Walk::held_by_arm(ctx, i).is_none() {
-                continue;
-            }
-            let elbow = self.rig.arms[i][2];
-            if !out.scope().contains(elbow) {
-                continue;
-            }
-            let (lo, hi) = sk.limits()[elbow];
-            // Newton on the elbow angle, with a numerical slope: the height is smooth and
-            // nearly linear over the few centimetres to take up.
-            let height = |q: &mut Vec<f64>, g: &mut Vec<troupe_body::Transform>| {
-                troupe_body::kinematics::forward_kinematics(sk, q, g);
-                g[joint].transform_point(point).y
-            };
-            for _ in 0..2 {
-                let e = self.carry_q[elbow];
-                let y = height(&mut self.carry_q, &mut self.carry_globals);
-                self.carry_q[elbow] = e + 1e-4;
-                let slope = (height(&mut self.carry_q, &mut self.carry_globals) - y) / 1e-4;
-                let step = if slope.abs() > 0.05 {
-                    (target - y) / slope
-                } else {
-                    0.0
-                };
-                self.carry_q[elbow] = (e + step.clamp(-0.3, 0.3)).clamp(lo, hi);
-            }
-            out.set(elbow, self.carry_q[elbow]);
-        }
     }
 
     /// What the hand of arm `i` in [`Rig::arms`] (0 left, 1 right) holds, if anything:
@@ -599,9 +549,11 @@ impl Walk {
         let joints = ctx.skeleton.joints();
         ctx.world.held.iter().map(|&(_, h)| h).find(|h| {
             h.actor == ctx.actor
-                && joints
-                    .get(h.joint)
-                    .is_some_and(|j| j.name.starts_with(prefix))
+                && h.wrists().any(|wrist| {
+                    joints
+                        .get(wrist)
+                        .is_some_and(|j| j.name.starts_with(prefix))
+                })
         })
     }
 
@@ -1432,12 +1384,10 @@ impl Generator for Walk {
         self.lambda = [0.0, 0.5];
         self.t = 0.0;
         self.start_q = q.clone();
-        for i in 0..2 {
-            self.carry[i] = Walk::held_by_arm(ctx, i).map(|h| {
-                let at = ctx.posture.globals[h.joint].transform_point(h.grip.translation);
-                (at.y, h.joint, h.grip.translation)
-            });
-        }
+        let ankle = |leg: usize| ctx.posture.globals[rig.legs[leg].joints[0]].translation.y;
+        let floor = ankle(0).min(ankle(1)) - rig.ankle_height;
+        let root = DVec3::new(start.x, 0.0, start.y);
+        self.carrying = carry::Carrying::start(ctx, carry::heading_frame(root, heading), floor);
         self.settle_since = None;
         self.progress = None;
         self.stopped_at = None;
@@ -1563,8 +1513,8 @@ impl Generator for Walk {
         }
         if self.options.arms {
             for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {
-                // A hand that carries something keeps its arm out of the swing, which
-                // would lower the load to the thigh.
+                // A hand that holds something keeps its arm out of the swing, which would
+                // lower the load to the thigh: the carrying moves it (see [`carry`]).
                 if Walk::held_by_arm(ctx, i).is_some() {
                     continue;
                 }
@@ -1573,7 +1523,9 @@ impl Generator for Walk {
                 }
             }
         }
-        self.carry(ctx, &upper, out);
+        let root_at = DVec3::new(rig.root_rest.x + root[0], 0.0, rig.root_rest.z + root[2]);
+        let heading = carry::heading_frame(root_at, root[3]);
+        self.carrying.step(ctx, (self.t, heading), &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
         if self.steer.plan_time(self.t, self.t) >= plan.end_time {

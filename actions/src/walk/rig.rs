@@ -65,6 +65,10 @@ pub struct Rig {
     /// Per arm (left, right): shoulder flexion, shoulder abduction, elbow flexion,
     /// shoulder twist.
     pub arms: [[usize; 4]; 2],
+    /// Per arm (left, right), the DOFs that only a carrying arm moves (see [`super::carry`]):
+    /// the clavicle's elevation and protraction, the forearm's pronation, the wrist's
+    /// flexion and deviation.
+    pub carrying_arms: [[usize; 5]; 2],
     /// Thigh height Ht: from the hip's flexion axis to the sole, standing (thesis 2.6).
     pub thigh_height: f64,
     /// Height of the ankle joint above the sole.
@@ -242,6 +246,22 @@ impl Rig {
                     d("r_shoulder_twist")?,
                 ],
             ],
+            carrying_arms: [
+                [
+                    d("l_sternoclavicular_elevation")?,
+                    d("l_sternoclavicular_protraction")?,
+                    d("l_elbow_pronation")?,
+                    d("l_wrist_flexion")?,
+                    d("l_wrist_deviation")?,
+                ],
+                [
+                    d("r_sternoclavicular_elevation")?,
+                    d("r_sternoclavicular_protraction")?,
+                    d("r_elbow_pronation")?,
+                    d("r_wrist_flexion")?,
+                    d("r_wrist_deviation")?,
+                ],
+            ],
             thigh_height: 0.5 * (l_hip.y + r_hip.y),
             ankle_height: l_ankle.y,
             hip_half_width: 0.5 * (l_hip.x - r_hip.x).abs(),
@@ -258,6 +278,9 @@ impl Rig {
         v.extend(self.spine);
         if arms {
             for a in &self.arms {
+                v.extend(a);
+            }
+            for a in &self.carrying_arms {
                 v.extend(a);
             }
         }

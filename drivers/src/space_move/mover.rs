@@ -357,6 +357,7 @@ mod tests {
             HoldRequest::Attach {
                 object: held,
                 joint: wrist,
+                also: None,
                 from: None
             }
         ));

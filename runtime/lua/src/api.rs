@@ -251,6 +251,10 @@ impl UserData for ObjectRef {
             let p = stage(lua)?.scene.objects()[this.0].position;
             vec3_table(lua, p)
         });
+        methods.add_method("up", |lua, this, ()| {
+            let r = stage(lua)?.scene.objects()[this.0].rotation;
+            vec3_table(lua, r * DVec3::Y)
+        });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
             Ok(format!(
                 "object {}",

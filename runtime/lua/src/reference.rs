@@ -206,6 +206,7 @@ pub const API: &[Entry] = &[
     field("Object", "mass", "number", "Its mass in kg."),
     field("Object", "holder", "Actor?", "The actor holding it, or nil."),
     m("Object", "position", &[], "Point", "`{x, y, z}` of its centre."),
+    m("Object", "up", &[], "Vec3", "The world direction of its own up (+Y) axis: `{0, 1, 0}` while it stands upright."),
     field("Sequence", "name", "string", "Its name (`sequence@file:line` when made inline without one)."),
     field("Sequence", "duration", "number", "Its length in seconds."),
     field("Sequence", "loop", "boolean", "Whether it loops."),

@@ -201,7 +201,7 @@ fn circle(radius: f64) -> impl Iterator<Item = DVec2> {
 }
 
 /// Points whose convex hull contains the shape, placed at `rotation`, `position`.
-fn surface_points(shape: &Shape, rotation: DQuat, position: DVec3) -> Vec<DVec3> {
+pub fn surface_points(shape: &Shape, rotation: DQuat, position: DVec3) -> Vec<DVec3> {
     let local: Vec<DVec3> = match *shape {
         Shape::Box { half_extents: h } => (0..8)
             .map(|i| {

@@ -28,6 +28,21 @@ pub struct Holder {
     pub joint: usize,
     /// The object's pose in that joint's frame, fixed at attachment.
     pub grip: Transform,
+    /// The other wrist of a two-handed hold: its hand grips the object too, though the
+    /// object follows `joint` alone.
+    pub also: Option<usize>,
+}
+
+impl Holder {
+    /// Whether `wrist` of the holding actor holds the object, alone or with the other hand.
+    pub fn held_by(&self, wrist: usize) -> bool {
+        self.joint == wrist || self.also == Some(wrist)
+    }
+
+    /// The wrists that hold the object: `joint`, then `also` if the hold is two-handed.
+    pub fn wrists(&self) -> impl Iterator<Item = usize> {
+        std::iter::once(self.joint).chain(self.also)
+    }
 }
 
 /// What a generator asks of the scene about objects.
@@ -39,6 +54,8 @@ pub enum HoldRequest {
         object: usize,
         /// Joint of the requesting actor.
         joint: usize,
+        /// The other wrist of a two-handed hold (see [`Holder::also`]).
+        also: Option<usize>,
         /// Accept the object from this actor's hand (a hand-over).
         from: Option<usize>,
     },
@@ -70,6 +87,7 @@ pub(crate) fn apply(
         HoldRequest::Attach {
             object,
             joint,
+            also,
             from,
         } => {
             let (Some(slot), Some(obj)) = (holders.get(object), objects.get(object)) else {
@@ -89,7 +107,12 @@ pub(crate) fn apply(
             let grip = frame
                 .inverse()
                 .mul(&Transform::new(obj.rotation, obj.position));
-            holders[object] = Some(Holder { actor, joint, grip });
+            holders[object] = Some(Holder {
+                actor,
+                joint,
+                grip,
+                also,
+            });
             true
         }
         HoldRequest::Release { object } => match holders.get(object) {

@@ -262,13 +262,14 @@ impl Scene {
         crowd.soles.clear();
         crowd.bodies.clear();
         crowd.cores.clear();
-        // What each holding hand holds reaches as low as its lowest point.
+        // What each holding hand holds (both hands of a two-handed hold) reaches as low as
+        // its lowest point.
         let held: Vec<(usize, usize, f64)> = self
             .held
             .iter()
-            .map(|&(o, h)| {
+            .flat_map(|&(o, h)| {
                 let lowest = troupe_nav::Footprint::lowest_of(&self.objects[o]);
-                (h.actor, h.joint, lowest)
+                h.wrists().map(move |wrist| (h.actor, wrist, lowest))
             })
             .collect();
         let mut holds: Vec<(usize, f64)> = Vec::new();
