@@ -41,6 +41,21 @@ test("a behavior can publish and another can wait for it", function()
   expect(bob:behavior_status() == "done", "bob's wait ended")
 end)
 
+test("lists, records, nesting and empty tables arrive as they were published", function()
+  local got = nil
+  troupe.subscribe("shape", function(v) got = v end)
+  local deep = { "bottom" }   -- with the message itself, 100 tables deep
+  for _ = 1, 98 do deep = { deep } end
+  troupe.publish("shape", { list = { 1, 2, 3 }, record = { a = 1, b = "two" }, empty = {}, deep = deep,
+                            flag = false })
+  run(0.02)
+  expect(got ~= nil and #got.list == 3 and got.list[3] == 3 and got.record.b == "two", "list and record")
+  expect(next(got.empty) == nil and got.flag == false, "empty table, false")
+  local d = got.deep
+  for _ = 1, 98 do d = d[1] end
+  expect(d[1] == "bottom", "100 tables deep")
+end)
+
 test("bad keys and values are refused with a message", function()
   local function refusal(f, ...)
     local ok, err = pcall(f, ...)
@@ -63,6 +78,25 @@ test("bad keys and values are refused with a message", function()
   shared[1], shared[2] = shared, shared
   err = refusal(troupe.publish, "cue/shared", shared)
   expect(err:find("publish cue/shared", 1, true), err)
+  -- A list is keys 1…n, a record string keys: other tables would lose keys as JSON.
+  err = refusal(troupe.publish, "cue/mixed", { 1, 2, a = 3 })
+  expect(err:find("publish cue/mixed: value is neither a list nor a record (string keys): it has both list keys", 1, true), err)
+  err = refusal(troupe.publish, "cue/sparse", { x = { [1] = 1, [3] = 3 } })
+  expect(err:find("value.x is neither a list nor a record (string keys): it has [3] among 2 keys (a list's are 1…2)", 1, true), err)
+  err = refusal(troupe.publish, "cue/far", { [10] = "x" })
+  expect(err:find("it has [10] among 1 keys", 1, true), err)
+  err = refusal(troupe.publish, "cue/half", { [1.5] = "x" })
+  expect(err:find("it has [1.5]", 1, true), err)
+  -- Deep nesting is refused (it crashed the process 20,000 deep); a DAG of doubling
+  -- tables would be 2^60 parts written out.
+  local deep = {}
+  for _ = 1, 20000 do deep = { deep } end
+  err = refusal(troupe.publish, "cue/deep", deep)
+  expect(err:find("publish cue/deep: value[1][1][1][1]…(92 more)…[1][1][1][1] nests tables more than 100 deep", 1, true), err)
+  local dag = { 1 }
+  for _ = 1, 60 do dag = { dag, dag } end
+  err = refusal(troupe.publish, "cue/dag", dag)
+  expect(err:find("publish cue/dag: the value has more than 1000000 parts", 1, true), err)
   err = refusal(troupe.subscribe, "cue/x", 5)
   expect(err:find("subscribe: argument 2 must be a function(value, key), got integer", 1, true), err)
   err = refusal(troupe.publish, 5, 1)

@@ -15,12 +15,7 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
         "publish",
         lua.create_function(|lua, (key, value): (Value, Value)| {
             let key = string_arg("publish", "argument 1 (the key)", key)?;
-            if let Some(path) = non_finite(&value, String::new(), &mut Default::default()) {
-                return Err(lua_err(format!(
-                    "publish {key}: value{path} is not a finite number (JSON has none)"
-                )));
-            }
-            let json = to_json(lua, value).map_err(|e| lua_err(format!("publish {key}: {e}")))?;
+            let json = to_json(&value).map_err(|e| lua_err(format!("publish {key}: {e}")))?;
             stage(lua)?
                 .scene
                 .mailbox_mut()
@@ -60,35 +55,161 @@ fn string_arg(method: &str, what: &str, v: Value) -> mlua::Result<String> {
     }
 }
 
-/// Where in `value` (`path` so far: `[2].x`) a number is not finite (NaN or infinite),
-/// which JSON cannot carry, if one is. Each table is looked into once (`seen`), so a
-/// table that holds itself, or one table held many times, costs one visit; the conversion
-/// to JSON then refuses a cycle.
-fn non_finite(
-    value: &Value,
-    path: String,
-    seen: &mut std::collections::HashSet<usize>,
-) -> Option<String> {
-    match value {
-        Value::Number(n) if !n.is_finite() => Some(path),
-        Value::Table(t) if !seen.insert(t.to_pointer() as usize) => None,
-        Value::Table(t) => t.pairs::<Value, Value>().flatten().find_map(|(k, v)| {
-            let key = match &k {
-                Value::Integer(i) => format!("[{i}]"),
-                Value::String(s) => format!(".{}", s.to_string_lossy()),
-                other => format!("[{}]", other.type_name()),
-            };
-            non_finite(&v, format!("{path}{key}"), seen)
-        }),
-        _ => None,
-    }
+/// How deeply tables may nest in a message: serde_json, which reads the messages here
+/// and in other troupe processes, refuses JSON nested deeper than 128.
+const DEEPEST: usize = 100;
+
+/// How many values (tables and what they hold) a message may have: a table held in two
+/// places is written out twice, so a few tables that each hold the next twice would make
+/// a message of 2⁶⁴ parts.
+const MOST_PARTS: usize = 1_000_000;
+
+/// A Lua value as JSON: tables with keys exactly 1…n are arrays, tables with string keys
+/// objects (an empty table an empty object); a table with both, with integer keys that
+/// are not 1…n, or with other keys, is refused, as are numbers that are not finite (JSON
+/// has none), functions, userdata, a table that holds itself, nesting deeper than
+/// [`DEEPEST`] and more than [`MOST_PARTS`] parts. Errors say where (`value.y[2]`).
+fn to_json(value: &Value) -> Result<serde_json::Value, String> {
+    let mut walk = JsonWalk {
+        path: Vec::new(),
+        open: Vec::new(),
+        parts: 0,
+    };
+    walk.value(value)
 }
 
-/// A Lua value as JSON: tables with keys 1..n are arrays, other tables objects (string
-/// keys only); functions, threads and userdata are refused.
-fn to_json(lua: &Lua, value: Value) -> mlua::Result<serde_json::Value> {
-    let json: serde_json::Value = lua.from_value(value)?;
-    Ok(json)
+/// One part of a path into a published value.
+enum Step {
+    Index(i64),
+    Field(String),
+}
+
+/// The state of [`to_json`]'s walk: where it is, the tables it is inside, the parts seen.
+struct JsonWalk {
+    path: Vec<Step>,
+    open: Vec<*const std::ffi::c_void>,
+    parts: usize,
+}
+
+impl JsonWalk {
+    /// Where the walk is, as a script would write it: `value.y[2]`.
+    fn here(&self) -> String {
+        let mut at = String::from("value");
+        let n = self.path.len();
+        for (k, step) in self.path.iter().enumerate() {
+            // A deep path keeps its first and last few steps.
+            if n > 12 && (4..n - 4).contains(&k) {
+                if k == 4 {
+                    at.push_str(&format!("…({} more)…", n - 8));
+                }
+                continue;
+            }
+            match step {
+                Step::Index(i) => at.push_str(&format!("[{i}]")),
+                Step::Field(f) => at.push_str(&format!(".{f}")),
+            }
+        }
+        at
+    }
+
+    fn value(&mut self, value: &Value) -> Result<serde_json::Value, String> {
+        self.parts += 1;
+        if self.parts > MOST_PARTS {
+            return Err(format!("the value has more than {MOST_PARTS} parts"));
+        }
+        use serde_json::Value as Json;
+        Ok(match value {
+            Value::Nil => Json::Null,
+            Value::Boolean(b) => Json::Bool(*b),
+            Value::Integer(i) => Json::from(*i),
+            Value::Number(n) => serde_json::Number::from_f64(*n)
+                .map(Json::Number)
+                .ok_or_else(|| format!("{} is not a finite number", self.here()))?,
+            Value::String(s) => Json::String(
+                s.to_str()
+                    .map_err(|_| format!("{} is not UTF-8 text", self.here()))?
+                    .to_string(),
+            ),
+            Value::Table(t) => self.table(t)?,
+            other => {
+                return Err(format!(
+                    "{} is a {}, which JSON cannot carry",
+                    self.here(),
+                    other.type_name()
+                ))
+            }
+        })
+    }
+
+    fn table(&mut self, t: &Table) -> Result<serde_json::Value, String> {
+        let me = t.to_pointer();
+        if self.open.contains(&me) {
+            return Err(format!("{} holds itself", self.here()));
+        }
+        if self.open.len() >= DEEPEST {
+            return Err(format!(
+                "{} nests tables more than {DEEPEST} deep",
+                self.here()
+            ));
+        }
+        let pairs: Vec<(Value, Value)> = t
+            .pairs()
+            .collect::<mlua::Result<_>>()
+            .map_err(|e| e.to_string())?;
+        let n = pairs.len() as i64;
+        let listed = pairs
+            .iter()
+            .all(|(k, _)| matches!(k, Value::Integer(i) if (1..=n).contains(i)));
+        let named = pairs.iter().all(|(k, _)| matches!(k, Value::String(_)));
+        self.open.push(me);
+        let json = if listed && n > 0 {
+            let mut items = vec![serde_json::Value::Null; pairs.len()];
+            for (k, v) in &pairs {
+                let Value::Integer(i) = k else { unreachable!() };
+                self.path.push(Step::Index(*i));
+                items[(*i - 1) as usize] = self.value(v)?;
+                self.path.pop();
+            }
+            serde_json::Value::Array(items)
+        } else if named {
+            let mut fields = serde_json::Map::new();
+            for (k, v) in &pairs {
+                let Value::String(name) = k else {
+                    unreachable!()
+                };
+                let name = name.to_string_lossy();
+                self.path.push(Step::Field(name.clone()));
+                let v = self.value(v)?;
+                self.path.pop();
+                fields.insert(name, v);
+            }
+            serde_json::Value::Object(fields)
+        } else {
+            let key_of = |k: &Value| match k {
+                Value::Integer(i) => format!("[{i}]"),
+                Value::Number(x) => format!("[{x}]"),
+                other => format!("a {} key", other.type_name()),
+            };
+            let odd = pairs.iter().map(|(k, _)| k).find(|k| match k {
+                Value::String(_) => false,
+                Value::Integer(i) => !(1..=n).contains(i),
+                _ => true,
+            });
+            let why = match odd {
+                Some(k @ Value::Integer(_)) => {
+                    format!("{} among {n} keys (a list's are 1…{n})", key_of(k))
+                }
+                Some(k) => key_of(k),
+                None => "both list keys (1, 2, …) and string keys".to_string(),
+            };
+            return Err(format!(
+                "{} is neither a list nor a record (string keys): it has {why}",
+                self.here()
+            ));
+        };
+        self.open.pop();
+        Ok(json)
+    }
 }
 
 /// A JSON value as a Lua value (objects and arrays as tables, null as nil).
