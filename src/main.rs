@@ -3,6 +3,7 @@
 mod bench;
 mod devices;
 mod export;
+mod interrupt;
 mod lua_defs;
 #[cfg(feature = "zenoh")]
 mod net;

@@ -269,7 +269,8 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         return view_run(session, tally, limit, size, camera, &args);
     }
     let started = Instant::now();
-    let ran = session.run(limit);
+    crate::interrupt::catch();
+    let ran = session.run_while(limit, || !crate::interrupt::requested());
     let wall = started.elapsed();
     let ticks = session.scene().tick();
     println!(
@@ -390,13 +391,22 @@ fn report(
     if limit.until_idle && !session.is_idle() {
         print_still_running(&session, &reports);
     }
+    let interrupted = crate::interrupt::requested();
+    if interrupted {
+        println!(
+            "  interrupted (Ctrl-C) at {:.2} s: stopped there, writing what was recorded",
+            session.scene().time()
+        );
+    }
     let finished = session.finish();
     for line in finished.iter().flatten() {
         println!("{line}");
     }
     ran?;
     finished?;
-    Ok(if failed > 0 {
+    Ok(if interrupted {
+        ExitCode::from(crate::interrupt::EXIT_CODE)
+    } else if failed > 0 {
         ExitCode::FAILURE
     } else {
         ExitCode::SUCCESS

@@ -450,3 +450,51 @@ fn a_zero_tick_run_records_the_starting_postures() {
     let set = troupe_formats::trk::read_trk_set(&trk).unwrap();
     assert_eq!(set.len(), 2, "ann and bob");
 }
+
+/// Ctrl-C stops a run between two ticks and still writes its recording (it threw the
+/// whole recording away: a performer's run ends with Ctrl-C).
+#[cfg(unix)]
+#[test]
+fn ctrl_c_stops_a_run_and_keeps_its_recording() {
+    let scene = temp("ctrl_c.lua");
+    std::fs::write(
+        &scene,
+        "local ann = troupe.actor{ name = 'ann' }\nann:walk{ velocity = 1.0 }\n",
+    )
+    .unwrap();
+    let record = temp("ctrl_c.trk");
+    let _ = std::fs::remove_file(&record);
+    let child = troupe()
+        .args(["run", "--seconds", "1000", "--realtime", "--record"])
+        .arg(&record)
+        .arg(&scene)
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_secs(3));
+    // SAFETY: sending a signal to our own child process.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(
+        out.status.code(),
+        Some(130),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("interrupted (Ctrl-C) at "), "{stdout}");
+    let info = succeeds(troupe().args(["seq", "info"]).arg(&record));
+    let info = String::from_utf8_lossy(&info.stdout);
+    assert!(info.contains("ann"), "{info}");
+    let ticks: u64 = stdout
+        .split("recorded ")
+        .nth(1)
+        .and_then(|s| s.split(' ').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no recorded ticks in {stdout}"));
+    assert!(
+        ticks > 10 && ticks < 100_000,
+        "{ticks} ticks recorded:\n{stdout}"
+    );
+}

@@ -299,9 +299,16 @@ impl<S: Script> Session<S> {
     /// Observers are started even when no tick runs (a recording of 0 ticks holds the
     /// starting postures).
     pub fn run(&mut self, limit: RunLimit) -> Result<u64> {
+        self.run_while(limit, || true)
+    }
+
+    /// Ticks until `limit` or until `go_on`, asked before each tick, says no (a user's
+    /// Ctrl-C): the run then stops between two ticks, and [`Session::finish`] writes
+    /// everything as at its end. Returns how many ticks ran.
+    pub fn run_while(&mut self, limit: RunLimit, mut go_on: impl FnMut() -> bool) -> Result<u64> {
         self.start()?;
         let mut ticks = 0;
-        while !limit.reached(ticks, self.is_idle()) {
+        while !limit.reached(ticks, self.is_idle()) && go_on() {
             self.tick()?;
             ticks += 1;
         }
