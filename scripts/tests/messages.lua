@@ -23,6 +23,16 @@ test("a method called with . instead of : says so", function()
   says(function() ann.position() end, "position: call it as a method, with `:`")
 end)
 
+test("names that could not be file names are refused", function()
+  -- Each name goes into a recording's file names (`rec.NAME.bvh`): a '/' wrote elsewhere.
+  says(function() troupe.actor{ name = "x/../../escaped" } end,
+    "an actor's name `x/../../escaped` holds '/': names become file names")
+  says(function() troupe.object{ name = "cup\\1", shape = "sphere", radius = 0.1, at = {0, 1, 0} } end,
+    "an object's name `cup\\\\1` holds '\\\\'")
+  says(function() troupe.actor{ name = "bell\7" } end, "an actor's name `bell\\u{7}` holds '\\u{7}'")
+  expect(troupe.actor{ name = "Zoë the 2nd" } ~= nil, "other characters are fine")
+end)
+
 test("bad arguments have one wording: what, what it must be, what it got", function()
   local ann = troupe.actor{ name = "ann" }
   says(function() ann:on("action_completed", 5) end,

@@ -468,9 +468,7 @@ impl Scene {
     /// A performer opens its devices with it before its actor exists, so that a device
     /// that fails leaves no actor behind.
     pub fn skeleton_for(&mut self, desc: &ActorDesc) -> Result<(Arc<Skeleton>, TemplateParams)> {
-        if desc.name.is_empty() {
-            return Err(Error::Invalid("an actor needs a name".into()));
-        }
+        check_name("an actor", &desc.name)?;
         if self.actors.iter().any(|a| a.name == desc.name) {
             return Err(Error::Duplicate {
                 what: "actor",
@@ -550,9 +548,7 @@ impl Scene {
 
     /// Adds a rigid object.
     pub fn add_object(&mut self, object: Object) -> Result<usize> {
-        if object.name.is_empty() {
-            return Err(Error::Invalid("an object needs a name".into()));
-        }
+        check_name("an object", &object.name)?;
         if self.objects.iter().any(|o| o.name == object.name) {
             return Err(Error::Duplicate {
                 what: "object",
@@ -868,4 +864,21 @@ impl Scene {
         }
         &self.events
     }
+}
+
+/// Refuses a name that is empty or that could not be part of a file name: each actor's
+/// and object's name goes into the files of a recording (`rec.NAME.bvh`), where a `/`
+/// wrote outside the recording's folder.
+fn check_name(what: &str, name: &str) -> Result<()> {
+    if name.is_empty() {
+        return Err(Error::Invalid(format!("{what} needs a name")));
+    }
+    if let Some(c) = name.chars().find(|c| matches!(c, '/' | '\\') || c.is_control()) {
+        return Err(Error::Invalid(format!(
+            "{what}'s name `{}` holds {c:?}: names become file names (a recording's \
+             `rec.NAME.bvh`), so they hold no '/', '\\' or control characters",
+            name.escape_default()
+        )));
+    }
+    Ok(())
 }
