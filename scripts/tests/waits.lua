@@ -59,6 +59,25 @@ test("waits on actions that ended long ago, or end while others wait, resume at 
   expect(at.long <= 0.5 + 0.4 + 2 / troupe.rate(), "woken by the end of the long one: " .. at.long)
 end)
 
+test("wait_all and wait_any refuse what is not an action, catchably, with the place", function()
+  local ann = troupe.actor{ name = "ann" }
+  local a = ann:play(hold(0.2, "r_elbow_flexion", 0.1))
+  local err
+  ann:behave(function()
+    local ok, e = pcall(wait_any, a, 5)
+    err = { ok, e }
+    local ok2, e2 = pcall(function() wait_all({ a, "x" }) end)
+    err[3], err[4] = ok2, e2
+  end)
+  run_until(function() return ann:behavior_status() ~= "running" end, 2)
+  expect(ann:behavior_status() == "done", "the behavior goes on: " .. ann:behavior_status())
+  -- Called by pcall itself, the error has no Lua caller to name.
+  expect(err[1] == false and err[2]:find("wait_any: argument 2 must be an action, got number", 1, true) ~= nil,
+         tostring(err[2]))
+  expect(err[3] == false and err[4]:find("waits%.lua:%d+: wait_all: argument 2 must be an action, got string") ~= nil,
+         tostring(err[4]))
+end)
+
 test("wait_until returns false at its timeout", function()
   local got = nil
   local ann = troupe.actor{ name = "ann" }

@@ -166,9 +166,17 @@ impl Director {
         for (name, make) in functions {
             troupe.set(name, make(lua)?)?;
         }
+        // For the prelude's wait_all and wait_any, which check their arguments.
+        globals.set(
+            "__troupe_is_action",
+            lua.create_function(|_, v: Value| {
+                Ok(matches!(v, Value::UserData(u) if u.is::<handles::ActionRef>()))
+            })?,
+        )?;
         lua.load(include_str!("prelude.lua"))
             .set_name("=prelude")
             .exec()?;
+        globals.raw_set("__troupe_is_action", Value::Nil)?;
         let wait: Function = globals.get("__troupe_action_wait")?;
         lua.set_named_registry_value("troupe.action_wait", wait)?;
         globals.raw_set("__troupe_action_wait", Value::Nil)?;

@@ -82,10 +82,19 @@ function wait_until(fn, timeout)
   return yield("until", fn, timeout)
 end
 
+local is_action = __troupe_is_action
+
+-- The actions given to `name` (as arguments or in one list), each checked here so that
+-- the error names the argument and the caller's place, and pcall can catch it.
 local function handles(name, ...)
   local list = { ... }
   if #list == 1 and type(list[1]) == "table" then list = list[1] end
   if #list == 0 then error(name .. ": give at least one action", 3) end
+  for i, a in ipairs(list) do
+    if not is_action(a) then
+      error(string.format("%s: argument %d must be an action, got %s", name, i, type(a)), 3)
+    end
+  end
   return list
 end
 
