@@ -23,6 +23,22 @@ test("a method called with . instead of : says so", function()
   says(function() ann.position() end, "position: call it as a method, with `:`")
 end)
 
+test("an error in a function an action calls is the message alone, with the time", function()
+  local ann = troupe.actor{ name = "ann" }
+  local e = says(function() ann:walk{ velocity = function(t) error("bad speed") end, duration = 2 } end,
+    "walk: `velocity` failed at t = 0.00 s: ")
+  expect(e:find("messages%.lua:%d+: bad speed$"), e)
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1, at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  e = says(function()
+    ann:manipulate{ object = cup, duration = 1, keys = function(t)
+      if t > 0.5 then error("boom") end
+      return {-0.2, 1.1, 0.4}
+    end }
+  end, "manipulate: `keys` failed at t = 0.52 s: ")
+  expect(e:find("messages%.lua:%d+: boom$"), e)
+end)
+
 test("names that could not be file names are refused", function()
   -- Each name goes into a recording's file names (`rec.NAME.bvh`): a '/' wrote elsewhere.
   says(function() troupe.actor{ name = "x/../../escaped" } end,

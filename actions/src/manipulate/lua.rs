@@ -3,7 +3,7 @@
 
 use super::{ManipulateOptions, ObjectKey};
 use mlua::{MultiValue, Value};
-use troupe_lua::args::{err, euler_degrees, object_arg, opt_number, table_arg, vec3};
+use troupe_lua::args::{err, error_text, euler_degrees, object_arg, opt_number, table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
@@ -80,7 +80,10 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                 } else {
                     (i as f64 * STEP).min(duration)
                 };
-                let (at, r): (Value, Value) = f.call(time)?;
+                let (at, r): (Value, Value) = f.call(time).map_err(|e| {
+                    let e = error_text(&e);
+                    err(m, format!("`keys` failed at t = {time:.2} s: {e}"))
+                })?;
                 let position = vec3(&at, &format!("{m}: keys({time})"))?;
                 let rotation = if r.is_nil() {
                     None

@@ -58,7 +58,7 @@ pub fn dot_call_hint(method: &str) -> String {
 /// The text of an mlua error in troupe's wording: a bad argument that mlua converted
 /// (`self` of a method called with `.`, a value of the wrong type) says so as the
 /// hand-written checks do; other errors keep their message.
-pub(crate) fn error_text(e: &mlua::Error) -> String {
+pub fn error_text(e: &mlua::Error) -> String {
     match e {
         mlua::Error::BadArgument {
             to,
@@ -96,7 +96,12 @@ pub(crate) fn error_text(e: &mlua::Error) -> String {
             format!("expected {}, got {from}", lua_type_of(to))
         }
         mlua::Error::CallbackError { cause, .. } => error_text(cause),
-        mlua::Error::RuntimeError(m) => m.clone(),
+        // A Lua function that Rust called (a walk's `velocity`) fails with mlua's
+        // traceback appended to its message.
+        mlua::Error::RuntimeError(m) => match m.split_once("\nstack traceback:") {
+            Some((message, _)) => message.to_string(),
+            None => m.clone(),
+        },
         other => other.to_string(),
     }
 }

@@ -873,7 +873,10 @@ fn check_name(what: &str, name: &str) -> Result<()> {
     if name.is_empty() {
         return Err(Error::Invalid(format!("{what} needs a name")));
     }
-    if let Some(c) = name.chars().find(|c| matches!(c, '/' | '\\') || c.is_control()) {
+    if let Some(c) = name
+        .chars()
+        .find(|c| matches!(c, '/' | '\\') || c.is_control())
+    {
         return Err(Error::Invalid(format!(
             "{what}'s name `{}` holds {c:?}: names become file names (a recording's \
              `rec.NAME.bvh`), so they hold no '/', '\\' or control characters",
