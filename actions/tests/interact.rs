@@ -211,9 +211,14 @@ fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, SignalId) {
         ..ActorDesc::new("bob")
     })
     .unwrap();
-    let (held, finished) = (s.new_signal(), s.new_signal());
+    let (held, finished, gave_up) = (s.new_signal(), s.new_signal(), s.new_signal());
     let skel = s.actors()[0].skeleton.clone();
-    let active = HoldHand::new(1, Side::Right, Side::Left, shake, held, finished);
+    let active = HoldHand::new(
+        1,
+        (Side::Right, Side::Left),
+        shake,
+        (held, finished, gave_up),
+    );
     let aid = s
         .start_action(
             0,
@@ -222,7 +227,7 @@ fn hold_scene(shake: bool) -> (Scene, ActionId, ActionId, SignalId) {
         )
         .unwrap();
     let wrist = skel.joint("r_wrist").unwrap();
-    let follow = FollowHand::new(0, wrist, Side::Left, held, finished);
+    let follow = FollowHand::new((0, wrist), Side::Left, (held, finished, gave_up));
     let fid = s
         .start_action(
             1,

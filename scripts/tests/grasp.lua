@@ -201,6 +201,32 @@ test("hold hands: the wrists stay within 1 cm while the active actor moves by ke
   expect(run_until(function() return h.status == "cancelled" and follow.status == "cancelled" end, 1), "let go")
 end)
 
+test("a hold fails fast, saying why, when the follower is cancelled or walks away", function()
+  -- Both stayed `active` for good, the hands 2.3 m apart.
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
+  local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
+  local follow = bob:actions()[1]
+  run(2.0)
+  expect(h.status == "active", "holding: " .. tostring(h.error))
+  follow:cancel()
+  expect(run_until(function() return h.status ~= "active" end, 0.1), "the hold ended")
+  expect(h.status == "failed" and tostring(h.error):find("^`bob`'s follow_hand ended first %(cancelled") ~= nil,
+         h.status .. ": " .. tostring(h.error))
+
+  local carl = troupe.actor{ name = "carl", at = {5, 0, 0} }
+  local dan = troupe.actor{ name = "dan", at = {4.55, 0, 0} }
+  local h2 = carl:hold_hand{ other = dan, hand = "right", other_hand = "left" }
+  local f2 = dan:actions()[1]
+  run(2.0)
+  expect(h2.status == "active", "holding: " .. tostring(h2.error))
+  dan:walk{ to = {2, 0, 0} }
+  expect(run_until(function() return h2.status ~= "active" end, 3), "the hold ended")
+  expect(h2.status == "failed" and tostring(h2.error):find("^the hands came apart: `dan`'s left hand is [%d.]+ m from `carl`'s right hand$") ~= nil,
+         h2.status .. ": " .. tostring(h2.error))
+  expect(run_until(function() return f2.status ~= "active" end, 0.1), "the follower let go too: " .. f2.status)
+end)
+
 test("a hand following another's turns no joint faster than 8 rad/s", function()
   -- Ann steps towards Bob and back, holding his hand: his arm's IK turned its
   -- sternoclavicular joint at 16.4 rad/s in one tick.

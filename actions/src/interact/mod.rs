@@ -347,6 +347,11 @@ impl Generator for Give {
     }
 }
 
+/// How much further apart (m) than when they closed two held hands may come before the
+/// hold fails: the follower's arm turns no faster than a reach's and lags a walk's step
+/// by a few centimetres.
+const HANDS_APART: f64 = 0.15;
+
 /// The active side of `actor:hold_hand` / `actor:shake_hands`.
 pub struct HoldHand {
     other: usize,
@@ -355,6 +360,12 @@ pub struct HoldHand {
     shake: bool,
     held: SignalId,
     finished: SignalId,
+    /// Raised as a failure when the follower's `follow_hand` ends before the hold does.
+    follower_gave_up: SignalId,
+    /// The other's wrist joint, and how far apart (m) the two wrists were once the
+    /// fingers had closed.
+    other_wrist: usize,
+    apart: Option<f64>,
     model: Option<HandModel>,
     arm: Option<ArmIk>,
     wrist_goal: Transform,
@@ -373,14 +384,13 @@ pub struct HoldHand {
 impl HoldHand {
     /// The acting actor's hand `side` holds `other`'s hand `other_side`; with `shake`, it
     /// shakes it and lets go. `held` is raised once the fingers are closed, `finished`
-    /// when a handshake is over.
+    /// when a handshake is over; the follower raises `follower_gave_up` as a failure if
+    /// its action ends first.
     pub fn new(
         other: usize,
-        side: Side,
-        other_side: Side,
+        (side, other_side): (Side, Side),
         shake: bool,
-        held: SignalId,
-        finished: SignalId,
+        (held, finished, follower_gave_up): (SignalId, SignalId, SignalId),
     ) -> HoldHand {
         HoldHand {
             other,
@@ -389,6 +399,9 @@ impl HoldHand {
             shake,
             held,
             finished,
+            follower_gave_up,
+            other_wrist: 0,
+            apart: None,
             model: None,
             arm: None,
             wrist_goal: Transform::IDENTITY,
@@ -437,6 +450,7 @@ impl Generator for HoldHand {
         }
         let other = actor_name(w, self.other);
         let theirs = HandModel::new(&w.actors[self.other].skeleton, self.other_side)?;
+        self.other_wrist = theirs.sensors.wrist;
         let tg = &w.states[self.other].globals[theirs.sensors.wrist];
         let their_palm = tg.transform_point(theirs.sensors.palm);
         let their_normal = tg.rotation * theirs.sensors.palm_normal;
@@ -523,6 +537,28 @@ impl Generator for HoldHand {
         };
         let t = ctx.local_time - self.phase_start;
         self.q.copy_from_slice(&ctx.posture.q);
+        let board = ctx.world.board;
+        if let Some(why) = board.failure(self.follower_gave_up, ctx.tick) {
+            return Step::Failed(format!(
+                "`{}`'s follow_hand ended first ({why}): nobody holds the other hand",
+                actor_name(ctx.world, self.other)
+            ));
+        }
+        if let Some(apart) = self.apart {
+            // A follower that walks away, or is carried off, takes its hand out of ours.
+            let mine = ctx.posture.globals[model.sensors.wrist].translation;
+            let theirs = ctx.world.states[self.other].globals[self.other_wrist].translation;
+            let now = mine.distance(theirs);
+            if now > apart + HANDS_APART {
+                return Step::Failed(format!(
+                    "the hands came apart: `{}`'s {} hand is {now:.2} m from `{}`'s {} hand",
+                    actor_name(ctx.world, self.other),
+                    self.other_side.name(),
+                    actor_name(ctx.world, ctx.actor),
+                    self.side.name()
+                ));
+            }
+        }
         match self.phase {
             0 => {
                 let u = quintic(t / 1.0);
@@ -559,6 +595,13 @@ impl Generator for HoldHand {
                 );
                 if self.s >= 1.0 {
                     out.raise(self.held);
+                    let g = &ctx.posture.globals;
+                    let theirs = ctx.world.states[self.other].globals[self.other_wrist];
+                    self.apart = Some(
+                        g[model.sensors.wrist]
+                            .translation
+                            .distance(theirs.translation),
+                    );
                     self.phase = 2;
                     self.phase_start = ctx.local_time;
                 }
@@ -630,6 +673,8 @@ pub struct FollowHand {
     side: Side,
     held: SignalId,
     finished: SignalId,
+    /// Raised as a failure if this action ends before the hold does.
+    gave_up: SignalId,
     arm: Option<ArmIk>,
     relative: Option<Transform>,
     last: Option<Transform>,
@@ -638,13 +683,11 @@ pub struct FollowHand {
 
 impl FollowHand {
     /// Follows `active`'s joint `active_wrist` with the hand `side` once `held` is raised,
-    /// until `finished` is.
+    /// until `finished` is; raises `gave_up` as a failure if it ends before that.
     pub fn new(
-        active: usize,
-        active_wrist: usize,
+        (active, active_wrist): (usize, usize),
         side: Side,
-        held: SignalId,
-        finished: SignalId,
+        (held, finished, gave_up): (SignalId, SignalId, SignalId),
     ) -> FollowHand {
         FollowHand {
             active,
@@ -652,6 +695,7 @@ impl FollowHand {
             side,
             held,
             finished,
+            gave_up,
             arm: None,
             relative: None,
             last: None,
@@ -661,6 +705,15 @@ impl FollowHand {
 }
 
 impl Generator for FollowHand {
+    /// A follower that ends before the hold (cancelled, pre-empted, failed) lets the
+    /// holding actor know, which then fails rather than hold an empty hand.
+    fn end(&mut self, ending: &Ending, notes: &mut Notes) {
+        if ending.status != Status::Completed {
+            let why = ending.reason.unwrap_or("no reason given");
+            notes.fail(self.gave_up, format!("{}: {why}", ending.status.name()));
+        }
+    }
+
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         if ctx.world.states.get(self.active).is_none() {
             return Err(format!("no actor #{} to follow", self.active).into());

@@ -211,14 +211,13 @@ impl HoldHandOptions {
     ) -> Result<(HoldHand, Scope)> {
         self.validate(actor)?;
         in_scene(scene, &[actor, self.other], &[])?;
-        let (held, finished) = (scene.new_signal(), scene.new_signal());
+        let (held, finished, gave_up) =
+            (scene.new_signal(), scene.new_signal(), scene.new_signal());
         let active = HoldHand::new(
             self.other,
-            self.hand,
-            self.other_hand,
+            (self.hand, self.other_hand),
             self.shake,
-            held,
-            finished,
+            (held, finished, gave_up),
         );
         let skeleton = scene.actors()[actor].skeleton.clone();
         let scope = grasp_scope(&skeleton, &[self.hand])?;
@@ -226,7 +225,7 @@ impl HoldHandOptions {
         let follow_scope = scene.actors()[self.other]
             .skeleton
             .scope(&format!("{}_arm", self.other_hand.name()))?;
-        let follow = FollowHand::new(actor, wrist, self.other_hand, held, finished);
+        let follow = FollowHand::new((actor, wrist), self.other_hand, (held, finished, gave_up));
         let mut follow_spec = ActionSpec::new("follow_hand", follow_scope);
         follow_spec.delay = delay;
         follow_spec.duration = duration;
