@@ -144,11 +144,13 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
                         "osc",
                         p.osc.as_ref().map(|o| Some(o.listener.health.report())),
                     ),
-                    ("vrpn", p.vrpn.as_ref().map(|v| v.source.health())),
                 ];
                 for (dev, report) in reports {
                     let Some(report) = report else { continue };
                     out.set(dev, health_table(lua, report)?)?;
+                }
+                if let Some(v) = &p.vrpn {
+                    out.set("vrpn", v.health_table(lua)?)?;
                 }
                 if let Some(v) = &p.vmc {
                     out.set("vmc", crate::vmc::lua::health(lua, v)?)?;

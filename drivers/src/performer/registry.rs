@@ -144,7 +144,7 @@ impl Performers {
             if let Some(o) = &p.osc {
                 v.push((p.name.clone(), "osc", o.listener.health.report()));
             }
-            if let Some(h) = p.vrpn.as_ref().and_then(|v| v.source.health()) {
+            if let Some(h) = p.vrpn.as_ref().and_then(|v| v.health()) {
                 v.push((p.name.clone(), "vrpn", h));
             }
             if let Some(h) = p.vmc.as_ref().and_then(|m| m.health()) {
