@@ -253,6 +253,36 @@ fn osc_poses_and_glove_values_drive_a_performer() {
             break;
         }
     }
+    // Inputs the performer cannot use are counted, never applied: glove values of a
+    // 22-sensor glove for this 18-sensor one, a joint it does not listen for.
+    let health = |d: &mut LuaSession| -> mlua::Table {
+        d.eval("return troupe.devices.health('oz').osc").unwrap()
+    };
+    let before: u64 = health(&mut d).get("resyncs").unwrap();
+    let wide = rosc::encoder::encode(&OscPacket::Message(OscMessage {
+        addr: "/troupe/oz/glove".into(),
+        args: (0..22).map(|_| OscType::Int(1)).collect(),
+    }))
+    .unwrap();
+    sock.send_to(&wide, ("127.0.0.1", port)).unwrap();
+    sock.send_to(&pose("l_wrist", pelvis, yaw), ("127.0.0.1", port))
+        .unwrap();
+    let start = Instant::now();
+    while health(&mut d).get::<u64>("resyncs").unwrap() < before + 2 {
+        assert!(start.elapsed() < Duration::from_secs(10), "not counted");
+        std::thread::sleep(Duration::from_millis(5));
+        d.tick().unwrap();
+    }
+    assert_eq!(health(&mut d).get::<u64>("resyncs").unwrap(), before + 2);
+    let error: String = health(&mut d).get("error").unwrap();
+    assert!(
+        error.contains("'l_wrist' is not one of the performer's OSC joints (pelvis, r_wrist)"),
+        "{error}"
+    );
+    assert_eq!(
+        _shared.0.lock().unwrap().glove_raw("oz"),
+        Some(vec![255; 18])
+    );
 }
 
 #[test]

@@ -90,6 +90,13 @@ impl OscListener {
             thread: Some(thread),
         })
     }
+
+    /// Counts an input its performer cannot use (a joint it does not listen for, a glove
+    /// message of another size) as a resync, with `error` as the last error.
+    pub fn refuse(&self, error: String) {
+        self.health.resyncs.fetch_add(1, Ordering::Relaxed);
+        self.health.set_error(error);
+    }
 }
 
 impl Drop for OscListener {
