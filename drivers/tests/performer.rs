@@ -390,3 +390,51 @@ fn gestures_trained_from_recordings_fire_lua_events_on_change() {
         .to_string();
     assert!(e.contains("missing.rec"), "{e}");
 }
+
+#[test]
+fn device_functions_and_vrpn_options_name_what_is_wrong() {
+    let (mut d, _s) = director(1, None);
+    d.load_str(r#"ann = troupe.actor{ name = "ann" }"#, "ann")
+        .unwrap();
+    let error = |d: &mut LuaSession, code: &str| -> String {
+        let (ok, e): (bool, String) = d
+            .eval(&format!(
+                "local ok, e = pcall(function() {code} end) return ok, tostring(e)"
+            ))
+            .unwrap();
+        assert!(!ok, "{code} did not fail");
+        e
+    };
+    let cases = [
+        (
+            r#"troupe.devices.health("nobody")"#,
+            "troupe.devices.health: no performer named 'nobody'",
+        ),
+        (
+            "troupe.devices.calibrate(ann)",
+            "troupe.devices.calibrate: actor 'ann' is not a performer",
+        ),
+        (
+            "troupe.devices.glove(3)",
+            "troupe.devices.glove: expected a performer (its actor or its name), got integer",
+        ),
+        (
+            r#"troupe.performer{ name = "v1", devices = { vrpn = { replay = "x.rec", map = { pelvis = 1.5 } } } }"#,
+            "map.pelvis = 1.5 is not a sensor 0…254 (a whole number)",
+        ),
+        (
+            r#"troupe.performer{ name = "v2", devices = { vrpn = { device = "T@127.0.0.1:1", map = { pelvis = 0 }, timeout = 0 } } }"#,
+            "timeout must be more than 0 and at most 60 s, got 0",
+        ),
+    ];
+    for (code, want) in cases {
+        let e = error(&mut d, code);
+        assert!(e.contains(want), "{code}: {e}");
+    }
+    // A float with a whole value is still a sensor: the missing file is the error.
+    let e = error(
+        &mut d,
+        r#"troupe.performer{ name = "v3", devices = { vrpn = { replay = "x.rec", map = { pelvis = 1.0 } } } }"#,
+    );
+    assert!(e.contains("x.rec") && !e.contains("not a sensor"), "{e}");
+}

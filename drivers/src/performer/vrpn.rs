@@ -17,7 +17,7 @@ use crate::record::feed::DeviceReplay;
 use crate::record::writer::Recorder;
 use crate::vrpn::{self, DeviceName, VrpnConfig, VrpnReading};
 use glam::{DQuat, DVec3};
-use mlua::{Lua, Table};
+use mlua::{Lua, Table, Value};
 use std::collections::BTreeMap;
 use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
@@ -171,8 +171,24 @@ pub(crate) fn vrpn_input(
         .get::<Option<Table>>("map")?
         .ok_or_else(|| args::err(WHAT, "`map` (joint = sensor, from 0) is required"))?;
     let mut map = Vec::new();
-    for pair in map_t.pairs::<String, i64>() {
-        let (j, s) = pair?;
+    for pair in map_t.pairs::<String, Value>() {
+        let (j, v) = pair?;
+        // A sensor is a whole number: say which entry is not, rather than mlua's bare
+        // "expected an integer".
+        let s = match v {
+            Value::Integer(s) => s,
+            Value::Number(n) if n.fract() == 0.0 && n.abs() <= 1e15 => n as i64,
+            other => {
+                let shown = match &other {
+                    Value::Number(n) => n.to_string(),
+                    o => o.type_name().to_string(),
+                };
+                return Err(args::err(
+                    WHAT,
+                    format!("map.{j} = {shown} is not a sensor 0…254 (a whole number)"),
+                ));
+            }
+        };
         if !(0..=254).contains(&s) {
             return Err(args::err(
                 WHAT,
@@ -230,7 +246,7 @@ pub(crate) fn vrpn_input(
             if !(timeout > 0.0 && timeout <= 60.0) {
                 return Err(args::err(
                     WHAT,
-                    format!("timeout must be 0…60 s, got {timeout}"),
+                    format!("timeout must be more than 0 and at most 60 s, got {timeout}"),
                 ));
             }
             let options = vrpn::driver_options(&format!("{name}.vrpn"), &d);
