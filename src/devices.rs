@@ -608,6 +608,10 @@ fn probe_vmc(listen: &str, samples: usize, timeout: Duration, json: bool) -> Res
             continue;
         };
         let p = read_datagram(&d.bytes, &mut counters);
+        if p.is_empty() {
+            // Garbage or another protocol: counted above, not a sample.
+            continue;
+        }
         let bones: Vec<&str> = VRM_BONES
             .iter()
             .zip(&p.pose.bones)

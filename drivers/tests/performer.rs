@@ -253,6 +253,36 @@ fn osc_poses_and_glove_values_drive_a_performer() {
             break;
         }
     }
+    // Inputs the performer cannot use are counted, never applied: glove values of a
+    // 22-sensor glove for this 18-sensor one, a joint it does not listen for.
+    let health = |d: &mut LuaSession| -> mlua::Table {
+        d.eval("return troupe.devices.health('oz').osc").unwrap()
+    };
+    let before: u64 = health(&mut d).get("resyncs").unwrap();
+    let wide = rosc::encoder::encode(&OscPacket::Message(OscMessage {
+        addr: "/troupe/oz/glove".into(),
+        args: (0..22).map(|_| OscType::Int(1)).collect(),
+    }))
+    .unwrap();
+    sock.send_to(&wide, ("127.0.0.1", port)).unwrap();
+    sock.send_to(&pose("l_wrist", pelvis, yaw), ("127.0.0.1", port))
+        .unwrap();
+    let start = Instant::now();
+    while health(&mut d).get::<u64>("resyncs").unwrap() < before + 2 {
+        assert!(start.elapsed() < Duration::from_secs(10), "not counted");
+        std::thread::sleep(Duration::from_millis(5));
+        d.tick().unwrap();
+    }
+    assert_eq!(health(&mut d).get::<u64>("resyncs").unwrap(), before + 2);
+    let error: String = health(&mut d).get("error").unwrap();
+    assert!(
+        error.contains("'l_wrist' is not one of the performer's OSC joints (pelvis, r_wrist)"),
+        "{error}"
+    );
+    assert_eq!(
+        _shared.0.lock().unwrap().glove_raw("oz"),
+        Some(vec![255; 18])
+    );
 }
 
 #[test]
@@ -359,4 +389,52 @@ fn gestures_trained_from_recordings_fire_lua_events_on_change() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("missing.rec"), "{e}");
+}
+
+#[test]
+fn device_functions_and_vrpn_options_name_what_is_wrong() {
+    let (mut d, _s) = director(1, None);
+    d.load_str(r#"ann = troupe.actor{ name = "ann" }"#, "ann")
+        .unwrap();
+    let error = |d: &mut LuaSession, code: &str| -> String {
+        let (ok, e): (bool, String) = d
+            .eval(&format!(
+                "local ok, e = pcall(function() {code} end) return ok, tostring(e)"
+            ))
+            .unwrap();
+        assert!(!ok, "{code} did not fail");
+        e
+    };
+    let cases = [
+        (
+            r#"troupe.devices.health("nobody")"#,
+            "troupe.devices.health: no performer named 'nobody'",
+        ),
+        (
+            "troupe.devices.calibrate(ann)",
+            "troupe.devices.calibrate: actor 'ann' is not a performer",
+        ),
+        (
+            "troupe.devices.glove(3)",
+            "troupe.devices.glove: expected a performer (its actor or its name), got integer",
+        ),
+        (
+            r#"troupe.performer{ name = "v1", devices = { vrpn = { replay = "x.rec", map = { pelvis = 1.5 } } } }"#,
+            "map.pelvis = 1.5 is not a sensor 0…254 (a whole number)",
+        ),
+        (
+            r#"troupe.performer{ name = "v2", devices = { vrpn = { device = "T@127.0.0.1:1", map = { pelvis = 0 }, timeout = 0 } } }"#,
+            "timeout must be more than 0 and at most 60 s, got 0",
+        ),
+    ];
+    for (code, want) in cases {
+        let e = error(&mut d, code);
+        assert!(e.contains(want), "{code}: {e}");
+    }
+    // A float with a whole value is still a sensor: the missing file is the error.
+    let e = error(
+        &mut d,
+        r#"troupe.performer{ name = "v3", devices = { vrpn = { replay = "x.rec", map = { pelvis = 1.0 } } } }"#,
+    );
+    assert!(e.contains("x.rec") && !e.contains("not a sensor"), "{e}");
 }

@@ -2,6 +2,7 @@
 //! time and sends them over a bounded channel, counting what it cannot decode.
 
 use crate::device::health::{Health, HealthState};
+use crate::osc::datagram::decode_datagram;
 use crate::osc::error::OscError;
 use crate::osc::message::{parse_packet, OscInput};
 use crossbeam::channel::{bounded, Receiver, TrySendError};
@@ -60,9 +61,10 @@ impl OscListener {
                     let mut inputs = Vec::new();
                     let mut bad = Vec::new();
                     let mut undecodable = None;
-                    match rosc::decoder::decode_udp(&buf[..n]) {
-                        Ok((_, p)) => parse_packet(&p, &mut inputs, &mut bad),
-                        Err(e) => undecodable = Some(format!("undecodable OSC packet: {e}")),
+                    // A datagram that is not whole is refused whole, never partly applied.
+                    match decode_datagram(&buf[..n]) {
+                        Ok(p) => parse_packet(&p, &mut inputs, &mut bad),
+                        Err(e) => undecodable = Some(e.to_string()),
                     }
                     let errors = bad.iter().map(|e| e.to_string()).chain(undecodable);
                     for e in errors {
@@ -87,6 +89,13 @@ impl OscListener {
             stop,
             thread: Some(thread),
         })
+    }
+
+    /// Counts an input its performer cannot use (a joint it does not listen for, a glove
+    /// message of another size) as a resync, with `error` as the last error.
+    pub fn refuse(&self, error: String) {
+        self.health.resyncs.fetch_add(1, Ordering::Relaxed);
+        self.health.set_error(error);
     }
 }
 
@@ -120,20 +129,21 @@ mod tests {
             timetag: (0, 1).into(),
             content: vec![pose.clone(), pose],
         });
-        s.send_to(&rosc::encoder::encode(&bundle).unwrap(), l.addr)
-            .unwrap();
+        let bytes = rosc::encoder::encode(&bundle).unwrap();
+        s.send_to(&bytes, l.addr).unwrap();
+        // Cut inside its second pose: refused whole, its first pose is not taken.
+        s.send_to(&bytes[..bytes.len() - 8], l.addr).unwrap();
         s.send_to(b"garbage!", l.addr).unwrap();
         let mut got = Vec::new();
         let start = Instant::now();
-        while (got.len() < 2 || l.health.report().resyncs < 1)
-            && start.elapsed() < Duration::from_secs(10)
-        {
+        while l.health.report().resyncs < 2 && start.elapsed() < Duration::from_secs(10) {
             if let Ok(x) = l.inputs.recv_timeout(Duration::from_millis(20)) {
                 got.push(x.1);
             }
         }
+        got.extend(l.inputs.try_iter().map(|x| x.1));
         assert_eq!(got.len(), 2);
-        assert_eq!(l.health.report().resyncs, 1);
+        assert_eq!(l.health.report().resyncs, 2);
         assert_eq!(l.health.state(), HealthState::Streaming);
     }
 }

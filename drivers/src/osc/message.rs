@@ -9,7 +9,7 @@ use glam::{DQuat, DVec3};
 use rosc::{OscMessage, OscPacket, OscType};
 
 /// An OSC message that is not a troupe input; each error names the address.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum MessageError {
     /// The address is not `/troupe/<performer>/<joint|glove>`.
     #[error("{0}: expected /troupe/<performer>/<joint|glove>")]
@@ -17,16 +17,41 @@ pub enum MessageError {
     /// An argument is not a number.
     #[error("{0}: arguments must be numbers")]
     NotNumbers(String),
-    /// A glove message without values.
-    #[error("{0}: no glove values")]
-    NoGloveValues(String),
-    /// A pose message without seven finite numbers.
-    #[error("{address}: expected 7 finite numbers x y z qw qx qy qz, got {got}")]
+    /// A glove message whose value count is not a glove's (18 or 22 sensors).
+    #[error("{address}: expected 18 or 22 glove values (one per sensor), got {got}")]
+    GloveCount {
+        /// The message's address.
+        address: String,
+        /// Values it carried.
+        got: usize,
+    },
+    /// A glove message with a NaN or infinite value.
+    #[error("{address}: glove value {index} is {value}, not a finite number")]
+    GloveNotFinite {
+        /// The message's address.
+        address: String,
+        /// The value's place, from 0.
+        index: usize,
+        /// The value.
+        value: f64,
+    },
+    /// A pose message without seven numbers.
+    #[error("{address}: expected 7 numbers x y z qw qx qy qz, got {got}")]
     PoseArity {
         /// The message's address.
         address: String,
         /// Numbers it carried.
         got: usize,
+    },
+    /// A pose message with a NaN or infinite number.
+    #[error("{address}: {name} is {value}, not a finite number")]
+    PoseNotFinite {
+        /// The message's address.
+        address: String,
+        /// The argument's name (`x`, `qw`, …).
+        name: &'static str,
+        /// Its value.
+        value: f64,
     },
     /// A pose whose quaternion is zero.
     #[error("{0}: zero quaternion")]
@@ -56,6 +81,9 @@ pub enum OscInput {
     },
 }
 
+/// The sensor counts a CyberGlove has: a glove message carries one of them.
+pub const GLOVE_SENSORS: [usize; 2] = [18, 22];
+
 fn number(a: &OscType) -> Option<f64> {
     match a {
         OscType::Float(f) => Some(f64::from(*f)),
@@ -76,8 +104,20 @@ pub fn parse_message(m: &OscMessage) -> Result<OscInput, MessageError> {
     let nums: Option<Vec<f64>> = m.args.iter().map(number).collect();
     let nums = nums.ok_or_else(|| MessageError::NotNumbers(m.addr.clone()))?;
     if what == "glove" {
-        if nums.is_empty() {
-            return Err(MessageError::NoGloveValues(m.addr.clone()));
+        // A glove reports every sensor at once: fewer values would leave the others at
+        // their old values, more would be dropped; NaN would be clamped to a value.
+        if !GLOVE_SENSORS.contains(&nums.len()) {
+            return Err(MessageError::GloveCount {
+                address: m.addr.clone(),
+                got: nums.len(),
+            });
+        }
+        if let Some((index, &value)) = nums.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+            return Err(MessageError::GloveNotFinite {
+                address: m.addr.clone(),
+                index,
+                value,
+            });
         }
         let raw = nums
             .iter()
@@ -85,10 +125,18 @@ pub fn parse_message(m: &OscMessage) -> Result<OscInput, MessageError> {
             .collect();
         return Ok(OscInput::Glove { performer, raw });
     }
-    if nums.len() != 7 || nums.iter().any(|v| !v.is_finite()) {
+    if nums.len() != 7 {
         return Err(MessageError::PoseArity {
             address: m.addr.clone(),
             got: nums.len(),
+        });
+    }
+    const NAMES: [&str; 7] = ["x", "y", "z", "qw", "qx", "qy", "qz"];
+    if let Some((i, &value)) = nums.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        return Err(MessageError::PoseNotFinite {
+            address: m.addr.clone(),
+            name: NAMES[i],
+            value,
         });
     }
     let q = DQuat::from_xyzw(nums[4], nums[5], nums[6], nums[3]);
@@ -148,17 +196,42 @@ pub(crate) mod tests {
             }
             other => panic!("{other:?}"),
         }
-        let g = msg(
-            "/troupe/pat/glove",
-            vec![OscType::Int(3), OscType::Float(300.0), OscType::Int(0)],
-        );
+        let mut values = vec![OscType::Int(3), OscType::Float(300.0), OscType::Int(0)];
+        values.extend((3..18).map(|_| OscType::Int(128)));
+        let g = msg("/troupe/pat/glove", values);
+        let mut raw = vec![3, 255, 1];
+        raw.extend([128; 15]);
         assert_eq!(
             parse_message(&g).unwrap(),
             OscInput::Glove {
                 performer: "pat".into(),
-                raw: vec![3, 255, 1]
+                raw
             }
         );
+        let g22 = msg("/troupe/pat/glove", vec![OscType::Float(9.0); 22]);
+        assert!(matches!(parse_message(&g22), Ok(OscInput::Glove { raw, .. }) if raw.len() == 22));
+    }
+
+    #[test]
+    fn glove_messages_with_another_count_or_non_finite_values_are_refused() {
+        for n in [0, 3, 17, 19, 23, 40] {
+            let e = parse_message(&msg("/troupe/pat/glove", vec![OscType::Int(100); n]));
+            assert_eq!(
+                e.unwrap_err().to_string(),
+                format!(
+                    "/troupe/pat/glove: expected 18 or 22 glove values (one per sensor), got {n}"
+                )
+            );
+        }
+        let mut values = vec![OscType::Float(100.0); 18];
+        values[4] = OscType::Float(f32::NAN);
+        let e = parse_message(&msg("/troupe/pat/glove", values.clone())).unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "/troupe/pat/glove: glove value 4 is NaN, not a finite number"
+        );
+        values[4] = OscType::Double(f64::NEG_INFINITY);
+        assert!(parse_message(&msg("/troupe/pat/glove", values)).is_err());
     }
 
     #[test]
@@ -167,11 +240,19 @@ pub(crate) mod tests {
             .unwrap_err()
             .to_string()
             .contains("/troupe/<performer>"));
-        assert!(
+        assert_eq!(
             parse_message(&msg("/troupe/pat/head", vec![OscType::Float(1.0)]))
                 .unwrap_err()
-                .to_string()
-                .contains("7 finite numbers")
+                .to_string(),
+            "/troupe/pat/head: expected 7 numbers x y z qw qx qy qz, got 1"
+        );
+        let mut nan = vec![OscType::Float(0.0); 7];
+        nan[3] = OscType::Float(f32::NAN);
+        assert_eq!(
+            parse_message(&msg("/troupe/pat/head", nan))
+                .unwrap_err()
+                .to_string(),
+            "/troupe/pat/head: qw is NaN, not a finite number"
         );
         assert!(
             parse_message(&msg("/troupe/pat/head", vec![OscType::String("a".into())]))

@@ -10,11 +10,13 @@
 //! | out | `/troupe/<actor>/<joint>`     | `x y z qw qx qy qz` for every joint, one bundle per actor per tick |
 //! | out | `/troupe/event`               | `actor` (string), `action id` (int), `kind` (string), `status` (string), `time` (float) |
 
+pub(crate) mod datagram;
 pub(crate) mod error;
 pub(crate) mod listener;
 pub(crate) mod message;
 pub(crate) mod output;
 
+pub use datagram::{decode_datagram, DatagramError, MAX_BUNDLE_DEPTH};
 pub use error::OscError;
 pub use listener::OscListener;
 pub use message::{parse_message, parse_packet, MessageError, OscInput};

@@ -29,8 +29,10 @@ impl Controls {
         }
     }
 
-    /// Takes a button or analog report (others are not controls).
-    pub(crate) fn apply(&mut self, r: &VrpnReading) {
+    /// Takes a button or analog report (others are not controls); `false` when it is
+    /// refused: an analog report with a non-finite channel is not applied at all (NaN
+    /// would differ from itself and fire a change on every report).
+    pub(crate) fn apply(&mut self, r: &VrpnReading) -> bool {
         match r {
             VrpnReading::Button {
                 device,
@@ -45,6 +47,9 @@ impl Controls {
                     self.button(format!("{device}.{i}"), *p);
                 }
             }
+            VrpnReading::Analog { channels, .. } if channels.iter().any(|v| !v.is_finite()) => {
+                return false;
+            }
             VrpnReading::Analog {
                 device, channels, ..
             } => {
@@ -57,6 +62,7 @@ impl Controls {
             }
             _ => {}
         }
+        true
     }
 }
 
@@ -123,5 +129,24 @@ mod tests {
                 Change::Analog("A.0".into(), 0.5)
             ]
         );
+    }
+
+    #[test]
+    fn non_finite_analog_reports_are_refused_whole() {
+        let mut c = Controls::default();
+        let a = |channels: Vec<f64>| VrpnReading::Analog {
+            device: "A".into(),
+            channels,
+            time: 0.0,
+        };
+        assert!(c.apply(&a(vec![0.5, 0.25])));
+        c.changes.clear();
+        // NaN twice: no value taken and no change fired (NaN != NaN fired every time).
+        for bad in [f64::NAN, f64::NAN, f64::INFINITY, f64::NEG_INFINITY] {
+            assert!(!c.apply(&a(vec![0.75, bad])));
+        }
+        assert_eq!(c.changes, vec![]);
+        assert_eq!(c.analogs["A.0"], 0.5);
+        assert_eq!(c.analogs["A.1"], 0.25);
     }
 }

@@ -62,12 +62,15 @@ fn shared(lua: &Lua) -> mlua::Result<SharedPerformers> {
 
 /// Runs `f` on the performer `who` (a name or an actor) names, under the performers'
 /// lock; `f` must not call Lua functions that reach the performers.
+/// Runs `f` on the performer `who` names (its actor or its name); `function` is the
+/// `troupe.devices` function asking, named in the error when `who` is not a performer.
 fn with_performer<R>(
     lua: &Lua,
+    function: &str,
     who: &Value,
     f: impl FnOnce(&mut Performer) -> mlua::Result<R>,
 ) -> mlua::Result<R> {
-    let i = performer_index(lua, who)?;
+    let i = performer_index(lua, function, who)?;
     let s = shared(lua)?;
     let mut perf =
         s.0.lock()
@@ -75,23 +78,48 @@ fn with_performer<R>(
     f(&mut perf.list[i])
 }
 
-fn performer_index(lua: &Lua, who: &Value) -> mlua::Result<usize> {
+/// The index of the performer `who` names; the error names `function` and the value.
+fn performer_index(lua: &Lua, function: &str, who: &Value) -> mlua::Result<usize> {
     let s = shared(lua)?;
-    let perf =
-        s.0.lock()
-            .map_err(|_| lua_err_message("performer lock poisoned"))?;
-    let found = match who {
-        Value::String(n) => {
-            let n = n.to_str()?.to_string();
-            perf.list.iter().position(|p| p.name == n)
+    let found = {
+        let perf =
+            s.0.lock()
+                .map_err(|_| lua_err_message("performer lock poisoned"))?;
+        match who {
+            Value::String(n) => {
+                let n = n.to_str()?.to_string();
+                perf.list.iter().position(|p| p.name == n)
+            }
+            Value::UserData(u) => {
+                let a = u.borrow::<ActorRef>()?.0;
+                perf.list.iter().position(|p| p.actor == a)
+            }
+            _ => None,
         }
-        Value::UserData(u) => {
-            let a = u.borrow::<ActorRef>()?.0;
-            perf.list.iter().position(|p| p.actor == a)
-        }
-        _ => None,
     };
-    found.ok_or_else(|| lua_err_message("not a performer (give the actor or its name)"))
+    found.ok_or_else(|| {
+        let what = match who {
+            Value::String(n) => format!("no performer named '{}'", n.to_string_lossy()),
+            Value::UserData(u) => {
+                let name = u.borrow::<ActorRef>().ok().and_then(|a| {
+                    troupe_lua::kinds::with_scene(lua, |sc| {
+                        sc.actors().get(a.0).map(|x| x.name.clone())
+                    })
+                    .ok()
+                    .flatten()
+                });
+                match name {
+                    Some(n) => format!("actor '{n}' is not a performer"),
+                    None => "the actor is not a performer".to_string(),
+                }
+            }
+            other => format!(
+                "expected a performer (its actor or its name), got {}",
+                other.type_name()
+            ),
+        };
+        args::err(&format!("troupe.devices.{function}"), what)
+    })
 }
 
 fn install_lua(lua: &Lua) -> mlua::Result<()> {
@@ -117,7 +145,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "calibrate",
         lua.create_function(|lua, who: Value| {
-            with_performer(lua, &who, |p| {
+            with_performer(lua, "calibrate", &who, |p| {
                 p.calibrate_requested = true;
                 Ok(())
             })
@@ -126,7 +154,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "is_calibrated",
         lua.create_function(|lua, who: Value| {
-            with_performer(lua, &who, |p| {
+            with_performer(lua, "is_calibrated", &who, |p| {
                 Ok(p.fob.as_ref().is_none_or(|f| f.converter.is_calibrated())
                     && p.vrpn.as_ref().is_none_or(|v| v.converter.is_calibrated()))
             })
@@ -135,7 +163,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "health",
         lua.create_function(|lua, who: Value| {
-            with_performer(lua, &who, |p| {
+            with_performer(lua, "health", &who, |p| {
                 let out = lua.create_table()?;
                 let reports = [
                     ("fob", p.fob.as_ref().map(|f| f.source.health())),
@@ -144,11 +172,13 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
                         "osc",
                         p.osc.as_ref().map(|o| Some(o.listener.health.report())),
                     ),
-                    ("vrpn", p.vrpn.as_ref().map(|v| v.source.health())),
                 ];
                 for (dev, report) in reports {
                     let Some(report) = report else { continue };
                     out.set(dev, health_table(lua, report)?)?;
+                }
+                if let Some(v) = &p.vrpn {
+                    out.set("vrpn", v.health_table(lua)?)?;
                 }
                 if let Some(v) = &p.vmc {
                     out.set("vmc", crate::vmc::lua::health(lua, v)?)?;
@@ -161,7 +191,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
         "hand",
         lua.create_function(|lua, who: Value| {
             // The glove's hand DOF targets by name: what a grasp corrector would consume.
-            with_performer(lua, &who, |p| {
+            with_performer(lua, "hand", &who, |p| {
                 let hand = troupe_lua::kinds::with_scene(lua, |scene| {
                     scene
                         .input_pose(p.actor)
@@ -182,7 +212,8 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
             // The glove hand's grasping automaton (4.7): its state, and the object it
             // touches or holds (nil when free).
             // The capture posts it on the scene's blackboard after every tick.
-            let (name, actor) = with_performer(lua, &who, |p| Ok((p.name.clone(), p.actor)))?;
+            let (name, actor) =
+                with_performer(lua, "hand_state", &who, |p| Ok((p.name.clone(), p.actor)))?;
             let (side, state, object) = troupe_lua::kinds::with_scene(lua, |sc| {
                 sc.blackboard().hand_state(actor).map(|(side, state)| {
                     let object = state
@@ -210,7 +241,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "glove",
         lua.create_function(|lua, who: Value| {
-            match with_performer(lua, &who, |p| {
+            match with_performer(lua, "glove", &who, |p| {
                 Ok(p.glove.as_ref().and_then(|g| g.latest.clone()))
             })? {
                 Some(raw) => Ok(Value::Table(lua.create_sequence_from(raw)?)),
@@ -221,7 +252,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
     devices.set(
         "on_gesture",
         lua.create_function(|lua, (who, f): (Value, Function)| {
-            with_performer(lua, &who, |p| {
+            with_performer(lua, "on_gesture", &who, |p| {
                 p.gesture_handlers.push(f);
                 Ok(())
             })
@@ -231,7 +262,7 @@ fn install_lua(lua: &Lua) -> mlua::Result<()> {
         "train_gestures",
         lua.create_function(|lua, (who, examples): (Value, Table)| {
             // { name = "file.rec", … }: every glove record of each recording is an example.
-            let i = performer_index(lua, &who)?;
+            let i = performer_index(lua, "train_gestures", &who)?;
             let mut ex = Vec::new();
             for pair in examples.pairs::<String, String>() {
                 let (name, file) = pair?;

@@ -144,7 +144,7 @@ impl Performers {
             if let Some(o) = &p.osc {
                 v.push((p.name.clone(), "osc", o.listener.health.report()));
             }
-            if let Some(h) = p.vrpn.as_ref().and_then(|v| v.source.health()) {
+            if let Some(h) = p.vrpn.as_ref().and_then(|v| v.health()) {
                 v.push((p.name.clone(), "vrpn", h));
             }
             if let Some(h) = p.vmc.as_ref().and_then(|m| m.health()) {
@@ -213,13 +213,39 @@ impl Performers {
                             position,
                             rotation,
                         } if performer == p.name => {
-                            if let Some((_, a)) = o.joints.iter().find(|(n, _)| *n == joint) {
-                                o.latest.insert(*a, (position, rotation));
-                                changed = true;
-                                newest = newest.max(Some(at));
+                            match o.joints.iter().find(|(n, _)| *n == joint) {
+                                Some((_, a)) => {
+                                    o.latest.insert(*a, (position, rotation));
+                                    changed = true;
+                                    newest = newest.max(Some(at));
+                                }
+                                None => {
+                                    let listed: Vec<&str> =
+                                        o.joints.iter().map(|(n, _)| n.as_str()).collect();
+                                    o.listener.refuse(format!(
+                                        "/troupe/{performer}/{joint}: '{joint}' is not one of \
+                                         the performer's OSC joints ({})",
+                                        listed.join(", ")
+                                    ));
+                                }
                             }
                         }
                         OscInput::Glove { performer, raw } if performer == p.name => {
+                            // Values for every sensor of this glove, or none taken.
+                            let sensors = p.glove.as_ref().map(|g| g.calibration.sensors.len());
+                            if sensors != Some(raw.len()) {
+                                o.listener.refuse(match sensors {
+                                    Some(n) => format!(
+                                        "/troupe/{performer}/glove: {} values for a glove of \
+                                         {n} sensors",
+                                        raw.len()
+                                    ),
+                                    None => format!(
+                                        "/troupe/{performer}/glove: the performer has no glove"
+                                    ),
+                                });
+                                continue;
+                            }
                             osc_glove.push((
                                 Reading::Glove(GloveRecord {
                                     command: b'S',

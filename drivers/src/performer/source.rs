@@ -128,6 +128,15 @@ impl Source {
         }
     }
 
+    /// What a replay's decoder could not use so far: (messages or records, their bytes);
+    /// zero for a live device (its health has them) or an external feed.
+    pub(crate) fn decode_counters(&self) -> (u64, u64) {
+        match self {
+            Source::Replay { feed, .. } => feed.lock().map(|f| f.counters()).unwrap_or_default(),
+            Source::Live { .. } | Source::External => (0, 0),
+        }
+    }
+
     /// The device's health; `None` for a replay or an external feed.
     pub(crate) fn health(&self) -> Option<HealthReport> {
         match self {

@@ -4,10 +4,12 @@
 //! brought to the scene's (metres, Y up); buttons and analog channels served on the same
 //! connection become the performer's controls.
 
+use crate::device::health::HealthReport;
 use crate::device::reading::Reading;
 use crate::device::remote::RemotePorts;
 use crate::device::thread::Opener;
 use crate::lua::args::{check_keys, resolve};
+use crate::lua::health::health_table;
 use crate::performer::controls::Controls;
 use crate::performer::converter::AnatomicalConverter;
 use crate::performer::source::Source;
@@ -15,7 +17,7 @@ use crate::record::feed::DeviceReplay;
 use crate::record::writer::Recorder;
 use crate::vrpn::{self, DeviceName, VrpnConfig, VrpnReading};
 use glam::{DQuat, DVec3};
-use mlua::{Lua, Table};
+use mlua::{Lua, Table, Value};
 use std::collections::BTreeMap;
 use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
@@ -45,6 +47,11 @@ impl Axes {
     }
 }
 
+/// Metres from the server's origin beyond which a tracker position is refused. Tracked
+/// rooms are tens of metres; a position a kilometre away is a broken server or a wrong
+/// `units`, and taken as is it would throw the actor out of the scene.
+pub(crate) const MAX_POSITION: f64 = 1000.0;
+
 /// A VRPN tracker (and its controls) on a performer.
 pub(crate) struct VrpnInput {
     /// Where the reports come from.
@@ -57,6 +64,11 @@ pub(crate) struct VrpnInput {
     pub(crate) scale: f64,
     /// Buttons and analog channels.
     pub(crate) controls: Controls,
+    /// Reports taken from the source (what a replay reports as its samples).
+    pub(crate) samples: u64,
+    /// Reports refused: a non-finite number, a zero quaternion, a position beyond
+    /// [`MAX_POSITION`].
+    pub(crate) invalid: u64,
 }
 
 impl VrpnInput {
@@ -68,6 +80,7 @@ impl VrpnInput {
         let mapped = self.converter.birds();
         for (r, at) in self.source.take(tick, time) {
             let Reading::Vrpn(r) = r else { continue };
+            self.samples += 1;
             match r {
                 VrpnReading::Tracker {
                     sensor,
@@ -75,25 +88,65 @@ impl VrpnInput {
                     quaternion: [x, y, z, w],
                     ..
                 } => {
+                    let p = DVec3::from_array(position) * self.scale;
+                    let q = DQuat::from_xyzw(x, y, z, w);
+                    // A zero or non-finite quaternion is no rotation, a position beyond
+                    // the bound no place in the room: refused rather than turned into
+                    // NaN joints or an actor kilometres away.
+                    let usable = p.is_finite()
+                        && p.length() <= MAX_POSITION
+                        && q.is_finite()
+                        && q.length() > 1e-6;
+                    if !usable {
+                        self.invalid += 1;
+                        continue;
+                    }
                     let Some(addr) = u8::try_from(sensor + 1).ok().filter(|a| mapped.contains(a))
                     else {
                         continue;
                     };
-                    let p = DVec3::from_array(position) * self.scale;
-                    let q = DQuat::from_xyzw(x, y, z, w);
-                    // A zero or non-finite quaternion is no rotation: skip rather than
-                    // turn it into NaN joints.
-                    if !(p.is_finite() && q.is_finite() && q.length() > 1e-6) {
-                        continue;
-                    }
                     self.latest.insert(addr, (p, q.normalize()));
                     changed = true;
                     newest = newest.max(at);
                 }
-                other => self.controls.apply(&other),
+                other => {
+                    if !self.controls.apply(&other) {
+                        self.invalid += 1;
+                    }
+                }
             }
         }
         (changed, newest)
+    }
+
+    /// The live connection's health with the refused reports counted as resyncs (what
+    /// `troupe run` prints); `None` for a replay.
+    pub(crate) fn health(&self) -> Option<HealthReport> {
+        let mut h = self.source.health()?;
+        h.resyncs += self.invalid;
+        Some(h)
+    }
+
+    /// The health table of `troupe.devices.health(pat).vrpn`: the connection's state and
+    /// counters and `invalid`. A replay has the same fields, counted from what it
+    /// replays: `samples` the reports taken, `resyncs` and `dropped_bytes` what its
+    /// decoder could not use plus the refused reports, `state = "replay"`.
+    pub(crate) fn health_table(&self, lua: &Lua) -> mlua::Result<Table> {
+        let t = match self.health() {
+            Some(h) => health_table(lua, Some(h))?,
+            None => {
+                let t = health_table(lua, None)?;
+                let (resyncs, dropped_bytes) = self.source.decode_counters();
+                t.set("samples", self.samples)?;
+                t.set("resyncs", resyncs + self.invalid)?;
+                t.set("dropped_bytes", dropped_bytes)?;
+                t.set("dropped_samples", 0)?;
+                t.set("connections", 0)?;
+                t
+            }
+        };
+        t.set("invalid", self.invalid)?;
+        Ok(t)
     }
 }
 
@@ -118,8 +171,24 @@ pub(crate) fn vrpn_input(
         .get::<Option<Table>>("map")?
         .ok_or_else(|| args::err(WHAT, "`map` (joint = sensor, from 0) is required"))?;
     let mut map = Vec::new();
-    for pair in map_t.pairs::<String, i64>() {
-        let (j, s) = pair?;
+    for pair in map_t.pairs::<String, Value>() {
+        let (j, v) = pair?;
+        // A sensor is a whole number: say which entry is not, rather than mlua's bare
+        // "expected an integer".
+        let s = match v {
+            Value::Integer(s) => s,
+            Value::Number(n) if n.fract() == 0.0 && n.abs() <= 1e15 => n as i64,
+            other => {
+                let shown = match &other {
+                    Value::Number(n) => n.to_string(),
+                    o => o.type_name().to_string(),
+                };
+                return Err(args::err(
+                    WHAT,
+                    format!("map.{j} = {shown} is not a sensor 0…254 (a whole number)"),
+                ));
+            }
+        };
         if !(0..=254).contains(&s) {
             return Err(args::err(
                 WHAT,
@@ -177,7 +246,7 @@ pub(crate) fn vrpn_input(
             if !(timeout > 0.0 && timeout <= 60.0) {
                 return Err(args::err(
                     WHAT,
-                    format!("timeout must be 0…60 s, got {timeout}"),
+                    format!("timeout must be more than 0 and at most 60 s, got {timeout}"),
                 ));
             }
             let options = vrpn::driver_options(&format!("{name}.vrpn"), &d);
@@ -220,12 +289,124 @@ pub(crate) fn vrpn_input(
         latest: BTreeMap::new(),
         scale,
         controls: Controls::default(),
+        samples: 0,
+        invalid: 0,
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::performer::controls::Change;
+    use crate::performer::converter::tests::adult;
+    use crate::record::writer::Recorder;
+    use crate::vrpn::decoder::types;
+    use crate::vrpn::wire::{encode, name_payload, system};
+
+    fn numbers(words: &[i32], values: &[f64]) -> Vec<u8> {
+        let mut p: Vec<u8> = words.iter().flat_map(|w| w.to_be_bytes()).collect();
+        p.extend(values.iter().flat_map(|v| v.to_be_bytes()));
+        p
+    }
+
+    /// A recorded VRPN stream (Tracker0 sensor 0 and Wand0's analogs) of `reports`:
+    /// `(sender, type, payload)` with senders 0 Tracker0, 1 Wand0 and types 0 Pos_Quat,
+    /// 1 Analog Channel.
+    fn recording(name: &str, reports: &[(i32, i32, Vec<u8>)]) -> std::path::PathBuf {
+        let dir = std::env::temp_dir().join(format!("troupe-vrpn-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join(name);
+        let rec = Recorder::create(&path).unwrap();
+        let config = VrpnConfig {
+            device: "Tracker0@localhost".into(),
+            senders: vec!["Tracker0".into(), "Wand0".into()],
+        };
+        let s = rec.add_stream("pat.vrpn", "vrpn", serde_json::to_value(&config).unwrap());
+        let described = [
+            (0, system::SENDER_DESCRIPTION, "Tracker0"),
+            (1, system::SENDER_DESCRIPTION, "Wand0"),
+            (0, system::TYPE_DESCRIPTION, types::POS_QUAT),
+            (1, system::TYPE_DESCRIPTION, types::ANALOG),
+        ];
+        for (id, kind, name) in described {
+            rec.data_at(s, 0, &encode(0, 0, id, kind, &name_payload(name)));
+        }
+        for (k, (sender, kind, payload)) in reports.iter().enumerate() {
+            rec.data_at(
+                s,
+                1000 * (k as u64 + 1),
+                &encode(0, 0, *sender, *kind, payload),
+            );
+        }
+        rec.finish().unwrap();
+        path
+    }
+
+    fn input(path: &std::path::Path) -> VrpnInput {
+        let map = [("pelvis".to_string(), 1u8)];
+        VrpnInput {
+            source: Source::replay(path, None, "vrpn", (0.0, 0)).unwrap(),
+            converter: AnatomicalConverter::new(adult(), &map, Axes::YUp.to_scene()).unwrap(),
+            latest: BTreeMap::new(),
+            scale: 1.0,
+            controls: Controls::default(),
+            samples: 0,
+            invalid: 0,
+        }
+    }
+
+    #[test]
+    fn non_finite_and_far_reports_are_refused_and_counted() {
+        let (w, id) = ([0, 0], [0.0, 0.0, 0.0, 1.0]);
+        let pose = |p: [f64; 3]| (0, 0, numbers(&w, &[p.as_slice(), &id].concat()));
+        let analog = |v: f64| (1, 1, numbers(&[], &[1.0, v]));
+        let path = recording(
+            "refused.rec",
+            &[
+                pose([0.1, 1.0, 0.2]),
+                pose([f64::NAN, 1.0, 0.2]),
+                // 1e300 m (the tester's) and just past the bound: refused.
+                pose([0.0, 1e300, 0.0]),
+                pose([MAX_POSITION + 1.0, 0.0, 0.0]),
+                analog(0.5),
+                analog(f64::NAN),
+                analog(f64::NAN),
+                analog(f64::INFINITY),
+            ],
+        );
+        let mut v = input(&path);
+        let (changed, _) = v.take(0, 10.0);
+        assert!(changed);
+        assert_eq!(v.latest[&1].0, DVec3::new(0.1, 1.0, 0.2));
+        assert_eq!(v.controls.changes, [Change::Analog("Wand0.0".into(), 0.5)]);
+        assert_eq!(v.controls.analogs["Wand0.0"], 0.5);
+        assert_eq!((v.samples, v.invalid), (8, 6));
+    }
+
+    #[test]
+    fn a_replayed_tracker_reports_the_live_health_fields() {
+        let report = numbers(&[0, 0], &[0.1, 1.0, 0.2, 0.0, 0.0, 0.0, 1.0]);
+        let path = recording(
+            "health.rec",
+            &[
+                (0, 0, report.clone()),
+                (0, 0, report[..20].to_vec()), // short: the decoder's resync
+                (0, 0, numbers(&[0, 0], &[f64::NAN; 7])),
+                (0, 0, report),
+            ],
+        );
+        let mut v = input(&path);
+        v.take(0, 10.0);
+        let lua = Lua::new();
+        let t = v.health_table(&lua).unwrap();
+        assert_eq!(t.get::<String>("state").unwrap(), "replay");
+        let field = |k: &str| t.get::<u64>(k).unwrap();
+        assert_eq!(field("samples"), 3);
+        assert_eq!(field("invalid"), 1);
+        assert_eq!(field("resyncs"), 2);
+        assert_eq!(field("dropped_bytes"), 20);
+        assert_eq!((field("dropped_samples"), field("connections")), (0, 0));
+    }
 
     #[test]
     fn z_up_axes_turn_into_the_scenes_y_up() {

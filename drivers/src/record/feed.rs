@@ -126,6 +126,12 @@ impl StreamFeed {
         self.clock
     }
 
+    /// What the stream's decoder could not use in the bytes decoded so far (a file's are
+    /// decoded when it is opened): (messages or records, their bytes).
+    pub(crate) fn counters(&self) -> (u64, u64) {
+        self.protocol.as_ref().map_or((0, 0), |p| p.counters())
+    }
+
     /// The recorded time of the first reading, in seconds.
     pub(crate) fn first_time(&self) -> Option<f64> {
         self.readings.first().map(|r| r.0)

@@ -5,11 +5,24 @@
 //! Each frame is placed on the receiver's clock by the sender's `/VMC/Ext/T` when it has
 //! one: its due time is `T + offset`, with `offset` the smallest `arrival − T` seen (the
 //! least-delayed packet), so network jitter does not move frames around. A frame without
-//! `T` is due when it arrived. A sender whose clock jumps back (restarted) starts afresh.
+//! `T` is due when it arrived.
+//!
+//! A sender whose clock goes back has restarted, unless the frame is an old one arriving
+//! out of order. The two are told apart by lateness: on the sender's old clock a frame
+//! is due at `T + offset`, and a datagram overtaken on the network arrives a few
+//! milliseconds after that, while a restarted clock's frames arrive as late as the time
+//! the old clock had run when the new one started. A frame whose `T` goes back and that
+//! arrives more than [`RESTART_LATENESS`] after its due time starts the clock afresh.
 
 use crate::vmc::rig::VmcPose;
 use std::collections::VecDeque;
 use std::time::Instant;
+
+/// How late (s) a frame whose clock went back may arrive and still be taken as an old
+/// frame reordered by the network rather than a restarted sender. Networks reorder by
+/// milliseconds, far below this; a sender restarted sooner than this after it started
+/// is not recognised, and holds its last pose at most this long.
+pub const RESTART_LATENESS: f64 = 0.25;
 
 /// One buffered frame.
 #[derive(Clone, Debug)]
@@ -75,7 +88,11 @@ impl JitterBuffer {
         }
         let due = match source_time {
             Some(t) => {
-                if self.last_source.is_some_and(|l| t < l - 1.0) {
+                let went_back = self.last_source.is_some_and(|l| t < l);
+                let late = self
+                    .offset
+                    .is_some_and(|o| arrival - (t + o) > RESTART_LATENESS);
+                if went_back && late {
                     // The sender restarted: its clock starts again.
                     self.offset = None;
                 }
@@ -180,5 +197,38 @@ mod tests {
         j.push(10.0, Some(100.0), &pose(0.1), None);
         j.push(10.1, Some(0.0), &pose(0.3), None);
         assert!((angle(&j.play(10.1).unwrap()) - 0.3).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_sender_restarted_less_than_a_second_into_its_clock_plays_at_once() {
+        // The tester's case: a sender runs 1 s (T 0…1), is silent 0.3 s, and starts
+        // again from T = 0 with another pose: its clock went back by only 1 s.
+        let mut j = JitterBuffer::new(0.02);
+        for k in 0..=60 {
+            let t = k as f64 / 60.0;
+            j.push(10.0 + t, Some(t), &pose(0.1), None);
+        }
+        for k in 0..=30 {
+            let t = k as f64 / 60.0;
+            j.push(11.3 + t, Some(t), &pose(0.5), None);
+        }
+        let got = angle(&j.play(11.3 + 0.25).unwrap());
+        assert!(
+            (got - 0.5).abs() < 1e-9,
+            "{got}: still the first sender's pose"
+        );
+    }
+
+    #[test]
+    fn a_datagram_overtaken_on_the_network_is_not_a_restart() {
+        let mut j = JitterBuffer::new(0.02);
+        j.push(10.000, Some(0.0), &pose(0.0), None);
+        j.push(10.035, Some(2.0 / 60.0), &pose(0.2), None);
+        // The frame between them arrives last, 29 ms late: it slots in by its T.
+        j.push(10.045, Some(1.0 / 60.0), &pose(0.1), None);
+        let mid = 10.0 + 1.0 / 60.0 + 0.02;
+        assert!((angle(&j.play(mid).unwrap()) - 0.1).abs() < 1e-9);
+        let end = 10.0 + 2.0 / 60.0 + 0.02;
+        assert!((angle(&j.play(end).unwrap()) - 0.2).abs() < 1e-9);
     }
 }

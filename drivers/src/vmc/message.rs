@@ -8,6 +8,7 @@
 //! | `/VMC/Ext/Root/Pos` | `"root"`, `p.x p.y p.z q.x q.y q.z q.w` (floats; more are allowed) |
 //! | `/VMC/Ext/Bone/Pos` | bone name (Unity `HumanBodyBones`), `p.x p.y p.z q.x q.y q.z q.w` |
 
+use crate::osc::datagram::decode_datagram;
 use crate::vmc::bones::{bone_index, IGNORED_BONES};
 use crate::vmc::rig::VmcPose;
 use glam::{DQuat, DVec3};
@@ -26,6 +27,14 @@ pub struct VmcPacket {
     pub time: Option<f64>,
     /// `/VMC/Ext/OK`: whether the sender has an avatar loaded.
     pub loaded: Option<bool>,
+}
+
+impl VmcPacket {
+    /// Whether the datagram gave nothing troupe reads: not OSC, or no VMC message it
+    /// uses (what `probe` does not count as a sample).
+    pub fn is_empty(&self) -> bool {
+        self.pose.is_empty() && self.time.is_none() && self.loaded.is_none()
+    }
 }
 
 /// Counters of what a receiver could not use; each kind of problem apart.
@@ -96,12 +105,14 @@ fn pose_message(addr: &str, name: &str, t: &Transform) -> OscPacket {
     message(addr, args)
 }
 
-/// Reads one datagram; what cannot be used is counted in `counters` and skipped.
+/// Reads one datagram; what cannot be used is counted in `counters` and skipped. A
+/// datagram that is not one whole OSC packet (cut short, a lying bundle size, garbage)
+/// is `malformed` and gives nothing: a frame is taken whole or not at all.
 pub fn read_datagram(bytes: &[u8], counters: &mut VmcCounters) -> VmcPacket {
     counters.packets += 1;
     let mut out = VmcPacket::default();
-    match rosc::decoder::decode_udp(bytes) {
-        Ok((_, p)) => read_packet(&p, &mut out, counters),
+    match decode_datagram(bytes) {
+        Ok(p) => read_packet(&p, &mut out, counters),
         Err(_) => counters.malformed += 1,
     }
     out
@@ -249,6 +260,40 @@ mod tests {
             read_datagram(&bytes[..cut], &mut c);
         }
         read_datagram(b"\xff\xfe garbage", &mut c);
-        assert!(c.malformed >= 3, "{c:?}");
+        // Every cut but 16 (right after the bundle header: an empty bundle, valid OSC).
+        assert_eq!(c.malformed, 5, "{c:?}");
+    }
+
+    #[test]
+    fn only_datagrams_with_vmc_content_are_samples() {
+        let mut c = VmcCounters::default();
+        let frame = encode(&frame_bundle(&VmcPose::default(), 1.0));
+        assert!(!read_datagram(&frame, &mut c).is_empty());
+        let ok = encode(&message("/VMC/Ext/OK", vec![OscType::Int(0)]));
+        assert!(!read_datagram(&ok, &mut c).is_empty());
+        let other = encode(&message("/other", vec![OscType::Int(0)]));
+        for bytes in [&b"\x13\x37 random"[..], &frame[..frame.len() - 3], &other] {
+            assert!(read_datagram(bytes, &mut c).is_empty());
+        }
+    }
+
+    #[test]
+    fn a_frame_cut_inside_a_bone_is_dropped_whole_and_counted() {
+        // The tester's case: pose B's frame cut inside its `LeftUpperArm` message. Its
+        // hips and right arm decode, but applying them would mix B with the last pose.
+        let mut pose = VmcPose::default();
+        for name in ["Hips", "RightUpperArm", "LeftUpperArm"] {
+            let t = Transform::new(DQuat::from_rotation_y(1.0), DVec3::new(0.0, 0.8, 0.0));
+            pose.bones[bone_index(name).unwrap()] = Some(t);
+        }
+        let bytes = encode(&frame_bundle(&pose, 1.0));
+        let at = bytes
+            .windows(12)
+            .position(|w| w == b"LeftUpperArm")
+            .unwrap();
+        let mut c = VmcCounters::default();
+        let got = read_datagram(&bytes[..at + 8], &mut c);
+        assert_eq!(got, VmcPacket::default());
+        assert_eq!((c.packets, c.malformed, c.invalid), (1, 1, 0));
     }
 }
