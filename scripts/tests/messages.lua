@@ -39,6 +39,24 @@ test("an error in a function an action calls is the message alone, with the time
   expect(e:find("messages%.lua:%d+: boom$"), e)
 end)
 
+test("options inside options are checked, and so are magnitudes no body could take", function()
+  local ann = troupe.actor{ name = "ann" }
+  says(function() ann:simulate{ duration = 0.5, push = { forc = {0, 1400, 0} } } end,
+    "simulate: push: unknown field `forc` (known: force, torque, duration)")
+  says(function() ann:simulate{ duration = 0.5, push = { force = {0, 1e300, 0} } } end,
+    "push.force must be at most 1e6 N and push.torque at most 1e6 N·m, got 1e300 N and 0e0 N·m")
+  says(function() ann:simulate{ small_time_step = 0.1, time_step = 0.01, duration = 1 } end,
+    "small_time_step")
+  says(function() ann:simulate{ small_time_step = 0.1, time_step = 0.01, duration = 1 } end,
+    "at most time_step (0.01 s)")
+  says(function() ann:forward_dynamics{ tau = { r_elbow_flexion = 1e308 } } end,
+    "forward_dynamics: invalid dynamics: tau[r_elbow_flexion]: 1e308 (a finite number within ±1e9)")
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1, at = {-0.2, 1.05, 0.38} }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  says(function() ann:manipulate{ object = cup, keys = { { t = 1, at = {-0.2, 1.1, 0.4}, rot = {0, 90, 0} } } } end,
+    "manipulate: keys[1]: unknown field `rot` (known: t, at, rotation)")
+end)
+
 test("names that could not be file names are refused", function()
   -- Each name goes into a recording's file names (`rec.NAME.bvh`): a '/' wrote elsewhere.
   says(function() troupe.actor{ name = "x/../../escaped" } end,

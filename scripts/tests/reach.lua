@@ -42,6 +42,17 @@ test("a reach too quick for its arm catches up instead of jumping at the end", f
   expect(troupe.time() <= 0.4 + 0.5 + 0.015, "caught up within 0.5 s")
 end)
 
+test("a reach shorter than a tick aims at its target and catches up", function()
+  -- Its only tick was also its first: it solved for the path's start, 0.51 m short, and
+  -- failed, where 0.01 s completed.
+  local ann = troupe.actor{ name = "ann" }
+  local target = {-0.25, 1.1, 0.4}
+  local r = ann:reach{ hand = "right", target = target, duration = 0.005 }
+  expect(run_until(function() return r.status ~= "active" end, 1), "ended")
+  expect(r.status == "completed", r.status .. ": " .. tostring(r.error))
+  expect(troupe.time() <= 0.5 + 0.02, "caught up within 0.5 s: " .. troupe.time())
+end)
+
 test("an unreachable target fails with the distance in error", function()
   local ann = troupe.actor{ name = "ann" }
   local r = ann:reach{ target = {0, 1.2, 3}, duration = 0.5 }

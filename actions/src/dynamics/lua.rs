@@ -8,7 +8,7 @@ use troupe_body::dynamics::contact::ContactParams;
 use troupe_body::dynamics::SimParams;
 use troupe_body::glam::DVec3;
 use troupe_lua::api::{load_sequence, ActorRef, SequenceRef};
-use troupe_lua::args::{err, opt_bool, opt_number, opt_table_arg, vec3};
+use troupe_lua::args::{check_keys, err, opt_bool, opt_number, opt_table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
@@ -87,6 +87,7 @@ pub fn build_simulate(
         match t.get::<Value>("push")? {
             Value::Nil => {}
             Value::Table(p) => {
+                check_keys(&p, "simulate: push", &["force", "torque", "duration"])?;
                 let read = |k: &str| -> mlua::Result<DVec3> {
                     let v: Value = p.get(k)?;
                     if v.is_nil() {

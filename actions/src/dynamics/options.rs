@@ -7,6 +7,24 @@ use troupe_body::dynamics::{Gains, SimParams};
 use troupe_body::glam::DVec3;
 use troupe_body::{Scope, Skeleton};
 
+/// The strongest push (N): ten times a car crash's force, which already throws a body
+/// across the room in a tenth of a second. Stronger pushes diverge within a step, or
+/// overflow the solve and are misreported as a lost inertia.
+pub const MAX_PUSH_FORCE: f64 = 1e6;
+
+/// The strongest turning push (N·m), on the same grounds as [`MAX_PUSH_FORCE`].
+pub const MAX_PUSH_TORQUE: f64 = 1e6;
+
+/// The length of `v`, without overflow for huge components (glam's squares them).
+fn magnitude(v: DVec3) -> f64 {
+    let largest = v.abs().max_element();
+    if largest > 0.0 && largest.is_finite() {
+        largest * (v / largest).length()
+    } else {
+        largest
+    }
+}
+
 /// A force and a torque applied at the centre of mass from the start of a `simulate`.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Push {
@@ -82,6 +100,17 @@ impl DynamicsOptions {
         if let Some(push) = &self.push {
             if !(push.duration.is_finite() && push.duration >= 0.0) {
                 return Err(OptionError::refused("push", "push.duration must be ≥ 0").into());
+            }
+            let (force, torque) = (magnitude(push.force), magnitude(push.torque));
+            if !(force <= MAX_PUSH_FORCE && torque <= MAX_PUSH_TORQUE) {
+                return Err(OptionError::refused(
+                    "push",
+                    format!(
+                        "push.force must be at most {MAX_PUSH_FORCE:e} N and push.torque at most \
+                         {MAX_PUSH_TORQUE:e} N·m, got {force:e} N and {torque:e} N·m"
+                    ),
+                )
+                .into());
             }
         }
         Ok(())

@@ -3,7 +3,9 @@
 
 use super::{ManipulateOptions, ObjectKey};
 use mlua::{MultiValue, Value};
-use troupe_lua::args::{err, error_text, euler_degrees, object_arg, opt_number, table_arg, vec3};
+use troupe_lua::args::{
+    check_keys, err, error_text, euler_degrees, object_arg, opt_number, table_arg, vec3,
+};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
@@ -44,6 +46,11 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                         ),
                     ));
                 };
+                check_keys(
+                    &k,
+                    &format!("{m}: keys[{}]", i + 1),
+                    &["t", "at", "rotation"],
+                )?;
                 let time = opt_number(&k, m, "t")?
                     .ok_or_else(|| err(m, format!("keys[{}].t is required", i + 1)))?;
                 let at: Value = k.get("at")?;

@@ -397,14 +397,22 @@ impl Generator for Reach {
             self.q[d] = v;
         }
         let t = ctx.local_time;
+        let finishing = t + 0.5 * ctx.dt >= self.spec.duration;
+        // Where the path is now: its end from the finishing tick on, which for a reach
+        // shorter than a tick is its first (the path's start was measured there, and the
+        // arm failed 0.5 m short of a goal it never aimed at).
+        let along = if finishing {
+            t.max(self.spec.duration)
+        } else {
+            t
+        };
         // A crouching reach lowers the body along the same ease as the path.
-        let s = quintic(t / self.spec.duration);
+        let s = quintic(along / self.spec.duration);
         for &(d, from, to) in &self.crouch {
             self.q[d] = from + (to - from) * s;
             out.set(d, self.q[d]);
         }
-        let finishing = t + 0.5 * ctx.dt >= self.spec.duration;
-        let mut point = self.path(t, goal);
+        let mut point = self.path(along, goal);
         if let (true, Some((radius, offset))) =
             (self.spec.detour, self.hand_sphere(&ctx.posture.globals))
         {
@@ -433,10 +441,10 @@ impl Generator for Reach {
             ) - (sensors.center(own, &ctx.posture.globals)
                 - self.spec.effector.position(&ctx.posture.globals));
         }
-        let orientation = self.spec.orientation.map(|r| {
-            let s = quintic(t / self.spec.duration);
-            self.start_rotation.slerp(r, s)
-        });
+        let orientation = self
+            .spec
+            .orientation
+            .map(|r| self.start_rotation.slerp(r, s));
         let task = IkTask {
             effector: self.spec.effector,
             goal: Goal {

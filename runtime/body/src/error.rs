@@ -48,7 +48,7 @@ pub enum Error {
         name: String,
     },
     /// A numeric parameter outside its valid range.
-    #[error("invalid {what}: {value} ({expected})")]
+    #[error("invalid {what}: {} ({expected})", readable(*.value))]
     InvalidValue {
         /// The parameter.
         what: String,
@@ -73,6 +73,16 @@ pub enum Error {
     /// Anything else a caller asked for that cannot be done, with the reason.
     #[error("{0}")]
     Invalid(String),
+}
+
+/// A number as a message shows it: as written for everyday sizes, in exponent form for
+/// huge and tiny ones (1e308 printed 309 digits).
+fn readable(v: f64) -> String {
+    if v != 0.0 && v.is_finite() && !(1e-4..1e9).contains(&v.abs()) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
 }
 
 impl Error {

@@ -96,7 +96,13 @@ impl ExternalForces {
     }
 }
 
-/// Checks that `values` has one finite entry per DOF; the error names the first bad one.
+/// The largest magnitude a state or input value may have (rad, m, their rates, N·m, N):
+/// far beyond any body's, and far below where the solve's products overflow (a torque of
+/// 1e308 came back as "singular configuration").
+pub const STATE_BOUND: f64 = 1e9;
+
+/// Checks that `values` has one finite entry within ±[`STATE_BOUND`] per DOF; the error
+/// names the first bad one.
 pub fn check_state(skeleton: &Skeleton, what: &str, values: &[f64]) -> Result<()> {
     if values.len() != skeleton.dof_count() {
         return Err(Error::Invalid(format!(
@@ -106,11 +112,11 @@ pub fn check_state(skeleton: &Skeleton, what: &str, values: &[f64]) -> Result<()
             skeleton.dof_count()
         )));
     }
-    if let Some(k) = values.iter().position(|v| !v.is_finite()) {
+    if let Some(k) = values.iter().position(|v| !(v.abs() <= STATE_BOUND)) {
         return Err(Error::invalid_value(
             format!("dynamics: {what}[{}]", skeleton.dofs()[k].name),
             values[k],
-            "a finite number",
+            format!("a finite number within ±{STATE_BOUND:e}"),
         ));
     }
     Ok(())

@@ -148,6 +148,16 @@ impl SimParams {
             ));
         }
         positive("time_step", self.time_step)?;
+        if self.small_time_step > self.time_step {
+            return Err(Error::invalid_value(
+                "small_time_step",
+                self.small_time_step,
+                format!(
+                    "at most time_step ({} s): the integration steps divide each control period",
+                    self.time_step
+                ),
+            ));
+        }
         positive("limit_frequency", self.limit_frequency)?;
         positive("max_speed", self.max_speed)?;
         if !(self.damping.is_finite() && self.damping >= 0.0) {
