@@ -21,14 +21,14 @@ pub struct RunArgs {
     #[arg(long, conflicts_with_all = ["seconds", "until_idle"])]
     pub ticks: Option<u64>,
     /// Run this many seconds of simulated time.
-    #[arg(long, conflicts_with = "until_idle")]
+    #[arg(long, conflicts_with = "until_idle", value_parser = seconds)]
     pub seconds: Option<f64>,
     /// Run until every behavior has returned and no action is active (the default),
     /// at most --max-seconds.
     #[arg(long)]
     pub until_idle: bool,
     /// Upper bound on simulated time for --until-idle.
-    #[arg(long, default_value_t = 600.0)]
+    #[arg(long, default_value_t = 600.0, value_parser = seconds)]
     pub max_seconds: f64,
     /// Ticks per second.
     #[arg(long, default_value_t = 100.0)]
@@ -42,7 +42,7 @@ pub struct RunArgs {
     /// Actors a worker claims at a time (default: sized by the crowd; a second worker
     /// starts only above 16 actors). `--chunk 1` steps even two actors on two threads,
     /// to check that a small scene is bit-identical whatever the thread count.
-    #[arg(long)]
+    #[arg(long, value_parser = chunk)]
     pub chunk: Option<usize>,
     /// Seed for the scene's random numbers.
     #[arg(long, default_value_t = 0)]
@@ -157,12 +157,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
     let limit = RunLimit {
         ticks: match (args.ticks, args.seconds) {
             (Some(t), _) => t,
-            (None, Some(s)) => {
-                if !(s.is_finite() && s >= 0.0) {
-                    bail!("--seconds must be a number ≥ 0");
-                }
-                (s / dt).round() as u64
-            }
+            (None, Some(s)) => (s / dt).round() as u64,
             (None, None) => (args.max_seconds / dt).ceil() as u64,
         },
         until_idle: args.until_idle || (args.ticks.is_none() && args.seconds.is_none()),
@@ -480,7 +475,7 @@ pub struct RenderArgs {
     /// The PNG file to write.
     pub out: PathBuf,
     /// Simulated time of the picture, in seconds.
-    #[arg(long, default_value_t = 0.0)]
+    #[arg(long, default_value_t = 0.0, value_parser = seconds)]
     pub at: f64,
     /// Picture size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
@@ -509,11 +504,34 @@ pub struct RenderArgs {
     pub debug: Option<troupe_viewer::DebugView>,
 }
 
+/// The longest simulated time a command line may ask for (about 31 years): more is a
+/// slip (`--seconds 1e300` ran for ever).
+const LONGEST: f64 = 1e9;
+
+/// A command-line duration: seconds, ≥ 0 and at most [`LONGEST`].
+pub fn seconds(text: &str) -> std::result::Result<f64, String> {
+    let s: f64 = text
+        .parse()
+        .map_err(|_| format!("`{text}` is not a number of seconds"))?;
+    if !(0.0..=LONGEST).contains(&s) {
+        return Err(format!("{text} s: a duration is from 0 to {LONGEST:e} s"));
+    }
+    Ok(s)
+}
+
+/// A command-line `--chunk`: actors a worker claims at a time, at least 1.
+pub fn chunk(text: &str) -> std::result::Result<usize, String> {
+    match text.parse::<usize>() {
+        Ok(n) if n >= 1 => Ok(n),
+        _ => Err(format!(
+            "`{text}`: a chunk is a whole number of actors, at least 1"
+        )),
+    }
+}
+
 /// `troupe render`: runs a scene headless up to `--at` and writes one picture.
 pub fn render(args: RenderArgs) -> Result<ExitCode> {
-    if !(args.at.is_finite() && args.at >= 0.0) {
-        bail!("--at must be a number of seconds ≥ 0");
-    }
+    crate::view::png_path(&args.out)?;
     let size = troupe_viewer::parse_size(&args.size)?;
     let camera: troupe_viewer::Camera = args.camera.parse()?;
     let config = SceneConfig {

@@ -14,7 +14,7 @@ pub struct TestArgs {
     /// Test files or folders (default `scripts/tests/`).
     pub paths: Vec<PathBuf>,
     /// Longest a test may run, in simulated seconds (a test's own `timeout` replaces it).
-    #[arg(long, default_value_t = 120.0)]
+    #[arg(long, default_value_t = 120.0, value_parser = crate::run::seconds)]
     pub timeout: f64,
     /// Worker threads for stepping actors.
     #[arg(long, default_value_t = 1)]
@@ -22,7 +22,7 @@ pub struct TestArgs {
     /// Actors a worker claims at a time (default: sized by the crowd; a second worker
     /// starts only above 16 actors). `--chunk 1` steps even two actors on two threads,
     /// to check that a small scene is bit-identical whatever the thread count.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::run::chunk)]
     pub chunk: Option<usize>,
     /// Run only the tests whose `FILE › NAME` contains PATTERN.
     #[arg(long, value_name = "PATTERN")]
@@ -152,7 +152,7 @@ pub fn run(args: TestArgs) -> Result<ExitCode> {
     }
     if selected.is_empty() && broken.is_empty() {
         bail!(
-            "no tests selected{}: a run that tests nothing is refused (check the paths and              --filter)",
+            "no tests selected{}: a run that tests nothing is refused (check the paths and --filter)",
             args.filter
                 .as_ref()
                 .map(|p| format!(" (--filter {p:?})"))

@@ -369,6 +369,7 @@ const NAMES: [&str; 8] = ["ann", "bob", "cleo", "dan", "eve", "finn", "gus", "ha
 
 /// Runs `troupe snapshot`.
 pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
+    png_path(&args.out)?;
     let size = parse_size(&args.size)?;
     let camera: Camera = args.camera.parse()?;
     if !args.spacing.is_finite() {
@@ -431,4 +432,19 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         renderer.adapter()
     );
     Ok(ExitCode::SUCCESS)
+}
+
+/// Refuses an output picture not named `.png`: troupe writes PNG, and a `.jpg` of PNG
+/// data is read wrongly by other tools.
+pub fn png_path(out: &std::path::Path) -> Result<()> {
+    let png = out
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("png"));
+    if !png {
+        bail!(
+            "{}: troupe writes PNG pictures: name the file .png",
+            out.display()
+        );
+    }
+    Ok(())
 }

@@ -152,6 +152,65 @@ fn bad_scene_files_give_clear_errors() {
     );
 }
 
+/// Durations, chunks and picture names a user could only mean by mistake are refused
+/// before anything runs (`--seconds 1e300` ran for ever; `render out.jpg` wrote PNG).
+#[test]
+fn impossible_durations_chunks_and_picture_names_are_refused() {
+    let scene = "scripts/examples/greeting.lua";
+    let refused = |args: &[&str], needle: &str| {
+        let out = troupe().args(args).output().unwrap();
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    };
+    refused(
+        &["run", "--seconds", "1e300", scene],
+        "a duration is from 0 to 1e9 s",
+    );
+    refused(
+        &["run", "--seconds=-1", scene],
+        "a duration is from 0 to 1e9 s",
+    );
+    refused(
+        &["run", "--max-seconds=-1", scene],
+        "a duration is from 0 to 1e9 s",
+    );
+    refused(
+        &["run", "--chunk", "0", scene],
+        "a chunk is a whole number of actors, at least 1",
+    );
+    refused(
+        &["test", "--timeout=-1", "scripts/tests/waits.lua"],
+        "a duration is from 0",
+    );
+    refused(
+        &["test", "--chunk", "0", "scripts/tests/waits.lua"],
+        "at least 1",
+    );
+    refused(
+        &["render", "--at", "1e12", scene, "out.png"],
+        "a duration is from 0",
+    );
+    refused(
+        &["render", scene, "out.jpg"],
+        "troupe writes PNG pictures: name the file .png",
+    );
+    refused(&["snapshot", "out.txt"], "troupe writes PNG pictures");
+    let out = troupe()
+        .args([
+            "test",
+            "--filter",
+            "no such test",
+            "scripts/tests/waits.lua",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("(check the paths and --filter)"), "{err}");
+}
+
 #[test]
 fn scenario_tests_pass_and_report_counts() {
     // One file of the suite: scripts/test.sh runs the whole of it, on 1 and on 2 threads
