@@ -82,6 +82,26 @@ test("a box held in both hands fills both: neither grasps anything else", functi
   expect(pen.holder == nil, "the pen is left")
 end)
 
+test("a receive with its hands full fails when it starts, not when the giver arrives", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0.9, 0, 0} }
+  troupe.object{ name = "stand", shape = "box", size = {0.8, 0.75, 0.5}, at = {0.9, 0.375, 0.75}, mass = 20 }
+  local box = troupe.object{ name = "box", shape = "box", size = {0.35, 0.25, 0.25}, at = {0.9, 0.875, 0.6},
+                             mass = 2 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1, at = {-0.2, 1.0, 0.38} }
+  expect(bob:grasp{ object = box, hand = "both" }:wait() == "completed", "bob holds the box")
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "ann holds the cup")
+  local t0 = troupe.time()
+  local give = ann:give{ object = cup, to = bob }
+  local rx = bob:receive{ object = cup, from = ann }
+  expect(run_until(function() return rx.status ~= "active" and rx.status ~= "pending" end, 2), "ended")
+  expect(rx.status == "failed" and rx.error:find("both hands are full (`box` and `box`)", 1, true) ~= nil,
+         rx.status .. ": " .. tostring(rx.error))
+  expect(troupe.time() - t0 < 0.05, string.format("at once: %.2f s", troupe.time() - t0))
+  run_until(function() return give.status ~= "active" end, 2)
+  expect(give.status == "failed", "the give fails with it: " .. give.status)
+end)
+
 test("every pattern takes small things with the palm within reach of them", function()
   -- A hand that closes more than 0.1 m from its object fails (PALM_REACH): fingertip
   -- grasps of small things must still pass.

@@ -341,6 +341,10 @@ impl Generator for Grasp {
         self.q = ctx.posture.q.clone();
         if self.gate.is_none() {
             self.begin(ctx)?;
+        } else {
+            // A receive waits for the giver's hand: a full hand is said now, not then.
+            let hand = self.options.hand;
+            super::plan::hands_free(ctx.world, ctx.skeleton, ctx.actor, hand)?;
         }
         Ok(())
     }

@@ -317,6 +317,41 @@ fn held_in<'w>(world: &'w World, skeleton: &Skeleton, actor: usize, side: Side) 
     })
 }
 
+/// Refuses a grasp by `actor` with `hand` when that hand is full (or, for `auto`, both
+/// are), as planning would: a receive checks it when it starts rather than when the
+/// giver's hand has arrived.
+pub fn hands_free(
+    world: &World,
+    skeleton: &Skeleton,
+    actor: usize,
+    hand: HandChoice,
+) -> crate::error::Result<()> {
+    let full = |side: Side| held_in(world, skeleton, actor, side);
+    let sides: &[Side] = match hand {
+        HandChoice::Right => &[Side::Right],
+        HandChoice::Left => &[Side::Left],
+        HandChoice::Both => &[Side::Right, Side::Left],
+        HandChoice::Auto => {
+            if let (Some(r), Some(l)) = (full(Side::Right), full(Side::Left)) {
+                return Err(crate::error::ActionError::Unfit(format!(
+                    "both hands are full (`{r}` and `{l}`): place or release one first"
+                )));
+            }
+            &[]
+        }
+    };
+    match sides
+        .iter()
+        .find_map(|&side| full(side).map(|held| (side, held)))
+    {
+        Some((side, held)) => Err(crate::error::ActionError::Unfit(format!(
+            "the {} hand already holds `{held}`: place or release it first",
+            side.name()
+        ))),
+        None => Ok(()),
+    }
+}
+
 /// Plans a grasp of `object` by `actor` (posture `posture`) in `world`.
 pub fn plan_grasp(
     skeleton: &Skeleton,
@@ -373,26 +408,16 @@ pub fn plan_grasp(
         }
     };
     // A hand that holds something grasps nothing else: one of two takes the free one.
-    let full = |side: Side| held_in(world, skeleton, actor, side);
     if options.hand == HandChoice::Auto && decision.hands != 2 {
-        sides.retain(|&side| full(side).is_none());
-        if sides.is_empty() {
-            return Err(crate::error::ActionError::Unfit(format!(
-                "both hands are full (`{}` and `{}`): place or release one first",
-                full(Side::Right).unwrap_or("?"),
-                full(Side::Left).unwrap_or("?")
-            )));
-        }
+        hands_free(world, skeleton, actor, HandChoice::Auto)?;
+        sides.retain(|&side| held_in(world, skeleton, actor, side).is_none());
     }
-    if let Some((side, held)) = sides
-        .iter()
-        .find_map(|&side| full(side).map(|held| (side, held)))
-    {
-        return Err(crate::error::ActionError::Unfit(format!(
-            "the {} hand already holds `{held}`: place or release it first",
-            side.name()
-        )));
-    }
+    let chosen = match sides.as_slice() {
+        [Side::Left] => HandChoice::Left,
+        [Side::Right] => HandChoice::Right,
+        _ => HandChoice::Both,
+    };
+    hands_free(world, skeleton, actor, chosen)?;
     let two = match options.hand {
         HandChoice::Both => true,
         HandChoice::Auto => decision.hands == 2,

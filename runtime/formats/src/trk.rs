@@ -51,11 +51,18 @@ pub fn read_trk(path: impl AsRef<Path>) -> Result<Sequence> {
     let mut set = read_trk_set(path)?;
     match set.len() {
         1 => Ok(set.remove(0)),
-        n => Err(Error::Parse {
-            file: path.display().to_string(),
-            line: 1,
-            message: format!("expected one sequence, found {n} (read it as a sequence set)"),
-        }),
+        n => {
+            let names: Vec<String> = set.iter().map(|s| format!("`{}`", s.name)).collect();
+            Err(Error::Parse {
+                file: path.display().to_string(),
+                line: 1,
+                message: format!(
+                    "expected one sequence, found {n} ({}): a recording of several actors \
+                     holds one per actor (`actor:play(FILE, {{ part = NAME }})` plays one)",
+                    names.join(", ")
+                ),
+            })
+        }
     }
 }
 

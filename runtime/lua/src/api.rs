@@ -3,8 +3,8 @@
 pub(crate) use crate::args::lua_err;
 pub use crate::args::lua_err_message;
 use crate::args::{
-    bad_arg, check_keys, dot_call_hint, euler_degrees, opt_bool, opt_number, opt_string, vec3,
-    vec3_table,
+    bad_arg, check_keys, dot_call_hint, euler_degrees, opt_bool, opt_number, opt_string,
+    value_name, vec3, vec3_table,
 };
 use crate::error::Error;
 pub use crate::handles::{
@@ -393,6 +393,12 @@ impl UserData for SequenceRef {
             lua.create_sequence_from(this.0.tracks().iter().map(|t| t.dof().to_string()))
         });
         methods.add_method("value", |_, this, (dof, time): (String, f64)| {
+            if !time.is_finite() {
+                return Err(lua_err(format!(
+                    "value: the time must be a finite number of seconds, got {}",
+                    value_name(&Value::Number(time))
+                )));
+            }
             Ok(sequence_track(&this.0, &dof)?.value(time))
         });
         methods.add_method("interpolation", |_, this, dof: String| {
