@@ -152,6 +152,14 @@ struct UrdfArgs {
 
 /// Runs `troupe export`.
 pub fn run(args: ExportArgs) -> Result<ExitCode> {
+    // The output's folder is made as `troupe run --record` makes a recording's.
+    let out = match &args.format {
+        Format::Gltf(a) => &a.out,
+        Format::Urdf(a) => &a.out,
+    };
+    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    }
     match args.format {
         Format::Gltf(a) => export_gltf(a),
         Format::Urdf(a) => {

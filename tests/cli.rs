@@ -211,6 +211,16 @@ fn impossible_durations_chunks_and_picture_names_are_refused() {
     assert!(err.contains("(check the paths and --filter)"), "{err}");
 }
 
+/// An export into a folder that does not exist yet makes it, as `run --record` does.
+#[test]
+fn export_makes_its_folder() {
+    let dir = temp("export_folder");
+    let _ = std::fs::remove_dir_all(&dir);
+    let out = dir.join("deeper").join("adult.urdf");
+    succeeds(troupe().args(["export", "urdf"]).arg(&out));
+    assert!(std::fs::metadata(&out).unwrap().len() > 1000);
+}
+
 #[test]
 fn scenario_tests_pass_and_report_counts() {
     // One file of the suite: scripts/test.sh runs the whole of it, on 1 and on 2 threads
