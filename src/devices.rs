@@ -109,7 +109,7 @@ struct CalibrateArgs {
 /// Options of `troupe emulate`.
 #[derive(Args)]
 pub struct EmulateArgs {
-    /// Which device: fob or cyberglove.
+    /// Which device: fob, cyberglove (on a pseudo-terminal) or vmc (a VMC sender over UDP).
     kind: EmulateKind,
     /// Motion from a BVH file or a .rec recording (default: built-in synthetic motion).
     #[arg(long)]

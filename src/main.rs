@@ -64,7 +64,7 @@ enum Command {
     Export(export::ExportArgs),
     /// List serial ports and HID devices; probe a device; make a glove calibration.
     Devices(devices::DevicesArgs),
-    /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path).
+    /// Emulate a Flock of Birds or a CyberGlove on a pseudo-terminal (prints its path), or a VMC sender.
     Emulate(devices::EmulateArgs),
     /// Serve a device on Zenoh for a performer on another machine (needs the zenoh feature).
     #[cfg(feature = "zenoh")]
