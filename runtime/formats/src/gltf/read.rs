@@ -90,11 +90,22 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
         }
         let input = floats(sampler.input(), Dimensions::Scalar, &buffers, &bad)?;
         match channel.target().property() {
-            Property::Rotation => rotations.push((
-                joint,
-                input,
-                floats(sampler.output(), Dimensions::Vec4, &buffers, &bad)?,
-            )),
+            Property::Rotation => {
+                let output = floats(sampler.output(), Dimensions::Vec4, &buffers, &bad)?;
+                // glTF asks for unit quaternions; one that is not finite, or nearly zero,
+                // has no rotation to read (it was patched over silently).
+                if let Some(k) = output.chunks(4).position(|q| {
+                    let n = q.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>();
+                    !(n.is_finite() && n > 1e-6)
+                }) {
+                    let q = &output[4 * k..4 * k + 4];
+                    return Err(bad(format!(
+                        "animation channel {c} (`{name}` rotation), key {k}: {q:?} is not a rotation \
+                         (glTF asks for unit quaternions)"
+                    )));
+                }
+                rotations.push((joint, input, output))
+            }
             Property::Translation if joint == 0 => {
                 translation = Some((
                     input,
@@ -435,6 +446,36 @@ mod tests {
         std::fs::write(dir.join("lost.gltf"), with_uri("lost.bin")).unwrap();
         let err = read_gltf_motion(dir.join("lost.gltf"), &skel).unwrap_err();
         assert!(err.to_string().contains("lost.bin"), "{err}");
+        // A rotation key that is not a rotation (NaN, zero) is refused, naming where.
+        let channel = doc["animations"][0]["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["target"]["path"] == "rotation")
+            .unwrap()
+            .clone();
+        let sampler =
+            &doc["animations"][0]["samplers"][channel["sampler"].as_u64().unwrap() as usize];
+        let accessor = &doc["accessors"][sampler["output"].as_u64().unwrap() as usize];
+        let view = &doc["bufferViews"][accessor["bufferView"].as_u64().unwrap() as usize];
+        let at = (view["byteOffset"].as_u64().unwrap_or(0)
+            + accessor["byteOffset"].as_u64().unwrap_or(0)) as usize
+            + 16; // the second key
+        let bin = std::fs::read(dir.join("motion.bin")).unwrap();
+        for (name, key) in [("nan", [f32::NAN, 0.0, 0.0, 1.0]), ("zero", [0.0f32; 4])] {
+            let mut patched = bin.clone();
+            for (i, x) in key.iter().enumerate() {
+                patched[at + 4 * i..at + 4 * i + 4].copy_from_slice(&x.to_le_bytes());
+            }
+            std::fs::write(dir.join(format!("{name}.bin")), patched).unwrap();
+            let file = dir.join(format!("{name}.gltf"));
+            std::fs::write(&file, with_uri(&format!("{name}.bin"))).unwrap();
+            let err = read_gltf_motion(&file, &skel).unwrap_err().to_string();
+            assert!(
+                err.contains("rotation), key 1:") && err.contains("is not a rotation"),
+                "{name}: {err}"
+            );
+        }
         // Nodes that are not troupe joints.
         for node in doc["nodes"].as_array_mut().unwrap() {
             node["name"] = "elsewhere".into();
