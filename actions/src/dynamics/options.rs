@@ -102,7 +102,8 @@ impl DynamicsOptions {
                 return Err(OptionError::refused("push", "push.duration must be ≥ 0").into());
             }
             let (force, torque) = (magnitude(push.force), magnitude(push.torque));
-            if !(force <= MAX_PUSH_FORCE && torque <= MAX_PUSH_TORQUE) {
+            let within = |v: f64, most: f64| v.is_finite() && v <= most;
+            if !(within(force, MAX_PUSH_FORCE) && within(torque, MAX_PUSH_TORQUE)) {
                 return Err(OptionError::refused(
                     "push",
                     format!(

@@ -112,7 +112,10 @@ pub fn check_state(skeleton: &Skeleton, what: &str, values: &[f64]) -> Result<()
             skeleton.dof_count()
         )));
     }
-    if let Some(k) = values.iter().position(|v| !(v.abs() <= STATE_BOUND)) {
+    if let Some(k) = values
+        .iter()
+        .position(|v| !v.is_finite() || v.abs() > STATE_BOUND)
+    {
         return Err(Error::invalid_value(
             format!("dynamics: {what}[{}]", skeleton.dofs()[k].name),
             values[k],
