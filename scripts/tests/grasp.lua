@@ -192,7 +192,9 @@ test("bad input fails with a reason", function()
   expect(not ok and tostring(e):find("unknown grasp pattern") ~= nil, tostring(e))
 end)
 
-test("hold hands: the wrists stay within 1 cm while the active actor moves by keyframes", function()
+-- Ann holds Bob's left hand in her right, 0.45 m apart, for 2 s: both actors, her hold
+-- and his follow_hand.
+local function holding_hands()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
   local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
@@ -200,6 +202,11 @@ test("hold hands: the wrists stay within 1 cm while the active actor moves by ke
   expect(follow.kind == "follow_hand", "bob follows")
   run(2.0)
   expect(h.status == "active", "holding: " .. h.status .. " " .. tostring(h.error))
+  return ann, bob, h, follow
+end
+
+test("hold hands: the wrists stay within 1 cm while the active actor moves by keyframes", function()
+  local ann, bob, h, follow = holding_hands()
   local function gap()
     local a, b = ann:joint_position("r_wrist"), bob:joint_position("l_wrist")
     return {a[1] - b[1], a[2] - b[2], a[3] - b[3]}
@@ -223,12 +230,7 @@ end)
 
 test("a hold fails fast, saying why, when the follower is cancelled or walks away", function()
   -- Both stayed `active` for good, the hands 2.3 m apart.
-  local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
-  local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
-  local follow = bob:actions()[1]
-  run(2.0)
-  expect(h.status == "active", "holding: " .. tostring(h.error))
+  local _, _, h, follow = holding_hands()
   follow:cancel()
   expect(run_until(function() return h.status ~= "active" end, 0.1), "the hold ended")
   expect(h.status == "failed" and tostring(h.error):find("^`bob`'s follow_hand ended first %(cancelled") ~= nil,
@@ -285,12 +287,7 @@ test("shake hands facing each other: both complete", function()
 end)
 
 test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold frees the follower", function()
-  local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
-  local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
-  local follow = bob:actions()[1]
-  run(2.0)
-  expect(h.status == "active", "holding: " .. h.status .. " " .. tostring(h.error))
+  local ann, bob, h, follow = holding_hands()
   local function gap()
     local a, b = ann:joint_position("r_wrist"), bob:joint_position("l_wrist")
     return {a[1] - b[1], a[2] - b[2], a[3] - b[3]}
