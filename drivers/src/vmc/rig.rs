@@ -18,9 +18,10 @@
 
 use crate::vmc::bones::{VrmBone, VRM_BONES};
 use glam::{DMat3, DQuat, DVec3};
+use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 use troupe_body::kinematics::forward_kinematics;
-use troupe_body::skeleton::{DofKind, Skeleton};
+use troupe_body::skeleton::{Dof, DofKind, Skeleton};
 use troupe_body::transform::Transform;
 
 /// A point from troupe's frame to Unity's, or back (the mirror is its own inverse).
@@ -437,9 +438,172 @@ fn chain_rotation(skeleton: &Skeleton, dofs: &[usize], q: &[f64]) -> DQuat {
 }
 
 /// Sets the rotation DOFs `dofs` (of one joint or a chain of joints, parent side first,
-/// whose offsets carry no rotation) so that their product is `target`: damped least
-/// squares, each step the smallest change, so a chain of similar joints shares a bend.
+/// whose offsets carry no rotation) so that their product is `target`. Three DOFs about
+/// the three principal axes (a shoulder, a hip, the root) are Euler angles, solved in
+/// closed form ([`solve_euler`]); any other chain by damped least squares, each step the
+/// smallest change, so a chain of similar joints shares a bend.
 pub fn solve_chain(skeleton: &Skeleton, dofs: &[usize], target: DQuat, q: &mut [f64]) {
+    match euler_axes(skeleton, dofs) {
+        Some(axes) => solve_euler(skeleton, dofs, axes, target, q),
+        None => solve_least_squares(skeleton, dofs, target, q),
+    }
+}
+
+/// Below this `cos b` (the middle Euler angle within 1e-9 rad of ±90°) the first and last
+/// axes line up (gimbal lock): only their sum or difference is set, and taking the whole
+/// target as that case moves the result by at most this angle.
+const GIMBAL: f64 = 1e-9;
+
+/// A DOF axis that is a principal axis of its joint's frame: its index (X 0, Y 1, Z 2)
+/// and its sign.
+fn principal_axis(axis: DVec3) -> Option<(usize, f64)> {
+    let a = axis.to_array();
+    let i = (0..3).max_by(|&x, &y| a[x].abs().total_cmp(&a[y].abs()))?;
+    let off = (0..3)
+        .filter(|&k| k != i)
+        .map(|k| a[k].abs())
+        .fold(0.0, f64::max);
+    ((a[i].abs() - 1.0).abs() < 1e-9 && off < 1e-9).then(|| (i, a[i].signum()))
+}
+
+/// The principal axes (index, sign) of `dofs` when they are three rotations about the
+/// three different principal axes: then their angles are Euler angles.
+fn euler_axes(skeleton: &Skeleton, dofs: &[usize]) -> Option<[(usize, f64); 3]> {
+    let axis = |d: usize| {
+        let dof = &skeleton.dofs()[d];
+        if dof.kind == DofKind::Rotation {
+            principal_axis(dof.axis)
+        } else {
+            None
+        }
+    };
+    let &[d0, d1, d2] = dofs else { return None };
+    let axes = [axis(d0)?, axis(d1)?, axis(d2)?];
+    let distinct = axes[0].0 != axes[1].0 && axes[1].0 != axes[2].0 && axes[0].0 != axes[2].0;
+    distinct.then_some(axes)
+}
+
+/// Sets three Euler-angle DOFs (`axes` from [`euler_axes`]) so that their product is
+/// exactly `target`. A rotation has two sets of Euler angles (`(a, b, c)` and
+/// `(a + π, π − b, c + π)`), each angle up to turns, and in gimbal lock a continuum: the
+/// set kept is the one within the DOFs' limits (else the least outside them) nearest the
+/// current values. The current values so only choose between equal rotations: an
+/// iterative solve from them can end on the set outside the limits, which clamping then
+/// turns into another rotation.
+fn solve_euler(
+    skeleton: &Skeleton,
+    dofs: &[usize],
+    axes: [(usize, f64); 3],
+    target: DQuat,
+    q: &mut [f64],
+) {
+    let [(i, _), (j, _), (k, _)] = axes;
+    let e = DVec3::AXES;
+    // Angles about the positive axes e_i, e_j, e_k; ε = e_i · (e_j × e_k).
+    let eps = if j == (i + 1) % 3 { 1.0 } else { -1.0 };
+    let target = target.normalize();
+    // Given the first angle a, the others: P = R_i(a)⁻¹ · target = R_j(b) · R_k(c) takes
+    // e_k to cos b · e_k + ε sin b · e_i, which gives b; c is what remains about e_k, so
+    // the product is the target whenever a belongs to one of its solutions.
+    let rest = |a: f64| -> [f64; 3] {
+        let p = DQuat::from_axis_angle(e[i], a).inverse() * target;
+        let w = p * e[k];
+        let b = (eps * w[i]).atan2(w[k]);
+        let n = DQuat::from_axis_angle(e[j], b).inverse() * p;
+        let c = 2.0 * n.xyz()[k].atan2(n.w);
+        [a, b, c]
+    };
+    let sign = axes.map(|(_, s)| s);
+    let now = [
+        q[dofs[0]] * sign[0],
+        q[dofs[1]] * sign[1],
+        q[dofs[2]] * sign[2],
+    ];
+    // target · e_k = R_i(a) (cos b · e_k + ε sin b · e_i): its e_j, e_k part is a's.
+    let v = target * e[k];
+    let cos_b = v[j].hypot(v[k]);
+    let candidates: Vec<[f64; 3]> = if cos_b > GIMBAL {
+        let a = (-eps * v[j]).atan2(v[k]);
+        vec![rest(a), rest(a + PI)]
+    } else {
+        // Any a works, with c = c(a₀) − σ (a − a₀): the candidates are a₀, the point
+        // nearest the current (a₀, c₀), and where a or c meets a limit.
+        let from_now = rest(now[0]);
+        let sigma = eps * from_now[1].signum();
+        let offset = |c: f64| wrap_pi(from_now[2] - c);
+        let limits = |n: usize| {
+            let dof = &skeleton.dofs()[dofs[n]];
+            [dof.min * sign[n], dof.max * sign[n]]
+                .into_iter()
+                .filter(|l| l.is_finite())
+        };
+        let mut ts = vec![now[0], now[0] + sigma * offset(now[2]) / 2.0];
+        ts.extend(limits(0));
+        ts.extend(limits(2).map(|c| now[0] + sigma * offset(c)));
+        ts.into_iter().map(rest).collect()
+    };
+    let mut best: Option<(f64, f64, [f64; 3])> = None;
+    for angles in candidates {
+        let mut set = [0.0; 3];
+        let (mut out, mut dist) = (0.0, 0.0);
+        for n in 0..3 {
+            let dof = &skeleton.dofs()[dofs[n]];
+            let (x, o) = nearest_turn(dof, angles[n] * sign[n], q[dofs[n]]);
+            set[n] = x;
+            out += o;
+            dist += (x - q[dofs[n]]).powi(2);
+        }
+        let better = match best {
+            None => true,
+            Some((bo, _, _)) if (out - bo).abs() > 1e-12 => out < bo,
+            Some((_, bd, _)) => dist < bd,
+        };
+        if better {
+            best = Some((out, dist, set));
+        }
+    }
+    if let Some((_, _, set)) = best {
+        for n in 0..3 {
+            q[dofs[n]] = set[n];
+        }
+    }
+}
+
+/// `x` turned into (−π, π].
+fn wrap_pi(x: f64) -> f64 {
+    let y = x.rem_euclid(TAU);
+    if y > PI {
+        y - TAU
+    } else {
+        y
+    }
+}
+
+/// `angle` plus the number of turns that puts it within `dof`'s limits, or least outside
+/// them, and nearest `now`; and how far outside the limits that is.
+fn nearest_turn(dof: &Dof, angle: f64, now: f64) -> (f64, f64) {
+    let near = |to: f64| angle + TAU * ((to - angle) / TAU).round();
+    let mid = (dof.min + dof.max) / 2.0;
+    let mut bases = vec![near(now)];
+    if mid.is_finite() {
+        bases.push(near(mid));
+    }
+    let mut best = (angle, f64::INFINITY, f64::INFINITY);
+    for base in bases {
+        for x in [base - TAU, base, base + TAU] {
+            let out = (dof.min - x).max(0.0) + (x - dof.max).max(0.0);
+            let dist = (x - now).abs();
+            if out < best.1 - 1e-12 || (out <= best.1 + 1e-12 && dist < best.2) {
+                best = (x, out, dist);
+            }
+        }
+    }
+    (best.0, best.1)
+}
+
+/// Damped least squares from the current values, each step the smallest change (what a
+/// chain of similar joints needs to share a bend).
+fn solve_least_squares(skeleton: &Skeleton, dofs: &[usize], target: DQuat, q: &mut [f64]) {
     if dofs.is_empty() {
         return;
     }
@@ -598,5 +762,157 @@ mod tests {
             .collect();
         assert_eq!(set, ["r_elbow_flexion", "r_elbow_pronation"]);
         assert!((0..q.len()).all(|d| mask[d] || q[d] == start[d]));
+    }
+
+    /// What the scene does to an input posture: every DOF within its limits.
+    fn clamp_to_limits(sk: &Skeleton, q: &mut [f64]) {
+        for (v, dof) in q.iter_mut().zip(sk.dofs()) {
+            *v = dof.clamp(*v);
+        }
+    }
+
+    /// The rotation DOFs of `joint`.
+    fn rotations(sk: &Skeleton, joint: &str) -> Vec<usize> {
+        let j = sk.joint(joint).unwrap();
+        sk.joints()[j]
+            .dofs
+            .clone()
+            .filter(|&d| sk.dofs()[d].kind == DofKind::Rotation)
+            .collect()
+    }
+
+    /// The angle between two rotations, precise near zero (`angle_between` takes an
+    /// arccosine, which cannot tell apart rotations closer than about 1e-8 rad).
+    fn angle(a: DQuat, b: DQuat) -> f64 {
+        let d = a * b.inverse();
+        2.0 * d.xyz().length().atan2(d.w.abs())
+    }
+
+    /// Whether `dofs` at `q` are within their limits and turn their joint by `target`.
+    fn check_solved(sk: &Skeleton, dofs: &[usize], q: &[f64], target: DQuat, case: &str) {
+        let deg: Vec<String> = dofs
+            .iter()
+            .map(|&d| format!("{} {:.2}°", sk.dofs()[d].name, q[d].to_degrees()))
+            .collect();
+        let off = angle(chain_rotation(sk, dofs, q), target);
+        assert!(
+            off < 1e-9,
+            "{case}: {:.3}° off at {deg:?}",
+            off.to_degrees()
+        );
+        for &d in dofs {
+            let dof = &sk.dofs()[d];
+            assert!(
+                q[d] >= dof.min - 1e-9 && q[d] <= dof.max + 1e-9,
+                "{case}: outside the limits at {deg:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn an_arm_brought_forward_from_the_t_pose_arrives_whatever_frame_played_between() {
+        // The tester's sender: the right arm level to the side (T-pose), then forward palm
+        // down (Unity's Y turned −90°). The jitter buffer plays one frame between them,
+        // interpolated at some u: from the T-pose's gimbal lock (twist axis on the flexion
+        // axis) the old least-squares solve could wind flexion and twist to −630°, which the
+        // limits clamp; from there it reached the forward arm's other Euler angle set
+        // (flexion −90°, beyond its −60° limit), clamped to a pose 30° off, for good.
+        let sk = adult();
+        let rig = VmcRig::new(sk.clone()).unwrap();
+        let arm = bone_index("RightUpperArm").unwrap();
+        let with_arm = |r: DQuat| {
+            let mut pose = VmcPose::default();
+            pose.bones[arm] = Some(Transform::new(r, DVec3::ZERO));
+            pose
+        };
+        let level = with_arm(DQuat::IDENTITY);
+        let forward = with_arm(DQuat::from_rotation_y(-std::f64::consts::FRAC_PI_2));
+        let dofs = rotations(&sk, "r_shoulder");
+        for step in 1..40 {
+            let u = step as f64 / 40.0;
+            let mut q = t_pose(&sk);
+            let frames = [&level, &level.lerp(&forward, u), &forward, &forward];
+            for pose in frames {
+                let mut mask = vec![false; q.len()];
+                rig.retarget(pose, &Transform::IDENTITY, &mut q, &mut mask);
+                clamp_to_limits(&sk, &mut q);
+            }
+            let sent = rig.pose(&fk(&sk, &q)).bones[arm].unwrap().rotation;
+            let deg: Vec<String> = dofs
+                .iter()
+                .map(|&d| format!("{:.1}°", q[d].to_degrees()))
+                .collect();
+            assert!(
+                angle(sent, forward.bones[arm].unwrap().rotation) < 1e-9,
+                "through u = {u}: the arm is off, shoulder at {deg:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn three_axis_joints_reach_every_rotation_within_their_limits_from_any_posture() {
+        let sk = adult();
+        for joint in ["r_shoulder", "l_shoulder", "r_hip", "vt12", "skullbase"] {
+            let dofs = rotations(&sk, joint);
+            assert_eq!(dofs.len(), 3, "{joint}");
+            // Targets and starting postures within the limits, the starts including the
+            // T-pose (the shoulders in gimbal lock) and the limits' corners.
+            let mut starts = vec![t_pose(&sk)];
+            for corner in 0..8 {
+                let mut q = vec![0.0; sk.dof_count()];
+                for (n, &d) in dofs.iter().enumerate() {
+                    let dof = &sk.dofs()[d];
+                    q[d] = if corner >> n & 1 == 0 {
+                        dof.min
+                    } else {
+                        dof.max
+                    };
+                }
+                starts.push(q);
+            }
+            starts.extend((0..20).map(|seed| moved(&sk, 3.2, 100 + seed)));
+            for seed in 0..20 {
+                let wanted = moved(&sk, 3.2, seed);
+                let target = chain_rotation(&sk, &dofs, &wanted);
+                for (n, start) in starts.iter().enumerate() {
+                    let mut q = start.clone();
+                    solve_chain(&sk, &dofs, target, &mut q);
+                    check_solved(&sk, &dofs, &q, target, &format!("{joint} {seed} from {n}"));
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_shoulder_in_gimbal_lock_splits_flexion_and_twist_within_the_limits() {
+        // Abducted 90°, the shoulder's twist axis is its flexion axis: only their sum (or
+        // difference) is set, and an even split from the T-pose can put the twist beyond
+        // ±90°, or the flexion beyond its limits; one takes what the other cannot.
+        let sk = adult();
+        let dofs = rotations(&sk, "r_shoulder");
+        let posture = |flexion: f64, twist: f64| {
+            let mut q = vec![0.0; sk.dof_count()];
+            let angles = [flexion, 90.0, twist].map(|a: f64| a.to_radians());
+            for (&d, a) in dofs.iter().zip(angles) {
+                q[d] = a;
+            }
+            q
+        };
+        let starts = [
+            (0.0, 0.0),
+            (150.0, 0.0),
+            (-50.0, 0.0),
+            (0.0, 80.0),
+            (0.0, -80.0),
+        ];
+        for (flexion, twist) in [(170.0, 80.0), (170.0, -80.0), (-50.0, 85.0), (-50.0, -85.0)] {
+            let target = chain_rotation(&sk, &dofs, &posture(flexion, twist));
+            for (f0, t0) in starts {
+                let mut q = posture(f0, t0);
+                solve_chain(&sk, &dofs, target, &mut q);
+                let case = format!("{flexion}° {twist}° from {f0}° {t0}°");
+                check_solved(&sk, &dofs, &q, target, &case);
+            }
+        }
     }
 }
