@@ -733,11 +733,48 @@ pub fn is_troupe_rig(skeleton: &Skeleton, bvh: &Bvh) -> bool {
         && bvh.joints().iter().all(|j| skeleton.joint(&j.name).is_ok())
 }
 
+/// Metres per unit of the BVH files troupe writes (centimetres).
+const TROUPE_BVH_METRES_PER_UNIT: f64 = 0.01;
+
+/// The template and standing height of the troupe body that a BVH on troupe's own
+/// hierarchy was recorded from: the template (at the height its root's rest offset gives)
+/// whose joint offsets all match the file's within 1e-6 m. `None` for any other BVH.
+pub fn recorded_body(bvh: &Bvh) -> Option<(String, f64)> {
+    let root = bvh.joints().first()?.offset.y * TROUPE_BVH_METRES_PER_UNIT;
+    troupe_body::template::templates()
+        .into_iter()
+        .find_map(|t| {
+            let at_default = t.instantiate(t.default_params()).ok()?;
+            let height = t.default_height * root / at_default.joints().first()?.offset.y;
+            let mut params = t.default_params();
+            params.height = height;
+            let s = t.instantiate(params).ok()?;
+            let same = is_troupe_rig(&s, bvh)
+                && bvh.joints().iter().all(|j| {
+                    s.joint(&j.name).is_ok_and(|i| {
+                        (s.joints()[i].offset - j.offset * TROUPE_BVH_METRES_PER_UNIT).length()
+                            < 1e-6
+                    })
+                });
+            same.then(|| (t.name.to_string(), height))
+        })
+}
+
 /// Reads a BVH on troupe's own hierarchy (as `troupe run --record OUT.bvh` writes it, in
 /// centimetres) back without retargeting: each joint's rotation becomes its DOF angles,
-/// the root's position its translation DOFs.
+/// the root's position its translation DOFs. A recording of a body of another size than
+/// `skeleton` has its root translation scaled by the ratio of the two root heights (as
+/// retargeting scales a foreign file's), so the feet stay on the floor; on a body of the
+/// recorded size the postures are replayed exactly.
 pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result<Sequence> {
-    const METRES_PER_UNIT: f64 = 0.01;
+    let recorded_root = bvh.joints().first().map_or(0.0, |j| j.offset.y);
+    let root_height = skeleton.joints()[0].offset.y;
+    // A file whose root offset says nothing of a height (zero) keeps centimetres.
+    let metres_per_unit = if recorded_root > 1e-9 && root_height > 1e-9 {
+        root_height / recorded_root
+    } else {
+        TROUPE_BVH_METRES_PER_UNIT
+    };
     let n = skeleton.dof_count();
     let joints: Vec<usize> = bvh
         .joints()
@@ -752,7 +789,7 @@ pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result
             let local = bvh.local_transform(b, frame);
             solve_joint_angles(skeleton, j, local.rotation, &mut q);
             if j == 0 {
-                let t = local.translation * METRES_PER_UNIT - skeleton.joints()[0].offset;
+                let t = local.translation * metres_per_unit - skeleton.joints()[0].offset;
                 for d in skeleton.joints()[0].dofs.clone() {
                     let dof = &skeleton.dofs()[d];
                     if dof.kind == DofKind::Translation {
@@ -772,7 +809,7 @@ pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result
     );
     seq.meta.insert("source".into(), "bvh".into());
     seq.meta
-        .insert("bvh_scale".into(), METRES_PER_UNIT.to_string());
+        .insert("bvh_scale".into(), metres_per_unit.to_string());
     let driven: Vec<usize> = joints
         .iter()
         .flat_map(|&j| skeleton.joints()[j].dofs.clone())
@@ -1131,6 +1168,61 @@ mod tests {
         // The root stands at troupe's height: BVH hips 90 above the feet → troupe's root.
         assert!(seq.track("root_y").unwrap().value(0.0).abs() < 1e-9);
         assert!(RetargetMap::parse("a b c\n", "m").is_err());
+    }
+
+    /// A troupe recording of `skeleton` standing and moving its root 1 m forward while
+    /// raising an arm, written as troupe writes BVH and read back.
+    fn recorded_bvh(skeleton: &Skeleton) -> Bvh {
+        let mut seq = Sequence::new("rec");
+        seq.meta.insert("rate".into(), "10".into());
+        for (dof, v) in [("root_z", 1.0), ("r_shoulder_abduction", 1.2)] {
+            let keys = vec![Key::new(0.0, 0.0), Key::new(2.0, v)];
+            seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
+        }
+        let rig = Rig::from_sequence(skeleton, &seq).unwrap();
+        let order: RotationOrder = "ZXY".parse().unwrap();
+        let bvh = from_rig(&rig, 0.1, order, 100.0).unwrap();
+        parse_bvh(&bvh.to_bvh_string(), "rec.bvh").unwrap()
+    }
+
+    #[test]
+    fn a_troupe_recording_keeps_its_feet_on_the_floor_on_a_body_of_another_size() {
+        let tall = body("adult", Some(1.95));
+        let bvh = recorded_bvh(&tall);
+        let tall_root = tall.joints()[0].offset.y;
+        for s in [adult(), body("child", None), body("adult", Some(1.5))] {
+            let seq = troupe_named_motion(&s, &bvh, "rec").unwrap();
+            let rest = fk(&s, &Sequence::new("rest"), 0.0);
+            let ankle = s.joint("l_ankle").unwrap();
+            for k in 0..bvh.frame_count() {
+                let g = fk(&s, &seq, k as f64 * 0.1);
+                let dy = g[ankle].translation.y - rest[ankle].translation.y;
+                assert!(
+                    dy.abs() < 1e-9,
+                    "frame {k}: the ankle is {dy} m off the floor"
+                );
+            }
+            // The walk is scaled as the body is.
+            let ratio = s.joints()[0].offset.y / tall_root;
+            let z = seq.track("root_z").unwrap().value(2.0);
+            assert!((z - ratio).abs() < 1e-9, "{z} vs {ratio}");
+        }
+        // On its own size it replays the recording exactly.
+        let seq = troupe_named_motion(&tall, &bvh, "rec").unwrap();
+        assert!(seq.track("root_y").unwrap().value(1.0).abs() < 1e-9);
+        assert!((seq.track("root_z").unwrap().value(2.0) - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn the_recorded_body_is_read_from_a_troupe_bvh() {
+        for (template, height) in [("adult", 1.95), ("adult", 1.75), ("child", 1.3)] {
+            let bvh = recorded_bvh(&body(template, Some(height)));
+            let (t, h) = recorded_body(&bvh).unwrap();
+            assert_eq!(t, template);
+            assert!((h - height).abs() < 1e-9, "{h} vs {height}");
+        }
+        let cmu = read_bvh(data("pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
+        assert_eq!(recorded_body(&cmu), None);
     }
 
     #[test]
