@@ -21,7 +21,7 @@
 //! and the BVH's lowest ankle over the clip stands at troupe's rest ankle height, which
 //! keeps the feet on the floor for any body size ([`Ground`]).
 
-use crate::bvh::{read_bvh, Axis, Bvh, RotationOrder};
+use crate::bvh::{read_bvh, Axis, Bvh, Channel, RotationOrder};
 use crate::error::{Error, Result};
 use glam::{DMat3, DQuat, DVec3};
 use std::path::Path;
@@ -409,6 +409,21 @@ struct Ground {
     bvh_floor: f64,
     /// The troupe height (metres) it stands at.
     troupe_floor: f64,
+    /// troupe's mapped ankles, whose lowest point over `contacts` settles the root.
+    ankles: Vec<usize>,
+    /// The frames whose ankles may touch the floor: all but those in the rest pose.
+    contacts: Vec<usize>,
+}
+
+/// Whether frame `k` holds the rest pose: every rotation channel zero.
+fn is_rest_frame(bvh: &Bvh, k: usize) -> bool {
+    let frame = bvh.frame(k);
+    bvh.joints().iter().all(|j| {
+        j.channels
+            .iter()
+            .enumerate()
+            .all(|(i, c)| matches!(c, Channel::Position(_)) || frame[j.first_channel + i] == 0.0)
+    })
 }
 
 /// The length of the chain from joint `j` up to its ancestor `top` (`None` if `top` is
@@ -433,8 +448,9 @@ impl Ground {
     /// The bone lengths, not the rest hip height, because a rest pose may splay or bend
     /// the legs (CMU's). Floor: the BVH's lowest ankle over the clip stands at troupe's
     /// rest ankle height, since a body of other feet has its ankles elsewhere above the
-    /// soles. Without mapped legs: the rest hip height over the lowest rest joint, and the
-    /// file's y = 0 at troupe's lowest rest joint.
+    /// soles; frames in the rest pose do not count (and [`settle`] then makes it exact
+    /// for troupe's own legs). Without mapped legs: the rest hip height over the lowest
+    /// rest joint, and the file's y = 0 at troupe's lowest rest joint.
     fn measure(
         skeleton: &Skeleton,
         bvh: &Bvh,
@@ -502,10 +518,20 @@ impl Ground {
             }
         };
         let (mut bvh_floor, mut troupe_floor) = (0.0, troupe_low);
+        // A frame in the rest pose (every rotation zero; CMU files start with one) is a
+        // reference, not a step: its splayed legs reach lower than any contact.
+        let moving: Vec<usize> = (0..bvh.frame_count())
+            .filter(|&k| !is_rest_frame(bvh, k))
+            .collect();
+        let contacts = if moving.is_empty() {
+            (0..bvh.frame_count()).collect()
+        } else {
+            moving
+        };
         if !ankles.is_empty() && bvh.frame_count() > 0 {
             let mut g = vec![Transform::IDENTITY; bvh.joints().len()];
             bvh_floor = f64::INFINITY;
-            for k in 0..bvh.frame_count() {
+            for &k in &contacts {
                 bvh.global_transforms(k, &mut g);
                 axes.turn(&mut g);
                 for &(_, b) in &ankles {
@@ -522,6 +548,47 @@ impl Ground {
             root_bvh,
             bvh_floor,
             troupe_floor,
+            ankles: ankles.iter().map(|&(t, _)| t).collect(),
+            contacts,
+        }
+    }
+}
+
+/// Raises or lowers the root (`values`: per DOF, per frame) so that troupe's lowest
+/// ankle over the contact frames stands at its rest height. troupe's legs follow the
+/// BVH's bones only as far as its joints can (a one-DOF knee, a two-DOF ankle) and with
+/// its own proportions, so the BVH's ankle height scaled is off by about a centimetre
+/// (the CMU walk on an adult: 1.1 cm up); troupe's own forward kinematics is not.
+fn settle(
+    skeleton: &Skeleton,
+    ground: &Ground,
+    values: &mut [Vec<f64>],
+    used: &[bool],
+    translations: &[(usize, Axis, f64)],
+) {
+    if ground.ankles.is_empty() || ground.contacts.is_empty() {
+        return;
+    }
+    let mut q = vec![0.0; skeleton.dof_count()];
+    let mut g = vec![Transform::IDENTITY; skeleton.joints().len()];
+    let mut low = f64::INFINITY;
+    for &k in &ground.contacts {
+        for (d, v) in values.iter().enumerate() {
+            if used[d] {
+                q[d] = v[k];
+            }
+        }
+        forward_kinematics(skeleton, &q, &mut g);
+        for &a in &ground.ankles {
+            low = low.min(g[a].translation.y);
+        }
+    }
+    let shift = ground.troupe_floor - low;
+    for &(d, ax, sign) in translations {
+        if ax == Axis::Y {
+            for v in &mut values[d] {
+                *v += sign * shift;
+            }
         }
     }
 }
@@ -691,6 +758,8 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
         }
     }
 
+    settle(skeleton, &ground, &mut values, &used, &translations);
+
     let mut seq = Sequence::new(name);
     seq.meta
         .insert("rate".into(), format!("{}", 1.0 / bvh.frame_time()));
@@ -855,7 +924,7 @@ pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::bvh::{from_rig, parse_bvh, Channel};
+    use crate::bvh::{from_rig, parse_bvh};
     use crate::rig::tests::{adult, every_dof_moving, fk_positions, posture};
     use crate::rig::Rig;
 
@@ -900,7 +969,8 @@ mod tests {
     fn lowest_ankle(s: &Skeleton, seq: &Sequence, bvh: &Bvh) -> (f64, f64) {
         let ankles = [s.joint("l_ankle").unwrap(), s.joint("r_ankle").unwrap()];
         let rest = fk(s, &Sequence::new("rest"), 0.0)[ankles[0]].translation.y;
-        let low = (0..bvh.frame_count())
+        // From frame 1: CMU's frame 0 is its rest pose, legs splayed, not a step.
+        let low = (1..bvh.frame_count())
             .map(|k| {
                 let g = fk(s, seq, k as f64 * bvh.frame_time());
                 ankles
