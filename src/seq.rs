@@ -59,6 +59,10 @@ enum SeqCommand {
         /// the output may then be .trk, .bvh (on the template's hierarchy) or glTF.
         #[arg(long)]
         template: Option<String>,
+        /// Standing height in metres of the --template body (default: the template's); a
+        /// BVH's root translation is scaled to it, so its feet stay on the floor.
+        #[arg(long, value_name = "METRES", requires = "template")]
+        height: Option<f64>,
         /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: the
         /// `.map` beside the BVH, else detect CMU or Mixamo names.
         #[arg(long)]
@@ -245,8 +249,16 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             output,
             rotation_order,
             template,
+            height,
             map,
-        } => convert(&input, &output, rotation_order, template, map, scale)?,
+        } => convert(
+            &input,
+            &output,
+            rotation_order,
+            (template, height),
+            map,
+            scale,
+        )?,
         SeqCommand::Blend {
             a,
             b,
@@ -370,7 +382,7 @@ fn convert(
     input: &Path,
     output: &Path,
     rotation_order: Option<String>,
-    template: Option<String>,
+    (template, height): (Option<String>, Option<f64>),
     map: Option<PathBuf>,
     scale: f64,
 ) -> Result<()> {
@@ -386,8 +398,12 @@ fn convert(
     let gltf_out = matches!(output_format, Format::Gltf | Format::Glb);
     if let Some(t) = template {
         let t = troupe_body::template(&t)?;
-        let skeleton = t.instantiate(t.default_params())?;
-        let seq = match (input_format, map) {
+        let mut params = t.default_params();
+        if let Some(h) = height {
+            params.height = h;
+        }
+        let skeleton = t.instantiate(params)?;
+        let mut seq = match (input_format, map) {
             (Format::Bvh, Some(m)) => {
                 retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)?
             }
@@ -397,6 +413,9 @@ fn convert(
         if let Some(map) = seq.meta.get("retarget_map") {
             println!("retargeting with the `{map}` map");
         }
+        // The body the output was made for: `troupe view` of a .trk shows that body.
+        seq.meta.insert("template".into(), t.name.into());
+        seq.meta.insert("height".into(), params.height.to_string());
         save_sequences(
             output,
             std::slice::from_ref(&seq),

@@ -38,6 +38,10 @@ pub struct ViewArgs {
     /// Body template of the actor (when the recording does not name one).
     #[arg(long, default_value = "adult")]
     actor_template: String,
+    /// Standing height of the actor in metres (when the recording does not tell one;
+    /// default: the template's).
+    #[arg(long, value_name = "METRES")]
+    actor_height: Option<f64>,
     /// Picture or window size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     size: String,
@@ -130,11 +134,26 @@ struct Performer {
 
 /// Reads a recording ([`troupe_formats::load_sequences`] chooses the reader): each
 /// sequence plays one actor, on the template and height stored in its metadata (a
-/// `--record` `.trk`), else on `template` — which a `.bvh` is retargeted onto and a
-/// `.gltf`/`.glb` written by troupe is read back onto.
-fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
+/// `--record` `.trk`), or on the body a BVH troupe wrote was recorded from (its offsets
+/// tell the template and height), else on `template` at `height` — which a foreign `.bvh`
+/// is retargeted onto and a `.gltf`/`.glb` written by troupe is read back onto.
+fn load_recording(path: &Path, template: &str, height: Option<f64>) -> Result<Vec<Performer>> {
+    let recorded = match troupe_formats::Format::of(path)? {
+        troupe_formats::Format::Bvh => {
+            troupe_formats::retarget::recorded_body(&troupe_formats::bvh::read_bvh(path)?)
+        }
+        _ => None,
+    };
+    let (template, height) = match &recorded {
+        Some((t, h)) => (t.as_str(), Some(*h)),
+        None => (template, height),
+    };
     let t = troupe_body::template(template)?;
-    let skeleton = t.instantiate(t.default_params())?;
+    let mut params = t.default_params();
+    if let Some(h) = height {
+        params.height = h;
+    }
+    let skeleton = t.instantiate(params)?;
     Ok(troupe_formats::load_sequences(path, Some(&skeleton))?
         .into_iter()
         .enumerate()
@@ -149,7 +168,11 @@ fn load_recording(path: &Path, template: &str) -> Result<Vec<Performer>> {
                 .get("template")
                 .cloned()
                 .unwrap_or_else(|| template.to_string()),
-            height: sequence.meta.get("height").and_then(|h| h.parse().ok()),
+            height: sequence
+                .meta
+                .get("height")
+                .and_then(|h| h.parse().ok())
+                .or(height),
             sequence,
         })
         .collect())
@@ -214,7 +237,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         .as_deref()
         .ok_or_else(|| anyhow!("troupe view: give a recording to play"))?;
     let size = parse_size(&args.size)?;
-    let performers = load_recording(file, &args.actor_template)?;
+    let performers = load_recording(file, &args.actor_template, args.actor_height)?;
     let objects = load_objects(file)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,

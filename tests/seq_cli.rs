@@ -146,6 +146,53 @@ fn a_trk_converts_to_bvh_and_gltf_on_a_template_and_back() {
 }
 
 #[test]
+fn a_tall_actors_bvh_converts_onto_a_default_adult_with_its_feet_on_the_floor() {
+    let wave = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scripts/examples/wave.trk"
+    ));
+    let tall = temp("wave-tall.bvh");
+    let back = temp("wave-tall-back.trk");
+    let s = |p: &PathBuf| p.display().to_string();
+    let (from, to) = (s(&wave), s(&tall));
+    troupe(&[
+        "seq",
+        "convert",
+        &from,
+        &to,
+        "--template",
+        "adult",
+        "--height",
+        "1.95",
+    ]);
+    let (template, height) =
+        troupe_formats::retarget::recorded_body(&read_bvh(&tall).unwrap()).unwrap();
+    assert_eq!(template, "adult");
+    assert!((height - 1.95).abs() < 1e-9, "{height}");
+    troupe(&[
+        "seq",
+        "convert",
+        &s(&tall),
+        &s(&back),
+        "--template",
+        "adult",
+    ]);
+    let again = &troupe_formats::load_sequences(&back, None).unwrap()[0];
+    assert_eq!(again.meta["template"], "adult");
+    assert_eq!(again.meta["height"], "1.75");
+    // The wave leaves the root where it stands: on the default adult too, root_y = 0,
+    // not the 0.11 m the tall body's root stands higher.
+    for key in again.track("root_y").unwrap().keys() {
+        assert!(
+            key.value.abs() < 1e-9,
+            "root_y {} at {}",
+            key.value,
+            key.time
+        );
+    }
+}
+
+#[test]
 fn info_names_each_tracks_interpolation() {
     let file = temp("interpolations.trk");
     std::fs::write(
