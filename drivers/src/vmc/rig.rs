@@ -440,7 +440,7 @@ fn chain_rotation(skeleton: &Skeleton, dofs: &[usize], q: &[f64]) -> DQuat {
 /// Sets the rotation DOFs `dofs` (of one joint or a chain of joints, parent side first,
 /// whose offsets carry no rotation) so that their product is `target`. Three DOFs about
 /// the three principal axes (a shoulder, a hip, the root) are Euler angles, solved in
-/// closed form ([`solve_euler`]); any other chain by damped least squares, each step the
+/// closed form (`solve_euler`); any other chain by damped least squares, each step the
 /// smallest change, so a chain of similar joints shares a bend.
 pub fn solve_chain(skeleton: &Skeleton, dofs: &[usize], target: DQuat, q: &mut [f64]) {
     match euler_axes(skeleton, dofs) {

@@ -14,12 +14,12 @@
 //! Axes: the BVH is first turned into troupe's axes (Y up, facing +Z, left +X): its
 //! skeleton's up is the rest direction from the root to the head, its left the side of the
 //! left limbs; and when the frames stand that skeleton along another axis throughout (a
-//! Z-up world), the world is stood upright too ([`Axes`]).
+//! Z-up world), the world is stood upright too (`Axes`).
 //!
 //! Root translation is scaled by troupe's leg length over the BVH's, both measured along
 //! the bones from the root to the ankles (a rest pose's splayed legs do not shorten them),
 //! and the BVH's lowest ankle over the clip stands at troupe's rest ankle height, which
-//! keeps the feet on the floor for any body size ([`Ground`]).
+//! keeps the feet on the floor for any body size (`Ground`).
 
 use crate::bvh::{read_bvh, Axis, Bvh, RotationOrder};
 use crate::error::{Error, Result};
