@@ -19,15 +19,19 @@ extern "C" fn on_sigint(_: libc::c_int) {
     }
 }
 
-/// From now on, the first Ctrl-C only asks the run to stop (see [`requested`]).
+/// From now on, the first Ctrl-C only asks the run to stop (see [`requested`]), unless
+/// SIGINT was ignored (a background job of a non-interactive shell), which it stays.
 pub fn catch() {
     #[cfg(unix)]
     // SAFETY: the handler only stores to an atomic and restores the default action.
     unsafe {
-        libc::signal(
+        let before = libc::signal(
             libc::SIGINT,
             on_sigint as extern "C" fn(libc::c_int) as libc::sighandler_t,
         );
+        if before == libc::SIG_IGN {
+            libc::signal(libc::SIGINT, libc::SIG_IGN);
+        }
     }
 }
 

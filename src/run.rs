@@ -119,6 +119,11 @@ pub struct RunArgs {
 
 /// Runs the scene and prints the summary.
 pub fn run(args: RunArgs) -> Result<ExitCode> {
+    // From the start, so that a Ctrl-C while the scene loads stops before the first tick
+    // (a window's run ends when its window closes).
+    if !args.view {
+        crate::interrupt::catch();
+    }
     let config = SceneConfig {
         rate: args.rate,
         threads: args.threads,
@@ -264,7 +269,6 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         return view_run(session, tally, limit, size, camera, &args);
     }
     let started = Instant::now();
-    crate::interrupt::catch();
     let ran = session.run_while(limit, || !crate::interrupt::requested());
     let wall = started.elapsed();
     let ticks = session.scene().tick();
@@ -399,6 +403,8 @@ fn report(
     }
     ran?;
     finished?;
+    // A Ctrl-C while the recordings were written still ends the run as interrupted.
+    let interrupted = interrupted || crate::interrupt::requested();
     Ok(if interrupted {
         ExitCode::from(crate::interrupt::EXIT_CODE)
     } else if failed > 0 {

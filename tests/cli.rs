@@ -528,12 +528,13 @@ fn ctrl_c_stops_a_run_and_keeps_its_recording() {
     let scene = temp("ctrl_c.lua");
     std::fs::write(
         &scene,
-        "local ann = troupe.actor{ name = 'ann' }\nann:walk{ velocity = 1.0 }\n",
+        "local ann = troupe.actor{ name = 'ann' }\nann:walk{ velocity = 1.0 }\n\
+         ann:behave(function() wait(0.3); print('ticking') end)\n",
     )
     .unwrap();
     let record = temp("ctrl_c.trk");
     let _ = std::fs::remove_file(&record);
-    let child = troupe()
+    let mut child = troupe()
         .args(["run", "--seconds", "1000", "--realtime", "--record"])
         .arg(&record)
         .arg(&scene)
@@ -541,17 +542,23 @@ fn ctrl_c_stops_a_run_and_keeps_its_recording() {
         .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    std::thread::sleep(std::time::Duration::from_secs(3));
+    // Interrupted once it ticks (the behavior's print), however slow the machine.
+    use std::io::BufRead;
+    let stderr = std::io::BufReader::new(child.stderr.take().unwrap());
+    let mut log = String::new();
+    for line in stderr.lines() {
+        let line = line.unwrap();
+        log.push_str(&line);
+        if line.contains("ticking") {
+            break;
+        }
+    }
+    assert!(log.contains("ticking"), "{log}");
     // SAFETY: sending a signal to our own child process.
     assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
     let out = child.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(
-        out.status.code(),
-        Some(130),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    assert_eq!(out.status.code(), Some(130), "{stdout}\n{log}");
     assert!(stdout.contains("interrupted (Ctrl-C) at "), "{stdout}");
     let info = succeeds(troupe().args(["seq", "info"]).arg(&record));
     let info = String::from_utf8_lossy(&info.stdout);

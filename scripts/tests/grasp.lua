@@ -80,6 +80,14 @@ test("a box held in both hands fills both: neither grasps anything else", functi
   local auto = ann:grasp{ object = pen }
   expect(auto:wait() == "failed" and auto.error:find("both hands are full") ~= nil, tostring(auto.error))
   expect(pen.holder == nil, "the pen is left")
+  -- Letting go opens both hands (the one the box did not follow stayed closed).
+  local closed = { ann:dof("l_index1_flexion"), ann:dof("r_index1_flexion") }
+  local rel = ann:release{ object = box }
+  expect(rel:wait() == "completed" and box.holder == nil, "released: " .. tostring(rel.error))
+  expect(closed[1] > 0.05 and ann:dof("l_index1_flexion") < 0.5 * closed[1]
+         and closed[2] > 0.05 and ann:dof("r_index1_flexion") < 0.5 * closed[2],
+         string.format("both hands open: index %.2f → %.2f (left), %.2f → %.2f (right)", closed[1],
+                       ann:dof("l_index1_flexion"), closed[2], ann:dof("r_index1_flexion")))
 end)
 
 test("a receive with its hands full fails when it starts, not when the giver arrives", function()

@@ -68,6 +68,8 @@ test("wait_all and wait_any refuse what is not an action, catchably, with the pl
     err = { ok, e }
     local ok2, e2 = pcall(function() wait_all({ a, "x" }) end)
     err[3], err[4] = ok2, e2
+    local ok3, e3 = pcall(function() wait_any(a, nil, a) end)
+    err[5], err[6] = ok3, e3
   end)
   run_until(function() return ann:behavior_status() ~= "running" end, 2)
   expect(ann:behavior_status() == "done", "the behavior goes on: " .. ann:behavior_status())
@@ -76,6 +78,8 @@ test("wait_all and wait_any refuse what is not an action, catchably, with the pl
          tostring(err[2]))
   expect(err[3] == false and err[4]:find("waits%.lua:%d+: wait_all: argument 2 must be an action, got string") ~= nil,
          tostring(err[4]))
+  expect(err[5] == false and err[6]:find("wait_any: argument 2 must be an action, got nil", 1, true) ~= nil,
+         tostring(err[6]))
 end)
 
 test("wait_until returns false at its timeout", function()

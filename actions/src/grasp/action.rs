@@ -65,15 +65,27 @@ pub(crate) fn check_place(at: DVec3, seconds: f64) -> Result<(), OptionError> {
     }
 }
 
-/// The hand of `actor` that holds `object`, if one does.
+/// The hand of `actor` that holds `object`, if one does (the one it is attached to).
 pub fn holding_side(scene: &Scene, actor: usize, object: usize) -> Option<Side> {
-    let h = scene.holder(object).filter(|h| h.actor == actor)?;
-    let name = &scene.actors()[actor].skeleton.joints()[h.joint].name;
-    Some(if name.starts_with("l_") {
-        Side::Left
-    } else {
-        Side::Right
-    })
+    holding_sides(scene, actor, object).first().copied()
+}
+
+/// Every hand of `actor` that holds `object`: the one it is attached to, then the other
+/// of a two-handed hold.
+pub fn holding_sides(scene: &Scene, actor: usize, object: usize) -> Vec<Side> {
+    let Some(h) = scene.holder(object).filter(|h| h.actor == actor) else {
+        return Vec::new();
+    };
+    let joints = scene.actors()[actor].skeleton.joints();
+    h.wrists()
+        .map(|wrist| {
+            if joints[wrist].name.starts_with("l_") {
+                Side::Left
+            } else {
+                Side::Right
+            }
+        })
+        .collect()
 }
 
 /// Refuses a duration that is not a finite number of seconds > 0.

@@ -2,7 +2,7 @@
 //! pattern, how long, and where to put the object down.
 
 use super::action::{
-    check_duration, check_place, grasp_scope, holding_side, reach_scope, Grasp, Release,
+    check_duration, check_place, grasp_scope, holding_sides, reach_scope, Grasp, Release,
 };
 use super::decision::GraspType;
 use super::plan::{HandChoice, PlanOptions};
@@ -99,23 +99,26 @@ impl ReleaseOptions {
     }
 
     /// The release generator for `actor` of `scene`, the DOFs it drives and the part of
-    /// them it yields: the arm and hand that hold the object (the right ones when none
+    /// them it yields: the arms and hands that hold the object (both of a two-handed hold) (the right ones when none
     /// does: the action then fails at its start, saying so); a place also the spine, the
     /// legs and `root_y`, to lean or crouch for a place the arm alone cannot reach, as a
     /// grasp does, and yields them (during a walk it places with the arm alone).
     pub fn release(&self, scene: &Scene, actor: usize) -> Result<(Release, Scope, Scope)> {
         self.validate()?;
-        let side = holding_side(scene, actor, self.object).unwrap_or(Side::Right);
+        let mut sides = holding_sides(scene, actor, self.object);
+        if sides.is_empty() {
+            sides.push(Side::Right);
+        }
         let place = self.place.map(|p| {
             let rotation = p.rotation.unwrap_or(scene.objects()[self.object].rotation);
             (Transform::new(rotation, p.at), p.duration)
         });
         let skeleton = &scene.actors()[actor].skeleton;
         let (scope, body) = match place {
-            Some(_) => reach_scope(skeleton, &[side])?,
-            None => (grasp_scope(skeleton, &[side])?, Scope::EMPTY),
+            Some(_) => reach_scope(skeleton, &sides)?,
+            None => (grasp_scope(skeleton, &sides)?, Scope::EMPTY),
         };
-        Ok((Release::new(self.object, vec![side], place)?, scope, body))
+        Ok((Release::new(self.object, sides, place)?, scope, body))
     }
 }
 

@@ -174,6 +174,23 @@ impl ArmIk {
         })
     }
 
+    /// The same arm following a goal that moves a little each tick, as a reach's path
+    /// does before its last tick: its tolerances and iterations, so that a solve that
+    /// meets the goal stops there (the default settles null-space tasks for ever).
+    pub fn tracking(mut self) -> crate::error::Result<ArmIk> {
+        use crate::reach::{
+            TRACKING_ITERATIONS, TRACKING_ORIENTATION_TOLERANCE, TRACKING_POSITION_TOLERANCE,
+            TRACKING_SETTLE_ITERATIONS,
+        };
+        let mut options = *self.solver.options();
+        options.max_iterations = TRACKING_ITERATIONS;
+        options.position_tolerance = TRACKING_POSITION_TOLERANCE;
+        options.orientation_tolerance = TRACKING_ORIENTATION_TOLERANCE;
+        options.settle_iterations = TRACKING_SETTLE_ITERATIONS;
+        self.solver.set_options(options)?;
+        Ok(self)
+    }
+
     /// The arm's DOFs.
     pub fn dofs(&self) -> &[usize] {
         self.solver.dofs()

@@ -4,7 +4,7 @@
 use super::{ManipulateOptions, ObjectKey};
 use mlua::{MultiValue, Value};
 use troupe_lua::args::{
-    check_keys, err, error_text, euler_degrees, object_arg, opt_number, table_arg, vec3,
+    caught_text, check_keys, err, euler_degrees, object_arg, opt_number, table_arg, vec3,
 };
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
@@ -88,7 +88,7 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                     (i as f64 * STEP).min(duration)
                 };
                 let (at, r): (Value, Value) = f.call(time).map_err(|e| {
-                    let e = error_text(&e);
+                    let e = caught_text(&e);
                     err(m, format!("`keys` failed at t = {time:.2} s: {e}"))
                 })?;
                 let position = vec3(&at, &format!("{m}: keys({time})"))?;

@@ -37,14 +37,14 @@ pub const POSITION_TOLERANCE: f64 = 1e-3;
 pub const ORIENTATION_TOLERANCE: f64 = std::f64::consts::PI / 180.0;
 
 /// Position error accepted on the ticks before the last (metres).
-const TRACKING_POSITION_TOLERANCE: f64 = 2e-4;
+pub(crate) const TRACKING_POSITION_TOLERANCE: f64 = 2e-4;
 /// Orientation error accepted on the ticks before the last (radians, about 0.1°).
-const TRACKING_ORIENTATION_TOLERANCE: f64 = 2e-3;
+pub(crate) const TRACKING_ORIENTATION_TOLERANCE: f64 = 2e-3;
 /// Most IK iterations on the ticks before the last.
-const TRACKING_ITERATIONS: usize = 10;
+pub(crate) const TRACKING_ITERATIONS: usize = 10;
 /// Most iterations of self-collision correction per tick once the goal is met; the
 /// correction goes on next tick.
-const TRACKING_SETTLE_ITERATIONS: usize = 2;
+pub(crate) const TRACKING_SETTLE_ITERATIONS: usize = 2;
 /// Self-collision correction keeps sensors this far from the body (metres).
 pub const COLLISION_MARGIN: f64 = 0.01;
 /// How far outside other bodies and obstacles the arm's sensors start to be pushed away

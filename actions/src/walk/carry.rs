@@ -37,10 +37,6 @@ const FOREARM_UP: f64 = 0.15;
 /// The least gap (m) between a carried object and the front of the trunk at rest.
 const TRUNK_GAP: f64 = 0.04;
 
-/// The arm's damped-least-squares iterations per tick: the goal moves a centimetre or two
-/// a tick, which a few iterations from the last solution follow.
-const IK_ITERATIONS: usize = 12;
-
 /// The held objects a walk carries.
 #[derive(Default)]
 pub struct Carrying {
@@ -110,7 +106,7 @@ impl Carrying {
                 .wrists()
                 .map(|wrist| {
                     let side = side_of(sk, wrist)?;
-                    let ik = ArmIk::new(sk, side, IK_ITERATIONS).ok()?;
+                    let ik = ArmIk::new(sk, side, 1).and_then(ArmIk::tracking).ok()?;
                     let values = ik.dofs().iter().map(|&d| (d, ctx.posture.q[d])).collect();
                     let grip = pose.inverse().mul(&ctx.posture.globals[wrist]);
                     Some(CarryingArm { ik, grip, values })

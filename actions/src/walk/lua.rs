@@ -7,7 +7,7 @@ use super::{Walk, WalkOptions};
 use mlua::{MultiValue, Value};
 use troupe_body::glam::DVec2;
 use troupe_lua::api::{load_sequence, ActorRef, ObjectRef, SequenceRef};
-use troupe_lua::args::{err, error_text, floor_point, number, opt_bool, opt_number, table_arg};
+use troupe_lua::args::{caught_text, err, floor_point, number, opt_bool, opt_number, table_arg};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
@@ -177,7 +177,7 @@ pub fn build_walk(
                     for i in 0..n {
                         let time = i as f64 * PROFILE_DT;
                         let v: Value = f.call(time).map_err(|e| {
-                            let e = error_text(&e);
+                            let e = caught_text(&e);
                             err("walk", format!("`velocity` failed at t = {time:.2} s: {e}"))
                         })?;
                         let v = number(&v).ok_or_else(|| {

@@ -101,7 +101,10 @@ impl VrpnInput {
                         self.invalid += 1;
                         continue;
                     }
-                    let Some(addr) = u8::try_from(sensor + 1).ok().filter(|a| mapped.contains(a))
+                    let Some(addr) = sensor
+                        .checked_add(1)
+                        .and_then(|s| u8::try_from(s).ok())
+                        .filter(|a| mapped.contains(a))
                     else {
                         continue;
                     };

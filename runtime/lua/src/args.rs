@@ -96,13 +96,19 @@ pub fn error_text(e: &mlua::Error) -> String {
             format!("expected {}, got {from}", lua_type_of(to))
         }
         mlua::Error::CallbackError { cause, .. } => error_text(cause),
-        // A Lua function that Rust called (a walk's `velocity`) fails with mlua's
-        // traceback appended to its message.
-        mlua::Error::RuntimeError(m) => match m.split_once("\nstack traceback:") {
-            Some((message, _)) => message.to_string(),
-            None => m.clone(),
-        },
+        mlua::Error::RuntimeError(m) => m.clone(),
         other => other.to_string(),
+    }
+}
+
+/// The text of the error of a Lua function that Rust called (a walk's `velocity`), as a
+/// script sees an error it caught: [`error_text`] without the traceback mlua appends to
+/// the message (a failed behavior's report keeps it).
+pub fn caught_text(e: &mlua::Error) -> String {
+    let text = error_text(e);
+    match text.split_once("\nstack traceback:") {
+        Some((message, _)) => message.to_string(),
+        None => text,
     }
 }
 

@@ -15,7 +15,7 @@ pub(crate) fn install(lua: &Lua, troupe: &Table) -> mlua::Result<()> {
         "publish",
         lua.create_function(|lua, (key, value): (Value, Value)| {
             let key = string_arg("publish", "argument 1 (the key)", key)?;
-            let json = to_json(&value).map_err(|e| lua_err(format!("publish {key}: {e}")))?;
+            let json = to_json(lua, &value).map_err(|e| lua_err(format!("publish {key}: {e}")))?;
             stage(lua)?
                 .scene
                 .mailbox_mut()
@@ -65,15 +65,17 @@ const DEEPEST: usize = 100;
 const MOST_PARTS: usize = 1_000_000;
 
 /// A Lua value as JSON: tables with keys exactly 1…n are arrays, tables with string keys
-/// objects (an empty table an empty object); a table with both, with integer keys that
+/// objects (an empty table an empty object, unless it came from a JSON array, as a list a
+/// subscriber received: that stays an array, its holes null); a table with both, with integer keys that
 /// are not 1…n, or with other keys, is refused, as are numbers that are not finite (JSON
 /// has none), functions, userdata, a table that holds itself, nesting deeper than
 /// [`DEEPEST`] and more than [`MOST_PARTS`] parts. Errors say where (`value.y[2]`).
-fn to_json(value: &Value) -> Result<serde_json::Value, String> {
+fn to_json(lua: &Lua, value: &Value) -> Result<serde_json::Value, String> {
     let mut walk = JsonWalk {
         path: Vec::new(),
         open: Vec::new(),
         parts: 0,
+        array_mark: lua.array_metatable(),
     };
     walk.value(value)
 }
@@ -84,11 +86,31 @@ enum Step {
     Field(String),
 }
 
-/// The state of [`to_json`]'s walk: where it is, the tables it is inside, the parts seen.
+/// The state of [`to_json`]'s walk: where it is, the tables it is inside, the parts seen,
+/// and mlua's mark of a table that came from a JSON array.
 struct JsonWalk {
     path: Vec<Step>,
     open: Vec<*const std::ffi::c_void>,
     parts: usize,
+    array_mark: Table,
+}
+
+/// Where a key sorts: integers by value first, then strings, then anything else.
+fn order(k: &Value) -> f64 {
+    match k {
+        Value::Integer(i) => *i as f64,
+        Value::Number(x) => *x,
+        Value::String(_) => f64::MAX,
+        _ => f64::INFINITY,
+    }
+}
+
+/// A key's text, to sort strings (and the rest) among themselves.
+fn text(k: &Value) -> Vec<u8> {
+    match k {
+        Value::String(s) => s.as_bytes().to_vec(),
+        other => other.type_name().as_bytes().to_vec(),
+    }
 }
 
 impl JsonWalk {
@@ -152,11 +174,49 @@ impl JsonWalk {
                 self.here()
             ));
         }
-        let pairs: Vec<(Value, Value)> = t
+        let mut pairs: Vec<(Value, Value)> = t
             .pairs()
             .collect::<mlua::Result<_>>()
             .map_err(|e| e.to_string())?;
+        // Lua's `pairs` order changes from run to run: walked in key order, the same
+        // table always gives the same message and the same error.
+        pairs.sort_by(|(a, _), (b, _)| {
+            order(a)
+                .total_cmp(&order(b))
+                .then_with(|| text(a).cmp(&text(b)))
+        });
+        if let Some((k, _)) = pairs
+            .iter()
+            .find(|(k, _)| matches!(k, Value::String(s) if s.to_str().is_err()))
+        {
+            return Err(format!(
+                "{} has a key that is not UTF-8 text ({k:?})",
+                self.here()
+            ));
+        }
         let n = pairs.len() as i64;
+        // A list a subscriber received keeps mlua's array mark, and its nulls are holes.
+        let marked = t.metatable().is_some_and(|m| m == self.array_mark);
+        if marked {
+            let last = pairs
+                .iter()
+                .try_fold(t.raw_len() as i64, |last, (k, _)| match k {
+                    Value::Integer(i) if *i >= 1 => Some(last.max(*i)),
+                    _ => None,
+                });
+            if let Some(last) = last.filter(|&l| l <= MOST_PARTS as i64) {
+                self.open.push(me);
+                let mut items = vec![serde_json::Value::Null; last as usize];
+                for (k, v) in &pairs {
+                    let Value::Integer(i) = k else { unreachable!() };
+                    self.path.push(Step::Index(*i));
+                    items[(*i - 1) as usize] = self.value(v)?;
+                    self.path.pop();
+                }
+                self.open.pop();
+                return Ok(serde_json::Value::Array(items));
+            }
+        }
         let listed = pairs
             .iter()
             .all(|(k, _)| matches!(k, Value::Integer(i) if (1..=n).contains(i)));
@@ -177,7 +237,7 @@ impl JsonWalk {
                 let Value::String(name) = k else {
                     unreachable!()
                 };
-                let name = name.to_string_lossy();
+                let name = name.to_str().map_err(|e| e.to_string())?.to_string();
                 self.path.push(Step::Field(name.clone()));
                 let v = self.value(v)?;
                 self.path.pop();
@@ -220,4 +280,48 @@ pub(crate) fn to_lua(lua: &Lua, value: &serde_json::Value) -> mlua::Result<Value
             .serialize_none_to_null(false)
             .serialize_unit_to_null(false),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// What a subscriber received goes out again as it came: lists (empty ones, and ones
+    /// with nulls) stay lists.
+    #[test]
+    fn a_received_value_is_published_back_unchanged() {
+        let lua = Lua::new();
+        let json: serde_json::Value = serde_json::from_str(
+            r#"{"empty": [], "holes": [1, null, 3], "nested": [[], {"a": [null, 2]}], "n": null}"#,
+        )
+        .unwrap();
+        let received = to_lua(&lua, &json).unwrap();
+        let back = to_json(&lua, &received).unwrap();
+        // `null` at the top of a record is a missing field in Lua (and a list's trailing
+        // nulls are lost the same way).
+        let mut expected = json.clone();
+        expected.as_object_mut().unwrap().remove("n");
+        assert_eq!(back, expected);
+    }
+
+    /// The same table gives the same error whatever order `pairs` takes.
+    #[test]
+    fn errors_name_the_first_bad_value_in_key_order() {
+        let lua = Lua::new();
+        let t: Value = lua
+            .load("return { b = 0/0, a = 0/0, c = { z = 1/0, y = 1/0 } }")
+            .eval()
+            .unwrap();
+        assert_eq!(
+            to_json(&lua, &t).unwrap_err(),
+            "value.a is not a finite number"
+        );
+        let t: Value = lua
+            .load("return { [3] = 1, x = 1, [5] = 2 }")
+            .eval()
+            .unwrap();
+        assert!(to_json(&lua, &t)
+            .unwrap_err()
+            .ends_with("it has [5] among 3 keys (a list's are 1…3)"));
+    }
 }

@@ -87,12 +87,16 @@ local is_action = __troupe_is_action
 -- The actions given to `name` (as arguments or in one list), each checked here so that
 -- the error names the argument and the caller's place, and pcall can catch it.
 local function handles(name, ...)
-  local list = { ... }
-  if #list == 1 and type(list[1]) == "table" then list = list[1] end
-  if #list == 0 then error(name .. ": give at least one action", 3) end
-  for i, a in ipairs(list) do
-    if not is_action(a) then
-      error(string.format("%s: argument %d must be an action, got %s", name, i, type(a)), 3)
+  local list, n = { ... }, select("#", ...)
+  if n == 1 and type(list[1]) == "table" and not is_action(list[1]) then
+    list = list[1]
+    n = #list
+  end
+  if n == 0 then error(name .. ": give at least one action", 3) end
+  -- By count, not ipairs: a nil among the arguments is refused, not the end of them.
+  for i = 1, n do
+    if not is_action(list[i]) then
+      error(string.format("%s: argument %d must be an action, got %s", name, i, type(list[i])), 3)
     end
   end
   return list
