@@ -454,6 +454,21 @@ pub fn solve_chain(skeleton: &Skeleton, dofs: &[usize], target: DQuat, q: &mut [
 /// target as that case moves the result by at most this angle.
 const GIMBAL: f64 = 1e-9;
 
+/// Below this `cos b` (the middle angle within 1.15° of ±90°) the joint is near gimbal
+/// lock: the exact first angle is the direction of the target's small departure from the
+/// lock, so a sender's noise of a tenth of a degree turns it by up to 90° frame to frame
+/// (and the last angle back), the product staying right. Angles near the current ones
+/// within [`NEAR_LOCK_TOLERANCE`] of the target are then also offered. Farther out the
+/// solve is exact; at this bound, taking the exact angles moves the first one by at most
+/// asin(sin 0.1° / sin 1.15°) ≈ 5°, about what the sender's noise moves it there anyway.
+const NEAR_LOCK: f64 = 2e-2;
+
+/// How far from the target (0.1°: a sender's noise) a solution near gimbal lock may turn
+/// the joint to stay continuous with the current posture. Within 0.1° of the lock every
+/// first angle is within it, so the current one is kept; farther, the first angle moves
+/// only as far as needed to come within it.
+const NEAR_LOCK_TOLERANCE: f64 = 0.1 * PI / 180.0;
+
 /// A DOF axis that is a principal axis of its joint's frame: its index (X 0, Y 1, Z 2)
 /// and its sign.
 fn principal_axis(axis: DVec3) -> Option<(usize, f64)> {
@@ -487,9 +502,10 @@ fn euler_axes(skeleton: &Skeleton, dofs: &[usize]) -> Option<[(usize, f64); 3]> 
 /// exactly `target`. A rotation has two sets of Euler angles (`(a, b, c)` and
 /// `(a + π, π − b, c + π)`), each angle up to turns, and in gimbal lock a continuum: the
 /// set kept is the one within the DOFs' limits (else the least outside them) nearest the
-/// current values. The current values so only choose between equal rotations: an
-/// iterative solve from them can end on the set outside the limits, which clamping then
-/// turns into another rotation.
+/// current values. The current values so only choose between equal rotations (near gimbal
+/// lock, [`NEAR_LOCK`], between rotations within [`NEAR_LOCK_TOLERANCE`] of the target, so
+/// that the angles follow a noisy target continuously): an iterative solve from them can
+/// end on the set outside the limits, which clamping then turns into another rotation.
 fn solve_euler(
     skeleton: &Skeleton,
     dofs: &[usize],
@@ -522,12 +538,20 @@ fn solve_euler(
     // target · e_k = R_i(a) (cos b · e_k + ε sin b · e_i): its e_j, e_k part is a's.
     let v = target * e[k];
     let cos_b = v[j].hypot(v[k]);
-    let candidates: Vec<[f64; 3]> = if cos_b > GIMBAL {
-        let a = (-eps * v[j]).atan2(v[k]);
-        vec![rest(a), rest(a + PI)]
+    let exact = cos_b > GIMBAL;
+    let a_exact = (-eps * v[j]).atan2(v[k]);
+    let mut candidates: Vec<[f64; 3]> = if exact {
+        vec![rest(a_exact), rest(a_exact + PI)]
     } else {
-        // Any a works, with c = c(a₀) − σ (a − a₀): the candidates are a₀, the point
-        // nearest the current (a₀, c₀), and where a or c meets a limit.
+        Vec::new()
+    };
+    if cos_b < NEAR_LOCK {
+        // In lock any a works, with c = c(a₀) − σ (a − a₀): the candidates are a₀, the
+        // point nearest the current (a₀, c₀), and where a or c meets a limit. Near lock
+        // `rest(a)` turns the joint asin(cos b · |sin(a − a*)|) off the target (a* the
+        // exact first angle: it misses only p · e_k's e_j part), so these are kept within
+        // the tolerance, and the first angles where that error reaches it are added (the
+        // ends of the arcs it allows, so a current one outside moves only to the nearest).
         let from_now = rest(now[0]);
         let sigma = eps * from_now[1].signum();
         let offset = |c: f64| wrap_pi(from_now[2] - c);
@@ -540,8 +564,23 @@ fn solve_euler(
         let mut ts = vec![now[0], now[0] + sigma * offset(now[2]) / 2.0];
         ts.extend(limits(0));
         ts.extend(limits(2).map(|c| now[0] + sigma * offset(c)));
-        ts.into_iter().map(rest).collect()
-    };
+        if exact {
+            // Just inside the tolerance, so rounding does not filter them out.
+            let w = (NEAR_LOCK_TOLERANCE.sin() * (1.0 - 1e-9) / cos_b)
+                .min(1.0)
+                .asin();
+            ts.extend([-w, w, PI - w, PI + w].map(|x| a_exact + x));
+        }
+        let near = |angles: &[f64; 3]| {
+            let [a, b, c] = *angles;
+            let got = DQuat::from_axis_angle(e[i], a)
+                * DQuat::from_axis_angle(e[j], b)
+                * DQuat::from_axis_angle(e[k], c);
+            let d = got * target.inverse();
+            2.0 * d.xyz().length().atan2(d.w.abs()) <= NEAR_LOCK_TOLERANCE
+        };
+        candidates.extend(ts.into_iter().map(rest).filter(|c| !exact || near(c)));
+    }
     let mut best: Option<(f64, f64, [f64; 3])> = None;
     for angles in candidates {
         let mut set = [0.0; 3];
@@ -913,6 +952,75 @@ mod tests {
                 let case = format!("{flexion}° {twist}° from {f0}° {t0}°");
                 check_solved(&sk, &dofs, &q, target, &case);
             }
+        }
+    }
+
+    /// Near gimbal lock, a rotation changing by less than 0.5° a tick moves no DOF by 3°.
+    #[test]
+    fn a_noisy_sender_near_gimbal_lock_moves_every_dof_continuously() {
+        // A sender in VMC's calibration pose (the T-pose: shoulders abducted 90°, in gimbal
+        // lock) or lying (the root pitched 90°): its sensors' noise turns each bone by up to
+        // 0.1° about any axis, while the middle angle wanders within 0.15° of 90° and the
+        // others drift slowly. Just outside exact lock, the exact Euler angles' first angle
+        // is the direction of that noise: flexion and twist jumped by up to 167° a tick
+        // with their product right (which blending, easing or interpolating per DOF turns
+        // into wrong poses), and by clamping to the limits a shoulder ended 14° off.
+        let sk = adult();
+        let mut seed = 7u64;
+        let mut uniform = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+        };
+        for joint in ["r_shoulder", "l_shoulder", "HumanoidRoot"] {
+            let dofs = rotations(&sk, joint);
+            let posture = |first: f64, middle: f64, last: f64| {
+                let mut q = vec![0.0; sk.dof_count()];
+                let angles = [first, middle, last].map(|a: f64| a.to_radians());
+                for (&d, a) in dofs.iter().zip(angles) {
+                    q[d] = a;
+                }
+                q
+            };
+            let mut q = posture(20.0, 90.0, 10.0);
+            let mut before = chain_rotation(&sk, &dofs, &q);
+            let (mut worst, mut worst_off) = (0.0f64, 0.0f64);
+            for tick in 0..2000 {
+                let t = tick as f64 / 100.0;
+                let drift = chain_rotation(
+                    &sk,
+                    &dofs,
+                    &posture(
+                        20.0 + 5.0 * (t / 3.0).sin(),
+                        90.0 + 0.15 * (t / 4.0).sin(),
+                        10.0 + 5.0 * (t / 2.0).sin(),
+                    ),
+                );
+                let axis = DVec3::new(uniform(), uniform(), uniform()).normalize_or_zero();
+                let noise = DQuat::from_axis_angle(axis, 0.1f64.to_radians() * uniform());
+                let target = drift * noise;
+                assert!(angle(target, before) < 0.5f64.to_radians());
+                before = target;
+                let was = q.clone();
+                solve_chain(&sk, &dofs, target, &mut q);
+                clamp_to_limits(&sk, &mut q);
+                worst = dofs
+                    .iter()
+                    .map(|&d| (q[d] - was[d]).abs())
+                    .fold(worst, f64::max);
+                worst_off = worst_off.max(angle(chain_rotation(&sk, &dofs, &q), target));
+            }
+            assert!(
+                worst < 3f64.to_radians(),
+                "{joint}: a DOF moved {:.1}° in a tick",
+                worst.to_degrees()
+            );
+            assert!(
+                worst_off <= NEAR_LOCK_TOLERANCE + 1e-12,
+                "{joint}: {:.4}° off the target",
+                worst_off.to_degrees()
+            );
         }
     }
 }
