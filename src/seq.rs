@@ -59,8 +59,9 @@ enum SeqCommand {
         /// the output may then be .trk, .bvh (on the template's hierarchy) or glTF.
         #[arg(long)]
         template: Option<String>,
-        /// Standing height in metres of the --template body (default: the template's); a
-        /// BVH's root translation is scaled to it, so its feet stay on the floor.
+        /// Standing height in metres of the --template body (default: the one a .trk
+        /// records for that template, else the template's); a BVH's root translation is
+        /// scaled to it, so its feet stay on the floor.
         #[arg(long, value_name = "METRES", requires = "template")]
         height: Option<f64>,
         /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: the
@@ -398,16 +399,26 @@ fn convert(
     let gltf_out = matches!(output_format, Format::Gltf | Format::Glb);
     if let Some(t) = template {
         let t = troupe_body::template(&t)?;
+        // A .trk keeps DOF values: its own body is kept unless --height says otherwise.
+        let trk = match input_format {
+            Format::Trk => Some(load(input, scale)?.seq),
+            _ => None,
+        };
+        let recorded = trk
+            .as_ref()
+            .filter(|seq| seq.meta.get("template").is_some_and(|n| n == t.name))
+            .and_then(|seq| seq.meta.get("height")?.parse::<f64>().ok());
         let mut params = t.default_params();
-        if let Some(h) = height {
+        if let Some(h) = height.or(recorded) {
             params.height = h;
         }
         let skeleton = t.instantiate(params)?;
-        let mut seq = match (input_format, map) {
-            (Format::Bvh, Some(m)) => {
-                retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)?
+        let mut seq = match (trk, map) {
+            (Some(seq), _) => seq,
+            (None, Some(m)) if input_format == Format::Bvh => {
+                retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)
+                    .with_context(|| format!("retargeting {}", input.display()))?
             }
-            (Format::Trk, _) => load(input, scale)?.seq,
             _ => load_sequence(input, Some(&skeleton))?,
         };
         if let Some(map) = seq.meta.get("retarget_map") {

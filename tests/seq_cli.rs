@@ -180,6 +180,33 @@ fn a_tall_actors_bvh_converts_onto_a_default_adult_with_its_feet_on_the_floor() 
     let again = &troupe_formats::load_sequences(&back, None).unwrap()[0];
     assert_eq!(again.meta["template"], "adult");
     assert_eq!(again.meta["height"], "1.75");
+    // A .trk converted again keeps the body it was made for (it took the default).
+    let tall_trk = temp("wave-tall.trk");
+    let bvh_again = temp("wave-tall-again.bvh");
+    troupe(&[
+        "seq",
+        "convert",
+        &from,
+        &s(&tall_trk),
+        "--template",
+        "adult",
+        "--height",
+        "1.95",
+    ]);
+    troupe(&[
+        "seq",
+        "convert",
+        &s(&tall_trk),
+        &s(&bvh_again),
+        "--template",
+        "adult",
+    ]);
+    let (_, kept) =
+        troupe_formats::retarget::recorded_body(&read_bvh(&bvh_again).unwrap()).unwrap();
+    assert!(
+        (kept - 1.95).abs() < 1e-9,
+        "the .trk's 1.95 m body, got {kept}"
+    );
     // The wave leaves the root where it stands: on the default adult too, root_y = 0,
     // not the 0.11 m the tall body's root stands higher.
     for key in again.track("root_y").unwrap().keys() {

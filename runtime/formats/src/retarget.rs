@@ -209,6 +209,9 @@ const REST_UP_COS: f64 = 0.8;
 const WORLD_UP_COS: f64 = 0.9;
 /// See [`WORLD_UP_COS`].
 const WORLD_UP_CONSISTENCY: f64 = 0.8;
+/// A world is not turned when the lowest joint's height along the skeleton's own up moves
+/// over the clip less than this fraction of how it moves along the world's candidate up.
+const FLOOR_STEADIER: f64 = 0.5;
 
 /// The signed principal axis (±X, ±Y or ±Z) nearest `v`, if the cosine between them is at
 /// least `min_cos`.
@@ -367,8 +370,17 @@ impl Axes {
             }
         }
         mean /= bvh.frame_count().max(1) as f64;
+        // A body lying along an axis throughout (crawling, lying, swimming) points its
+        // head along it as consistently as a turned world does: not turned when the
+        // floor says otherwise, the lowest joint much steadier along the skeleton's own
+        // up than along that axis (a clip that stays in place says nothing either way).
         let world = match nearest_axis(mean, WORLD_UP_COS) {
-            Some(a) if mean.length() >= WORLD_UP_CONSISTENCY && a != DVec3::Y => {
+            Some(a)
+                if mean.length() >= WORLD_UP_CONSISTENCY
+                    && a != DVec3::Y
+                    && floor_spread(bvh, skeleton, DVec3::Y, &mut g)
+                        >= FLOOR_STEADIER * floor_spread(bvh, skeleton, a, &mut g) =>
+            {
                 let stand = upright(a);
                 bvh.global_transforms(0, &mut g);
                 let lateral = stand * skeleton * marks.lateral(|j| g[j].translation);
@@ -397,6 +409,24 @@ impl Axes {
     fn file_axis(&self, axis: DVec3) -> String {
         axis_label((self.world * self.skeleton).inverse() * axis)
     }
+}
+
+/// How far the lowest joint's height along `axis` (in the skeleton's turned axes) moves
+/// over the clip: little along the floor's normal. A body lying along an axis throughout
+/// (crawling, lying, swimming) points its head along it as consistently as a turned world
+/// does; its floor tells them apart.
+fn floor_spread(bvh: &Bvh, skeleton: DQuat, axis: DVec3, g: &mut [Transform]) -> f64 {
+    let (mut low, mut high) = (f64::INFINITY, f64::NEG_INFINITY);
+    for k in 0..bvh.frame_count() {
+        bvh.global_transforms(k, g);
+        let lowest = g
+            .iter()
+            .map(|t| (skeleton * t.translation).dot(axis))
+            .fold(f64::INFINITY, f64::min);
+        low = low.min(lowest);
+        high = high.max(lowest);
+    }
+    high - low
 }
 
 /// How BVH lengths scale onto troupe's and where the BVH body's floor is.
@@ -1115,6 +1145,55 @@ mod tests {
         let (low, rest_ankle) = lowest_ankle(&s, &seq, &bvh);
         assert!((low - rest_ankle).abs() < 0.01, "{low} vs {rest_ankle}");
         assert_eq!(seq.meta["bvh_up"], "+Z");
+    }
+
+    #[test]
+    fn a_body_lying_along_z_in_a_y_up_world_is_not_stood_up() {
+        // Crawling forward along +Z, head first, in an ordinary Y-up file: its head points
+        // along +Z as consistently as bvh_test3's turned world, but its floor is Y.
+        let joint = |name: &str, offset: &str, inner: &str| {
+            format!("JOINT {name}\n{{\nOFFSET {offset}\nCHANNELS 3 Zrotation Xrotation Yrotation\n{inner}}}\n")
+        };
+        let end = "End Site\n{\nOFFSET 0 -2 0\n}\n";
+        let leg = |side: &str, x: &str| {
+            joint(
+                &format!("{side}UpLeg"),
+                &format!("{x} -2 0"),
+                &joint(
+                    &format!("{side}Leg"),
+                    "0 -8 0",
+                    &joint(&format!("{side}Foot"), "0 -8 0", end),
+                ),
+            )
+        };
+        let head = joint(
+            "Neck",
+            "0 6 0",
+            &joint("Head", "0 2 0", "End Site\n{\nOFFSET 0 3 0\n}\n"),
+        );
+        let spine = joint("Spine", "0 4 0", &head);
+        let mut text = format!(
+            "HIERARCHY\nROOT Hips\n{{\nOFFSET 0 0 0\nCHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n{spine}{}{}}}\nMOTION\nFrames: 20\nFrame Time: 0.1\n",
+            leg("Left", "2"),
+            leg("Right", "-2")
+        );
+        for k in 0..20 {
+            // Root 2 units above the floor, lying face down (90° about X), crawling on.
+            text.push_str(&format!(
+                "0 2 {} 0 90 0{}\n",
+                1.5 * k as f64,
+                " 0 0 0".repeat(9)
+            ));
+        }
+        let path = std::env::temp_dir().join(format!("troupe-crawl-{}.bvh", std::process::id()));
+        std::fs::write(&path, text).unwrap();
+        let seq = load_sequence_for(&adult(), &path).unwrap();
+        std::fs::remove_file(&path).unwrap();
+        assert_eq!(seq.meta["bvh_up"], "+Y", "{:?}", seq.meta);
+        let s = adult();
+        let g = fk(&s, &seq, 1.0);
+        let up = g[s.joint("skullbase").unwrap()].translation - g[0].translation;
+        assert!(angle(up, DVec3::Y) > 70.0, "still lying: root to head {up}");
     }
 
     #[test]
