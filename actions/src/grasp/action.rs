@@ -78,13 +78,7 @@ pub fn holding_sides(scene: &Scene, actor: usize, object: usize) -> Vec<Side> {
     };
     let joints = scene.actors()[actor].skeleton.joints();
     h.wrists()
-        .map(|wrist| {
-            if joints[wrist].name.starts_with("l_") {
-                Side::Left
-            } else {
-                Side::Right
-            }
-        })
+        .map(|wrist| Side::of_joint(&joints[wrist].name).unwrap_or(Side::Right))
         .collect()
 }
 

@@ -326,7 +326,7 @@ fn held_in<'w>(world: &'w World, skeleton: &Skeleton, actor: usize, side: Side) 
             skeleton
                 .joints()
                 .get(wrist)
-                .is_some_and(|j| j.name.starts_with(side.prefix()))
+                .is_some_and(|j| Side::of_joint(&j.name) == Some(side))
         });
         (h.actor == actor && on_side)
             .then(|| world.objects.get(object).map(|o| o.name.as_str()))

@@ -105,7 +105,7 @@ impl Carrying {
             let arms: Option<Vec<CarryingArm>> = h
                 .wrists()
                 .map(|wrist| {
-                    let side = side_of(sk, wrist)?;
+                    let side = Side::of_joint(&sk.joints().get(wrist)?.name)?;
                     let ik = ArmIk::new(sk, side, 1).and_then(ArmIk::tracking).ok()?;
                     let values = ik.dofs().iter().map(|&d| (d, ctx.posture.q[d])).collect();
                     let grip = pose.inverse().mul(&ctx.posture.globals[wrist]);
@@ -277,16 +277,4 @@ fn carrying_place(
     let object = Transform::new(wrist_turn, hand).mul(&arms[0].grip.inverse());
     let forward = (clear - object.translation.z).max(0.0);
     lifted(object.translation + DVec3::Z * forward)
-}
-
-/// The side of a wrist joint, by its name.
-fn side_of(skeleton: &Skeleton, wrist: usize) -> Option<Side> {
-    let name = &skeleton.joints().get(wrist)?.name;
-    if name.starts_with("l_") {
-        Some(Side::Left)
-    } else if name.starts_with("r_") {
-        Some(Side::Right)
-    } else {
-        None
-    }
 }

@@ -52,6 +52,7 @@ use std::f64::consts::TAU;
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
 use troupe_body::math::smoothstep;
+use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
@@ -545,14 +546,14 @@ impl Walk {
     /// What the hand of arm `i` in [`Rig::arms`] (0 left, 1 right) holds, if anything:
     /// the first holding of the actor on a joint of that side.
     fn held_by_arm(ctx: &GeneratorContext, i: usize) -> Option<Holder> {
-        let prefix = if i == 0 { "l_" } else { "r_" };
+        let side = if i == 0 { Side::Left } else { Side::Right };
         let joints = ctx.skeleton.joints();
         ctx.world.held.iter().map(|&(_, h)| h).find(|h| {
             h.actor == ctx.actor
                 && h.wrists().any(|wrist| {
                     joints
                         .get(wrist)
-                        .is_some_and(|j| j.name.starts_with(prefix))
+                        .is_some_and(|j| Side::of_joint(&j.name) == Some(side))
                 })
         })
     }

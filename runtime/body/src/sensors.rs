@@ -34,6 +34,12 @@ impl Side {
             Side::Right => "r_",
         }
     }
+    /// The side of a joint named with a side's prefix (`l_wrist`), if it is one's.
+    pub fn of_joint(name: &str) -> Option<Side> {
+        [Side::Left, Side::Right]
+            .into_iter()
+            .find(|side| name.starts_with(side.prefix()))
+    }
     /// `left` or `right`.
     pub fn name(self) -> &'static str {
         match self {
