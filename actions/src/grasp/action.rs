@@ -22,8 +22,7 @@ use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::holding::HoldRequest;
 use troupe_scene::{
-    DofWriter, Ending, Generator, GeneratorContext, Notes, Scene, SignalId, StartError, Status,
-    Step,
+    DofWriter, Ending, Generator, GeneratorContext, Notes, Scene, SignalId, StartError, Step,
 };
 
 /// Seconds the fingers take to close along a pattern.
@@ -356,11 +355,8 @@ impl Generator for Grasp {
     }
 
     fn end(&mut self, ending: &Ending, notes: &mut Notes) {
-        if let Some(signal) = self.gave_up {
-            if ending.status != Status::Completed {
-                let why = ending.reason.unwrap_or("no reason given");
-                notes.fail(signal, format!("{}: {why}", ending.status.name()));
-            }
+        if let (Some(signal), Some(why)) = (self.gave_up, ending.failure()) {
+            notes.fail(signal, why);
         }
     }
 

@@ -40,8 +40,7 @@ use troupe_body::jacobian::rotation_error;
 use troupe_body::sensors::{solid_distance, Side};
 use troupe_body::{Scope, Transform};
 use troupe_scene::{
-    DofWriter, Ending, Generator, GeneratorContext, Notes, SignalId, StartError, Status, Step,
-    World,
+    DofWriter, Ending, Generator, GeneratorContext, Notes, SignalId, StartError, Step, World,
 };
 
 /// The giver waits this long for the receiver to take the object.
@@ -180,12 +179,9 @@ impl Generator for Give {
     /// The receiver waiting for the object learns that the give ended, and why if it
     /// ended without handing the object over.
     fn end(&mut self, ending: &Ending, notes: &mut Notes) {
-        match (ending.status, ending.reason) {
-            (Status::Completed, _) => notes.raise(self.ended),
-            (status, reason) => notes.fail(
-                self.ended,
-                format!("{}: {}", status.name(), reason.unwrap_or("no reason given")),
-            ),
+        match ending.failure() {
+            None => notes.raise(self.ended),
+            Some(why) => notes.fail(self.ended, why),
         }
     }
 
@@ -708,9 +704,8 @@ impl Generator for FollowHand {
     /// A follower that ends before the hold (cancelled, pre-empted, failed) lets the
     /// holding actor know, which then fails rather than hold an empty hand.
     fn end(&mut self, ending: &Ending, notes: &mut Notes) {
-        if ending.status != Status::Completed {
-            let why = ending.reason.unwrap_or("no reason given");
-            notes.fail(self.gave_up, format!("{}: {why}", ending.status.name()));
+        if let Some(why) = ending.failure() {
+            notes.fail(self.gave_up, why);
         }
     }
 

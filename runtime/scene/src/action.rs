@@ -418,6 +418,17 @@ pub struct Ending<'a> {
     pub reason: Option<&'a str>,
 }
 
+impl Ending<'_> {
+    /// For an action that did not complete, its status and why (`cancelled: pre-empted
+    /// by action #2`), as it tells an action that waits on it; `None` when it completed.
+    pub fn failure(&self) -> Option<String> {
+        (self.status != Status::Completed).then(|| {
+            let why = self.reason.unwrap_or("no reason given");
+            format!("{}: {why}", self.status.name())
+        })
+    }
+}
+
 /// A snapshot of one action for queries and listings.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ActionInfo {
