@@ -99,8 +99,9 @@ impl ReleaseOptions {
     }
 
     /// The release generator for `actor` of `scene`, the DOFs it drives and the part of
-    /// them it yields: the arms and hands that hold the object (both of a two-handed hold) (the right ones when none
-    /// does: the action then fails at its start, saying so); a place also the spine, the
+    /// them it yields: the arms and hands that hold the object, both of a two-handed hold
+    /// (the right ones when none does: the action then fails at its start, saying so); a
+    /// place also the spine, the
     /// legs and `root_y`, to lean or crouch for a place the arm alone cannot reach, as a
     /// grasp does, and yields them (during a walk it places with the arm alone).
     pub fn release(&self, scene: &Scene, actor: usize) -> Result<(Release, Scope, Scope)> {

@@ -540,11 +540,14 @@ impl Generator for HoldHand {
                 actor_name(ctx.world, self.other)
             ));
         }
+        let wrists_apart = || {
+            let theirs = ctx.world.states[self.other].globals[self.other_wrist];
+            let mine = ctx.posture.globals[model.sensors.wrist];
+            mine.translation.distance(theirs.translation)
+        };
         if let Some(apart) = self.apart {
             // A follower that walks away, or is carried off, takes its hand out of ours.
-            let mine = ctx.posture.globals[model.sensors.wrist].translation;
-            let theirs = ctx.world.states[self.other].globals[self.other_wrist].translation;
-            let now = mine.distance(theirs);
+            let now = wrists_apart();
             if now > apart + HANDS_APART {
                 return Step::Failed(format!(
                     "the hands came apart: `{}`'s {} hand is {now:.2} m from `{}`'s {} hand",
@@ -591,13 +594,7 @@ impl Generator for HoldHand {
                 );
                 if self.s >= 1.0 {
                     out.raise(self.held);
-                    let g = &ctx.posture.globals;
-                    let theirs = ctx.world.states[self.other].globals[self.other_wrist];
-                    self.apart = Some(
-                        g[model.sensors.wrist]
-                            .translation
-                            .distance(theirs.translation),
-                    );
+                    self.apart = Some(wrists_apart());
                     self.phase = 2;
                     self.phase_start = ctx.local_time;
                 }

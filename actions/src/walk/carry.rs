@@ -126,14 +126,14 @@ impl Carrying {
         carrying
     }
 
-    /// Moves the carrying arms at walk time `t`, the body's heading frame being `heading`
-    /// and `upper` this tick's root, pelvis and spine values as written. A load that is no
-    /// longer held as it was is dropped; one whose arms another action has taken is left
-    /// where it is.
+    /// Moves the carrying arms at walk time `t`, the root this tick on the floor at `root`
+    /// turned by `yaw`, and `upper` this tick's root, pelvis and spine values as written.
+    /// A load that is no longer held as it was is dropped; one whose arms another action
+    /// has taken is left where it is.
     pub fn step(
         &mut self,
         ctx: &GeneratorContext,
-        (t, heading): (f64, Transform),
+        (t, root, yaw): (f64, DVec3, f64),
         upper: &[(usize, f64)],
         out: &mut DofWriter,
     ) {
@@ -147,6 +147,8 @@ impl Carrying {
         if self.loads.is_empty() {
             return;
         }
+        // Made only for a walk that carries: every walker of a crowd passes here.
+        let heading = heading_frame(root, yaw);
         let sk = ctx.skeleton;
         self.q.clear();
         self.q.extend_from_slice(&ctx.posture.q);

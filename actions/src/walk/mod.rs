@@ -531,7 +531,8 @@ impl Walk {
     }
 
     /// The part of its scope the walk can give up and keep walking: the arms (their swing
-    /// and carrying) and the spine's lean and counter-rotation. The root, pelvis and legs are essential.
+    /// and carrying) and the spine's lean and counter-rotation. The root, pelvis and legs
+    /// are essential.
     pub fn yields(&self) -> Scope {
         let rig = &self.rig;
         let arms = rig
@@ -1525,8 +1526,8 @@ impl Generator for Walk {
             }
         }
         let root_at = DVec3::new(rig.root_rest.x + root[0], 0.0, rig.root_rest.z + root[2]);
-        let heading = carry::heading_frame(root_at, root[3]);
-        self.carrying.step(ctx, (self.t, heading), &upper, out);
+        self.carrying
+            .step(ctx, (self.t, root_at, root[3]), &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
         if self.steer.plan_time(self.t, self.t) >= plan.end_time {
