@@ -66,8 +66,8 @@ const MOST_PARTS: usize = 1_000_000;
 
 /// A Lua value as JSON: tables with keys exactly 1…n are arrays, tables with string keys
 /// objects (an empty table an empty object, unless it came from a JSON array, as a list a
-/// subscriber received: that stays an array, its holes null); a table with both, with integer keys that
-/// are not 1…n, or with other keys, is refused, as are numbers that are not finite (JSON
+/// subscriber received: that stays an array, its holes null); a table with both, with
+/// integer keys that are not 1…n, or with other keys, is refused, as are numbers that are not finite (JSON
 /// has none), functions, userdata, a table that holds itself, nesting deeper than
 /// [`DEEPEST`] and more than [`MOST_PARTS`] parts. Errors say where (`value.y[2]`).
 fn to_json(lua: &Lua, value: &Value) -> Result<serde_json::Value, String> {
@@ -163,6 +163,19 @@ impl JsonWalk {
         })
     }
 
+    /// A JSON array of `len` items from `pairs`, whose keys are integers 1…`len` (the
+    /// missing ones null).
+    fn list(&mut self, pairs: &[(Value, Value)], len: i64) -> Result<serde_json::Value, String> {
+        let mut items = vec![serde_json::Value::Null; len as usize];
+        for (k, v) in pairs {
+            let Value::Integer(i) = k else { unreachable!() };
+            self.path.push(Step::Index(*i));
+            items[(*i - 1) as usize] = self.value(v)?;
+            self.path.pop();
+        }
+        Ok(serde_json::Value::Array(items))
+    }
+
     fn table(&mut self, t: &Table) -> Result<serde_json::Value, String> {
         let me = t.to_pointer();
         if self.open.contains(&me) {
@@ -197,40 +210,26 @@ impl JsonWalk {
         let n = pairs.len() as i64;
         // A list a subscriber received keeps mlua's array mark, and its nulls are holes.
         let marked = t.metatable().is_some_and(|m| m == self.array_mark);
-        if marked {
-            let last = pairs
-                .iter()
-                .try_fold(t.raw_len() as i64, |last, (k, _)| match k {
-                    Value::Integer(i) if *i >= 1 => Some(last.max(*i)),
-                    _ => None,
-                });
-            if let Some(last) = last.filter(|&l| l <= MOST_PARTS as i64) {
-                self.open.push(me);
-                let mut items = vec![serde_json::Value::Null; last as usize];
-                for (k, v) in &pairs {
-                    let Value::Integer(i) = k else { unreachable!() };
-                    self.path.push(Step::Index(*i));
-                    items[(*i - 1) as usize] = self.value(v)?;
-                    self.path.pop();
-                }
-                self.open.pop();
-                return Ok(serde_json::Value::Array(items));
-            }
-        }
+        let received = marked
+            .then(|| {
+                pairs
+                    .iter()
+                    .try_fold(t.raw_len() as i64, |last, (k, _)| match k {
+                        Value::Integer(i) if *i >= 1 => Some(last.max(*i)),
+                        _ => None,
+                    })
+            })
+            .flatten()
+            .filter(|&last| last <= MOST_PARTS as i64);
         let listed = pairs
             .iter()
             .all(|(k, _)| matches!(k, Value::Integer(i) if (1..=n).contains(i)));
         let named = pairs.iter().all(|(k, _)| matches!(k, Value::String(_)));
         self.open.push(me);
-        let json = if listed && n > 0 {
-            let mut items = vec![serde_json::Value::Null; pairs.len()];
-            for (k, v) in &pairs {
-                let Value::Integer(i) = k else { unreachable!() };
-                self.path.push(Step::Index(*i));
-                items[(*i - 1) as usize] = self.value(v)?;
-                self.path.pop();
-            }
-            serde_json::Value::Array(items)
+        let json = if let Some(len) = received {
+            self.list(&pairs, len)?
+        } else if listed && n > 0 {
+            self.list(&pairs, n)?
         } else if named {
             let mut fields = serde_json::Map::new();
             for (k, v) in &pairs {
