@@ -5,6 +5,17 @@ local STANDING_ANKLE = nil
 
 local function done(a) return a.status == "completed" end
 
+-- How far (degrees) an object's own up axis leans from the vertical.
+local function tilt(object)
+  return math.deg(math.acos(math.min(1, object:up()[2])))
+end
+
+-- Horizontal distance (m) from the actor's root to a point.
+local function from_root(actor, p)
+  local r = actor:position()
+  return math.sqrt((p[1] - r[1])^2 + (p[3] - r[3])^2)
+end
+
 -- A world point at (dx, y, dz) from the actor's floor position (actors here face +Z).
 local function near(actor, dx, y, dz)
   local p = actor:position()
@@ -189,6 +200,66 @@ test("a grasp during a walk starts at once and the walk keeps walking", function
   local c, h = cup:position(), ann:joint_position("r_wrist")
   local d = math.sqrt((c[1] - h[1])^2 + (c[2] - h[2])^2 + (c[3] - h[3])^2)
   expect(d < 0.15, string.format("the cup is in the hand: %.3f m from the wrist", d))
+  -- The grasp gives the arm back: the walk carries the cup from then on, brought in
+  -- before the body (it closed beside the hip), kept upright and at one height.
+  local function ahead()
+    local c, r = cup:position(), ann:position()
+    return c[3] - r[3]
+  end
+  local closed = ahead()
+  run(1.5)
+  expect(w.status == "active" and w.yielded == 0,
+         string.format("the walk has its arm again: %s, %d yielded", w.status, w.yielded))
+  local lo, hi, fwd, leaned = math.huge, -math.huge, math.huge, 0
+  run_until(function()
+    local y = cup:position()[2]
+    lo, hi, fwd, leaned = math.min(lo, y), math.max(hi, y), math.min(fwd, ahead()), math.max(leaned, tilt(cup))
+    return false
+  end, 1.0)
+  print(string.format("a cup grasped while walking: %.2f m ahead of the root when the hand closed, " ..
+                      "at least %.2f m once carried, at %.3f to %.3f m, leaning %.1f° at most",
+                      closed, fwd, lo, hi, leaned))
+  expect(fwd > 0.25 and fwd > closed + 0.2,
+         string.format("carried before the body: %.2f m ahead (closed %.2f m ahead)", fwd, closed))
+  expect(hi - lo < 0.003, string.format("at one height: %.4f to %.4f m", lo, hi))
+  expect(leaned < 0.5, string.format("upright: it leaned %.2f°", leaned))
+  expect(cup.holder == ann, "still held")
+end)
+
+test("a wave during a walk takes the arm; the arm swings again once it has ended", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ velocity = 1.0 }
+  run(1.0)
+  local dofs = w.dofs
+  local wave = troupe.sequence{ r_shoulder_abduction = { {0, 0}, {0.4, 2.4}, {1.2, 2.4}, {1.6, 0} },
+                                r_elbow_flexion = { {0, 0}, {0.4, 1.2}, {1.2, 1.2}, {1.6, 0} } }
+  local k = ann:play(wave, { scope = "right_arm", ease_out = 0.2 })
+  run(0.02)
+  expect(k.status == "active" and w.yielded == 9, "the wave takes the arm: " .. w.yielded)
+  expect(k:wait() == "completed", "waved: " .. k.status)
+  local ended = troupe.time()
+  run(0.02)
+  expect(w.yielded == 0 and w.dofs == dofs,
+         string.format("the walk has its arm back: %d of %d DOFs, %d yielded", w.dofs, dofs, w.yielded))
+  -- Over the next two strides the arm swings as the left one does, eased in from where
+  -- the wave left it (no jump larger than the swing's own speed).
+  local lo, hi, llo, lhi, step, last = math.huge, -math.huge, math.huge, -math.huge, 0, nil
+  run_until(function()
+    local r, l = ann:dof("r_shoulder_flexion"), ann:dof("l_shoulder_flexion")
+    if last then step = math.max(step, math.abs(r - last)) end
+    last = r
+    if troupe.time() - ended > 0.5 then
+      lo, hi, llo, lhi = math.min(lo, r), math.max(hi, r), math.min(llo, l), math.max(lhi, l)
+    end
+    return troupe.time() - ended > 2.5
+  end, 3)
+  print(string.format("after a wave: the right shoulder swings %.1f°, the left %.1f°; " ..
+                      "the largest change in a tick %.2f°", math.deg(hi - lo), math.deg(lhi - llo),
+                      math.deg(step)))
+  expect(hi - lo > 0.8 * (lhi - llo) and hi - lo > math.rad(5),
+         string.format("swings again: %.1f° against the left's %.1f°", math.deg(hi - lo), math.deg(lhi - llo)))
+  expect(step < math.rad(1.5), string.format("eased back in: %.2f° in one tick at most", math.deg(step)))
+  w:cancel()
 end)
 
 test("a crouching grasp whose legs a walk takes fails, saying where the hand closed", function()
@@ -203,17 +274,6 @@ test("a crouching grasp whose legs a walk takes fails, saying where the hand clo
   expect(tostring(g.error):find("the hand closed [%d.]+ m from `ball`") ~= nil, tostring(g.error))
   w:cancel()
 end)
-
--- How far (degrees) an object's own up axis leans from the vertical.
-local function tilt(object)
-  return math.deg(math.acos(math.min(1, object:up()[2])))
-end
-
--- Horizontal distance (m) from the actor's root to a point.
-local function from_root(actor, p)
-  local r = actor:position()
-  return math.sqrt((p[1] - r[1])^2 + (p[3] - r[3])^2)
-end
 
 -- Ann grasps a cup at arm's length from a stand, then `walk(ann)` starts a walk and `until_done(w, track)`
 -- runs it (calling `track` every tick) until it has ended. The cup comes in to the body

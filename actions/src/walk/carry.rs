@@ -14,11 +14,18 @@
 //! pelvis' bounce and the spine's lean. Every arm that holds it is solved each tick (the
 //! arm's damped least squares, from its last solution) for its wrist's pose on the object:
 //! both arms of a two-handed hold move as one.
+//!
+//! What the hands take up during the walk is carried from then on in the same way: a
+//! grasp takes its arm from the walk and gives it back when it ends (the walk's spec
+//! `takes_back`), and the walk then brings the object in over [`CARRY_TIME`] from where
+//! the hand closed. A load whose arm another action takes is let go, and found again when
+//! the arm comes back.
 
 use crate::grasp::plan::ArmIk;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::math::smoothstep;
+use troupe_body::scope::Scope;
 use troupe_body::sensors::Side;
 use troupe_body::{Shape, Skeleton, Transform};
 use troupe_scene::space::surface_points;
@@ -45,6 +52,10 @@ pub struct Carrying {
     /// starts out moving with it, so that the arms need not stretch or fold as the trunk
     /// straightens from a reach (the walk's blend-in) before the load has come in.
     trunk: Option<usize>,
+    /// The floor's height under the body when the walk started.
+    floor: f64,
+    /// The body at rest, measured once something is carried.
+    rest: Option<Rest>,
     /// Scratch posture and joint frames for the arms' solves.
     q: Vec<f64>,
     globals: Vec<Transform>,
@@ -54,9 +65,11 @@ pub struct Carrying {
 struct Load {
     /// The object's index in the scene.
     object: usize,
-    /// Its turn in the heading frame when the walk started, which it keeps.
+    /// The walk's time when the walk took it up.
+    since: f64,
+    /// Its turn in the heading frame when the walk took it up, which it keeps.
     turn: DQuat,
-    /// Its centre in the trunk's frame (see [`Carrying::trunk`]) when the walk started.
+    /// Its centre in the trunk's frame (see [`Carrying::trunk`]) when the walk took it up.
     from: DVec3,
     /// Its centre's carrying place in the heading frame.
     to: DVec3,
@@ -67,7 +80,7 @@ struct Load {
 /// An arm holding a carried object.
 struct CarryingArm {
     ik: ArmIk,
-    /// The wrist's pose in the object's frame, as the walk found it.
+    /// The wrist's pose in the object's frame, as the walk took it up.
     grip: Transform,
     /// The arm's values asked for on the last tick.
     values: Vec<(usize, f64)>,
@@ -83,8 +96,9 @@ struct Rest {
 }
 
 impl Carrying {
-    /// The objects `ctx`'s actor holds when its walk starts; `heading` is the body's
-    /// heading frame then (see [`heading_frame`]) and `floor` the floor's height under it.
+    /// The objects `ctx`'s actor holds when its walk starts, in arms the walk drives;
+    /// `heading` is the body's heading frame then (see [`heading_frame`]) and `floor` the
+    /// floor's height under it.
     pub fn start(ctx: &GeneratorContext, heading: Transform, floor: f64) -> Carrying {
         let sk = ctx.skeleton;
         let mut carrying = Carrying {
@@ -92,12 +106,23 @@ impl Carrying {
                 .joint("l_sternoclavicular")
                 .ok()
                 .and_then(|j| sk.joints()[j].parent),
+            floor,
             ..Carrying::default()
         };
-        let trunk = carrying.trunk.map_or(heading, |j| ctx.posture.globals[j]);
+        carrying.take_up(ctx, 0.0, heading, ctx.scope);
+        carrying
+    }
+
+    /// Takes up, at walk time `t` and in the heading frame `heading`, each object the hands
+    /// hold that no load carries yet, when every arm holding it is in `scope`.
+    fn take_up(&mut self, ctx: &GeneratorContext, t: f64, heading: Transform, scope: Scope) {
+        let sk = ctx.skeleton;
+        let trunk = self.trunk.map_or(heading, |j| ctx.posture.globals[j]);
         let mine = ctx.world.held.iter().filter(|(_, h)| h.actor == ctx.actor);
-        let mut rest = None;
         for &(object, h) in mine {
+            if self.loads.iter().any(|load| load.object == object) {
+                continue;
+            }
             let Some(obj) = ctx.world.objects.get(object) else {
                 continue;
             };
@@ -113,23 +138,26 @@ impl Carrying {
                 })
                 .collect();
             let Some(arms) = arms else { continue };
-            let rest = rest.get_or_insert_with(|| Rest::of(sk));
+            if !arms.iter().all(|arm| arm.in_scope(scope)) {
+                continue;
+            }
+            let rest = self.rest.get_or_insert_with(|| Rest::of(sk));
             let turn = heading.rotation.inverse() * obj.rotation;
-            carrying.loads.push(Load {
+            self.loads.push(Load {
                 object,
+                since: t,
                 turn,
                 from: trunk.inverse().transform_point(obj.position),
-                to: carrying_place(rest, &obj.shape, turn, &arms, floor),
+                to: carrying_place(rest, &obj.shape, turn, &arms, self.floor),
                 arms,
             });
         }
-        carrying
     }
 
     /// Moves the carrying arms at walk time `t`, the root this tick on the floor at `root`
     /// turned by `yaw`, and `upper` this tick's root, pelvis and spine values as written.
-    /// A load that is no longer held as it was is dropped; one whose arms another action
-    /// has taken is left where it is.
+    /// A load that is no longer held as it was, or whose arms another action has taken, is
+    /// let go; what the hands have taken up since is taken up.
     pub fn step(
         &mut self,
         ctx: &GeneratorContext,
@@ -137,38 +165,42 @@ impl Carrying {
         upper: &[(usize, f64)],
         out: &mut DofWriter,
     ) {
+        let scope = out.scope();
         self.loads.retain(|load| {
-            ctx.world.holder(load.object).is_some_and(|h| {
-                h.actor == ctx.actor
-                    && h.wrists().count() == load.arms.len()
-                    && load.arms.iter().all(|arm| h.held_by(arm.ik.wrist))
-            })
+            load.arms.iter().all(|arm| arm.in_scope(scope))
+                && ctx.world.holder(load.object).is_some_and(|h| {
+                    h.actor == ctx.actor
+                        && h.wrists().count() == load.arms.len()
+                        && load.arms.iter().all(|arm| h.held_by(arm.ik.wrist))
+                })
         });
+        // Every walker of a crowd passes here: the rest only for a walk whose hands hold.
+        if !ctx.world.held.iter().any(|(_, h)| h.actor == ctx.actor) {
+            self.loads.clear();
+            return;
+        }
+        let heading = heading_frame(root, yaw);
+        self.take_up(ctx, t, heading, scope);
         if self.loads.is_empty() {
             return;
         }
-        // Made only for a walk that carries: every walker of a crowd passes here.
-        let heading = heading_frame(root, yaw);
         let sk = ctx.skeleton;
         self.q.clear();
         self.q.extend_from_slice(&ctx.posture.q);
         for &(d, v) in upper {
             self.q[d] = v;
         }
+        let coming = self.loads.iter().any(|load| t - load.since < CARRY_TIME);
         let trunk = match self.trunk {
-            Some(j) if t < CARRY_TIME => {
+            Some(j) if coming => {
                 self.globals.resize(sk.joints().len(), Transform::IDENTITY);
                 forward_kinematics(sk, &self.q, &mut self.globals);
                 self.globals[j]
             }
             _ => heading,
         };
-        let s = smoothstep(t / CARRY_TIME);
         for load in &mut self.loads {
-            let ours = |arm: &CarryingArm| arm.values.iter().all(|&(d, _)| out.scope().contains(d));
-            if !load.arms.iter().all(ours) {
-                continue;
-            }
+            let s = smoothstep((t - load.since) / CARRY_TIME);
             // Where it was on the trunk, turned as it was on the heading; then where it
             // is carried.
             let from = trunk.transform_point(load.from);
@@ -187,6 +219,13 @@ impl Carrying {
                 }
             }
         }
+    }
+}
+
+impl CarryingArm {
+    /// Whether every DOF the arm's solve moves is in `scope`.
+    fn in_scope(&self, scope: Scope) -> bool {
+        self.values.iter().all(|&(d, _)| scope.contains(d))
     }
 }
 

@@ -233,6 +233,8 @@ pub fn build_walk(
     .map_err(|e| err("walk", e))?;
     let mut spec = common.spec("walk", walk.scope());
     spec.yields = walk.yields().intersection(&spec.scope);
+    // An arm lent to a wave or a grasp swings again, or carries what it took, afterwards.
+    spec.takes_back = true;
     // The walk decides when it has arrived (and a velocity walk's duration is its route's).
     spec.duration = None;
     Ok((Box::new(walk), spec))

@@ -189,6 +189,7 @@ impl CommonOptions {
             ease_in: self.ease_in,
             ease_out: self.ease_out,
             yields: Scope::EMPTY,
+            takes_back: false,
         }
     }
 }

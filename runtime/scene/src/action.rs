@@ -132,6 +132,10 @@ pub struct ActionSpec {
     /// action that needs only these DOFs takes them and *narrows* this one instead of
     /// stopping it. The rest of the scope is essential (see [`crate::scheduler`]).
     pub yields: Scope,
+    /// Whether the DOFs it yields come back to it when the action that took them ends
+    /// (a walk's arm after a wave or a grasp swings or carries again); otherwise they
+    /// leave its scope for good.
+    pub takes_back: bool,
 }
 
 impl ActionSpec {
@@ -147,6 +151,7 @@ impl ActionSpec {
             ease_in: 0.0,
             ease_out: 0.0,
             yields: Scope::EMPTY,
+            takes_back: false,
         }
     }
 

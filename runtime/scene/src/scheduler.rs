@@ -16,7 +16,8 @@
 //! 2. **Transitions.** Cancel requests start the ease-out; `initiating` becomes `active`
 //!    once `ease_in` has passed; an action with a `duration` starts terminating at
 //!    `start + duration − ease_out`; a terminating action whose ease-out is over ends
-//!    (it contributes nothing on that tick).
+//!    (it contributes nothing on that tick). An action that takes back what it yields
+//!    gets the DOFs whose takers have let go of them (see [`ActionSpec::takes_back`]).
 //! 3. **Generators.** Every running action's generator is stepped with the previous
 //!    tick's snapshot and writes its scope; its output enters the blend with weight ×
 //!    ease factor. A generator reporting `Finished` starts the ease-out (or completes at
@@ -38,6 +39,10 @@ use crate::world::World;
 use troupe_body::scope::Scope;
 use troupe_body::skeleton::Skeleton;
 use troupe_body::state::ActorState;
+
+/// The least time (s) over which DOFs an action gets back ease in: a swinging arm that
+/// comes back at once would jump from where the taker left it.
+pub const TAKE_BACK_EASE: f64 = 0.3;
 
 /// An action owned by the scheduler.
 pub(crate) struct Action {
@@ -62,6 +67,12 @@ pub(crate) struct Action {
     /// DOFs given up to other actions, each set with the time it was given up: they fade
     /// out over `ease_out` while the taker eases in.
     pub releasing: Vec<(Scope, f64)>,
+    /// DOFs given up to other actions that come back when the taker ends (with
+    /// `spec.takes_back`), each set with the taker's id.
+    pub lent: Vec<(ActionId, Scope)>,
+    /// DOFs given back, each set with the time it came back: they ease in over
+    /// [`Action::return_time`] from the posture the taker left.
+    pub returning: Vec<(Scope, f64)>,
     /// The last tick the generator was started or stepped (0: never).
     pub last_run: u64,
     pub generator: Box<dyn Generator>,
@@ -90,6 +101,8 @@ impl Action {
             stop_requested: false,
             winding_down: false,
             releasing: Vec::new(),
+            lent: Vec::new(),
+            returning: Vec::new(),
             last_run: 0,
             generator,
         }
@@ -109,6 +122,22 @@ impl Action {
         } else {
             0.0
         }
+    }
+
+    /// Seconds over which DOFs given back ease in: its own ease-in, at least
+    /// [`TAKE_BACK_EASE`].
+    fn return_time(&self) -> f64 {
+        self.spec.ease_in.max(TAKE_BACK_EASE)
+    }
+
+    /// How much of its weight the action has on DOFs given back to it at `since`.
+    fn return_fade(&self, since: f64, time: f64) -> f64 {
+        ease((time - since) / self.return_time())
+    }
+
+    /// Whether it no longer holds what it took at full weight: ended, or easing out.
+    fn lets_go(&self) -> bool {
+        self.status.is_final() || (self.status == Status::Terminating && !self.winding_down)
     }
 
     pub(crate) fn info(&self, actor: usize) -> ActionInfo {
@@ -225,12 +254,31 @@ impl Transitions<'_> {
         }
         action.spec.scope = action.spec.scope.difference(&taken);
         action.spec.yields = action.spec.yields.difference(&taken);
+        without(&mut action.returning, &taken);
         if action.status.is_running() {
             action.releasing.push((taken, self.clock.time));
         }
         if report {
             self.event(action, None, Some(taken));
         }
+    }
+
+    /// Takes `taken` out of `action`'s scope for `taker` (see [`Transitions::narrow`]); an
+    /// action that takes back what it yields gets it back when `taker` lets go of it.
+    fn lend(&mut self, action: &mut Action, taken: Scope, taker: ActionId) {
+        if action.spec.takes_back && !taken.is_empty() {
+            action.lent.push((taker, taken));
+        }
+        self.narrow(action, taken, true);
+    }
+
+    /// Gives `back` to `action` again: its scope and its yieldable part, eased in from
+    /// where the taker left it.
+    fn give_back(&mut self, action: &mut Action, back: Scope) {
+        action.spec.scope = action.spec.scope.union(&back);
+        action.spec.yields = action.spec.yields.union(&back);
+        without(&mut action.releasing, &back);
+        action.returning.push((back, self.clock.time));
     }
 
     /// Starts the ease-out toward `ending`, or ends at once without one.
@@ -281,6 +329,7 @@ impl ActorRuntime {
         };
         admit(&mut self.actions, &mut tr, actor, skeleton, world, previous);
         advance(&mut self.actions, &mut tr);
+        take_back(&mut self.actions, &mut tr);
         stopwatch.lap(&mut self.phases.scheduling);
 
         // Generators and blend.
@@ -338,8 +387,21 @@ impl ActorRuntime {
                     action.spec.ease_out,
                 );
             if w > 0.0 {
-                for d in written.intersection(&action.spec.scope).iter() {
+                let returning = action
+                    .returning
+                    .iter()
+                    .fold(Scope::EMPTY, |s, (r, _)| s.union(r));
+                let full = action.spec.scope.difference(&returning);
+                for d in written.intersection(&full).iter() {
                     self.accumulator.add(d, self.scratch[d], w);
+                }
+                for &(back, since) in &action.returning {
+                    let fade = w * action.return_fade(since, clock.time);
+                    if fade > 0.0 {
+                        for d in written.intersection(&back).iter() {
+                            self.accumulator.add(d, self.scratch[d], fade);
+                        }
+                    }
                 }
                 for &(released, since) in &action.releasing {
                     let fade = w * action.release_fade(since, clock.time);
@@ -358,6 +420,8 @@ impl ActorRuntime {
                 .collect();
             let mut faded = faded.into_iter();
             action.releasing.retain(|_| !faded.next().unwrap_or(false));
+            let back = action.return_time();
+            action.returning.retain(|&(_, since)| time - since < back);
             if step == Step::Finished {
                 if action.winding_down {
                     // Wound down: it stands where it stopped, so it ends without easing.
@@ -458,6 +522,15 @@ fn admit(
                     held.union(&other.spec.scope)
                 });
             let own = actions[i].spec.yields.intersection(&held);
+            if actions[i].spec.takes_back {
+                let lenders: Vec<_> = actions
+                    .iter()
+                    .filter(|other| other.id != actions[i].id)
+                    .map(|other| (other.id, own.intersection(&other.spec.scope)))
+                    .filter(|(_, part)| !part.is_empty())
+                    .collect();
+                actions[i].lent.extend(lenders);
+            }
             tr.narrow(&mut actions[i], own, true);
         }
         let scope = actions[i].spec.scope;
@@ -477,7 +550,7 @@ fn admit(
                     for (j, other) in actions.iter_mut().enumerate() {
                         if j != i && other.status.is_running() {
                             let taken = other.spec.scope.intersection(&scope);
-                            tr.narrow(other, taken, true);
+                            tr.lend(other, taken, id);
                         }
                     }
                 }
@@ -497,7 +570,7 @@ fn admit(
                         if clearing || loses_essential {
                             pre_empt(tr, other, taken, reason);
                         } else {
-                            tr.narrow(other, taken, true);
+                            tr.lend(other, taken, id);
                         }
                     } else if clearing && other.status == Status::Pending && j < i {
                         other.reason = reason;
@@ -578,6 +651,55 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
             }
         }
     }
+}
+
+/// Gives each action that takes back what it yields the DOFs whose takers have let go of
+/// them (ended, or easing out), except those another running action now drives, which it
+/// waits for in turn.
+fn take_back(actions: &mut [Action], tr: &mut Transitions) {
+    for i in 0..actions.len() {
+        if actions[i].lent.is_empty() || !actions[i].status.is_running() {
+            continue;
+        }
+        let holds = |id: ActionId| actions.iter().any(|a| a.id == id && !a.lets_go());
+        let (kept, freed): (Vec<_>, Vec<_>) = actions[i]
+            .lent
+            .iter()
+            .partition(|&&(taker, _)| holds(taker));
+        if freed.is_empty() {
+            continue;
+        }
+        let still = kept.iter().fold(Scope::EMPTY, |s, (_, part)| s.union(part));
+        let mut back = freed
+            .iter()
+            .fold(Scope::EMPTY, |s, (_, part)| s.union(part))
+            .difference(&still);
+        let mut lent = kept;
+        // What another action took meanwhile stays lent to it.
+        for other in actions.iter() {
+            let drives = other.id != actions[i].id
+                && other.status.is_running()
+                && !other.lets_go()
+                && other.spec.mode != Mode::Weighted;
+            let part = back.intersection(&other.spec.scope);
+            if drives && !part.is_empty() {
+                lent.push((other.id, part));
+                back = back.difference(&part);
+            }
+        }
+        actions[i].lent = lent;
+        if !back.is_empty() {
+            tr.give_back(&mut actions[i], back);
+        }
+    }
+}
+
+/// Takes `scope` out of each set of `sets`, dropping those left empty.
+fn without(sets: &mut Vec<(Scope, f64)>, scope: &Scope) {
+    for (set, _) in sets.iter_mut() {
+        *set = set.difference(scope);
+    }
+    sets.retain(|(set, _)| !set.is_empty());
 }
 
 /// `other` loses an essential part (or is cleared): it stops gracefully. If its generator

@@ -766,6 +766,110 @@ fn yielding_spec(s: &Scene) -> ActionSpec {
 }
 
 #[test]
+fn a_yielded_part_comes_back_eased_in_when_its_taker_ends_if_the_action_takes_back() {
+    for takes_back in [true, false] {
+        let (mut s, a) = scene();
+        let walk = s
+            .start_action(
+                a,
+                ActionSpec {
+                    takes_back,
+                    ..yielding_spec(&s)
+                },
+                constant(0.3),
+            )
+            .unwrap();
+        s.step();
+        let wave = s
+            .start_action(
+                a,
+                ActionSpec {
+                    duration: Some(0.1),
+                    ..spec(&s, "l_elbow", Mode::Default)
+                },
+                constant(1.0),
+            )
+            .unwrap();
+        s.step();
+        assert_eq!(s.action(walk).unwrap().yielded, scope(&s, "l_elbow"));
+        assert_eq!(q(&s, "l_elbow_flexion"), 1.0);
+        run_until(&mut s, wave, Status::Completed, 20);
+        s.step();
+        let info = s.action(walk).unwrap();
+        if !takes_back {
+            assert_eq!(info.yielded, scope(&s, "l_elbow"), "lost for good");
+            for _ in 0..40 {
+                s.step();
+                assert_eq!(q(&s, "l_elbow_flexion"), 1.0, "held where the wave left it");
+            }
+            continue;
+        }
+        assert!(info.yielded.is_empty(), "back in its scope");
+        assert!(info.scope.contains(dof(&s, "l_elbow_flexion")));
+        // Eased in over TAKE_BACK_EASE from where the wave left it, never jumping.
+        let mut last = q(&s, "l_elbow_flexion");
+        assert!(last > 0.99, "starts from the wave's posture: {last}");
+        let ticks = (troupe_scene::scheduler::TAKE_BACK_EASE / s.dt()).round() as usize;
+        for _ in 0..ticks {
+            s.step();
+            let now = q(&s, "l_elbow_flexion");
+            assert!(now <= last && last - now < 0.1, "{last} → {now}");
+            last = now;
+        }
+        assert!(
+            (last - 0.3).abs() < 1e-12,
+            "the walk's own value once eased in: {last}"
+        );
+        assert_eq!(s.refused_writes(), 0);
+    }
+}
+
+#[test]
+fn a_yielded_part_another_action_took_meanwhile_comes_back_when_that_one_ends() {
+    let (mut s, a) = scene();
+    let walk = s
+        .start_action(
+            a,
+            ActionSpec {
+                takes_back: true,
+                ..yielding_spec(&s)
+            },
+            constant(0.3),
+        )
+        .unwrap();
+    s.step();
+    let first = s
+        .start_action(a, spec(&s, "l_elbow", Mode::Default), constant(1.0))
+        .unwrap();
+    s.step();
+    // A second, exclusive, pre-empts the first on the elbow the walk lent it.
+    let second = s
+        .start_action(
+            a,
+            ActionSpec {
+                duration: Some(0.2),
+                ..spec(&s, "l_elbow", Mode::Exclusive)
+            },
+            constant(0.7),
+        )
+        .unwrap();
+    run_until(&mut s, first, Status::Cancelled, 5);
+    s.step();
+    assert_eq!(
+        s.action(walk).unwrap().yielded,
+        scope(&s, "l_elbow"),
+        "the second holds it"
+    );
+    assert_eq!(q(&s, "l_elbow_flexion"), 0.7);
+    run_until(&mut s, second, Status::Completed, 30);
+    s.step();
+    assert!(
+        s.action(walk).unwrap().yielded.is_empty(),
+        "then it comes back"
+    );
+}
+
+#[test]
 fn every_mode_against_a_yieldable_part() {
     // (mode, whether A keeps running, whether A is narrowed)
     for (mode, keeps, narrowed) in [
