@@ -472,6 +472,45 @@ test("a give fails within one tick of its receiver's cancel", function()
   expect(give.error:find("bob") ~= nil and give.error:find("cancelled") ~= nil, give.error)
 end)
 
+test("a receive stopped before it holds the cup ends cancelled, and the give fails within a tick", function()
+  local give, receive = handover()
+  run(0.3)
+  receive:stop()
+  fails_within_a_tick(receive, give)
+  expect(receive.status == "cancelled" and receive.error:find("stopped before the hand held") ~= nil,
+         "the receive: " .. receive.status .. " " .. tostring(receive.error))
+  expect(give.error:find("bob") ~= nil and give.error:find("stopped before", 1, true) ~= nil, give.error)
+end)
+
+test("a give stopped before the hand-over ends cancelled, and the receive fails within a tick", function()
+  local give, receive = handover()
+  run(0.6)
+  give:stop()
+  fails_within_a_tick(give, receive)
+  expect(give.status == "cancelled" and give.error:find("before the receiver took") ~= nil,
+         "the give: " .. give.status .. " " .. tostring(give.error))
+  expect(receive.error:find("giver") ~= nil, receive.error)
+end)
+
+test("a grasp stopped before its hand holds the cup ends cancelled; stopped after, completed", function()
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  local g = ann:grasp{ object = cup, hand = "right", duration = 1.5 }
+  run(1.0)
+  g:stop()
+  expect(g:wait() == "cancelled" and g.error == "stopped before the hand held the object" and cup.holder == nil,
+         "stopped reaching: " .. g.status .. " " .. tostring(g.error))
+  local h = ann:grasp{ object = cup, hand = "right" }
+  expect(h:wait() == "completed" and cup.holder == ann, "grasped: " .. h.status)
+  local c = cup:position()
+  local r = ann:place{ object = cup, at = {c[1], c[2] - 0.1, c[3] + 0.1}, duration = 1 }
+  run(0.3)
+  r:stop()
+  expect(r:wait() == "cancelled" and r.error:find("let go") ~= nil and cup.holder == ann,
+         "a place stopped before it lets go: " .. r.status .. " " .. tostring(r.error))
+end)
+
 test("a receive fails within one tick of its giver's failure, with the giver's reason", function()
   local give, receive = handover()
   -- The cup is at the meeting point and bob reaches for it: the giver gives up.

@@ -124,6 +124,18 @@ test("walk to an actor ends about a metre away, facing them", function()
   local w2 = ann:walk{ to = bob, distance = 2 }
   expect(run_until(function() return w2.status == "completed" end, 15), "completed: " .. tostring(w2.error))
   expect(math.abs(flat_dist(ann:position(), 3, 4) - 2) < 0.06, "at 2 m")
+  -- Closer than the two bodies allow: as close as they stand, 0.1 m between their discs
+  -- (an adult's radius is about 0.28 m), the same for every such distance.
+  local ends = {}
+  for _, asked in ipairs({ 0.2, 0 }) do
+    local w3 = ann:walk{ to = bob, distance = asked }
+    expect(run_until(function() return w3.status ~= "active" end, 15),
+           string.format("distance %.1f: ended, %s", asked, w3.status))
+    ends[#ends + 1] = flat_dist(ann:position(), 3, 4)
+    expect(w3.status == "completed" and ends[#ends] > 0.6 and ends[#ends] < 0.75,
+           string.format("distance %.1f: %s %.2f m from bob", asked, w3.status, ends[#ends]))
+  end
+  expect(math.abs(ends[1] - ends[2]) < 0.02, string.format("%.3f and %.3f m", ends[1], ends[2]))
 end)
 
 test("a walkable floor: a goal off it fails, its holes are walked around", function()

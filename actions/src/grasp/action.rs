@@ -354,6 +354,11 @@ impl Generator for Grasp {
         Ok(())
     }
 
+    fn unfinished(&self) -> Option<String> {
+        (!matches!(self.phase, Phase::Verify))
+            .then(|| "stopped before the hand held the object".to_string())
+    }
+
     fn end(&mut self, ending: &Ending, notes: &mut Notes) {
         if let (Some(signal), Some(why)) = (self.gave_up, ending.failure()) {
             notes.fail(signal, why);
@@ -565,6 +570,10 @@ impl Release {
 }
 
 impl Generator for Release {
+    fn unfinished(&self) -> Option<String> {
+        (!self.released).then(|| "stopped before the hands let go of the object".to_string())
+    }
+
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let name = ctx
             .world

@@ -176,6 +176,10 @@ impl Generator for Give {
         self.arm_detour.as_ref().map_or(0, ArmDetour::detours)
     }
 
+    fn unfinished(&self) -> Option<String> {
+        (self.phase < 2).then(|| "stopped before the receiver took the object".to_string())
+    }
+
     /// The receiver waiting for the object learns that the give ended, and why if it
     /// ended without handing the object over.
     fn end(&mut self, ending: &Ending, notes: &mut Notes) {

@@ -12,6 +12,10 @@ use troupe_scene::GeneratorContext;
 pub const GRASP_DISTANCE: f64 = 0.35;
 /// Default distance (m) between two actors' centres when one walks to the other.
 pub const CONVERSATION_DISTANCE: f64 = 1.0;
+/// The least gap (m) between two actors' discs when one walks to the other: a `distance`
+/// that would bring them closer is taken as this close (the discs never overlap, so a
+/// walk to closer than that could not end).
+pub const LEAST_ACTOR_GAP: f64 = 0.1;
 /// How far (m) each side of a planned path's corner the route is pinned, so that the
 /// walk's rounding of the corner stays within the clearance.
 const CORNER_PIN: f64 = 0.12;
@@ -32,7 +36,8 @@ pub enum Goal {
     Actor {
         /// The other actor's index in the scene.
         actor: usize,
-        /// Metres between the two centres.
+        /// Metres between the two centres (at least the two bodies' radii and
+        /// [`LEAST_ACTOR_GAP`]).
         distance: f64,
     },
 }
@@ -89,7 +94,9 @@ impl Goal {
                 let other = world.states.get(*actor).ok_or("the actor is gone")?;
                 let name = &world.actors[*actor].name;
                 let at = other.globals[0].translation;
-                stand_near(ctx, start, DVec2::new(at.x, at.z), radius, |_| *distance)
+                let theirs = world.crowd.radii.get(*actor).copied().unwrap_or(radius);
+                let distance = distance.max(radius + theirs + LEAST_ACTOR_GAP);
+                stand_near(ctx, start, DVec2::new(at.x, at.z), radius, |_| distance)
                     .map_err(|e| format!("no place to stand near {name}: {e}"))?
             }
         };

@@ -395,6 +395,14 @@ pub trait Generator: Send {
         false
     }
 
+    /// Why ending now would leave the action's purpose undone (a grasp whose hand holds
+    /// nothing yet, a give whose object has not changed hands): a `:stop()` then ends it
+    /// `cancelled` with this reason instead of `completed`. `None` (the default): a stop
+    /// completes it.
+    fn unfinished(&self) -> Option<String> {
+        None
+    }
+
     /// Called once when the action ends, however it ends (completed, failed, cancelled,
     /// pre-empted, or never admitted), with how it ended: a partner waiting on this action
     /// learns it (and why) from the notes posted here, applied after the tick like a

@@ -625,7 +625,11 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
         }
         if action.stop_requested {
             action.stop_requested = false;
-            tr.stop(action, Status::Completed, None);
+            let (ending, reason) = match action.generator.unfinished() {
+                Some(why) => (Status::Cancelled, Some(why)),
+                None => (Status::Completed, None),
+            };
+            tr.stop(action, ending, reason);
             if action.status.is_final() {
                 continue;
             }
