@@ -377,6 +377,29 @@ test("carrying a cup to a table: the hand passes over the table, the walk arrive
          string.format("the cup stands on the table top at (%.3f, %.3f, %.3f)", c[1], c[2], c[3]))
 end)
 
+test("a cup placed on a side table while walking past: the hand follows the place as the body walks on", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "side", shape = "box", size = {0.4, 0.95, 0.4}, at = {-0.62, 0.475, 2.0}, mass = 10 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.10,
+                             at = {-0.25, 1.0, 0.35}, obstacle = false }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local w = ann:walk{ to = {0, 0, 4}, speed = 0.6 }
+  -- Timed so that the hand arrives as the place comes alongside: the arm alone (the walk
+  -- keeps the spine) does not reach it from much further back or once past it.
+  expect(run_until(function() return ann:position()[3] > 1.45 end, 10), "walked on")
+  local p = ann:place{ object = cup, at = {-0.45, 1.0, 2.0}, duration = 0.8 }
+  expect(p:wait() == "completed", "placed: " .. p.status .. " " .. tostring(p.error))
+  local c = cup:position()
+  local off = math.sqrt((c[1] + 0.45)^2 + (c[2] - 1.0)^2 + (c[3] - 2.0)^2)
+  print(string.format("placed while walking: the cup %.1f mm from its place; the body walked %.2f m meanwhile",
+                      1000 * off, ann:position()[3] - 1.45))
+  expect(off < 0.01 and cup.holder == nil, string.format("on its place: %.3f m off", off))
+  expect(w.status == "active", "the walk went on: " .. w.status)
+  run(0.5)
+  expect(w.yielded == 0, "and has its arm back: " .. w.yielded)
+  expect(w:wait() == "completed", "arrived: " .. w.status)
+end)
+
 test("a walk that a counter as high as its carrying hand holds back fails as stuck, naming it", function()
   local ann = troupe.actor{ name = "ann", at = {0, 0, 0.86} }
   troupe.object{ name = "counter", shape = "box", size = {0.8, 0.95, 0.5}, at = {3, 0.475, -1}, mass = 20 }

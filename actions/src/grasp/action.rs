@@ -13,7 +13,7 @@ use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 use super::close::HandModel;
 use super::follow::FollowBody;
 use super::pattern::{BoundPattern, HandPattern};
-use super::plan::{plan_grasp, ArmIk, GraspPlan, PlanOptions};
+use super::plan::{plan_grasp, ArmIk, GraspPlan, HandPlan, PlanOptions};
 use crate::error::{OptionError, Result};
 use crate::reach::arm_detour::{ArmDetour, PlannedArm};
 use crate::reach::quintic;
@@ -530,6 +530,11 @@ pub struct Release {
     start_q: Vec<f64>,
     goal_q: Vec<f64>,
     patterns: Vec<BoundPattern>,
+    /// A place's hands: each wrist's goal and the arm that reaches it from the start.
+    hands: Vec<HandPlan>,
+    /// The hands kept on their wrist goals while the body moves on (a place during a
+    /// walk), as a grasp's are.
+    follow: Option<FollowBody>,
     phase: u8,
     phase_start: f64,
     released: bool,
@@ -560,6 +565,8 @@ impl Release {
             start_q: Vec::new(),
             goal_q: Vec::new(),
             patterns: Vec::new(),
+            hands: Vec::new(),
+            follow: None,
             phase: 0,
             phase_start: 0.0,
             released: false,
@@ -612,7 +619,15 @@ impl Generator for Release {
                 let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
                 self.moving = self.moving.union(&ik.dofs().iter().copied().collect());
                 let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
+                let hand = |goal_q: &[f64]| HandPlan {
+                    side: s,
+                    wrist: wrist_goal,
+                    palm: wrist_goal.translation,
+                    arm: ik.dofs().iter().map(|&d| (d, goal_q[d])).collect(),
+                    cost: 0.0,
+                };
                 if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
+                    self.hands.push(hand(&self.goal_q));
                     continue;
                 }
                 // The arm alone cannot: lean, then crouch, as a grasp does.
@@ -642,8 +657,10 @@ impl Generator for Release {
                     self.goal_q[d] = v;
                     self.moving.insert(d);
                 }
+                self.hands.push(hand(&self.goal_q));
             }
             self.writes = self.writes.union(&self.moving);
+            self.follow = Some(FollowBody::new(ctx.skeleton, &ctx.posture.q, &self.hands)?);
         } else {
             self.phase = 1;
         }
@@ -653,6 +670,19 @@ impl Generator for Release {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
         self.q.copy_from_slice(&ctx.posture.q);
         let t = ctx.local_time - self.phase_start;
+        // The arms' goals follow the body as it moves on (see [`FollowBody`]).
+        if let Some(follow) = &mut self.follow {
+            for i in 0..self.hands.len() {
+                match follow.arm(ctx.skeleton, &ctx.posture.q, &self.hands, i) {
+                    Ok(arm) => {
+                        for &(d, v) in arm {
+                            self.goal_q[d] = v;
+                        }
+                    }
+                    Err(e) => return Step::Failed(e.to_string()),
+                }
+            }
+        }
         if self.phase == 0 {
             let seconds = self.place.map(|p| p.1).unwrap_or(1.0);
             let u = quintic(t / seconds);
