@@ -21,6 +21,5 @@ bob:behave(function(self)
   local p = cup:position()
   self:manipulate{ object = cup, keys = { { t = 0.8, at = {p[1], p[2] + 0.1, p[3] + 0.1} } } }:wait()
   print("bob lifted the cup to y = " .. string.format("%.2f", cup:position()[2]))
-  self:reach{ hand = "left", target = {-0.03, 1.05, 0.5}, duration = 0.8 }:wait()
-  offered = true
+  offered = true   -- ann may shake his free hand now: he holds it out as she reaches
 end)

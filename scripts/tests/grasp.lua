@@ -277,12 +277,9 @@ test("a hand following another's turns no joint faster than 8 rad/s", function()
   expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
 end)
 
-test("shake hands facing each other: both complete", function()
+test("shake hands facing each other: bob holds his hand out as ann reaches for it; both complete", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
-  -- The other hand must be within reach: Bob offers his.
-  local offer = bob:reach{ hand = "right", target = {0.05, 1.05, 0.5}, duration = 0.8 }
-  expect(run_until(function() return done(offer) end, 2), "offered: " .. tostring(offer.error))
   local s = ann:shake_hands{ other = bob }
   local f = bob:actions()[#bob:actions()]
   -- Ann's arm turns no joint faster than 8 rad/s: as the hand began to open, the arm
@@ -292,6 +289,29 @@ test("shake hands facing each other: both complete", function()
   expect(run_until(function() return done(s) and done(f) end, 6),
          "shake: " .. s.status .. " " .. tostring(s.error) .. ", follow: " .. f.status)
   expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
+end)
+
+test("shake hands at 0.5 to 1.1 m apart, the other's hand hanging: it is held out, both complete", function()
+  for i, d in ipairs({ 0.5, 0.7, 0.9, 1.1 }) do
+    local ann = troupe.actor{ name = "ann" .. i, at = {3 * i, 0, 0} }
+    local bob = troupe.actor{ name = "bob" .. i, at = {3 * i, 0, d}, facing = 180 }
+    local s = ann:shake_hands{ other = bob }
+    local f = bob:actions()[#bob:actions()]
+    local held_out = 0
+    expect(run_until(function()
+      -- Bob's wrist comes out towards ann before the hands close.
+      held_out = math.max(held_out, -(bob:joint_position("r_wrist")[3] - d))
+      return done(s) and done(f)
+    end, 6), string.format("%.1f m: shake %s %s, follow %s", d, s.status, tostring(s.error), f.status))
+    print(string.format("shake hands %.1f m apart: bob's wrist came %.2f m out towards ann", d, held_out))
+    expect(held_out > 0.3 * d, string.format("%.1f m: held out %.2f m", d, held_out))
+  end
+  -- Too far apart to reach each other: fails at once, saying so.
+  local ann = troupe.actor{ name = "far_ann", at = {20, 0, 0} }
+  local bob = troupe.actor{ name = "far_bob", at = {20, 0, 2.5}, facing = 180 }
+  local s = ann:shake_hands{ other = bob }
+  expect(run_until(function() return s.status == "failed" end, 0.1), "failed: " .. s.status)
+  expect(s.error:find("cannot hold out the right hand to `far_ann` 2.50 m away") ~= nil, s.error)
 end)
 
 test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold frees the follower", function()

@@ -17,11 +17,14 @@
 //!   closes its fingers around it (sensors against the other's body) and raises `held`;
 //!   the passive actor then keeps its hand at the same pose relative to the active hand
 //!   by IK every tick, extrapolating the active hand one tick ahead.
-//! - **shake hands**: hold hands, then the active hand moves up and down and both follow.
+//! - **shake hands**: the passive actor holds out its hand ([`offer`]) as the active one
+//!   reaches for it there; they hold hands, then the active hand moves up and down and
+//!   both follow.
 
 pub mod device_hand;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
+pub mod offer;
 pub mod options;
 
 pub use options::{GiveOptions, HoldHandOptions, ReceiveOptions};
@@ -38,7 +41,7 @@ use crate::reach::{hold_to_joint_speed, quintic};
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::jacobian::rotation_error;
 use troupe_body::sensors::{solid_distance, Side};
-use troupe_body::{Scope, Transform};
+use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::{
     DofWriter, Ending, Generator, GeneratorContext, Notes, SignalId, StartError, Step, World,
 };
@@ -358,6 +361,8 @@ pub struct HoldHand {
     other_side: Side,
     side: Side,
     shake: bool,
+    /// Whether the other holds its hand out (see [`offer`]): reached for where it will be.
+    offered: bool,
     held: SignalId,
     finished: SignalId,
     /// Raised as a failure when the follower's `follow_hand` ends before the hold does.
@@ -397,6 +402,7 @@ impl HoldHand {
             other_side,
             side,
             shake,
+            offered: false,
             held,
             finished,
             follower_gave_up,
@@ -418,6 +424,13 @@ impl HoldHand {
         }
     }
 
+    /// Reaches for the other's hand where it holds it out (see [`offer`]), not where it
+    /// is now.
+    pub fn to_offered_hand(mut self) -> HoldHand {
+        self.offered = true;
+        self
+    }
+
     fn write(&self, out: &mut DofWriter) {
         for d in out.scope().iter() {
             out.set(d, self.q[d]);
@@ -427,11 +440,19 @@ impl HoldHand {
 
 /// Signed distance from `p` to actor `actor`'s body solids in `world`.
 fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
-    let skel = &world.actors[actor].skeleton;
-    let g = &world.states[actor].globals;
-    skel.solids()
+    posed_distance(
+        &world.actors[actor].skeleton,
+        &world.states[actor].globals,
+        p,
+    )
+}
+
+/// Signed distance from `p` to the solids of `skeleton` with joint frames `globals`.
+fn posed_distance(skeleton: &Skeleton, globals: &[Transform], p: DVec3) -> f64 {
+    skeleton
+        .solids()
         .iter()
-        .map(|(j, s)| solid_distance(s, &g[*j], p))
+        .map(|(j, s)| solid_distance(s, &globals[*j], p))
         .fold(f64::INFINITY, f64::min)
 }
 
@@ -449,9 +470,18 @@ impl Generator for HoldHand {
             return Err(format!("`{me}` needs another actor to hold hands with").into());
         }
         let other = actor_name(w, self.other);
-        let theirs = HandModel::new(&w.actors[self.other].skeleton, self.other_side)?;
+        let their_skeleton = &w.actors[self.other].skeleton;
+        let theirs = HandModel::new(their_skeleton, self.other_side)?;
         self.other_wrist = theirs.sensors.wrist;
-        let tg = &w.states[self.other].globals[theirs.sensors.wrist];
+        // Their body as it will be once the hand is held out, or as it is.
+        let posed;
+        let their_globals: &[Transform] = if self.offered {
+            posed = offer::offered_hand(w, self.other, ctx.actor, self.other_side)?.globals;
+            &posed
+        } else {
+            &w.states[self.other].globals
+        };
+        let tg = &their_globals[theirs.sensors.wrist];
         let their_palm = tg.transform_point(theirs.sensors.palm);
         let their_normal = tg.rotation * theirs.sensors.palm_normal;
         let their_fingers = tg.rotation * theirs.sensors.finger_direction;
@@ -486,7 +516,8 @@ impl Generator for HoldHand {
             for _ in 0..200 {
                 let wrist = Transform::new(rot, origin - rot * hs.palm);
                 if local.iter().all(|(p, r)| {
-                    body_distance(w, self.other, wrist.transform_point(*p)) - r >= CLEARANCE
+                    posed_distance(their_skeleton, their_globals, wrist.transform_point(*p)) - r
+                        >= CLEARANCE
                 }) {
                     free = true;
                     break;
@@ -673,6 +704,10 @@ pub struct FollowHand {
     /// Raised as a failure if this action ends before the hold does.
     gave_up: SignalId,
     arm: Option<ArmIk>,
+    /// Whether it holds its hand out first (see [`offer`]), and then the arm's values
+    /// from where it started to where it holds the hand out.
+    offers: bool,
+    offer: Vec<(usize, f64, f64)>,
     relative: Option<Transform>,
     last: Option<Transform>,
     q: Vec<f64>,
@@ -694,10 +729,18 @@ impl FollowHand {
             finished,
             gave_up,
             arm: None,
+            offers: false,
+            offer: Vec::new(),
             relative: None,
             last: None,
             q: Vec::new(),
         }
+    }
+
+    /// Holds the hand out to the active actor until it is held (see [`offer`]).
+    pub fn offering(mut self) -> FollowHand {
+        self.offers = true;
+        self
     }
 }
 
@@ -716,6 +759,14 @@ impl Generator for FollowHand {
         }
         self.arm = Some(ArmIk::new(ctx.skeleton, self.side, 40)?);
         self.q = ctx.posture.q.clone();
+        if self.offers {
+            let offer = offer::offered_hand(ctx.world, ctx.actor, self.active, self.side)?;
+            self.offer = offer
+                .arm
+                .iter()
+                .map(|&(d, v)| (d, ctx.posture.q[d], v))
+                .collect();
+        }
         Ok(())
     }
 
@@ -755,6 +806,12 @@ impl Generator for FollowHand {
             // As a reach's: the IK may find the arm another way at once where a DOF locks
             // at its limit, or swing it between two ways with the hand out of reach.
             hold_to_joint_speed(&mut self.q, mine, ctx.dt);
+        } else {
+            // Holding the hand out, until the other has it.
+            let u = quintic(ctx.local_time / offer::OFFER_SECONDS);
+            for &(d, from, to) in &self.offer {
+                self.q[d] = from + (to - from) * u;
+            }
         }
         for d in out.scope().iter() {
             out.set(d, self.q[d]);

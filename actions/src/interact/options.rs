@@ -213,7 +213,7 @@ impl HoldHandOptions {
         in_scene(scene, &[actor, self.other], &[])?;
         let (held, finished, gave_up) =
             (scene.new_signal(), scene.new_signal(), scene.new_signal());
-        let active = HoldHand::new(
+        let mut active = HoldHand::new(
             self.other,
             (self.hand, self.other_hand),
             self.shake,
@@ -225,7 +225,13 @@ impl HoldHandOptions {
         let follow_scope = scene.actors()[self.other]
             .skeleton
             .scope(&format!("{}_arm", self.other_hand.name()))?;
-        let follow = FollowHand::new((actor, wrist), self.other_hand, (held, finished, gave_up));
+        let mut follow =
+            FollowHand::new((actor, wrist), self.other_hand, (held, finished, gave_up));
+        if self.shake {
+            // The other holds its hand out for a handshake, and is reached there.
+            active = active.to_offered_hand();
+            follow = follow.offering();
+        }
         let mut follow_spec = ActionSpec::new("follow_hand", follow_scope);
         follow_spec.delay = delay;
         follow_spec.duration = duration;
