@@ -125,7 +125,10 @@ test("unknown names: get_actor and get_object answer nil, every other call raise
   says(function() ann:grasp{ object = "nothing" } end, "grasp: ")
   says(function() ann:give{ object = "cup", to = "nobody" } end, "give: ")
   says(function() ann:look_at{ target = "nobody" } end, "look_at: ")
-  says(function() ann:dof("tail_wag") end, "unknown DOF `tail_wag`")
+  says(function() ann:dof("tail_wag") end, "unknown DOF `tail_wag` in skeleton `adult`")
+  -- A slip of a name gets the nearest one the skeleton has.
+  says(function() ann:dof("r_shoulder_twisting") end, "did you mean `r_shoulder_twist`?")
+  says(function() ann:joint_position("r_wirst") end, "unknown joint `r_wirst` in skeleton `adult`; did you mean `r_wrist`?")
   says(function() ann:on("action_exploded", function() end) end, "on: unknown event `action_exploded`")
 end)
 

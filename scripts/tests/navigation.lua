@@ -138,6 +138,33 @@ test("walk to an actor ends about a metre away, facing them", function()
   expect(math.abs(ends[1] - ends[2]) < 0.02, string.format("%.3f and %.3f m", ends[1], ends[2]))
 end)
 
+test("walk to an object or an actor given by name; an unknown, ambiguous or own-held one is refused", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {3, 0, 4}, facing = 180 }
+  troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {-2, 0.05, 2} }
+  local w = ann:walk{ to = "bob" }
+  expect(run_until(function() return w.status == "completed" end, 15), "to bob: " .. tostring(w.error))
+  expect(math.abs(flat_dist(ann:position(), 3, 4) - 1) < 0.06, "about a metre from bob")
+  w = ann:walk{ to = "cup", distance = 0.3 }
+  expect(run_until(function() return w.status == "completed" end, 15), "to the cup: " .. tostring(w.error))
+  expect(flat_dist(ann:position(), -2, 2) < 0.45, "by the cup")
+  local function refused(arg, wanted)
+    local ok, e = pcall(function() return ann:walk(arg) end)
+    expect(not ok and tostring(e):find(wanted, 1, true) ~= nil, tostring(e))
+  end
+  refused({ to = "nobody" }, 'walk: `to = "nobody"`: no object or actor has that name')
+  troupe.object{ name = "bob", shape = "sphere", radius = 0.05, at = {5, 0.05, 5} }
+  refused({ to = "bob" }, 'walk: `to = "bob"` names both an object and an actor')
+  refused({ to = true }, "`to` (a point, an object or an actor) must be a point")
+  local cat = troupe.actor{ name = "cat", at = {10, 0, 0} }
+  local mug = troupe.object{ name = "mug", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {9.8, 1.05, 0.38} }
+  expect(cat:grasp{ object = mug, hand = "right" }:wait() == "completed", "holds the mug")
+  local ok, e = pcall(function() return cat:walk{ to = mug } end)
+  expect(not ok and tostring(e):find("walk: an actor cannot walk `to` an object in its own hands", 1, true),
+         tostring(e))
+end)
+
 test("a walkable floor: a goal off it fails, its holes are walked around", function()
   local ann = troupe.actor{ name = "ann" }
   troupe.floor{ outline = { {-3, -3}, {3, -3}, {3, 6}, {-3, 6} },

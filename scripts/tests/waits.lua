@@ -70,16 +70,21 @@ test("wait_all and wait_any refuse what is not an action, catchably, with the pl
     err[3], err[4] = ok2, e2
     local ok3, e3 = pcall(function() wait_any(a, nil, a) end)
     err[5], err[6] = ok3, e3
+    local ok4, e4 = pcall(function() wait_all(ann) end)
+    err[7], err[8] = ok4, e4
   end)
   run_until(function() return ann:behavior_status() ~= "running" end, 2)
   expect(ann:behavior_status() == "done", "the behavior goes on: " .. ann:behavior_status())
   -- Called by pcall itself, the error has no Lua caller to name.
-  expect(err[1] == false and err[2]:find("wait_any: argument 2 must be an action, got number", 1, true) ~= nil,
+  expect(err[1] == false and err[2]:find("wait_any: argument 2 must be an action, got integer", 1, true) ~= nil,
          tostring(err[2]))
   expect(err[3] == false and err[4]:find("waits%.lua:%d+: wait_all: argument 2 must be an action, got string") ~= nil,
          tostring(err[4]))
   expect(err[5] == false and err[6]:find("wait_any: argument 2 must be an action, got nil", 1, true) ~= nil,
          tostring(err[6]))
+  -- A handle is named for what it is.
+  expect(err[7] == false and err[8]:find("wait_all: argument 1 must be an action, got an actor", 1, true) ~= nil,
+         tostring(err[8]))
 end)
 
 test("wait_until returns false at its timeout", function()

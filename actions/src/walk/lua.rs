@@ -113,31 +113,7 @@ pub fn build_walk(
         }
     }
     let goal = match kind {
-        "to" => Some(match t.get::<Value>("to")? {
-            Value::UserData(u) if u.is::<ObjectRef>() => Goal::Object {
-                object: u.borrow::<ObjectRef>()?.0,
-                distance: distance.unwrap_or(GRASP_DISTANCE),
-            },
-            Value::UserData(u) if u.is::<ActorRef>() => {
-                let actor = u.borrow::<ActorRef>()?.0;
-                if actor == ctx.actor {
-                    return Err(err("walk", "an actor cannot walk `to` itself"));
-                }
-                Goal::Actor {
-                    actor,
-                    distance: distance.unwrap_or(CONVERSATION_DISTANCE),
-                }
-            }
-            v => {
-                if distance.is_some() {
-                    return Err(err(
-                        "walk",
-                        "`distance` applies to `to = OBJECT` or `to = ACTOR`, not to a point",
-                    ));
-                }
-                Goal::Through(vec![floor_point(&v, "walk", "`to`")?])
-            }
-        }),
+        "to" => Some(goal_to(ctx, t.get::<Value>("to")?, distance)?),
         "path" => {
             let Value::Table(list) = t.get::<Value>("path")? else {
                 return Err(err("walk", "`path` must be a list of points {{x, z}, …}"));
@@ -238,4 +214,72 @@ pub fn build_walk(
     // The walk decides when it has arrived (and a velocity walk's duration is its route's).
     spec.duration = None;
     Ok((Box::new(walk), spec))
+}
+
+/// The goal of `walk{ to = … }`: a floor point, or an object or actor given by handle or
+/// by name, `distance` from it (its default when `None`).
+fn goal_to(ctx: &BuildContext, to: Value, distance: Option<f64>) -> mlua::Result<Goal> {
+    enum Named {
+        Object(usize),
+        Actor(usize),
+    }
+    let named = match &to {
+        Value::UserData(u) if u.is::<ObjectRef>() => Named::Object(u.borrow::<ObjectRef>()?.0),
+        Value::UserData(u) if u.is::<ActorRef>() => Named::Actor(u.borrow::<ActorRef>()?.0),
+        Value::String(name) => {
+            let name = name.to_str()?.to_string();
+            let found =
+                ctx.with_scene(|s| (s.object_index(&name).ok(), s.actor_index(&name).ok()))?;
+            match found {
+                (Some(o), None) => Named::Object(o),
+                (None, Some(a)) => Named::Actor(a),
+                (Some(_), Some(_)) => {
+                    return Err(err(
+                        "walk",
+                        format!("`to = \"{name}\"` names both an object and an actor: pass the one you mean"),
+                    ))
+                }
+                (None, None) => {
+                    return Err(err(
+                        "walk",
+                        format!("`to = \"{name}\"`: no object or actor has that name"),
+                    ))
+                }
+            }
+        }
+        v => {
+            if distance.is_some() {
+                return Err(err(
+                    "walk",
+                    "`distance` applies to `to = OBJECT` or `to = ACTOR`, not to a point",
+                ));
+            }
+            let point = floor_point(v, "walk", "`to` (a point, an object or an actor)")?;
+            return Ok(Goal::Through(vec![point]));
+        }
+    };
+    match named {
+        Named::Object(object) => {
+            let holder = ctx.with_scene(|s| s.holder(object).map(|h| h.actor))?;
+            if holder == Some(ctx.actor) {
+                return Err(err(
+                    "walk",
+                    "an actor cannot walk `to` an object in its own hands",
+                ));
+            }
+            Ok(Goal::Object {
+                object,
+                distance: distance.unwrap_or(GRASP_DISTANCE),
+            })
+        }
+        Named::Actor(actor) => {
+            if actor == ctx.actor {
+                return Err(err("walk", "an actor cannot walk `to` itself"));
+            }
+            Ok(Goal::Actor {
+                actor,
+                distance: distance.unwrap_or(CONVERSATION_DISTANCE),
+            })
+        }
+    }
 }

@@ -6,20 +6,24 @@ use thiserror::Error;
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum Error {
     /// A joint name that the skeleton does not have.
-    #[error("unknown joint `{name}` in skeleton `{skeleton}`")]
+    #[error("unknown joint `{name}` in skeleton `{skeleton}`{hint}")]
     UnknownJoint {
         /// The name asked for.
         name: String,
         /// The skeleton's name.
         skeleton: String,
+        /// The nearest name the skeleton has (see [`did_you_mean`]), or nothing.
+        hint: String,
     },
     /// A DOF name that the skeleton does not have.
-    #[error("unknown DOF `{name}` in skeleton `{skeleton}`")]
+    #[error("unknown DOF `{name}` in skeleton `{skeleton}`{hint}")]
     UnknownDof {
         /// The name asked for.
         name: String,
         /// The skeleton's name.
         skeleton: String,
+        /// The nearest name the skeleton has (see [`did_you_mean`]), or nothing.
+        hint: String,
     },
     /// A scope name (or scope expression term) that means nothing for the skeleton.
     #[error("unknown scope `{name}` in skeleton `{skeleton}` (known scopes: {known})")]
@@ -98,3 +102,56 @@ impl Error {
 
 /// The body model's result type.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// "; did you mean `NAME`?" for the name of `known` nearest to `name` by edits (inserted,
+/// deleted or changed characters), when it is near enough to be a slip (at most a third
+/// of the name's length); else nothing.
+pub fn did_you_mean<'a>(name: &str, known: impl IntoIterator<Item = &'a str>) -> String {
+    let limit = (name.chars().count() / 3).max(1);
+    known
+        .into_iter()
+        .map(|k| (edits(name, k), k))
+        .filter(|&(d, _)| d <= limit)
+        .min()
+        .map(|(_, k)| format!("; did you mean `{k}`?"))
+        .unwrap_or_default()
+}
+
+/// The edit (Levenshtein) distance between `a` and `b`.
+fn edits(a: &str, b: &str) -> usize {
+    let b: Vec<char> = b.chars().collect();
+    let mut row: Vec<usize> = (0..=b.len()).collect();
+    for (i, ca) in a.chars().enumerate() {
+        let mut diagonal = row[0];
+        row[0] = i + 1;
+        for (j, &cb) in b.iter().enumerate() {
+            let next = (diagonal + usize::from(ca != cb))
+                .min(row[j] + 1)
+                .min(row[j + 1] + 1);
+            diagonal = row[j + 1];
+            row[j + 1] = next;
+        }
+    }
+    row[b.len()]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_slip_of_a_name_gets_the_nearest_one_and_a_different_name_none() {
+        let known = ["r_shoulder_twist", "r_shoulder_flexion", "r_elbow_flexion"];
+        assert_eq!(
+            did_you_mean("r_shoulder_twisting", known),
+            "; did you mean `r_shoulder_twist`?"
+        );
+        assert_eq!(
+            did_you_mean("r_elbow_flexon", known),
+            "; did you mean `r_elbow_flexion`?"
+        );
+        assert_eq!(did_you_mean("pelvis_tilt", known), "");
+        assert_eq!(edits("kitten", "sitting"), 3);
+        assert_eq!(edits("", "abc"), 3);
+    }
+}

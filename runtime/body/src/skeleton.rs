@@ -2,7 +2,7 @@
 //! solids and named scopes. One `Arc<Skeleton>` is shared by every actor of a template
 //! instance; per-actor state lives elsewhere (see [`crate::state`]).
 
-use crate::error::{Error, Result};
+use crate::error::{did_you_mean, Error, Result};
 use crate::scope::{Scope, MAX_DOFS};
 use crate::solid::Solid;
 use glam::DVec3;
@@ -130,6 +130,7 @@ impl Skeleton {
             .ok_or_else(|| Error::UnknownJoint {
                 name: name.to_string(),
                 skeleton: self.name.clone(),
+                hint: did_you_mean(name, self.joints.iter().map(|j| j.name.as_str())),
             })
     }
 
@@ -141,6 +142,7 @@ impl Skeleton {
             .ok_or_else(|| Error::UnknownDof {
                 name: name.to_string(),
                 skeleton: self.name.clone(),
+                hint: did_you_mean(name, self.dofs.iter().map(|d| d.name.as_str())),
             })
     }
 
@@ -270,6 +272,7 @@ impl SkeletonBuilder {
                     .ok_or_else(|| Error::UnknownJoint {
                         name: p.to_string(),
                         skeleton: s.name.clone(),
+                        hint: did_you_mean(p, s.joints.iter().map(|j| j.name.as_str())),
                     })?,
             ),
             None if s.joints.is_empty() => None,

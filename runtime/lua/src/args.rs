@@ -35,9 +35,17 @@ pub fn err(method: &str, message: impl std::fmt::Display) -> mlua::Error {
 /// What a value is, for "got …" in messages: its type, or `nan`, `inf`, `-inf` for a
 /// number that is not finite.
 pub fn value_name(v: &Value) -> String {
+    use crate::handles::{ActionRef, ActorRef, BehaviorRef, HandlerRef, ObjectRef, SequenceRef};
     match v {
         Value::Number(n) if n.is_nan() => "nan".into(),
         Value::Number(n) if n.is_infinite() => if *n > 0.0 { "inf" } else { "-inf" }.into(),
+        // troupe's handles by what they are, not as "userdata".
+        Value::UserData(u) if u.is::<ActorRef>() => "an actor".into(),
+        Value::UserData(u) if u.is::<ObjectRef>() => "an object".into(),
+        Value::UserData(u) if u.is::<ActionRef>() => "an action".into(),
+        Value::UserData(u) if u.is::<BehaviorRef>() => "a behavior".into(),
+        Value::UserData(u) if u.is::<HandlerRef>() => "a handler".into(),
+        Value::UserData(u) if u.is::<SequenceRef>() => "a sequence".into(),
         other => other.type_name().into(),
     }
 }

@@ -173,10 +173,15 @@ impl Director {
                 Ok(matches!(v, Value::UserData(u) if u.is::<handles::ActionRef>()))
             })?,
         )?;
+        globals.set(
+            "__troupe_value_name",
+            lua.create_function(|_, v: Value| Ok(args::value_name(&v)))?,
+        )?;
         lua.load(include_str!("prelude.lua"))
             .set_name("=prelude")
             .exec()?;
         globals.raw_set("__troupe_is_action", Value::Nil)?;
+        globals.raw_set("__troupe_value_name", Value::Nil)?;
         let wait: Function = globals.get("__troupe_action_wait")?;
         lua.set_named_registry_value("troupe.action_wait", wait)?;
         globals.raw_set("__troupe_action_wait", Value::Nil)?;

@@ -83,6 +83,7 @@ function wait_until(fn, timeout)
 end
 
 local is_action = __troupe_is_action
+local value_name = __troupe_value_name
 
 -- The actions given to `name` (as arguments or in one list), each checked here so that
 -- the error names the argument and the caller's place, and pcall can catch it.
@@ -96,7 +97,7 @@ local function handles(name, ...)
   -- By count, not ipairs: a nil among the arguments is refused, not the end of them.
   for i = 1, n do
     if not is_action(list[i]) then
-      error(string.format("%s: argument %d must be an action, got %s", name, i, type(list[i])), 3)
+      error(string.format("%s: argument %d must be an action, got %s", name, i, value_name(list[i])), 3)
     end
   end
   return list

@@ -597,6 +597,7 @@ impl Scene {
                 Error::Body(troupe_body::Error::UnknownDof {
                     name: format!("#{d}"),
                     skeleton: skeleton.name().to_string(),
+                    hint: String::new(),
                 })
             })?;
             if !v.is_finite() {
