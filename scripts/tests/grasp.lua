@@ -277,6 +277,33 @@ test("a hand following another's turns no joint faster than 8 rad/s", function()
   expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
 end)
 
+test("an adult hands a cup to a child at the child's height, leaning to it", function()
+  local ann = troupe.actor{ name = "ann", facing = 90 }
+  local kid = troupe.actor{ name = "kid", template = "child", at = {0.8, 0, 0}, facing = 270 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.10,
+                             at = {0.35, 1.0, 0.25}, obstacle = false }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local shoulder = kid:joint_position("r_shoulder")[2]
+  local give = ann:give{ object = cup, to = kid }
+  local receive = kid:actions()[#kid:actions()]
+  local met, raised, leaned = nil, 0, 0
+  expect(run_until(function()
+    raised = math.max(raised, math.deg(kid:dof("r_shoulder_flexion")), math.deg(kid:dof("l_shoulder_flexion")))
+    leaned = math.max(leaned, ann:dof("vl5_flexion"))
+    if not met and cup.holder == kid then met = cup:position()[2] end
+    return done(give) and done(receive)
+  end, 8), "handed over: " .. give.status .. " " .. tostring(give.error))
+  print(string.format("handed to a child: the cup taken %.2f m high, the child's shoulders at %.2f m, " ..
+                      "its arm raised %.0f° at most; ann leaned %.0f° and stands straight again (%.0f°)",
+                      met, shoulder, raised, math.deg(leaned), math.deg(math.abs(ann:dof("vl5_flexion")))))
+  expect(cup.holder == kid and math.abs(met - 0.79 * shoulder) < 0.02,
+         string.format("taken a fifth of the way down from the child's shoulders: %.2f against %.2f m",
+                       met, shoulder))
+  expect(raised < 60, string.format("the child's arm raised %.0f°", raised))
+  expect(leaned > math.rad(5) and math.abs(ann:dof("vl5_flexion")) < math.rad(1),
+         string.format("the adult leaned (%.1f°) and straightened", math.deg(leaned)))
+end)
+
 test("shake hands facing each other: bob holds his hand out as ann reaches for it; both complete", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }

@@ -35,7 +35,9 @@ pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
         .map_err(|e| err(m, e))?;
     let mut spec = common.spec(m, scope);
     spec.duration = None;
-    Ok((generator, spec))
+    // The lean or crouch it may take to reach the meeting point gives way to a walk.
+    let body = crate::grasp::body::BodyReach::body_scope(&ctx.skeleton).map_err(|e| err(m, e))?;
+    Ok((generator, crate::grasp::lua::yielding(spec, body)))
 }
 
 /// `actor:receive{object = OBJ, from = ACTOR, hand = …, duration = reach seconds,

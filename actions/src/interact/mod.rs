@@ -30,6 +30,7 @@ pub mod options;
 pub use options::{GiveOptions, HoldHandOptions, ReceiveOptions};
 
 use crate::grasp::action::{CLOSE_SECONDS, OPEN_SECONDS};
+use crate::grasp::body::BodyReach;
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};
 use crate::grasp::plan::{
@@ -70,6 +71,9 @@ pub struct Give {
     sides: Vec<Side>,
     arrived: SignalId,
     arm: Option<ArmIk>,
+    /// The DOFs that carry the object to the meeting point, from `start_q` to `goal_q`:
+    /// the arm's, and the spine's and legs' when it leans or crouches.
+    moving: Scope,
     start_q: Vec<f64>,
     goal_q: Vec<f64>,
     open: Option<BoundPattern>,
@@ -109,6 +113,7 @@ impl Give {
             sides: vec![side],
             arrived,
             arm: None,
+            moving: Scope::EMPTY,
             start_q: Vec::new(),
             goal_q: Vec::new(),
             open: None,
@@ -153,18 +158,33 @@ impl Give {
     }
 }
 
-/// Where a handed-over object's centre goes: halfway between the two actors, 30 cm
-/// below the giver's shoulders.
-pub fn meeting_point(world: &World, giver: usize, receiver: usize) -> Option<DVec3> {
+/// How far below the shoulders a handed-over object meets the other hand, as a part of the
+/// shoulders' height (0.3 m for an adult).
+const MEETING_BELOW_SHOULDERS: f64 = 0.21;
+
+/// Where a handed-over object's centre may go, in order of preference: halfway between the
+/// two actors, a fifth of the way down from the lower one's shoulders (0.3 m for an adult,
+/// 0.22 m for a child), then up in 5 cm steps to as far below the giver's.
+pub fn meeting_points(world: &World, giver: usize, receiver: usize) -> Option<Vec<DVec3>> {
     let a = world.states.get(giver)?.globals.first()?.translation;
     let b = world.states.get(receiver)?.globals.first()?.translation;
-    let shoulder = world.actors[giver]
-        .skeleton
-        .joint("r_shoulder")
-        .ok()
-        .map(|j| world.states[giver].globals[j].translation.y)?;
+    let shoulder = |actor: usize| {
+        world.actors[actor]
+            .skeleton
+            .joint("r_shoulder")
+            .ok()
+            .map(|j| world.states[actor].globals[j].translation.y)
+    };
+    let below = |y: f64| y * (1.0 - MEETING_BELOW_SHOULDERS);
+    let highest = below(shoulder(giver)?);
+    let lowest = shoulder(receiver).map_or(highest, |r| below(r).min(highest));
     let mid = (a + b) * 0.5;
-    Some(DVec3::new(mid.x, shoulder - 0.3, mid.z))
+    let steps = ((highest - lowest) / 0.05).ceil() as usize;
+    Some(
+        (0..=steps)
+            .map(|i| DVec3::new(mid.x, (lowest + 0.05 * i as f64).min(highest), mid.z))
+            .collect(),
+    )
 }
 
 impl Give {
@@ -205,18 +225,49 @@ impl Generator for Give {
         if w.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
             return Err(format!("`{me}` does not hold `{}`", obj.name).into());
         }
-        let goal = match self.receiver_hand {
-            Some(side) => crate::grasp::handover::offer_point(w, self.receiver, side, self.object)?,
-            None => meeting_point(w, ctx.actor, self.receiver)
+        let goals = match self.receiver_hand {
+            Some(side) => vec![crate::grasp::handover::offer_point(
+                w,
+                self.receiver,
+                side,
+                self.object,
+            )?],
+            None => meeting_points(w, ctx.actor, self.receiver)
                 .ok_or_else(|| format!("no actor #{} to give to", self.receiver))?,
         };
         let now = Transform::new(obj.rotation, obj.position);
-        let delta = Transform::new(obj.rotation, goal).mul(&now.inverse());
         let mut ik = ArmIk::new(ctx.skeleton, self.sides[0], 200)?;
         self.start_q = ctx.posture.q.clone();
-        self.goal_q = ctx.posture.q.clone();
-        let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
-        let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
+        self.moving = ik.dofs().iter().copied().collect();
+        // The first meeting point the arm reaches, leaning or crouching if it must (as a
+        // grasp does: during a walk the body is the walk's, and the arm is alone).
+        let allowed = ctx
+            .scope
+            .intersection(&BodyReach::body_scope(ctx.skeleton)?);
+        let body = BodyReach::new(ctx.skeleton, allowed)?;
+        let (mut miss, mut angle, mut wrist_goal) = (f64::INFINITY, f64::INFINITY, now);
+        'points: for goal in goals {
+            let delta = Transform::new(obj.rotation, goal).mul(&now.inverse());
+            self.goal_q = ctx.posture.q.clone();
+            wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
+            (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
+            if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
+                break;
+            }
+            for stage in body.stages().into_iter().skip(1) {
+                if let Ok(reached) =
+                    body.reach(&ctx.posture.q, &[(self.sides[0], wrist_goal)], stage)?
+                {
+                    self.goal_q = ctx.posture.q.clone();
+                    for &(d, v) in &reached.changed {
+                        self.goal_q[d] = v;
+                        self.moving.insert(d);
+                    }
+                    (miss, angle) = (0.0, 0.0);
+                    break 'points;
+                }
+            }
+        }
         if miss > REACH_TOLERANCE || angle > REACH_ANGLE {
             return Err(format!(
                 "the meeting point with `{}` is out of reach of `{me}` (misses by {miss:.3} m)",
@@ -265,7 +316,7 @@ impl Generator for Give {
             0 => {
                 let u = quintic(t / GIVE_REACH_SECONDS);
                 let finished = u >= 1.0 - 1e-12;
-                for &d in arm.dofs() {
+                for d in self.moving.iter() {
                     self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
                 }
                 if let Some(around) = &mut self.arm_detour {
@@ -290,7 +341,7 @@ impl Generator for Give {
                 }
             }
             1 => {
-                for &d in arm.dofs() {
+                for d in self.moving.iter() {
                     self.q[d] = self.goal_q[d];
                 }
                 // The arm is at the goal since the last tick: the object is there.
@@ -323,10 +374,17 @@ impl Generator for Give {
                 }
             }
             _ => {
-                for &d in arm.dofs() {
-                    self.q[d] = self.goal_q[d];
-                }
                 let s = (t / OPEN_SECONDS).min(1.0);
+                // The hand opens where it gave; a body that leaned or crouched to give
+                // straightens meanwhile.
+                let back = quintic(s);
+                for d in self.moving.iter() {
+                    self.q[d] = if arm.dofs().contains(&d) {
+                        self.goal_q[d]
+                    } else {
+                        self.goal_q[d] + (self.start_q[d] - self.goal_q[d]) * back
+                    };
+                }
                 if let Some(open) = &self.open {
                     open.sample(s, &mut self.samples);
                     for &(d, v) in &self.samples {

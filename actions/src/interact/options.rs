@@ -5,6 +5,7 @@ use super::device_hand::{offer_to_hand, receive};
 use super::{FollowHand, Give, HoldHand};
 use crate::error::{ActionError, OptionError, Result};
 use crate::grasp::action::{check_duration, grasp_scope, holding_side, reach_scope, Grasp};
+use crate::grasp::body::BodyReach;
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
@@ -91,6 +92,9 @@ impl GiveOptions {
                 offer_to_hand(scene, self.object, giver, side, self.to, hand, self.timeout)?;
             return Ok((Box::new(giver), scope));
         }
+        // The giver may lean or crouch to bring the object to the meeting point, as a grasp
+        // does: the body is a yieldable part of its scope (see the Lua builder).
+        let scope = scope.union(&BodyReach::body_scope(&scene.actors()[giver].skeleton)?);
         let (arrived, ended) = (scene.new_signal(), scene.new_signal());
         let gave_up = scene.new_signal();
         let mut give = Give::new(self.object, self.to, side, arrived, ended)
