@@ -399,15 +399,22 @@ fn convert(
     let gltf_out = matches!(output_format, Format::Gltf | Format::Glb);
     if let Some(t) = template {
         let t = troupe_body::template(&t)?;
-        // A .trk keeps DOF values: its own body is kept unless --height says otherwise.
+        // A .trk keeps DOF values, and a glTF file troupe wrote its body's offsets: that
+        // body is kept unless --height says otherwise (on another template, the glTF's
+        // root is scaled to it).
         let trk = match input_format {
             Format::Trk => Some(load(input, scale)?.seq),
             _ => None,
         };
-        let recorded = trk
-            .as_ref()
-            .filter(|seq| seq.meta.get("template").is_some_and(|n| n == t.name))
-            .and_then(|seq| seq.meta.get("height")?.parse::<f64>().ok());
+        let recorded = match input_format {
+            Format::Gltf | Format::Glb => troupe_formats::gltf::recorded_body(input)?
+                .filter(|(name, _)| name == t.name)
+                .map(|(_, h)| h),
+            _ => trk
+                .as_ref()
+                .filter(|seq| seq.meta.get("template").is_some_and(|n| n == t.name))
+                .and_then(|seq| seq.meta.get("height")?.parse::<f64>().ok()),
+        };
         let mut params = t.default_params();
         if let Some(h) = height.or(recorded) {
             params.height = h;

@@ -10,12 +10,12 @@ use anyhow::{anyhow, bail, Context, Result};
 use clap::Args;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
-use troupe_actions::Keyframe;
+use troupe_actions::keyframe::replay;
 use troupe_body::glam::DVec3;
 use troupe_body::DofKind;
 use troupe_motion::{ObjectMotion, Sequence};
 use troupe_scene::playback::ObjectPlayback;
-use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
+use troupe_scene::{ActorDesc, RunLimit, Scene, SceneConfig, Session};
 use troupe_viewer::{
     parse_size, run_window, BodyStyle, Camera, DebugView, Frame, FrameWriter, Hand, HandState,
     OffscreenRenderer, RenderOptions, ViewerError, WindowOptions,
@@ -134,13 +134,16 @@ struct Performer {
 
 /// Reads a recording ([`troupe_formats::load_sequences`] chooses the reader): each
 /// sequence plays one actor, on the template and height stored in its metadata (a
-/// `--record` `.trk`), or on the body a BVH troupe wrote was recorded from (its offsets
-/// tell the template and height), else on `template` at `height` — which a foreign `.bvh`
-/// is retargeted onto and a `.gltf`/`.glb` written by troupe is read back onto.
+/// `--record` `.trk`), or on the body a BVH or glTF file troupe wrote was recorded from
+/// (its offsets tell the template and height), else on `template` at `height` — which a
+/// foreign `.bvh` is retargeted onto.
 fn load_recording(path: &Path, template: &str, height: Option<f64>) -> Result<Vec<Performer>> {
     let recorded = match troupe_formats::Format::of(path)? {
         troupe_formats::Format::Bvh => {
             troupe_formats::retarget::recorded_body(&troupe_formats::bvh::read_bvh(path)?)
+        }
+        troupe_formats::Format::Gltf | troupe_formats::Format::Glb => {
+            troupe_formats::gltf::recorded_body(path)?
         }
         _ => None,
     };
@@ -254,9 +257,9 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
             ..ActorDesc::new(p.name.clone())
         };
         let actor = scene.add_actor(&desc)?;
-        let skeleton = scene.actors()[actor].skeleton.clone();
-        let keyframe =
-            Keyframe::new(&skeleton, &p.sequence, None, Some(true)).with_context(|| {
+        // In step with the recorded run: the first frame shows its first posture.
+        let (_, played) =
+            replay(&mut scene, actor, &p.sequence, Some(true)).with_context(|| {
                 format!(
                     "{}: `{}` on template {}",
                     file.display(),
@@ -264,9 +267,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
                     p.template
                 )
             })?;
-        length = length.max(keyframe.length());
-        let spec = ActionSpec::new("keyframe", keyframe.scope());
-        scene.start_action(actor, spec, Box::new(keyframe))?;
+        length = length.max(played);
     }
     length = length.max(object_length);
     let camera: Camera = match &args.camera {

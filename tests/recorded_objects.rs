@@ -4,10 +4,10 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use troupe_actions::Keyframe;
+use troupe_actions::keyframe::replay;
 use troupe_formats::trk::{read_trk_file, TrkFile};
 use troupe_scene::playback::ObjectPlayback;
-use troupe_scene::{ActionSpec, ActorDesc, RunLimit, Scene, SceneConfig, Session};
+use troupe_scene::{ActorDesc, RunLimit, Scene, SceneConfig, Session};
 
 fn troupe() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_troupe"));
@@ -53,10 +53,7 @@ fn play(file: &TrkFile, until: f64) -> Vec<(f64, f64, bool)> {
     let mut scene = Scene::new(SceneConfig::default()).unwrap();
     for seq in &file.sequences {
         let actor = scene.add_actor(&ActorDesc::new(seq.name.clone())).unwrap();
-        let skeleton = scene.actors()[actor].skeleton.clone();
-        let keyframe = Keyframe::new(&skeleton, seq, None, Some(false)).unwrap();
-        let spec = ActionSpec::new("keyframe", keyframe.scope());
-        scene.start_action(actor, spec, Box::new(keyframe)).unwrap();
+        replay(&mut scene, actor, seq, Some(false)).unwrap();
     }
     let playback = ObjectPlayback::install(&mut scene, file.objects.clone()).unwrap();
     assert_eq!(playback.len(), 2);
@@ -64,6 +61,7 @@ fn play(file: &TrkFile, until: f64) -> Vec<(f64, f64, bool)> {
     session.add_input(Box::new(playback));
     let cup = file.objects.iter().find(|o| o.name == "cup").unwrap();
     let mut out = Vec::new();
+    in_step(&session, file);
     while session.scene().time() < until {
         session
             .run(RunLimit {
@@ -79,8 +77,42 @@ fn play(file: &TrkFile, until: f64) -> Vec<(f64, f64, bool)> {
         let t = scene.time();
         let held = cup.holder_at(t).is_some_and(|h| h.actor == "bob");
         out.push((t, (object.position - hand).length(), held));
+        in_step(&session, file);
     }
     out
+}
+
+/// Checks that every actor of the session shows the posture its recording has at the
+/// scene's time, and every object its recorded pose: the replay is in step with the run
+/// (it was one tick behind, and showed everyone at rest before the first tick).
+fn in_step(session: &Session, file: &TrkFile) {
+    let scene = session.scene();
+    let t = scene.time();
+    for (a, seq) in file.sequences.iter().enumerate() {
+        let skeleton = &scene.actors()[a].skeleton;
+        for track in seq.tracks() {
+            let d = skeleton.dof(track.dof()).unwrap();
+            let (got, want) = (scene.states()[a].q[d], track.value(t.min(seq.end())));
+            assert!(
+                (got - want).abs() < 1e-9,
+                "{} at {t}: {got} against {want}",
+                track.dof()
+            );
+        }
+    }
+    for motion in &file.objects {
+        let object = scene
+            .objects()
+            .iter()
+            .find(|o| o.name == motion.name)
+            .unwrap();
+        let (want, _) = motion.pose_at(t);
+        assert!(
+            (object.position - want).length() < 1e-9,
+            "{} at {t}",
+            motion.name
+        );
+    }
 }
 
 #[test]

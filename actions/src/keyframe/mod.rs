@@ -10,7 +10,7 @@ use crate::error::Result;
 use std::sync::Arc;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
-use troupe_scene::{DofWriter, Generator, GeneratorContext, Step};
+use troupe_scene::{ActionId, ActionSpec, DofWriter, Generator, GeneratorContext, Scene, Step};
 
 /// Plays a sequence's tracks on the DOFs they name, from the sequence's first key time.
 /// Actors playing the same sequence share its keys.
@@ -21,6 +21,8 @@ pub struct Keyframe {
     start: f64,
     length: f64,
     looping: bool,
+    /// Seconds of the sequence it plays ahead of its own clock (see [`Keyframe::ahead`]).
+    lead: f64,
     /// Whether every bound track has the same key times (sampled motion such as BVH):
     /// then the segment is found once per tick for all of them.
     shared_times: bool,
@@ -67,6 +69,7 @@ impl Keyframe {
             start: sequence.start(),
             length: sequence.duration(),
             looping: looping.unwrap_or(sequence.looping),
+            lead: 0.0,
             sequence,
         })
     }
@@ -80,11 +83,48 @@ impl Keyframe {
     pub fn length(&self) -> f64 {
         self.length
     }
+
+    /// Plays `seconds` ahead: its first tick shows the sequence at `seconds` instead of
+    /// its first key (see [`replay`]).
+    pub fn ahead(mut self, seconds: f64) -> Keyframe {
+        self.lead = seconds;
+        self
+    }
+}
+
+/// Replays `sequence`, a recording of an actor (`troupe run --record`: its first key the
+/// posture the run started from, then one key per tick), on `actor` of `scene` in step
+/// with the run it recorded: the actor is posed at the first key now, and every tick then
+/// shows the posture recorded at the same scene time. (A keyframe action started now plays
+/// its first key on the coming tick, one tick behind the run, with the actor at rest
+/// before it.) Returns the action and the recording's length in seconds.
+pub fn replay(
+    scene: &mut Scene,
+    actor: usize,
+    sequence: &Sequence,
+    looping: Option<bool>,
+) -> Result<(ActionId, f64)> {
+    let skeleton = scene
+        .actors()
+        .get(actor)
+        .ok_or_else(|| troupe_scene::Error::UnknownActor(format!("#{actor}")))?
+        .skeleton
+        .clone();
+    let keyframe = Keyframe::new(&skeleton, sequence, None, looping)?.ahead(scene.dt());
+    let first: Vec<(usize, f64)> = keyframe
+        .tracks
+        .iter()
+        .map(|&(d, i, _)| (d, sequence.tracks()[i].value(keyframe.start)))
+        .collect();
+    scene.set_dofs(actor, &first)?;
+    let length = keyframe.length();
+    let spec = ActionSpec::new("keyframe", keyframe.scope());
+    Ok((scene.start_action(actor, spec, Box::new(keyframe))?, length))
 }
 
 impl Generator for Keyframe {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        let mut t = ctx.local_time;
+        let mut t = ctx.local_time + self.lead;
         let finished = !self.looping && t >= self.length;
         if self.looping && self.length > 0.0 {
             t = t.rem_euclid(self.length);

@@ -50,11 +50,12 @@ impl Input for ObjectPlayback {
         "recorded objects".into()
     }
 
-    /// Poses every object as recorded at the scene's time before the coming step: the
-    /// time at which the actors' keyframe actions sample their sequences in that step, so
-    /// that a held object stays in the hand (tested in `tests/recorded_objects.rs`).
+    /// Poses every object as recorded at the scene's time after the coming step: the time
+    /// whose posture the actors' replays show after that step (see
+    /// `troupe_actions::keyframe::replay`), so that a held object stays in the hand and
+    /// the replay is in step with the recorded run (tested in `tests/recorded_objects.rs`).
     fn poll(&mut self, scene: &mut Scene) -> Result<()> {
-        let t = scene.time();
+        let t = scene.time() + scene.dt();
         for (index, motion) in &self.objects {
             let (position, rotation) = motion.pose_at(t);
             if let Some(object) = scene.objects_mut().get_mut(*index) {

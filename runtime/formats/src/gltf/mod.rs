@@ -15,7 +15,7 @@ pub mod read;
 pub mod skin;
 pub mod write;
 
-pub use read::read_gltf_motion;
+pub use read::{read_gltf_motion, recorded_body};
 pub use skin::{add_skin, with_helper_joints};
 pub use write::{
     to_gltf, to_gltf_with_objects, write_character, write_glb, write_glb_with, write_gltf,

@@ -5,7 +5,11 @@
 //!
 //! Each joint's animated local rotation is turned back into the angles of its DOFs by a
 //! small least-squares solve (exact when the rotation is one the DOF axes can make); the
-//! root's animated translation gives `root_x/y/z`. Buffers may be external files, base64
+//! root's animated translation gives `root_x/y/z`, scaled by the ratio of the skeleton's
+//! root height to the file's (its root node's rest translation), as a troupe BVH's is: a
+//! recording of a child played on an adult keeps its feet on the floor, and on the body it
+//! was recorded from it replays exactly. [`recorded_body`] finds that body from the
+//! nodes' rest translations. Buffers may be external files, base64
 //! `data:` URIs or the binary chunk of a `.glb`; channels are read from tightly packed
 //! 32-bit float accessors (what troupe writes), and everything else is refused with a
 //! message naming the file and what was wrong. A file of a user's character (what
@@ -115,6 +119,19 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
             _ => {}
         }
     }
+    // The root's translation is the recorded body's: scaled to this one's (see the module
+    // documentation).
+    let playing_root = skeleton.joints()[0].offset;
+    let recorded_root = gltf
+        .nodes()
+        .find(|n| n.name() == Some(skeleton.joints()[0].name.as_str()))
+        .map(|n| n.transform().decomposed().0[1] as f64)
+        .unwrap_or(playing_root.y);
+    let scale = if recorded_root > 1e-9 && playing_root.y > 1e-9 {
+        playing_root.y / recorded_root
+    } else {
+        1.0
+    };
     if rotations.is_empty() && translation.is_none() {
         return Err(bad(format!(
             "no animation channel targets a joint of the `{}` skeleton (node names must be troupe joint names)",
@@ -146,7 +163,7 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
             }
         }
         if let Some((input, output)) = &translation {
-            let local = sample_vec3(input, output, t) - skeleton.joints()[0].offset;
+            let local = sample_vec3(input, output, t) * scale - playing_root;
             for d in skeleton.joints()[0].dofs.clone() {
                 let dof = &skeleton.dofs()[d];
                 if dof.kind == DofKind::Translation {
@@ -178,6 +195,47 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
         seq.add_track(Track::new(skeleton.dofs()[d].name.clone(), keys)?)?;
     }
     Ok(seq)
+}
+
+/// The template and standing height of the troupe body a glTF file was written from: the
+/// template (at the height its root node's rest translation gives) whose joints' offsets
+/// all match the nodes' rest translations of the same names (within glTF's f32 precision).
+/// `None` for a file of any other skeleton, or of a user's character.
+pub fn recorded_body(path: impl AsRef<Path>) -> Result<Option<(String, f64)>> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    let bad = |message: String| Error::Parse {
+        file: path.display().to_string(),
+        line: 1,
+        message,
+    };
+    check_glb_header(&bytes).map_err(bad)?;
+    let gltf = Gltf::from_slice(&bytes).map_err(|e| bad(format!("not valid glTF: {e}")))?;
+    if character_source(&gltf).is_some() {
+        return Ok(None);
+    }
+    let rest: std::collections::HashMap<&str, DVec3> = gltf
+        .nodes()
+        .filter_map(|n| {
+            let [x, y, z] = n.transform().decomposed().0;
+            Some((n.name()?, DVec3::new(x as f64, y as f64, z as f64)))
+        })
+        .collect();
+    Ok(troupe_body::template::templates()
+        .into_iter()
+        .find_map(|t| {
+            let at_default = t.instantiate(t.default_params()).ok()?;
+            let root = rest.get(at_default.joints().first()?.name.as_str())?;
+            let height = t.default_height * root.y / at_default.joints()[0].offset.y;
+            let mut params = t.default_params();
+            params.height = height;
+            let body = t.instantiate(params).ok()?;
+            let same = body.joints().iter().all(|j| {
+                rest.get(j.name.as_str())
+                    .is_some_and(|r| (*r - j.offset).length() < 1e-5 * (1.0 + j.offset.length()))
+            });
+            same.then(|| (t.name.to_string(), height))
+        }))
 }
 
 /// Refuses a binary glTF whose header is cut short or declares a total length shorter
@@ -392,6 +450,53 @@ mod tests {
         let embedded = dir.join("embedded.gltf");
         std::fs::write(&embedded, doc.to_string()).unwrap();
         same_postures(&skel, &seq, &read_gltf_motion(&embedded, &skel).unwrap());
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn a_recording_read_onto_another_body_keeps_its_feet_on_the_floor_and_tells_its_body() {
+        let child = {
+            let t = troupe_body::template::template("child").unwrap();
+            let mut params = t.default_params();
+            params.height = 1.4;
+            t.instantiate(params).unwrap()
+        };
+        let mut seq = Sequence::new("kid");
+        seq.meta.insert("rate".into(), "10".into());
+        for (dof, a, b) in [
+            ("root_x", 0.0, 1.0),
+            ("root_y", 0.0, -0.05),
+            ("root_z", 0.0, 0.4),
+        ] {
+            seq.add_track(Track::new(dof, vec![Key::new(0.0, a), Key::new(1.0, b)]).unwrap())
+                .unwrap();
+        }
+        let dir = scratch("gltf-body");
+        let glb = dir.join("kid.glb");
+        write_glb(&glb, &Rig::from_sequence(&child, &seq).unwrap(), "kid").unwrap();
+        let (template, height) = recorded_body(&glb).unwrap().unwrap();
+        assert_eq!(template, "child");
+        assert!((height - 1.4).abs() < 1e-4, "{height}");
+        assert_eq!(recorded_body(dir.join("missing.glb")).ok(), None);
+        // On the body it was recorded from, the root's DOFs come back as they were.
+        let same = read_gltf_motion(&glb, &child).unwrap();
+        for (dof, want) in [("root_x", 1.0), ("root_y", -0.05), ("root_z", 0.4)] {
+            let got = same.track(dof).unwrap().value(1.0);
+            assert!((got - want).abs() < 1e-5, "{dof}: {got} against {want}");
+        }
+        // On the default adult, scaled by the two roots' heights: the root stands as high
+        // over the floor, in proportion, and travels as far in strides (it once sank 25 cm).
+        let grown = read_gltf_motion(&glb, &adult()).unwrap();
+        let ratio = adult().joints()[0].offset.y / child.joints()[0].offset.y;
+        for (dof, want) in [
+            ("root_x", ratio),
+            ("root_y", -0.05 * ratio),
+            ("root_z", 0.4 * ratio),
+        ] {
+            let got = grown.track(dof).unwrap().value(1.0);
+            assert!((got - want).abs() < 1e-5, "{dof}: {got} against {want}");
+        }
+        assert!(grown.track("root_y").unwrap().value(0.0).abs() < 1e-5);
         std::fs::remove_dir_all(dir).ok();
     }
 
