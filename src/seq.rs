@@ -115,7 +115,8 @@ enum SeqCommand {
         #[arg(long, conflicts_with = "map")]
         squeeze: Option<String>,
     },
-    /// Band editing (eq. 5-9): weights w0 (finest band) … wN-1, then the top level.
+    /// Band editing (eq. 5-9): weights w0 (finest band) … wN-1, then the top level; what
+    /// the weights change is added to the keys, so all ones give the motion back.
     Bands {
         /// Input file.
         input: PathBuf,

@@ -211,7 +211,7 @@ pub fn save_dressed_recording<'a>(
                 objects.iter().map(|o| o.pose.end()).fold(0.0, f64::max),
             ),
         };
-        let frames = ((end - start) / frame_time).round() as usize + 1;
+        let frames = ((end - start) / frame_time - 1e-9).ceil().max(0.0) as usize + 1;
         let times: Vec<f64> = (0..frames).map(|k| k as f64 * frame_time).collect();
         for object in objects {
             let out = beside(&object.name);

@@ -134,7 +134,9 @@ impl Rig {
 /// How many frames `seq` has when sampled every `seq.frame_time()` from its start to its
 /// end, at most [`MAX_FRAMES`].
 pub fn sampled_frames(seq: &Sequence) -> Result<usize> {
-    let n = (seq.duration() / seq.frame_time()).round() as usize + 1;
+    // Up to the last key: a duration that is not a whole number of frames gets one more
+    // (which holds the last key's value), rather than losing its end.
+    let n = (seq.duration() / seq.frame_time() - 1e-9).ceil().max(0.0) as usize + 1;
     if n > MAX_FRAMES {
         return Err(Error::invalid_value(
             "frame count",
@@ -211,6 +213,43 @@ pub(crate) mod tests {
             .iter()
             .map(|d| seq.track(&d.name).map(|t| t.value(time)).unwrap_or(0.0))
             .collect()
+    }
+
+    #[test]
+    fn a_hand_keyed_sequence_is_sampled_finely_and_to_its_last_key() {
+        let s = adult();
+        let mut seq = Sequence::new("keys");
+        let keys = vec![Key::new(0.0, 0.0), Key::new(0.3, 0.8), Key::new(1.0, 1.2)];
+        seq.add_track(Track::new("l_elbow_flexion", keys).unwrap())
+            .unwrap();
+        let rig = Rig::from_sequence(&s, &seq).unwrap();
+        // Every 10 ms (not every 0.3 s, the keys' spacing: that cut the last 0.1 s off and
+        // turned the curve into straight lines), up to the last key.
+        assert_eq!(rig.times.len(), 101);
+        assert!((rig.times[100] - 1.0).abs() < 1e-9, "{}", rig.times[100]);
+        let elbow = s.dof("l_elbow_flexion").unwrap();
+        let at = |k: usize| {
+            let mut q = vec![0.0; s.dof_count()];
+            q[elbow] = seq.tracks()[0].value(rig.times[k]);
+            fk_positions(&s, &q)
+        };
+        for k in [13, 50, 100] {
+            for (a, b) in rig.positions(k).iter().zip(&at(k)) {
+                assert!((*a - *b).length() < 1e-9, "frame {k}: {a} {b}");
+            }
+        }
+        // A rate that does not divide the duration gets a last frame past it, holding the
+        // last key, rather than losing the end.
+        seq.meta.insert("rate".into(), "3.5".into());
+        let rig = Rig::from_sequence(&s, &seq).unwrap();
+        assert_eq!(rig.times.len(), 5);
+        assert!(rig.times[4] > 1.0 && rig.times[3] < 1.0);
+        assert_eq!(rig.positions(4), at_time(&s, &seq, 1.0));
+    }
+
+    /// Joint positions of `seq` at `time` on `skeleton`.
+    fn at_time(skeleton: &Skeleton, seq: &Sequence, time: f64) -> Vec<DVec3> {
+        fk_positions(skeleton, &posture(skeleton, seq, time))
     }
 
     #[test]

@@ -13,6 +13,10 @@
 use crate::error::{Error, Result};
 use std::collections::BTreeMap;
 
+/// The longest sampling period (s) of a sequence that states no rate (see
+/// [`Sequence::frame_time`]): troupe's tick at its default 100 Hz.
+pub const FINEST_UNRATED_FRAME: f64 = 0.01;
+
 /// One key of a track: a value at a time, with an optional slope (value per second).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Key {
@@ -458,8 +462,10 @@ impl Sequence {
         self.end() - self.start()
     }
 
-    /// The sequence's sampling period: `1 / meta rate` when that is a positive number,
-    /// else the smallest key spacing of any track, else 1/100 s.
+    /// The sequence's sampling period: `1 / meta rate` when that is a positive number
+    /// (a recording, a motion file), else the smallest key spacing of any track, at most
+    /// [`FINEST_UNRATED_FRAME`]: hand-set keys half a second apart are curves, which a
+    /// frame at every key would turn into straight lines.
     pub fn frame_time(&self) -> f64 {
         if let Some(rate) = self.meta.get("rate").and_then(|r| r.parse::<f64>().ok()) {
             if rate.is_finite() && rate > 0.0 {
@@ -472,9 +478,9 @@ impl Sequence {
             .flat_map(|t| t.keys.windows(2).map(|w| w[1].time - w[0].time))
             .fold(f64::INFINITY, f64::min);
         if min.is_finite() && min > 0.0 {
-            min
+            min.min(FINEST_UNRATED_FRAME)
         } else {
-            0.01
+            FINEST_UNRATED_FRAME
         }
     }
 

@@ -195,7 +195,8 @@ pub fn blend(a: &Sequence, b: &Sequence, at: f64, over: f64, dt: Option<f64>) ->
         return Err(Error::invalid_value("blend sampling period", dt, "> 0"));
     }
     let (t0, t1) = pair.span();
-    let n = ((t1 - t0) / dt).round() as usize + 1;
+    // Up to the end: a span that is not a whole number of frames ends on a shorter one.
+    let n = ((t1 - t0) / dt - 1e-9).ceil().max(0.0) as usize + 1;
     let mut out = a.empty_like();
     out.name = format!("{}+{}", a.name, b.name);
     out.meta.insert("rate".into(), format!("{}", 1.0 / dt));

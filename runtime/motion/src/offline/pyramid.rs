@@ -208,8 +208,11 @@ fn resample_at(dof: &str, grid: &Grid, values: &[f64], times: &[f64]) -> Result<
 }
 
 /// Band editing of every track (eq. 5-9): `weights` = `w_0 … w_{N−1}, w_N` (so
-/// `weights.len() − 1` levels). Each track is resampled on a `2^K + 1` grid, rebuilt with
-/// the weights and sampled back at its own key times.
+/// `weights.len() − 1` levels). Each track is sampled on a `2^K + 1` grid and rebuilt
+/// with the weights; what the weights changed, read back at the track's own key times
+/// (value and slope), is added to its keys. So unit weights give the track back (to
+/// rounding): the grid need not line up with the keys, which resampling the rebuilt
+/// curve itself there would move (8° at a key of a hand-keyed wave).
 pub fn band_edit(seq: &Sequence, weights: &[f64], a: f64) -> Result<Sequence> {
     if weights.len() < 2 {
         return Err(Error::Invalid(
@@ -220,20 +223,30 @@ pub fn band_edit(seq: &Sequence, weights: &[f64], a: f64) -> Result<Sequence> {
     let grid = Grid::covering(seq.start(), seq.end(), seq.frame_time(), levels)?;
     let mut out = seq.empty_like();
     for track in seq.tracks() {
-        let p = Pyramid::new(
-            &track.sample(grid.start, grid.dt, grid.n),
-            grid.start,
-            grid.dt,
-            levels,
-            a,
-        )?;
-        let times: Vec<f64> = track.keys().iter().map(|k| k.time).collect();
-        out.add_track(resample_at(
-            track.dof(),
-            &grid,
-            &p.reconstruct_weighted(weights),
-            &times,
-        )?)?;
+        let samples = track.sample(grid.start, grid.dt, grid.n);
+        let p = Pyramid::new(&samples, grid.start, grid.dt, levels, a)?;
+        let change: Vec<f64> = p
+            .reconstruct_weighted(weights)
+            .iter()
+            .zip(&samples)
+            .map(|(edited, was)| edited - was)
+            .collect();
+        let change = Track::from_samples(track.dof(), grid.start, grid.dt, &change)?;
+        let keys = track
+            .keys()
+            .iter()
+            .map(|k| {
+                let (dv, ds) = (change.value(k.time), change.velocity(k.time));
+                if dv == 0.0 && ds == 0.0 {
+                    *k
+                } else {
+                    Key::with_slope(k.time, k.value + dv, track.velocity(k.time) + ds)
+                }
+            })
+            .collect();
+        let mut edited = Track::new(track.dof(), keys)?;
+        edited.set_interpolation(track.interpolation());
+        out.add_track(edited)?;
     }
     Ok(out)
 }
@@ -255,7 +268,8 @@ pub fn pyramid_blend(
     let (t0, t1) = pair.span();
     let ft = a_seq.frame_time().min(b_seq.frame_time());
     let grid = Grid::covering(t0, t1, ft, levels)?;
-    let n_out = ((t1 - t0) / ft).round() as usize + 1;
+    // Up to the end: a span that is not a whole number of frames ends on a shorter one.
+    let n_out = ((t1 - t0) / ft - 1e-9).ceil().max(0.0) as usize + 1;
     let times: Vec<f64> = (0..n_out).map(|i| (t0 + i as f64 * ft).min(t1)).collect();
     let mut out = a_seq.empty_like();
     out.name = format!("{}+{}", a_seq.name, b_seq.name);
@@ -363,6 +377,78 @@ mod tests {
         for (k, v) in same.track("x").unwrap().keys().iter().zip(&s) {
             assert!((k.value - v).abs() < 1e-12);
         }
+    }
+
+    /// A hand-keyed wave (keys half a second apart and irregular, no rate): its keys are
+    /// not on any 2^K + 1 grid over its span.
+    fn hand_keyed() -> Sequence {
+        let mut seq = Sequence::new("wave");
+        let keys = [
+            (0.0, 0.0),
+            (0.5, 1.2),
+            (1.0, 0.6),
+            (1.3, 1.9),
+            (2.2, 1.9),
+            (2.9, 0.0),
+        ];
+        seq.add_track(
+            Track::new("x", keys.iter().map(|&(t, v)| Key::new(t, v)).collect()).unwrap(),
+        )
+        .unwrap();
+        seq
+    }
+
+    #[test]
+    fn unit_band_weights_give_a_hand_keyed_sequence_back_and_others_change_it_smoothly() {
+        let seq = hand_keyed();
+        let x = seq.track("x").unwrap();
+        let same = band_edit(&seq, &[1.0, 1.0, 1.0, 1.0], DEFAULT_A).unwrap();
+        let back = same.track("x").unwrap();
+        // Keys and the curve between them (a key moved 0.139 rad when the rebuilt curve
+        // was resampled at the keys).
+        for i in 0..=290 {
+            let t = i as f64 * 0.01;
+            assert!((back.value(t) - x.value(t)).abs() < 1e-12, "{t}");
+        }
+        // The finest band left out smooths the curve a little, no more than it is rough.
+        let smooth = band_edit(&seq, &[0.0, 1.0, 1.0, 1.0], DEFAULT_A).unwrap();
+        let smooth = smooth.track("x").unwrap();
+        let moved = (0..=290)
+            .map(|i| (smooth.value(i as f64 * 0.01) - x.value(i as f64 * 0.01)).abs())
+            .fold(0.0, f64::max);
+        assert!(moved > 1e-4 && moved < 0.3, "{moved}");
+    }
+
+    #[test]
+    fn a_blend_of_hand_keyed_sequences_is_a_before_its_window_and_b_after() {
+        let a = hand_keyed();
+        let mut b = Sequence::new("b");
+        let keys = vec![Key::new(0.0, 1.0), Key::new(0.7, 0.2), Key::new(1.6, 1.5)];
+        b.add_track(Track::new("x", keys).unwrap()).unwrap();
+        let s = pyramid_blend(&a, &b, 1.0, 0.5, 3, DEFAULT_A).unwrap();
+        let (x, ta, tb) = (
+            s.track("x").unwrap(),
+            a.track("x").unwrap(),
+            b.track("x").unwrap(),
+        );
+        // It ends where A ends (2.9 s, after B's 1.0 + 1.6 s), not a frame short.
+        assert!((x.end() - 2.9).abs() < 1e-9, "{}", x.end());
+        // A alone before the window, B alone from its end (1.5 s) until B, inside A, eases
+        // back to A over its last 0.5 s, then A alone again.
+        let off = |range: std::ops::RangeInclusive<i32>, want: &dyn Fn(f64) -> f64| {
+            range
+                .map(|i| (x.value(i as f64 * 0.01) - want(i as f64 * 0.01)).abs())
+                .fold(0.0, f64::max)
+        };
+        let (before, during, after) = (
+            off(0..=100, &|t| ta.value(t)),
+            off(150..=210, &|t| tb.value(t - 1.0)),
+            off(260..=290, &|t| ta.value(t)),
+        );
+        assert!(
+            before < 5e-3 && during < 5e-3 && after < 5e-3,
+            "{before} {during} {after}"
+        );
     }
 
     #[test]
