@@ -275,6 +275,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         None if performers.len() == 1 => format!("follow:{}", performers[0].name).parse()?,
         None => Camera::fit(),
     };
+    crate::run::check_camera(&camera, &scene)?;
 
     let headless_dir = match (&args.frames, has_display()) {
         (Some(dir), _) => Some(dir.clone()),
@@ -435,6 +436,7 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         }
         scene.set_dofs(actor, &values)?;
     }
+    crate::run::check_camera(&camera, &scene)?;
     // A snapshot is a session that never ticks: the posed scene is its only frame.
     let session = Session::new(scene);
     let mut frame = Frame::from_scene(session.scene());

@@ -59,6 +59,22 @@ fn snapshot_rejects_bad_poses_and_cameras_with_a_message() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.starts_with("troupe: "), "{args:?}: {err}");
     }
+    // Following an actor the scene lacks is refused, as `render` does (it silently used
+    // the default camera).
+    let out = troupe()
+        .args([
+            "snapshot",
+            "/nonexistent/never.png",
+            "--camera",
+            "follow:nobody",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("the scene has no actor `nobody` (actors: ann)"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -112,9 +128,29 @@ fn view_refuses_unknown_formats() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(
-        err.contains("`.fbx` motion files (use .trk, .bvh, .gltf or .glb)"),
+        err.contains("motion files with `.fbx` (use .trk, .bvh, .gltf or .glb)"),
         "{err}"
     );
+    // So is a camera following an actor the recording lacks.
+    let dir = temp_dir("view-camera");
+    let trk = dir.join("wave.trk");
+    std::fs::write(
+        &trk,
+        "troupe-trk 1\nsequence wave\ntrack r_shoulder_abduction\n0 0\n1 0\nend\n",
+    )
+    .unwrap();
+    let out = troupe()
+        .args(["view", trk.to_str().unwrap(), "--frames"])
+        .arg(dir.join("frames"))
+        .args(["--camera", "follow:nobody"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("the scene has no actor `nobody` (actors: wave)"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
     // A known format that is missing names the file.
     let out = troupe().args(["view", "walk.gltf"]).output().unwrap();
     assert!(!out.status.success());

@@ -56,9 +56,14 @@ impl Format {
             "bvh" => Ok(Format::Bvh),
             "gltf" => Ok(Format::Gltf),
             "glb" => Ok(Format::Glb),
+            // A name without an extension says so, rather than "`.` motion files".
+            "" => Err(Error::UnknownFormat {
+                path: path.display().to_string(),
+                extension: "no extension".into(),
+            }),
             _ => Err(Error::UnknownFormat {
                 path: path.display().to_string(),
-                extension: format!(".{ext}"),
+                extension: format!("`.{ext}`"),
             }),
         }
     }
@@ -327,6 +332,11 @@ mod tests {
                 Err(Error::UnknownFormat { .. })
             ));
         }
+        // A name without an extension is told so (it read "`.` motion files").
+        assert_eq!(
+            Format::of(Path::new("out")).unwrap_err().to_string(),
+            "out: cannot read or write motion files with no extension (use .trk, .bvh, .gltf or .glb)"
+        );
     }
 
     #[test]

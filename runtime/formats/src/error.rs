@@ -41,12 +41,12 @@ pub enum Error {
     },
     /// A file whose extension names no motion format troupe reads or writes.
     #[error(
-        "{path}: cannot read or write `{extension}` motion files (use .trk, .bvh, .gltf or .glb)"
+        "{path}: cannot read or write motion files with {extension} (use .trk, .bvh, .gltf or .glb)"
     )]
     UnknownFormat {
         /// The path.
         path: String,
-        /// See the variant.
+        /// Its extension in backquotes, or `no extension`.
         extension: String,
     },
     /// A file whose motion is bound to a body (BVH, glTF), loaded without one.
