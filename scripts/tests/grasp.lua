@@ -277,6 +277,30 @@ test("a hand following another's turns no joint faster than 8 rad/s", function()
   expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
 end)
 
+test("two hands going for one cup: the first to reach for it takes it, the other gives up at once", function()
+  local ann = troupe.actor{ name = "ann", at = {-0.35, 0, 0}, facing = 90 }
+  local bob = troupe.actor{ name = "bob", at = {0.35, 0, 0}, facing = 270 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.10,
+                             at = {0, 1.0, 0.15}, obstacle = false }
+  -- At once: claims of one tick go in actor order, so ann (created first) has it.
+  local a = ann:grasp{ object = cup, hand = "right" }
+  local b = bob:grasp{ object = cup, hand = "left" }
+  local deepest = 0
+  expect(run_until(function()
+    local d = troupe.deepest_overlap()
+    if d and d > deepest then deepest = d end
+    return done(a) and b.status == "failed"
+  end, 4), "ann: " .. a.status .. ", bob: " .. b.status .. " " .. tostring(b.error))
+  expect(b.error == "`ann` is already reaching for `cup`", tostring(b.error))
+  expect(cup.holder == ann, "ann holds it")
+  print(string.format("two hands for one cup: bob gave up; the hands met %.1f mm deep at most", 1000 * deepest))
+  expect(deepest < 0.01, string.format("no hand inside the other: %.3f m", deepest))
+  -- Later, while ann holds it, a plain grasp of it fails at once, saying how to take it.
+  local c = bob:grasp{ object = cup, hand = "left" }
+  expect(run_until(function() return c.status == "failed" end, 0.05), "refused: " .. c.status)
+  expect(c.error:find("is held by `ann`", 1, true) ~= nil, tostring(c.error))
+end)
+
 test("an adult hands a cup to a child at the child's height, leaning to it", function()
   local ann = troupe.actor{ name = "ann", facing = 90 }
   local kid = troupe.actor{ name = "kid", template = "child", at = {0.8, 0, 0}, facing = 270 }

@@ -22,7 +22,7 @@ use troupe_body::sensors::{object_distance, Side};
 use troupe_body::{Scope, Skeleton, Transform};
 use troupe_scene::holding::HoldRequest;
 use troupe_scene::{
-    DofWriter, Ending, Generator, GeneratorContext, Notes, Scene, SignalId, StartError, Step,
+    DofWriter, Ending, Generator, GeneratorContext, Note, Notes, Scene, SignalId, StartError, Step,
 };
 
 /// Seconds the fingers take to close along a pattern.
@@ -363,6 +363,7 @@ impl Generator for Grasp {
         if let (Some(signal), Some(why)) = (self.gave_up, ending.failure()) {
             notes.fail(signal, why);
         }
+        notes.post(Note::Unclaim(self.object));
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
@@ -371,6 +372,26 @@ impl Generator for Grasp {
         if let Some(why) = self.abort.and_then(|a| board.failure(a, ctx.tick)) {
             if !matches!(self.phase, Phase::Verify) {
                 return Step::Failed(format!("the giver gave up: {why}"));
+            }
+        }
+        // Two hands going for one object: the first to reach for it keeps it, the other
+        // gives up at once rather than closing inside the first hand.
+        if matches!(self.phase, Phase::Reach | Phase::Close | Phase::Attach) {
+            match board.claimed_by(self.object) {
+                Some(other) if other != ctx.actor => {
+                    let name = |i: usize| ctx.world.actors.get(i).map_or("?", |a| a.name.as_str());
+                    let object = ctx
+                        .world
+                        .objects
+                        .get(self.object)
+                        .map_or("?", |o| o.name.as_str());
+                    return Step::Failed(format!(
+                        "`{}` is already reaching for `{object}`",
+                        name(other)
+                    ));
+                }
+                Some(_) => {}
+                None => out.post(Note::Claim(self.object)),
             }
         }
         match self.phase {

@@ -96,6 +96,12 @@ pub enum Note {
         /// The torque.
         torque: f64,
     },
+    /// The posting actor's hand is on its way to object `.0` (a grasp reaching for it):
+    /// the first actor to claim an object keeps it until it lets go (see
+    /// [`Blackboard::claimed_by`]).
+    Claim(usize),
+    /// The posting actor's hand no longer goes for object `.0`.
+    Unclaim(usize),
 }
 
 /// Notes a generator posts in one step, or when its action ends.
@@ -135,6 +141,8 @@ pub struct Blackboard {
     hand_states: BTreeMap<usize, HandState>,
     offers: Vec<Offer>,
     torques: BTreeMap<(usize, usize), f64>,
+    /// Per object, the actor whose hand is on its way to it.
+    claims: BTreeMap<usize, usize>,
 }
 
 impl Blackboard {
@@ -184,6 +192,12 @@ impl Blackboard {
                 && self.before(o.arrived, tick)
                 && !self.before(o.closed, tick)
         })
+    }
+
+    /// The actor whose hand is on its way to `object` (its grasp claimed it first: claims
+    /// of one tick are applied in actor order, so the lower index wins a tie), if any.
+    pub fn claimed_by(&self, object: usize) -> Option<usize> {
+        self.claims.get(&object).copied()
     }
 
     /// The offers, oldest first (closed ones are forgotten when the next one opens).
@@ -246,6 +260,14 @@ impl Blackboard {
                 Note::Torque { dof, torque } => {
                     *self.torques.entry((actor, dof)).or_insert(0.0) += torque;
                 }
+                Note::Claim(object) => {
+                    self.claims.entry(object).or_insert(actor);
+                }
+                Note::Unclaim(object) => {
+                    if self.claims.get(&object) == Some(&actor) {
+                        self.claims.remove(&object);
+                    }
+                }
             }
         }
     }
@@ -254,6 +276,21 @@ impl Blackboard {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_first_claim_of_an_object_stays_until_its_claimant_lets_go() {
+        let mut b = Blackboard::default();
+        // One tick's notes are applied in actor order: actor 1 before actor 4.
+        b.apply(1, 7, vec![Note::Claim(3)]);
+        b.apply(4, 7, vec![Note::Claim(3)]);
+        assert_eq!(b.claimed_by(3), Some(1));
+        b.apply(4, 8, vec![Note::Unclaim(3)]);
+        assert_eq!(b.claimed_by(3), Some(1), "only the claimant lets go");
+        b.apply(1, 9, vec![Note::Unclaim(3)]);
+        assert_eq!(b.claimed_by(3), None);
+        b.apply(4, 10, vec![Note::Claim(3)]);
+        assert_eq!(b.claimed_by(3), Some(4));
+    }
 
     #[test]
     fn a_signal_is_believed_from_the_tick_after_its_stamp_and_the_first_stamp_stays() {
