@@ -232,7 +232,7 @@ pub fn run(args: RunArgs) -> Result<ExitCode> {
         return Err(anyhow::Error::new(e).context(format!("loading {}", args.scene.display())));
     }
     warn_of_tests(&session, &args.scene);
-    check_camera(&camera, session.scene())?;
+    crate::view::check_camera(&camera, session.scene())?;
     // What every run, headless or in a window, attaches to its session.
     if let Some(osc) = osc_out {
         session.observe(osc);
@@ -325,28 +325,6 @@ fn print_still_running(session: &LuaSession, reports: &[troupe_lua::BehaviorRepo
             println!("      {a}");
         }
     }
-}
-
-/// A camera that follows an actor the scene lacks is refused, naming the actors there are.
-pub(crate) fn check_camera(
-    camera: &troupe_viewer::Camera,
-    scene: &troupe_scene::Scene,
-) -> Result<()> {
-    if let troupe_viewer::Focus::Actor(name) = &camera.focus {
-        let actors = scene.actors();
-        if !actors.iter().any(|a| a.name == *name) {
-            let names: Vec<&str> = actors.iter().map(|a| a.name.as_str()).collect();
-            bail!(
-                "--camera follow:{name}: the scene has no actor `{name}` (actors: {})",
-                if names.is_empty() {
-                    "none".into()
-                } else {
-                    names.join(", ")
-                }
-            );
-        }
-    }
-    Ok(())
 }
 
 /// A scene that registers tests is probably meant for `troupe test`: say so, since `run`
@@ -556,7 +534,7 @@ pub fn render(args: RenderArgs) -> Result<ExitCode> {
     session
         .load_file(&args.scene)
         .with_context(|| format!("loading {}", args.scene.display()))?;
-    check_camera(&camera, session.scene())?;
+    crate::view::check_camera(&camera, session.scene())?;
     let ticks = (args.at * args.rate).round() as u64;
     session.run(RunLimit {
         ticks,

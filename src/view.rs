@@ -275,7 +275,7 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         None if performers.len() == 1 => format!("follow:{}", performers[0].name).parse()?,
         None => Camera::fit(),
     };
-    crate::run::check_camera(&camera, &scene)?;
+    check_camera(&camera, &scene)?;
 
     let headless_dir = match (&args.frames, has_display()) {
         (Some(dir), _) => Some(dir.clone()),
@@ -436,7 +436,7 @@ pub fn snapshot(args: SnapshotArgs) -> Result<ExitCode> {
         }
         scene.set_dofs(actor, &values)?;
     }
-    crate::run::check_camera(&camera, &scene)?;
+    check_camera(&camera, &scene)?;
     // A snapshot is a session that never ticks: the posed scene is its only frame.
     let session = Session::new(scene);
     let mut frame = Frame::from_scene(session.scene());
@@ -471,6 +471,25 @@ pub fn png_path(out: &std::path::Path) -> Result<()> {
             "{}: troupe writes PNG pictures: name the file .png",
             out.display()
         );
+    }
+    Ok(())
+}
+
+/// A camera that follows an actor the scene lacks is refused, naming the actors there are.
+pub(crate) fn check_camera(camera: &Camera, scene: &Scene) -> Result<()> {
+    if let troupe_viewer::Focus::Actor(name) = &camera.focus {
+        let actors = scene.actors();
+        if !actors.iter().any(|a| a.name == *name) {
+            let names: Vec<&str> = actors.iter().map(|a| a.name.as_str()).collect();
+            bail!(
+                "--camera follow:{name}: the scene has no actor `{name}` (actors: {})",
+                if names.is_empty() {
+                    "none".into()
+                } else {
+                    names.join(", ")
+                }
+            );
+        }
     }
     Ok(())
 }
