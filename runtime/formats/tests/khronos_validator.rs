@@ -4,7 +4,8 @@
 //! pose), users' characters (CesiumMan, CesiumMan as a VRM 1.0 file, and the VRM 1.0
 //! sample of the test assets given a box per bone as its skin) moving with an
 //! object, in troupe's rest posture and in their bind pose, and a BVH on its own
-//! hierarchy, as `.gltf` + `.bin` and as `.glb`.
+//! hierarchy, as `.gltf` + `.bin` and as `.glb`; `.gltf` files whose `.bin` name holds
+//! characters a URI encodes (`%`, `#`, a space, non-ASCII).
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
 //! into `.tools/node`; without node or without that package the test prints why and
@@ -124,6 +125,12 @@ fn written_gltf_files_pass_the_khronos_validator() {
     write_gltf_with(&gltf, &rig, Some(&skin), &objects, "carry").unwrap();
     write_glb_with(&glb, &rig, Some(&skin), &objects, "carry").unwrap();
     files.extend([gltf, glb]);
+    // File names a URI must percent-encode: `%`, `#` (a fragment), a space, non-ASCII.
+    for stem in ["G%20v1", "G.take#2", "cup é"] {
+        let gltf = dir.join(format!("{stem}.gltf"));
+        write_gltf_with(&gltf, &rig, Some(&skin), &objects, stem).unwrap();
+        files.push(gltf);
+    }
     // Users' characters, as `troupe export gltf --look` and `run --record` write them:
     // CesiumMan (mapped by a `bones` map) waving with an object, and in troupe's rest
     // posture; a VRM 1.0 file (CesiumMan with a `VRMC_vrm` humanoid, mapped by it) at

@@ -13,6 +13,7 @@ pub mod character;
 mod objects;
 pub mod read;
 pub mod skin;
+mod uri;
 pub mod write;
 
 pub use read::read_gltf_motion;
