@@ -104,6 +104,25 @@ mod tests {
     }
 
     #[test]
+    fn a_rig_of_several_roots_has_no_skeleton_root() {
+        let bvh = crate::bvh::parse_bvh(fixtures::TWO_ROOTS, "two.bvh").unwrap();
+        let rig = Rig::from_bvh(&bvh, 0.01);
+        let (root, bin) = to_gltf(&rig, "two", Some("two.bin"));
+        let doc = as_json(&root);
+        check_consistent(&doc, &bin);
+        assert_eq!(doc["scenes"][0]["nodes"].as_array().unwrap().len(), 2);
+        assert!(
+            doc["skins"][0].get("skeleton").is_none(),
+            "{}",
+            doc["skins"][0]
+        );
+        // One root is the skin's skeleton root.
+        let walk = read_bvh(fixtures::data("pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
+        let (root, _) = to_gltf(&Rig::from_bvh(&walk, 0.056444), "walk", None);
+        assert_eq!(as_json(&root)["skins"][0]["skeleton"], 0);
+    }
+
+    #[test]
     fn a_troupe_rig_is_written_as_a_consistent_gltf() {
         let s = adult();
         let mut seq = Sequence::new("wave");

@@ -164,6 +164,13 @@ pub fn to_gltf_with_objects(
         .filter(|&j| rig.parents[j].is_none())
         .map(|j| Index::new(j as u32))
         .collect();
+    // glTF asks a skin's `skeleton` to be a common root of all its joints: a rig of
+    // several roots (a BVH with several ROOTs) has none among its nodes, and the skin
+    // leaves it out (its joints then resolve from the scene's root).
+    let skeleton = match roots[..] {
+        [root] => Some(root),
+        _ => None,
+    };
 
     // Inverse bind matrices: inverse of each joint's global rest transform (column major).
     let ibm: Vec<f32> = rig
@@ -227,7 +234,7 @@ pub fn to_gltf_with_objects(
         name: Some(name.into()),
         joints: (0..n).map(|j| Index::new(j as u32)).collect(),
         inverse_bind_matrices: Some(ibm),
-        skeleton: roots.first().copied(),
+        skeleton,
         extensions: None,
         extras: Default::default(),
     };
