@@ -4,7 +4,7 @@
 //! pose), users' characters (CesiumMan, CesiumMan as a VRM 1.0 file, and the VRM 1.0
 //! sample of the test assets given a box per bone as its skin) moving with an
 //! object, in troupe's rest posture and in their bind pose, and a BVH on its own
-//! hierarchy (and a BVH of two hierarchies), as `.gltf` + `.bin` and as `.glb`; `.gltf` files whose `.bin` name holds
+//! hierarchy (a Z-up one turned to glTF's axes, and a BVH of two hierarchies), as `.gltf` + `.bin` and as `.glb`; `.gltf` files whose `.bin` name holds
 //! characters a URI encodes (`%`, `#`, a space, non-ASCII).
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
@@ -23,6 +23,7 @@ use troupe_formats::character::read_character;
 use troupe_formats::gltf::{
     write_character, write_glb, write_glb_with, write_gltf, write_gltf_with,
 };
+use troupe_formats::retarget::{bvh_axes, RetargetMap};
 use troupe_formats::Rig;
 use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
@@ -108,6 +109,13 @@ fn written_gltf_files_pass_the_khronos_validator() {
     write_gltf(dir.join("walk.gltf"), &walk, "walk").unwrap();
     write_glb(dir.join("walk.glb"), &walk, "walk").unwrap();
     files.extend([dir.join("walk.gltf"), dir.join("walk.glb")]);
+    // A Z-up BVH turned to glTF's axes, as `troupe seq convert` writes it.
+    let zup = read_bvh(repo().join("../shared/data/bvh/pybvhrepo_bvh_example.bvh")).unwrap();
+    let mut upright = Rig::from_bvh(&zup, 0.01);
+    upright.turn(bvh_axes(&zup, &RetargetMap::detect(&zup)).unwrap().turn);
+    write_gltf(dir.join("upright.gltf"), &upright, "upright").unwrap();
+    write_glb(dir.join("upright.glb"), &upright, "upright").unwrap();
+    files.extend([dir.join("upright.gltf"), dir.join("upright.glb")]);
     // A BVH of two hierarchies: its skin has no common root.
     let two = Rig::from_bvh(&parse_bvh(TWO_ROOTS, "two.bvh").unwrap(), 0.01);
     write_gltf(dir.join("two_roots.gltf"), &two, "two_roots").unwrap();

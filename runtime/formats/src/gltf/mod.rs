@@ -3,7 +3,8 @@
 //! A rig is written as a node hierarchy with a skin, and its motion as one animation whose
 //! channels are per-joint rotation quaternions (and translations for joints that move,
 //! like the root): a `.gltf` (JSON) with a `.bin` beside it, or one `.glb`. Metres, Y up,
-//! facing +Z — glTF's own conventions, so no axis change is needed. A troupe body's file
+//! facing +Z — glTF's own conventions, so a troupe body needs no axis change (a BVH of
+//! other axes is turned to them first: `Rig::turn`, `retarget::bvh_axes`). A troupe body's file
 //! also carries its generated skin as a skinned mesh ([`skin`]). Reading takes the
 //! first animation back onto a troupe skeleton whose joint names the nodes carry. An
 //! actor dressed in a user's character is written as that character ([`character`]).
