@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 use troupe_formats::bvh::{read_bvh, write_bvh, Bvh, RotationOrder};
-use troupe_formats::retarget::{retarget, RetargetMap};
+use troupe_formats::retarget::{bvh_axes, map_for, retarget, RetargetMap};
 use troupe_formats::{load_sequence, load_sequences, save_rig, save_sequences, Format, Rig};
 use troupe_motion::offline::compress::{compress_pyramid, compress_spline, SplineOptions};
 use troupe_motion::offline::pyramid::{self, Grid};
@@ -65,7 +65,8 @@ enum SeqCommand {
         #[arg(long, value_name = "METRES", requires = "template")]
         height: Option<f64>,
         /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: the
-        /// `.map` beside the BVH, else detect CMU or Mixamo names.
+        /// `.map` beside the BVH, else detect CMU or Mixamo names. Without --template, a
+        /// BVH written to glTF is turned upright by the axes it gives.
         #[arg(long)]
         map: Option<PathBuf>,
     },
@@ -446,7 +447,25 @@ fn convert(
             b = b.with_rotation_order(o);
         }
         if gltf_out {
-            save_rig(output, &Rig::from_bvh(&b, scale), &name, b.frame_time())?;
+            let mut rig = Rig::from_bvh(&b, scale);
+            // glTF is Y up and faces +Z: a file of other axes (a Z-up one) is turned as
+            // retargeting would turn it, so that the figure stands in a glTF viewer.
+            let map = match &map {
+                Some(m) => RetargetMap::read(m)?,
+                None => map_for(input, &b)?,
+            };
+            match bvh_axes(&b, &map) {
+                Ok(axes) if !axes.is_troupes() => {
+                    rig.turn(axes.turn);
+                    println!(
+                        "turned to glTF's axes: the file's up {} and forward {} became +Y and +Z",
+                        axes.up, axes.forward
+                    );
+                }
+                Ok(_) => {}
+                Err(e) => println!("kept the file's axes: cannot tell which way is up ({e})"),
+            }
+            save_rig(output, &rig, &name, b.frame_time())?;
         } else {
             write_bvh(output, &b)?;
         }

@@ -205,3 +205,54 @@ fn view_draws_a_recordings_objects_and_gltf_and_bvh_keep_them() {
     }
     std::fs::remove_dir_all(dir).ok();
 }
+
+#[test]
+fn names_that_are_not_plain_words_are_recorded_and_read_back() {
+    // Lua refuses only `/`, `\` and control characters in a name: spaces, `#`, accents
+    // and a name with spaces around it beside the same name without are all recorded.
+    let dir = temp_dir("names");
+    let scene = dir.join("names.lua");
+    std::fs::write(
+        &scene,
+        r#"local ann = troupe.actor{ name = "Ann Lee" }
+troupe.actor{ name = "take#2", at = {1, 0, 0} }
+troupe.actor{ name = " lead ", at = {2, 0, 0} }
+troupe.actor{ name = "lead", at = {3, 0, 0} }
+troupe.object{ name = "table", shape = "box", size = {0.6, 0.95, 0.3}, at = {-0.45, 0.475, 0.45}, mass = 20 }
+local cup = troupe.object{ name = "cup é", shape = "cylinder", radius = 0.035, height = 0.1, at = {-0.2, 1.0, 0.38} }
+ann:behave(function(self) self:grasp{ object = cup, hand = "right" }:wait(); wait(0.2) end)
+"#,
+    )
+    .unwrap();
+    let trk = dir.join("names.trk");
+    let o = troupe()
+        .arg("run")
+        .arg(&scene)
+        .arg("--record")
+        .arg(&trk)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let file = read_trk_file(&trk).unwrap();
+    let actors: Vec<&str> = file.sequences.iter().map(|s| s.name.as_str()).collect();
+    assert_eq!(actors, ["Ann Lee", "take#2", " lead ", "lead"]);
+    let objects: Vec<&str> = file.objects.iter().map(|o| o.name.as_str()).collect();
+    assert_eq!(objects, ["table", "cup é"]);
+    let holders: Vec<&str> = file.objects[1]
+        .holds
+        .iter()
+        .map(|h| h.actor.as_str())
+        .collect();
+    assert_eq!(holders, ["Ann Lee"]);
+    // `troupe view` plays it: every actor by its name, the cup in Ann Lee's hand.
+    let o = troupe()
+        .arg("view")
+        .arg(&trk)
+        .args(["--seconds", "0.1", "--size", "160x90", "--no-msaa"])
+        .arg("--frames")
+        .arg(dir.join("frames"))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    std::fs::remove_dir_all(dir).ok();
+}

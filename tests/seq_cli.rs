@@ -2,6 +2,7 @@
 
 use std::path::PathBuf;
 use std::process::Command;
+use troupe_body::glam::{DQuat, DVec3};
 use troupe_formats::bvh::read_bvh;
 
 fn shared(name: &str) -> PathBuf {
@@ -235,4 +236,59 @@ fn info_names_each_tracks_interpolation() {
     assert_eq!(tracks[1]["interpolation"], "step");
     let text = troupe(&["seq", "info", &path]);
     assert!(text.contains("2 keys, step"), "{text}");
+}
+
+/// The JSON chunk of a binary glTF file.
+fn glb_json(path: &PathBuf) -> serde_json::Value {
+    let bytes = std::fs::read(path).unwrap();
+    let len = u32::from_le_bytes(bytes[12..16].try_into().unwrap()) as usize;
+    serde_json::from_slice(&bytes[20..20 + len]).unwrap()
+}
+
+#[test]
+fn a_z_up_bvh_converts_to_an_upright_gltf() {
+    // pybvh's example is Z up and faces +Y: its root node is turned so that the file's
+    // +Z is glTF's +Y and its +Y glTF's +Z (the body faces +Z, as glTF asks).
+    let s = |p: &PathBuf| p.display().to_string();
+    let glb = temp("zup.glb");
+    let out = troupe(&[
+        "seq",
+        "convert",
+        &s(&shared("pybvhrepo_bvh_example.bvh")),
+        &s(&glb),
+    ]);
+    assert!(
+        out.contains("the file's up +Z and forward +Y became +Y and +Z"),
+        "{out}"
+    );
+    let doc = glb_json(&glb);
+    let root = doc["scenes"][0]["nodes"][0].as_u64().unwrap() as usize;
+    let q: Vec<f64> = doc["nodes"][root]["rotation"]
+        .as_array()
+        .expect("a turned root")
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    let turn = DQuat::from_xyzw(q[0], q[1], q[2], q[3]);
+    for (file_axis, gltf_axis) in [(DVec3::Z, DVec3::Y), (DVec3::Y, DVec3::Z)] {
+        let got = turn * file_axis;
+        assert!((got - gltf_axis).length() < 1e-6, "{file_axis} → {got}");
+    }
+    // A Y-up file facing +Z (CMU) is written as it is.
+    let glb = temp("walk.glb");
+    let out = troupe(&[
+        "seq",
+        "convert",
+        &s(&shared("pybvhrepo_cmu_12_01_walk.bvh")),
+        &s(&glb),
+        "--scale",
+        "0.056444",
+    ]);
+    assert!(!out.contains("turned"), "{out}");
+    let doc = glb_json(&glb);
+    assert!(
+        doc["nodes"][0].get("rotation").is_none(),
+        "{}",
+        doc["nodes"][0]
+    );
 }

@@ -342,10 +342,14 @@ mod tests {
     #[test]
     fn every_format_saves_and_loads_two_actors() {
         let skel = adult();
-        let both = [
+        let mut both = [
             every_dof_moving(&skel, 4, 0.25, "20"),
             every_dof_moving(&skel, 3, 0.5, "20"),
         ];
+        // Named after their actors, as a recording names them (a .trk needs each name
+        // once).
+        both[0].name = "ann".into();
+        both[1].name = "bob".into();
         let dir = std::env::temp_dir().join(format!("troupe-dispatch-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let actors = [("ann", &skel), ("bob", &skel)];

@@ -612,17 +612,13 @@ fn settle(
     }
 }
 
-/// Retargets `bvh` onto `skeleton` with `map`; `name` names the sequence. The result has
-/// one track per DOF of every mapped troupe joint (radians; root translation in metres),
-/// one key per BVH frame, and metadata `rate`, `source = bvh`, `retarget_map`, `bvh_scale`
-/// (metres per file unit), `bvh_up` and `bvh_forward` (the file's axes, e.g. `+Z`, that
-/// became troupe's up and forward). An error if the BVH's rest pose does not tell which way
-/// is up.
-pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -> Result<Sequence> {
-    let troupe_parent = |j: usize| skeleton.joints()[j].parent;
-    let bvh_parent = |j: usize| bvh.joints()[j].parent;
-    // Resolve names, keep troupe topological order.
-    let mut pairs: Vec<(usize, usize, usize)> = Vec::new(); // (troupe, bvh, map order)
+/// A joint a map resolves: `(troupe joint, BVH joint, map order)`.
+type Pair = (usize, usize, usize);
+
+/// The mapped joints of `map` in troupe's topological order, and troupe's root; an error
+/// when a troupe joint is mapped twice or the root is not mapped.
+fn resolve_pairs(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap) -> Result<(Vec<Pair>, usize)> {
+    let mut pairs: Vec<Pair> = Vec::new();
     for (order, (b, t)) in map.pairs.iter().enumerate() {
         let Some(bi) = find_joint(bvh, b) else {
             tracing::debug!("retarget map `{}`: BVH has no joint `{b}`", map.name);
@@ -652,10 +648,29 @@ pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -
         });
     }
     pairs.sort_by_key(|p| p.0);
+    Ok((pairs, root))
+}
 
-    // Rest positions of both skeletons (troupe in metres, BVH in file units).
+/// Global rest transforms of `skeleton` (every DOF at zero).
+fn rest_globals(skeleton: &Skeleton) -> Vec<Transform> {
     let mut rest = vec![Transform::IDENTITY; skeleton.joints().len()];
     forward_kinematics(skeleton, &vec![0.0; skeleton.dof_count()], &mut rest);
+    rest
+}
+
+/// Retargets `bvh` onto `skeleton` with `map`; `name` names the sequence. The result has
+/// one track per DOF of every mapped troupe joint (radians; root translation in metres),
+/// one key per BVH frame, and metadata `rate`, `source = bvh`, `retarget_map`, `bvh_scale`
+/// (metres per file unit), `bvh_up` and `bvh_forward` (the file's axes, e.g. `+Z`, that
+/// became troupe's up and forward). An error if the BVH's rest pose does not tell which way
+/// is up.
+pub fn retarget(skeleton: &Skeleton, bvh: &Bvh, map: &RetargetMap, name: &str) -> Result<Sequence> {
+    let troupe_parent = |j: usize| skeleton.joints()[j].parent;
+    let bvh_parent = |j: usize| bvh.joints()[j].parent;
+    let (pairs, root) = resolve_pairs(skeleton, bvh, map)?;
+
+    // Rest positions of both skeletons (troupe in metres, BVH in file units).
+    let rest = rest_globals(skeleton);
     // The BVH's rest pose turned into troupe's axes (see [`Axes`]).
     let axes = Axes::detect(bvh, map, &pairs, root, &rest)?;
     let bvh_rest: Vec<DVec3> = bvh
@@ -934,16 +949,57 @@ pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
     if is_troupe_rig(skeleton, &bvh) {
         return troupe_named_motion(skeleton, &bvh, &name);
     }
-    let user = path.with_extension("map");
-    let map = if user.is_file() {
-        RetargetMap::read(&user)?
-    } else {
-        RetargetMap::detect(&bvh)
-    };
+    let map = map_for(path, &bvh)?;
     retarget(skeleton, &bvh, &map, &name).map_err(|e| match e {
         // The map's name alone does not say which file would not retarget.
         Error::Retarget { .. } => Error::Invalid(format!("{}: {e}", path.display())),
         e => e,
+    })
+}
+
+/// The map a BVH file `path` (read as `bvh`) is retargeted with by default: the `.map`
+/// beside it if that exists, else the built-in map that matches its joint names best.
+pub fn map_for(path: &Path, bvh: &Bvh) -> Result<RetargetMap> {
+    let user = path.with_extension("map");
+    if user.is_file() {
+        RetargetMap::read(&user)
+    } else {
+        Ok(RetargetMap::detect(bvh))
+    }
+}
+
+/// A BVH's axes as retargeting reads them (see [`Axes`]): which of the file's axes are its
+/// figure's up and forward, and the turn onto troupe's and glTF's (Y up, facing +Z).
+#[derive(Clone, Debug, PartialEq)]
+pub struct BvhAxes {
+    /// The file's axis that is up, e.g. `+Z` (recorded as `bvh_up` by [`retarget`]).
+    pub up: String,
+    /// The file's axis the figure faces, e.g. `+Y` (`bvh_forward`).
+    pub forward: String,
+    /// The rotation taking the file's world into troupe's axes.
+    pub turn: DQuat,
+}
+
+impl BvhAxes {
+    /// Whether the file already has troupe's axes (up `+Y`, forward `+Z`).
+    pub fn is_troupes(&self) -> bool {
+        self.up == "+Y" && self.forward == "+Z"
+    }
+}
+
+/// The axes of `bvh` as [`retarget`] with `map` finds them — on the adult template, whose
+/// rest pose says which mapped joints are high and which are on the left (any template
+/// says the same) — for a BVH written on its own hierarchy (glTF is Y up, facing +Z). An
+/// error when `map` does not fit the file or its rest pose does not tell which way is up.
+pub fn bvh_axes(bvh: &Bvh, map: &RetargetMap) -> Result<BvhAxes> {
+    let template = troupe_body::template::template("adult")?;
+    let skeleton = template.instantiate(template.default_params())?;
+    let (pairs, root) = resolve_pairs(&skeleton, bvh, map)?;
+    let axes = Axes::detect(bvh, map, &pairs, root, &rest_globals(&skeleton))?;
+    Ok(BvhAxes {
+        up: axes.file_axis(DVec3::Y),
+        forward: axes.file_axis(DVec3::Z),
+        turn: axes.world * axes.skeleton,
     })
 }
 
@@ -1080,6 +1136,67 @@ mod tests {
             ("+Z", "-Y")
         );
         assert_eq!(seq.meta["bvh_scale"], original.meta["bvh_scale"]);
+    }
+
+    #[test]
+    fn a_bvh_on_its_own_hierarchy_turned_by_its_axes_stands_as_the_y_up_original() {
+        let walk = read_bvh(data("pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
+        let map = RetargetMap::cmu();
+        let axes = bvh_axes(&walk, &map).unwrap();
+        assert!(axes.is_troupes(), "{axes:?}");
+        assert!(axes.turn.abs_diff_eq(DQuat::IDENTITY, 1e-12), "{axes:?}");
+        // The walk turned Z up (facing -Y, as Blender's files) and turned back by its
+        // axes is the original, joint for joint, in every frame.
+        let z_up = turned(&walk, DQuat::from_rotation_x(std::f64::consts::FRAC_PI_2));
+        let axes = bvh_axes(&z_up, &map).unwrap();
+        assert_eq!((axes.up.as_str(), axes.forward.as_str()), ("+Z", "-Y"));
+        assert!(!axes.is_troupes());
+        let want = Rig::from_bvh(&walk, 0.056444);
+        let mut rig = Rig::from_bvh(&z_up, 0.056444);
+        rig.turn(axes.turn);
+        for k in (0..walk.frame_count()).step_by(17) {
+            for (j, (a, b)) in rig.positions(k).iter().zip(want.positions(k)).enumerate() {
+                assert!(
+                    (*a - b).length() < 1e-9,
+                    "frame {k} {}: {a} vs {b}",
+                    rig.names[j]
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn z_up_files_turned_by_their_axes_stand_up_facing_z() {
+        // pybvh's example (a Z-up skeleton) and test3 (a Y-up skeleton the frames stand
+        // along Z): the file's +Z becomes +Y, and the body faces +Z (left on +X).
+        for file in ["pybvhrepo_bvh_example.bvh", "pybvhrepo_bvh_test3.bvh"] {
+            let bvh = read_bvh(data(file)).unwrap();
+            let axes = bvh_axes(&bvh, &RetargetMap::detect(&bvh)).unwrap();
+            assert_eq!(axes.up, "+Z", "{file}");
+            let mut rig = Rig::from_bvh(&bvh, 0.01);
+            rig.turn(axes.turn);
+            let joint = |name: &str| rig.names.iter().position(|n| n == name).unwrap();
+            let (hips, head) = (joint("Hips"), joint("Head"));
+            let (left, right) = (joint("LeftUpLeg"), joint("RightUpLeg"));
+            for k in (0..bvh.frame_count()).step_by(9) {
+                let p = rig.positions(k);
+                let up = p[head] - p[hips];
+                assert!(
+                    angle(up, DVec3::Y) < 30.0,
+                    "{file} frame {k}: hips to head {up}"
+                );
+            }
+            let p = rig.positions(0);
+            let lateral = p[left] - p[right];
+            assert!(
+                angle(lateral, DVec3::X) < 30.0,
+                "{file}: right to left {lateral}"
+            );
+        }
+        // A file whose joints no map knows keeps its axes: which way is up is unknown.
+        let two = parse_bvh(crate::bvh::fixtures::TWO_ROOTS, "two.bvh").unwrap();
+        let err = bvh_axes(&two, &RetargetMap::detect(&two)).unwrap_err();
+        assert!(err.to_string().contains("does not map"), "{err}");
     }
 
     #[test]

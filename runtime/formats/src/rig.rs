@@ -105,6 +105,25 @@ impl Rig {
         }
     }
 
+    /// Turns the whole rig by `rotation` about the origin: each root's rest transform and
+    /// motion, so that every joint's global transform, at rest and in every frame, is
+    /// turned.
+    pub fn turn(&mut self, rotation: DQuat) {
+        let turned =
+            |t: &Transform| Transform::new(rotation * t.rotation, rotation * t.translation);
+        for j in (0..self.names.len()).filter(|&j| self.parents[j].is_none()) {
+            self.rest[j] = turned(&self.rest[j]);
+            for frame in &mut self.rotations {
+                frame[j] = rotation * frame[j];
+            }
+            if let Some(i) = self.moving.iter().position(|&m| m == j) {
+                for frame in &mut self.translations {
+                    frame[i] = rotation * frame[i];
+                }
+            }
+        }
+    }
+
     /// Global rest transforms of every joint.
     pub fn rest_globals(&self) -> Vec<Transform> {
         let mut g = vec![Transform::IDENTITY; self.rest.len()];
@@ -274,5 +293,28 @@ pub(crate) mod tests {
         // At rest, the globals are the rest globals.
         let rest = Rig::from_sequence(&s, &Sequence::new("rest")).unwrap();
         assert_eq!(rest.globals(0), rest.rest_globals());
+    }
+
+    #[test]
+    fn a_turned_rig_turns_every_joint_at_rest_and_in_every_frame() {
+        let s = adult();
+        let rig = Rig::from_sequence(&s, &every_dof_moving(&s, 3, 0.5, "4")).unwrap();
+        let q = DQuat::from_rotation_x(-std::f64::consts::FRAC_PI_2) * DQuat::from_rotation_z(0.3);
+        let mut turned = rig.clone();
+        turned.turn(q);
+        let close = |a: &Transform, b: &Transform| {
+            (a.translation - b.translation).length() < 1e-12
+                && a.rotation.abs_diff_eq(b.rotation, 1e-12)
+        };
+        let check = |a: Vec<Transform>, b: Vec<Transform>| {
+            for (j, (a, b)) in a.iter().zip(&b).enumerate() {
+                let want = Transform::new(q * b.rotation, q * b.translation);
+                assert!(close(a, &want), "{}: {a:?} vs {want:?}", rig.names[j]);
+            }
+        };
+        check(turned.rest_globals(), rig.rest_globals());
+        for k in 0..rig.times.len() {
+            check(turned.globals(k), rig.globals(k));
+        }
     }
 }

@@ -4,7 +4,8 @@
 //! pose), users' characters (CesiumMan, CesiumMan as a VRM 1.0 file, and the VRM 1.0
 //! sample of the test assets given a box per bone as its skin) moving with an
 //! object, in troupe's rest posture and in their bind pose, and a BVH on its own
-//! hierarchy, as `.gltf` + `.bin` and as `.glb`.
+//! hierarchy (a Z-up one turned to glTF's axes, and a BVH of two hierarchies), as `.gltf` + `.bin` and as `.glb`; `.gltf` files whose `.bin` name holds
+//! characters a URI encodes (`%`, `#`, a space, non-ASCII).
 //!
 //! The validator is the npm package `gltf-validator`, which `scripts/setup.sh` installs
 //! into `.tools/node`; without node or without that package the test prints why and
@@ -17,17 +18,50 @@ use troupe_body::skin::SkinLibrary;
 use troupe_body::solid::Shape;
 use troupe_body::template::{template, TemplateParams};
 use troupe_body::{Skeleton, Skin};
-use troupe_formats::bvh::read_bvh;
+use troupe_formats::bvh::{parse_bvh, read_bvh};
 use troupe_formats::character::read_character;
 use troupe_formats::gltf::{
     write_character, write_glb, write_glb_with, write_gltf, write_gltf_with,
 };
+use troupe_formats::retarget::{bvh_axes, RetargetMap};
 use troupe_formats::Rig;
 use troupe_motion::object_motion::{Hold, ObjectMotion};
 use troupe_motion::sequence::{Key, Sequence, Track};
 
 mod characters;
 use characters::{as_vrm, asset, cesium_map, vrm_with_boxes};
+
+/// Two hierarchies in one BVH file (`ROOT A` and `ROOT B`).
+const TWO_ROOTS: &str = "HIERARCHY
+ROOT A
+{
+OFFSET 0 0 0
+CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+End Site
+{
+OFFSET 0 5 0
+}
+}
+ROOT B
+{
+OFFSET 10 0 0
+CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation
+JOINT C
+{
+OFFSET 0 5 0
+CHANNELS 3 Zrotation Xrotation Yrotation
+End Site
+{
+OFFSET 0 5 0
+}
+}
+}
+MOTION
+Frames: 2
+Frame Time: 0.1
+0 0 0 0 0 0 10 0 0 0 0 0 0 0 0
+1 0 0 0 0 90 10 0 0 90 0 0 45 0 0
+";
 
 fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
@@ -75,6 +109,18 @@ fn written_gltf_files_pass_the_khronos_validator() {
     write_gltf(dir.join("walk.gltf"), &walk, "walk").unwrap();
     write_glb(dir.join("walk.glb"), &walk, "walk").unwrap();
     files.extend([dir.join("walk.gltf"), dir.join("walk.glb")]);
+    // A Z-up BVH turned to glTF's axes, as `troupe seq convert` writes it.
+    let zup = read_bvh(repo().join("../shared/data/bvh/pybvhrepo_bvh_example.bvh")).unwrap();
+    let mut upright = Rig::from_bvh(&zup, 0.01);
+    upright.turn(bvh_axes(&zup, &RetargetMap::detect(&zup)).unwrap().turn);
+    write_gltf(dir.join("upright.gltf"), &upright, "upright").unwrap();
+    write_glb(dir.join("upright.glb"), &upright, "upright").unwrap();
+    files.extend([dir.join("upright.gltf"), dir.join("upright.glb")]);
+    // A BVH of two hierarchies: its skin has no common root.
+    let two = Rig::from_bvh(&parse_bvh(TWO_ROOTS, "two.bvh").unwrap(), 0.01);
+    write_gltf(dir.join("two_roots.gltf"), &two, "two_roots").unwrap();
+    write_glb(dir.join("two_roots.glb"), &two, "two_roots").unwrap();
+    files.extend([dir.join("two_roots.gltf"), dir.join("two_roots.glb")]);
     for template in ["adult", "child"] {
         let skeleton = body(template);
         let skin = Skin::build(&skeleton).unwrap();
@@ -124,6 +170,12 @@ fn written_gltf_files_pass_the_khronos_validator() {
     write_gltf_with(&gltf, &rig, Some(&skin), &objects, "carry").unwrap();
     write_glb_with(&glb, &rig, Some(&skin), &objects, "carry").unwrap();
     files.extend([gltf, glb]);
+    // File names a URI must percent-encode: `%`, `#` (a fragment), a space, non-ASCII.
+    for stem in ["G%20v1", "G.take#2", "cup é"] {
+        let gltf = dir.join(format!("{stem}.gltf"));
+        write_gltf_with(&gltf, &rig, Some(&skin), &objects, stem).unwrap();
+        files.push(gltf);
+    }
     // Users' characters, as `troupe export gltf --look` and `run --record` write them:
     // CesiumMan (mapped by a `bones` map) waving with an object, and in troupe's rest
     // posture; a VRM 1.0 file (CesiumMan with a `VRMC_vrm` humanoid, mapped by it) at

@@ -40,6 +40,19 @@ pub use write::write_bvh;
 pub(crate) mod fixtures {
     use super::Bvh;
 
+    /// Two hierarchies in one file: `A` with an end site, and `B` with a child `C`, ten
+    /// units to A's right; two frames.
+    pub(crate) const TWO_ROOTS: &str = "HIERARCHY\nROOT A\n{\nOFFSET 0 0 0\n\
+        CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n\
+        End Site\n{\nOFFSET 0 5 0\n}\n}\n\
+        ROOT B\n{\nOFFSET 10 0 0\n\
+        CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation Yrotation\n\
+        JOINT C\n{\nOFFSET 0 5 0\nCHANNELS 3 Zrotation Xrotation Yrotation\n\
+        End Site\n{\nOFFSET 0 5 0\n}\n}\n}\n\
+        MOTION\nFrames: 2\nFrame Time: 0.1\n\
+        0 0 0 0 0 0 10 0 0 0 0 0 0 0 0\n\
+        1 0 0 0 0 90 10 0 0 90 0 0 45 0 0\n";
+
     /// The path of a file in `../shared/data/bvh`.
     pub(crate) fn data(name: &str) -> String {
         format!(

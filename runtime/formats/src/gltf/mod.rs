@@ -3,7 +3,8 @@
 //! A rig is written as a node hierarchy with a skin, and its motion as one animation whose
 //! channels are per-joint rotation quaternions (and translations for joints that move,
 //! like the root): a `.gltf` (JSON) with a `.bin` beside it, or one `.glb`. Metres, Y up,
-//! facing +Z — glTF's own conventions, so no axis change is needed. A troupe body's file
+//! facing +Z — glTF's own conventions, so a troupe body needs no axis change (a BVH of
+//! other axes is turned to them first: `Rig::turn`, `retarget::bvh_axes`). A troupe body's file
 //! also carries its generated skin as a skinned mesh ([`skin`]). Reading takes the
 //! first animation back onto a troupe skeleton whose joint names the nodes carry. An
 //! actor dressed in a user's character is written as that character ([`character`]).
@@ -13,6 +14,7 @@ pub mod character;
 mod objects;
 pub mod read;
 pub mod skin;
+mod uri;
 pub mod write;
 
 pub use read::{read_gltf_motion, recorded_body};
@@ -100,6 +102,25 @@ mod tests {
         check_consistent(&doc, &bin);
         assert_eq!(doc["nodes"].as_array().unwrap().len(), 31 + 7);
         std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn a_rig_of_several_roots_has_no_skeleton_root() {
+        let bvh = crate::bvh::parse_bvh(fixtures::TWO_ROOTS, "two.bvh").unwrap();
+        let rig = Rig::from_bvh(&bvh, 0.01);
+        let (root, bin) = to_gltf(&rig, "two", Some("two.bin"));
+        let doc = as_json(&root);
+        check_consistent(&doc, &bin);
+        assert_eq!(doc["scenes"][0]["nodes"].as_array().unwrap().len(), 2);
+        assert!(
+            doc["skins"][0].get("skeleton").is_none(),
+            "{}",
+            doc["skins"][0]
+        );
+        // One root is the skin's skeleton root.
+        let walk = read_bvh(fixtures::data("pybvhrepo_cmu_12_01_walk.bvh")).unwrap();
+        let (root, _) = to_gltf(&Rig::from_bvh(&walk, 0.056444), "walk", None);
+        assert_eq!(as_json(&root)["skins"][0]["skeleton"], 0);
     }
 
     #[test]

@@ -16,6 +16,7 @@
 //! `--record` writes for an actor dressed in one) is refused too: its bones are the
 //! character's, not troupe's joints.
 
+use super::uri;
 use crate::error::{Error, Result};
 use ::gltf::accessor::{DataType, Dimensions};
 use ::gltf::animation::{Interpolation, Property};
@@ -260,7 +261,7 @@ pub(crate) fn check_glb_header(bytes: &[u8]) -> std::result::Result<(), String> 
 }
 
 /// The bytes of every buffer of `gltf`: the `.glb` binary chunk, a base64 `data:` URI,
-/// or a file beside `path`.
+/// or a file beside `path` (its URI percent-decoded).
 pub(crate) fn load_buffers(
     gltf: &Gltf,
     path: &Path,
@@ -278,8 +279,15 @@ pub(crate) fn load_buffers(
             Source::Uri(uri) if uri.starts_with("data:") => {
                 decode_data_uri(uri).map_err(|why| bad(format!("buffer {}: {why}", buffer.index())))
             }
-            Source::Uri(uri) => {
-                let file = dir.join(uri);
+            Source::Uri(written) => {
+                // Percent-decoded, as RFC 3986 asks; as written when that names no file
+                // and the URI as written does (a file troupe wrote before it encoded
+                // names, or a loose writer's `50%.bin`).
+                let verbatim = dir.join(written);
+                let file = match uri::decode(written) {
+                    Ok(name) if dir.join(&name).exists() || !verbatim.exists() => dir.join(name),
+                    _ => verbatim,
+                };
                 std::fs::read(&file).map_err(|e| Error::io(&file, e))
             }
         })
@@ -497,6 +505,34 @@ mod tests {
             assert!((got - want).abs() < 1e-5, "{dof}: {got} against {want}");
         }
         assert!(grown.track("root_y").unwrap().value(0.0).abs() < 1e-5);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn buffer_file_names_are_percent_encoded_and_read_back() {
+        let skel = adult();
+        let seq = every_dof_moving(&skel, 3, 0.5, "10");
+        let rig = Rig::from_sequence(&skel, &seq).unwrap();
+        let dir = scratch("gltf-uri");
+        for (stem, uri) in [
+            ("G%20v1", "G%2520v1.bin"),
+            ("G.take#2", "G.take%232.bin"),
+            ("cup é", "cup%20%C3%A9.bin"),
+        ] {
+            let gltf = dir.join(format!("{stem}.gltf"));
+            write_gltf(&gltf, &rig, stem).unwrap();
+            assert!(dir.join(format!("{stem}.bin")).is_file());
+            let doc: Value = serde_json::from_slice(&std::fs::read(&gltf).unwrap()).unwrap();
+            assert_eq!(doc["buffers"][0]["uri"], uri);
+            same_postures(&skel, &seq, &read_gltf_motion(&gltf, &skel).unwrap());
+        }
+        // Written before names were encoded, a URI names its file as written.
+        let mut doc: Value =
+            serde_json::from_slice(&std::fs::read(dir.join("G%20v1.gltf")).unwrap()).unwrap();
+        doc["buffers"][0]["uri"] = "G%20v1.bin".into();
+        let old = dir.join("old.gltf");
+        std::fs::write(&old, doc.to_string()).unwrap();
+        same_postures(&skel, &seq, &read_gltf_motion(&old, &skel).unwrap());
         std::fs::remove_dir_all(dir).ok();
     }
 

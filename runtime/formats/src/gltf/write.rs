@@ -4,6 +4,7 @@
 use super::character::{add_character, character_rig};
 use super::objects::object_node;
 use super::skin::{add_skin, with_helper_joints};
+use super::uri;
 use crate::error::{Error, Result};
 use crate::rig::Rig;
 use ::gltf::binary::{Glb, Header};
@@ -163,6 +164,13 @@ pub fn to_gltf_with_objects(
         .filter(|&j| rig.parents[j].is_none())
         .map(|j| Index::new(j as u32))
         .collect();
+    // glTF asks a skin's `skeleton` to be a common root of all its joints: a rig of
+    // several roots (a BVH with several ROOTs) has none among its nodes, and the skin
+    // leaves it out (its joints then resolve from the scene's root).
+    let skeleton = match roots[..] {
+        [root] => Some(root),
+        _ => None,
+    };
 
     // Inverse bind matrices: inverse of each joint's global rest transform (column major).
     let ibm: Vec<f32> = rig
@@ -226,7 +234,7 @@ pub fn to_gltf_with_objects(
         name: Some(name.into()),
         joints: (0..n).map(|j| Index::new(j as u32)).collect(),
         inverse_bind_matrices: Some(ibm),
-        skeleton: roots.first().copied(),
+        skeleton,
         extensions: None,
         extras: Default::default(),
     };
@@ -366,7 +374,8 @@ pub fn write_character(
 
 /// Writes the document `build` makes, given how it names its buffer: as one binary
 /// `path` (a JSON chunk and a binary chunk, the buffer unnamed) when `binary`, else as
-/// JSON `path` with the buffer in a `.bin` of the same stem beside it.
+/// JSON `path` with the buffer in a `.bin` of the same stem beside it (named by its
+/// percent-encoded file name).
 fn save_document(
     path: &Path,
     binary: bool,
@@ -376,7 +385,7 @@ fn save_document(
         let bin = path.with_extension("bin");
         let uri = bin
             .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
+            .map(|s| uri::encode(&s.to_string_lossy()))
             .unwrap_or_else(|| "motion.bin".into());
         let (root, bytes) = build(Some(&uri));
         let text = root.to_string_pretty().map_err(|e| json_error(path, e))?;

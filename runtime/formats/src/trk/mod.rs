@@ -22,9 +22,13 @@
 //! as `hermite`, the interpolation they were written for, so an old file plays as it did.
 //!
 //! Numbers are written in Rust's shortest round-trip form, so a sequence read back from
-//! its own output is identical bit for bit.
+//! its own output is identical bit for bit. Names that are not plain words are written in
+//! double quotes (`sequence "Ann Lee"`, `held 1 2 "take#2" r_wrist`; see [`words`]).
+
+mod words;
 
 use crate::error::{Error, Result};
+use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 use troupe_body::glam::DVec3;
@@ -137,11 +141,13 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
         line,
         message,
     };
+    // A byte-order mark is no part of the header (editors on Windows write one).
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut lines = text
         .lines()
         .enumerate()
-        .map(|(i, l)| (i + 1, l.split('#').next().unwrap_or("").trim()))
-        .filter(|(_, l)| !l.is_empty());
+        .map(|(i, l)| (i + 1, words::strip_comment(l).map(str::trim)))
+        .filter(|(_, l)| l.as_ref().map_or(true, |l| !l.is_empty()));
 
     let (n, header) = lines.next().ok_or_else(|| {
         err(
@@ -149,6 +155,7 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
             format!("empty file: expected `troupe-trk {TRK_VERSION}`"),
         )
     })?;
+    let header = header.map_err(|m| err(n, m))?;
     let version = header
         .strip_prefix("troupe-trk")
         .map(str::trim)
@@ -169,6 +176,8 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
     let mut out = TrkFile::default();
     let mut current: Option<Block> = None;
     let mut track: Option<(usize, String, Interpolation, Vec<Key>)> = None;
+    // The line of each named block, by kind and name: a name is one actor or object.
+    let mut seen: HashMap<(&str, String), usize> = HashMap::new();
     // Closes the current block into `out`.
     let close = |block: Option<Block>, out: &mut TrkFile| -> Result<()> {
         match block {
@@ -196,6 +205,7 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
         Ok(())
     };
     for (n, line) in lines {
+        let line = line.map_err(|m| err(n, m))?;
         if let Some((start, dof, interpolation, keys)) = track.as_mut() {
             if line == "end" {
                 let (start, dof, keys) = (*start, std::mem::take(dof), std::mem::take(keys));
@@ -233,22 +243,37 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
         let rest = rest.trim();
         let in_object = matches!(current, Some(Block::Object(_)));
         match word {
-            "sequence" => {
+            // Objects came with version 2.
+            "sequence" | "object" if word == "sequence" || version >= 2 => {
+                let name = block_name(word, rest).map_err(|m| err(n, m))?;
                 close(current.take(), &mut out)?;
-                current = Some(Block::Sequence(Sequence::new(rest)));
-            }
-            "object" if version >= 2 => {
-                if rest.is_empty() || rest.contains(char::is_whitespace) {
-                    return Err(err(n, format!("expected `object NAME`, found `{line}`")));
+                let earlier = match seen.get(&(word, name.clone())) {
+                    Some(line) => Some(format!("line {line}")),
+                    // Only the unnamed sequence before the first `sequence` line is not
+                    // in `seen`.
+                    None if word == "sequence" && out.sequences.iter().any(|s| s.name == name) => {
+                        Some("the unnamed sequence before the first `sequence` line".into())
+                    }
+                    None => None,
+                };
+                if let Some(earlier) = earlier {
+                    return Err(err(
+                        n,
+                        format!("a second {word} named `{name}` (the first: {earlier}): each {word} of a file has a name of its own"),
+                    ));
                 }
-                close(current.take(), &mut out)?;
-                current = Some(Block::Object(ObjectDraft {
-                    line: n,
-                    shape: None,
-                    mass: None,
-                    pose: Sequence::new(rest),
-                    holds: Vec::new(),
-                }));
+                seen.insert((word, name.clone()), n);
+                current = Some(if word == "sequence" {
+                    Block::Sequence(Sequence::new(name))
+                } else {
+                    Block::Object(ObjectDraft {
+                        line: n,
+                        shape: None,
+                        mass: None,
+                        pose: Sequence::new(name),
+                        holds: Vec::new(),
+                    })
+                });
             }
             "loop" | "meta" if in_object => {
                 return Err(err(
@@ -270,12 +295,12 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
                 sequence_of(&mut current).looping = looping;
             }
             "meta" => {
-                let (key, value) = rest
-                    .split_once(char::is_whitespace)
+                let (key, value) = words::split_word(rest)
+                    .map_err(|m| err(n, m))?
+                    .filter(|(_, value)| !value.trim().is_empty())
                     .ok_or_else(|| err(n, "expected `meta KEY VALUE`".into()))?;
-                sequence_of(&mut current)
-                    .meta
-                    .insert(key.to_string(), value.trim().to_string());
+                let value = words::text(value).map_err(|m| err(n, m))?;
+                sequence_of(&mut current).meta.insert(key, value);
             }
             "shape" | "mass" | "held" => {
                 let Some(Block::Object(o)) = current.as_mut() else {
@@ -294,8 +319,8 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
                 }
             }
             "track" => {
-                let words: Vec<&str> = rest.split_whitespace().collect();
-                let interpolation = match words[..] {
+                let words = words::words(rest).map_err(|m| err(n, m))?;
+                let interpolation = match &words[..] {
                     [_] => default_interpolation(version),
                     [_, name] if version >= 2 => {
                         Interpolation::from_name(name).ok_or_else(|| {
@@ -315,7 +340,7 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
                     }
                     _ => return Err(err(n, format!("expected `track DOF_NAME`, found `{line}`"))),
                 };
-                track = Some((n, words[0].to_string(), interpolation, Vec::new()));
+                track = Some((n, words[0].clone(), interpolation, Vec::new()));
             }
             _ => {
                 let expected = if version >= 2 {
@@ -335,6 +360,16 @@ pub fn parse_trk_file(text: &str, file: &str) -> Result<TrkFile> {
         return Err(err(1, "no sequence in file".into()));
     }
     Ok(out)
+}
+
+/// The name on a `sequence` or `object` line (`word`), `rest` following the word.
+fn block_name(word: &str, rest: &str) -> std::result::Result<String, String> {
+    // A bare name is the rest of the line: older files wrote names with spaces so.
+    let name = words::text(rest)?;
+    if word == "object" && rest.trim().is_empty() {
+        return Err("expected `object NAME`".into());
+    }
+    Ok(name)
 }
 
 /// The sequence that `loop` and `meta` apply to (an unnamed one before the first block).
@@ -413,8 +448,7 @@ pub(crate) fn format_shape(shape: &Shape) -> String {
 
 /// `FROM TO ACTOR JOINT` of a `held` line.
 fn parse_hold(rest: &str) -> std::result::Result<Hold, String> {
-    let words: Vec<&str> = rest.split_whitespace().collect();
-    let [from, to, actor, joint] = words[..] else {
+    let [from, to, actor, joint] = &words::words(rest)?[..] else {
         return Err(format!(
             "expected `held FROM TO ACTOR JOINT`, found `held {rest}`"
         ));
@@ -428,8 +462,8 @@ fn parse_hold(rest: &str) -> std::result::Result<Hold, String> {
     Ok(Hold {
         from,
         to,
-        actor: actor.into(),
-        joint: joint.into(),
+        actor: actor.clone(),
+        joint: joint.clone(),
     })
 }
 
@@ -438,12 +472,12 @@ pub fn format_trk(set: &[Sequence]) -> String {
     let mut out = format!("troupe-trk {TRK_VERSION}\n");
     for seq in set {
         // `writeln!` into a String cannot fail.
-        let _ = writeln!(out, "sequence {}", seq.name);
+        let _ = writeln!(out, "sequence {}", words::name_word(&seq.name));
         if seq.looping {
             out.push_str("loop true\n");
         }
         for (k, v) in &seq.meta {
-            let _ = writeln!(out, "meta {k} {v}");
+            let _ = writeln!(out, "meta {} {}", words::name_word(k), words::text_field(v));
         }
         format_tracks(&mut out, seq);
     }
@@ -454,12 +488,19 @@ pub fn format_trk(set: &[Sequence]) -> String {
 pub fn format_trk_file(file: &TrkFile) -> String {
     let mut out = format_trk(&file.sequences);
     for object in &file.objects {
-        let _ = writeln!(out, "object {}", object.name);
+        let _ = writeln!(out, "object {}", words::name_word(&object.name));
         let _ = writeln!(out, "shape {}", format_shape(&object.shape));
         let _ = writeln!(out, "mass {}", object.mass);
         format_tracks(&mut out, &object.pose);
         for h in &object.holds {
-            let _ = writeln!(out, "held {} {} {} {}", h.from, h.to, h.actor, h.joint);
+            let _ = writeln!(
+                out,
+                "held {} {} {} {}",
+                h.from,
+                h.to,
+                words::name_word(&h.actor),
+                words::name_word(&h.joint)
+            );
         }
     }
     out
@@ -468,12 +509,13 @@ pub fn format_trk_file(file: &TrkFile) -> String {
 /// The `track … end` blocks of `seq`.
 fn format_tracks(out: &mut String, seq: &Sequence) {
     for track in seq.tracks() {
+        let dof = words::name_word(track.dof());
         match track.interpolation() {
             Interpolation::Cubic => {
-                let _ = writeln!(out, "track {}", track.dof());
+                let _ = writeln!(out, "track {dof}");
             }
             other => {
-                let _ = writeln!(out, "track {} {}", track.dof(), other.name());
+                let _ = writeln!(out, "track {dof} {}", other.name());
             }
         }
         for key in track.keys() {
@@ -490,16 +532,39 @@ fn format_tracks(out: &mut String, seq: &Sequence) {
     }
 }
 
-/// Writes a whole file (sequences and objects) to `path`.
+/// Writes a whole file (sequences and objects) to `path`; two sequences or two objects of
+/// one name are an error (the file could not be read back).
 pub fn write_trk_file(path: impl AsRef<Path>, file: &TrkFile) -> Result<()> {
     let path = path.as_ref();
+    unique_names(path, "sequence", file.sequences.iter().map(|s| &s.name))?;
+    unique_names(path, "object", file.objects.iter().map(|o| &o.name))?;
     std::fs::write(path, format_trk_file(file)).map_err(|e| Error::io(path, e))
 }
 
-/// Writes sequences to a `.trk` file.
+/// Writes sequences to a `.trk` file; two of one name are an error (the file could not be
+/// read back).
 pub fn write_trk(path: impl AsRef<Path>, set: &[Sequence]) -> Result<()> {
     let path = path.as_ref();
+    unique_names(path, "sequence", set.iter().map(|s| &s.name))?;
     std::fs::write(path, format_trk(set)).map_err(|e| Error::io(path, e))
+}
+
+/// An error naming `path` when two of `names` (of `kind`s) are equal.
+fn unique_names<'a>(
+    path: &Path,
+    kind: &str,
+    names: impl IntoIterator<Item = &'a String>,
+) -> Result<()> {
+    let mut seen = std::collections::HashSet::new();
+    for name in names {
+        if !seen.insert(name) {
+            return Err(Error::Invalid(format!(
+                "{}: two {kind}s named `{name}`: a .trk names each {kind} once",
+                path.display()
+            )));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]
@@ -701,6 +766,177 @@ mod tests {
         assert_eq!(v1[0].tracks()[0].interpolation(), Interpolation::Hermite);
         assert!(v1[0].tracks()[0].value(1.5) > 1.0);
         assert_eq!(a.value(1.5), 1.0);
+    }
+
+    /// A recording whose names are not plain words: spaces, `#`, a name with spaces at
+    /// its ends beside the same name without, accents, quotes.
+    fn odd_names() -> TrkFile {
+        let mut file = parse_trk_file(WITH_OBJECT, "rec.trk").unwrap();
+        let ann = file.sequences[0].clone();
+        file.sequences.clear();
+        for name in ["Ann Lee", "take#2", " lead ", "lead", "say \"hi\"", "", "é"] {
+            let mut seq = ann.clone();
+            seq.name = name.into();
+            file.sequences.push(seq);
+        }
+        file.sequences[0]
+            .meta
+            .insert("retarget_map".into(), "/maps/take#2.map".into());
+        file.sequences[0].meta.insert("empty".into(), String::new());
+        file.sequences[0]
+            .meta
+            .insert("source".into(), "troupe run".into());
+        file.sequences[0]
+            .meta
+            .insert("two words".into(), " spaced ".into());
+        let cup = file.objects[0].clone();
+        file.objects.clear();
+        for (name, holder) in [("cup é", "Ann Lee"), ("my cup", "take#2"), ("#", " lead ")] {
+            let mut object = cup.clone();
+            object.name = name.into();
+            object.pose.name = name.into();
+            object.holds[0].actor = holder.into();
+            file.objects.push(object);
+        }
+        file
+    }
+
+    #[test]
+    fn names_that_are_not_plain_words_are_quoted_and_read_back() {
+        let file = odd_names();
+        let text = format_trk_file(&file);
+        assert_eq!(parse_trk_file(&text, "odd.trk").unwrap(), file, "{text}");
+        for line in [
+            "sequence \"Ann Lee\"\n",
+            "sequence \"take#2\"\n",
+            "sequence \" lead \"\n",
+            "sequence lead\n",
+            "sequence \"say \\\"hi\\\"\"\n",
+            "sequence \"\"\n",
+            "sequence é\n",
+            "meta retarget_map \"/maps/take#2.map\"\n",
+            "meta empty \"\"\n",
+            "meta \"two words\" \" spaced \"\n",
+            "meta source troupe run\n",
+            "object \"cup é\"\n",
+            "object \"#\"\n",
+            "held 0.25 1 \"Ann Lee\" r_wrist\n",
+            "held 0.25 1 \"take#2\" r_wrist\n",
+        ] {
+            assert!(text.contains(line), "no {line:?} in\n{text}");
+        }
+        // Plain names are written as before.
+        assert_eq!(
+            format_trk_file(&parse_trk_file(WITH_OBJECT, "rec.trk").unwrap()),
+            WITH_OBJECT
+        );
+    }
+
+    #[test]
+    fn older_files_read_as_they_did() {
+        // Written before names were quoted: a sequence name and a meta value are the rest
+        // of their line, spaces inside kept; a quote inside a word is a character.
+        let old = "troupe-trk 2\nsequence Ann  Lee # the actor\nmeta source troupe run\n\
+                   meta map a\"b c\ntrack r_elbow_flexion\n0 0\nend\n";
+        let set = parse_trk(old, "old.trk").unwrap();
+        assert_eq!(set[0].name, "Ann  Lee");
+        // An object's name too (older builds wrote it so, and could not read it back).
+        let old_object = WITH_OBJECT.replace("object cup", "object cup é # the cup");
+        let objects = parse_trk_file(&old_object, "old.trk").unwrap().objects;
+        assert_eq!(objects[0].name, "cup é");
+        assert_eq!(set[0].meta["source"], "troupe run");
+        assert_eq!(set[0].meta["map"], "a\"b c");
+        assert_eq!(parse_trk(&format_trk(&set), "again").unwrap(), set);
+    }
+
+    #[test]
+    fn two_sequences_or_objects_of_one_name_are_not_written() {
+        let dir = std::env::temp_dir().join(format!("troupe-trk-names-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("twice.trk");
+        let mut file = odd_names();
+        file.sequences[1].name = "Ann Lee".into();
+        let err = write_trk(&path, &file.sequences).unwrap_err().to_string();
+        assert!(err.contains("two sequences named `Ann Lee`"), "{err}");
+        let err = write_trk_file(&path, &file).unwrap_err().to_string();
+        assert!(err.contains("two sequences named `Ann Lee`"), "{err}");
+        file = odd_names();
+        file.objects[2].name = "my cup".into();
+        let err = write_trk_file(&path, &file).unwrap_err().to_string();
+        assert!(err.contains("two objects named `my cup`"), "{err}");
+        assert!(!path.exists());
+        // A sequence and an object may share a name.
+        file.objects[2].name = "Ann Lee".into();
+        file.objects[2].pose.name = "Ann Lee".into();
+        write_trk_file(&path, &file).unwrap();
+        assert_eq!(read_trk_file(&path).unwrap(), file);
+        std::fs::remove_dir_all(dir).ok();
+    }
+
+    #[test]
+    fn a_byte_order_mark_is_no_part_of_the_header() {
+        let set = parse_trk(&format!("\u{feff}{WAVE}"), "bom.trk").unwrap();
+        assert_eq!(set, parse_trk(WAVE, "wave.trk").unwrap());
+    }
+
+    #[test]
+    fn a_name_twice_or_a_bad_quote_is_an_error_naming_the_line() {
+        let two = "troupe-trk 2\nsequence a\ntrack x\n0 0\nend\nsequence \"b\"\nsequence \"a\"\n";
+        assert_parse_error(
+            parse_trk(two, "f.trk"),
+            two,
+            "f.trk",
+            7,
+            "second sequence named `a` (the first: line 2)",
+        );
+        let unnamed = "troupe-trk 2\ntrack x\n0 0\nend\nsequence \"\"\n";
+        assert_parse_error(
+            parse_trk(unnamed, "f.trk"),
+            unnamed,
+            "f.trk",
+            5,
+            "the unnamed sequence before",
+        );
+        // An actor and an object may share a name; two objects may not.
+        let text = format_trk_file(&odd_names());
+        let objects = text.replace("object \"#\"", "object \"my cup\"");
+        let line = objects
+            .lines()
+            .position(|l| l == "object \"my cup\"")
+            .unwrap()
+            + 1;
+        let at = objects[..]
+            .lines()
+            .skip(line)
+            .position(|l| l == "object \"my cup\"")
+            .unwrap()
+            + line
+            + 1;
+        assert_parse_error(
+            parse_trk_file(&objects, "f.trk"),
+            &objects,
+            "f.trk",
+            at,
+            &format!("second object named `my cup` (the first: line {line})"),
+        );
+        let cases = [
+            ("troupe-trk 2\nsequence \"Ann\n", 2, "not closed"),
+            ("troupe-trk 2\nsequence \"Ann\" Lee\n", 2, "more follows"),
+            ("troupe-trk 2\nsequence \"a\\qb\"\n", 2, "unknown escape"),
+            (
+                "troupe-trk 2\ntrack \"x\"y\n",
+                2,
+                "space after the closing quote",
+            ),
+            (
+                &*WITH_OBJECT.replace("object cup", "object"),
+                7,
+                "expected `object NAME`",
+            ),
+        ];
+        for (text, line, needle) in cases {
+            assert_parse_error(parse_trk_file(text, "f.trk"), text, "f.trk", line, needle);
+        }
     }
 
     proptest! {
