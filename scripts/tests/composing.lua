@@ -515,7 +515,7 @@ test("a give stopped before the hand-over ends cancelled, and the receive fails 
   expect(receive.error:find("giver") ~= nil, receive.error)
 end)
 
-test("a grasp stopped before its hand holds the cup ends cancelled; stopped after, completed", function()
+test("a grasp stopped before its hand holds the cup ends cancelled, and so does a place before it lets go", function()
   local ann = troupe.actor{ name = "ann" }
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
                              at = {-0.2, 1.05, 0.38} }

@@ -321,7 +321,7 @@ test("an adult hands a cup to a child at the child's height, leaning to it", fun
                       "its arm raised %.0f° at most; ann leaned %.0f° and stands straight again (%.0f°)",
                       met, shoulder, raised, math.deg(leaned), math.deg(math.abs(ann:dof("vl5_flexion")))))
   expect(cup.holder == kid and math.abs(met - 0.79 * shoulder) < 0.02,
-         string.format("taken a fifth of the way down from the child's shoulders: %.2f against %.2f m",
+         string.format("taken 21 %% of the way down from the child's shoulders: %.2f against %.2f m",
                        met, shoulder))
   expect(raised < 60, string.format("the child's arm raised %.0f°", raised))
   expect(leaned > math.rad(5) and math.abs(ann:dof("vl5_flexion")) < math.rad(1),

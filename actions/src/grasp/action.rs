@@ -733,6 +733,10 @@ impl Generator for Release {
                     object: self.object,
                 });
                 self.released = true;
+                // The empty hand opens as it is, moving on with the body: no longer kept
+                // on the place behind a walker (0.24 m back at 0.6 m/s by the time it is
+                // open).
+                self.follow = None;
             }
             let s = (t / OPEN_SECONDS).min(1.0);
             for p in &self.patterns {

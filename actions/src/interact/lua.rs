@@ -30,13 +30,12 @@ pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
         hand: hand_choice(m, &t)?,
         detour: detour(m, &t)?,
     };
-    let (generator, scope) = ctx
+    let (generator, scope, body) = ctx
         .with_scene_mut(|s| options.start(s, ctx.actor, common.delay))?
         .map_err(|e| err(m, e))?;
     let mut spec = common.spec(m, scope);
     spec.duration = None;
     // The lean or crouch it may take to reach the meeting point gives way to a walk.
-    let body = crate::grasp::body::BodyReach::body_scope(&ctx.skeleton).map_err(|e| err(m, e))?;
     Ok((generator, crate::grasp::lua::yielding(spec, body)))
 }
 

@@ -163,8 +163,8 @@ impl Give {
 const MEETING_BELOW_SHOULDERS: f64 = 0.21;
 
 /// Where a handed-over object's centre may go, in order of preference: halfway between the
-/// two actors, a fifth of the way down from the lower one's shoulders (0.3 m for an adult,
-/// 0.22 m for a child), then up in 5 cm steps to as far below the giver's.
+/// two actors, 21 % of the way down from the lower one's shoulders (0.3 m for an adult,
+/// 0.2 m for a child), then up in 5 cm steps to as far below the giver's.
 pub fn meeting_points(world: &World, giver: usize, receiver: usize) -> Option<Vec<DVec3>> {
     let a = world.states.get(giver)?.globals.first()?.translation;
     let b = world.states.get(receiver)?.globals.first()?.translation;

@@ -61,18 +61,20 @@ impl GiveOptions {
         Ok(())
     }
 
-    /// Makes `giver`'s action and the DOFs it drives. A receiver whose hand a person
-    /// drives (declared on the scene's blackboard) takes the object when its glove
-    /// closes; any other receiver gets a `receive` action started on `scene` now, `delay`
-    /// seconds ahead like the give, which waits for the object to arrive. Pass the
-    /// returned generator to [`Scene::start_action`]: the receiver learns of the give's end
-    /// from it (also when `start_action` refuses it).
+    /// Makes `giver`'s action, the DOFs it drives and the part of them it yields (the
+    /// lean and crouch it may take to reach the meeting point: an
+    /// [`ActionSpec::yields`], so that during a walk it gives with the arm alone). A
+    /// receiver whose hand a person drives (declared on the scene's blackboard) takes the
+    /// object when its glove closes; any other receiver gets a `receive` action started on
+    /// `scene` now, `delay` seconds ahead like the give, which waits for the object to
+    /// arrive. Pass the returned generator to [`Scene::start_action`]: the receiver learns
+    /// of the give's end from it (also when `start_action` refuses it).
     pub fn start(
         &self,
         scene: &mut Scene,
         giver: usize,
         delay: f64,
-    ) -> Result<(Box<dyn Generator>, Scope)> {
+    ) -> Result<(Box<dyn Generator>, Scope, Scope)> {
         self.validate(giver)?;
         in_scene(scene, &[giver, self.to], &[self.object])?;
         let side = holding_side(scene, giver, self.object).unwrap_or(Side::Right);
@@ -90,11 +92,12 @@ impl GiveOptions {
         if let Some(hand) = theirs {
             let giver =
                 offer_to_hand(scene, self.object, giver, side, self.to, hand, self.timeout)?;
-            return Ok((Box::new(giver), scope));
+            return Ok((Box::new(giver), scope, Scope::EMPTY));
         }
         // The giver may lean or crouch to bring the object to the meeting point, as a grasp
-        // does: the body is a yieldable part of its scope (see the Lua builder).
-        let scope = scope.union(&BodyReach::body_scope(&scene.actors()[giver].skeleton)?);
+        // does: the body is a yieldable part of its scope.
+        let body = BodyReach::body_scope(&scene.actors()[giver].skeleton)?;
+        let scope = scope.union(&body);
         let (arrived, ended) = (scene.new_signal(), scene.new_signal());
         let gave_up = scene.new_signal();
         let mut give = Give::new(self.object, self.to, side, arrived, ended)
@@ -121,7 +124,7 @@ impl GiveOptions {
         rx_spec.yields = rx_body;
         rx_spec.delay = delay;
         scene.start_action(self.to, rx_spec, Box::new(take))?;
-        Ok((Box::new(give), scope))
+        Ok((Box::new(give), scope, body))
     }
 }
 

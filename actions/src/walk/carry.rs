@@ -56,6 +56,10 @@ pub struct Carrying {
     floor: f64,
     /// The body at rest, measured once something is carried.
     rest: Option<Rest>,
+    /// Per side (left, right), the DOFs a carrying arm's solve moves, found once: a held
+    /// object whose arms are not the walk's is passed over each tick without building
+    /// their solvers.
+    arm_dofs: [Option<Scope>; 2],
     /// Scratch posture and joint frames for the arms' solves.
     q: Vec<f64>,
     globals: Vec<Transform>,
@@ -121,6 +125,14 @@ impl Carrying {
         let mine = ctx.world.held.iter().filter(|(_, h)| h.actor == ctx.actor);
         for &(object, h) in mine {
             if self.loads.iter().any(|load| load.object == object) {
+                continue;
+            }
+            let ours = h.wrists().all(|wrist| {
+                let side = sk.joints().get(wrist).and_then(|j| Side::of_joint(&j.name));
+                side.and_then(|side| self.arm_dofs(sk, side))
+                    .is_some_and(|dofs| scope.contains_all(&dofs))
+            });
+            if !ours {
                 continue;
             }
             let Some(obj) = ctx.world.objects.get(object) else {
@@ -219,6 +231,19 @@ impl Carrying {
                 }
             }
         }
+    }
+}
+
+impl Carrying {
+    /// The DOFs the carrying solve of the `side` arm of `skeleton` moves, found once;
+    /// `None` for a body without that arm.
+    fn arm_dofs(&mut self, skeleton: &Skeleton, side: Side) -> Option<Scope> {
+        let slot = &mut self.arm_dofs[usize::from(side == Side::Right)];
+        if slot.is_none() {
+            let ik = ArmIk::new(skeleton, side, 1).ok()?;
+            *slot = Some(ik.dofs().iter().copied().collect());
+        }
+        *slot
     }
 }
 

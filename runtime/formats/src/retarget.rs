@@ -968,7 +968,7 @@ pub fn map_for(path: &Path, bvh: &Bvh) -> Result<RetargetMap> {
     }
 }
 
-/// A BVH's axes as retargeting reads them (see [`Axes`]): which of the file's axes are its
+/// A BVH's axes as retargeting reads them (see `Axes`): which of the file's axes are its
 /// figure's up and forward, and the turn onto troupe's and glTF's (Y up, facing +Z).
 #[derive(Clone, Debug, PartialEq)]
 pub struct BvhAxes {

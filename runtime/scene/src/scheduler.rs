@@ -62,6 +62,9 @@ pub(crate) struct Action {
     /// The generator accepted to finish by itself ([`Generator::stop`]): the action keeps
     /// full weight until it reports `Finished`, then ends with `ending`.
     pub winding_down: bool,
+    /// A `:stop()` found its purpose undone ([`Generator::unfinished`]) and made it end
+    /// cancelled: asked again when the ease-out is over, as the generator works on.
+    pub stopped_undone: bool,
     /// The scope the action was created with (its scope shrinks when it is narrowed).
     pub original: Scope,
     /// DOFs given up to other actions, each set with the time it was given up: they fade
@@ -100,6 +103,7 @@ impl Action {
             cancel_requested: false,
             stop_requested: false,
             winding_down: false,
+            stopped_undone: false,
             releasing: Vec::new(),
             lent: Vec::new(),
             returning: Vec::new(),
@@ -510,23 +514,27 @@ fn admit(
         // during a walk: the walk keeps its legs and its spine).
         let mode = actions[i].spec.mode;
         if !actions[i].spec.yields.is_empty() {
+            let holds = |j: usize, other: &Action| {
+                j != i
+                    && (other.status.is_running()
+                        || (other.status == Status::Pending && j < i && mode == Mode::Default))
+            };
             let held = actions
                 .iter()
                 .enumerate()
-                .filter(|&(j, other)| {
-                    j != i
-                        && (other.status.is_running()
-                            || (other.status == Status::Pending && j < i && mode == Mode::Default))
-                })
+                .filter(|&(j, other)| holds(j, other))
                 .fold(Scope::EMPTY, |held, (_, other)| {
                     held.union(&other.spec.scope)
                 });
             let own = actions[i].spec.yields.intersection(&held);
             if actions[i].spec.takes_back {
+                // Lent to those that hold it, as counted above: not to a later pending
+                // action, which may wait for this one to end.
                 let lenders: Vec<_> = actions
                     .iter()
-                    .filter(|other| other.id != actions[i].id)
-                    .map(|other| (other.id, own.intersection(&other.spec.scope)))
+                    .enumerate()
+                    .filter(|&(j, other)| holds(j, other))
+                    .map(|(_, other)| (other.id, own.intersection(&other.spec.scope)))
                     .filter(|(_, part)| !part.is_empty())
                     .collect();
                 actions[i].lent.extend(lenders);
@@ -617,6 +625,10 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
             continue;
         }
         let start = action.started_at.unwrap_or(time);
+        if action.cancel_requested {
+            // A cancel stands, whatever a stop before it found.
+            action.stopped_undone = false;
+        }
         if action.cancel_requested && action.ending != Status::Cancelled {
             tr.stop(action, Status::Cancelled, Some("cancelled".into()));
             if action.status.is_final() {
@@ -629,6 +641,7 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
                 Some(why) => (Status::Cancelled, Some(why)),
                 None => (Status::Completed, None),
             };
+            action.stopped_undone = ending == Status::Cancelled;
             tr.stop(action, ending, reason);
             if action.status.is_final() {
                 continue;
@@ -650,6 +663,12 @@ fn advance(actions: &mut [Action], tr: &mut Transitions) {
         if action.status == Status::Terminating && !action.winding_down {
             let t0 = action.terminate_at.unwrap_or(time);
             if time - t0 >= action.spec.ease_out - 1e-9 {
+                // Its purpose done during the ease-out after all (a grasp that attached
+                // as it eased out): a stop completes it.
+                if action.stopped_undone && action.generator.unfinished().is_none() {
+                    action.ending = Status::Completed;
+                    action.reason = None;
+                }
                 let ending = action.ending;
                 tr.set(action, ending);
             }
@@ -710,6 +729,7 @@ fn without(sets: &mut Vec<(Scope, f64)>, scope: &Scope) {
 /// winds down by itself, it gives up `taken` at once and keeps the rest until it has
 /// finished; otherwise the whole action eases out, as before.
 fn pre_empt(tr: &mut Transitions, other: &mut Action, taken: Scope, reason: Option<String>) {
+    other.stopped_undone = false;
     tr.stop(other, Status::Cancelled, reason);
     if other.winding_down {
         tr.narrow(other, taken, false);

@@ -824,6 +824,106 @@ fn a_yielded_part_comes_back_eased_in_when_its_taker_ends_if_the_action_takes_ba
     }
 }
 
+/// Holds still; its purpose is done (see [`Generator::unfinished`]) after `done_after`
+/// seconds of running.
+struct Purpose {
+    done_after: f64,
+    done: bool,
+}
+
+impl Generator for Purpose {
+    fn unfinished(&self) -> Option<String> {
+        (!self.done).then(|| "stopped before it was done".to_string())
+    }
+
+    fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
+        self.done |= ctx.local_time >= self.done_after;
+        for d in ctx.scope.iter() {
+            out.set(d, 0.2);
+        }
+        Step::Running
+    }
+}
+
+#[test]
+fn a_stop_that_leaves_the_purpose_undone_cancels_unless_it_is_done_by_the_end_of_the_ease_out() {
+    // (done after, expected ending, reason)
+    for (done_after, ending, reason) in [
+        (10.0, Status::Cancelled, Some("stopped before it was done")),
+        (0.15, Status::Completed, None),
+        (0.0, Status::Completed, None),
+    ] {
+        let (mut s, a) = scene();
+        let id = s
+            .start_action(
+                a,
+                ActionSpec {
+                    ease_out: 0.2,
+                    ..spec(&s, "r_elbow", Mode::Default)
+                },
+                Box::new(Purpose {
+                    done_after,
+                    done: false,
+                }),
+            )
+            .unwrap();
+        for _ in 0..5 {
+            s.step();
+        }
+        s.stop(id).unwrap();
+        let info = loop {
+            s.step();
+            let info = s.action(id).unwrap();
+            if info.status.is_final() {
+                break info;
+            }
+        };
+        assert_eq!(info.status, ending, "done after {done_after}");
+        assert_eq!(info.reason.as_deref(), reason, "done after {done_after}");
+    }
+}
+
+#[test]
+fn a_part_given_up_on_admission_comes_back_though_a_later_action_waits_behind() {
+    let (mut s, a) = scene();
+    // A wave on the elbow runs when the walk is admitted: the walk gives it up at once.
+    let wave = s
+        .start_action(
+            a,
+            ActionSpec {
+                duration: Some(0.1),
+                ..spec(&s, "l_elbow", Mode::Default)
+            },
+            constant(1.0),
+        )
+        .unwrap();
+    s.step();
+    let walk = s
+        .start_action(
+            a,
+            ActionSpec {
+                takes_back: true,
+                ..yielding_spec(&s)
+            },
+            constant(0.3),
+        )
+        .unwrap();
+    // Queued behind the walk, on its essential part (the right elbow) and on the part it
+    // gave up: pending until the walk ends, and no holder of that part meanwhile.
+    let next = s
+        .start_action(a, spec(&s, "l_elbow+r_elbow", Mode::Default), constant(0.6))
+        .unwrap();
+    s.step();
+    assert_eq!(s.action(walk).unwrap().yielded, scope(&s, "l_elbow"));
+    run_until(&mut s, wave, Status::Completed, 20);
+    s.step();
+    assert_eq!(status(&s, next), Status::Pending);
+    assert!(
+        s.action(walk).unwrap().yielded.is_empty(),
+        "the elbow came back though an action waits behind the walk"
+    );
+}
+
 #[test]
 fn a_yielded_part_another_action_took_meanwhile_comes_back_when_that_one_ends() {
     let (mut s, a) = scene();

@@ -23,7 +23,7 @@
 //!
 //! Numbers are written in Rust's shortest round-trip form, so a sequence read back from
 //! its own output is identical bit for bit. Names that are not plain words are written in
-//! double quotes (`sequence "Ann Lee"`, `held 1 2 "take#2" r_wrist`; see [`words`]).
+//! double quotes (`sequence "Ann Lee"`, `held 1 2 "take#2" r_wrist`; see `words.rs`).
 
 mod words;
 
