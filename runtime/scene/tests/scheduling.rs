@@ -765,31 +765,32 @@ fn yielding_spec(s: &Scene) -> ActionSpec {
     }
 }
 
+/// A walk-like action on both arms, the left one yieldable, that takes back (or not) what
+/// it yields.
+fn walk_taking_back(s: &mut Scene, a: usize, takes_back: bool) -> ActionId {
+    let spec = ActionSpec {
+        takes_back,
+        ..yielding_spec(s)
+    };
+    s.start_action(a, spec, constant(0.3)).unwrap()
+}
+
+/// A 0.1 s action on the left elbow.
+fn short_wave(s: &mut Scene, a: usize) -> ActionId {
+    let spec = ActionSpec {
+        duration: Some(0.1),
+        ..spec(s, "l_elbow", Mode::Default)
+    };
+    s.start_action(a, spec, constant(1.0)).unwrap()
+}
+
 #[test]
 fn a_yielded_part_comes_back_eased_in_when_its_taker_ends_if_the_action_takes_back() {
     for takes_back in [true, false] {
         let (mut s, a) = scene();
-        let walk = s
-            .start_action(
-                a,
-                ActionSpec {
-                    takes_back,
-                    ..yielding_spec(&s)
-                },
-                constant(0.3),
-            )
-            .unwrap();
+        let walk = walk_taking_back(&mut s, a, takes_back);
         s.step();
-        let wave = s
-            .start_action(
-                a,
-                ActionSpec {
-                    duration: Some(0.1),
-                    ..spec(&s, "l_elbow", Mode::Default)
-                },
-                constant(1.0),
-            )
-            .unwrap();
+        let wave = short_wave(&mut s, a);
         s.step();
         assert_eq!(s.action(walk).unwrap().yielded, scope(&s, "l_elbow"));
         assert_eq!(q(&s, "l_elbow_flexion"), 1.0);
@@ -887,27 +888,9 @@ fn a_stop_that_leaves_the_purpose_undone_cancels_unless_it_is_done_by_the_end_of
 fn a_part_given_up_on_admission_comes_back_though_a_later_action_waits_behind() {
     let (mut s, a) = scene();
     // A wave on the elbow runs when the walk is admitted: the walk gives it up at once.
-    let wave = s
-        .start_action(
-            a,
-            ActionSpec {
-                duration: Some(0.1),
-                ..spec(&s, "l_elbow", Mode::Default)
-            },
-            constant(1.0),
-        )
-        .unwrap();
+    let wave = short_wave(&mut s, a);
     s.step();
-    let walk = s
-        .start_action(
-            a,
-            ActionSpec {
-                takes_back: true,
-                ..yielding_spec(&s)
-            },
-            constant(0.3),
-        )
-        .unwrap();
+    let walk = walk_taking_back(&mut s, a, true);
     // Queued behind the walk, on its essential part (the right elbow) and on the part it
     // gave up: pending until the walk ends, and no holder of that part meanwhile.
     let next = s
@@ -927,16 +910,7 @@ fn a_part_given_up_on_admission_comes_back_though_a_later_action_waits_behind() 
 #[test]
 fn a_yielded_part_another_action_took_meanwhile_comes_back_when_that_one_ends() {
     let (mut s, a) = scene();
-    let walk = s
-        .start_action(
-            a,
-            ActionSpec {
-                takes_back: true,
-                ..yielding_spec(&s)
-            },
-            constant(0.3),
-        )
-        .unwrap();
+    let walk = walk_taking_back(&mut s, a, true);
     s.step();
     let first = s
         .start_action(a, spec(&s, "l_elbow", Mode::Default), constant(1.0))
