@@ -656,13 +656,7 @@ impl Generator for Release {
                     .scope
                     .intersection(&BodyReach::body_scope(ctx.skeleton)?);
                 let body = BodyReach::new(ctx.skeleton, allowed)?;
-                let mut reached = None;
-                for stage in body.stages().into_iter().skip(1) {
-                    if let Ok(r) = body.reach(&ctx.posture.q, &[(s, wrist_goal)], stage)? {
-                        reached = Some(r);
-                        break;
-                    }
-                }
+                let reached = body.beyond_the_arm(&ctx.posture.q, &[(s, wrist_goal)])?;
                 let Some(reached) = reached else {
                     let how = if allowed.is_empty() {
                         ""

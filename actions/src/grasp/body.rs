@@ -110,6 +110,22 @@ impl<'a> BodyReach<'a> {
         Ok(s)
     }
 
+    /// The first stage past the arms alone (lean, then crouch, as `allowed` permits) that
+    /// brings the wrists of `goals` from posture `q0` to their poses, if any: for an
+    /// action whose arm alone has missed.
+    pub fn beyond_the_arm(
+        &self,
+        q0: &[f64],
+        goals: &[(Side, Transform)],
+    ) -> crate::error::Result<Option<Reached>> {
+        for stage in self.stages().into_iter().skip(1) {
+            if let Ok(reached) = self.reach(q0, goals, stage)? {
+                return Ok(Some(reached));
+            }
+        }
+        Ok(None)
+    }
+
     /// Tries `stage` from posture `q0`: the wrists of `goals` to their poses.
     pub fn reach(
         &self,

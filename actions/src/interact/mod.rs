@@ -158,6 +158,17 @@ impl Give {
     }
 }
 
+/// The height (m) of actor `actor`'s shoulders in `world`: its right shoulder's, else
+/// its left's; `None` for a body without shoulders.
+fn shoulder_height(world: &World, actor: usize) -> Option<f64> {
+    let skeleton = &world.actors.get(actor)?.skeleton;
+    let joint = skeleton
+        .joint("r_shoulder")
+        .or_else(|_| skeleton.joint("l_shoulder"))
+        .ok()?;
+    Some(world.states.get(actor)?.globals[joint].translation.y)
+}
+
 /// How far below the shoulders a handed-over object meets the other hand, as a part of the
 /// shoulders' height (0.3 m for an adult).
 const MEETING_BELOW_SHOULDERS: f64 = 0.21;
@@ -168,16 +179,9 @@ const MEETING_BELOW_SHOULDERS: f64 = 0.21;
 pub fn meeting_points(world: &World, giver: usize, receiver: usize) -> Option<Vec<DVec3>> {
     let a = world.states.get(giver)?.globals.first()?.translation;
     let b = world.states.get(receiver)?.globals.first()?.translation;
-    let shoulder = |actor: usize| {
-        world.actors[actor]
-            .skeleton
-            .joint("r_shoulder")
-            .ok()
-            .map(|j| world.states[actor].globals[j].translation.y)
-    };
     let below = |y: f64| y * (1.0 - MEETING_BELOW_SHOULDERS);
-    let highest = below(shoulder(giver)?);
-    let lowest = shoulder(receiver).map_or(highest, |r| below(r).min(highest));
+    let highest = below(shoulder_height(world, giver)?);
+    let lowest = shoulder_height(world, receiver).map_or(highest, |r| below(r).min(highest));
     let mid = (a + b) * 0.5;
     let steps = ((highest - lowest) / 0.05).ceil() as usize;
     Some(
@@ -246,7 +250,7 @@ impl Generator for Give {
             .intersection(&BodyReach::body_scope(ctx.skeleton)?);
         let body = BodyReach::new(ctx.skeleton, allowed)?;
         let (mut miss, mut angle, mut wrist_goal) = (f64::INFINITY, f64::INFINITY, now);
-        'points: for goal in goals {
+        for goal in goals {
             let delta = Transform::new(obj.rotation, goal).mul(&now.inverse());
             self.goal_q = ctx.posture.q.clone();
             wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
@@ -254,18 +258,15 @@ impl Generator for Give {
             if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
                 break;
             }
-            for stage in body.stages().into_iter().skip(1) {
-                if let Ok(reached) =
-                    body.reach(&ctx.posture.q, &[(self.sides[0], wrist_goal)], stage)?
-                {
-                    self.goal_q = ctx.posture.q.clone();
-                    for &(d, v) in &reached.changed {
-                        self.goal_q[d] = v;
-                        self.moving.insert(d);
-                    }
-                    (miss, angle) = (0.0, 0.0);
-                    break 'points;
+            let goals = [(self.sides[0], wrist_goal)];
+            if let Some(reached) = body.beyond_the_arm(&ctx.posture.q, &goals)? {
+                self.goal_q = ctx.posture.q.clone();
+                for &(d, v) in &reached.changed {
+                    self.goal_q[d] = v;
+                    self.moving.insert(d);
                 }
+                (miss, angle) = (0.0, 0.0);
+                break;
             }
         }
         if miss > REACH_TOLERANCE || angle > REACH_ANGLE {

@@ -45,20 +45,15 @@ pub fn offered_hand(
     active: usize,
     side: Side,
 ) -> Result<Offer, String> {
-    let name = |i: usize| world.actors.get(i).map_or("?", |a| a.name.as_str());
+    let name = |i: usize| super::actor_name(world, i);
     let (Some(mine), Some(theirs)) = (world.states.get(follower), world.states.get(active)) else {
         return Err("no such actor".into());
     };
     let skeleton = &world.actors[follower].skeleton;
-    let shoulder = |i: usize| {
-        let sk = &world.actors[i].skeleton;
-        let j = sk
-            .joint("r_shoulder")
-            .or_else(|_| sk.joint("l_shoulder"))
-            .ok()?;
-        Some(world.states[i].globals[j].translation.y)
-    };
-    let (Some(a), Some(b)) = (shoulder(follower), shoulder(active)) else {
+    let (Some(a), Some(b)) = (
+        super::shoulder_height(world, follower),
+        super::shoulder_height(world, active),
+    ) else {
         return Err(format!(
             "`{}` or `{}` has no shoulders",
             name(follower),

@@ -399,18 +399,18 @@ impl ActorRuntime {
                 for d in written.intersection(&full).iter() {
                     self.accumulator.add(d, self.scratch[d], w);
                 }
-                for &(back, since) in &action.returning {
-                    let fade = w * action.return_fade(since, clock.time);
+                // What comes back eases in, what was given up fades out.
+                let t = clock.time;
+                let easing = (action.returning.iter())
+                    .map(|&(part, since)| (part, action.return_fade(since, t)))
+                    .chain(
+                        (action.releasing.iter())
+                            .map(|&(part, since)| (part, action.release_fade(since, t))),
+                    );
+                for (part, fade) in easing {
+                    let fade = w * fade;
                     if fade > 0.0 {
-                        for d in written.intersection(&back).iter() {
-                            self.accumulator.add(d, self.scratch[d], fade);
-                        }
-                    }
-                }
-                for &(released, since) in &action.releasing {
-                    let fade = w * action.release_fade(since, clock.time);
-                    if fade > 0.0 {
-                        for d in written.intersection(&released).iter() {
+                        for d in written.intersection(&part).iter() {
                             self.accumulator.add(d, self.scratch[d], fade);
                         }
                     }
