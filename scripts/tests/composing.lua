@@ -434,6 +434,44 @@ test("give and receive start at once during walks, which go on narrowed", functi
   expect(cup.holder == bob, "bob holds it")
 end)
 
+test("a give started while the giver walks up to the receiver waits for it to stand, then hands over", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 3}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {-0.25, 1.0, 0.35}, obstacle = false }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local walk = ann:walk{ to = bob }
+  run(1.5)
+  -- Still 1.8 m apart: the meeting point between them now is out of the arm's reach.
+  local give = ann:give{ object = cup, to = bob }
+  local walked_on = false
+  expect(run_until(function()
+    walked_on = walked_on or (walk.status == "active" and give.status == "active")
+    return give.status ~= "active" or cup.holder == bob
+  end, 12), "the give ended: " .. give.status)
+  expect(walked_on, "the give waited while the walk went on")
+  expect(walk.status == "completed", "the walk arrived before the cup changed hands: " .. walk.status)
+  expect(give:wait() == "completed", "handed over: " .. tostring(give.error))
+  expect(cup.holder == bob, "bob holds it")
+end)
+
+test("a give whose giver walks on and on fails after its timeout, saying why", function()
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, -1} }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {-0.25, 1.0, 0.35}, obstacle = false }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  ann:walk{ velocity = 0.6 }  -- away from bob, behind her
+  run(1.5)
+  local give = ann:give{ object = cup, to = bob, timeout = 2 }
+  run(1)
+  expect(give.status == "active", "waits while walking: " .. give.status .. " " .. tostring(give.error))
+  expect(give:wait() == "failed", "then fails: " .. give.status)
+  expect(tostring(give.error):find("did not both stand still within 2 s", 1, true),
+         "says why: " .. tostring(give.error))
+  expect(cup.holder == ann, "ann still holds the cup")
+end)
+
 test("look and reach run alongside a walk", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {2, 0, 2} }

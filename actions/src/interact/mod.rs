@@ -95,6 +95,9 @@ pub struct Give {
     detour: bool,
     /// The carry round other bodies, when the interpolation is blocked.
     arm_detour: Option<ArmDetour>,
+    /// Whether the give waits, holding the object, for the two actors to stand: a give
+    /// started while either walks cannot know where their bodies will meet.
+    approaching: bool,
 }
 
 impl Give {
@@ -127,6 +130,7 @@ impl Give {
             receiver_gave_up: None,
             detour: true,
             arm_detour: None,
+            approaching: false,
         }
     }
 
@@ -169,6 +173,18 @@ fn shoulder_height(world: &World, actor: usize) -> Option<f64> {
     Some(world.states.get(actor)?.globals[joint].translation.y)
 }
 
+/// Whether any of `actors` walks: its root moved on the floor faster than a body standing
+/// (swaying or settling its feet) does, over the previous tick.
+fn walking(world: &World, actors: &[usize]) -> bool {
+    actors.iter().any(|&i| {
+        world
+            .crowd
+            .velocities
+            .get(i)
+            .is_some_and(|v| v.length() >= crate::walk::replan::STANDING)
+    })
+}
+
 /// How far below the shoulders a handed-over object meets the other hand, as a part of the
 /// shoulders' height (0.3 m for an adult).
 const MEETING_BELOW_SHOULDERS: f64 = 0.21;
@@ -196,39 +212,13 @@ impl Give {
     pub fn ended(&self) -> SignalId {
         self.ended
     }
-}
 
-impl Generator for Give {
-    fn detours(&self) -> usize {
-        self.arm_detour.as_ref().map_or(0, ArmDetour::detours)
-    }
-
-    fn unfinished(&self) -> Option<String> {
-        (self.phase < 2).then(|| "stopped before the receiver took the object".to_string())
-    }
-
-    /// The receiver waiting for the object learns that the give ended, and why if it
-    /// ended without handing the object over.
-    fn end(&mut self, ending: &Ending, notes: &mut Notes) {
-        match ending.failure() {
-            None => notes.raise(self.ended),
-            Some(why) => notes.fail(self.ended, why),
-        }
-    }
-
-    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
+    /// Plans the carry from the posture of `ctx` to the first meeting point the arm
+    /// reaches (leaning or crouching if it must), or says why none is in reach.
+    fn plan(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
         let w = ctx.world;
-        let obj = w
-            .objects
-            .get(self.object)
-            .ok_or_else(|| format!("no object #{}", self.object))?;
+        let obj = &w.objects[self.object];
         let me = actor_name(w, ctx.actor);
-        if self.receiver == ctx.actor {
-            return Err(format!("`{me}` cannot give `{}` to itself", obj.name).into());
-        }
-        if w.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
-            return Err(format!("`{me}` does not hold `{}`", obj.name).into());
-        }
         let goals = match self.receiver_hand {
             Some(side) => vec![crate::grasp::handover::offer_point(
                 w,
@@ -289,15 +279,52 @@ impl Generator for Give {
         }
         self.arm = Some(ik);
         self.q = ctx.posture.q.clone();
+        self.phase_start = ctx.local_time;
         Ok(())
+    }
+}
+
+impl Generator for Give {
+    fn detours(&self) -> usize {
+        self.arm_detour.as_ref().map_or(0, ArmDetour::detours)
+    }
+
+    fn unfinished(&self) -> Option<String> {
+        (self.phase < 2).then(|| "stopped before the receiver took the object".to_string())
+    }
+
+    /// The receiver waiting for the object learns that the give ended, and why if it
+    /// ended without handing the object over.
+    fn end(&mut self, ending: &Ending, notes: &mut Notes) {
+        match ending.failure() {
+            None => notes.raise(self.ended),
+            Some(why) => notes.fail(self.ended, why),
+        }
+    }
+
+    fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
+        let w = ctx.world;
+        let obj = w
+            .objects
+            .get(self.object)
+            .ok_or_else(|| format!("no object #{}", self.object))?;
+        let me = actor_name(w, ctx.actor);
+        if self.receiver == ctx.actor {
+            return Err(format!("`{me}` cannot give `{}` to itself", obj.name).into());
+        }
+        if w.holder(self.object).is_none_or(|h| h.actor != ctx.actor) {
+            return Err(format!("`{me}` does not hold `{}`", obj.name).into());
+        }
+        // A meeting point between bodies that walk is not where they will meet: the give
+        // waits until both stand (a performer's glove hand is met wherever it is).
+        if self.receiver_hand.is_none() && walking(w, &[ctx.actor, self.receiver]) {
+            self.approaching = true;
+            return Ok(());
+        }
+        self.plan(ctx)
     }
 
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        let Some(arm) = &self.arm else {
-            return Step::Failed("give: not started".into());
-        };
-        self.q.copy_from_slice(&ctx.posture.q);
-        let t = ctx.local_time - self.phase_start;
         if let Some(why) = self
             .receiver_gave_up
             .and_then(|s| ctx.world.board.failure(s, ctx.tick))
@@ -313,6 +340,33 @@ impl Generator for Give {
                 ));
             }
         }
+        if self.approaching {
+            if walking(ctx.world, &[ctx.actor, self.receiver]) {
+                if ctx.local_time > self.timeout {
+                    return Step::Failed(format!(
+                        "`{}` and `{}` did not both stand still within {} s (a give waits \
+                         for that to find where they meet)",
+                        actor_name(ctx.world, ctx.actor),
+                        actor_name(ctx.world, self.receiver),
+                        self.timeout
+                    ));
+                }
+                // The arm keeps the object where it was carried.
+                for d in out.scope().iter() {
+                    out.set(d, ctx.posture.q[d]);
+                }
+                return Step::Running;
+            }
+            if let Err(e) = self.plan(ctx) {
+                return Step::Failed(e.reason);
+            }
+            self.approaching = false;
+        }
+        let Some(arm) = &self.arm else {
+            return Step::Failed("give: not started".into());
+        };
+        self.q.copy_from_slice(&ctx.posture.q);
+        let t = ctx.local_time - self.phase_start;
         match self.phase {
             0 => {
                 let u = quintic(t / GIVE_REACH_SECONDS);
