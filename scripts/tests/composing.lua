@@ -61,6 +61,43 @@ test("walk:stop() mid-stride decelerates and ends completed with both feet down"
   expect(slid > 0.2 and slid < 1.2, string.format("slowed down over %.2f m, not at once", slid))
 end)
 
+test("a walk stopped anywhere in its stride stands on both flat soles within 2 s", function()
+  -- Eleven walkers stopped a tenth of a second apart: every moment of a stride.
+  local rest = troupe.actor{ name = "rest", at = {-5, 0, 0} }:joint_position("l_metatarsal")[2]
+  local walkers, walks, ended = {}, {}, {}
+  for i = 0, 10 do
+    walkers[i] = troupe.actor{ name = "w" .. i, at = {i * 2, 0, 0} }
+    walks[i] = walkers[i]:walk{ velocity = 1.2 }
+  end
+  run(2.0)
+  for i = 0, 10 do
+    run(0.1)
+    walks[i]:stop()
+    ended[i] = { at = troupe.time() }
+  end
+  expect(run_until(function()
+    local all = true
+    for i = 0, 10 do
+      local w, e = walks[i], ended[i]
+      if w.status == "active" or w.status == "terminating" then
+        all = false
+      elseif not e.took then
+        e.took = troupe.time() - e.at
+        e.feet = { walkers[i]:joint_position("l_metatarsal")[2], walkers[i]:joint_position("r_metatarsal")[2] }
+      end
+    end
+    return all
+  end, 4), "every walk ended")
+  for i = 0, 10 do
+    local e = ended[i]
+    expect(walks[i].status == "completed", "w" .. i .. " completed: " .. walks[i].status)
+    expect(e.took <= 2.05, string.format("w%d stopped in %.2f s", i, e.took))
+    expect(math.abs(e.feet[1] - rest) < 0.003 and math.abs(e.feet[2] - rest) < 0.003,
+           string.format("w%d stands on flat soles: the balls of its feet %.3f and %.3f m up (%.3f at rest)",
+                         i, e.feet[1], e.feet[2], rest))
+  end
+end)
+
 test("cancel of a velocity walk also stops well, and ends cancelled", function()
   standing_ankle()
   local ann = troupe.actor{ name = "ann" }

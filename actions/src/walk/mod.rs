@@ -103,8 +103,8 @@ pub const SETTLE_TIME: f64 = 0.3;
 /// finishes within 2 s (0.8 s of slowing down, the feet catching up, 0.3 s settling).
 pub const STOP_DEADLINE: f64 = 2.5;
 /// Seconds after [`STOP_DEADLINE`] by which a stopped walk finishes however its feet
-/// stand (an unhindered stop in the middle of setting off after a turn on the spot, at
-/// the slowest cadence, took up to 3.6 s).
+/// stand (an unhindered stop takes 1.4–2 s; one held where it stands may not get its
+/// feet together and flat).
 pub const STOP_GRACE: f64 = 3.0;
 /// Farthest apart (m) two planted feet may be for a stopped walk past [`STOP_DEADLINE`]
 /// to finish where it stands: beside each other, not in mid-stride (feet side by side
@@ -132,6 +132,11 @@ pub const TURN_ON_PLANTED: f64 = 0.55;
 /// The cadence (as a walking speed, m/s) of the steps that turn a body on the spot (see
 /// [`route::SPOT_TURN_RATE`]).
 pub const TURNING_CADENCE: f64 = 1.0;
+/// The least cadence (as a walking speed, m/s) of a stopped walk's steps: a person
+/// stopping brings the feet together in a quick step or two, where the cadence of the
+/// body's speed, falling to nothing, took the slowest cycle (2.5 s) and the last step
+/// was still in the air when the stop's time ran out.
+pub const STOPPING_CADENCE: f64 = 1.0;
 /// Farthest (radians) a landing turns from the other foot's heading: a step takes the
 /// body round by at most about this much, twice [`TURN_ON_PLANTED`] less a margin.
 pub const STEP_TURN: f64 = 0.9;
@@ -601,10 +606,16 @@ impl Walk {
         } else {
             0.0
         };
+        let stopping = if self.stopped_at.is_some() {
+            STOPPING_CADENCE
+        } else {
+            0.0
+        };
         now.max(ahead)
             .max(behind)
             .max(self.steer.cadence_floor(plan, t, self.t))
             .max(turning)
+            .max(stopping)
     }
 
     /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
@@ -874,7 +885,10 @@ impl Walk {
                 }
             }
         }
-        if self.steer.engaged {
+        // A stop changes where the body will be as much as a steering does: a foot that
+        // lifted for the pace before it landed a stride past where the body then stood,
+        // and stepped back (0.79 m) to stand.
+        if self.steer.engaged || self.stopped_at.is_some() {
             self.follow_steering(around, plan, leg, lambda);
         }
         let rig = &self.rig;
@@ -1552,9 +1566,12 @@ impl Generator for Walk {
             // A walk held where it stands (its plan's clock, or its body, held by someone in
             // its way or by the clearance) steps towards spots it never reaches.
             let since = self.t - stopped_at;
+            // Flat on both soles too: a foot that has just struck the floor, toes up, would
+            // stay so once the walk ends.
             let standing = match self.feet {
                 [Foot::Stance { plant: l, .. }, Foot::Stance { plant: r, .. }] => {
                     (l - r).length() < STOP_STANCE
+                        && self.poses.iter().all(|pose| pose.pitch == 0.0)
                 }
                 _ => false,
             };
