@@ -492,6 +492,29 @@ test("a give started while the giver walks up to the receiver waits for it to st
   expect(cup.holder == bob, "bob holds it")
 end)
 
+test("a receiver with its back to the giver turns round to take the object in front", function()
+  local ann = troupe.actor{ name = "ann", facing = 90 }
+  local bob = troupe.actor{ name = "bob", at = {1.0, 0, 0}, facing = 90 }   -- his back to ann
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {0.35, 1.0, 0.25}, obstacle = false }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local give = ann:give{ object = cup, to = bob }
+  local kinds = {}
+  for _, a in ipairs(bob:actions()) do kinds[#kinds + 1] = a.kind end
+  expect(table.concat(kinds, " ") == "walk receive", "bob turns and receives: " .. table.concat(kinds, " "))
+  expect(give:wait() == "completed", "handed over: " .. tostring(give.error))
+  expect(cup.holder == bob, "bob holds it")
+  -- He faces ann (-x), and took the cup in front of him, not behind his back.
+  local yaw = math.deg(bob:dof("root_yaw")) % 360
+  expect(math.abs(yaw - 270) < 10, string.format("bob faces ann: yaw %.1f°", yaw))
+  expect(bob:dof("r_shoulder_flexion") > 0 and math.abs(bob:dof("r_shoulder_twist")) < 0.5,
+         string.format("the arm forwards: flexion %.2f, twist %.2f rad",
+                       bob:dof("r_shoulder_flexion"), bob:dof("r_shoulder_twist")))
+  local p = bob:position()
+  expect(math.abs(p[1] - 1.0) < 0.05 and math.abs(p[3]) < 0.05,
+         string.format("turning on the spot: bob at (%.3f, %.3f)", p[1], p[3]))
+end)
+
 test("a give whose giver walks on and on fails after its timeout, saying why", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, -1} }

@@ -2,11 +2,15 @@
 //! `receive`, and `hold_hand` / `shake_hands` (which start the other's `follow_hand`).
 
 use super::device_hand::{offer_to_hand, receive};
-use super::{FollowHand, Give, HoldHand};
+use super::{facing_angle, FollowHand, Give, HoldHand, TURN_TO_TAKE};
 use crate::error::{ActionError, OptionError, Result};
 use crate::grasp::action::{check_duration, grasp_scope, holding_side, reach_scope, Grasp};
 use crate::grasp::body::BodyReach;
 use crate::grasp::plan::{HandChoice, PlanOptions};
+use crate::walk::goal::Goal;
+use crate::walk::replan::STANDING;
+use crate::walk::{Walk, WalkOptions};
+use troupe_body::glam::DVec2;
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
 use troupe_scene::{ActionSpec, Generator, Scene};
@@ -106,6 +110,9 @@ impl GiveOptions {
         if let Some(t) = self.timeout {
             give = give.with_timeout(t);
         }
+        if turn_to_face(scene, self.to, giver, delay)? {
+            give = give.awaiting_turn();
+        }
         // The receiver: a grasp that waits for the object to arrive and may take it from
         // the giver.
         let sides = self.hand.sides();
@@ -126,6 +133,47 @@ impl GiveOptions {
         scene.start_action(self.to, rx_spec, Box::new(take))?;
         Ok((Box::new(give), scope, body))
     }
+}
+
+/// Turns `receiver` on the spot to face `giver` (a walk to where it stands, `delay`
+/// seconds ahead) when its back is to the giver, it stands and nothing else drives its
+/// legs: a person turns round to take something rather than reach behind the back (the
+/// arm twisted 80° and raised backwards). Says whether it turns.
+fn turn_to_face(scene: &mut Scene, receiver: usize, giver: usize, delay: f64) -> Result<bool> {
+    let skeleton = scene.actors()[receiver].skeleton.clone();
+    let (Ok(x), Ok(z)) = (skeleton.dof("root_x"), skeleton.dof("root_z")) else {
+        return Ok(false);
+    };
+    let states = scene.states();
+    let (me, them) = (&states[receiver], &states[giver]);
+    let at = me.globals[0].translation;
+    let to_giver = DVec2::new(
+        them.globals[0].translation.x - at.x,
+        them.globals[0].translation.z - at.z,
+    );
+    let standing = DVec2::new(me.qd[x], me.qd[z]).length() < STANDING;
+    let legs_busy = scene
+        .actions_of(receiver)
+        .iter()
+        .any(|a| !a.status.is_final() && a.scope.contains(x));
+    if facing_angle(me, to_giver) <= TURN_TO_TAKE || !standing || legs_busy {
+        return Ok(false);
+    }
+    let options = WalkOptions {
+        heading: Some(to_giver.x.atan2(to_giver.y)),
+        ..WalkOptions::default()
+    };
+    let walk = Walk::navigate(
+        &skeleton,
+        Goal::Through(vec![DVec2::new(at.x, at.z)]),
+        options,
+    )?;
+    let mut spec = ActionSpec::new("walk", walk.scope());
+    spec.yields = walk.yields().intersection(&spec.scope);
+    spec.takes_back = true;
+    spec.delay = delay;
+    scene.start_action(receiver, spec, Box::new(walk))?;
+    Ok(true)
 }
 
 /// The options of a receive: take an object out of another actor's hand.
