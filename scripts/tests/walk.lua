@@ -29,6 +29,22 @@ test("walk to a point with a requested heading", function()
   expect(angle_diff(ann:dof("root_yaw"), math.rad(90)) < 0.05, "faces +X")
 end)
 
+test("a walk refuses a scope without its root, pelvis and legs, and a heading it cannot use", function()
+  local ann = troupe.actor{ name = "ann" }
+  local ok, e = pcall(function() return ann:walk{ velocity = 1, duration = 1, scope = "head" } end)
+  expect(not ok and tostring(e):find("the scope leaves out 23 DOF(s) a walk cannot do without (`root_x`", 1, true),
+         "a head-only walk is refused, naming what it lacks: " .. tostring(e))
+  ok, e = pcall(function() return ann:walk{ velocity = 1, duration = 1, scope = "global+legs" } end)
+  expect(not ok and tostring(e):find("`sacroiliac_tilt`", 1, true), "the pelvis too: " .. tostring(e))
+  local w = ann:walk{ velocity = 1, duration = 1, scope = "global+lower_body" }
+  run(1.5)
+  expect(ann:position()[3] > 0.3, "root, pelvis and legs are enough: " .. ann:position()[3])
+  ok, e = pcall(function() return ann:walk{ velocity = 1, heading = 90 } end)
+  expect(not ok and tostring(e):find("`heading` (the way to face on arrival) applies to `to` and `path` walks", 1, true),
+         "a velocity walk's heading is refused: " .. tostring(e))
+  expect(w.status ~= "failed", w.status)
+end)
+
 test("walk a path of floor points; feet stay on or above the floor", function()
   local ann = troupe.actor{ name = "ann" }
   local w = ann:walk{ path = {{0, 2}, {1.5, 3}, {2, 1}}, speed = 1.1 }

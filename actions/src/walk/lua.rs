@@ -85,6 +85,12 @@ pub fn build_walk(
         ));
     }
     let kind = given[0];
+    if options.heading.is_some() && !matches!(kind, "to" | "path") {
+        return Err(err(
+            "walk",
+            format!("`heading` (the way to face on arrival) applies to `to` and `path` walks, not to a `{kind}` walk"),
+        ));
+    }
     if kind != "velocity" && common.duration.is_some() {
         return Err(err(
             "walk",
@@ -208,6 +214,27 @@ pub fn build_walk(
     }
     .map_err(|e| err("walk", e))?;
     let mut spec = common.spec("walk", walk.scope());
+    // Without the root, the pelvis and the legs a walk would "complete" having gone
+    // nowhere.
+    let essential: Vec<&str> = walk
+        .scope()
+        .iter()
+        .filter(|&d| !walk.yields().contains(d) && !spec.scope.contains(d))
+        .map(|d| ctx.skeleton.dofs()[d].name.as_str())
+        .collect();
+    if !essential.is_empty() {
+        return Err(err(
+            "walk",
+            format!(
+                "the scope leaves out {} DOF(s) a walk cannot do without (`{}`{}): the root, \
+                 the pelvis and the legs; give a scope that holds them (\"all\", the default, or \
+                 \"global+lower_body\"), and `arms = false` to leave the arms to others",
+                essential.len(),
+                essential[..essential.len().min(4)].join("`, `"),
+                if essential.len() > 4 { ", …" } else { "" }
+            ),
+        ));
+    }
     spec.yields = walk.yields().intersection(&spec.scope);
     // An arm lent to a wave or a grasp swings again, or carries what it took, afterwards.
     spec.takes_back = true;
