@@ -328,6 +328,34 @@ test("an adult hands a cup to a child at the child's height, leaning to it", fun
          string.format("the adult leaned (%.1f°) and straightened", math.deg(leaned)))
 end)
 
+test("a child hands a ball it picked up at its hip to an adult, 0.6 to 0.9 m away", function()
+  -- The hand that took the ball from beside the hip (fingers down) cannot bring it up and
+  -- forward at that angle: the ball turns about the vertical on its way instead.
+  local gives = {}
+  for i, d in ipairs({0.6, 0.7, 0.8, 0.9}) do
+    local z = i * 3
+    local kid = troupe.actor{ name = "kid" .. i, template = "child", at = {d, 0, z}, facing = -90 }
+    local mum = troupe.actor{ name = "mum" .. i, height = 1.68, at = {0, 0, z}, facing = 90 }
+    local ball = troupe.object{ name = "ball" .. i, shape = "sphere", radius = 0.06,
+                                at = {d - 0.05, 0.6, z - 0.25}, mass = 0.2 }
+    kid:behave(function(self)
+      self:grasp{ object = ball, hand = "right" }:wait()
+      gives[i] = self:give{ object = ball, to = mum }
+      gives[i]:wait()
+      expect(ball.holder == mum, string.format("%.1f m: mum holds the ball", d))
+    end)
+  end
+  expect(run_until(function()
+    for i = 1, 4 do
+      if not gives[i] or gives[i].status == "active" or gives[i].status == "pending" then return false end
+    end
+    return true
+  end, 12), "every give ended")
+  for i = 1, 4 do
+    expect(gives[i].status == "completed", string.format("give %d: %s (%s)", i, gives[i].status, tostring(gives[i].error)))
+  end
+end)
+
 test("shake hands facing each other: bob holds his hand out as ann reaches for it; both complete", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }

@@ -213,6 +213,26 @@ fn walking(world: &World, actors: &[usize]) -> bool {
     })
 }
 
+/// The turns (radians about the vertical) a handed-over object may make on its way to the
+/// meeting point, tried in this order: none first.
+const MEETING_TURNS: [f64; 12] = {
+    use std::f64::consts::PI;
+    [
+        0.0,
+        PI / 6.0,
+        -PI / 6.0,
+        PI / 3.0,
+        -PI / 3.0,
+        PI / 2.0,
+        -PI / 2.0,
+        2.0 * PI / 3.0,
+        -2.0 * PI / 3.0,
+        5.0 * PI / 6.0,
+        -5.0 * PI / 6.0,
+        PI,
+    ]
+};
+
 /// How far below the shoulders a handed-over object meets the other hand, as a part of the
 /// shoulders' height (0.3 m for an adult).
 const MEETING_BELOW_SHOULDERS: f64 = 0.21;
@@ -274,29 +294,49 @@ impl Give {
         let mut ik = ArmIk::new(ctx.skeleton, self.sides[0], 200)?;
         self.start_q = ctx.posture.q.clone();
         self.moving = ik.dofs().iter().copied().collect();
-        // The first meeting point the arm reaches, leaning or crouching if it must (as a
-        // grasp does: during a walk the body is the walk's, and the arm is alone).
         let allowed = ctx
             .scope
             .intersection(&BodyReach::body_scope(ctx.skeleton)?);
         let body = BodyReach::new(ctx.skeleton, allowed)?;
+        // The object may turn about the vertical on the way (a cup stays upright): the
+        // hand kept at the angle it picked the object up with could not bring it up and
+        // forward (a child's hand, fingers down from grasping a ball at its hip, missed a
+        // meeting point 0.3 m ahead by 0.24 m).
+        let poses = |goal: DVec3| {
+            MEETING_TURNS.iter().map(move |&turn| {
+                let turn = DQuat::from_rotation_y(turn);
+                let placed = Transform::new(turn * obj.rotation, goal);
+                placed.mul(&now.inverse())
+            })
+        };
+        // The lowest meeting point the arm reaches, else reaches leaning or crouching with
+        // the object as it is held (as a grasp does: during a walk the body is the walk's,
+        // and the arm is alone).
         let (mut miss, mut angle, mut wrist_goal) = (f64::INFINITY, f64::INFINITY, now);
-        for goal in goals {
-            let delta = Transform::new(obj.rotation, goal).mul(&now.inverse());
-            self.goal_q = ctx.posture.q.clone();
-            wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
-            (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
-            if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
-                break;
+        'goals: for &goal in &goals {
+            for delta in poses(goal) {
+                let wrist = delta.mul(&ctx.posture.globals[ik.wrist]);
+                self.goal_q = ctx.posture.q.clone();
+                let (m, a) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist)?;
+                if m < miss {
+                    (miss, angle) = (m, a);
+                }
+                if m <= REACH_TOLERANCE && a <= REACH_ANGLE {
+                    (miss, angle, wrist_goal) = (m, a, wrist);
+                    break 'goals;
+                }
             }
-            let goals = [(self.sides[0], wrist_goal)];
+            let wrist = poses(goal)
+                .next()
+                .map_or(now, |delta| delta.mul(&ctx.posture.globals[ik.wrist]));
+            let goals = [(self.sides[0], wrist)];
             if let Some(reached) = body.beyond_the_arm(&ctx.posture.q, &goals)? {
                 self.goal_q = ctx.posture.q.clone();
                 for &(d, v) in &reached.changed {
                     self.goal_q[d] = v;
                     self.moving.insert(d);
                 }
-                (miss, angle) = (0.0, 0.0);
+                (miss, angle, wrist_goal) = (0.0, 0.0, wrist);
                 break;
             }
         }
