@@ -356,6 +356,32 @@ test("a child hands a ball it picked up at its hip to an adult, 0.6 to 0.9 m awa
   end
 end)
 
+test("people of different heights shake hands, and a child holds an adult's hand walking", function()
+  -- The taller one's arm does not reach as low as the shorter's shoulders ask: the hand
+  -- is held out higher; a taller person cannot reach below its own hanging hand: the
+  -- shorter lifts its hand to be taken.
+  local shakes = {}
+  for i, h in ipairs({ {1.65, 1.82}, {1.60, 1.70}, {1.80, 1.90}, {1.90, 1.65} }) do
+    local a = troupe.actor{ name = "a" .. i, height = h[1], at = {-0.45, 0, i * 3}, facing = 90 }
+    local b = troupe.actor{ name = "b" .. i, height = h[2], at = {0.45, 0, i * 3}, facing = -90 }
+    shakes[i] = { a:shake_hands{ other = b }, h }
+  end
+  local mum = troupe.actor{ name = "mum", height = 1.7, at = {5, 0, 0} }
+  local kid = troupe.actor{ name = "kid", template = "child", height = 1.15, at = {4.6, 0, 0} }
+  local hold = mum:hold_hand{ other = kid, hand = "right", other_hand = "left" }
+  run(2.5)
+  expect(hold.status == "active", "mum holds kid's hand: " .. hold.status .. " " .. tostring(hold.error))
+  local a = mum:walk{ path = { {5, 2}, {5, 4} }, speed = 0.8, arms = false }
+  local b = kid:walk{ path = { {4.6, 2}, {4.6, 4} }, speed = 0.8, arms = false }
+  expect(run_until(function() return a.status == "completed" and b.status == "completed" end, 10),
+         "they walked: " .. a.status .. " " .. b.status)
+  expect(hold.status == "active", "still hand in hand: " .. hold.status .. " " .. tostring(hold.error))
+  for i, s in ipairs(shakes) do
+    expect(s[1]:wait() == "completed", string.format("%.2f m shakes %.2f m: %s %s", s[2][1], s[2][2],
+                                                     s[1].status, tostring(s[1].error)))
+  end
+end)
+
 test("shake hands facing each other: bob holds his hand out as ann reaches for it; both complete", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }

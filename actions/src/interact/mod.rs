@@ -677,7 +677,13 @@ impl Generator for HoldHand {
         // Their body as it will be once the hand is held out, or as it is.
         let posed;
         let their_globals: &[Transform] = if self.offered {
-            posed = offer::offered_hand(w, self.other, ctx.actor, self.other_side)?.globals;
+            let grip = if self.shake {
+                offer::Grip::Shake
+            } else {
+                offer::Grip::Hold
+            };
+            let (theirs, mine) = ((self.other, self.other_side), (ctx.actor, self.side));
+            posed = offer::offered_hand(w, theirs, mine, grip)?.globals;
             &posed
         } else {
             &w.states[self.other].globals
@@ -905,9 +911,10 @@ pub struct FollowHand {
     /// Raised as a failure if this action ends before the hold does.
     gave_up: SignalId,
     arm: Option<ArmIk>,
-    /// Whether it holds its hand out first (see [`offer`]), and then the arm's values
-    /// from where it started to where it holds the hand out.
-    offers: bool,
+    /// How it holds its hand out first, if it does (see [`offer`]), to the active hand
+    /// of which side; and then the arm's values from where it started to where it holds
+    /// the hand out.
+    offers: Option<(offer::Grip, Side)>,
     offer: Vec<(usize, f64, f64)>,
     relative: Option<Transform>,
     last: Option<Transform>,
@@ -930,7 +937,7 @@ impl FollowHand {
             finished,
             gave_up,
             arm: None,
-            offers: false,
+            offers: None,
             offer: Vec::new(),
             relative: None,
             last: None,
@@ -938,9 +945,10 @@ impl FollowHand {
         }
     }
 
-    /// Holds the hand out to the active actor until it is held (see [`offer`]).
-    pub fn offering(mut self) -> FollowHand {
-        self.offers = true;
+    /// Holds the hand out to the active actor's hand `active_side` until it is held, as
+    /// `grip` says (see [`offer`]).
+    pub fn offering(mut self, grip: offer::Grip, active_side: Side) -> FollowHand {
+        self.offers = Some((grip, active_side));
         self
     }
 }
@@ -960,8 +968,9 @@ impl Generator for FollowHand {
         }
         self.arm = Some(ArmIk::new(ctx.skeleton, self.side, 40)?);
         self.q = ctx.posture.q.clone();
-        if self.offers {
-            let offer = offer::offered_hand(ctx.world, ctx.actor, self.active, self.side)?;
+        if let Some((grip, active_side)) = self.offers {
+            let (mine, theirs) = ((ctx.actor, self.side), (self.active, active_side));
+            let offer = offer::offered_hand(ctx.world, mine, theirs, grip)?;
             self.offer = offer
                 .arm
                 .iter()

@@ -2,10 +2,12 @@
 //! `receive`, and `hold_hand` / `shake_hands` (which start the other's `follow_hand`).
 
 use super::device_hand::{offer_to_hand, receive};
+use super::offer::Grip;
 use super::{facing_angle, FollowHand, Give, HoldHand, TURN_TO_TAKE};
 use crate::error::{ActionError, OptionError, Result};
 use crate::grasp::action::{check_duration, grasp_scope, holding_side, reach_scope, Grasp};
 use crate::grasp::body::BodyReach;
+use crate::grasp::close::HandModel;
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use crate::walk::goal::Goal;
 use crate::walk::replan::STANDING;
@@ -285,7 +287,12 @@ impl HoldHandOptions {
         if self.shake {
             // The other holds its hand out for a handshake, and is reached there.
             active = active.to_offered_hand();
-            follow = follow.offering();
+            follow = follow.offering(Grip::Shake, self.hand);
+        } else if hangs_lower(scene, (self.other, self.other_hand), (actor, self.hand))? {
+            // A shorter other lifts its hand to the taller's, who cannot reach below its
+            // own hanging hand.
+            active = active.to_offered_hand();
+            follow = follow.offering(Grip::Hold, self.hand);
         }
         let mut follow_spec = ActionSpec::new("follow_hand", follow_scope);
         follow_spec.delay = delay;
@@ -293,6 +300,24 @@ impl HoldHandOptions {
         scene.start_action(self.other, follow_spec, Box::new(follow))?;
         Ok((active, scope))
     }
+}
+
+/// How far (m) below the other's hanging hand one's may hang and still be reached there.
+const REACHED_BELOW: f64 = 0.01;
+
+/// Whether actor `a`'s hand `a_side` hangs lower than `b`'s hand `b_side` (their palms,
+/// as they stand) by more than [`REACHED_BELOW`].
+fn hangs_lower(
+    scene: &Scene,
+    (a, a_side): (usize, Side),
+    (b, b_side): (usize, Side),
+) -> Result<bool> {
+    let palm = |actor: usize, side: Side| -> Result<f64> {
+        let model = HandModel::new(&scene.actors()[actor].skeleton, side)?;
+        let wrist = scene.states()[actor].globals[model.sensors.wrist];
+        Ok(wrist.transform_point(model.sensors.palm).y)
+    };
+    Ok(palm(a, a_side)? < palm(b, b_side)? - REACHED_BELOW)
 }
 
 /// Refuses actor and object indices the scene does not have.
