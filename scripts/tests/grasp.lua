@@ -202,9 +202,9 @@ end)
 
 -- Ann holds Bob's left hand in her right, 0.45 m apart, for 2 s: both actors, her hold
 -- and his follow_hand.
-local function holding_hands()
+local function holding_hands(apart)
   local ann = troupe.actor{ name = "ann" }
-  local bob = troupe.actor{ name = "bob", at = {-0.45, 0, 0} }
+  local bob = troupe.actor{ name = "bob", at = {-(apart or 0.45), 0, 0} }
   local h = ann:hold_hand{ other = bob, hand = "right", other_hand = "left" }
   local follow = bob:actions()[1]
   expect(follow.kind == "follow_hand", "bob follows")
@@ -417,6 +417,25 @@ test("shake hands at 0.5 to 1.1 m apart, the other's hand hanging: it is held ou
   local s = ann:shake_hands{ other = bob }
   expect(run_until(function() return s.status == "failed" end, 0.1), "failed: " .. s.status)
   expect(s.error:find("cannot hold out the right hand to `far_ann` 2.50 m away") ~= nil, s.error)
+end)
+
+test("walking hand in hand 0.6 m apart, bodies apart: they walk together, the hold holds", function()
+  -- Their discs do not touch: until held hands made them companions, each avoided the
+  -- other and the hold broke ("the hands came apart").
+  local ann, bob, h = holding_hands(0.6)
+  local a = ann:walk{ path = { {0, 2}, {1, 4}, {1, 6} }, speed = 1.0, arms = false }
+  local b = bob:walk{ path = { {-0.6, 2}, {0.4, 4}, {0.4, 6} }, speed = 1.0, arms = false }
+  local widest = 0
+  expect(run_until(function()
+    local p, q = ann:position(), bob:position()
+    widest = math.max(widest, math.sqrt((p[1] - q[1])^2 + (p[3] - q[3])^2))
+    return a.status ~= "active" and b.status ~= "active"
+  end, 15), "the walks ended")
+  expect(h.status == "active", "still holding: " .. h.status .. " " .. tostring(h.error))
+  expect(widest < 0.65, string.format("they kept 0.6 m apart: at most %.2f m", widest))
+  local p, q = ann:position(), bob:position()
+  expect(math.abs(p[1] - 1) < 0.02 and math.abs(p[3] - 6) < 0.02 and math.abs(q[1] - 0.4) < 0.02 and math.abs(q[3] - 6) < 0.02,
+         string.format("both arrived: ann (%.2f, %.2f), bob (%.2f, %.2f)", p[1], p[3], q[1], q[3]))
 end)
 
 test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold frees the follower", function()

@@ -55,6 +55,10 @@ pub struct Scratch {
     agents: Vec<Agent>,
 }
 
+/// How near (m) one actor's wrist and another's are when their hands are joined (held,
+/// shaken): a held hand's wrist is 6–8 cm from the holding one's.
+pub const HANDS_JOINED: f64 = 0.12;
+
 /// How a walk currently departs from its plan.
 #[derive(Clone, Debug, Default)]
 pub struct Steer {
@@ -68,8 +72,9 @@ pub struct Steer {
     pub offset: DVec2,
     /// The offset's velocity.
     pub drift: DVec2,
-    /// Actors whose bodies already touched this one's when the walk started (a hand
-    /// held, a group walking together): they are not avoided.
+    /// Actors whose bodies already touched this one's, or whose hands held its hands,
+    /// when the walk started (a group walking together, a hand held): they are not
+    /// avoided.
     pub companions: Vec<usize>,
     /// The last decision's preferred and chosen velocities (x, z): the rate and the drift
     /// head for the chosen one (the preferred one while the way is clear). For the debug
@@ -136,8 +141,28 @@ impl Steer {
         let mut companions = Vec::new();
         if let (Some(&p), Some(&r)) = (crowd.positions.get(me), crowd.radii.get(me)) {
             crowd.near(p, &mut companions);
+            let wrists = |i: usize| {
+                let skeleton = &ctx.world.actors[i].skeleton;
+                let globals = &ctx.world.states[i].globals;
+                ["l_wrist", "r_wrist"]
+                    .map(|w| skeleton.joint(w).ok().map(|j| globals[j].translation))
+            };
+            let mine = wrists(me);
             companions.retain(|&j| {
-                j != me && (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP
+                let touching = (crowd.positions[j] - p).length() < r + crowd.radii[j] + GAP;
+                // Hand in hand further apart than their bodies touch: they walk together
+                // too (two walkers 0.6 m apart holding hands pushed each other away until
+                // the hold broke).
+                let hands_joined = || {
+                    let theirs = wrists(j);
+                    mine.iter().flatten().any(|a| {
+                        theirs
+                            .iter()
+                            .flatten()
+                            .any(|b| (*a - *b).length() < HANDS_JOINED)
+                    })
+                };
+                j != me && (touching || hands_joined())
             });
         }
         Steer {
