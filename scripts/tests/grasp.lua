@@ -328,6 +328,29 @@ test("an adult hands a cup to a child at the child's height, leaning to it", fun
          string.format("the adult leaned (%.1f°) and straightened", math.deg(leaned)))
 end)
 
+test("a giver crouched from picking a cup off a low table stands up as it hands it over", function()
+  local ann = troupe.actor{ name = "ann", facing = 0 }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  troupe.object{ name = "table", shape = "box", size = {0.6, 0.75, 0.5}, at = {-0.8, 0.375, 0.45}, mass = 20 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {-0.65, 0.8, 0.35}, mass = 0.3 }
+  expect(ann:grasp{ object = cup, hand = "left" }:wait() == "completed", "grasped")
+  expect(ann:dof("root_y") < -0.2, "she crouched to pick it up: " .. ann:dof("root_y"))
+  local shoulder = bob:joint_position("r_shoulder")[2]
+  local give = ann:give{ object = cup, to = bob }
+  local met
+  expect(run_until(function()
+    if not met and cup.holder == bob then met = cup:position()[2] end
+    return give.status == "completed" or give.status == "failed"
+  end, 8), "the give ended: " .. give.status)
+  expect(give.status == "completed", "handed over: " .. tostring(give.error))
+  -- Planned from her crouch, the cup met bob's hand at 0.69 m and he crouched to it.
+  expect(math.abs(met - 0.79 * shoulder) < 0.03,
+         string.format("taken 21 %% below the shoulders: %.3f against %.3f m", met, 0.79 * shoulder))
+  expect(math.abs(ann:dof("root_y")) < 0.005 and math.abs(ann:dof("vl5_flexion")) < 0.01,
+         string.format("ann stands upright: pelvis %.3f m, vl5 %.3f rad", ann:dof("root_y"), ann:dof("vl5_flexion")))
+end)
+
 test("a child hands a ball it picked up at its hip to an adult, 0.6 to 0.9 m away", function()
   -- The hand that took the ball from beside the hip (fingers down) cannot bring it up and
   -- forward at that angle: the ball turns about the vertical on its way instead.

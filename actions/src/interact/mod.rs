@@ -76,6 +76,10 @@ pub struct Give {
     moving: Scope,
     start_q: Vec<f64>,
     goal_q: Vec<f64>,
+    /// Where the DOFs that carried the object besides the arm go as the hand opens: back
+    /// to `start_q` after a lean to give, or the upright posture a crouched giver stood
+    /// up to.
+    after_q: Vec<f64>,
     open: Option<BoundPattern>,
     phase: u8,
     phase_start: f64,
@@ -121,6 +125,7 @@ impl Give {
             moving: Scope::EMPTY,
             start_q: Vec::new(),
             goal_q: Vec::new(),
+            after_q: Vec::new(),
             open: None,
             phase: 0,
             phase_start: 0.0,
@@ -172,15 +177,46 @@ impl Give {
     }
 }
 
-/// The height (m) of actor `actor`'s shoulders in `world`: its right shoulder's, else
-/// its left's; `None` for a body without shoulders.
+/// How far (m) a body's pelvis may be lowered, and (radians) its spine bent, and still
+/// count as upright for a hand-over.
+const UPRIGHT: (f64, f64) = (0.03, 0.15);
+
+/// Actor `actor`'s posture in `world` stood upright, if it crouches or leans (beyond
+/// [`UPRIGHT`]): its spine, legs and pelvis height at rest, the rest as it is. `None`
+/// when it stands upright already (or is not there).
+fn straightened(world: &World, actor: usize) -> Option<Vec<f64>> {
+    let skeleton = &world.actors.get(actor)?.skeleton;
+    let q = &world.states.get(actor)?.q;
+    let root_y = skeleton.dof("root_y").ok()?;
+    let spine = skeleton.scope("spine").ok()?;
+    let bent = q[root_y] < -UPRIGHT.0 || spine.iter().any(|d| q[d].abs() > UPRIGHT.1);
+    if !bent {
+        return None;
+    }
+    let mut upright = q.clone();
+    for d in BodyReach::body_scope(skeleton).ok()?.iter() {
+        upright[d] = 0.0;
+    }
+    Some(upright)
+}
+
+/// The height (m) of actor `actor`'s shoulders in `world` standing upright (see
+/// [`straightened`]: a crouched giver's shoulders put a meeting point at its waist): its
+/// right shoulder's, else its left's; `None` for a body without shoulders.
 fn shoulder_height(world: &World, actor: usize) -> Option<f64> {
     let skeleton = &world.actors.get(actor)?.skeleton;
     let joint = skeleton
         .joint("r_shoulder")
         .or_else(|_| skeleton.joint("l_shoulder"))
         .ok()?;
-    Some(world.states.get(actor)?.globals[joint].translation.y)
+    match straightened(world, actor) {
+        Some(q) => {
+            let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
+            troupe_body::kinematics::forward_kinematics(skeleton, &q, &mut globals);
+            Some(globals[joint].translation.y)
+        }
+        None => Some(world.states.get(actor)?.globals[joint].translation.y),
+    }
 }
 
 /// How far (radians) from a receiver's facing the giver may stand for it to take the
@@ -298,6 +334,19 @@ impl Give {
             .scope
             .intersection(&BodyReach::body_scope(ctx.skeleton)?);
         let body = BodyReach::new(ctx.skeleton, allowed)?;
+        // A giver crouched or leaning (from picking the object up) stands up as it carries
+        // the object: planned from its upright posture, not from the crouch.
+        let from = match straightened(w, ctx.actor) {
+            Some(upright) if allowed.contains_all(&BodyReach::body_scope(ctx.skeleton)?) => {
+                for d in allowed.iter() {
+                    if upright[d] != ctx.posture.q[d] {
+                        self.moving.insert(d);
+                    }
+                }
+                upright
+            }
+            _ => ctx.posture.q.clone(),
+        };
         // The object may turn about the vertical on the way (a cup stays upright): the
         // hand kept at the angle it picked the object up with could not bring it up and
         // forward (a child's hand, fingers down from grasping a ball at its hip, missed a
@@ -316,7 +365,7 @@ impl Give {
         'goals: for &goal in &goals {
             for delta in poses(goal) {
                 let wrist = delta.mul(&ctx.posture.globals[ik.wrist]);
-                self.goal_q = ctx.posture.q.clone();
+                self.goal_q = from.clone();
                 let (m, a) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist)?;
                 if m < miss {
                     (miss, angle) = (m, a);
@@ -330,8 +379,8 @@ impl Give {
                 .next()
                 .map_or(now, |delta| delta.mul(&ctx.posture.globals[ik.wrist]));
             let goals = [(self.sides[0], wrist)];
-            if let Some(reached) = body.beyond_the_arm(&ctx.posture.q, &goals)? {
-                self.goal_q = ctx.posture.q.clone();
+            if let Some(reached) = body.beyond_the_arm(&from, &goals)? {
+                self.goal_q = from.clone();
                 for &(d, v) in &reached.changed {
                     self.goal_q[d] = v;
                     self.moving.insert(d);
@@ -359,6 +408,7 @@ impl Give {
             self.arm_detour = ArmDetour::plan(ctx, &arm)?;
         }
         self.arm = Some(ik);
+        self.after_q = from;
         self.q = ctx.posture.q.clone();
         self.phase_start = ctx.local_time;
         Ok(())
@@ -525,7 +575,7 @@ impl Generator for Give {
                     self.q[d] = if arm.dofs().contains(&d) {
                         self.goal_q[d]
                     } else {
-                        self.goal_q[d] + (self.start_q[d] - self.goal_q[d]) * back
+                        self.goal_q[d] + (self.after_q[d] - self.goal_q[d]) * back
                     };
                 }
                 if let Some(open) = &self.open {
