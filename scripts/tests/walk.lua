@@ -45,6 +45,21 @@ test("a walk refuses a scope without its root, pelvis and legs, and a heading it
   expect(w.status ~= "failed", w.status)
 end)
 
+test("an arrived walk brings its feet together in a quick step and completes within 1.5 s", function()
+  local ann = troupe.actor{ name = "ann" }
+  local w = ann:walk{ to = {0, 0, 4} }
+  local near
+  expect(run_until(function()
+    local p = ann:position()
+    if not near and math.abs(p[3] - 4) < 0.01 and math.abs(p[1]) < 0.01 then near = troupe.time() end
+    return w.status == "completed" or w.status == "failed"
+  end, 10), "the walk ended: " .. w.status)
+  expect(w.status == "completed", w.status)
+  -- The last steps at the cadence of the body's speed, falling to nothing, took 2 s.
+  expect(troupe.time() - near < 1.5,
+         string.format("completed %.2f s after the body reached its goal", troupe.time() - near))
+end)
+
 test("walk a path of floor points; feet stay on or above the floor", function()
   local ann = troupe.actor{ name = "ann" }
   local w = ann:walk{ path = {{0, 2}, {1.5, 3}, {2, 1}}, speed = 1.1 }

@@ -132,10 +132,11 @@ pub const TURN_ON_PLANTED: f64 = 0.55;
 /// The cadence (as a walking speed, m/s) of the steps that turn a body on the spot (see
 /// [`route::SPOT_TURN_RATE`]).
 pub const TURNING_CADENCE: f64 = 1.0;
-/// The least cadence (as a walking speed, m/s) of a stopped walk's steps: a person
-/// stopping brings the feet together in a quick step or two, where the cadence of the
-/// body's speed, falling to nothing, took the slowest cycle (2.5 s) and the last step
-/// was still in the air when the stop's time ran out.
+/// The least cadence (as a walking speed, m/s) of a stopped walk's steps, and of an
+/// arrived walk's last steps: a person stopping brings the feet together in a quick step
+/// or two, where the cadence of the body's speed, falling to nothing, took the slowest
+/// cycle (2.5 s): a stop's last step was still in the air when its time ran out, and a
+/// walk stood 2 s at its goal before it completed.
 pub const STOPPING_CADENCE: f64 = 1.0;
 /// Farthest (radians) a landing turns from the other foot's heading: a step takes the
 /// body round by at most about this much, twice [`TURN_ON_PLANTED`] less a margin.
@@ -606,7 +607,9 @@ impl Walk {
         } else {
             0.0
         };
-        let stopping = if self.stopped_at.is_some() {
+        // Stopped, or arrived (the plan's body has come to rest): the feet catch up.
+        let arrived = self.steer.plan_time(t, self.t) >= plan.end_time;
+        let stopping = if self.stopped_at.is_some() || arrived {
             STOPPING_CADENCE
         } else {
             0.0
