@@ -21,6 +21,29 @@ test("a method called with . instead of : says so", function()
   says(function() ann.on("action_completed", function() end) end,
     "on: call it as a method, with `:` (`actor:on(…)`), not with `.`")
   says(function() ann.position() end, "position: call it as a method, with `:`")
+  -- A sequence's method named the actor's: ``(`actor:dofs(…)`)``.
+  local s = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  says(function() s.dofs() end, "dofs: call it as a method, with `:` (`sequence:dofs(…)`)")
+end)
+
+test("a handle's unknown field says where it was asked, and the nearest name", function()
+  -- They said `__mlua_index:31: actor has no method or field `mas``: the place of mlua's
+  -- lookup code, not the scene's; objects, sequences and handlers answered nil.
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "sphere", radius = 0.04, at = {0.3, 1, 0.3} }
+  local seq = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  local e = says(function() return ann.heigth end, "actor has no method or field `heigth`; did you mean `height`?")
+  expect(not e:find("__mlua", 1, true), e)
+  says(function() ann:nonexistent() end, "actor has no method or field `nonexistent`")
+  says(function() return cup.positon end, "object has no method or field `positon`; did you mean `position`?")
+  says(function() return seq.duraton end, "sequence has no method or field `duraton`; did you mean `duration`?")
+  says(function() return seq.speed end, "sequence has no method or field `speed` (known: ")
+  local a = ann:play(seq)
+  says(function() return a.statsu end, "action has no method or field `statsu`; did you mean `status`?")
+  local h = ann:on("action_completed", function() end)
+  says(function() return h.of end, "handler has no method or field `of`; did you mean `off`?")
+  local b = ann:behave(function() end)
+  says(function() return b.state end, "behavior has no method or field `state`")
 end)
 
 test("an error in a function an action calls is the message alone, with the time", function()

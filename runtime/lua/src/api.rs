@@ -183,13 +183,13 @@ impl UserData for ActorRef {
                         let is_self = matches!(args.next(),
                             Some(Value::UserData(u)) if u.borrow::<ActorRef>().is_ok());
                         if !is_self {
-                            return Err(lua_err(dot_call_hint(kind.method)));
+                            return Err(lua_err(dot_call_hint("actor", kind.method)));
                         }
                         start_kind(lua, actor, kind, args.collect())
                     })?;
                     Ok(Value::Function(f))
                 }
-                None => Err(lua_err(format!("actor has no method or field `{key}`"))),
+                None => Err(no_member("Actor", &key)),
             }
         });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
@@ -255,6 +255,9 @@ impl UserData for ObjectRef {
             let r = stage(lua)?.scene.objects()[this.0].rotation;
             vec3_table(lua, r * DVec3::Y)
         });
+        methods.add_meta_method(MetaMethod::Index, |_, _, key: String| {
+            Err::<Value, _>(no_member("Object", &key))
+        });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
             Ok(format!(
                 "object {}",
@@ -297,7 +300,7 @@ impl UserData for ActionRef {
                     }
                     _ => Value::Nil,
                 },
-                _ => return Err(lua_err(format!("action has no field `{key}`"))),
+                _ => return Err(no_member("Action", &key)),
             })
         });
         methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
@@ -347,11 +350,7 @@ impl UserData for BehaviorRef {
                     Some(a) => Value::UserData(lua.create_userdata(ActorRef(a))?),
                     None => Value::Nil,
                 },
-                _ => {
-                    return Err(lua_err(format!(
-                        "behavior has no field `{key}` (known: status, error, actor, stop, wait)"
-                    )))
-                }
+                _ => return Err(no_member("Behavior", &key)),
             })
         });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
@@ -379,6 +378,9 @@ impl UserData for HandlerRef {
         methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
             Ok(format!("handler {}", this.0))
         });
+        methods.add_meta_method(MetaMethod::Index, |_, _, key: String| {
+            Err::<Value, _>(no_member("Handler", &key))
+        });
     }
 }
 
@@ -404,7 +406,29 @@ impl UserData for SequenceRef {
         methods.add_method("interpolation", |_, this, dof: String| {
             Ok(sequence_track(&this.0, &dof)?.interpolation().name())
         });
+        methods.add_meta_method(MetaMethod::Index, |_, _, key: String| {
+            Err::<Value, _>(no_member("Sequence", &key))
+        });
     }
+}
+
+/// The error of indexing a handle of `class` (as [`crate::reference::CLASSES`] names it)
+/// with a name it lacks: the nearest documented one when `key` looks like a slip of it,
+/// else the documented names when they are few.
+fn no_member(class: &str, key: &str) -> mlua::Error {
+    let known: Vec<&str> = crate::reference::API
+        .iter()
+        .filter(|e| e.owner == class)
+        .map(|e| e.name)
+        .collect();
+    let mut hint = troupe_body::error::did_you_mean(key, known.iter().copied());
+    if hint.is_empty() && known.len() <= 12 {
+        hint = format!(" (known: {})", known.join(", "));
+    }
+    lua_err(format!(
+        "{} has no method or field `{key}`{hint}",
+        class.to_lowercase()
+    ))
 }
 
 /// The track of `dof` in `seq`, or an error naming both.

@@ -59,8 +59,8 @@ pub fn bad_arg(method: &str, what: &str, expected: &str, got: &Value) -> mlua::E
 }
 
 /// The message of a method called with `.` instead of `:` (its `self` is missing).
-pub fn dot_call_hint(method: &str) -> String {
-    format!("{method}: call it as a method, with `:` (`actor:{method}(…)`), not with `.`")
+pub fn dot_call_hint(receiver: &str, method: &str) -> String {
+    format!("{method}: call it as a method, with `:` (`{receiver}:{method}(…)`), not with `.`")
 }
 
 /// The text of an mlua error in troupe's wording: a bad argument that mlua converted
@@ -74,13 +74,15 @@ pub fn error_text(e: &mlua::Error) -> String {
             name,
             cause,
         } => {
-            // mlua names a method `Type.method`.
-            let method = to
-                .as_deref()
-                .map(|t| t.rsplit('.').next().unwrap_or(t))
-                .unwrap_or("call");
+            // mlua names a method `Type.method` (`SequenceRef.dofs`).
+            let (receiver, method) = match to.as_deref() {
+                Some(t) => t.rsplit_once('.').unwrap_or(("", t)),
+                None => ("", "call"),
+            };
             if name.as_deref() == Some("self") {
-                return dot_call_hint(method);
+                // The handle as scripts know it: `ActorRef` is an actor.
+                let receiver = receiver.strip_suffix("Ref").unwrap_or(receiver);
+                return dot_call_hint(&receiver.to_lowercase(), method);
             }
             // A method's arguments are counted after `self`, as the script writes them.
             let is_method = to.as_deref().is_some_and(|t| t.contains('.'));
