@@ -153,6 +153,20 @@ test("unknown names: get_actor and get_object answer nil, every other call raise
   says(function() ann:dof("r_shoulder_twisting") end, "did you mean `r_shoulder_twist`?")
   says(function() ann:joint_position("r_wirst") end, "unknown joint `r_wirst` in skeleton `adult`; did you mean `r_wrist`?")
   says(function() ann:on("action_exploded", function() end) end, "on: unknown event `action_exploded`")
+  -- Each query names itself, as `file:line: method: …` promises (they did not).
+  says(function() ann:joint_position("r_wirst") end, "joint_position: unknown joint `r_wirst`")
+  says(function() ann:dof("r_elbo") end, "dof: unknown DOF `r_elbo`")
+  says(function() ann:dofs("tail") end, "dofs: unknown scope `tail`")
+  says(function() ann:pose{ r_elbo = 1 } end, "pose: unknown DOF `r_elbo`")
+  local s = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  says(function() s:value("l_elbow_flexion", 0.5) end, "value: sequence `")
+  says(function() s:interpolation("l_elbow_flexion") end, "interpolation: sequence `")
+end)
+
+test("a character file not found, caught, is the message alone", function()
+  local e = says(function() troupe.actor{ name = "nf", look = "no_such_avatar.vrm" } end,
+    "actor: look: file `no_such_avatar.vrm` not found; looked for ")
+  expect(not e:find("runtime error", 1, true), e)
 end)
 
 test("limits name the limit and the place", function()
