@@ -163,6 +163,19 @@ test("unknown names: get_actor and get_object answer nil, every other call raise
   says(function() s:interpolation("l_elbow_flexion") end, "interpolation: sequence `")
 end)
 
+test("an unknown actor or object name lists the scene's, or gives the nearest", function()
+  -- `grasp: unknown object `cpu`` listed nothing, though the doc promises the known
+  -- names where the list is short.
+  local ann = troupe.actor{ name = "ann" }
+  troupe.actor{ name = "bob", at = {1, 0, 0} }
+  for _, n in ipairs({ "cup", "plate", "jug" }) do
+    troupe.object{ name = n, shape = "sphere", radius = 0.04, at = {0.3, 1, 0.3} }
+  end
+  says(function() ann:grasp{ object = "cupp" } end, "grasp: unknown object `cupp`; did you mean `cup`?")
+  says(function() ann:grasp{ object = "saucer" } end, "grasp: unknown object `saucer` (known: cup, plate, jug)")
+  says(function() ann:give{ object = "cup", to = "bobb" } end, "give: unknown actor `bobb`; did you mean `bob`?")
+end)
+
 test("a character file not found, caught, is the message alone", function()
   local e = says(function() troupe.actor{ name = "nf", look = "no_such_avatar.vrm" } end,
     "actor: look: file `no_such_avatar.vrm` not found; looked for ")

@@ -423,10 +423,7 @@ fn no_member(class: &str, key: &str) -> mlua::Error {
         .filter(|e| e.owner == class)
         .map(|e| e.name)
         .collect();
-    let mut hint = troupe_body::error::did_you_mean(key, known.iter().copied());
-    if hint.is_empty() && known.len() <= 12 {
-        hint = format!(" (known: {})", known.join(", "));
-    }
+    let hint = crate::args::name_hint(key, &known, 12);
     lua_err(format!(
         "{} has no method or field `{key}`{hint}",
         class.to_lowercase()
