@@ -102,3 +102,19 @@ test("a diverging simulation fails and the actor keeps its last valid posture", 
   local ok, e = pcall(function() return ann:servo{ target = { r_elbow_flexion = "bent" } } end)
   expect(not ok, "bad target refused")
 end)
+
+test("servo follows an actor given by name; an unknown name or a root target says why", function()
+  -- `target = "ann"` was refused ("must be a posture table or an actor, got string")
+  -- where walk, give and grasp take names; `target = {root_x = …}` said "servo action:
+  -- scope is empty".
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {2, 0, 0} }
+  ann:pose{ r_elbow_flexion = 1.0 }
+  local f = bob:servo{ target = "ann", scope = "right_arm", duration = 1 }
+  expect(f:wait() == "completed", "completed: " .. tostring(f.error))
+  expect(math.abs(bob:dof("r_elbow_flexion") - 1.0) < 0.1, "followed: " .. bob:dof("r_elbow_flexion"))
+  local ok, e = pcall(function() return bob:servo{ target = "anne" } end)
+  expect(not ok and tostring(e):find("servo: unknown actor `anne`; did you mean `ann`?", 1, true), tostring(e))
+  ok, e = pcall(function() return bob:servo{ target = { root_x = 0.5 } } end)
+  expect(not ok and tostring(e):find("servo: the target names only root DOFs, and the root is never servoed", 1, true), tostring(e))
+end)

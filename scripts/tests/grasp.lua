@@ -144,6 +144,28 @@ test("manipulate with a function of time", function()
   expect(math.abs(ball:position()[2] - 1.05) < 0.01, "put back down")
 end)
 
+test("a grasp, place or manipulate whose scope has nothing of the arm is refused", function()
+  -- They ran with every arm write refused: the grasp failed "the hand closed 0.35 m
+  -- from `cup`", the manipulate completed with the cup where it was.
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {-0.2, 1.05, 0.38} }
+  local function refused(f)
+    local ok, e = pcall(f)
+    expect(not ok, "refused")
+    e = tostring(e)
+    expect(e:find("option `scope` must hold a DOF that moves the", 1, true) ~= nil, e)
+    expect(e:find("grasp.lua:", 1, true) ~= nil, "says where: " .. e)
+  end
+  refused(function() return ann:grasp{ object = cup, scope = "head" } end)
+  local g = ann:grasp{ object = cup, hand = "right", scope = "right_arm+right_hand" }
+  expect(run_until(function() return done(g) end, 4), "a scope with the arm grasps: " .. tostring(g.error))
+  refused(function() return ann:manipulate{ object = cup, scope = "left_arm",
+                                            keys = { { t = 0.5, at = {-0.2, 1.15, 0.38} } } } end)
+  refused(function() return ann:place{ object = cup, at = {-0.2, 1.05, 0.4}, scope = "spine" } end)
+  expect(#ann:actions() == 0, "nothing started")
+end)
+
 test("manipulate overhead turns no joint faster than 8 rad/s", function()
   -- The ball raised over the head: the shoulder's flexion locked at its limit and the IK
   -- found the arm another way in one tick (89.8 rad/s).

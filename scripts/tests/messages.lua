@@ -21,6 +21,29 @@ test("a method called with . instead of : says so", function()
   says(function() ann.on("action_completed", function() end) end,
     "on: call it as a method, with `:` (`actor:on(…)`), not with `.`")
   says(function() ann.position() end, "position: call it as a method, with `:`")
+  -- A sequence's method named the actor's: ``(`actor:dofs(…)`)``.
+  local s = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  says(function() s.dofs() end, "dofs: call it as a method, with `:` (`sequence:dofs(…)`)")
+end)
+
+test("a handle's unknown field says where it was asked, and the nearest name", function()
+  -- They said `__mlua_index:31: actor has no method or field `mas``: the place of mlua's
+  -- lookup code, not the scene's; objects, sequences and handlers answered nil.
+  local ann = troupe.actor{ name = "ann" }
+  local cup = troupe.object{ name = "cup", shape = "sphere", radius = 0.04, at = {0.3, 1, 0.3} }
+  local seq = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  local e = says(function() return ann.heigth end, "actor has no method or field `heigth`; did you mean `height`?")
+  expect(not e:find("__mlua", 1, true), e)
+  says(function() ann:nonexistent() end, "actor has no method or field `nonexistent`")
+  says(function() return cup.positon end, "object has no method or field `positon`; did you mean `position`?")
+  says(function() return seq.duraton end, "sequence has no method or field `duraton`; did you mean `duration`?")
+  says(function() return seq.speed end, "sequence has no method or field `speed` (known: ")
+  local a = ann:play(seq)
+  says(function() return a.statsu end, "action has no method or field `statsu`; did you mean `status`?")
+  local h = ann:on("action_completed", function() end)
+  says(function() return h.of end, "handler has no method or field `of`; did you mean `off`?")
+  local b = ann:behave(function() end)
+  says(function() return b.state end, "behavior has no method or field `state`")
 end)
 
 test("an error in a function an action calls is the message alone, with the time", function()
@@ -130,6 +153,33 @@ test("unknown names: get_actor and get_object answer nil, every other call raise
   says(function() ann:dof("r_shoulder_twisting") end, "did you mean `r_shoulder_twist`?")
   says(function() ann:joint_position("r_wirst") end, "unknown joint `r_wirst` in skeleton `adult`; did you mean `r_wrist`?")
   says(function() ann:on("action_exploded", function() end) end, "on: unknown event `action_exploded`")
+  -- Each query names itself, as `file:line: method: …` promises (they did not).
+  says(function() ann:joint_position("r_wirst") end, "joint_position: unknown joint `r_wirst`")
+  says(function() ann:dof("r_elbo") end, "dof: unknown DOF `r_elbo`")
+  says(function() ann:dofs("tail") end, "dofs: unknown scope `tail`")
+  says(function() ann:pose{ r_elbo = 1 } end, "pose: unknown DOF `r_elbo`")
+  local s = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
+  says(function() s:value("l_elbow_flexion", 0.5) end, "value: sequence `")
+  says(function() s:interpolation("l_elbow_flexion") end, "interpolation: sequence `")
+end)
+
+test("an unknown actor or object name lists the scene's, or gives the nearest", function()
+  -- `grasp: unknown object `cpu`` listed nothing, though the doc promises the known
+  -- names where the list is short.
+  local ann = troupe.actor{ name = "ann" }
+  troupe.actor{ name = "bob", at = {1, 0, 0} }
+  for _, n in ipairs({ "cup", "plate", "jug" }) do
+    troupe.object{ name = n, shape = "sphere", radius = 0.04, at = {0.3, 1, 0.3} }
+  end
+  says(function() ann:grasp{ object = "cupp" } end, "grasp: unknown object `cupp`; did you mean `cup`?")
+  says(function() ann:grasp{ object = "saucer" } end, "grasp: unknown object `saucer` (known: cup, plate, jug)")
+  says(function() ann:give{ object = "cup", to = "bobb" } end, "give: unknown actor `bobb`; did you mean `bob`?")
+end)
+
+test("a character file not found, caught, is the message alone", function()
+  local e = says(function() troupe.actor{ name = "nf", look = "no_such_avatar.vrm" } end,
+    "actor: look: file `no_such_avatar.vrm` not found; looked for ")
+  expect(not e:find("runtime error", 1, true), e)
 end)
 
 test("limits name the limit and the place", function()

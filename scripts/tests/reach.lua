@@ -86,6 +86,23 @@ test("look_at turns the head toward a point and keeps running", function()
   expect(run_until(function() return l.status == "cancelled" end, 1), "cancelled")
 end)
 
+test("look_at refuses a scope without the head or eyes, and looks with the eyes alone", function()
+  -- `scope = "right_arm"` ran to completion having moved nothing (every write refused,
+  -- with a log warning); `scope = "eyes"` aimed the eyes as if the head had turned too.
+  local ann = troupe.actor{ name = "ann" }
+  local ok, err = pcall(function() return ann:look_at{ target = {0, 1.6, 2}, scope = "right_arm" } end)
+  expect(not ok, "refused")
+  err = tostring(err)
+  expect(err:find("look_at: option `scope` must hold a DOF that moves the head or the eyes", 1, true) ~= nil, err)
+  expect(err:find("reach.lua:", 1, true) ~= nil, "says where: " .. err)
+  local l = ann:look_at{ target = {0.3, 1.6, 2}, scope = "eyes" }
+  run(1)
+  expect(l.status == "active", "runs: " .. l.status .. " " .. tostring(l.error))
+  expect(ann:dof("skullbase_torsion") == 0, "the head stays")
+  local pan = ann:dof("l_eyeball_pan")
+  expect(pan > 0.1, "the eyes alone turn toward the target: pan " .. pan)
+end)
+
 test("self-collision is a per-actor setting", function()
   local ann = troupe.actor{ name = "ann" }
   ann:set{ self_collision = false }

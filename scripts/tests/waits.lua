@@ -148,7 +148,19 @@ test("a wait inside a coroutine the behavior made is an error, not a silent retu
   }) do
     local ok, e = pcall(coroutine.wrap(inner))
     expect(not ok and tostring(e):find("not in a coroutine it made", 1, true), tostring(e))
+    -- Called from a Lua line, Lua 5.4's wrap put that line's place before the error's
+    -- own: `waits.lua:N: waits.lua:N: …`.
+    ok, e = pcall(function() coroutine.wrap(inner)() end)
+    local _, places = tostring(e):gsub("waits%.lua:%d+: ", "")
+    expect(places == 1, "the place once: " .. tostring(e))
   end
+  -- A wrapped coroutine still yields, returns and ends as Lua's does.
+  local gen = coroutine.wrap(function(a) local b = coroutine.yield(a + 1); return b * 2 end)
+  expect(gen(1) == 2 and gen(5) == 10, "yields and returns")
+  local ok, e = pcall(gen)
+  expect(not ok and tostring(e):find("cannot resume dead coroutine", 1, true), tostring(e))
+  local _, e2 = pcall(coroutine.wrap(function() error({ code = 7 }) end))
+  expect(type(e2) == "table" and e2.code == 7, "a table error passes as it is")
   expect(troupe.time() == t0, "no time passed")
   run(0.5)   -- the test's own waits still wait
   expect(troupe.time() > t0, "the test waited")

@@ -8,7 +8,7 @@ use troupe_body::dynamics::contact::ContactParams;
 use troupe_body::dynamics::SimParams;
 use troupe_body::glam::DVec3;
 use troupe_lua::api::{load_sequence, ActorRef, SequenceRef};
-use troupe_lua::args::{check_keys, err, opt_bool, opt_number, opt_table_arg, vec3};
+use troupe_lua::args::{actor_arg, check_keys, err, opt_bool, opt_number, opt_table_arg, vec3};
 use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
@@ -150,11 +150,14 @@ pub fn build_servo(
             list.sort_by_key(|(k, _)| *k);
             ServoTarget::Posture(list)
         }
-        Value::UserData(u) => {
-            let other = u
-                .borrow::<ActorRef>()
-                .map_err(|_| err(m, "target must be a posture table or an actor"))?
-                .0;
+        // An actor, by handle or by name (as `walk`, `give` and `grasp` take them).
+        target @ (Value::UserData(_) | Value::String(_)) => {
+            if let Value::UserData(u) = &target {
+                if !u.is::<ActorRef>() {
+                    return Err(err(m, "target must be a posture table or an actor"));
+                }
+            }
+            let other = actor_arg(ctx.lua, m, "target", target)?;
             let same = ctx.with_scene(|s| {
                 let o = &s.actors()[other].skeleton;
                 o.dof_count() == skel.dof_count()
@@ -176,7 +179,7 @@ pub fn build_servo(
             return Err(err(
                 m,
                 format!(
-                    "target must be a posture table or an actor, got {}",
+                    "target must be a posture table, an actor or an actor's name, got {}",
                     other.type_name()
                 ),
             ))

@@ -131,27 +131,64 @@ impl DynamicsOptions {
             Drive::Servo {
                 target: ServoTarget::Posture(values),
                 ..
-            } => asked.unwrap_or_else(|| {
+            } => {
                 let named: Scope = values.iter().map(|(k, _)| *k).collect();
-                named.intersection(&body)
-            }),
+                if named.is_empty() && asked.is_none() {
+                    return Err(OptionError::refused(
+                        "target",
+                        "the target names no DOF (give some, or a `scope` to hold)",
+                    )
+                    .into());
+                }
+                if !named.is_empty() && !named.overlaps(&body) {
+                    return Err(OptionError::refused(
+                        "target",
+                        "the target names only root DOFs, and the root is never servoed",
+                    )
+                    .into());
+                }
+                // Servoing DOFs the target does not name holds them where they are: a
+                // scope with none of the target's DOFs would ignore the target.
+                if let Some(asked) = asked {
+                    if !named.is_empty() && !asked.overlaps(&named.intersection(&body)) {
+                        return Err(OptionError::refused(
+                            "scope",
+                            "the scope holds none of the target's DOFs (root excluded)",
+                        )
+                        .into());
+                    }
+                }
+                asked.unwrap_or_else(|| named.intersection(&body))
+            }
             Drive::Servo { .. } => asked.unwrap_or(body),
             Drive::Track { sequence, .. } => {
                 let mut natural = Scope::EMPTY;
                 for track in sequence.tracks() {
                     natural.insert(skeleton.dof(track.dof())?);
                 }
-                let scope = asked.unwrap_or(natural).difference(&root);
-                if scope.is_empty() {
+                // Like a servo's, a scope beyond the tracks holds those DOFs, but one
+                // with none of them would track nothing.
+                let tracked = asked.map_or(natural, |a| a.intersection(&natural));
+                if tracked.difference(&root).is_empty() {
                     return Err(OptionError::refused(
                         "scope",
                         "nothing to track (the sequence's DOFs on the scope, root excluded)",
                     )
                     .into());
                 }
-                scope
+                asked.unwrap_or(natural).difference(&root)
             }
         };
+        if !matches!(self.drive, Drive::Passive)
+            && !scope.is_empty()
+            && scope.difference(&root).is_empty()
+        {
+            return Err(OptionError::refused(
+                "scope",
+                "the scope holds only root DOFs, and the root is never servoed",
+            )
+            .into());
+        }
         Ok(scope)
     }
 
@@ -242,5 +279,49 @@ mod tests {
         track.validate().unwrap();
         let e = track.scope(&skeleton, None).expect_err("refused");
         assert!(e.to_string().contains("nothing to track"), "{e}");
+    }
+
+    #[test]
+    fn a_scope_with_none_of_the_tracks_is_refused() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let mut seq = Sequence::new("bend");
+        let keys = vec![Key::new(0.0, 0.5), Key::new(1.0, 1.2)];
+        seq.add_track(Track::new("r_elbow_flexion", keys).unwrap())
+            .unwrap();
+        let track = DynamicsOptions::new(Drive::Track {
+            sequence: Arc::new(seq),
+            gains: Gains::default(),
+        });
+        let head = skeleton.scope("head").unwrap();
+        let e = track.scope(&skeleton, Some(head)).expect_err("refused");
+        assert!(e.to_string().contains("nothing to track"), "{e}");
+        let arm = skeleton.scope("right_arm").unwrap();
+        assert_eq!(track.scope(&skeleton, Some(arm)).unwrap(), arm);
+    }
+
+    #[test]
+    fn a_servo_of_the_root_or_beside_its_target_is_refused_saying_why() {
+        let skeleton = default_skeleton("adult").unwrap();
+        let root_x = skeleton.dof("root_x").unwrap();
+        let e = servo(vec![(root_x, 0.5)], Gains::default())
+            .scope(&skeleton, None)
+            .expect_err("refused");
+        assert!(e.to_string().contains("root is never servoed"), "{e}");
+        let elbow = skeleton.dof("r_elbow_flexion").unwrap();
+        let head = skeleton.scope("head").unwrap();
+        let e = servo(vec![(elbow, 0.5)], Gains::default())
+            .scope(&skeleton, Some(head))
+            .expect_err("refused");
+        assert!(e.to_string().contains("none of the target's DOFs"), "{e}");
+        let root = Scope::range(skeleton.joints()[0].dofs.clone());
+        let follow = DynamicsOptions::new(Drive::Servo {
+            target: ServoTarget::Actor(1),
+            gains: Gains::default(),
+            gravity_compensation: true,
+        });
+        let e = follow.scope(&skeleton, Some(root)).expect_err("refused");
+        assert!(e.to_string().contains("root is never servoed"), "{e}");
+        let arm = skeleton.scope("right_arm").unwrap();
+        assert_eq!(follow.scope(&skeleton, Some(arm)).unwrap(), arm);
     }
 }

@@ -37,11 +37,20 @@ pub(crate) fn yielding(mut spec: ActionSpec, body: troupe_body::Scope) -> Action
     spec
 }
 
-/// Makes a spec for a hand action that decides itself when it is done.
-fn open_ended(common: &CommonOptions, kind: &str, scope: troupe_body::Scope) -> ActionSpec {
-    let mut spec = common.spec(kind, scope);
+/// Makes a spec for a hand action on `scope` that decides itself when it is done,
+/// yielding the part of `body` (the whole-body part of a reach) in its scope; a `scope`
+/// option with nothing of the arm and hand is refused.
+fn open_ended(
+    ctx: &BuildContext,
+    common: &CommonOptions,
+    kind: &str,
+    scope: troupe_body::Scope,
+    body: troupe_body::Scope,
+) -> mlua::Result<ActionSpec> {
+    let arm = scope.difference(&body);
+    let mut spec = common.spec_moving(ctx, kind, scope, arm, "the hand")?;
     spec.duration = None;
-    spec
+    Ok(yielding(spec, body))
 }
 
 /// Reads `detour = false` (default `true`: the arm bends round other bodies).
@@ -68,10 +77,7 @@ pub fn build_grasp(ctx: &BuildContext, args: MultiValue) -> Built {
     let (scope, body) = options.scope(&ctx.skeleton).map_err(|e| err(m, e))?;
     let grasp = options.grasp().map_err(|e| err(m, e))?;
     // The generator decides when it is done; `duration` is the reach time.
-    Ok((
-        Box::new(grasp),
-        yielding(open_ended(&common, m, scope), body),
-    ))
+    Ok((Box::new(grasp), open_ended(ctx, &common, m, scope, body)?))
 }
 
 /// Makes a release (or, with `place`, a place) of `t`'s `object`.
@@ -90,10 +96,7 @@ fn release_like(
     let (release, scope, body) = ctx
         .with_scene(|s| options.release(s, ctx.actor))?
         .map_err(|e| err(m, e))?;
-    Ok((
-        Box::new(release),
-        yielding(open_ended(common, m, scope), body),
-    ))
+    Ok((Box::new(release), open_ended(ctx, common, m, scope, body)?))
 }
 
 /// `actor:release{object = OBJ, <common options>}`.

@@ -20,5 +20,6 @@ pub fn build_look_at(
     };
     let generator = options.look_at(&ctx.skeleton).map_err(|e| err(m, e))?;
     let natural: Scope = generator.scope_dofs().into_iter().collect();
-    Ok((Box::new(generator), common.spec(m, natural)))
+    let spec = common.spec_moving(ctx, m, natural, natural, "the head or the eyes")?;
+    Ok((Box::new(generator), spec))
 }

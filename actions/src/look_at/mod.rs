@@ -115,7 +115,13 @@ impl Generator for LookAt {
             self.q = ctx.posture.q.clone();
         }
         let d = &self.dofs;
-        let own = self.scope_dofs();
+        // A `scope` option may leave it part of the head and eyes (`scope = "eyes"`): the
+        // rest follows the posture, and the eyes aim from where the head really is.
+        let own: Vec<usize> = self
+            .scope_dofs()
+            .into_iter()
+            .filter(|&i| ctx.scope.contains(i))
+            .collect();
         // The body as it is, with the head and eyes where this action last put them.
         let saved: Vec<f64> = own.iter().map(|&i| self.q[i]).collect();
         self.q.copy_from_slice(&ctx.posture.q);
@@ -140,8 +146,10 @@ impl Generator for LookAt {
         let eye_k = 1.0 - (-ctx.dt / EYE_TIME_CONSTANT).exp();
         let dofs = skeleton.dofs();
         let approach = |i: usize, want: f64, k: f64, q: &mut [f64]| {
-            let want = dofs[i].clamp(want);
-            q[i] += (want - q[i]) * k;
+            if ctx.scope.contains(i) {
+                let want = dofs[i].clamp(want);
+                q[i] += (want - q[i]) * k;
+            }
         };
         approach(d.neck_torsion, yaw * NECK_SHARE, head_k, &mut self.q);
         approach(d.neck_flexion, pitch * NECK_SHARE, head_k, &mut self.q);

@@ -24,7 +24,7 @@ pub fn build_manipulate(
     let (generator, scope) = ctx
         .with_scene(|s| options.manipulate(s, ctx.actor))?
         .map_err(|e| err(m, e))?;
-    let mut spec = common.spec(m, scope);
+    let mut spec = common.spec_moving(ctx, m, scope, scope, "the arm that holds the object")?;
     spec.duration = None;
     Ok((Box::new(generator), spec))
 }

@@ -3,7 +3,7 @@
 pub(crate) use crate::args::lua_err;
 pub use crate::args::lua_err_message;
 use crate::args::{
-    bad_arg, check_keys, dot_call_hint, euler_degrees, opt_bool, opt_number, opt_string,
+    bad_arg, check_keys, dot_call_hint, err, euler_degrees, opt_bool, opt_number, opt_string,
     value_name, vec3, vec3_table,
 };
 use crate::error::Error;
@@ -58,7 +58,7 @@ impl UserData for ActorRef {
             let p = {
                 let st = stage(lua)?;
                 let skel = &st.scene.actors()[this.0].skeleton;
-                let j = skel.joint(&name).map_err(lua_err)?;
+                let j = skel.joint(&name).map_err(|e| err("joint_position", e))?;
                 st.scene.states()[this.0].globals[j].translation
             };
             vec3_table(lua, p)
@@ -68,14 +68,14 @@ impl UserData for ActorRef {
             let d = st.scene.actors()[this.0]
                 .skeleton
                 .dof(&name)
-                .map_err(lua_err)?;
+                .map_err(|e| err("dof", e))?;
             Ok(st.scene.states()[this.0].q[d])
         });
         methods.add_method("dofs", |lua, this, scope: String| {
             let names: Vec<String> = {
                 let st = stage(lua)?;
                 let skel = &st.scene.actors()[this.0].skeleton;
-                let s = skel.scope(&scope).map_err(lua_err)?;
+                let s = skel.scope(&scope).map_err(|e| err("dofs", e))?;
                 skel.dof_names(&s).into_iter().map(String::from).collect()
             };
             lua.create_sequence_from(names)
@@ -104,10 +104,10 @@ impl UserData for ActorRef {
             for pair in values.pairs::<String, f64>() {
                 let (name, v) = pair
                     .map_err(|e| lua_err(format!("pose: expects {{dof_name = number, …}}: {e}")))?;
-                set.push((skel.dof(&name).map_err(lua_err)?, v));
+                set.push((skel.dof(&name).map_err(|e| err("pose", e))?, v));
             }
             set.sort_by_key(|(d, _)| *d);
-            st.scene.set_dofs(this.0, &set).map_err(lua_err)
+            st.scene.set_dofs(this.0, &set).map_err(|e| err("pose", e))
         });
         methods.add_method("set", |lua, this, t: Table| {
             crate::settings::set(lua, this.0, &t)
@@ -183,13 +183,13 @@ impl UserData for ActorRef {
                         let is_self = matches!(args.next(),
                             Some(Value::UserData(u)) if u.borrow::<ActorRef>().is_ok());
                         if !is_self {
-                            return Err(lua_err(dot_call_hint(kind.method)));
+                            return Err(lua_err(dot_call_hint("actor", kind.method)));
                         }
                         start_kind(lua, actor, kind, args.collect())
                     })?;
                     Ok(Value::Function(f))
                 }
-                None => Err(lua_err(format!("actor has no method or field `{key}`"))),
+                None => Err(no_member("Actor", &key)),
             }
         });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
@@ -255,6 +255,9 @@ impl UserData for ObjectRef {
             let r = stage(lua)?.scene.objects()[this.0].rotation;
             vec3_table(lua, r * DVec3::Y)
         });
+        methods.add_meta_method(MetaMethod::Index, |_, _, key: String| {
+            Err::<Value, _>(no_member("Object", &key))
+        });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
             Ok(format!(
                 "object {}",
@@ -297,7 +300,7 @@ impl UserData for ActionRef {
                     }
                     _ => Value::Nil,
                 },
-                _ => return Err(lua_err(format!("action has no field `{key}`"))),
+                _ => return Err(no_member("Action", &key)),
             })
         });
         methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
@@ -347,11 +350,7 @@ impl UserData for BehaviorRef {
                     Some(a) => Value::UserData(lua.create_userdata(ActorRef(a))?),
                     None => Value::Nil,
                 },
-                _ => {
-                    return Err(lua_err(format!(
-                        "behavior has no field `{key}` (known: status, error, actor, stop, wait)"
-                    )))
-                }
+                _ => return Err(no_member("Behavior", &key)),
             })
         });
         methods.add_meta_method(MetaMethod::ToString, |lua, this, ()| {
@@ -379,6 +378,9 @@ impl UserData for HandlerRef {
         methods.add_meta_method(MetaMethod::ToString, |_, this, ()| {
             Ok(format!("handler {}", this.0))
         });
+        methods.add_meta_method(MetaMethod::Index, |_, _, key: String| {
+            Err::<Value, _>(no_member("Handler", &key))
+        });
     }
 }
 
@@ -399,21 +401,45 @@ impl UserData for SequenceRef {
                     value_name(&Value::Number(time))
                 )));
             }
-            Ok(sequence_track(&this.0, &dof)?.value(time))
+            Ok(sequence_track("value", &this.0, &dof)?.value(time))
         });
         methods.add_method("interpolation", |_, this, dof: String| {
-            Ok(sequence_track(&this.0, &dof)?.interpolation().name())
+            Ok(sequence_track("interpolation", &this.0, &dof)?
+                .interpolation()
+                .name())
+        });
+        methods.add_meta_method(MetaMethod::Index, |_, _, key: String| {
+            Err::<Value, _>(no_member("Sequence", &key))
         });
     }
 }
 
-/// The track of `dof` in `seq`, or an error naming both.
-fn sequence_track<'a>(seq: &'a Sequence, dof: &str) -> mlua::Result<&'a Track> {
+/// The error of indexing a handle of `class` (as [`crate::reference::CLASSES`] names it)
+/// with a name it lacks: the nearest documented one when `key` looks like a slip of it,
+/// else the documented names when they are few.
+fn no_member(class: &str, key: &str) -> mlua::Error {
+    let known: Vec<&str> = crate::reference::API
+        .iter()
+        .filter(|e| e.owner == class)
+        .map(|e| e.name)
+        .collect();
+    let hint = crate::args::name_hint(key, &known, 12);
+    lua_err(format!(
+        "{} has no method or field `{key}`{hint}",
+        class.to_lowercase()
+    ))
+}
+
+/// The track of `dof` in `seq`, or an error of `method` naming both.
+fn sequence_track<'a>(method: &str, seq: &'a Sequence, dof: &str) -> mlua::Result<&'a Track> {
     seq.track(dof).ok_or_else(|| {
-        lua_err(format!(
-            "sequence `{}` has no track for `{dof}` (see seq:dofs())",
-            seq.name
-        ))
+        err(
+            method,
+            format!(
+                "sequence `{}` has no track for `{dof}` (see seq:dofs())",
+                seq.name
+            ),
+        )
     })
 }
 
@@ -667,7 +693,9 @@ fn object_shape(t: &Table) -> mlua::Result<Shape> {
 /// beside the scene or as given) with its `bones` map (`{ hips = "NodeName", … }`).
 fn load_character(lua: &Lua, path: &str, opts: &Table) -> mlua::Result<troupe_body::Character> {
     let base = stage(lua)?.base_dir.clone();
-    let full = resolve_path(&base, path).map_err(|e| lua_err(format!("actor: look: {e}")))?;
+    // The message alone: mlua's `runtime error:` prefix is no part of it.
+    let full = resolve_path(&base, path)
+        .map_err(|e| lua_err(format!("actor: look: {}", crate::args::error_text(&e))))?;
     stage(lua)?.loaded_files.push(full.clone());
     let mut bones = Vec::new();
     match opts.get::<Value>("bones")? {

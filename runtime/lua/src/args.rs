@@ -59,8 +59,8 @@ pub fn bad_arg(method: &str, what: &str, expected: &str, got: &Value) -> mlua::E
 }
 
 /// The message of a method called with `.` instead of `:` (its `self` is missing).
-pub fn dot_call_hint(method: &str) -> String {
-    format!("{method}: call it as a method, with `:` (`actor:{method}(…)`), not with `.`")
+pub fn dot_call_hint(receiver: &str, method: &str) -> String {
+    format!("{method}: call it as a method, with `:` (`{receiver}:{method}(…)`), not with `.`")
 }
 
 /// The text of an mlua error in troupe's wording: a bad argument that mlua converted
@@ -74,13 +74,15 @@ pub fn error_text(e: &mlua::Error) -> String {
             name,
             cause,
         } => {
-            // mlua names a method `Type.method`.
-            let method = to
-                .as_deref()
-                .map(|t| t.rsplit('.').next().unwrap_or(t))
-                .unwrap_or("call");
+            // mlua names a method `Type.method` (`SequenceRef.dofs`).
+            let (receiver, method) = match to.as_deref() {
+                Some(t) => t.rsplit_once('.').unwrap_or(("", t)),
+                None => ("", "call"),
+            };
             if name.as_deref() == Some("self") {
-                return dot_call_hint(method);
+                // The handle as scripts know it: `ActorRef` is an actor.
+                let receiver = receiver.strip_suffix("Ref").unwrap_or(receiver);
+                return dot_call_hint(&receiver.to_lowercase(), method);
             }
             // A method's arguments are counted after `self`, as the script writes them.
             let is_method = to.as_deref().is_some_and(|t| t.contains('.'));
@@ -345,7 +347,7 @@ pub fn object_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<
         "object",
         v,
         |o: &ObjectRef| o.0,
-        Scene::object_index,
+        |s| s.objects().iter().map(|o| o.name.clone()).collect(),
     )
 }
 
@@ -358,11 +360,25 @@ pub fn actor_arg(lua: &Lua, method: &str, key: &str, v: Value) -> mlua::Result<u
         "actor",
         v,
         |a: &ActorRef| a.0,
-        Scene::actor_index,
+        |s| s.actors().iter().map(|a| a.name.clone()).collect(),
     )
 }
 
-/// A handle `H` (a `noun` such as "actor") or a name that `lookup` finds in the scene.
+/// What follows an unknown `name` in a message: the nearest of `known` when `name` looks
+/// like a slip of it, else every known one when there are at most `short`.
+pub(crate) fn name_hint(name: &str, known: &[&str], short: usize) -> String {
+    let hint = troupe_body::error::did_you_mean(name, known.iter().copied());
+    if !hint.is_empty() || known.len() > short {
+        hint
+    } else if known.is_empty() {
+        " (there are none)".into()
+    } else {
+        format!(" (known: {})", known.join(", "))
+    }
+}
+
+/// A handle `H` (a `noun` such as "actor") or one of the scene's `names` (in index
+/// order); an unknown name's error gives the nearest of them, or lists them when few.
 fn handle_or_name<H: UserData + 'static>(
     lua: &Lua,
     method: &str,
@@ -370,7 +386,7 @@ fn handle_or_name<H: UserData + 'static>(
     noun: &str,
     v: Value,
     index: fn(&H) -> usize,
-    lookup: fn(&Scene, &str) -> troupe_scene::Result<usize>,
+    names: fn(&Scene) -> Vec<String>,
 ) -> mlua::Result<usize> {
     let expected = format!("`{key}` must be an {noun} or an {noun}'s name");
     match v {
@@ -380,7 +396,12 @@ fn handle_or_name<H: UserData + 'static>(
             .map_err(|_| err(method, &expected)),
         Value::String(name) => {
             let name = name.to_str()?.to_string();
-            with_scene(lua, |s| lookup(s, &name))?.map_err(|e| err(method, e))
+            let known = with_scene(lua, names)?;
+            known.iter().position(|n| *n == name).ok_or_else(|| {
+                let known: Vec<&str> = known.iter().map(String::as_str).collect();
+                let hint = name_hint(&name, &known, 8);
+                err(method, format!("unknown {noun} `{name}`{hint}"))
+            })
         }
         Value::Nil => Err(err(method, format!("`{key}` is required"))),
         other => Err(err(

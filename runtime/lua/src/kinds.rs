@@ -192,4 +192,34 @@ impl CommonOptions {
             takes_back: false,
         }
     }
+
+    /// Like [`CommonOptions::spec`], but refuses a `scope` option that holds none of
+    /// `needed`, the DOFs that move `what` (the part the action exists to move): such
+    /// an action would run to completion having moved nothing.
+    pub fn spec_moving(
+        &self,
+        ctx: &BuildContext,
+        kind: &str,
+        natural_scope: Scope,
+        needed: Scope,
+        what: &str,
+    ) -> mlua::Result<ActionSpec> {
+        if let Some(scope) = self.scope {
+            if !scope.overlaps(&needed) {
+                let dofs = ctx.skeleton.dofs();
+                let names: Vec<&str> = needed.iter().map(|k| dofs[k].name.as_str()).collect();
+                // A short list helps; the forty DOFs of an arm and its hand would not.
+                let which = if names.len() <= 8 {
+                    format!(" ({})", names.join(", "))
+                } else {
+                    String::new()
+                };
+                return Err(err(
+                    kind,
+                    format!("option `scope` must hold a DOF that moves {what}{which}, got none"),
+                ));
+            }
+        }
+        Ok(self.spec(kind, natural_scope))
+    }
 }

@@ -38,6 +38,23 @@ coroutine.close = function(co)
   return caught(raw_close(co))
 end
 
+-- Lua 5.4's coroutine.wrap puts the place of the call that resumed it before a string
+-- error raised inside, which names its own place already: `s.lua:22: s.lua:22: wait() …`.
+-- This one passes the error on as it was raised (as Lua 5.3 did).
+local status = coroutine.status
+coroutine.wrap = function(f)
+  local co = coroutine.create(f)
+  local function pass(ok, ...)
+    if ok then return ... end
+    if status(co) == "dead" then raw_close(co) end
+    error((...), 0)
+  end
+  return function(...)
+    if status(co) == "dead" then error("cannot resume dead coroutine", 2) end
+    return pass(coroutine.resume(co, ...))
+  end
+end
+
 -- The coroutines of behaviors and tests (the director's), weakly: a coroutine a behavior
 -- makes itself would take the director's requests to wait as its own values.
 local running = coroutine.running

@@ -283,13 +283,16 @@ pub(crate) fn clean_message(e: &mlua::Error) -> String {
 }
 
 /// `file:line: ` of the script line that called a Rust function, read from the traceback
-/// of its error (the first frame of a script; the prelude's wrappers are skipped), so that
-/// a refused call names its place as Lua's own errors do.
+/// of its error (the first frame of a script; the prelude's wrappers and mlua's own
+/// chunks, such as the `__mlua_index` that looks up a handle's fields, are skipped), so
+/// that a refused call names its place as Lua's own errors do.
 fn caller_place(traceback: &str) -> String {
     traceback
         .lines()
         .map(str::trim)
-        .filter(|l| !l.starts_with("[C]") && !l.starts_with("prelude:"))
+        .filter(|l| {
+            !l.starts_with("[C]") && !l.starts_with("prelude:") && !l.starts_with("__mlua_")
+        })
         .find_map(|l| {
             let (place, _) = l.split_once(": in ")?;
             place.rsplit_once(':')?.1.parse::<u32>().ok()?;
