@@ -43,6 +43,11 @@ test("a walk refuses a scope without its root, pelvis and legs, and a heading it
   expect(not ok and tostring(e):find("`heading` (the way to face on arrival) applies to `to` and `path` walks", 1, true),
          "a velocity walk's heading is refused: " .. tostring(e))
   expect(w.status ~= "failed", w.status)
+  troupe.object{ name = "table", shape = "box", size = {1, 0.7, 0.5}, at = {2, 0.35, 2} }
+  ok, e = pcall(function() return ann:walk{ to = "tabl" } end)
+  expect(not ok and tostring(e):find("did you mean `table`", 1, true), "a name's slip: " .. tostring(e))
+  ok, e = pcall(function() return ann:walk{ velocity = 0 / 0 } end)
+  expect(not ok and tostring(e):find("got nan", 1, true), "nan as Lua writes it: " .. tostring(e))
 end)
 
 test("an arrived walk brings its feet together in a quick step and completes within 1.5 s", function()

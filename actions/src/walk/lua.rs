@@ -267,10 +267,15 @@ fn goal_to(ctx: &BuildContext, to: Value, distance: Option<f64>) -> mlua::Result
                     ))
                 }
                 (None, None) => {
+                    let known = ctx.with_scene(|s| {
+                        let objects = s.objects().iter().map(|o| o.name.clone());
+                        objects.chain(s.actors().iter().map(|a| a.name.clone())).collect::<Vec<_>>()
+                    })?;
+                    let hint = troupe_body::error::did_you_mean(&name, known.iter().map(String::as_str));
                     return Err(err(
                         "walk",
-                        format!("`to = \"{name}\"`: no object or actor has that name"),
-                    ))
+                        format!("`to = \"{name}\"`: no object or actor has that name{hint}"),
+                    ));
                 }
             }
         }

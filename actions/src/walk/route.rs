@@ -89,9 +89,15 @@ impl Route {
         let max_speed = super::cycle::MAX_RV * ht;
         let speed_ok = |v: f64, option: &'static str, what: &str| -> Result<(), OptionError> {
             if !v.is_finite() || v <= 0.0 {
+                // As Lua writes it (Rust writes "NaN").
+                let got = if v.is_nan() {
+                    "nan".to_string()
+                } else {
+                    v.to_string()
+                };
                 return Err(OptionError::refused(
                     option,
-                    format!("{what} must be a finite number > 0 m/s, got {v}"),
+                    format!("{what} must be a finite number > 0 m/s, got {got}"),
                 ));
             }
             if v > max_speed {
