@@ -574,3 +574,22 @@ fn ctrl_c_stops_a_run_and_keeps_its_recording() {
         "{ticks} ticks recorded:\n{stdout}"
     );
 }
+
+#[test]
+fn warn_logs_a_warning_with_the_actors_name() {
+    let scene = temp("warn.lua");
+    std::fs::write(
+        &scene,
+        "local ann = troupe.actor{ name = 'ann' }\n\
+         warn('@on')\n\
+         ann:behave(function() warn('careful: ', 3, ' cups') end)\n",
+    )
+    .unwrap();
+    let out = succeeds(troupe().args(["run", "--seconds", "0.1"]).arg(&scene));
+    let log = String::from_utf8_lossy(&out.stdout) + String::from_utf8_lossy(&out.stderr);
+    assert!(
+        log.contains("WARN") && log.contains("careful: 3 cups") && log.contains("actor=ann"),
+        "{log}"
+    );
+    assert!(!log.contains("@on"), "{log}");
+}

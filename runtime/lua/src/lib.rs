@@ -139,11 +139,34 @@ impl Director {
                     })
                     .collect::<Vec<_>>()
                     .join("\t");
-                let who = lua
-                    .app_data_ref::<Stage>()
-                    .and_then(|st| st.current_actor.map(|a| st.scene.actors()[a].name.clone()))
-                    .unwrap_or_else(|| "scene".into());
-                tracing::info!(target: "lua", actor = %who, "{text}");
+                tracing::info!(target: "lua", actor = %speaker(lua), "{text}");
+                Ok(())
+            })?,
+        )?;
+        // Lua's own `warn` wrote to stderr once turned on with "@on", which no scene saw:
+        // here a warning goes to the log as print's lines do, at the warning level.
+        globals.set(
+            "warn",
+            lua.create_function(|lua, args: MultiValue| {
+                let mut text = String::new();
+                for (i, v) in args.iter().enumerate() {
+                    match v {
+                        Value::String(s) => text.push_str(&s.to_string_lossy()),
+                        Value::Integer(_) | Value::Number(_) => text.push_str(&v.to_string()?),
+                        other => {
+                            return Err(lua_err(format!(
+                                "warn: argument {} must be a string, got {}",
+                                i + 1,
+                                other.type_name()
+                            )))
+                        }
+                    }
+                }
+                // Lua's control messages ("@on", "@off") have nothing to switch here.
+                if args.len() == 1 && text.starts_with('@') {
+                    return Ok(());
+                }
+                tracing::warn!(target: "lua", actor = %speaker(lua), "{text}");
                 Ok(())
             })?,
         )?;
@@ -790,6 +813,14 @@ impl LuaSessionExt for LuaSession {
     fn lua(&self) -> &Lua {
         self.script().lua()
     }
+}
+
+/// Who a line of `print` or `warn` comes from: the actor whose behavior or handler runs,
+/// else the scene.
+fn speaker(lua: &Lua) -> String {
+    lua.app_data_ref::<Stage>()
+        .and_then(|st| st.current_actor.map(|a| st.scene.actors()[a].name.clone()))
+        .unwrap_or_else(|| "scene".into())
 }
 
 /// The `timeout` of `test(name, fn, { timeout = seconds })`: a positive number of

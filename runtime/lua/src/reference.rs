@@ -112,6 +112,7 @@ pub const API: &[Entry] = &[
     f("", "test", &["name: string", "fn: fun()", "opts?: { timeout?: number }"], "", "Registers a scenario test (`troupe test`); `timeout`: its own limit in simulated seconds (default `--timeout`, 120)."),
     f("", "require", &["name: string"], "any", "Loads a module from the scene's folder, else troupe's standard library (once)."),
     f("", "print", &["...: any"], "", "Logs the values with the actor's name."),
+    f("", "warn", &["...: string|number"], "", "Logs the concatenated message as a warning with the actor's name."),
     // The troupe table.
     f("troupe", "actor", &["opts: ActorOptions"], "Actor", "Creates an actor: `name` (required), `template`, `height`, `mass`, `at`, `facing`, and `look` (a rigged .glb/.gltf/.vrm character to draw it as) with its `bones` map."),
     f("troupe", "object", &["opts: ObjectOptions"], "Object", "Creates a rigid object: `name`, `shape` and its sizes, `at`, `rotation`, `mass`."),
