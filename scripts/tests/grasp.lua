@@ -371,6 +371,9 @@ test("a giver crouched from picking a cup off a low table stands up as it hands 
          string.format("taken 21 %% below the shoulders: %.3f against %.3f m", met, 0.79 * shoulder))
   expect(math.abs(ann:dof("root_y")) < 0.005 and math.abs(ann:dof("vl5_flexion")) < 0.01,
          string.format("ann stands upright: pelvis %.3f m, vl5 %.3f rad", ann:dof("root_y"), ann:dof("vl5_flexion")))
+  -- Her empty arm has come down to her side, not left held out where she gave.
+  expect(math.abs(ann:dof("l_shoulder_flexion")) < 0.01 and math.abs(ann:dof("l_elbow_flexion")) < 0.01,
+         string.format("the arm hangs: shoulder %.2f, elbow %.2f rad", ann:dof("l_shoulder_flexion"), ann:dof("l_elbow_flexion")))
 end)
 
 test("a child hands a ball it picked up at its hip to an adult, 0.6 to 0.9 m away", function()

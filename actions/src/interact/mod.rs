@@ -51,6 +51,9 @@ use troupe_scene::{
 pub const GIVE_TIMEOUT: f64 = 10.0;
 /// Seconds to carry the object to the meeting point.
 pub const GIVE_REACH_SECONDS: f64 = 1.0;
+/// Seconds over which a giver's empty arm comes down to its side once the hand has
+/// opened.
+pub const LOWER_SECONDS: f64 = 0.8;
 /// Amplitude (metres) and frequency (Hz) of a handshake.
 pub const SHAKE: (f64, f64) = (0.03, 2.0);
 /// Seconds of shaking.
@@ -569,11 +572,14 @@ impl Generator for Give {
             _ => {
                 let s = (t / OPEN_SECONDS).min(1.0);
                 // The hand opens where it gave; a body that leaned or crouched to give
-                // straightens meanwhile.
+                // straightens meanwhile; then the empty arm comes down to the side (left
+                // held out, it stood in the way of the next person passing: a forearm
+                // 7 cm into it).
                 let back = quintic(s);
+                let down = quintic(((t - OPEN_SECONDS) / LOWER_SECONDS).clamp(0.0, 1.0));
                 for d in self.moving.iter() {
                     self.q[d] = if arm.dofs().contains(&d) {
-                        self.goal_q[d]
+                        self.goal_q[d] * (1.0 - down)
                     } else {
                         self.goal_q[d] + (self.after_q[d] - self.goal_q[d]) * back
                     };
@@ -587,7 +593,7 @@ impl Generator for Give {
                 for d in out.scope().iter() {
                     out.set(d, self.q[d]);
                 }
-                return if s >= 1.0 {
+                return if down >= 1.0 {
                     Step::Finished
                 } else {
                     Step::Running
