@@ -276,7 +276,8 @@ test("a hold fails fast, saying why, when the follower is cancelled or walks awa
   expect(run_until(function() return h2.status ~= "active" end, 3), "the hold ended")
   expect(h2.status == "failed" and tostring(h2.error):find("^the hands came apart: `dan`'s left hand is [%d.]+ m from `carl`'s right hand$") ~= nil,
          h2.status .. ": " .. tostring(h2.error))
-  expect(run_until(function() return f2.status ~= "active" end, 0.1), "the follower let go too: " .. f2.status)
+  -- The follower lets go at once and lowers its arm (0.8 s).
+  expect(run_until(function() return f2.status ~= "active" end, 0.85), "the follower let go too: " .. f2.status)
 end)
 
 test("a hand following another's turns no joint faster than 8 rad/s", function()
@@ -442,6 +443,12 @@ test("shake hands facing each other: bob holds his hand out as ann reaches for i
   expect(run_until(function() return done(s) and done(f) end, 6),
          "shake: " .. s.status .. " " .. tostring(s.error) .. ", follow: " .. f.status)
   expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
+  -- Both let go and their arms came down to their sides (they stayed held out).
+  for _, who in ipairs({ann, bob}) do
+    expect(math.abs(who:dof("r_shoulder_flexion")) < 0.01 and math.abs(who:dof("r_elbow_flexion")) < 0.01,
+           string.format("%s's arm hangs: shoulder %.2f, elbow %.2f rad", who.name,
+                         who:dof("r_shoulder_flexion"), who:dof("r_elbow_flexion")))
+  end
 end)
 
 test("shake hands at 0.5 to 1.1 m apart, the other's hand hanging: it is held out, both complete", function()

@@ -843,8 +843,10 @@ impl Generator for HoldHand {
             let mine = ctx.posture.globals[model.sensors.wrist];
             mine.translation.distance(theirs.translation)
         };
-        if let Some(apart) = self.apart {
-            // A follower that walks away, or is carried off, takes its hand out of ours.
+        let let_go = self.phase > 2 && t >= OPEN_SECONDS;
+        if let (Some(apart), false) = (self.apart, let_go) {
+            // A follower that walks away, or is carried off, takes its hand out of ours
+            // (once the hand has opened to let go, the other's comes down).
             let now = wrists_apart();
             if now > apart + HANDS_APART {
                 return Step::Failed(format!(
@@ -934,10 +936,12 @@ impl Generator for HoldHand {
                 }
             }
             _ => {
-                for &d in arm.dofs() {
-                    self.q[d] = self.goal_q[d];
-                }
+                // The hand opens, lets the other go, and the arm comes down to the side.
                 let s = (t / OPEN_SECONDS).min(1.0);
+                let down = quintic(((t - OPEN_SECONDS) / LOWER_SECONDS).clamp(0.0, 1.0));
+                for &d in arm.dofs() {
+                    self.q[d] = self.goal_q[d] * (1.0 - down);
+                }
                 if let Some(p) = &self.pattern {
                     p.sample(s, &mut self.samples);
                     for &(d, v) in &self.samples {
@@ -946,6 +950,8 @@ impl Generator for HoldHand {
                 }
                 if s >= 1.0 {
                     out.raise(self.finished);
+                }
+                if down >= 1.0 {
                     self.write(out);
                     return Step::Finished;
                 }
@@ -974,6 +980,9 @@ pub struct FollowHand {
     offer: Vec<(usize, f64, f64)>,
     relative: Option<Transform>,
     last: Option<Transform>,
+    /// When the hold ended (local time), and the arm's values then, which it lowers from.
+    let_go: Option<f64>,
+    lower_from: Vec<(usize, f64)>,
     q: Vec<f64>,
 }
 
@@ -997,6 +1006,8 @@ impl FollowHand {
             offer: Vec::new(),
             relative: None,
             last: None,
+            let_go: None,
+            lower_from: Vec::new(),
             q: Vec::new(),
         }
     }
@@ -1043,10 +1054,23 @@ impl Generator for FollowHand {
         let mine: Vec<(usize, f64)> = out.scope().iter().map(|d| (d, self.q[d])).collect();
         self.q.copy_from_slice(&ctx.posture.q);
         if ctx.world.board.before(self.finished, ctx.tick) {
+            // Let go: the arm comes down to the side from where the hold left it.
+            let since = *self.let_go.get_or_insert(ctx.local_time);
+            let down = quintic(((ctx.local_time - since) / LOWER_SECONDS).min(1.0));
+            if self.lower_from.is_empty() {
+                self.lower_from = arm.dofs().iter().map(|&d| (d, ctx.posture.q[d])).collect();
+            }
+            for &(d, from) in &self.lower_from {
+                self.q[d] = from * (1.0 - down);
+            }
             for d in out.scope().iter() {
                 out.set(d, self.q[d]);
             }
-            return Step::Finished;
+            return if down >= 1.0 {
+                Step::Finished
+            } else {
+                Step::Running
+            };
         }
         if ctx.world.board.before(self.held, ctx.tick) {
             for &(d, v) in &mine {
