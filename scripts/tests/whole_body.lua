@@ -140,3 +140,123 @@ test("reach leans for a point the arm alone misses, and crouches for a low one",
   local fixed = cal:reach{ hand = "right", target = {5.8, 0.95, 0.7}, scope = "right_arm", duration = 1 }
   expect(fixed:wait() == "failed", "right_arm only does not lean")
 end)
+
+-- The lowest of `actor`'s ankles over every tick until `done()` is true (or `seconds`).
+local function lowest_ankle_until(actor, done, seconds)
+  local lowest = 1
+  run_until(function()
+    lowest = math.min(lowest, actor:joint_position("l_ankle")[2], actor:joint_position("r_ankle")[2])
+    return done()
+  end, seconds)
+  return lowest
+end
+
+test("a crouch keeps the feet on the floor however it ends: stopped, completed, placing", function()
+  -- A cup on a 0.75 m table at the left: the grasp crouches. Interpolating the knees with
+  -- the pelvis, the soles sank 10 cm halfway and stayed there when the grasp stopped.
+  local ann = troupe.actor{ name = "ann" }
+  local standing = ann:joint_position("l_ankle")[2]
+  troupe.object{ name = "table", shape = "box", size = {0.6, 0.75, 0.5}, at = {-0.8, 0.375, 0.45} }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {-0.65, 0.8, 0.35} }
+  local plan = troupe.plan_grasp(ann, cup, { hand = "left" })
+  expect(plan ~= nil and plan.crouch > 0, "the grasp crouches")
+  local g = ann:grasp{ object = cup, hand = "left", duration = 1.2 }
+  local t0 = troupe.time()
+  local low = lowest_ankle_until(ann, function() return troupe.time() - t0 >= 0.5 end, 1)
+  g:stop()
+  low = math.min(low, lowest_ankle_until(ann, function() return false end, 1))
+  print(string.format("stopped crouching grasp: pelvis %.3f m, lowest ankle %.3f m (standing %.3f)",
+                      ann:position()[2], low, standing))
+  expect(ann:position()[2] < 0.95, "stopped halfway down: " .. ann:position()[2])
+  expect(low > standing - 0.01, string.format("the soles stay on the floor: ankle %.3f m, standing %.3f", low, standing))
+
+  -- Completed, then put down on a low table: every tick, the feet stay where they stand.
+  local bob = troupe.actor{ name = "bob", at = {3, 0, 0} }
+  troupe.object{ name = "table2", shape = "box", size = {0.6, 0.75, 0.5}, at = {2.2, 0.375, 0.45} }
+  local cup2 = troupe.object{ name = "cup2", shape = "cylinder", radius = 0.04, height = 0.1,
+                              at = {2.35, 0.8, 0.35} }
+  local g2 = bob:grasp{ object = cup2, hand = "left" }
+  low = lowest_ankle_until(bob, function() return g2.status ~= "active" end, 4)
+  expect(g2.status == "completed", "grasp: " .. tostring(g2.error))
+  local p = bob:place{ object = cup2, at = {2.3, 0.8, 0.5} }
+  low = math.min(low, lowest_ankle_until(bob, function() return p.status ~= "active" end, 4))
+  expect(p.status == "completed", "place: " .. tostring(p.error))
+  print(string.format("crouching grasp and place: lowest ankle %.3f m", low))
+  expect(low > standing - 0.01, string.format("grasp and place: ankle %.3f m, standing %.3f", low, standing))
+
+  -- A hand reach to a low point crouches along its path, the soles on the floor too.
+  local cal = troupe.actor{ name = "cal", at = {6, 0, 0} }
+  local r = cal:reach{ hand = "right", target = {5.8, 0.25, 0.35}, duration = 1.2 }
+  low = lowest_ankle_until(cal, function() return r.status ~= "active" end, 3)
+  expect(r.status == "completed", "reach: " .. tostring(r.error))
+  expect(low > standing - 0.01, string.format("reach: ankle %.3f m, standing %.3f", low, standing))
+end)
+
+test("a box held in both hands is placed on a sideboard, both hands on it all the way", function()
+  for i, d in ipairs({ 0.45, 0.55, 0.7 }) do
+    local x = i * 3
+    local a = troupe.actor{ name = "a" .. i, at = {x, 0, 0} }
+    troupe.object{ name = "sb" .. i, shape = "box", size = {0.8, 0.7, 0.45}, at = {x, 0.35, d + 0.025} }
+    local box = troupe.object{ name = "box" .. i, shape = "box", size = {0.4, 0.3, 0.3}, at = {x, 1.0, 0.35},
+                               mass = 2, obstacle = false }
+    grasped(a, box, { hand = "both" })
+    local function gap()
+      local l, r = a:joint_position("l_wrist"), a:joint_position("r_wrist")
+      return math.sqrt((l[1] - r[1])^2 + (l[2] - r[2])^2 + (l[3] - r[3])^2)
+    end
+    local held, drift = gap(), 0
+    local p = a:place{ object = box, at = {x, 0.85, d + 0.1} }
+    run_until(function()
+      if box.holder == a then drift = math.max(drift, math.abs(gap() - held)) end
+      return p.status ~= "active"
+    end, 4)
+    local b = box:position()
+    local tilt = math.deg(math.acos(box:up()[2]))
+    print(string.format("box on a sideboard %.2f m ahead: place %s, the wrists' gap drifted %.3f m, box at (%.3f, %.3f, %.3f), tilt %.1f°",
+                        d - 0.2, p.status, drift, b[1] - x, b[2], b[3], tilt))
+    expect(p.status == "completed", "place " .. i .. ": " .. tostring(p.error))
+    expect(box.holder == nil, "both hands let go")
+    expect(math.abs(b[1] - x) < 0.01 and math.abs(b[2] - 0.85) < 0.01 and math.abs(b[3] - d - 0.1) < 0.01,
+           string.format("the box went down where asked: (%.3f, %.3f, %.3f)", b[1] - x, b[2], b[3]))
+    expect(tilt < 1, "upright: " .. tilt)
+    expect(drift < 0.01, string.format("the hands kept their grip: the wrists' gap changed %.3f m", drift))
+  end
+end)
+
+test("a cup held in the other hand stays upright where it was while a place leans", function()
+  local w = troupe.actor{ name = "w" }
+  troupe.object{ name = "table", shape = "box", size = {0.6, 0.75, 0.6}, at = {0, 0.375, 0.75} }
+  local c1 = troupe.object{ name = "c1", shape = "cylinder", radius = 0.04, height = 0.1, at = {-0.25, 1.05, 0.3} }
+  local c2 = troupe.object{ name = "c2", shape = "cylinder", radius = 0.04, height = 0.1, at = {0.25, 1.05, 0.3} }
+  grasped(w, c1, { hand = "right" })
+  grasped(w, c2, { hand = "left" })
+  local function rel() local p, r = c1:position(), w:position(); return { p[1] - r[1], p[2] - r[2], p[3] - r[3] } end
+  local tilt = function() return math.deg(math.acos(c1:up()[2])) end
+  local before, worst, moved = rel(), 0, 0
+  local p = w:place{ object = c2, at = {0.12, 0.80, 0.65} }
+  run_until(function()
+    local now = rel()
+    worst = math.max(worst, tilt())
+    moved = math.max(moved, math.sqrt((now[1] - before[1])^2 + (now[2] - before[2])^2 + (now[3] - before[3])^2))
+    return p.status ~= "active"
+  end, 4)
+  print(string.format("placing with the left hand, leaning %.1f°: the right-hand cup tilted at most %.1f°, moved %.3f m on the body",
+                      math.deg(w:dof("vl5_flexion")), worst, moved))
+  expect(p.status == "completed", "place: " .. tostring(p.error))
+  expect(worst < 3, string.format("the other cup stays upright: %.1f°", worst))
+  expect(moved < 0.01, string.format("and where it was on the body: %.3f m", moved))
+end)
+
+test("out of reach names what limited the reach, not the tolerance", function()
+  local w = troupe.actor{ name = "w" }
+  troupe.object{ name = "counter", shape = "box", size = {1.4, 1.0, 0.5}, at = {0, 0.5, 1.3} }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {-0.3, 1.05, 1.15} }
+  local plan, why = troupe.plan_grasp(w, cup, { hand = "right" })
+  print("a cup 1.15 m ahead on a counter: " .. tostring(why))
+  expect(plan == nil and why:find("out of reach"), tostring(why))
+  expect(why:find("misses by 0.005") == nil, "not the tolerance: " .. why)
+  expect(why:find("leaning the trunk") or why:find("centre of mass"), "names the limit: " .. why)
+  local g = w:grasp{ object = cup, hand = "right" }
+  expect(g:wait() == "failed" and g.error == why, "the grasp says the same: " .. tostring(g.error))
+end)

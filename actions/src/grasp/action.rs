@@ -8,10 +8,11 @@
 //! that interpolation would take an arm through another actor's body or an obstacle,
 //! the hand goes round it through temporary goals instead ([`ArmDetour`], 4.6.3).
 
-use super::body::BodyReach;
+use super::body::{BodyReach, CrouchLegs};
 use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 use super::close::HandModel;
 use super::follow::FollowBody;
+use super::keep::KeepArms;
 use super::pattern::{BoundPattern, HandPattern};
 use super::plan::{plan_grasp, ArmIk, GraspPlan, HandPlan, PlanOptions};
 use crate::error::{OptionError, Result};
@@ -137,6 +138,12 @@ pub struct Grasp {
     detours: Vec<Option<ArmDetour>>,
     /// The arms' targets, solved again while the body moves on (a grasp during a walk).
     follow: Option<FollowBody>,
+    /// The legs under a crouching grasp, solved for each height of the pelvis.
+    crouch: Option<CrouchLegs>,
+    /// The arms this grasp does not reach with, kept on the body as it leans or crouches.
+    keep: KeepArms,
+    /// The DOFs of the arms it neither reaches with nor keeps: left to other actions.
+    idle: Scope,
 }
 
 impl Grasp {
@@ -170,6 +177,9 @@ impl Grasp {
             detour: true,
             detours: Vec::new(),
             follow: None,
+            crouch: None,
+            keep: KeepArms::default(),
+            idle: Scope::EMPTY,
         })
     }
 
@@ -272,6 +282,25 @@ impl Grasp {
             }
         }
         self.start_q = ctx.posture.q.clone();
+        self.crouch = None;
+        if plan.crouch > 0.0 {
+            self.crouch = CrouchLegs::new(ctx.skeleton, &ctx.posture.q, plan.crouch);
+        }
+        self.keep = KeepArms::default();
+        self.idle = Scope::EMPTY;
+        for side in [Side::Right, Side::Left] {
+            let arm = ctx.skeleton.scope(&format!("{}_arm", side.name()))?;
+            if planned.contains(&side) {
+                continue;
+            }
+            let leans = plan.lean > 0.0 || plan.crouch > 0.0;
+            if leans && ctx.scope.contains_all(&arm) {
+                self.keep
+                    .keep(ctx.skeleton, side, 0, &ctx.posture.globals)?;
+            } else if !self.sides.contains(&side) {
+                self.idle = self.idle.union(&arm);
+            }
+        }
         self.follow = Some(FollowBody::new(ctx.skeleton, &ctx.posture.q, &plan.hands)?);
         self.plan = Some(plan);
         self.phase = Phase::Reach;
@@ -300,6 +329,12 @@ impl Grasp {
                 };
             }
         }
+        if let (Some(legs), Some(_)) = (&mut self.crouch, u) {
+            legs.apply(ctx.skeleton, &mut self.q);
+        }
+        self.keep
+            .apply(ctx.skeleton, &mut self.q)
+            .map_err(|e| e.to_string())?;
         Ok(())
     }
 
@@ -326,7 +361,7 @@ impl Grasp {
     }
 
     fn write(&self, out: &mut DofWriter, q: &[f64]) {
-        for d in out.scope().iter() {
+        for d in out.scope().difference(&self.idle).iter() {
             out.set(d, q[d]);
         }
     }
@@ -556,6 +591,11 @@ pub struct Release {
     /// The hands kept on their wrist goals while the body moves on (a place during a
     /// walk), as a grasp's are.
     follow: Option<FollowBody>,
+    /// The legs under a crouching place, solved for each height of the pelvis.
+    crouch: Option<CrouchLegs>,
+    /// The second hand of a two-handed hold, kept on the object as the first carries it,
+    /// and the arms this place does not place with, kept on the body as it leans.
+    keep: KeepArms,
     phase: u8,
     phase_start: f64,
     released: bool,
@@ -588,12 +628,118 @@ impl Release {
             patterns: Vec::new(),
             hands: Vec::new(),
             follow: None,
+            crouch: None,
+            keep: KeepArms::default(),
             phase: 0,
             phase_start: 0.0,
             released: false,
             q: Vec::new(),
             samples: Vec::new(),
         })
+    }
+}
+
+impl Release {
+    /// Plans a place of the object at `goal`: every holding arm moves by the object's
+    /// displacement (thesis 4.4); when an arm alone cannot, the body leans or crouches
+    /// for all the hands together, as a grasp does (a lean for one hand moves the other's
+    /// shoulder too: solved one at a time, the hands of a box pulled it apart).
+    fn plan_place(&mut self, ctx: &GeneratorContext, goal: Transform, name: &str) -> Result<()> {
+        let sk = ctx.skeleton;
+        let q0 = &ctx.posture.q;
+        let obj = &ctx.world.objects[self.object];
+        let delta = goal.mul(&Transform::new(obj.rotation, obj.position).inverse());
+        let mut goals = Vec::new();
+        let mut arms = Vec::new();
+        let mut arm_miss = None::<f64>;
+        for &s in &self.sides {
+            let mut ik = ArmIk::new(sk, s, 200)?;
+            let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
+            self.moving = self.moving.union(&ik.dofs().iter().copied().collect());
+            let (miss, angle) = ik.solve(sk, &mut self.goal_q, &wrist_goal)?;
+            if miss > REACH_TOLERANCE || angle > REACH_ANGLE {
+                arm_miss = Some(arm_miss.unwrap_or(0.0).max(miss));
+            }
+            goals.push((s, wrist_goal));
+            arms.push(ik.dofs().to_vec());
+        }
+        let body_scope = BodyReach::body_scope(sk)?;
+        if let Some(miss) = arm_miss {
+            let allowed = ctx.scope.intersection(&body_scope);
+            let body = BodyReach::new(sk, allowed)?;
+            let reached = match body.search_beyond_the_arm(q0, &goals)? {
+                Ok(reached) => reached,
+                Err(shortfall) => {
+                    let hands: Vec<&str> = self.sides.iter().map(|s| s.name()).collect();
+                    let hands = format!(
+                        "{} hand{}",
+                        hands.join(" and "),
+                        if hands.len() > 1 { "s" } else { "" }
+                    );
+                    let why = if allowed.is_empty() {
+                        format!("the arm alone misses by {miss:.3} m")
+                    } else {
+                        format!(
+                            "the arm alone misses by {miss:.3} m; {}",
+                            shortfall.describe("leaning and crouching, the best posture")
+                        )
+                    };
+                    let how = if allowed.is_empty() {
+                        ""
+                    } else {
+                        " (even leaning and crouching)"
+                    };
+                    return Err(crate::error::ActionError::Unfit(format!(
+                        "the place for `{name}` is out of reach of the {hands}{how}: {why}"
+                    )));
+                }
+            };
+            self.goal_q.copy_from_slice(q0);
+            for &(d, v) in &reached.changed {
+                self.goal_q[d] = v;
+                self.moving.insert(d);
+            }
+            if reached.crouch > 0.0 {
+                self.crouch = CrouchLegs::new(sk, q0, reached.crouch);
+                if let Some(legs) = &self.crouch {
+                    self.moving = self.moving.union(&legs.dofs().collect());
+                }
+            }
+        }
+        for ((side, wrist), arm) in goals.into_iter().zip(arms) {
+            self.hands.push(HandPlan {
+                side,
+                wrist,
+                palm: wrist.translation,
+                arm: arm.iter().map(|&d| (d, self.goal_q[d])).collect(),
+                cost: 0.0,
+            });
+        }
+        self.plan_keep(ctx, self.moving.overlaps(&body_scope))?;
+        self.writes = self.writes.union(&self.moving).union(&self.keep.dofs());
+        self.follow = Some(FollowBody::new(sk, q0, &self.hands)?);
+        Ok(())
+    }
+
+    /// The arms kept as the place moves: the second hand of a two-handed hold on the
+    /// first, and when the body leans or crouches (`body_moves`), each other arm still in
+    /// the action's scope (none that another action drives) on the body.
+    fn plan_keep(&mut self, ctx: &GeneratorContext, body_moves: bool) -> Result<()> {
+        let sk = ctx.skeleton;
+        let g = &ctx.posture.globals;
+        if let [first, second, ..] = self.sides[..] {
+            let anchor = sk.joint(&format!("{}wrist", first.prefix()))?;
+            self.keep.keep(sk, second, anchor, g)?;
+        }
+        if body_moves {
+            for side in [Side::Right, Side::Left] {
+                let arm = sk.scope(&format!("{}_arm", side.name()))?;
+                if !self.sides.contains(&side) && ctx.scope.contains_all(&arm) {
+                    self.keep.keep(sk, side, 0, g)?;
+                }
+            }
+        }
+        Ok(())
     }
 }
 
@@ -631,51 +777,7 @@ impl Generator for Release {
         }
         self.writes = grasp_scope(ctx.skeleton, &self.sides)?;
         if let Some((goal, _)) = self.place {
-            // Every holding arm moves by the object's displacement (thesis 4.4).
-            let obj = &ctx.world.objects[self.object];
-            let now = Transform::new(obj.rotation, obj.position);
-            let delta = goal.mul(&now.inverse());
-            for &s in &self.sides {
-                let mut ik = ArmIk::new(ctx.skeleton, s, 200)?;
-                let wrist_goal = delta.mul(&ctx.posture.globals[ik.wrist]);
-                self.moving = self.moving.union(&ik.dofs().iter().copied().collect());
-                let (miss, angle) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist_goal)?;
-                let hand = |goal_q: &[f64]| HandPlan {
-                    side: s,
-                    wrist: wrist_goal,
-                    palm: wrist_goal.translation,
-                    arm: ik.dofs().iter().map(|&d| (d, goal_q[d])).collect(),
-                    cost: 0.0,
-                };
-                if miss <= REACH_TOLERANCE && angle <= REACH_ANGLE {
-                    self.hands.push(hand(&self.goal_q));
-                    continue;
-                }
-                // The arm alone cannot: lean, then crouch, as a grasp does.
-                let allowed = ctx
-                    .scope
-                    .intersection(&BodyReach::body_scope(ctx.skeleton)?);
-                let body = BodyReach::new(ctx.skeleton, allowed)?;
-                let reached = body.beyond_the_arm(&ctx.posture.q, &[(s, wrist_goal)])?;
-                let Some(reached) = reached else {
-                    let how = if allowed.is_empty() {
-                        ""
-                    } else {
-                        " (even leaning and crouching)"
-                    };
-                    return Err(crate::error::ActionError::Unfit(format!(
-                        "the place for `{name}` is out of reach of the {} hand{how} (the arm alone misses by {miss:.3} m)",
-                        s.name()
-                    )).into());
-                };
-                for &(d, v) in &reached.changed {
-                    self.goal_q[d] = v;
-                    self.moving.insert(d);
-                }
-                self.hands.push(hand(&self.goal_q));
-            }
-            self.writes = self.writes.union(&self.moving);
-            self.follow = Some(FollowBody::new(ctx.skeleton, &ctx.posture.q, &self.hands)?);
+            self.plan_place(ctx, goal, &name)?;
         } else {
             self.phase = 1;
         }
@@ -704,6 +806,12 @@ impl Generator for Release {
             for d in self.moving.iter() {
                 self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
             }
+            if let Some(legs) = &mut self.crouch {
+                legs.apply(ctx.skeleton, &mut self.q);
+            }
+            if let Err(e) = self.keep.apply(ctx.skeleton, &mut self.q) {
+                return Step::Failed(e.to_string());
+            }
             if u >= 1.0 - 1e-12 {
                 self.phase = 1;
                 self.phase_start = ctx.local_time;
@@ -711,6 +819,9 @@ impl Generator for Release {
         } else {
             for d in self.moving.iter() {
                 self.q[d] = self.goal_q[d];
+            }
+            if let Err(e) = self.keep.apply(ctx.skeleton, &mut self.q) {
+                return Step::Failed(e.to_string());
             }
             if !self.released {
                 if let (Some((goal, _)), Some(obj)) =

@@ -66,6 +66,165 @@ pub enum Missed {
     Lean(f64),
 }
 
+/// Lowers the pelvis of `q` by `depth` (raises it for a negative one) with the feet flat
+/// where they are (closed-form leg IK of the walk's rig); false, `q` partly changed, if a
+/// leg cannot reach its foot.
+fn lower_pelvis(sk: &Skeleton, rig: &Rig, root_y: usize, q: &mut [f64], depth: f64) -> bool {
+    let mut g = vec![Transform::IDENTITY; sk.joints().len()];
+    forward_kinematics(sk, q, &mut g);
+    let heading = q[rig.root[3]];
+    let pelvis = [q[rig.pelvis[0]], q[rig.pelvis[1]], q[rig.pelvis[2]]];
+    let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
+    let root = g[0].translation - DVec3::Y * depth;
+    q[root_y] -= depth;
+    for (leg, l) in rig.legs.iter().enumerate() {
+        let ankle_joint = l.joints[0];
+        let ankle = g[ankle_joint].translation;
+        let fwd = g[ankle_joint].rotation * DVec3::Z;
+        let yaw = fwd.x.atan2(fwd.z);
+        let hip = rig.hip_position(leg, root, heading, pelvis_rot);
+        let (vals, miss) = rig.solve_leg(
+            leg,
+            pelvis_rot,
+            heading + pelvis[2],
+            None,
+            hip,
+            ankle,
+            (yaw, 0.0, 0.0),
+        );
+        if miss > 1e-3 {
+            return false;
+        }
+        for (i, &d) in l.dofs.iter().enumerate() {
+            q[d] = vals[i];
+        }
+    }
+    true
+}
+
+/// The legs of a crouch on its way down (or back up): an action that moves `root_y`
+/// between two heights by interpolation solves the legs again for each height, the feet
+/// flat where they stood at its start. Interpolated too, the knees straighten faster than
+/// the pelvis rises (the leg's length is not linear in the knee's angle) and the soles
+/// went up to 10 cm into the floor halfway, and stayed there if the action stopped then.
+pub struct CrouchLegs {
+    rig: Rig,
+    root_y: usize,
+    /// The posture the crouch starts from: its feet stay where they are.
+    start: Vec<f64>,
+    /// How far (m) the pelvis goes down in all.
+    depth: f64,
+    /// Per leg DOF, the start's value less the legs solved at the start's height (feet
+    /// not quite flat, another hip twist): faded out on the way down, so the legs neither
+    /// jump at the start nor miss the planned crouch at its end.
+    offset: Vec<(usize, f64)>,
+    scratch: Vec<f64>,
+}
+
+impl CrouchLegs {
+    /// For a crouch from posture `start` of `skeleton`; `None` when the skeleton has no
+    /// legs the walk's rig knows.
+    /// For a crouch `depth` metres down from posture `start` of `skeleton`; `None` when
+    /// the skeleton has no legs the walk's rig knows or they cannot stand where they are.
+    pub fn new(skeleton: &Skeleton, start: &[f64], depth: f64) -> Option<CrouchLegs> {
+        let rig = Rig::new(skeleton).ok()?;
+        let root_y = skeleton.dof("root_y").ok()?;
+        let mut solved = start.to_vec();
+        if !lower_pelvis(skeleton, &rig, root_y, &mut solved, 0.0) {
+            return None;
+        }
+        let offset = (rig.legs.iter().flat_map(|l| l.dofs))
+            .map(|d| (d, start[d] - solved[d]))
+            .collect();
+        Some(CrouchLegs {
+            rig,
+            root_y,
+            start: start.to_vec(),
+            depth,
+            offset,
+            scratch: Vec::new(),
+        })
+    }
+
+    /// The leg DOFs it sets.
+    pub fn dofs(&self) -> impl Iterator<Item = usize> + '_ {
+        self.offset.iter().map(|&(d, _)| d)
+    }
+
+    /// Sets the legs of `q` for its `root_y`: the feet flat where they stood at the start.
+    /// A height the legs cannot reach leaves them as they are.
+    pub fn apply(&mut self, skeleton: &Skeleton, q: &mut [f64]) {
+        let depth = self.start[self.root_y] - q[self.root_y];
+        self.scratch.clear();
+        self.scratch.extend_from_slice(&self.start);
+        if lower_pelvis(skeleton, &self.rig, self.root_y, &mut self.scratch, depth) {
+            let rest = if self.depth > 0.0 {
+                (1.0 - depth / self.depth).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            for &(d, off) in &self.offset {
+                q[d] = self.scratch[d] + off * rest;
+            }
+        }
+    }
+}
+
+/// What kept every posture tried from counting, gathered over a search: an error then
+/// names what limited the reach, not only how far the wrists stayed from their goals.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Shortfall {
+    /// The least the wrists missed by (metres, plus 0.1 m per radian), over the postures
+    /// that did not reach.
+    pub miss: Option<f64>,
+    /// The least lean (radians) of a posture that reached only by leaning past
+    /// [`MAX_LEAN`].
+    pub lean: Option<f64>,
+    /// The least distance (metres) the centre of mass went beyond the feet, over the
+    /// postures that reached but would fall.
+    pub balance: Option<f64>,
+}
+
+impl Shortfall {
+    /// Counts one posture that did not count.
+    pub fn note(&mut self, missed: Missed) {
+        let least = |old: Option<f64>, v: f64| Some(old.map_or(v, |o| o.min(v)));
+        match missed {
+            Missed::By(miss, angle) if (miss + angle * 0.1).is_finite() => {
+                self.miss = least(self.miss, miss + angle * 0.1);
+            }
+            Missed::By(..) => {}
+            Missed::Lean(lean) => self.lean = least(self.lean, lean),
+            Missed::Balance(by) => self.balance = least(self.balance, by),
+        }
+    }
+
+    /// What limited the reach, for an error: the postures that reached but leaned too
+    /// far or would fall, then how near the others came (`best`: "the best grasp").
+    pub fn describe(&self, best: &str) -> String {
+        let mut parts = Vec::new();
+        if let Some(lean) = self.lean {
+            parts.push(format!(
+                "the wrist gets there only by leaning the trunk {:.0}° (at most {:.0}°)",
+                lean.to_degrees(),
+                MAX_LEAN.to_degrees()
+            ));
+        }
+        if let Some(by) = self.balance {
+            parts.push(format!(
+                "reaching it would put the centre of mass {by:.3} m beyond the feet"
+            ));
+        }
+        match (self.miss, parts.is_empty()) {
+            (Some(miss), true) => parts.push(format!("{best} misses by {miss:.3} m")),
+            (Some(miss), false) => parts.push(format!("otherwise it misses by {miss:.3} m")),
+            (None, true) => parts.push("no posture reaches it".into()),
+            (None, false) => {}
+        }
+        parts.join("; ")
+    }
+}
+
 /// Whole-body reaching for one actor's skeleton, limited to `allowed` DOFs besides the
 /// arms of the hands that reach.
 pub struct BodyReach<'a> {
@@ -118,12 +277,23 @@ impl<'a> BodyReach<'a> {
         q0: &[f64],
         goals: &[(Side, Transform)],
     ) -> crate::error::Result<Option<Reached>> {
+        Ok(self.search_beyond_the_arm(q0, goals)?.ok())
+    }
+
+    /// As [`BodyReach::beyond_the_arm`], with what limited every stage when none reaches.
+    pub fn search_beyond_the_arm(
+        &self,
+        q0: &[f64],
+        goals: &[(Side, Transform)],
+    ) -> crate::error::Result<Result<Reached, Shortfall>> {
+        let mut shortfall = Shortfall::default();
         for stage in self.stages().into_iter().skip(1) {
-            if let Ok(reached) = self.reach(q0, goals, stage)? {
-                return Ok(Some(reached));
+            match self.reach(q0, goals, stage)? {
+                Ok(reached) => return Ok(Ok(reached)),
+                Err(missed) => shortfall.note(missed),
             }
         }
-        Ok(None)
+        Ok(Err(shortfall))
     }
 
     /// Tries `stage` from posture `q0`: the wrists of `goals` to their poses.
@@ -227,41 +397,11 @@ impl<'a> BodyReach<'a> {
         Ok(g[sk.joint("vt1")?].translation - g[sk.joint("vl5")?].translation)
     }
 
-    /// Lowers the pelvis of `q` by `depth` with the feet flat where they are (closed-form
-    /// leg IK of the walk's rig); false if a leg cannot reach its foot.
+    /// Lowers the pelvis of `q` by `depth` with the feet flat where they are; false if a
+    /// leg cannot reach its foot.
     fn crouch(&self, q: &mut [f64], depth: f64) -> bool {
         let Some(rig) = &self.rig else { return false };
-        let sk = self.skeleton;
-        let mut g = vec![Transform::IDENTITY; sk.joints().len()];
-        forward_kinematics(sk, q, &mut g);
-        let heading = q[rig.root[3]];
-        let pelvis = [q[rig.pelvis[0]], q[rig.pelvis[1]], q[rig.pelvis[2]]];
-        let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
-        let root = g[0].translation - DVec3::Y * depth;
-        q[self.root_y] -= depth;
-        for (leg, l) in rig.legs.iter().enumerate() {
-            let ankle_joint = l.joints[0];
-            let ankle = g[ankle_joint].translation;
-            let fwd = g[ankle_joint].rotation * DVec3::Z;
-            let yaw = fwd.x.atan2(fwd.z);
-            let hip = rig.hip_position(leg, root, heading, pelvis_rot);
-            let (vals, miss) = rig.solve_leg(
-                leg,
-                pelvis_rot,
-                heading + pelvis[2],
-                None,
-                hip,
-                ankle,
-                (yaw, 0.0, 0.0),
-            );
-            if miss > 1e-3 {
-                return false;
-            }
-            for (i, &d) in l.dofs.iter().enumerate() {
-                q[d] = vals[i];
-            }
-        }
-        true
+        lower_pelvis(self.skeleton, rig, self.root_y, q, depth)
     }
 
     /// How far (metres) the centre of mass lies outside the feet's support rectangle, in

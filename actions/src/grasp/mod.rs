@@ -9,6 +9,7 @@ pub mod close;
 pub mod decision;
 pub mod follow;
 pub mod handover;
+pub mod keep;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;

@@ -48,9 +48,12 @@ impl GraspOptions {
 
     /// The DOFs a grasp with these hands drives, on `skeleton`, and the part of them it
     /// yields (the spine, legs and `root_y` it leans and crouches with: see
-    /// [`reach_scope`]).
+    /// [`reach_scope`]; and the other arm, kept on the body as it leans or crouches).
     pub fn scope(&self, skeleton: &Skeleton) -> Result<(Scope, Scope)> {
-        reach_scope(skeleton, &self.hand.sides())
+        let sides = self.hand.sides();
+        let (scope, body) = reach_scope(skeleton, &sides)?;
+        let others = other_arms(skeleton, &sides)?;
+        Ok((scope.union(&others), body.union(&others)))
     }
 
     /// The grasp generator, once the options are valid.
@@ -101,9 +104,9 @@ impl ReleaseOptions {
     /// The release generator for `actor` of `scene`, the DOFs it drives and the part of
     /// them it yields: the arms and hands that hold the object, both of a two-handed hold
     /// (the right ones when none does: the action then fails at its start, saying so); a
-    /// place also the spine, the
-    /// legs and `root_y`, to lean or crouch for a place the arm alone cannot reach, as a
-    /// grasp does, and yields them (during a walk it places with the arm alone).
+    /// place also the spine, the legs and `root_y`, to lean or crouch for a place the arm
+    /// alone cannot reach, as a grasp does, and the other arm, kept on the body as it
+    /// leans, and yields them (during a walk it places with the arm alone).
     pub fn release(&self, scene: &Scene, actor: usize) -> Result<(Release, Scope, Scope)> {
         self.validate()?;
         let mut sides = holding_sides(scene, actor, self.object);
@@ -116,11 +119,29 @@ impl ReleaseOptions {
         });
         let skeleton = &scene.actors()[actor].skeleton;
         let (scope, body) = match place {
-            Some(_) => reach_scope(skeleton, &sides)?,
+            Some(_) => {
+                // The other arm too, to keep it on the body as the place leans or
+                // crouches (`super::keep`); yielded, so an action that drives it keeps it.
+                let (scope, body) = reach_scope(skeleton, &sides)?;
+                let body = body.union(&other_arms(skeleton, &sides)?);
+                (scope.union(&body), body)
+            }
             None => (grasp_scope(skeleton, &sides)?, Scope::EMPTY),
         };
         Ok((Release::new(self.object, sides, place)?, scope, body))
     }
+}
+
+/// The arms (without the hands) of the sides not in `sides`: an action that leans or
+/// crouches keeps them on the body (`super::keep`).
+fn other_arms(skeleton: &Skeleton, sides: &[Side]) -> Result<Scope> {
+    let mut arms = Scope::EMPTY;
+    for side in [Side::Right, Side::Left] {
+        if !sides.contains(&side) {
+            arms = arms.union(&skeleton.scope(&format!("{}_arm", side.name()))?);
+        }
+    }
+    Ok(arms)
 }
 
 #[cfg(test)]

@@ -15,7 +15,7 @@
 //! 4. candidates are ranked by a weighted sum of the translation and rotation from the
 //!    current hand pose, and the first one inverse kinematics can reach is kept.
 
-use super::body::{BodyReach, Missed, Stage};
+use super::body::{BodyReach, Shortfall, Stage};
 use super::close::HandModel;
 use super::decision::{decide, Decision, GraspType};
 use crate::error::OptionError;
@@ -570,8 +570,7 @@ pub fn plan_grasp(
             .map(|(_, r)| r[k])
             .expect("a planned side")
     };
-    let mut best_miss = f64::INFINITY;
-    let mut unbalanced: Option<f64> = None;
+    let mut shortfall = Shortfall::default();
     // Frames that keep a receiving hand apart from the giving one first, whichever hand.
     for near in [false, true] {
         for stage in body.stages() {
@@ -609,12 +608,9 @@ pub fn plan_grasp(
                             crouch: reached.crouch,
                         });
                     }
-                    Err(Missed::By(miss, angle)) => best_miss = best_miss.min(miss + angle * 0.1),
-                    // Reached, but only by folding over: a deeper crouch may do it upright.
-                    Err(Missed::Lean(_)) => best_miss = best_miss.min(REACH_TOLERANCE),
-                    Err(Missed::Balance(by)) => {
-                        unbalanced = Some(unbalanced.map_or(by, |u: f64| u.min(by)));
-                    }
+                    // Reached, but only by folding over (a deeper crouch may do it
+                    // upright) or falling, or not at all: the error says which.
+                    Err(missed) => shortfall.note(missed),
                 }
             }
         }
@@ -624,21 +620,13 @@ pub fn plan_grasp(
         "" => String::new(),
         used => format!(" (even {used})"),
     };
-    Err(crate::error::ActionError::Unfit(match unbalanced {
-        Some(by) if best_miss.is_infinite() || best_miss > REACH_TOLERANCE * 20.0 => format!(
-            "`{}` is out of reach of the {} hand{}{how}: reaching it would put the centre of mass {by:.3} m beyond the feet",
-            obj.name,
-            hands.join(" and "),
-            if hands.len() > 1 { "s" } else { "" },
-        ),
-        _ => format!(
-            "`{}` is out of reach of the {} hand{}{how}: the best grasp misses by {:.3} m",
-            obj.name,
-            hands.join(" and "),
-            if hands.len() > 1 { "s" } else { "" },
-            best_miss
-        ),
-    }))
+    Err(crate::error::ActionError::Unfit(format!(
+        "`{}` is out of reach of the {} hand{}{how}: {}",
+        obj.name,
+        hands.join(" and "),
+        if hands.len() > 1 { "s" } else { "" },
+        shortfall.describe("the best grasp")
+    )))
 }
 
 /// A candidate grasp frame: its cost, the wrist's goal pose and the palm centre's goal.

@@ -21,7 +21,7 @@ pub mod options;
 pub use options::{ReachOptions, Reacher};
 
 use crate::error::{OptionError, Result};
-use crate::grasp::body::{BodyReach, Stage};
+use crate::grasp::body::{BodyReach, CrouchLegs, Stage};
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
@@ -214,6 +214,8 @@ pub struct Reach {
     /// The legs' and `root_y`'s (start, goal) values of a crouching reach (see
     /// [`Reach::widen`]), interpolated along the path.
     crouch: Vec<(usize, f64, f64)>,
+    /// The legs of a crouching reach, solved again for each height of the pelvis.
+    legs: Option<CrouchLegs>,
     /// The path: through the spec's via points and the temporary goals of [`detour`].
     path: detour::HandPath,
     /// How many temporary goals [`detour`] inserted at the start.
@@ -259,6 +261,7 @@ impl Reach {
             start: DVec3::ZERO,
             start_rotation: DQuat::IDENTITY,
             crouch: Vec::new(),
+            legs: None,
             path: detour::HandPath::default(),
             detours: 0,
             volumes: Vec::new(),
@@ -306,6 +309,9 @@ impl Reach {
                 .filter(|(d, _)| allowed.contains(*d) && !moving.contains(*d))
                 .map(|&(d, v)| (d, ctx.posture.q[d], v))
                 .collect();
+            if reached.crouch > 0.0 {
+                self.legs = CrouchLegs::new(sk, &ctx.posture.q, reached.crouch);
+            }
             return Ok(());
         }
         Ok(())
@@ -352,6 +358,7 @@ impl Generator for Reach {
             .map_err(|e| e.to_string())?;
         self.q = ctx.posture.q.clone();
         self.crouch.clear();
+        self.legs = None;
         self.widen(ctx, goal).map_err(|e| e.to_string())?;
         self.start = self.spec.effector.position(&ctx.posture.globals);
         self.start_rotation = self.spec.effector.rotation(&ctx.posture.globals);
@@ -411,6 +418,12 @@ impl Generator for Reach {
         for &(d, from, to) in &self.crouch {
             self.q[d] = from + (to - from) * s;
             out.set(d, self.q[d]);
+        }
+        if let Some(legs) = &mut self.legs {
+            legs.apply(ctx.skeleton, &mut self.q);
+            for d in legs.dofs() {
+                out.set(d, self.q[d]);
+            }
         }
         let mut point = self.path(along, goal);
         if let (true, Some((radius, offset))) =
