@@ -360,12 +360,17 @@ test("a giver crouched from picking a cup off a low table stands up as it hands 
   expect(ann:grasp{ object = cup, hand = "left" }:wait() == "completed", "grasped")
   expect(ann:dof("root_y") < -0.2, "she crouched to pick it up: " .. ann:dof("root_y"))
   local shoulder = bob:joint_position("r_shoulder")[2]
+  local standing = bob:joint_position("l_ankle")[2]
   local give = ann:give{ object = cup, to = bob }
-  local met
+  local met, lowest = nil, math.huge
   expect(run_until(function()
     if not met and cup.holder == bob then met = cup:position()[2] end
+    lowest = math.min(lowest, ann:joint_position("l_ankle")[2], ann:joint_position("r_ankle")[2])
     return give.status == "completed" or give.status == "failed"
   end, 8), "the give ended: " .. give.status)
+  -- Her legs straighten with her pelvis, the feet flat on the floor all the way up.
+  expect(math.abs(lowest - standing) < 0.003,
+         string.format("ankles at least %.3f m high (standing: %.3f)", lowest, standing))
   expect(give.status == "completed", "handed over: " .. tostring(give.error))
   -- Planned from her crouch, the cup met bob's hand at 0.69 m and he crouched to it.
   expect(math.abs(met - 0.79 * shoulder) < 0.03,

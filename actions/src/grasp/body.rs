@@ -122,8 +122,6 @@ pub struct CrouchLegs {
 }
 
 impl CrouchLegs {
-    /// For a crouch from posture `start` of `skeleton`; `None` when the skeleton has no
-    /// legs the walk's rig knows.
     /// For a crouch `depth` metres down from posture `start` of `skeleton`; `None` when
     /// the skeleton has no legs the walk's rig knows or they cannot stand where they are.
     pub fn new(skeleton: &Skeleton, start: &[f64], depth: f64) -> Option<CrouchLegs> {

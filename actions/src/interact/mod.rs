@@ -30,7 +30,7 @@ pub mod options;
 pub use options::{GiveOptions, HoldHandOptions, ReceiveOptions};
 
 use crate::grasp::action::{CLOSE_SECONDS, OPEN_SECONDS};
-use crate::grasp::body::BodyReach;
+use crate::grasp::body::{BodyReach, CrouchLegs};
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};
 use crate::grasp::plan::{
@@ -102,6 +102,9 @@ pub struct Give {
     detour: bool,
     /// The carry round other bodies, when the interpolation is blocked.
     arm_detour: Option<ArmDetour>,
+    /// The legs while the pelvis goes down to give (or up, a crouched giver standing,
+    /// or back after the hand has opened): feet flat where they stand.
+    legs: Option<CrouchLegs>,
     /// Whether the give waits, holding the object, for the two actors to stand: a give
     /// started while either walks cannot know where their bodies will meet.
     approaching: bool,
@@ -140,6 +143,7 @@ impl Give {
             receiver_gave_up: None,
             detour: true,
             arm_detour: None,
+            legs: None,
             approaching: false,
             receiver_turns: false,
         }
@@ -178,6 +182,16 @@ impl Give {
         self.receiver_hand = Some(side);
         self
     }
+}
+
+/// The legs of a body whose pelvis goes from posture `from`'s height to `to`'s (see
+/// [`CrouchLegs`]), if it moves at all.
+fn crouch_legs(skeleton: &Skeleton, from: &[f64], to: &[f64]) -> Option<CrouchLegs> {
+    let root_y = skeleton.dof("root_y").ok()?;
+    let depth = from[root_y] - to[root_y];
+    (depth != 0.0)
+        .then(|| CrouchLegs::new(skeleton, from, depth))
+        .flatten()
 }
 
 /// How far (m) a body's pelvis may be lowered, and (radians) its spine bent, and still
@@ -411,6 +425,7 @@ impl Give {
             self.arm_detour = ArmDetour::plan(ctx, &arm)?;
         }
         self.arm = Some(ik);
+        self.legs = crouch_legs(ctx.skeleton, &self.start_q, &self.goal_q);
         self.after_q = from;
         self.q = ctx.posture.q.clone();
         self.phase_start = ctx.local_time;
@@ -515,6 +530,9 @@ impl Generator for Give {
                 for d in self.moving.iter() {
                     self.q[d] = self.start_q[d] + (self.goal_q[d] - self.start_q[d]) * u;
                 }
+                if let Some(legs) = &mut self.legs {
+                    legs.apply(ctx.skeleton, &mut self.q);
+                }
                 if let Some(around) = &mut self.arm_detour {
                     let tau = if finished {
                         1.0
@@ -550,6 +568,7 @@ impl Generator for Give {
                         };
                         open.restart_from(&ctx.posture.q);
                         self.open = Some(open);
+                        self.legs = crouch_legs(ctx.skeleton, &self.goal_q, &self.after_q);
                         self.phase = 2;
                         self.phase_start = ctx.local_time;
                     }
@@ -583,6 +602,9 @@ impl Generator for Give {
                     } else {
                         self.goal_q[d] + (self.after_q[d] - self.goal_q[d]) * back
                     };
+                }
+                if let Some(legs) = &mut self.legs {
+                    legs.apply(ctx.skeleton, &mut self.q);
                 }
                 if let Some(open) = &self.open {
                     open.sample(s, &mut self.samples);
