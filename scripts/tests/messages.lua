@@ -130,6 +130,13 @@ test("unknown names: get_actor and get_object answer nil, every other call raise
   says(function() ann:dof("r_shoulder_twisting") end, "did you mean `r_shoulder_twist`?")
   says(function() ann:joint_position("r_wirst") end, "unknown joint `r_wirst` in skeleton `adult`; did you mean `r_wrist`?")
   says(function() ann:on("action_exploded", function() end) end, "on: unknown event `action_exploded`")
+  -- A track that is no DOF of the actor a sequence is given to: named with the sequence
+  -- (an inline one is named after its line); a walk following it ignored it.
+  local slip = troupe.sequence{ name = "slip", root_x = { {0, 0}, {1, 1} }, root_z = { {0, 0}, {1, 1} },
+    root_yw = { {0, 0}, {1, 1} } }
+  says(function() ann:walk{ follow = slip } end,
+    "walk: sequence `slip`: unknown DOF `root_yw` in skeleton `adult`; did you mean")
+  says(function() ann:play(slip) end, "play: sequence `slip`: unknown DOF `root_yw`")
 end)
 
 test("limits name the limit and the place", function()
