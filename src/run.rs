@@ -461,9 +461,13 @@ pub struct RenderArgs {
     pub scene: PathBuf,
     /// The PNG file to write.
     pub out: PathBuf,
-    /// Simulated time of the picture, in seconds.
+    /// Simulated time of the picture, in seconds (at most --max-seconds).
     #[arg(long, default_value_t = 0.0, value_parser = seconds)]
     pub at: f64,
+    /// Latest --at accepted: the picture's time is reached by simulating every tick
+    /// before it, so a slip (`--at 1e9`) would run for days.
+    #[arg(long, default_value_t = 600.0, value_parser = seconds)]
+    pub max_seconds: f64,
     /// Picture size, WIDTHxHEIGHT.
     #[arg(long, default_value = "1280x720")]
     pub size: String,
@@ -519,6 +523,14 @@ pub fn chunk(text: &str) -> std::result::Result<usize, String> {
 /// `troupe render`: runs a scene headless up to `--at` and writes one picture.
 pub fn render(args: RenderArgs) -> Result<ExitCode> {
     crate::view::png_path(&args.out)?;
+    if args.at > args.max_seconds {
+        bail!(
+            "--at {} s is past --max-seconds ({} s): rendering a time means simulating the \
+             whole scene up to it; raise --max-seconds to render later",
+            args.at,
+            args.max_seconds
+        );
+    }
     let size = troupe_viewer::parse_size(&args.size)?;
     let camera: troupe_viewer::Camera = args.camera.parse()?;
     let config = SceneConfig {

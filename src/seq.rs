@@ -13,7 +13,10 @@ use std::process::ExitCode;
 use std::time::Instant;
 use troupe_formats::bvh::{read_bvh, write_bvh, Bvh, RotationOrder};
 use troupe_formats::retarget::{bvh_axes, map_for, retarget, RetargetMap};
-use troupe_formats::{load_sequence, load_sequences, save_rig, save_sequences, Format, Rig};
+use troupe_formats::trk::read_trk_file;
+use troupe_formats::{
+    load_sequence, load_sequences, save_recording, save_rig, save_sequences, Format, Rig,
+};
 use troupe_motion::offline::compress::{compress_pyramid, compress_spline, SplineOptions};
 use troupe_motion::offline::pyramid::{self, Grid};
 use troupe_motion::offline::warp::{squeeze_stretch, warp_sequence, TimeWarp};
@@ -25,6 +28,11 @@ pub struct SeqArgs {
     /// Length unit of BVH files in metres (0.01 for centimetres, 0.0254 for inches).
     #[arg(long, global = true, default_value_t = 0.01)]
     scale: f64,
+    /// The actor to work on in a .trk recording of several (`troupe run --record`): its
+    /// sequence alone. Without it `seq convert` writes every actor, and the other
+    /// commands take the first, saying so.
+    #[arg(long, global = true, value_name = "NAME")]
+    actor: Option<String>,
     #[command(subcommand)]
     command: SeqCommand,
 }
@@ -139,8 +147,8 @@ enum SeqCommand {
         /// Also draw the Gaussian pyramid levels G1…GN of each curve.
         #[arg(long)]
         pyramid: Option<usize>,
-        /// Image width in pixels.
-        #[arg(long, default_value_t = 1200)]
+        /// Image width in pixels, 200 to 8000.
+        #[arg(long, default_value_t = 1200, value_parser = clap::value_parser!(u32).range(200..=8000))]
         width: u32,
     },
 }
@@ -161,8 +169,9 @@ struct Loaded {
 }
 
 /// Loads the sequence of an input: a BVH as its own channels (keeping the motion, to write
-/// BVH back); any other file through the dispatch (the first sequence of a `.trk`).
-fn load(path: &Path, scale: f64) -> Result<Loaded> {
+/// BVH back); any other file through the dispatch (of a `.trk` recording several actors,
+/// `actor`'s sequence, else the first).
+fn load(path: &Path, scale: f64, actor: Option<&str>) -> Result<Loaded> {
     if Format::of(path)? == Format::Bvh {
         let name = path
             .file_stem()
@@ -183,17 +192,80 @@ fn load(path: &Path, scale: f64) -> Result<Loaded> {
         );
     }
     let mut set = load_sequences(path, None)?;
-    if set.len() != 1 {
-        tracing::warn!(
-            "{}: {} sequences; using the first",
-            path.display(),
-            set.len()
+    let seq = match actor {
+        Some(name) if set.len() > 1 => pick(path, set, name)?,
+        _ if set.is_empty() => bail!("{}: the file holds no sequence", path.display()),
+        _ => {
+            if set.len() > 1 {
+                tracing::warn!(
+                    "{}: {} actors ({}); using the first, `{}` (choose one with --actor NAME)",
+                    path.display(),
+                    set.len(),
+                    actor_names(&set),
+                    set[0].name
+                );
+            }
+            set.remove(0)
+        }
+    };
+    Ok(Loaded { seq, bvh: None })
+}
+
+/// The sequence of `actor` in `set` (read from `path`), or an error naming those there are.
+fn pick(path: &Path, set: Vec<Sequence>, actor: &str) -> Result<Sequence> {
+    let names = actor_names(&set);
+    set.into_iter().find(|s| s.name == actor).with_context(|| {
+        format!(
+            "--actor {actor}: {} has no actor `{actor}` (actors: {names})",
+            path.display()
+        )
+    })
+}
+
+/// The names of a recording's sequences (its actors), comma-separated.
+fn actor_names(set: &[Sequence]) -> String {
+    let names: Vec<&str> = set.iter().map(|s| s.name.as_str()).collect();
+    names.join(", ")
+}
+
+/// Up to eight of `names`, comma-separated, then how many more there are.
+fn some_names(names: &[&str]) -> String {
+    let shown = names.len().min(8);
+    let mut text = names[..shown].join(", ");
+    if names.len() > shown {
+        text += &format!(" and {} more", names.len() - shown);
+    }
+    text
+}
+
+/// Refuses a blend of sequences that share no track (of different skeletons: nothing to
+/// blend), and warns of the tracks only one of them has: the blend keeps those as that
+/// one plays them, unblended.
+fn check_blend(a: (&Path, &Sequence), b: (&Path, &Sequence)) -> Result<()> {
+    let only = |x: &Sequence, y: &Sequence| -> Vec<String> {
+        let lacking = x.tracks().iter().filter(|t| y.track(t.dof()).is_none());
+        lacking.map(|t| t.dof().to_string()).collect()
+    };
+    let (only_a, only_b) = (only(a.1, b.1), only(b.1, a.1));
+    if only_a.len() == a.1.tracks().len() {
+        bail!(
+            "{} and {} share no track: nothing to blend (sequences of different skeletons?)",
+            a.0.display(),
+            b.0.display()
         );
     }
-    Ok(Loaded {
-        seq: set.remove(0),
-        bvh: None,
-    })
+    for ((path, _), only) in [(a, only_a), (b, only_b)] {
+        if !only.is_empty() {
+            let names: Vec<&str> = only.iter().map(String::as_str).collect();
+            tracing::warn!(
+                "{}: {} track(s) the other sequence lacks, kept unblended: {}",
+                path.display(),
+                only.len(),
+                some_names(&names)
+            );
+        }
+    }
+    Ok(())
 }
 
 /// Saves an edited sequence: to BVH on the hierarchy of the BVH input it came from,
@@ -206,6 +278,27 @@ fn save(path: &Path, seq: &Sequence, template: Option<&Bvh>, scale: f64) -> Resu
                 path.display()
             );
         };
+        // A track without a channel on the hierarchy would vanish from the file (a blend
+        // with another skeleton's motion): refused rather than dropped.
+        let channels: std::collections::HashSet<String> = b
+            .joints()
+            .iter()
+            .flat_map(|j| j.channels.iter().map(move |c| format!("{}.{c}", j.name)))
+            .collect();
+        let lost: Vec<&str> = seq
+            .tracks()
+            .iter()
+            .map(|t| t.dof())
+            .filter(|d| !channels.contains(*d))
+            .collect();
+        if !lost.is_empty() {
+            bail!(
+                "{}: the BVH hierarchy written has no channel for {} track(s): {}; write a .trk to keep them",
+                path.display(),
+                lost.len(),
+                some_names(&lost)
+            );
+        }
         let scale = seq
             .meta
             .get("bvh_scale")
@@ -237,6 +330,7 @@ fn parse_list(s: &str) -> Result<Vec<f64>> {
 /// Runs a `troupe seq` command.
 pub fn run(args: SeqArgs) -> Result<ExitCode> {
     let scale = args.scale;
+    let actor = args.actor.as_deref();
     if !(scale.is_finite() && scale > 0.0) {
         bail!("--scale must be a positive number of metres per BVH unit");
     }
@@ -260,7 +354,7 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             rotation_order,
             (template, height),
             map,
-            scale,
+            (scale, actor),
         )?,
         SeqCommand::Blend {
             a,
@@ -270,7 +364,8 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             over,
             pyramid: levels,
         } => {
-            let (la, lb) = (load(&a, scale)?, load(&b, scale)?);
+            let (la, lb) = (load(&a, scale, actor)?, load(&b, scale, actor)?);
+            check_blend((&a, &la.seq), (&b, &lb.seq))?;
             let start = Instant::now();
             let s = match levels {
                 Some(n) => {
@@ -295,7 +390,7 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             tolerance,
             method,
         } => {
-            let l = load(&input, scale)?;
+            let l = load(&input, scale, actor)?;
             let start = Instant::now();
             let (s, r) = match method {
                 Method::Spline => compress_spline(&l.seq, &SplineOptions::new(tolerance))?,
@@ -318,7 +413,7 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             map,
             squeeze,
         } => {
-            let l = load(&input, scale)?;
+            let l = load(&input, scale, actor)?;
             let s = if let Some(sq) = squeeze {
                 let v: Vec<f64> = sq
                     .split(':')
@@ -350,6 +445,16 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
                 s.end(),
                 output.display()
             );
+            // The warp keeps `meta rate` true (see `remap_times`): say what became of it.
+            match (l.seq.meta.get("rate"), s.meta.get("rate")) {
+                (Some(from), Some(to)) if from != to => println!("rate {from} Hz -> {to} Hz"),
+                (Some(from), None) => println!(
+                    "rate {from} Hz dropped: the warp spaced the keys unevenly (BVH and glTF \
+                     output sample every {:.4} s)",
+                    s.frame_time()
+                ),
+                _ => {}
+            }
         }
         SeqCommand::Bands {
             input,
@@ -357,7 +462,7 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             weights,
         } => {
             let w = parse_list(&weights)?;
-            let l = load(&input, scale)?;
+            let l = load(&input, scale, actor)?;
             let s = pyramid::band_edit(&l.seq, &w, pyramid::DEFAULT_A)?;
             save(&output, &s, l.bvh.as_ref(), scale)?;
             println!(
@@ -374,7 +479,7 @@ pub fn run(args: SeqArgs) -> Result<ExitCode> {
             pyramid: levels,
             width,
         } => {
-            let l = load(&input, scale)?;
+            let l = load(&input, scale, actor)?;
             plot(&l.seq, &output, &dofs, levels, width)?;
         }
     }
@@ -387,7 +492,7 @@ fn convert(
     rotation_order: Option<String>,
     (template, height): (Option<String>, Option<f64>),
     map: Option<PathBuf>,
-    scale: f64,
+    (scale, actor): (f64, Option<&str>),
 ) -> Result<()> {
     let order = rotation_order
         .map(|o| o.parse::<RotationOrder>())
@@ -399,32 +504,29 @@ fn convert(
     let input_format = Format::of(input)?;
     let output_format = Format::of(output)?;
     let gltf_out = matches!(output_format, Format::Gltf | Format::Glb);
+    if input_format == Format::Trk {
+        if order.is_some() {
+            bail!("--rotation-order applies to BVH → BVH conversion");
+        }
+        return convert_trk(input, output, (template, height), actor);
+    }
     if let Some(t) = template {
         let t = troupe_body::template(&t)?;
-        // A .trk keeps DOF values, and a glTF file troupe wrote its body's offsets: that
-        // body is kept unless --height says otherwise (on another template, the glTF's
-        // root is scaled to it).
-        let trk = match input_format {
-            Format::Trk => Some(load(input, scale)?.seq),
-            _ => None,
-        };
+        // A glTF file troupe wrote keeps its body's offsets: that body is kept unless
+        // --height says otherwise (on another template, the glTF's root is scaled to it).
         let recorded = match input_format {
             Format::Gltf | Format::Glb => troupe_formats::gltf::recorded_body(input)?
                 .filter(|(name, _)| name == t.name)
                 .map(|(_, h)| h),
-            _ => trk
-                .as_ref()
-                .filter(|seq| seq.meta.get("template").is_some_and(|n| n == t.name))
-                .and_then(|seq| seq.meta.get("height")?.parse::<f64>().ok()),
+            _ => None,
         };
         let mut params = t.default_params();
         if let Some(h) = height.or(recorded) {
             params.height = h;
         }
         let skeleton = t.instantiate(params)?;
-        let mut seq = match (trk, map) {
-            (Some(seq), _) => seq,
-            (None, Some(m)) if input_format == Format::Bvh => {
+        let mut seq = match map {
+            Some(m) if input_format == Format::Bvh => {
                 retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)
                     .with_context(|| format!("retargeting {}", input.display()))?
             }
@@ -473,13 +575,62 @@ fn convert(
         if order.is_some() {
             bail!("--rotation-order applies to BVH → BVH conversion");
         }
-        if gltf_out {
-            bail!("glTF output of a .trk needs --template (the body to play it on)");
-        }
-        let l = load(input, scale)?;
+        let l = load(input, scale, actor)?;
         save(output, &l.seq, l.bvh.as_ref(), scale)?;
     }
     println!("wrote {}", output.display());
+    Ok(())
+}
+
+/// `seq convert` of a `.trk`: every actor it records (`actor`'s alone if given) and its
+/// objects, to a `.trk`, or played on `--template` to BVH or glTF — one file per actor,
+/// `NAME.ACTOR.EXT`, when there are several, as `troupe run --record` writes them.
+fn convert_trk(
+    input: &Path,
+    output: &Path,
+    (template, height): (Option<String>, Option<f64>),
+    actor: Option<&str>,
+) -> Result<()> {
+    let file = read_trk_file(input)?;
+    let mut sequences = match actor {
+        Some(name) => vec![pick(input, file.sequences, name)?],
+        None => file.sequences,
+    };
+    let output_format = Format::of(output)?;
+    let written = match template {
+        None if output_format != Format::Trk => bail!(
+            "{} output of a .trk needs --template (the body to play it on)",
+            output_format.name()
+        ),
+        None => save_recording(output, &sequences, &file.objects, [])?,
+        Some(t) => {
+            let t = troupe_body::template(&t)?;
+            let mut skeletons = Vec::new();
+            for seq in &mut sequences {
+                // An actor recorded on this template keeps its height, unless --height
+                // says otherwise.
+                let recorded = seq
+                    .meta
+                    .get("height")
+                    .filter(|_| seq.meta.get("template").is_some_and(|n| n == t.name))
+                    .and_then(|h| h.parse::<f64>().ok());
+                let mut params = t.default_params();
+                if let Some(h) = height.or(recorded) {
+                    params.height = h;
+                }
+                skeletons.push(t.instantiate(params)?);
+                // The body the output was made for: `troupe view` of a .trk shows it.
+                seq.meta.insert("template".into(), t.name.into());
+                seq.meta.insert("height".into(), params.height.to_string());
+            }
+            let names: Vec<String> = sequences.iter().map(|s| s.name.clone()).collect();
+            let actors = names.iter().map(String::as_str).zip(&skeletons);
+            save_recording(output, &sequences, &file.objects, actors)?
+        }
+    };
+    for path in written {
+        println!("wrote {}", path.display());
+    }
     Ok(())
 }
 
@@ -641,7 +792,6 @@ fn plot(
     if tracks.is_empty() {
         bail!("nothing to plot");
     }
-    let width = width.clamp(200, 8000);
     let panel = 240u32;
     let height = panel * tracks.len() as u32;
     let mut img = image::RgbImage::from_pixel(width, height, image::Rgb([255, 255, 255]));

@@ -69,7 +69,7 @@ pub struct ViewArgs {
     /// Headless: no multisampling (about 3× faster on CPU adapters, jagged edges).
     #[arg(long)]
     no_msaa: bool,
-    /// Seconds to play headless (default: the recording's length).
+    /// Seconds to play headless (default, and at most: the recording's length).
     #[arg(long)]
     seconds: Option<f64>,
     /// Simulation ticks per second.
@@ -132,32 +132,49 @@ struct Performer {
     height: Option<f64>,
 }
 
-/// Reads a recording ([`troupe_formats::load_sequences`] chooses the reader): each
-/// sequence plays one actor, on the template and height stored in its metadata (a
-/// `--record` `.trk`), or on the body a BVH or glTF file troupe wrote was recorded from
-/// (its offsets tell the template and height), else on `template` at `height` — which a
-/// foreign `.bvh` is retargeted onto.
-fn load_recording(path: &Path, template: &str, height: Option<f64>) -> Result<Vec<Performer>> {
-    let recorded = match troupe_formats::Format::of(path)? {
+/// What a recording holds: a performer per actor and the scene's objects (a `.trk` of
+/// `troupe run --record` keeps them; other formats bring none).
+struct Recording {
+    performers: Vec<Performer>,
+    objects: Vec<ObjectMotion>,
+}
+
+/// Reads a recording, once whatever its format: each sequence plays one actor, on the
+/// template and height stored in its metadata (a `--record` `.trk`), or on the body a
+/// BVH or glTF file troupe wrote was recorded from (its offsets tell the template and
+/// height), else on `template` at `height` — which a foreign `.bvh` is retargeted onto.
+fn load_recording(path: &Path, template: &str, height: Option<f64>) -> Result<Recording> {
+    // The body a file of one actor plays on: the one it was recorded from, if it tells.
+    let body = |recorded: Option<(String, f64)>| -> Result<(String, Option<f64>, _)> {
+        let (template, height) = match recorded {
+            Some((t, h)) => (t, Some(h)),
+            None => (template.to_string(), height),
+        };
+        let t = troupe_body::template(&template)?;
+        let mut params = t.default_params();
+        if let Some(h) = height {
+            params.height = h;
+        }
+        Ok((template, height, t.instantiate(params)?))
+    };
+    let (sequences, objects, template, height) = match troupe_formats::Format::of(path)? {
+        troupe_formats::Format::Trk => {
+            let file = troupe_formats::trk::read_trk_file(path)?;
+            (file.sequences, file.objects, template.to_string(), height)
+        }
         troupe_formats::Format::Bvh => {
-            troupe_formats::retarget::recorded_body(&troupe_formats::bvh::read_bvh(path)?)
+            let bvh = troupe_formats::bvh::read_bvh(path)?;
+            let (template, height, skeleton) = body(troupe_formats::retarget::recorded_body(&bvh))?;
+            let seq = troupe_formats::retarget::motion_for(&skeleton, path, &bvh)?;
+            (vec![seq], Vec::new(), template, height)
         }
         troupe_formats::Format::Gltf | troupe_formats::Format::Glb => {
-            troupe_formats::gltf::recorded_body(path)?
+            let gltf = troupe_formats::gltf::GltfFile::read(path)?;
+            let (template, height, skeleton) = body(gltf.recorded_body())?;
+            (vec![gltf.motion(&skeleton)?], Vec::new(), template, height)
         }
-        _ => None,
     };
-    let (template, height) = match &recorded {
-        Some((t, h)) => (t.as_str(), Some(*h)),
-        None => (template, height),
-    };
-    let t = troupe_body::template(template)?;
-    let mut params = t.default_params();
-    if let Some(h) = height {
-        params.height = h;
-    }
-    let skeleton = t.instantiate(params)?;
-    Ok(troupe_formats::load_sequences(path, Some(&skeleton))?
+    let performers = sequences
         .into_iter()
         .enumerate()
         .map(|(i, sequence)| Performer {
@@ -170,7 +187,7 @@ fn load_recording(path: &Path, template: &str, height: Option<f64>) -> Result<Ve
                 .meta
                 .get("template")
                 .cloned()
-                .unwrap_or_else(|| template.to_string()),
+                .unwrap_or_else(|| template.clone()),
             height: sequence
                 .meta
                 .get("height")
@@ -178,7 +195,11 @@ fn load_recording(path: &Path, template: &str, height: Option<f64>) -> Result<Ve
                 .or(height),
             sequence,
         })
-        .collect())
+        .collect();
+    Ok(Recording {
+        performers,
+        objects,
+    })
 }
 
 /// Parses `--debug CHANNEL[,CHANNEL]` (channels: `nav`).
@@ -221,15 +242,6 @@ fn render_options(look: Look, bones: bool, labels: bool) -> RenderOptions {
     }
 }
 
-/// The objects of a recording: those a `.trk` holds (`troupe run --record` keeps them);
-/// other formats bring none.
-fn load_objects(path: &Path) -> Result<Vec<ObjectMotion>> {
-    match troupe_formats::Format::of(path)? {
-        troupe_formats::Format::Trk => Ok(troupe_formats::trk::read_trk_file(path)?.objects),
-        _ => Ok(Vec::new()),
-    }
-}
-
 /// Runs `troupe view`.
 pub fn run(args: ViewArgs) -> Result<ExitCode> {
     if let Some(prefix) = &args.remote.zenoh {
@@ -240,8 +252,10 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         .as_deref()
         .ok_or_else(|| anyhow!("troupe view: give a recording to play"))?;
     let size = parse_size(&args.size)?;
-    let performers = load_recording(file, &args.actor_template, args.actor_height)?;
-    let objects = load_objects(file)?;
+    let Recording {
+        performers,
+        objects,
+    } = load_recording(file, &args.actor_template, args.actor_height)?;
     let mut scene = Scene::new(SceneConfig {
         rate: args.rate,
         ..SceneConfig::default()
@@ -286,7 +300,15 @@ pub fn run(args: ViewArgs) -> Result<ExitCode> {
         (None, true) => None,
     };
     if let Some(dir) = headless_dir {
-        let seconds = args.seconds.unwrap_or(length).max(0.0);
+        let seconds = args.seconds.unwrap_or(length);
+        // Past its end a recording holds still: every further tick would write the same
+        // picture again (`--seconds 1e9` filled the disk).
+        if !(0.0..=length + 1.0 / args.rate).contains(&seconds) {
+            bail!(
+                "--seconds {seconds}: {} plays for {length:.2} s; its frames end there",
+                file.display()
+            );
+        }
         let options = render_options(args.look, args.bones, !args.no_labels);
         let mut writer = FrameWriter::new(&dir, size, camera, args.every)?;
         writer.renderer_mut().set_options(options);

@@ -1,5 +1,8 @@
 //! End-to-end checks of the `troupe` command line.
 
+mod common;
+
+use common::{finishes, succeeds};
 use std::path::PathBuf;
 use std::process::Command;
 
@@ -7,17 +10,6 @@ fn troupe() -> Command {
     let mut c = Command::new(env!("CARGO_BIN_EXE_troupe"));
     c.current_dir(env!("CARGO_MANIFEST_DIR"));
     c
-}
-
-/// Runs the command and checks that it succeeded, showing its stderr if not.
-fn succeeds(command: &mut Command) -> std::process::Output {
-    let out = command.output().unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-    out
 }
 
 fn temp(name: &str) -> PathBuf {
@@ -592,4 +584,57 @@ fn warn_logs_a_warning_with_the_actors_name() {
         "{log}"
     );
     assert!(!log.contains("@on"), "{log}");
+}
+
+/// A time past what a scene or recording holds is refused at once: `render --at 1e9`
+/// simulated for days, `view --seconds 1e9` wrote pictures until the disk was full.
+#[test]
+fn times_past_a_scene_or_a_recording_are_refused_at_once() {
+    let refused = |args: &[&str], needle: &str| {
+        let child = troupe()
+            .args(args)
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = finishes(child, 60, &format!("{args:?}"));
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            !out.status.success() && err.contains(needle),
+            "{args:?}: {err}"
+        );
+    };
+    let scene = "scripts/examples/greeting.lua";
+    refused(
+        &["render", scene, "never.png", "--at", "1e9"],
+        "--at 1000000000 s is past --max-seconds (600 s)",
+    );
+    refused(
+        &[
+            "render",
+            scene,
+            "never.png",
+            "--at",
+            "20",
+            "--max-seconds",
+            "10",
+        ],
+        "past --max-seconds (10 s)",
+    );
+    let trk = temp("short.trk");
+    succeeds(
+        troupe()
+            .args(["run", scene, "--seconds", "0.5", "--record"])
+            .arg(&trk),
+    );
+    let frames = temp("never-frames");
+    let (trk, frames) = (trk.display().to_string(), frames.display().to_string());
+    refused(
+        &["view", &trk, "--frames", &frames, "--seconds", "1e9"],
+        "plays for 0.50 s",
+    );
+    refused(
+        &["view", &trk, "--frames", &frames, "--seconds", "inf"],
+        "plays for 0.50 s",
+    );
 }

@@ -292,3 +292,170 @@ fn a_z_up_bvh_converts_to_an_upright_gltf() {
         doc["nodes"][0]
     );
 }
+
+/// Runs troupe expecting it to fail; returns its stderr.
+fn fails(args: &[&str]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_troupe"))
+        .args(args)
+        .output()
+        .expect("run troupe");
+    let err = String::from_utf8_lossy(&out.stderr).into_owned();
+    assert!(!out.status.success(), "troupe {args:?} succeeded: {err}");
+    err
+}
+
+#[test]
+fn plot_refuses_a_width_out_of_range_naming_the_range() {
+    let wave = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/examples/wave.trk");
+    let png = temp("narrow.png");
+    for width in ["100", "9000"] {
+        let err = fails(&[
+            "seq",
+            "plot",
+            wave,
+            &png.display().to_string(),
+            "--width",
+            width,
+        ]);
+        assert!(err.contains("200..=8000"), "{width}: {err}");
+    }
+    troupe(&[
+        "seq",
+        "plot",
+        wave,
+        &png.display().to_string(),
+        "--width",
+        "200",
+    ]);
+}
+
+#[test]
+fn warp_keeps_the_rate_true() {
+    let rated = temp("rated.trk");
+    std::fs::write(
+        &rated,
+        "troupe-trk 1\nsequence s\nmeta rate 100\ntrack r_elbow_flexion\n0 0\n0.01 0.1\n0.02 0.3\n0.03 0.2\nend\n",
+    )
+    .unwrap();
+    let s = |p: &PathBuf| p.display().to_string();
+    let rate = |p: &PathBuf| {
+        let v: serde_json::Value =
+            serde_json::from_str(&troupe(&["seq", "info", &s(p), "--json"])).unwrap();
+        v["sequences"][0]["meta"]["rate"]
+            .as_str()
+            .map(str::to_string)
+    };
+    // Twice as slow: the keys are 0.02 s apart, 50 Hz.
+    let slow = temp("slow.trk");
+    let text = troupe(&["seq", "warp", &s(&rated), &s(&slow), "--map", "0:0,1:2"]);
+    assert!(text.contains("rate 100 Hz -> 50 Hz"), "{text}");
+    assert_eq!(rate(&slow).as_deref(), Some("50"));
+    // Unevenly warped keys have no rate.
+    let uneven = temp("uneven.trk");
+    let text = troupe(&[
+        "seq",
+        "warp",
+        &s(&rated),
+        &s(&uneven),
+        "--squeeze",
+        "0:0.01:0.03:0.02",
+    ]);
+    assert!(text.contains("rate 100 Hz dropped"), "{text}");
+    assert_eq!(rate(&uneven), None);
+}
+
+/// A recording of two actors (ann, bob) and the table of the greeting scene.
+fn greeting_recording(name: &str) -> PathBuf {
+    let trk = temp(name);
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/examples/greeting.lua");
+    let s = trk.display().to_string();
+    troupe(&["run", scene, "--seconds", "0.2", "--record", &s]);
+    trk
+}
+
+#[test]
+fn convert_of_a_recording_writes_every_actor_or_the_one_asked() {
+    let trk = greeting_recording("two.trk");
+    let s = |p: &PathBuf| p.display().to_string();
+    let file = |p: &PathBuf| troupe_formats::trk::read_trk_file(p).unwrap();
+    // To .trk: every actor and object (only the first actor was kept).
+    let copy = temp("two-copy.trk");
+    troupe(&["seq", "convert", &s(&trk), &s(&copy)]);
+    let (before, after) = (file(&trk), file(&copy));
+    let names = |f: &troupe_formats::trk::TrkFile| -> Vec<String> {
+        f.sequences.iter().map(|q| q.name.clone()).collect()
+    };
+    assert_eq!(names(&after), ["ann", "bob"]);
+    assert_eq!(after.objects.len(), before.objects.len());
+    // To glTF on a template: one file per actor, as `run --record` writes them.
+    let glb = temp("two.glb");
+    let text = troupe(&["seq", "convert", &s(&trk), &s(&glb), "--template", "adult"]);
+    for actor in ["ann", "bob"] {
+        let one = glb.with_file_name(format!("two.{actor}.glb"));
+        assert!(one.is_file() && text.contains(&s(&one)), "{text}");
+    }
+    // --actor chooses one; an actor the file lacks is refused, naming those there are.
+    let bob = temp("bob.trk");
+    troupe(&["seq", "convert", &s(&trk), &s(&bob), "--actor", "bob"]);
+    assert_eq!(names(&file(&bob)), ["bob"]);
+    let err = fails(&["seq", "convert", &s(&trk), &s(&bob), "--actor", "cleo"]);
+    assert!(err.contains("no actor `cleo` (actors: ann, bob)"), "{err}");
+}
+
+#[test]
+fn blend_of_different_skeletons_says_what_it_cannot_blend() {
+    let (a, b) = (
+        shared("pybvhrepo_cmu_12_01_walk.bvh"),
+        shared("pymo_AV_8Walk_Meredith_HVHA_Rep1.bvh"),
+    );
+    let s = |p: &PathBuf| p.display().to_string();
+    let blend = |out: &PathBuf| {
+        Command::new(env!("CARGO_BIN_EXE_troupe"))
+            .args([
+                "seq",
+                "blend",
+                &s(&a),
+                &s(&b),
+                &s(out),
+                "--at",
+                "0.5",
+                "--over",
+                "0.3",
+            ])
+            .output()
+            .unwrap()
+    };
+    // A BVH written on the first file's hierarchy cannot hold the second's thumbs.
+    let out = blend(&temp("mixed.bvh"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("has no channel for 12 track(s): LeftHandThumb1.Xrotation"),
+        "{err}"
+    );
+    // A .trk holds every track; those only one file has are named, unblended.
+    let out = blend(&temp("mixed.trk"));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("36 track(s) the other sequence lacks, kept unblended: LHipJoint"),
+        "{err}"
+    );
+    // Sequences sharing no track have nothing to blend.
+    let wave = PathBuf::from(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/scripts/examples/wave.trk"
+    ));
+    let err = fails(&[
+        "seq",
+        "blend",
+        &s(&a),
+        &s(&wave),
+        &s(&temp("none.trk")),
+        "--at",
+        "0",
+        "--over",
+        "1",
+    ]);
+    assert!(err.contains("share no track: nothing to blend"), "{err}");
+}

@@ -1,6 +1,9 @@
 //! End-to-end tests of `troupe snapshot` and `troupe view` (headless, on this machine's
 //! adapter).
 
+mod common;
+
+use common::{finishes, succeeds};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -87,20 +90,15 @@ fn view_plays_a_recording_headless_into_frames() {
     )
     .unwrap();
     let frames = dir.join("frames");
-    let out = troupe()
-        .args([
-            "view",
-            trk.to_str().unwrap(),
-            "--frames",
-            frames.to_str().unwrap(),
-        ])
-        .args(["--every", "25", "--size", "96x64"])
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    succeeds(
+        troupe()
+            .args([
+                "view",
+                trk.to_str().unwrap(),
+                "--frames",
+                frames.to_str().unwrap(),
+            ])
+            .args(["--every", "25", "--size", "96x64"]),
     );
     // 1 s at 100 Hz: ticks 0, 25, 50, 75, 100.
     let mut names: Vec<_> = std::fs::read_dir(&frames)
@@ -155,4 +153,118 @@ fn view_refuses_unknown_formats() {
     let out = troupe().args(["view", "walk.gltf"]).output().unwrap();
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("walk.gltf"));
+}
+
+/// Records 0.2 s of the greeting scene (ann and bob) to `out`.
+fn record_greeting(out: &Path) {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scripts/examples/greeting.lua");
+    let status = troupe()
+        .args(["run", scene, "--seconds", "0.2", "--record"])
+        .arg(out)
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+#[test]
+fn view_of_a_gltf_names_the_actor_recorded_whatever_the_file_is_called() {
+    let dir = temp_dir("gltf-name");
+    record_greeting(&dir.join("rec.glb"));
+    let renamed = dir.join("renamed.glb");
+    std::fs::copy(dir.join("rec.bob.glb"), &renamed).unwrap();
+    succeeds(
+        troupe()
+            .arg("view")
+            .arg(&renamed)
+            .args([
+                "--camera",
+                "follow:bob",
+                "--size",
+                "64x48",
+                "--every",
+                "100",
+            ])
+            .args(["--look", "bones", "--no-msaa", "--frames"])
+            .arg(dir.join("frames")),
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Each recording is read through a named pipe that gives its bytes once: a second read
+/// of the file would wait for ever.
+#[cfg(unix)]
+#[test]
+fn view_reads_a_recording_once() {
+    let dir = temp_dir("read-once");
+    record_greeting(&dir.join("rec.trk"));
+    record_greeting(&dir.join("rec.bvh"));
+    record_greeting(&dir.join("rec.glb"));
+    for (file, ext) in [
+        ("rec.trk", "trk"),
+        ("rec.ann.bvh", "bvh"),
+        ("rec.ann.glb", "glb"),
+    ] {
+        let bytes = std::fs::read(dir.join(file)).unwrap();
+        let pipe = dir.join(format!("pipe.{ext}"));
+        let made = Command::new("mkfifo").arg(&pipe).status().unwrap();
+        assert!(made.success());
+        let writer = {
+            let pipe = pipe.clone();
+            std::thread::spawn(move || std::fs::write(pipe, bytes))
+        };
+        let child = troupe()
+            .arg("view")
+            .arg(&pipe)
+            .args(["--size", "48x32", "--every", "100", "--look", "bones"])
+            .args(["--no-msaa", "--no-labels", "--frames"])
+            .arg(dir.join(format!("frames-{ext}")))
+            .stderr(std::process::Stdio::piped())
+            .stdout(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let out = finishes(child, 120, &format!("view of a .{ext} through a pipe"));
+        assert!(
+            out.status.success(),
+            "{ext}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        writer.join().unwrap().unwrap();
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Renders a scene of one actor named `name` with its label; the picture's bytes.
+fn label_picture(dir: &Path, name: &str) -> Vec<u8> {
+    let scene = dir.join("named.lua");
+    std::fs::write(&scene, format!("troupe.actor{{ name = \"{name}\" }}\n")).unwrap();
+    let png = dir.join("named.png");
+    succeeds(
+        troupe()
+            .arg("render")
+            .arg(&scene)
+            .arg(&png)
+            // Far enough for the label and the marks above it to stand inside the picture.
+            .args([
+                "--size",
+                "400x300",
+                "--look",
+                "bones",
+                "--camera",
+                "fit@0,10,8",
+            ]),
+    );
+    std::fs::read(&png).unwrap()
+}
+
+#[test]
+fn labels_draw_accented_letters() {
+    let dir = temp_dir("accents");
+    for (accented, plain) in [("Zoë", "Zoe"), ("José", "Jose"), ("Čapek", "Capek")] {
+        let picture = label_picture(&dir, accented);
+        // Not the `?` a letter the font lacks draws, and not the letter without its mark.
+        let question = accented.replace(|c: char| !c.is_ascii(), "?");
+        assert_ne!(picture, label_picture(&dir, &question), "{accented}");
+        assert_ne!(picture, label_picture(&dir, plain), "{accented}");
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -74,6 +74,25 @@ impl OptionError {
     }
 }
 
+/// The DOF of each track of `sequence` on `skeleton`, in track order. A track that names
+/// no DOF of the body is refused as `option`, naming the sequence (an inline one is named
+/// after the line that made it), the track and the nearest DOF name.
+pub(crate) fn track_dofs(
+    skeleton: &troupe_body::Skeleton,
+    sequence: &troupe_motion::Sequence,
+    option: &'static str,
+) -> std::result::Result<Vec<usize>, OptionError> {
+    sequence
+        .tracks()
+        .iter()
+        .map(|track| {
+            skeleton.dof(track.dof()).map_err(|e| {
+                OptionError::refused(option, format!("sequence `{}`: {e}", sequence.name))
+            })
+        })
+        .collect()
+}
+
 /// Why an action cannot be made.
 #[derive(Debug, Error, Clone, PartialEq)]
 pub enum ActionError {

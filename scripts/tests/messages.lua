@@ -161,6 +161,13 @@ test("unknown names: get_actor and get_object answer nil, every other call raise
   local s = troupe.sequence{ r_elbow_flexion = { {0, 0}, {1, 1} } }
   says(function() s:value("l_elbow_flexion", 0.5) end, "value: sequence `")
   says(function() s:interpolation("l_elbow_flexion") end, "interpolation: sequence `")
+  -- A track that is no DOF of the actor a sequence is given to: named with the sequence
+  -- (an inline one is named after its line); a walk following it ignored it.
+  local slip = troupe.sequence{ name = "slip", root_x = { {0, 0}, {1, 1} }, root_z = { {0, 0}, {1, 1} },
+    root_yw = { {0, 0}, {1, 1} } }
+  says(function() ann:walk{ follow = slip } end,
+    "walk: sequence `slip`: unknown DOF `root_yw` in skeleton `adult`; did you mean")
+  says(function() ann:play(slip) end, "play: sequence `slip`: unknown DOF `root_yw`")
 end)
 
 test("an unknown actor or object name lists the scene's, or gives the nearest", function()

@@ -16,7 +16,7 @@ pub mod torque_recorder;
 pub use options::{DynamicsOptions, Push};
 pub use torque_recorder::TorqueRecorder;
 
-use crate::error::Result;
+use crate::error::{track_dofs, Result};
 use std::sync::Arc;
 use troupe_body::dynamics::{Control, Gains, SimParams, Simulation};
 use troupe_body::{Scope, Skeleton};
@@ -86,9 +86,8 @@ impl DynamicsGenerator {
         } = options.clone();
         let mut tracks = Vec::new();
         if let Drive::Track { sequence, .. } = &drive {
-            for (i, t) in sequence.tracks().iter().enumerate() {
-                tracks.push((skeleton.dof(t.dof())?, i));
-            }
+            let dofs = track_dofs(skeleton, sequence, "sequence")?;
+            tracks.extend(dofs.into_iter().enumerate().map(|(i, d)| (d, i)));
         }
         let n = skeleton.dof_count();
         Ok(DynamicsGenerator {

@@ -2,7 +2,7 @@
 //! simulation's parameters, an optional push, and which DOFs are simulated.
 
 use super::{Drive, DynamicsGenerator, ServoTarget};
-use crate::error::{OptionError, Result};
+use crate::error::{track_dofs, OptionError, Result};
 use troupe_body::dynamics::{Gains, SimParams};
 use troupe_body::glam::DVec3;
 use troupe_body::{Scope, Skeleton};
@@ -162,10 +162,9 @@ impl DynamicsOptions {
             }
             Drive::Servo { .. } => asked.unwrap_or(body),
             Drive::Track { sequence, .. } => {
-                let mut natural = Scope::EMPTY;
-                for track in sequence.tracks() {
-                    natural.insert(skeleton.dof(track.dof())?);
-                }
+                let natural: Scope = track_dofs(skeleton, sequence, "sequence")?
+                    .into_iter()
+                    .collect();
                 // Like a servo's, a scope beyond the tracks holds those DOFs, but one
                 // with none of them would track nothing.
                 let tracked = asked.map_or(natural, |a| a.intersection(&natural));

@@ -6,7 +6,7 @@ pub mod options;
 
 pub use options::KeyframeOptions;
 
-use crate::error::Result;
+use crate::error::{track_dofs, Result};
 use std::sync::Arc;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
@@ -48,8 +48,10 @@ impl Keyframe {
         looping: Option<bool>,
     ) -> Result<Keyframe> {
         let mut tracks = Vec::new();
-        for (i, track) in sequence.tracks().iter().enumerate() {
-            let dof = skeleton.dof(track.dof())?;
+        for (i, dof) in track_dofs(skeleton, &sequence, "sequence")?
+            .into_iter()
+            .enumerate()
+        {
             if scope.is_none_or(|s| s.contains(dof)) {
                 tracks.push((dof, i, 0));
             }

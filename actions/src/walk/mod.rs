@@ -46,7 +46,7 @@ pub use options::WalkOptions;
 pub use rig::Rig;
 pub use route::{Plan, RootSample, Route, Speed};
 
-use crate::error::{OptionError, Result};
+use crate::error::{track_dofs, OptionError, Result};
 use route::wrap;
 use std::f64::consts::TAU;
 use std::sync::Arc;
@@ -293,6 +293,11 @@ impl Walk {
     pub fn new(skeleton: &Skeleton, route: Route, options: WalkOptions) -> Result<Walk> {
         let rig = Rig::new(skeleton)?;
         options.validate()?;
+        if let Route::Follow(sequence) = &route {
+            // The walk reads the root's tracks only, but a name that is no DOF of the
+            // body is a slip (`root_yw`) that would leave the walk unturned, unsaid.
+            track_dofs(skeleton, sequence, "follow")?;
+        }
         route.check(rig.thigh_height)?;
         let dofs = rig.dofs(options.arms);
         let flat = Foot::Stance {

@@ -941,16 +941,22 @@ pub fn troupe_named_motion(skeleton: &Skeleton, bvh: &Bvh, name: &str) -> Result
 /// beside it if that exists, else the built-in map (CMU or Mixamo) that matches its joint
 /// names best. (Other formats: [`crate::load_sequence`].)
 pub fn load_sequence_for(skeleton: &Skeleton, path: &Path) -> Result<Sequence> {
+    motion_for(skeleton, path, &read_bvh(path)?)
+}
+
+/// The motion of `bvh`, read from `path`, to play on `skeleton`, as [`load_sequence_for`]
+/// makes it: for a caller that has read the file already (the path names the sequence
+/// and the `.map` beside it).
+pub fn motion_for(skeleton: &Skeleton, path: &Path, bvh: &Bvh) -> Result<Sequence> {
     let name = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    let bvh = read_bvh(path)?;
-    if is_troupe_rig(skeleton, &bvh) {
-        return troupe_named_motion(skeleton, &bvh, &name);
+    if is_troupe_rig(skeleton, bvh) {
+        return troupe_named_motion(skeleton, bvh, &name);
     }
-    let map = map_for(path, &bvh)?;
-    retarget(skeleton, &bvh, &map, &name).map_err(|e| match e {
+    let map = map_for(path, bvh)?;
+    retarget(skeleton, bvh, &map, &name).map_err(|e| match e {
         // The map's name alone does not say which file would not retarget.
         Error::Retarget { .. } => Error::Invalid(format!("{}: {e}", path.display())),
         e => e,

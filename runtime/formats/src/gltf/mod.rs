@@ -17,7 +17,7 @@ pub mod skin;
 mod uri;
 pub mod write;
 
-pub use read::{read_gltf_motion, recorded_body};
+pub use read::{read_gltf_motion, recorded_body, GltfFile};
 pub use skin::{add_skin, with_helper_joints};
 pub use write::{
     to_gltf, to_gltf_with_objects, write_character, write_glb, write_glb_with, write_gltf,

@@ -24,7 +24,7 @@ use ::gltf::buffer::Source;
 use ::gltf::{Accessor, Gltf};
 use base64::Engine as _;
 use glam::{DQuat, DVec3};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use troupe_body::kinematics::solve_joint_angles;
 use troupe_body::skeleton::{DofKind, Skeleton};
 use troupe_motion::sequence::{Key, Sequence, Track};
@@ -42,160 +42,223 @@ fn character_source(gltf: &Gltf) -> Option<String> {
     })
 }
 
-/// Reads the first animation of a glTF file (`.gltf` or `.glb`) as a sequence for
-/// `skeleton`.
-pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<Sequence> {
-    let path = path.as_ref();
-    let file = path.display().to_string();
-    let bad = |message: String| Error::Parse {
-        file: file.clone(),
-        line: 1,
-        message,
-    };
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    check_glb_header(&bytes).map_err(bad)?;
-    let gltf = Gltf::from_slice(&bytes).map_err(|e| match e {
-        ::gltf::Error::Deserialize(e) => Error::Parse {
-            file: file.clone(),
-            line: e.line().max(1),
-            message: format!("not glTF JSON: {e}"),
-        },
-        other => bad(format!("not valid glTF: {other}")),
-    })?;
-    if let Some(source) = character_source(&gltf) {
-        return Err(bad(format!(
-            "it holds a user's character ({source}) moved by its own bones, not troupe's \
-             joints: play the run's .trk recording instead"
-        )));
-    }
-    let buffers = load_buffers(&gltf, path, &bad)?;
+/// A glTF file (`.gltf` or `.glb`) read and parsed once, to ask both the body it was
+/// recorded from and its motion (buffer files beside it are read by
+/// [`GltfFile::motion`]).
+pub struct GltfFile {
+    path: PathBuf,
+    gltf: Gltf,
+}
 
-    let animation = gltf
-        .animations()
-        .next()
-        .ok_or_else(|| bad("the file has no animation".into()))?;
-    let mut rotations: Vec<(usize, Vec<f32>, Vec<f32>)> = Vec::new();
-    let mut translation: Option<(Vec<f32>, Vec<f32>)> = None;
-    for (c, channel) in animation.channels().enumerate() {
-        let node = channel.target().node();
-        let Some(name) = node.name() else {
-            return Err(bad(format!(
-                "animation channel {c}: target node {} has no name",
-                node.index()
-            )));
+impl GltfFile {
+    /// Reads and parses `path`; errors name the file and what was wrong.
+    pub fn read(path: impl AsRef<Path>) -> Result<GltfFile> {
+        let path = path.as_ref();
+        let file = path.display().to_string();
+        let bad = |line: usize, message: String| Error::Parse {
+            file: file.clone(),
+            line,
+            message,
         };
-        let Ok(joint) = skeleton.joint(name) else {
-            continue;
+        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+        check_glb_header(&bytes).map_err(|m| bad(1, m))?;
+        let gltf = Gltf::from_slice(&bytes).map_err(|e| match e {
+            ::gltf::Error::Deserialize(e) => bad(e.line().max(1), format!("not glTF JSON: {e}")),
+            other => bad(1, format!("not valid glTF: {other}")),
+        })?;
+        Ok(GltfFile {
+            path: path.to_path_buf(),
+            gltf,
+        })
+    }
+
+    /// The template and standing height of the troupe body the file was written from, as
+    /// [`recorded_body`] finds them.
+    pub fn recorded_body(&self) -> Option<(String, f64)> {
+        if character_source(&self.gltf).is_some() {
+            return None;
+        }
+        let rest: std::collections::HashMap<&str, DVec3> = self
+            .gltf
+            .nodes()
+            .filter_map(|n| {
+                let [x, y, z] = n.transform().decomposed().0;
+                Some((n.name()?, DVec3::new(x as f64, y as f64, z as f64)))
+            })
+            .collect();
+        troupe_body::template::templates()
+            .into_iter()
+            .find_map(|t| {
+                let at_default = t.instantiate(t.default_params()).ok()?;
+                let root = rest.get(at_default.joints().first()?.name.as_str())?;
+                let height = t.default_height * root.y / at_default.joints()[0].offset.y;
+                let mut params = t.default_params();
+                params.height = height;
+                let body = t.instantiate(params).ok()?;
+                let same = body.joints().iter().all(|j| {
+                    rest.get(j.name.as_str()).is_some_and(|r| {
+                        (*r - j.offset).length() < 1e-5 * (1.0 + j.offset.length())
+                    })
+                });
+                same.then(|| (t.name.to_string(), height))
+            })
+    }
+
+    /// The first animation as a sequence for `skeleton`, as [`read_gltf_motion`] reads it.
+    pub fn motion(&self, skeleton: &Skeleton) -> Result<Sequence> {
+        let (path, gltf) = (self.path.as_path(), &self.gltf);
+        let file = path.display().to_string();
+        let bad = |message: String| Error::Parse {
+            file: file.clone(),
+            line: 1,
+            message,
         };
-        let sampler = channel.sampler();
-        if sampler.interpolation() == Interpolation::CubicSpline {
+        if let Some(source) = character_source(gltf) {
             return Err(bad(format!(
-                "animation channel {c}: CUBICSPLINE samplers are not supported (LINEAR or STEP)"
+                "it holds a user's character ({source}) moved by its own bones, not troupe's \
+                 joints: play the run's .trk recording instead"
             )));
         }
-        let input = floats(sampler.input(), Dimensions::Scalar, &buffers, &bad)?;
-        match channel.target().property() {
-            Property::Rotation => {
-                let output = floats(sampler.output(), Dimensions::Vec4, &buffers, &bad)?;
-                // glTF asks for unit quaternions; one that is not finite, or nearly zero,
-                // has no rotation to read (it was patched over silently).
-                if let Some(k) = output.chunks(4).position(|q| {
-                    let n = q.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>();
-                    !(n.is_finite() && n > 1e-6)
-                }) {
-                    let q = &output[4 * k..4 * k + 4];
-                    return Err(bad(format!(
+        let buffers = load_buffers(gltf, path, &bad)?;
+
+        let animation = gltf
+            .animations()
+            .next()
+            .ok_or_else(|| bad("the file has no animation".into()))?;
+        let mut rotations: Vec<(usize, Vec<f32>, Vec<f32>)> = Vec::new();
+        let mut translation: Option<(Vec<f32>, Vec<f32>)> = None;
+        for (c, channel) in animation.channels().enumerate() {
+            let node = channel.target().node();
+            let Some(name) = node.name() else {
+                return Err(bad(format!(
+                    "animation channel {c}: target node {} has no name",
+                    node.index()
+                )));
+            };
+            let Ok(joint) = skeleton.joint(name) else {
+                continue;
+            };
+            let sampler = channel.sampler();
+            if sampler.interpolation() == Interpolation::CubicSpline {
+                return Err(bad(format!(
+                "animation channel {c}: CUBICSPLINE samplers are not supported (LINEAR or STEP)"
+            )));
+            }
+            let input = floats(sampler.input(), Dimensions::Scalar, &buffers, &bad)?;
+            match channel.target().property() {
+                Property::Rotation => {
+                    let output = floats(sampler.output(), Dimensions::Vec4, &buffers, &bad)?;
+                    // glTF asks for unit quaternions; one that is not finite, or nearly zero,
+                    // has no rotation to read (it was patched over silently).
+                    if let Some(k) = output.chunks(4).position(|q| {
+                        let n = q.iter().map(|&x| (x as f64) * (x as f64)).sum::<f64>();
+                        !(n.is_finite() && n > 1e-6)
+                    }) {
+                        let q = &output[4 * k..4 * k + 4];
+                        return Err(bad(format!(
                         "animation channel {c} (`{name}` rotation), key {k}: {q:?} is not a rotation \
                          (glTF asks for unit quaternions)"
                     )));
+                    }
+                    rotations.push((joint, input, output))
                 }
-                rotations.push((joint, input, output))
+                Property::Translation if joint == 0 => {
+                    translation = Some((
+                        input,
+                        floats(sampler.output(), Dimensions::Vec3, &buffers, &bad)?,
+                    ))
+                }
+                _ => {}
             }
-            Property::Translation if joint == 0 => {
-                translation = Some((
-                    input,
-                    floats(sampler.output(), Dimensions::Vec3, &buffers, &bad)?,
-                ))
-            }
-            _ => {}
         }
-    }
-    // The root's translation is the recorded body's: scaled to this one's (see the module
-    // documentation).
-    let playing_root = skeleton.joints()[0].offset;
-    let recorded_root = gltf
-        .nodes()
-        .find(|n| n.name() == Some(skeleton.joints()[0].name.as_str()))
-        .map(|n| n.transform().decomposed().0[1] as f64)
-        .unwrap_or(playing_root.y);
-    let scale = if recorded_root > 1e-9 && playing_root.y > 1e-9 {
-        playing_root.y / recorded_root
-    } else {
-        1.0
-    };
-    if rotations.is_empty() && translation.is_none() {
-        return Err(bad(format!(
+        // The root's translation is the recorded body's: scaled to this one's (see the module
+        // documentation).
+        let playing_root = skeleton.joints()[0].offset;
+        let recorded_root = gltf
+            .nodes()
+            .find(|n| n.name() == Some(skeleton.joints()[0].name.as_str()))
+            .map(|n| n.transform().decomposed().0[1] as f64)
+            .unwrap_or(playing_root.y);
+        let scale = if recorded_root > 1e-9 && playing_root.y > 1e-9 {
+            playing_root.y / recorded_root
+        } else {
+            1.0
+        };
+        if rotations.is_empty() && translation.is_none() {
+            return Err(bad(format!(
             "no animation channel targets a joint of the `{}` skeleton (node names must be troupe joint names)",
             skeleton.name()
         )));
-    }
-    // Sample every channel at the times of the longest input.
-    let times: Vec<f64> = rotations
-        .iter()
-        .map(|(_, t, _)| t)
-        .chain(translation.as_ref().map(|(t, _)| t))
-        .max_by_key(|t| t.len())
-        .map(|t| t.iter().map(|&x| x as f64).collect())
-        .unwrap_or_default();
-    if times.windows(2).any(|w| w[1] <= w[0]) || times.iter().any(|t| !t.is_finite()) {
-        return Err(bad("animation times must be finite and increasing".into()));
-    }
-
-    let n = skeleton.dof_count();
-    let mut q = vec![0.0; n];
-    let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(times.len()); n];
-    let mut driven = vec![false; n];
-    for &t in &times {
-        for (joint, input, output) in &rotations {
-            let r = sample_quat(input, output, t);
-            solve_joint_angles(skeleton, *joint, r, &mut q);
-            for d in skeleton.joints()[*joint].dofs.clone() {
-                driven[d] |= skeleton.dofs()[d].kind == DofKind::Rotation;
-            }
         }
-        if let Some((input, output)) = &translation {
-            let local = sample_vec3(input, output, t) * scale - playing_root;
-            for d in skeleton.joints()[0].dofs.clone() {
-                let dof = &skeleton.dofs()[d];
-                if dof.kind == DofKind::Translation {
-                    q[d] = local.dot(dof.axis);
-                    driven[d] = true;
+        // Sample every channel at the times of the longest input.
+        let times: Vec<f64> = rotations
+            .iter()
+            .map(|(_, t, _)| t)
+            .chain(translation.as_ref().map(|(t, _)| t))
+            .max_by_key(|t| t.len())
+            .map(|t| t.iter().map(|&x| x as f64).collect())
+            .unwrap_or_default();
+        if times.windows(2).any(|w| w[1] <= w[0]) || times.iter().any(|t| !t.is_finite()) {
+            return Err(bad("animation times must be finite and increasing".into()));
+        }
+
+        let n = skeleton.dof_count();
+        let mut q = vec![0.0; n];
+        let mut values: Vec<Vec<f64>> = vec![Vec::with_capacity(times.len()); n];
+        let mut driven = vec![false; n];
+        for &t in &times {
+            for (joint, input, output) in &rotations {
+                let r = sample_quat(input, output, t);
+                solve_joint_angles(skeleton, *joint, r, &mut q);
+                for d in skeleton.joints()[*joint].dofs.clone() {
+                    driven[d] |= skeleton.dofs()[d].kind == DofKind::Rotation;
                 }
             }
+            if let Some((input, output)) = &translation {
+                let local = sample_vec3(input, output, t) * scale - playing_root;
+                for d in skeleton.joints()[0].dofs.clone() {
+                    let dof = &skeleton.dofs()[d];
+                    if dof.kind == DofKind::Translation {
+                        q[d] = local.dot(dof.axis);
+                        driven[d] = true;
+                    }
+                }
+            }
+            for (d, v) in q.iter().enumerate() {
+                values[d].push(*v);
+            }
         }
-        for (d, v) in q.iter().enumerate() {
-            values[d].push(*v);
+        // Named as troupe names its animation: after the actor recorded (`run --record`),
+        // else the file.
+        let name = match animation.name().filter(|n| !n.is_empty()) {
+            Some(name) => name.to_string(),
+            None => path
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        };
+        let mut seq = Sequence::new(name);
+        seq.meta.insert("source".into(), file.clone());
+        if times.len() > 1 {
+            let rate = (times.len() - 1) as f64 / (times[times.len() - 1] - times[0]);
+            seq.meta.insert("rate".into(), format!("{}", rate.round()));
         }
+        for d in (0..n).filter(|&d| driven[d]) {
+            let keys = times
+                .iter()
+                .zip(&values[d])
+                .map(|(&t, &v)| Key::new(t, v))
+                .collect();
+            seq.add_track(Track::new(skeleton.dofs()[d].name.clone(), keys)?)?;
+        }
+        Ok(seq)
     }
-    let mut seq = Sequence::new(
-        path.file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default(),
-    );
-    seq.meta.insert("source".into(), file.clone());
-    if times.len() > 1 {
-        let rate = (times.len() - 1) as f64 / (times[times.len() - 1] - times[0]);
-        seq.meta.insert("rate".into(), format!("{}", rate.round()));
-    }
-    for d in (0..n).filter(|&d| driven[d]) {
-        let keys = times
-            .iter()
-            .zip(&values[d])
-            .map(|(&t, &v)| Key::new(t, v))
-            .collect();
-        seq.add_track(Track::new(skeleton.dofs()[d].name.clone(), keys)?)?;
-    }
-    Ok(seq)
+}
+
+/// Reads the first animation of a glTF file (`.gltf` or `.glb`) as a sequence for
+/// `skeleton`.
+pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<Sequence> {
+    GltfFile::read(path)?.motion(skeleton)
 }
 
 /// The template and standing height of the troupe body a glTF file was written from: the
@@ -203,40 +266,7 @@ pub fn read_gltf_motion(path: impl AsRef<Path>, skeleton: &Skeleton) -> Result<S
 /// all match the nodes' rest translations of the same names (within glTF's f32 precision).
 /// `None` for a file of any other skeleton, or of a user's character.
 pub fn recorded_body(path: impl AsRef<Path>) -> Result<Option<(String, f64)>> {
-    let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let bad = |message: String| Error::Parse {
-        file: path.display().to_string(),
-        line: 1,
-        message,
-    };
-    check_glb_header(&bytes).map_err(bad)?;
-    let gltf = Gltf::from_slice(&bytes).map_err(|e| bad(format!("not valid glTF: {e}")))?;
-    if character_source(&gltf).is_some() {
-        return Ok(None);
-    }
-    let rest: std::collections::HashMap<&str, DVec3> = gltf
-        .nodes()
-        .filter_map(|n| {
-            let [x, y, z] = n.transform().decomposed().0;
-            Some((n.name()?, DVec3::new(x as f64, y as f64, z as f64)))
-        })
-        .collect();
-    Ok(troupe_body::template::templates()
-        .into_iter()
-        .find_map(|t| {
-            let at_default = t.instantiate(t.default_params()).ok()?;
-            let root = rest.get(at_default.joints().first()?.name.as_str())?;
-            let height = t.default_height * root.y / at_default.joints()[0].offset.y;
-            let mut params = t.default_params();
-            params.height = height;
-            let body = t.instantiate(params).ok()?;
-            let same = body.joints().iter().all(|j| {
-                rest.get(j.name.as_str())
-                    .is_some_and(|r| (*r - j.offset).length() < 1e-5 * (1.0 + j.offset.length()))
-            });
-            same.then(|| (t.name.to_string(), height))
-        }))
+    Ok(GltfFile::read(path)?.recorded_body())
 }
 
 /// Refuses a binary glTF whose header is cut short or declares a total length shorter

@@ -96,13 +96,27 @@ impl TimeWarp {
 }
 
 /// Moves every key of `seq` by `map` (explicit slopes are divided by `dt′/dt` so the
-/// motion keeps its shape in the new time).
+/// motion keeps its shape in the new time). A `rate` in the metadata stays true: keys
+/// moved by one factor (a uniform stretch or squeeze, a shift) are `factor / rate`
+/// apart; keys moved unevenly have no rate, and it is dropped (the frame time then
+/// follows the keys, see [`Sequence::frame_time`]).
 pub fn remap_times(
     seq: &Sequence,
     map: impl Fn(f64) -> f64,
     derivative: impl Fn(f64) -> f64,
 ) -> Result<Sequence> {
     let mut out = seq.empty_like();
+    if let Some(rate) = out.meta.get("rate").and_then(|r| r.parse::<f64>().ok()) {
+        match uniform_factor(seq, &map) {
+            Some(factor) => {
+                let rate = format!("{}", rate / factor);
+                out.meta.insert("rate".into(), rate);
+            }
+            None => {
+                out.meta.remove("rate");
+            }
+        }
+    }
     for track in seq.tracks() {
         let keys = track
             .keys()
@@ -123,6 +137,26 @@ pub fn remap_times(
         out.add_track(Track::new(track.dof(), keys)?.with_interpolation(track.interpolation()))?;
     }
     Ok(out)
+}
+
+/// The one factor by which `map` scales the time between every two keys of `seq`, if
+/// it scales them all alike (within 1e-9 s); `None` when the keys move unevenly.
+fn uniform_factor(seq: &Sequence, map: &impl Fn(f64) -> f64) -> Option<f64> {
+    let times = || {
+        seq.tracks()
+            .iter()
+            .flat_map(|t| t.keys().iter().map(|k| k.time))
+    };
+    let first = times().fold(f64::INFINITY, f64::min);
+    let last = times().fold(f64::NEG_INFINITY, f64::max);
+    if last <= first {
+        // One key time (or none): nothing is spaced, so any factor keeps the rate.
+        return Some(1.0);
+    }
+    let (from, to) = (map(first), map(last));
+    let factor = (to - from) / (last - first);
+    let even = times().all(|t| (map(t) - (from + (t - first) * factor)).abs() <= 1e-9);
+    (factor > 0.0 && even).then_some(factor)
 }
 
 /// Warps a sequence's time by `warp` (the keys move, their values stay).
@@ -245,5 +279,31 @@ mod tests {
         assert_eq!(times[1], 0.1);
         assert_eq!(times[10], 1.0);
         assert!(squeeze_stretch(&seq(), 0.2, 0.5, 0.9, 0.95).is_err());
+    }
+
+    #[test]
+    fn the_rate_follows_an_even_warp_and_is_dropped_by_an_uneven_one() {
+        let mut rated = seq();
+        rated.meta.insert("rate".into(), "10".into());
+        let rate = |s: &Sequence| s.meta.get("rate").cloned();
+        // Twice as slow: keys 0.2 s apart, 5 Hz; a shift keeps the rate.
+        let slow = TimeWarp::new(&[(0.0, 0.0), (1.0, 2.0)]).unwrap();
+        let slower = warp_sequence(&rated, &slow).unwrap();
+        assert_eq!(rate(&slower).as_deref(), Some("5"));
+        assert!((slower.frame_time() - 0.2).abs() < 1e-12);
+        let shift = TimeWarp::new(&[(0.0, 3.0)]).unwrap();
+        assert_eq!(
+            rate(&warp_sequence(&rated, &shift).unwrap()).as_deref(),
+            Some("10")
+        );
+        // Uneven warps leave no rate that holds.
+        let uneven = TimeWarp::new(&[(0.0, 0.0), (0.5, 0.2), (1.0, 1.0)]).unwrap();
+        assert_eq!(rate(&warp_sequence(&rated, &uneven).unwrap()), None);
+        assert_eq!(
+            rate(&squeeze_stretch(&rated, 0.2, 0.5, 0.9, 0.3).unwrap()),
+            None
+        );
+        // Without a rate, none is made up.
+        assert_eq!(rate(&warp_sequence(&seq(), &slow).unwrap()), None);
     }
 }
