@@ -68,7 +68,6 @@ mod tests {
             "tonumber",
             "tostring",
             "type",
-            "warn",
             "xpcall",
         ];
         names

@@ -10,7 +10,7 @@
 //!
 //! A **text** (a meta value, the rest of its line) is written bare unless it would not
 //! read back: empty, with whitespace at either end, a `#`, a control character, or a
-//! leading `"`. Read back, a text that does not start with a quote is the rest of the
+//! `"` at the start of a word. Read back, a text that does not start with a quote is the rest of the
 //! line as it stands, inner spaces and all, as files were read before quoting. The name
 //! of a `sequence` or `object` line is read as a text too, so `sequence Ann Lee` in an
 //! older file still names `Ann Lee`.
@@ -38,9 +38,11 @@ pub(crate) fn name_word(name: &str) -> Cow<'_, str> {
 /// `text` as written for the rest of a line: bare when it reads back as itself, else
 /// quoted.
 pub(crate) fn text_field(text: &str) -> Cow<'_, str> {
+    // A `"` opening any word would be read as a quote by `strip_comment`, not only a
+    // leading one (`a "b` read as a quote not closed).
     let bare = !text.is_empty()
         && text.trim() == text
-        && !text.starts_with('"')
+        && !text.split_whitespace().any(|word| word.starts_with('"'))
         && !text.chars().any(|c| c.is_control() || c == '#');
     if bare {
         Cow::Borrowed(text)
@@ -216,6 +218,7 @@ mod tests {
         "nbsp\u{a0}x",
         "\"",
         "a\"b",
+        "a \"b",
         "#",
         "ünïcødé",
     ];
