@@ -44,6 +44,7 @@ fn generator_step(c: &mut Criterion) {
         space: &Default::default(),
         obstacle_flags: &[],
         crowd: &Default::default(),
+        walking: &[],
     };
     let mut walk = Walk::velocity(
         &skeleton,

@@ -35,7 +35,10 @@ pub fn build_give(ctx: &BuildContext, args: MultiValue) -> Built {
         .map_err(|e| err(m, e))?;
     let mut spec = common.spec(m, scope);
     spec.duration = None;
-    // The lean or crouch it may take to reach the meeting point gives way to a walk.
+    // The lean or crouch it may take to reach the meeting point gives way to a walk, and
+    // comes back once the walk has ended: a give started on the way plans when they
+    // stand (it planned with the arm alone, the body's part lost for good).
+    spec.takes_back = true;
     Ok((generator, crate::grasp::lua::yielding(spec, body)))
 }
 

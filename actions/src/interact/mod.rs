@@ -108,8 +108,6 @@ pub struct Give {
     /// Whether the give waits, holding the object, for the two actors to stand: a give
     /// started while either walks cannot know where their bodies will meet.
     approaching: bool,
-    /// Whether the receiver turns to face the giver first (see [`Give::awaiting_turn`]).
-    receiver_turns: bool,
 }
 
 impl Give {
@@ -145,15 +143,7 @@ impl Give {
             arm_detour: None,
             legs: None,
             approaching: false,
-            receiver_turns: false,
         }
-    }
-
-    /// Waits, as for walkers, until the receiver faces the giver: it turns round to take
-    /// the object (a walk that [`GiveOptions::start`] starts).
-    pub fn awaiting_turn(mut self) -> Give {
-        self.receiver_turns = true;
-        self
     }
 
     /// Bends the carrying arm round other bodies and obstacles (`true`, the default) or
@@ -239,9 +229,6 @@ fn shoulder_height(world: &World, actor: usize) -> Option<f64> {
 /// How far (radians) from a receiver's facing the giver may stand for it to take the
 /// object without turning round: beyond, the giver is behind its shoulders.
 pub const TURN_TO_TAKE: f64 = std::f64::consts::FRAC_PI_2;
-/// How far (radians) from its facing a receiver that turns round to take an object has
-/// the giver once it is turned enough for the give to go on.
-const TURNED: f64 = 1.0;
 
 /// The angle (radians, 0 to π) between the way `state`'s body faces and the floor
 /// direction `to`.
@@ -254,15 +241,17 @@ pub fn facing_angle(state: &troupe_body::ActorState, to: troupe_body::glam::DVec
     facing.angle_to(to).abs()
 }
 
-/// Whether any of `actors` walks: its root moved on the floor faster than a body standing
-/// (swaying or settling its feet) does, over the previous tick.
-fn walking(world: &World, actors: &[usize]) -> bool {
+/// Whether any of `actors` walks: it has a walk that has not ended (one setting off, or
+/// turning on the spot, is slow), or its root moved on the floor faster than a body
+/// standing (swaying or settling its feet) does over the previous tick.
+pub fn walking(world: &World, actors: &[usize]) -> bool {
     actors.iter().any(|&i| {
-        world
-            .crowd
-            .velocities
-            .get(i)
-            .is_some_and(|v| v.length() >= crate::walk::replan::STANDING)
+        world.walks(i)
+            || world
+                .crowd
+                .velocities
+                .get(i)
+                .is_some_and(|v| v.length() >= crate::walk::replan::STANDING)
     })
 }
 
@@ -314,17 +303,9 @@ impl Give {
         self.ended
     }
 
-    /// Whether the give can plan where the two meet: both stand, and a receiver turning
-    /// round to take the object faces the giver `giver`.
+    /// Whether the give can plan where the two meet: neither walks (see [`walking`]).
     fn ready(&self, world: &World, giver: usize) -> bool {
-        if walking(world, &[giver, self.receiver]) {
-            return false;
-        }
-        !self.receiver_turns || {
-            let (me, them) = (&world.states[self.receiver], &world.states[giver]);
-            let to = them.globals[0].translation - me.globals[0].translation;
-            facing_angle(me, troupe_body::glam::DVec2::new(to.x, to.z)) <= TURNED
-        }
+        !walking(world, &[giver, self.receiver])
     }
 
     /// Plans the carry from the posture of `ctx` to the first meeting point the arm
@@ -492,18 +473,11 @@ impl Generator for Give {
         if self.approaching {
             if !self.ready(ctx.world, ctx.actor) {
                 if ctx.local_time > self.timeout {
-                    let (me, them) = (
+                    return Step::Failed(format!(
+                        "`{}` and `{}` did not both stand still within {} s (a give waits \
+                         for that to find where they meet)",
                         actor_name(ctx.world, ctx.actor),
                         actor_name(ctx.world, self.receiver),
-                    );
-                    let turn = if self.receiver_turns {
-                        format!(" with `{them}` turned to `{me}`")
-                    } else {
-                        String::new()
-                    };
-                    return Step::Failed(format!(
-                        "`{me}` and `{them}` did not both stand still{turn} within {} s (a \
-                         give waits for that to find where they meet)",
                         self.timeout
                     ));
                 }

@@ -10,7 +10,6 @@ use crate::grasp::body::BodyReach;
 use crate::grasp::close::HandModel;
 use crate::grasp::plan::{HandChoice, PlanOptions};
 use crate::walk::goal::Goal;
-use crate::walk::replan::STANDING;
 use crate::walk::{Walk, WalkOptions};
 use troupe_body::glam::DVec2;
 use troupe_body::sensors::Side;
@@ -112,9 +111,7 @@ impl GiveOptions {
         if let Some(t) = self.timeout {
             give = give.with_timeout(t);
         }
-        if turn_to_face(scene, self.to, giver, delay)? {
-            give = give.awaiting_turn();
-        }
+        turn_to_face(scene, self.to, giver, delay)?;
         // The receiver: a grasp that waits for the object to arrive and may take it from
         // the giver.
         let sides = self.hand.sides();
@@ -131,6 +128,8 @@ impl GiveOptions {
             .detouring(self.detour);
         let mut rx_spec = ActionSpec::new("receive", rx_scope);
         rx_spec.yields = rx_body;
+        // Its lean comes back after a walk of the receiver's (its turn round) has ended.
+        rx_spec.takes_back = true;
         rx_spec.delay = delay;
         scene.start_action(self.to, rx_spec, Box::new(take))?;
         Ok((Box::new(give), scope, body))
@@ -140,11 +139,11 @@ impl GiveOptions {
 /// Turns `receiver` on the spot to face `giver` (a walk to where it stands, `delay`
 /// seconds ahead) when its back is to the giver, it stands and nothing else drives its
 /// legs: a person turns round to take something rather than reach behind the back (the
-/// arm twisted 80° and raised backwards). Says whether it turns.
-fn turn_to_face(scene: &mut Scene, receiver: usize, giver: usize, delay: f64) -> Result<bool> {
+/// arm twisted 80° and raised backwards). The give waits for the turn as for any walk.
+fn turn_to_face(scene: &mut Scene, receiver: usize, giver: usize, delay: f64) -> Result<()> {
     let skeleton = scene.actors()[receiver].skeleton.clone();
-    let (Ok(x), Ok(z)) = (skeleton.dof("root_x"), skeleton.dof("root_z")) else {
-        return Ok(false);
+    let Ok(x) = skeleton.dof("root_x") else {
+        return Ok(());
     };
     let states = scene.states();
     let (me, them) = (&states[receiver], &states[giver]);
@@ -153,13 +152,13 @@ fn turn_to_face(scene: &mut Scene, receiver: usize, giver: usize, delay: f64) ->
         them.globals[0].translation.x - at.x,
         them.globals[0].translation.z - at.z,
     );
-    let standing = DVec2::new(me.qd[x], me.qd[z]).length() < STANDING;
+    let standing = !super::walking(&scene.world(), &[receiver]);
     let legs_busy = scene
         .actions_of(receiver)
         .iter()
         .any(|a| !a.status.is_final() && a.scope.contains(x));
     if facing_angle(me, to_giver) <= TURN_TO_TAKE || !standing || legs_busy {
-        return Ok(false);
+        return Ok(());
     }
     let options = WalkOptions {
         heading: Some(to_giver.x.atan2(to_giver.y)),
@@ -175,7 +174,7 @@ fn turn_to_face(scene: &mut Scene, receiver: usize, giver: usize, delay: f64) ->
     spec.takes_back = true;
     spec.delay = delay;
     scene.start_action(receiver, spec, Box::new(walk))?;
-    Ok(true)
+    Ok(())
 }
 
 /// The options of a receive: take an object out of another actor's hand.

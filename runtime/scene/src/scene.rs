@@ -131,6 +131,8 @@ pub struct Scene {
     space: troupe_nav::Space,
     obstacle_flags: Vec<Option<bool>>,
     crowd: troupe_nav::Crowd,
+    /// Per actor, whether it has a walk that has not ended (see [`World::walking`]).
+    walking: Vec<bool>,
     /// Per actor: the DOF indices of root_x and root_z.
     root_dofs: Vec<(usize, usize)>,
     /// Per actor: the joints that stretch or widen its body on the floor (see
@@ -181,6 +183,7 @@ impl Scene {
             space: troupe_nav::Space::default(),
             obstacle_flags: Vec::new(),
             crowd: troupe_nav::Crowd::default(),
+            walking: Vec::new(),
             root_dofs: Vec::new(),
             body_joints: Vec::new(),
             looks: Vec::new(),
@@ -337,6 +340,7 @@ impl Scene {
             space: &self.space,
             obstacle_flags: &self.obstacle_flags,
             crowd: &self.crowd,
+            walking: &self.walking,
         }
     }
 
@@ -803,6 +807,13 @@ impl Scene {
         };
         let started = self.profiling.then(Instant::now);
         self.update_crowd();
+        self.walking.clear();
+        self.walking.extend(self.work.iter().map(|w| {
+            w.runtime
+                .actions
+                .iter()
+                .any(|a| a.spec.kind == "walk" && !a.status.is_final())
+        }));
         {
             let _span = tracing::trace_span!("step_actors", tick = self.tick).entered();
             let world = World {
@@ -817,6 +828,7 @@ impl Scene {
                 space: &self.space,
                 obstacle_flags: &self.obstacle_flags,
                 crowd: &self.crowd,
+                walking: &self.walking,
             };
             let actors = &self.actors;
             let states = &self.states;

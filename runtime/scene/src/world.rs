@@ -46,9 +46,18 @@ pub struct World<'a> {
     /// Every actor's floor position, velocity and radius, and the obstacles' footprints,
     /// as of the previous tick (see [`troupe_nav::Crowd`]).
     pub crowd: &'a troupe_nav::Crowd,
+    /// Per actor: whether it has a walk that has not ended (pending, running or stopping),
+    /// as of the start of this tick: a body whose root is still slow as it sets off, or
+    /// turns on the spot, is walking all the same. Empty when nobody walks.
+    pub walking: &'a [bool],
 }
 
 impl World<'_> {
+    /// Whether actor `actor` has a walk that has not ended (see [`World::walking`]).
+    pub fn walks(&self, actor: usize) -> bool {
+        self.walking.get(actor).copied().unwrap_or(false)
+    }
+
     /// The index of the actor called `name`.
     pub fn actor_index(&self, name: &str) -> Option<usize> {
         self.actors.iter().position(|a| a.name == name)
