@@ -275,13 +275,28 @@ pub fn pyramid_blend(
     out.name = format!("{}+{}", a_seq.name, b_seq.name);
     out.meta.insert("rate".into(), format!("{}", 1.0 / ft));
     for dof in pair.dofs() {
+        // A track only one sequence has is that sequence's on its own clock on both
+        // sides, so the blend keeps it as it is (as `blend` does): taken for the other's
+        // too, it was blended with a copy of itself shifted by B's start.
         let (ta, tb) = pair.tracks(&dof);
-        let (Some(ta), Some(tb)) = (ta.or(tb), tb.or(ta)) else {
+        let of_a = |t: f64| ta.map(|a| a.value(t));
+        let of_b = |t: f64| tb.map(|b| b.value(t + pair.b_shift));
+        if ta.is_none() && tb.is_none() {
             continue;
-        };
-        let sa: Vec<f64> = (0..grid.n).map(|i| ta.value(grid.time(i))).collect();
+        }
+        let sa: Vec<f64> = (0..grid.n)
+            .map(|i| {
+                of_a(grid.time(i))
+                    .or_else(|| of_b(grid.time(i)))
+                    .unwrap_or(0.0)
+            })
+            .collect();
         let sb: Vec<f64> = (0..grid.n)
-            .map(|i| tb.value(grid.time(i) + pair.b_shift))
+            .map(|i| {
+                of_b(grid.time(i))
+                    .or_else(|| of_a(grid.time(i)))
+                    .unwrap_or(0.0)
+            })
             .collect();
         let pa = Pyramid::new(&sa, grid.start, grid.dt, levels, a)?;
         let pb = Pyramid::new(&sb, grid.start, grid.dt, levels, a)?;
@@ -482,5 +497,42 @@ mod tests {
         let x = inside.track("x").unwrap();
         assert!(x.value(1.25) > 3.0, "{}", x.value(1.25));
         assert!((x.value(2.8) - 2.8f64.sin()).abs() < 0.05);
+    }
+
+    #[test]
+    fn a_track_only_one_sequence_has_is_kept_as_it_is() {
+        // A's own ramp, 1 per second, which B lacks: it was blended with a copy of itself
+        // shifted by B's start (0.9375 at 1.5 s).
+        let ramp = |name: &str, track: &str, f: fn(f64) -> f64| {
+            let v: Vec<f64> = (0..301).map(|i| f(i as f64 * 0.01)).collect();
+            let mut s = Sequence::new(name);
+            s.meta.insert("rate".into(), "100".into());
+            s.add_track(Track::from_samples(track, 0.0, 0.01, &v).unwrap())
+                .unwrap();
+            s.add_track(Track::from_samples("x", 0.0, 0.01, &v).unwrap())
+                .unwrap();
+            s
+        };
+        let a = ramp("a", "only_a", |t| t);
+        let b = ramp("b", "only_b", |t| 10.0 + t);
+        let s = pyramid_blend(&a, &b, 1.0, 0.5, 4, DEFAULT_A).unwrap();
+        let only_a = s.track("only_a").unwrap();
+        for t in [0.5, 1.5, 2.0] {
+            assert!(
+                (only_a.value(t) - t).abs() < 1e-6,
+                "{t}: {}",
+                only_a.value(t)
+            );
+        }
+        // B's, on B's clock: B starts at 1 s.
+        let only_b = s.track("only_b").unwrap();
+        for t in [1.5, 2.5, 3.5] {
+            let want = 10.0 + (t - 1.0);
+            assert!(
+                (only_b.value(t) - want).abs() < 1e-6,
+                "{t}: {}",
+                only_b.value(t)
+            );
+        }
     }
 }
