@@ -173,6 +173,13 @@ struct Loaded {
 /// `actor`'s sequence, else the first).
 fn load(path: &Path, scale: f64, actor: Option<&str>) -> Result<Loaded> {
     if Format::of(path)? == Format::Bvh {
+        if let Some(name) = actor {
+            bail!(
+                "--actor {name}: {} is a BVH file, which holds one motion (--actor picks an \
+                 actor of a .trk recording)",
+                path.display()
+            );
+        }
         let name = path
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
@@ -193,7 +200,9 @@ fn load(path: &Path, scale: f64, actor: Option<&str>) -> Result<Loaded> {
     }
     let mut set = load_sequences(path, None)?;
     let seq = match actor {
-        Some(name) if set.len() > 1 => pick(path, set, name)?,
+        // Asked for by name, the actor must be there, one or many (a recording of `a`
+        // read for `--actor bob` went on with `a`, saying nothing).
+        Some(name) => pick(path, set, name)?,
         _ if set.is_empty() => bail!("{}: the file holds no sequence", path.display()),
         _ => {
             if set.len() > 1 {

@@ -400,6 +400,18 @@ fn convert_of_a_recording_writes_every_actor_or_the_one_asked() {
     assert_eq!(names(&file(&bob)), ["bob"]);
     let err = fails(&["seq", "convert", &s(&trk), &s(&bob), "--actor", "cleo"]);
     assert!(err.contains("no actor `cleo` (actors: ann, bob)"), "{err}");
+    // Any seq command, on a recording of one actor too: the one named or an error (it
+    // went on with the only actor there, saying nothing); a BVH holds one motion.
+    let plot = temp("bob.png");
+    let err = fails(&["seq", "--actor", "ann", "plot", &s(&bob), &s(&plot)]);
+    assert!(err.contains("no actor `ann` (actors: bob)"), "{err}");
+    let bvh = temp("bob.bvh");
+    troupe(&["seq", "convert", &s(&bob), &s(&bvh), "--template", "adult"]);
+    let err = fails(&["seq", "--actor", "bob", "plot", &s(&bvh), &s(&plot)]);
+    assert!(
+        err.contains("is a BVH file, which holds one motion"),
+        "{err}"
+    );
 }
 
 #[test]
