@@ -1,5 +1,5 @@
 //! A tiny built-in 5×7 bitmap font laid out as screen-space rectangles, for actor labels:
-//! printable ASCII, the letters of Latin-1 (`é`, `ñ`, `ø`, `ß`…) and the caron and acute
+//! printable ASCII, the letters of Latin-1 but Ð, ð, Þ and þ (`é`, `ñ`, `ø`, `ß`…) and the caron and acute
 //! letters of Central European names (`č`, `š`, `ž`, `ř`, `ń`…). Other characters are
 //! drawn as `?`.
 //!

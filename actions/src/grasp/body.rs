@@ -156,7 +156,8 @@ impl CrouchLegs {
         self.scratch.clear();
         self.scratch.extend_from_slice(&self.start);
         if lower_pelvis(skeleton, &self.rig, self.root_y, &mut self.scratch, depth) {
-            let rest = if self.depth > 0.0 {
+            // Down or up (a crouched body standing): the offset fades either way.
+            let rest = if self.depth != 0.0 {
                 (1.0 - depth / self.depth).clamp(0.0, 1.0)
             } else {
                 1.0

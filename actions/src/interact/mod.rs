@@ -5,11 +5,13 @@
 //! ([`troupe_scene::blackboard`]): one raises a signal, the other sees it from the next
 //! tick on, so the outcome does not depend on which thread stepped which actor first.
 //!
-//! - **give**: the giver carries the held object to a meeting point between the actors
-//!   (the object leads, the arm follows by IK as in 4.4), raises `arrived`; the receiver
-//!   (a gated [`Grasp`](crate::grasp::Grasp) allowed to take the object from the
-//!   giver) plans its grasp on the object there, reaches, closes and attaches; once
-//!   the snapshot shows the receiver holding it, the giver opens its hand and completes.
+//! - **give**: the giver waits, holding the object, until neither actor walks (a
+//!   receiver with its back to it turns round first), carries the object to a meeting
+//!   point between them (the object leads, the arm follows by IK as in 4.4, standing up
+//!   or leaning as it must) and raises `arrived`; the receiver (a gated
+//!   [`Grasp`](crate::grasp::Grasp) allowed to take the object from the giver) plans its
+//!   grasp on the object there, reaches, closes and attaches; once the snapshot shows the
+//!   receiver holding it, the giver opens its hand, lowers the arm and completes.
 //!   Both arms bend round a third actor's body or an obstacle in their way through
 //!   temporary goals ([`ArmDetour`], thesis 4.6.3), unless `detour` is off.
 //! - **hold hands**: the active actor reaches the other's hand (grasp frame from the other
@@ -54,6 +56,11 @@ pub const GIVE_REACH_SECONDS: f64 = 1.0;
 /// Seconds over which a giver's empty arm comes down to its side once the hand has
 /// opened.
 pub const LOWER_SECONDS: f64 = 0.8;
+
+/// How far (0 to 1, eased) an arm let go `seconds` ago has come down to its side.
+fn lowered(seconds: f64) -> f64 {
+    quintic((seconds / LOWER_SECONDS).clamp(0.0, 1.0))
+}
 /// Amplitude (metres) and frequency (Hz) of a handshake.
 pub const SHAKE: (f64, f64) = (0.03, 2.0);
 /// Seconds of shaking.
@@ -523,6 +530,13 @@ impl Generator for Give {
                         }
                     }
                 }
+                if let (true, Some(legs)) = (finished, &self.legs) {
+                    // And the legs where they were solved for the pelvis (feet where they
+                    // stood), not the plan's interpolation target.
+                    for d in legs.dofs() {
+                        self.goal_q[d] = self.q[d];
+                    }
+                }
                 if finished {
                     self.phase = 1;
                     self.phase_start = ctx.local_time;
@@ -569,7 +583,7 @@ impl Generator for Give {
                 // held out, it stood in the way of the next person passing: a forearm
                 // 7 cm into it).
                 let back = quintic(s);
-                let down = quintic(((t - OPEN_SECONDS) / LOWER_SECONDS).clamp(0.0, 1.0));
+                let down = lowered(t - OPEN_SECONDS);
                 for d in self.moving.iter() {
                     self.q[d] = if arm.dofs().contains(&d) {
                         self.goal_q[d] * (1.0 - down)
@@ -934,7 +948,7 @@ impl Generator for HoldHand {
             _ => {
                 // The hand opens, lets the other go, and the arm comes down to the side.
                 let s = (t / OPEN_SECONDS).min(1.0);
-                let down = quintic(((t - OPEN_SECONDS) / LOWER_SECONDS).clamp(0.0, 1.0));
+                let down = lowered(t - OPEN_SECONDS);
                 for &d in arm.dofs() {
                     self.q[d] = self.goal_q[d] * (1.0 - down);
                 }
@@ -1052,7 +1066,7 @@ impl Generator for FollowHand {
         if ctx.world.board.before(self.finished, ctx.tick) {
             // Let go: the arm comes down to the side from where the hold left it.
             let since = *self.let_go.get_or_insert(ctx.local_time);
-            let down = quintic(((ctx.local_time - since) / LOWER_SECONDS).min(1.0));
+            let down = lowered(ctx.local_time - since);
             if self.lower_from.is_empty() {
                 self.lower_from = arm.dofs().iter().map(|&d| (d, ctx.posture.q[d])).collect();
             }

@@ -1,10 +1,12 @@
-//! The hand a person holds out to shake another's.
+//! The hand a person holds out to shake another's, or lifts to be taken.
 //!
 //! A handshake begins with both hands going out: the other person does not wait with a
 //! hand hanging at the side for the first to fetch it. So for `shake_hands` the passive
 //! actor holds out its hand (its `follow_hand` moves it there) while the active one
 //! reaches for it where it will be: both compute the same held-out pose from the same
-//! world, the previous tick's, when their actions start together.
+//! world, the previous tick's, when their actions start together. For `hold_hand`, a
+//! follower whose hand hangs lower than the active one's lifts it the same way
+//! ([`Grip::Hold`]): a taller person cannot reach below its own hanging hand.
 
 use crate::grasp::close::HandModel;
 use crate::grasp::plan::{frame_rotation, ArmIk};
@@ -136,16 +138,22 @@ pub fn offered_hand(
             let mut their_ik =
                 ArmIk::new(their_skeleton, active_side, 200).map_err(|e| e.to_string())?;
             let mut their_q = theirs.q.clone();
-            let mut best = f64::INFINITY;
+            // The least miss over the heights, and the first height this arm reaches
+            // (kept if the other's reaches none: it then reaches as best it can).
+            let mut least = f64::INFINITY;
+            let mut first_reached: Option<Transform> = None;
+            let mut chosen = None;
             let steps = (MOST_RAISED / RAISE_STEP).round() as usize;
             for k in 0..=steps {
                 let y = a.min(b) - BELOW_SHOULDERS + RAISE_STEP * k as f64;
                 let palm = middle.with_y(y) - towards * SHORT_OF_MIDDLE;
                 let wrist = Transform::new(rotation, palm - rotation * hs.palm);
-                best = reach(&wrist, &mut q)?;
-                if best > OFFER_TOLERANCE {
+                let miss = reach(&wrist, &mut q)?;
+                least = least.min(miss);
+                if miss > OFFER_TOLERANCE {
                     continue;
                 }
+                first_reached.get_or_insert(wrist);
                 let their_palm = middle.with_y(y) + towards * SHORT_OF_MIDDLE;
                 let their_wrist =
                     Transform::new(their_rotation, their_palm - their_rotation * their_hs.palm);
@@ -154,10 +162,16 @@ pub fn offered_hand(
                     .solve(their_skeleton, &mut their_q, &their_wrist)
                     .map_err(|e| e.to_string())?;
                 if theirs_miss <= THEIR_TOLERANCE {
+                    chosen = Some(miss);
                     break;
                 }
             }
-            best
+            match (chosen, first_reached) {
+                (Some(miss), _) => miss,
+                // `q` holds the last height tried: solve the first reached again.
+                (None, Some(wrist)) => reach(&wrist, &mut q)?,
+                (None, None) => least,
+            }
         }
         Grip::Hold => {
             let theirs_model = HandModel::new(&world.actors[active].skeleton, active_side)
@@ -172,16 +186,18 @@ pub fn offered_hand(
             // fingers pointing down.
             let forward = mine.globals[0].rotation * DVec3::Z;
             let left = DVec3::Y.cross(forward.with_y(0.0)).normalize_or(DVec3::X);
-            let mut best = f64::INFINITY;
+            let mut least = f64::INFINITY;
             for pitch in HELD_UP_PITCHES {
                 let rotation = DQuat::from_axis_angle(left, pitch) * wrist_now.rotation;
                 let wrist = Transform::new(rotation, palm - rotation * hs.palm);
-                best = reach(&wrist, &mut q)?;
-                if best <= OFFER_TOLERANCE {
+                let miss = reach(&wrist, &mut q)?;
+                if miss <= OFFER_TOLERANCE {
+                    least = miss;
                     break;
                 }
+                least = least.min(miss);
             }
-            best
+            least
         }
     };
     if miss > OFFER_TOLERANCE {

@@ -148,6 +148,9 @@ impl Director {
         globals.set(
             "warn",
             lua.create_function(|lua, args: MultiValue| {
+                if args.is_empty() {
+                    return Err(lua_err("warn: a message is required (strings or numbers)"));
+                }
                 let mut text = String::new();
                 for (i, v) in args.iter().enumerate() {
                     match v {
