@@ -284,20 +284,17 @@ pub fn pyramid_blend(
         if ta.is_none() && tb.is_none() {
             continue;
         }
-        let sa: Vec<f64> = (0..grid.n)
-            .map(|i| {
-                of_a(grid.time(i))
-                    .or_else(|| of_b(grid.time(i)))
-                    .unwrap_or(0.0)
-            })
-            .collect();
-        let sb: Vec<f64> = (0..grid.n)
-            .map(|i| {
-                of_b(grid.time(i))
-                    .or_else(|| of_a(grid.time(i)))
-                    .unwrap_or(0.0)
-            })
-            .collect();
+        // One side's samples: its own track, else the other's.
+        let side = |own: &dyn Fn(f64) -> Option<f64>, other: &dyn Fn(f64) -> Option<f64>| {
+            (0..grid.n)
+                .map(|i| {
+                    own(grid.time(i))
+                        .or_else(|| other(grid.time(i)))
+                        .unwrap_or(0.0)
+                })
+                .collect::<Vec<f64>>()
+        };
+        let (sa, sb) = (side(&of_a, &of_b), side(&of_b, &of_a));
         let pa = Pyramid::new(&sa, grid.start, grid.dt, levels, a)?;
         let pb = Pyramid::new(&sb, grid.start, grid.dt, levels, a)?;
         let mix = |l: usize, x: &[f64], y: &[f64]| -> Vec<f64> {
