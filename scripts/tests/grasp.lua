@@ -255,7 +255,8 @@ test("hold hands: the wrists stay within 1 cm while the active actor moves by ke
   expect(h.status == "active" and follow.status == "active", "still holding")
   h:cancel()
   follow:cancel()
-  expect(run_until(function() return h.status == "cancelled" and follow.status == "cancelled" end, 1), "let go")
+  -- Both let go, the active hand opening and its arm coming down (1.2 s).
+  expect(run_until(function() return h.status == "cancelled" and follow.status == "cancelled" end, 2), "let go")
 end)
 
 test("a hold fails fast, saying why, when the follower is cancelled or walks away", function()
@@ -519,8 +520,13 @@ test("walking hand in hand: the wrists stay within 1 cm, cancelling the hold fre
   expect(worst < 0.01, "wrists kept within a centimetre while walking: " .. worst)
   -- Cancelling the active side ends the passive side as well.
   h:cancel()
-  expect(run_until(function() return h.status == "cancelled" and follow.status == "completed" end, 1),
+  expect(run_until(function() return h.status == "cancelled" and follow.status == "completed" end, 2.5),
          "let go: " .. h.status .. ", follow " .. follow.status)
+  -- Both arms came down to their sides (they stayed held out where they had held hands).
+  expect(math.abs(ann:dof("r_shoulder_flexion")) < 0.01 and math.abs(ann:dof("r_elbow_flexion")) < 0.01
+         and math.abs(bob:dof("l_shoulder_flexion")) < 0.01 and math.abs(bob:dof("l_elbow_flexion")) < 0.01,
+         string.format("the arms hang: ann's shoulder %.2f, bob's %.2f rad", ann:dof("r_shoulder_flexion"),
+                       bob:dof("l_shoulder_flexion")))
 end)
 
 test("a give or a hold that fails to start lets the partner's action end", function()

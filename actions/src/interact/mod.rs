@@ -651,6 +651,8 @@ pub struct HoldHand {
     q: Vec<f64>,
     globals: Vec<Transform>,
     samples: Vec<(usize, f64)>,
+    /// Asked to stop: lets go at the next tick (see [`Generator::stop`]).
+    letting_go: bool,
 }
 
 impl HoldHand {
@@ -688,6 +690,7 @@ impl HoldHand {
             q: Vec::new(),
             globals: Vec::new(),
             samples: Vec::new(),
+            letting_go: false,
         }
     }
 
@@ -728,6 +731,16 @@ impl Generator for HoldHand {
     /// start, never admitted) lets the follower go too, from the next tick on.
     fn end(&mut self, _ending: &Ending, notes: &mut Notes) {
         notes.raise(self.finished);
+    }
+
+    /// Stopped or cancelled once the hands hold, the hand opens, lets go and the arm
+    /// comes down to the side as after a handshake; before, the action eases out.
+    fn stop(&mut self) -> bool {
+        if self.phase < 2 {
+            return false;
+        }
+        self.letting_go = true;
+        true
     }
 
     fn start(&mut self, ctx: &GeneratorContext) -> Result<(), StartError> {
@@ -842,7 +855,9 @@ impl Generator for HoldHand {
         let t = ctx.local_time - self.phase_start;
         self.q.copy_from_slice(&ctx.posture.q);
         let board = ctx.world.board;
-        if let Some(why) = board.failure(self.follower_gave_up, ctx.tick) {
+        // Letting go, the other's hand may go first.
+        let going = self.letting_go || self.phase > 2;
+        if let (Some(why), false) = (board.failure(self.follower_gave_up, ctx.tick), going) {
             return Step::Failed(format!(
                 "`{}`'s follow_hand ended first ({why}): nobody holds the other hand",
                 actor_name(ctx.world, self.other)
@@ -926,22 +941,24 @@ impl Generator for HoldHand {
                     if let Err(e) = arm.solve(ctx.skeleton, &mut self.q, &goal) {
                         return Step::Failed(e.to_string());
                     }
-                    if t + ctx.dt >= SHAKE_SECONDS {
-                        // The hand opens where the shake left the arm: the per-tick solve
-                        // drifts from the planned posture, and going back to it in one
-                        // tick snapped the elbow (10 rad/s).
-                        for &d in arm.dofs() {
-                            self.goal_q[d] = self.q[d];
-                        }
-                        self.phase = 3;
-                        self.phase_start = ctx.local_time;
-                        if let Some(p) = &mut self.pattern {
-                            *p = match HandPattern::open(ctx.skeleton, self.side) {
-                                Ok(p) => p,
-                                Err(e) => return Step::Failed(e.to_string()),
-                            };
-                            p.restart_from(&ctx.posture.q);
-                        }
+                }
+                // Let go when the shake is over, or when asked to stop (a hold cancelled
+                // or stopped: its arm stayed held out for good).
+                if self.letting_go || (self.shake && t + ctx.dt >= SHAKE_SECONDS) {
+                    // The hand opens where the shake left the arm: the per-tick solve
+                    // drifts from the planned posture, and going back to it in one
+                    // tick snapped the elbow (10 rad/s).
+                    for &d in arm.dofs() {
+                        self.goal_q[d] = self.q[d];
+                    }
+                    self.phase = 3;
+                    self.phase_start = ctx.local_time;
+                    if let Some(p) = &mut self.pattern {
+                        *p = match HandPattern::open(ctx.skeleton, self.side) {
+                            Ok(p) => p,
+                            Err(e) => return Step::Failed(e.to_string()),
+                        };
+                        p.restart_from(&ctx.posture.q);
                     }
                 }
             }
