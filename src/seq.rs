@@ -74,7 +74,7 @@ enum SeqCommand {
         height: Option<f64>,
         /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: the
         /// `.map` beside the BVH, else detect CMU or Mixamo names. Without --template, a
-        /// BVH written to glTF is turned upright by the axes it gives.
+        /// BVH written to glTF is turned upright by the axes it gives. BVH input only.
         #[arg(long)]
         map: Option<PathBuf>,
     },
@@ -513,6 +513,17 @@ fn convert(
     let input_format = Format::of(input)?;
     let output_format = Format::of(output)?;
     let gltf_out = matches!(output_format, Format::Gltf | Format::Glb);
+    // A retargeting map names BVH joints: on another input it would mean nothing.
+    if let Some(m) = &map {
+        if input_format != Format::Bvh {
+            bail!(
+                "--map {}: a retargeting map applies to a BVH input, and {} is a {} file",
+                m.display(),
+                input.display(),
+                input_format.name()
+            );
+        }
+    }
     if input_format == Format::Trk {
         if order.is_some() {
             bail!("--rotation-order applies to BVH → BVH conversion");
@@ -535,10 +546,8 @@ fn convert(
         }
         let skeleton = t.instantiate(params)?;
         let mut seq = match map {
-            Some(m) if input_format == Format::Bvh => {
-                retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)
-                    .with_context(|| format!("retargeting {}", input.display()))?
-            }
+            Some(m) => retarget(&skeleton, &read_bvh(input)?, &RetargetMap::read(m)?, &name)
+                .with_context(|| format!("retargeting {}", input.display()))?,
             _ => load_sequence(input, Some(&skeleton))?,
         };
         if let Some(map) = seq.meta.get("retarget_map") {

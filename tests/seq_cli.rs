@@ -415,6 +415,47 @@ fn convert_of_a_recording_writes_every_actor_or_the_one_asked() {
 }
 
 #[test]
+fn convert_refuses_a_map_on_an_input_other_than_bvh() {
+    let trk = greeting_recording("mapped.trk");
+    let s = |p: &PathBuf| p.display().to_string();
+    let map = temp("mine.map");
+    std::fs::write(&map, "Hips HumanoidRoot\n").unwrap();
+    let glb = temp("mapped.glb");
+    troupe(&[
+        "seq",
+        "convert",
+        &s(&trk),
+        &s(&glb),
+        "--template",
+        "adult",
+        "--actor",
+        "ann",
+    ]);
+    // A retargeting map names BVH joints: on a recording or a glTF it was ignored.
+    for (input, kind) in [(&trk, ".trk"), (&glb, "glTF")] {
+        let out = temp("mapped-out.trk");
+        let err = fails(&[
+            "seq",
+            "convert",
+            &s(input),
+            &s(&out),
+            "--template",
+            "adult",
+            "--map",
+            &s(&map),
+        ]);
+        assert!(
+            err.contains(&format!(
+                "--map {}: a retargeting map applies to a BVH input, and {} is a {kind} file",
+                s(&map),
+                s(input)
+            )),
+            "{err}"
+        );
+    }
+}
+
+#[test]
 fn blend_of_different_skeletons_says_what_it_cannot_blend() {
     let (a, b) = (
         shared("pybvhrepo_cmu_12_01_walk.bvh"),
