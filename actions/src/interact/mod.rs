@@ -372,7 +372,9 @@ impl Give {
                 let wrist = delta.mul(&ctx.posture.globals[ik.wrist]);
                 self.goal_q = from.clone();
                 let (m, a) = ik.solve(ctx.skeleton, &mut self.goal_q, &wrist)?;
-                if m < miss {
+                // The closest try, for the message: a wrist placed within the tolerance
+                // counts as placed, and then its angle decides.
+                if (m.max(REACH_TOLERANCE), a) < (miss.max(REACH_TOLERANCE), angle) {
                     (miss, angle) = (m, a);
                 }
                 if m <= REACH_TOLERANCE && a <= REACH_ANGLE {
@@ -396,8 +398,9 @@ impl Give {
         }
         if miss > REACH_TOLERANCE || angle > REACH_ANGLE {
             return Err(format!(
-                "the meeting point with `{}` is out of reach of `{me}` (misses by {miss:.3} m)",
-                actor_name(w, self.receiver)
+                "the meeting point with `{}` is out of reach of `{me}` ({})",
+                actor_name(w, self.receiver),
+                wrist_miss(miss, angle)
             )
             .into());
         }
@@ -1134,5 +1137,39 @@ impl Generator for FollowHand {
             out.set(d, self.q[d]);
         }
         Step::Running
+    }
+}
+
+/// What a wrist goal out of reach missed by: the distance when its position missed, the
+/// angle (degrees) when its orientation did, both when both did.
+fn wrist_miss(miss: f64, angle: f64) -> String {
+    let degrees = angle.to_degrees();
+    match (miss > REACH_TOLERANCE, angle > REACH_ANGLE) {
+        (true, true) => format!("misses by {miss:.3} m, and the wrist's angle by {degrees:.1}°"),
+        (false, true) => format!("reaches it, but the wrist's angle misses by {degrees:.1}°"),
+        _ => format!("misses by {miss:.3} m"),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wrist_miss_names_what_missed() {
+        let off = 10f64.to_radians();
+        // The position missed: the distance alone.
+        assert_eq!(wrist_miss(0.2, 0.0), "misses by 0.200 m");
+        // The orientation missed, the position reached: the angle, not the tolerance's
+        // distance (it said "misses by 0.003 m").
+        assert_eq!(
+            wrist_miss(0.003, off),
+            "reaches it, but the wrist's angle misses by 10.0°"
+        );
+        // Both missed: both.
+        assert_eq!(
+            wrist_miss(0.2, off),
+            "misses by 0.200 m, and the wrist's angle by 10.0°"
+        );
     }
 }
