@@ -286,18 +286,19 @@ impl Grasp {
         if plan.crouch > 0.0 {
             self.crouch = CrouchLegs::new(ctx.skeleton, &ctx.posture.q, plan.crouch);
         }
+        // Leaning or crouching, the arms it does not reach with stay on the body; the
+        // arms of hands it neither reaches with nor keeps are left to other actions.
         self.keep = KeepArms::default();
+        let kept = if plan.lean > 0.0 || plan.crouch > 0.0 {
+            self.keep
+                .keep_free_arms(ctx.skeleton, &ctx.scope, &planned, &ctx.posture.globals)?
+        } else {
+            Vec::new()
+        };
         self.idle = Scope::EMPTY;
         for side in [Side::Right, Side::Left] {
-            let arm = ctx.skeleton.scope(&format!("{}_arm", side.name()))?;
-            if planned.contains(&side) {
-                continue;
-            }
-            let leans = plan.lean > 0.0 || plan.crouch > 0.0;
-            if leans && ctx.scope.contains_all(&arm) {
-                self.keep
-                    .keep(ctx.skeleton, side, 0, &ctx.posture.globals)?;
-            } else if !self.sides.contains(&side) {
+            if !self.sides.contains(&side) && !kept.contains(&side) {
+                let arm = ctx.skeleton.scope(&format!("{}_arm", side.name()))?;
                 self.idle = self.idle.union(&arm);
             }
         }
@@ -732,12 +733,7 @@ impl Release {
             self.keep.keep(sk, second, anchor, g)?;
         }
         if body_moves {
-            for side in [Side::Right, Side::Left] {
-                let arm = sk.scope(&format!("{}_arm", side.name()))?;
-                if !self.sides.contains(&side) && ctx.scope.contains_all(&arm) {
-                    self.keep.keep(sk, side, 0, g)?;
-                }
-            }
+            self.keep.keep_free_arms(sk, &ctx.scope, &self.sides, g)?;
         }
         Ok(())
     }

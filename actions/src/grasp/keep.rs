@@ -50,6 +50,30 @@ impl KeepArms {
         Ok(())
     }
 
+    /// Keeps each arm on the body (its wrist relative to the root, as in `globals`),
+    /// right then left, but the arms of `busy` and those not wholly in `scope` (another
+    /// action drives them); returns the sides it kept.
+    pub fn keep_free_arms(
+        &mut self,
+        skeleton: &Skeleton,
+        scope: &Scope,
+        busy: &[Side],
+        globals: &[Transform],
+    ) -> Result<Vec<Side>> {
+        let mut kept = Vec::new();
+        for side in [Side::Right, Side::Left] {
+            if busy.contains(&side) {
+                continue;
+            }
+            let arm = skeleton.scope(&format!("{}_arm", side.name()))?;
+            if scope.contains_all(&arm) {
+                self.keep(skeleton, side, 0, globals)?;
+                kept.push(side);
+            }
+        }
+        Ok(kept)
+    }
+
     /// Whether it keeps no arm.
     pub fn is_empty(&self) -> bool {
         self.arms.is_empty()
@@ -80,5 +104,39 @@ impl KeepArms {
             worst = (worst.0.max(miss), worst.1.max(angle));
         }
         Ok(worst)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn keep_free_arms_keeps_the_arms_in_scope_but_the_busy_ones() {
+        let sk = troupe_body::template::default_skeleton("adult").unwrap();
+        let q = vec![0.0; sk.dof_count()];
+        let mut g = vec![Transform::IDENTITY; sk.joints().len()];
+        forward_kinematics(&sk, &q, &mut g);
+        let left = sk.scope("left_arm").unwrap();
+        let right = sk.scope("right_arm").unwrap();
+        let (all, no_left) = (sk.all(), sk.all().difference(&left));
+        let (r, l) = (Side::Right, Side::Left);
+        // Right then left; a busy arm and one another action drives (not in the scope)
+        // are not kept.
+        for (scope, busy, want) in [
+            (all, vec![], vec![r, l]),
+            (all, vec![r], vec![l]),
+            (all, vec![r, l], vec![]),
+            (no_left, vec![], vec![r]),
+            (no_left, vec![r], vec![]),
+        ] {
+            let mut keep = KeepArms::default();
+            let kept = keep.keep_free_arms(&sk, &scope, &busy, &g).unwrap();
+            assert_eq!(kept, want, "busy {busy:?}");
+            let dofs = keep.dofs();
+            assert_eq!(dofs.overlaps(&right), want.contains(&r), "busy {busy:?}");
+            assert_eq!(dofs.overlaps(&left), want.contains(&l), "busy {busy:?}");
+            assert_eq!(keep.is_empty(), want.is_empty());
+        }
     }
 }
