@@ -21,8 +21,12 @@ pub struct Keyframe {
     start: f64,
     length: f64,
     looping: bool,
-    /// Seconds of the sequence it plays ahead of its own clock (see [`Keyframe::ahead`]).
-    lead: f64,
+    /// Seconds of the sequence it plays ahead of its own clock (see [`Keyframe::ahead`]);
+    /// `None`: one tick for a recording from a run's start ([`recorded_from_the_start`]),
+    /// else none.
+    lead: Option<f64>,
+    /// Whether the sequence is a recording of an actor from a run's start.
+    recorded: bool,
     /// Whether every bound track has the same key times (sampled motion such as BVH):
     /// then the segment is found once per tick for all of them.
     shared_times: bool,
@@ -71,7 +75,8 @@ impl Keyframe {
             start: sequence.start(),
             length: sequence.duration(),
             looping: looping.unwrap_or(sequence.looping),
-            lead: 0.0,
+            lead: None,
+            recorded: recorded_from_the_start(&sequence),
             sequence,
         })
     }
@@ -86,20 +91,36 @@ impl Keyframe {
         self.length
     }
 
-    /// Plays `seconds` ahead: its first tick shows the sequence at `seconds` instead of
-    /// its first key (see [`replay`]).
+    /// Plays `seconds` ahead: its first tick shows the sequence at `seconds` past its
+    /// first key (see [`replay`]), in place of the tick a recording is played ahead by.
     pub fn ahead(mut self, seconds: f64) -> Keyframe {
-        self.lead = seconds;
+        self.lead = Some(seconds);
         self
     }
+}
+
+/// Whether `sequence` is a recording (`troupe run --record`) of an actor there from the
+/// run's start: its first key, at time 0, is the posture before the run's first tick, and
+/// each later key the posture a tick made. A keyframe action shows its sequence's first
+/// key on its first tick, so it plays such a recording one tick ahead: each tick then
+/// shows what the same tick of the recorded run made, not the tick before. (An actor
+/// added during a run is first recorded after its first tick: its recording plays in step
+/// as it is.)
+fn recorded_from_the_start(sequence: &Sequence) -> bool {
+    sequence
+        .meta
+        .get("source")
+        .is_some_and(|s| s == "troupe run")
+        && sequence.start() == 0.0
 }
 
 /// Replays `sequence`, a recording of an actor (`troupe run --record`: its first key the
 /// posture the run started from, then one key per tick), on `actor` of `scene` in step
 /// with the run it recorded: the actor is posed at the first key now, and every tick then
 /// shows the posture recorded at the same scene time. (A keyframe action started now plays
-/// its first key on the coming tick, one tick behind the run, with the actor at rest
-/// before it.) Returns the action and the recording's length in seconds.
+/// such a recording in step too, one tick ahead of its clock, but leaves the actor as
+/// it is until the coming tick; any other sequence it starts at its first key there.)
+/// Returns the action and the recording's length in seconds.
 pub fn replay(
     scene: &mut Scene,
     actor: usize,
@@ -126,7 +147,12 @@ pub fn replay(
 
 impl Generator for Keyframe {
     fn step(&mut self, ctx: &GeneratorContext, out: &mut DofWriter) -> Step {
-        let mut t = ctx.local_time + self.lead;
+        let lead = match self.lead {
+            Some(seconds) => seconds,
+            None if self.recorded => ctx.dt,
+            None => 0.0,
+        };
+        let mut t = ctx.local_time + lead;
         let finished = !self.looping && t >= self.length;
         if self.looping && self.length > 0.0 {
             t = t.rem_euclid(self.length);
@@ -204,6 +230,72 @@ mod tests {
             .unwrap();
         seq.add_track(track("vl5_flexion", &times, 0.2)).unwrap();
         plays_exactly(seq, true);
+    }
+
+    /// Adds actor `name` to `scene`, playing `seq` once from the coming tick.
+    fn add_playing(scene: &mut Scene, name: &str, seq: &Sequence) {
+        let a = scene.add_actor(&ActorDesc::new(name)).unwrap();
+        let skel = scene.actors()[a].skeleton.clone();
+        let gen = Keyframe::new(&skel, seq, None, Some(false)).unwrap();
+        let spec = ActionSpec::new("keyframe", gen.scope());
+        scene.start_action(a, spec, Box::new(gen)).unwrap();
+    }
+
+    /// `ann` waves from the start and `cid`, added after `late` ticks, from then on, for
+    /// `ticks` ticks: their recordings (`troupe run --record`) and, per tick, each one's
+    /// elbow as it was (`None` before `cid` is there).
+    fn recorded_waves(ticks: usize, late: usize) -> (Vec<Sequence>, Vec<[Option<f64>; 2]>) {
+        let mut wave = Sequence::new("wave");
+        let times = [0.0, 0.1, 0.25, 0.4, 0.6];
+        wave.add_track(track("r_elbow_flexion", &times, 0.8))
+            .unwrap();
+        let mut scene = Scene::new(SceneConfig::default()).unwrap();
+        let mut recorder = troupe_scene::record::PostureRecorder::new();
+        add_playing(&mut scene, "ann", &wave);
+        recorder.sample(&scene);
+        let elbow = scene.actors()[0].skeleton.dof("r_elbow_flexion").unwrap();
+        let mut seen = Vec::new();
+        for tick in 0..ticks {
+            if tick == late {
+                add_playing(&mut scene, "cid", &wave);
+            }
+            scene.step();
+            recorder.sample(&scene);
+            let q = |a: usize| scene.states().get(a).map(|s| s.q[elbow]);
+            seen.push([q(0), q(1)]);
+        }
+        (recorder.sequences(&scene), seen)
+    }
+
+    #[test]
+    fn a_recording_plays_in_step_with_the_run_it_recorded() {
+        let (ticks, late) = (40, 15);
+        let (recorded, seen) = recorded_waves(ticks, late);
+        let mut scene = Scene::new(SceneConfig::default()).unwrap();
+        // bob plays ann's part from the start; dee, added when cid was, plays cid's.
+        add_playing(&mut scene, "bob", &recorded[0]);
+        let elbow = scene.actors()[0].skeleton.dof("r_elbow_flexion").unwrap();
+        for (tick, was) in seen.iter().enumerate() {
+            if tick == late {
+                add_playing(&mut scene, "dee", &recorded[1]);
+            }
+            scene.step();
+            for (a, was) in was.iter().enumerate() {
+                let now = scene.states().get(a).map(|s| s.q[elbow]);
+                let (Some(was), Some(now)) = (was, now) else {
+                    assert_eq!(was.is_some(), now.is_some(), "tick {tick}: actor {a}");
+                    continue;
+                };
+                // It was a tick behind: the first tick showed the posture before the
+                // recorded run's first tick.
+                assert!(
+                    (now - was).abs() < 1e-9,
+                    "tick {} ({} s), actor {a}: played {now}, recorded {was}",
+                    tick + 1,
+                    scene.time()
+                );
+            }
+        }
     }
 
     #[test]
