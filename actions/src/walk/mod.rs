@@ -182,6 +182,9 @@ struct Landing {
     strike: f64,
     /// Heel-off pitch (toes down, positive) for the support that follows.
     roll: f64,
+    /// Whether no clear spot was found under the body then, and it steps in place (see
+    /// [`Walk::spot`]).
+    pinched: bool,
 }
 
 /// One foot's state.
@@ -627,29 +630,53 @@ impl Walk {
     }
 
     /// The floor spot of foot `leg` for the body at `sample`, `width` scaling the hip
-    /// half-width: beside the body, moved until the foot lands clear of what is `around`
+    /// half-width, for a foot that strikes the floor `strike_in` seconds from now: beside
+    /// the body, moved until the foot lands clear of what is `around`
     /// (`troupe_nav::clearance::clear_foot`: the body is kept clear by its step's limit,
     /// but a foot lands ahead of it).
-    fn spot(&self, around: &Surroundings, leg: usize, sample: &RootSample, width: f64) -> DVec2 {
+    fn spot(
+        &self,
+        around: &Surroundings,
+        leg: usize,
+        sample: &RootSample,
+        width: f64,
+        strike_in: f64,
+    ) -> (DVec2, bool) {
         let left = DVec2::new(sample.heading.cos(), -sample.heading.sin());
         let side = if leg == 0 { 1.0 } else { -1.0 };
         let offset = left * (side * self.rig.hip_half_width * width);
         let beside = sample.position + offset;
+        if let Some(at) = self.cleared(around, leg, beside, sample.heading, strike_in) {
+            return (at, false);
+        }
         // Pinched there (between a body and an obstacle): a step in place, beside where
-        // the body stood on the last tick.
-        self.cleared(around, leg, beside, sample.heading)
-            .or_else(|| {
-                let home = self.last_floor? + offset;
-                self.cleared(around, leg, home, sample.heading)
-            })
-            .unwrap_or(beside)
+        // the body stood on the last tick. (The furthest clear spot on the way there
+        // instead put a foot, and the body's capsule with it, into the way of people
+        // crossing: the plaza's crowds arrived later.)
+        let home = self
+            .last_floor
+            .and_then(|last| self.cleared(around, leg, last + offset, sample.heading, 0.0));
+        (home.unwrap_or(beside), true)
     }
 
-    /// Landing point `at` of foot `leg` heading `yaw`, moved clear of what is `around`
-    /// (`troupe_nav::clearance::clear_foot`); `None` if no such place was found.
-    fn cleared(&self, around: &Surroundings, leg: usize, at: DVec2, yaw: f64) -> Option<DVec2> {
+    /// Landing point `at` of foot `leg` heading `yaw`, striking the floor `strike_in`
+    /// seconds from now, moved clear of what is `around`
+    /// (`troupe_nav::clearance::clear_foot`); `None` if no such place was found. Where
+    /// someone walking ahead stands in the way now, clear of where that one will have
+    /// gone by then (`Surroundings::ahead`): a walker following another a stride and a
+    /// half behind stepped in place, its feet a stride behind its body.
+    fn cleared(
+        &self,
+        around: &Surroundings,
+        leg: usize,
+        at: DVec2,
+        yaw: f64,
+        strike_in: f64,
+    ) -> Option<DVec2> {
         let span = surroundings::foot_span(&self.rig.legs[leg], at, yaw);
-        clear_foot(span, around).map(|by| at + by)
+        clear_foot(span, around)
+            .or_else(|| clear_foot(span, &around.ahead(at, strike_in)?))
+            .map(|by| at + by)
     }
 
     /// The part of a body turn of `turn` radians (from its heading now) that its planted
@@ -719,17 +746,19 @@ impl Walk {
         let sigma = self.cycle(self.cadence).support_fraction();
         let to_strike = 1.0 - lambda;
         let t_mid = self.time_of_phase(plan, self.phase + to_strike + PLACEMENT * sigma);
-        self.landing_at(around, plan, leg, t_mid, from)
+        let strike_in = to_strike * self.cycle(self.cadence).cycle;
+        self.landing_at(around, plan, leg, (t_mid, strike_in), from)
     }
 
     /// The landing of foot `leg`, stepping from `from`, under the steered body at walk
-    /// time `t_mid`, clear of what is `around` (see [`Walk::spot`]).
+    /// time `t_mid`, striking the floor `strike_in` seconds from now, clear of what is
+    /// `around` (see [`Walk::spot`]).
     fn landing_at(
         &self,
         around: &Surroundings,
         plan: &Plan,
         leg: usize,
-        t_mid: f64,
+        (t_mid, strike_in): (f64, f64),
         from: DVec2,
     ) -> Landing {
         let (sample, width) = if self.steer.plan_time(t_mid, self.t) >= plan.end_time {
@@ -740,7 +769,7 @@ impl Walk {
                 self.options.step_width,
             )
         };
-        let plant = self.spot(around, leg, &sample, width);
+        let (plant, pinched) = self.spot(around, leg, &sample, width, strike_in);
         let step = (plant - from).length();
         let q = (step / (0.8 * self.rig.thigh_height)).min(1.0);
         Landing {
@@ -748,6 +777,17 @@ impl Walk {
             yaw: self.landing_yaw(leg, sample.heading),
             strike: 0.26 * q,
             roll: MAX_ROLL * q,
+            pinched,
+        }
+    }
+
+    /// Steers the walk from now if `landing` is pinched (a step in place): then the body
+    /// goes no further than its planted feet allow (see [`footing`]) and the landing
+    /// follows it (see [`Walk::follow_steering`]), where a walk that went on along its
+    /// plan left the foot a stride behind and the pelvis sank to reach it.
+    fn hold_for(&mut self, landing: &Landing) {
+        if landing.pinched && !self.steer.engaged {
+            self.steer.engage(self.t, DVec2::ZERO);
         }
     }
 
@@ -765,13 +805,17 @@ impl Walk {
         let cycle = self.cycle(self.cadence);
         let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
         let t_mid = self.t + ahead * cycle.cycle;
-        let fresh = self.landing_at(around, plan, leg, t_mid, DVec2::new(from.x, from.z));
+        let strike_in = (1.0 - lambda) * cycle.cycle;
+        let times = (t_mid, strike_in);
+        let fresh = self.landing_at(around, plan, leg, times, DVec2::new(from.x, from.z));
         let step = RETARGET_SPEED * self.dt;
         let plant = to.plant + (fresh.plant - to.plant).clamp_length_max(step);
         let mut yaw = to.yaw + wrap(fresh.yaw - to.yaw).clamp(-2.0 * step, 2.0 * step);
         // Wherever the retargeting has got to, the foot lands clear (a jump of the
         // landing, not of the foot, which swings towards it).
-        let mut plant = self.cleared(around, leg, plant, yaw).unwrap_or(plant);
+        let mut plant = self
+            .cleared(around, leg, plant, yaw, strike_in)
+            .unwrap_or(plant);
         // Across a corner of furniture from the body's new landing, the step towards it
         // goes into the corner and clearing puts it back where it was: the landing stayed
         // on the far side, the foot was held (its way crossed the corner) and came down
@@ -779,7 +823,7 @@ impl Walk {
         // landing that gets no nearer jumps to the new one, if that is clear.
         let gap = (to.plant - fresh.plant).length();
         if gap > STUCK_LANDING && (plant - fresh.plant).length() > gap - 0.25 * step {
-            if let Some(clear) = self.cleared(around, leg, fresh.plant, fresh.yaw) {
+            if let Some(clear) = self.cleared(around, leg, fresh.plant, fresh.yaw, strike_in) {
                 (plant, yaw) = (clear, fresh.yaw);
             }
         }
@@ -801,7 +845,6 @@ impl Walk {
     ) -> FootPose {
         let wrapped = lambda < self.lambda[leg];
         self.lambda[leg] = lambda;
-        let rig = &self.rig;
         // Transitions first.
         match self.feet[leg] {
             Foot::Swing { to, .. } if wrapped => {
@@ -838,6 +881,7 @@ impl Walk {
         {
             if roll.is_none() && lambda >= HEEL_OFF * sigma {
                 let landing = self.plan_landing(around, plan, leg, lambda, plant);
+                self.hold_for(&landing);
                 let still =
                     (landing.plant - plant).length() < 0.01 && wrap(landing.yaw - yaw).abs() < 0.05;
                 self.feet[leg] = Foot::Stance {
@@ -858,6 +902,7 @@ impl Walk {
                     // pelvis sank to the floor.
                     _ => self.plan_landing(around, plan, leg, lambda, plant),
                 };
+                self.hold_for(&to);
                 let in_place = (to.plant - plant).length() < 0.01
                     && wrap(to.yaw - yaw).abs() < 0.05
                     && pose.pitch == 0.0;
@@ -871,7 +916,7 @@ impl Walk {
                 } else {
                     let from_plant = DVec2::new(pose.ankle.x, pose.ankle.z);
                     let step = (to.plant - from_plant).length();
-                    let lift = (0.35 * step).clamp(0.02, 0.055 * rig.thigh_height)
+                    let lift = (0.35 * step).clamp(0.02, 0.055 * self.rig.thigh_height)
                         * (1.0 + self.options.run);
                     let swing_time = (1.0 - sigma) * self.cycle(self.cadence).cycle;
                     let body = self.steer.speed(plan, self.t, self.t);
@@ -1557,7 +1602,7 @@ impl Generator for Walk {
             let settled = (0..2).all(|leg| match self.feet[leg] {
                 // Its heading too: a turn larger than a step takes more steps.
                 Foot::Stance { plant, yaw, .. } => {
-                    (plant - self.spot(&around, leg, &end, 1.0)).length() < 0.01
+                    (plant - self.spot(&around, leg, &end, 1.0, 0.0).0).length() < 0.01
                         && self.poses[leg].pitch == 0.0
                         && wrap(yaw - end.heading).abs() < 0.05
                 }

@@ -23,6 +23,8 @@ const FEET_OUT: f64 = 0.6;
 pub struct Lists {
     /// The bodies' list.
     bodies: Vec<Capsule>,
+    /// Their velocities' list.
+    velocities: Vec<DVec2>,
     /// The feet's list.
     feet: Vec<FootSpan>,
 }
@@ -31,6 +33,7 @@ impl Lists {
     /// Takes back the lists `around` was gathered in, for the next tick.
     pub fn keep(&mut self, around: Surroundings) {
         self.bodies = around.bodies;
+        self.velocities = around.velocities;
         self.feet = around.feet;
     }
 }
@@ -51,10 +54,12 @@ pub fn gather<'a>(
     let me = ctx.actor;
     let mut around = Surroundings {
         bodies: std::mem::take(&mut lists.bodies),
+        velocities: std::mem::take(&mut lists.velocities),
         feet: std::mem::take(&mut lists.feet),
         obstacles: Default::default(),
     };
     around.bodies.clear();
+    around.velocities.clear();
     around.feet.clear();
     let (Some(&from), Some(&radius)) = (crowd.positions.get(me), crowd.radii.get(me)) else {
         return around;
@@ -71,7 +76,12 @@ pub fn gather<'a>(
         if (crowd.positions[j] - from).length() - reach - crowd.radii[j] - FEET_OUT > RANGE {
             continue;
         }
-        around.bodies.extend(crowd.bodies.get(j));
+        if let Some(&body) = crowd.bodies.get(j) {
+            around.bodies.push(body);
+            around
+                .velocities
+                .push(crowd.velocities.get(j).copied().unwrap_or_default());
+        }
         if let Some(Some(feet)) = crowd.soles.get(j) {
             around.feet.extend(feet);
         }

@@ -861,6 +861,7 @@ fn a_swinging_foot_held_for_its_knee_swings_on_from_where_it_was_held() {
             yaw: 0.2,
             strike: 0.2,
             roll: 0.3,
+            pinched: false,
         },
     );
     walk.lambda[0] = 0.66;
@@ -918,6 +919,7 @@ fn a_swinging_foot_held_by_the_clearance_keeps_its_whole_pose() {
         yaw: 0.2,
         strike: 0.2,
         roll: 0.3,
+        pinched: false,
     };
     walk.feet[0] = swing(DVec3::new(0.1, 0.12, -0.1), landing);
     walk.lambda[0] = 0.66;
@@ -980,7 +982,7 @@ fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() 
         let ahead = 1.0 - lambda + PLACEMENT * cycle.support_fraction();
         let t_mid = walk.t + ahead * cycle.cycle;
         let open = Surroundings::default();
-        walk.landing_at(&open, &plan, 0, t_mid, DVec2::new(0.1, -0.3))
+        walk.landing_at(&open, &plan, 0, (t_mid, 0.0), DVec2::new(0.1, -0.3))
     };
     // The plaza, layout 11.1/1.42, at 83.2 s: s2_43's left foot was to land by planter 1's
     // side, across its corner from where the body now wanted it, beside another walker;
@@ -1025,6 +1027,7 @@ fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() 
             yaw: fresh.yaw,
             strike: 0.26,
             roll: 1.0,
+            pinched: false,
         },
     );
     walk.lambda[0] = lambda;
@@ -1032,7 +1035,7 @@ fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() 
     let f = fresh.plant;
     let step = RETARGET_SPEED * walk.dt;
     let towards = by_face + (f - by_face).clamp_length_max(step);
-    let back_out = walk.cleared(&around, 0, towards, fresh.yaw).unwrap();
+    let back_out = walk.cleared(&around, 0, towards, fresh.yaw, 0.0).unwrap();
     assert!(
         (back_out - f).length() > (by_face - f).length() - 0.25 * step,
         "{by_face} {back_out}"

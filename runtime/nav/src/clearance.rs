@@ -195,6 +195,14 @@ impl Capsule {
             .fold(self.bare, |radius, h| radius.max(h.radius))
     }
 
+    /// The same body moved by `by` (x, z).
+    pub fn moved(&self, by: DVec2) -> Capsule {
+        Capsule {
+            centre: self.centre + by,
+            ..*self
+        }
+    }
+
     /// A circle (centre, radius) that holds the capsule.
     fn bound(&self) -> (DVec2, f64) {
         (self.centre, self.half_length + self.radius)
@@ -243,11 +251,42 @@ fn footprint_gap_bound(a: (DVec2, f64), f: &Footprint) -> f64 {
 pub struct Surroundings<'a> {
     /// Other walkers' and standing actors' bodies.
     pub bodies: Vec<Capsule>,
+    /// Each body's velocity (x, z) over the previous tick, as `bodies` lists them (none
+    /// listed: all standing).
+    pub velocities: Vec<DVec2>,
     /// Their feet (see `Crowd::soles`), which a foot in the air keeps from as from a
     /// body.
     pub feet: Vec<FootSpan>,
     /// The obstacles near (the usual few on the stack, as each tick gathers them).
     pub obstacles: SmallVec<[&'a Footprint; 8]>,
+}
+
+impl<'a> Surroundings<'a> {
+    /// Where the bodies walking away from `from` will be at least `seconds` from now: each
+    /// moved on by half of what its velocity covers in that time, which it covers even if
+    /// it stops over it (a walk stops within 0.8 s); the others where they stand. `None`
+    /// when no body walks away. A foot landing behind someone walking ahead lands where
+    /// that one has gone from (see [`clear_foot`]), not where it stands now.
+    pub fn ahead(&self, from: DVec2, seconds: f64) -> Option<Surroundings<'a>> {
+        let velocity = |i: usize| self.velocities.get(i).copied().unwrap_or_default();
+        let leaving = |i: usize, body: &Capsule| velocity(i).dot(body.centre - from) > 0.0;
+        if seconds <= 0.0 || !self.bodies.iter().enumerate().any(|(i, b)| leaving(i, b)) {
+            return None;
+        }
+        let bodies = self.bodies.iter().enumerate().map(|(i, body)| {
+            if leaving(i, body) {
+                body.moved(velocity(i) * (0.5 * seconds))
+            } else {
+                *body
+            }
+        });
+        Some(Surroundings {
+            bodies: bodies.collect(),
+            velocities: self.velocities.clone(),
+            feet: self.feet.clone(),
+            obstacles: self.obstacles.clone(),
+        })
+    }
 }
 
 /// A limit on the step `s`: `s · normal >= -allowed`, `allowed >= 0`.
@@ -812,6 +851,43 @@ mod tests {
             radius: 0.04,
         };
         assert_eq!(clear_foot(across, &around), None);
+    }
+
+    #[test]
+    fn a_foot_behind_someone_walking_away_lands_where_that_one_will_have_gone() {
+        // A foot landing 1.0 m ahead of its walker, straight into the back of someone
+        // 1.3 m ahead walking on at 1.3 m/s, and someone standing beside the way.
+        let foot = FootSpan {
+            heel: DVec2::new(0.0, 0.9),
+            toe: DVec2::new(0.0, 1.15),
+            radius: 0.04,
+        };
+        let ahead = body(0.0, 1.3, 0.2);
+        let beside = body(1.0, 1.0, 0.0);
+        let around = Surroundings {
+            bodies: vec![ahead, beside],
+            velocities: vec![DVec2::new(0.0, 1.3), DVec2::ZERO],
+            ..Surroundings::default()
+        };
+        assert_eq!(
+            clear_foot(foot, &around),
+            None,
+            "pinched where they stand now"
+        );
+        // Striking in 0.6 s: the one ahead has gone on at least 0.39 m; the other stays.
+        let then = around.ahead(foot.heel, 0.6).unwrap();
+        assert_eq!(then.bodies[0].centre, DVec2::new(0.0, 1.3 + 0.39));
+        assert_eq!(then.bodies[1], beside);
+        assert_eq!(clear_foot(foot, &then), Some(DVec2::ZERO));
+        // Someone walking towards the foot, or nobody walking: nothing moves.
+        let coming = Surroundings {
+            velocities: vec![DVec2::new(0.0, -1.3), DVec2::ZERO],
+            ..around.clone()
+        };
+        assert!(coming.ahead(foot.heel, 0.6).is_none());
+        assert!(bodies(&[ahead]).ahead(foot.heel, 0.6).is_none());
+        // A foot striking now sees everyone where they stand.
+        assert!(around.ahead(foot.heel, 0.0).is_none());
     }
 
     #[test]
