@@ -117,6 +117,36 @@ test("two groups of five meet head-on in a 2.3 m corridor: they pass", function(
   groups_pass("two groups of five in 2.3 m", 5, 2.3, 5, 0.7)
 end)
 
+test("three a side cross a 1.6 m doorway in a wall: those before it step back and all pass", function()
+  -- The doorway is a passage a wall's thickness long, crossed at a slant: the walkers
+  -- wait before it, not in it, and their ways cross the door obliquely. Measured across
+  -- the way where each stood, the passage was wider than 2.6 m, so nobody stepped back
+  -- and all six stood for good (docs/navigation.md, "Stand-offs").
+  troupe.wall{ from = {-8, 0}, to = {-0.8, 0} }
+  troupe.wall{ from = {0.8, 0}, to = {8, 0} }
+  local actors, walks, goals = {}, {}, {}
+  for i = 1, 3 do
+    local x = -2.25 + (i - 1) * 1.5
+    actors[#actors + 1] = troupe.actor{ name = "s" .. i, at = {x, 0, -2.5 - 0.3 * i}, facing = 0 }
+    goals[#actors] = {x, 4.5}
+    actors[#actors + 1] = troupe.actor{ name = "n" .. i, at = {-x, 0, 2.5 + 0.3 * i}, facing = 180 }
+    goals[#actors] = {-x, -4.5}
+  end
+  for i, a in ipairs(actors) do walks[i] = a:walk{ to = {goals[i][1], 0, goals[i][2]} } end
+  local solids = 0.0
+  local deepest, frozen, ok = watch(actors, walks, goals, 90, function()
+    solids = math.max(solids, (troupe.deepest_overlap()))
+  end)
+  print(string.format("doorway: all in by %.1f s; deepest discs %.4f m, solids %.4f m, longest stand %.2f s",
+    troupe.time(), deepest, solids, frozen))
+  expect(ok, "every walk ended")
+  for i, a in ipairs(actors) do
+    expect(walks[i].status == "completed", a.name .. ": " .. walks[i].status .. " " .. tostring(walks[i].error))
+  end
+  expect(deepest <= 0.01, string.format("discs interpenetrated %.3f m", deepest))
+  expect(solids <= 0.01, string.format("solids interpenetrated %.3f m", solids))
+end)
+
 test("troupe.deepest_overlap measures the two most overlapping body discs", function()
   troupe.actor{ name = "ann" }
   troupe.actor{ name = "bob", at = {3, 0, 0} }

@@ -42,8 +42,12 @@ const BACKED_INTO: f64 = 0.3;
 /// furniture or anywhere) put more limbs into one another in the plaza
 /// (docs/navigation.md, "Stand-offs").
 const PASSAGE: f64 = 2.6;
-/// Step (m) at which the passage's width is measured.
+/// Step (m) along the way at which the passage's width is measured.
 const PASSAGE_STEP: f64 = 0.1;
+/// How far (m) ahead of the body, along its way, the passage's width is measured besides
+/// where it stands: as far as a walker stands from a doorway it waits to go through
+/// (three walkers a side of a 1.6 m doorway in a thin wall stood for good before it).
+const PASSAGE_AHEAD: f64 = 1.0;
 /// Furthest (m) looked to the right for room to step aside into.
 const ASIDE: f64 = 0.5;
 /// Step (m) at which that room is measured, and the gap it keeps from an obstacle.
@@ -126,7 +130,14 @@ impl Standoff {
         let begun = self
             .backing_since
             .is_some_and(|since| now - since < SHORTEST_STEP_BACK);
-        let in_a_passage = || passage_width(position, along, footprints) < PASSAGE;
+        // In a passage or before one: a doorway in a wall is a passage a wall's thickness
+        // long, and those who wait for it stand before it.
+        let in_a_passage = || {
+            (0..=(PASSAGE_AHEAD / PASSAGE_STEP).round() as usize).any(|i| {
+                let ahead = along * (i as f64 * PASSAGE_STEP);
+                passage_width(position + ahead, along, footprints).is_some_and(|w| w < PASSAGE)
+            })
+        };
         let stand_off = backed_into || (face_to_face && (self.backing() || waited));
         let backing = begun || (stand_off && in_a_passage());
         self.backing_since = if backing {
@@ -180,24 +191,25 @@ fn room_on_the_right(
     room
 }
 
-/// The width (m, up to [`PASSAGE`] or more) of the passage across `along` at `position`:
-/// how far to the left and to the right the first of the `footprints` is, measured every
-/// [`PASSAGE_STEP`] up to [`PASSAGE`] each way.
-fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> f64 {
-    let side = along.perp();
-    let free = |towards: DVec2| {
-        let mut d = PASSAGE_STEP;
-        while d < PASSAGE {
-            let at = position + towards * d;
-            if footprints
-                .within(d + PASSAGE_STEP)
-                .any(|f| f.distance(at) < PASSAGE_STEP / 2.0)
-            {
-                return d;
-            }
-            d += PASSAGE_STEP;
+/// The width (m, up to twice [`PASSAGE`]) of the passage across `along` at `position`:
+/// how far the nearest of the `footprints` is on its left and on its right (at most
+/// [`PASSAGE`] each), whatever their direction (a doorway in a thin wall, which a way
+/// crosses at a slant, is as narrow as the door); `None` inside a footprint.
+fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> Option<f64> {
+    let (mut left, mut right) = (PASSAGE, PASSAGE);
+    for f in footprints.within(PASSAGE + PASSAGE_AHEAD) {
+        if f.contains(position) {
+            return None;
         }
-        PASSAGE
-    };
-    free(side) + free(-side)
+        let Some(nearest) = f.nearest_point(position) else {
+            continue;
+        };
+        let (offset, d) = (nearest - position, nearest.distance(position));
+        if along.perp_dot(offset) > 0.0 {
+            left = left.min(d);
+        } else {
+            right = right.min(d);
+        }
+    }
+    Some(left + right)
 }

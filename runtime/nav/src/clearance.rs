@@ -515,7 +515,7 @@ fn nearest_to_footprint(f: &Footprint, span: &FootSpan) -> Option<(DVec2, DVec2)
         if f.contains(p) {
             return None;
         }
-        let nearest = nearest_on_outline(f, p)?;
+        let nearest = f.nearest_point(p)?;
         if best.is_none_or(|(q, n)| (p - nearest).length() < (q - n).length()) {
             best = Some((p, nearest));
         }
@@ -530,7 +530,7 @@ fn nearest_to_footprint(f: &Footprint, span: &FootSpan) -> Option<(DVec2, DVec2)
 fn footprint_overlap(f: &Footprint, span: &FootSpan) -> Option<(DVec2, f64)> {
     let mut worst: Option<(DVec2, f64)> = None;
     for p in span.samples() {
-        let Some(nearest) = nearest_on_outline(f, p) else {
+        let Some(nearest) = f.nearest_point(p) else {
             continue;
         };
         let inside = f.contains(p);
@@ -585,18 +585,6 @@ fn nearest_on_segment(p: DVec2, a: DVec2, b: DVec2) -> DVec2 {
         0.0
     };
     a + ab * t
-}
-
-/// The point of footprint `f`'s outline nearest `p`; `None` if it has no outline.
-fn nearest_on_outline(f: &Footprint, p: DVec2) -> Option<DVec2> {
-    let n = f.outline.len();
-    (0..n)
-        .map(|i| nearest_on_segment(p, f.outline[i], f.outline[(i + 1) % n]))
-        .min_by(|x, y| {
-            (*x - p)
-                .length_squared()
-                .total_cmp(&(*y - p).length_squared())
-        })
 }
 
 /// The step nearest `wanted` (by projections in a fixed order) within every limit, each of

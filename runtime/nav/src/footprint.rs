@@ -97,6 +97,22 @@ impl Footprint {
         }
     }
 
+    /// The point of the polygon's outline nearest `p` (`p` itself is not on it unless it
+    /// lies on an edge); `None` for a footprint without an outline.
+    pub fn nearest_point(&self, p: DVec2) -> Option<DVec2> {
+        let n = self.outline.len();
+        (0..n)
+            .map(|i| {
+                let (a, b) = (self.outline[i], self.outline[(i + 1) % n]);
+                a + (b - a) * segment_fraction(p - a, b - a)
+            })
+            .min_by(|x, y| {
+                (*x - p)
+                    .length_squared()
+                    .total_cmp(&(*y - p).length_squared())
+            })
+    }
+
     /// A circle that holds the polygon: the centre of its corners and the farthest
     /// corner's distance from it.
     pub fn bounding_circle(&self) -> (DVec2, f64) {
@@ -181,12 +197,17 @@ pub fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 /// Squared distance from a point to a segment, both relative to the segment's start:
 /// `ap` to the point, `ab` to the segment's end.
 fn segment_distance_squared(ap: DVec2, ab: DVec2) -> f64 {
-    let t = if ab.length_squared() > 0.0 {
+    (ab * segment_fraction(ap, ab) - ap).length_squared()
+}
+
+/// How far along the segment `ab` (0 at its start, 1 at its end) is the point of it
+/// nearest the point `ap` from its start.
+fn segment_fraction(ap: DVec2, ab: DVec2) -> f64 {
+    if ab.length_squared() > 0.0 {
         (ap.dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
     } else {
         0.0
-    };
-    (ab * t - ap).length_squared()
+    }
 }
 
 /// Corners of a polygon that contains the circle of `radius` about the origin.
