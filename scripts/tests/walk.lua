@@ -65,6 +65,34 @@ test("an arrived walk brings its feet together in a quick step and completes wit
          string.format("completed %.2f s after the body reached its goal", troupe.time() - near))
 end)
 
+test("a walk setting off 55° from where the body faces turns onto its way smoothly, a cup in hand", function()
+  -- Below 60° the walk sets off without turning on the spot, and the planted feet hold
+  -- the body's turn (31.5° from a planted foot) until one lifts. The body then turned
+  -- the rest at 6 rad/s, 3.4° in a tick, and the cup in its hand moved 35 mm in one.
+  local ann = troupe.actor{ name = "ann", at = {0, 0, 0}, facing = 41 }
+  troupe.object{ name = "stand", shape = "cylinder", radius = 0.1, height = 0.95, at = {0.45, 0.475, 0.25}, mass = 10, obstacle = false }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {0.45, 1.0, 0.25}, mass = 0.3 }
+  local g = ann:grasp{ object = cup, hand = "right" }
+  run_until(function() return g.status ~= "active" and g.status ~= "pending" end, 10)
+  expect(g.status == "completed", "the grasp: " .. g.status)
+  local h, p = math.rad(96), ann:position()
+  local w = ann:walk{ to = {p[1] + 1.97 * math.sin(h), 0, p[3] + 1.97 * math.cos(h)}, speed = 1.2 }
+  local yaw, at = ann:dof("root_yaw"), cup:position()
+  local fastest_turn, fastest_cup = 0, 0
+  run_until(function()
+    local y, c = ann:dof("root_yaw"), cup:position()
+    fastest_turn = math.max(fastest_turn, math.abs(y - yaw) * troupe.rate())
+    fastest_cup = math.max(fastest_cup, math.sqrt((c[1] - at[1])^2 + (c[2] - at[2])^2 + (c[3] - at[3])^2))
+    yaw, at = y, c
+    return w.status == "completed"
+  end, 10)
+  print(string.format("setting off 55° aside: fastest turn %.2f rad/s, cup's largest move %.1f mm in a tick",
+    fastest_turn, fastest_cup * 1000))
+  expect(w.status == "completed", "the walk: " .. w.status)
+  expect(fastest_turn < 2.5, string.format("the body turned %.2f rad/s", fastest_turn))
+  expect(fastest_cup < 0.025, string.format("the cup moved %.1f mm in a tick", fastest_cup * 1000))
+end)
+
 test("walk a path of floor points; feet stay on or above the floor", function()
   local ann = troupe.actor{ name = "ann" }
   local w = ann:walk{ path = {{0, 2}, {1.5, 3}, {2, 1}}, speed = 1.1 }

@@ -123,6 +123,12 @@ pub const CADENCE_LOOKBACK: f64 = 0.6;
 /// 5.9 rad/s), so it holds back only a plan whose clock jumped (see `Walk::pose`).
 pub const MAX_TURN_RATE: f64 = 6.0;
 
+/// Fastest (rad/s) a body that its planted feet held back from the plan's heading turns
+/// to catch up with it, beyond the plan's own turn: a walk setting off 55° from where the
+/// body faced was held at 31.5° until a foot lifted, then turned the rest at
+/// [`MAX_TURN_RATE`], a cup in the hand moving 35 mm in a tick.
+pub const CATCH_UP_RATE: f64 = 2.0;
+
 /// Farthest (radians) the body turns from a planted foot's heading: the hip twists 45°
 /// each way (the leg solve stops at 43°), less what the pelvis' own rotation and the
 /// hip's flexion take of it. Past it the leg cannot turn the foot with the body, which
@@ -244,6 +250,9 @@ pub struct Walk {
     poses: [FootPose; 2],
     yaw: f64,
     heading: f64,
+    /// The heading the plan (as steered) asked for on the last tick, which the body's may
+    /// lag (see [`CATCH_UP_RATE`]).
+    plan_heading: f64,
     start_q: Vec<f64>,
     settle_since: Option<f64>,
     /// Where the body last stood [`PROGRESS`] away from where it stood before, and the
@@ -324,6 +333,7 @@ impl Walk {
             poses: [FootPose::default(); 2],
             yaw: 0.0,
             heading: 0.0,
+            plan_heading: 0.0,
             start_q: Vec::new(),
             settle_since: None,
             progress: None,
@@ -1079,8 +1089,17 @@ impl Walk {
         // The body turns no faster than a person pivots: the plan's clock can jump ahead
         // (a push along a route that has just set off, whose speed is still small, moves
         // it by several ticks), and its heading, still turning in, with it; and no further
-        // from a planted foot than the hip twists.
-        let most = MAX_TURN_RATE * ctx.dt;
+        // from a planted foot than the hip twists. Unsteered, a body the planted feet
+        // held back catches up with the plan no faster than [`CATCH_UP_RATE`] beyond the
+        // plan's own turn (a steered one at once: held back among others, its heading
+        // lagging its way put more limbs into theirs in the plaza).
+        let plan_turn = wrap(sample.heading - self.plan_heading);
+        self.plan_heading = sample.heading;
+        let most = if self.steer.engaged {
+            MAX_TURN_RATE * ctx.dt
+        } else {
+            (plan_turn.abs() + CATCH_UP_RATE * ctx.dt).min(MAX_TURN_RATE * ctx.dt)
+        };
         let turn = wrap(sample.heading - self.heading);
         let allowed = self.turn_on_planted_feet(turn.clamp(-most, most));
         if allowed != turn {
@@ -1425,6 +1444,7 @@ impl Generator for Walk {
         }
         self.yaw = heading;
         self.heading = heading;
+        self.plan_heading = heading;
         if let Some(goal) = &self.goal {
             let planned = goal.plan(ctx, start, self.radius)?;
             self.route = Route::Path {
