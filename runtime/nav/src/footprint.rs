@@ -58,15 +58,6 @@ impl Footprint {
         )
     }
 
-    /// The height (m) of `object`'s lowest point, as [`Footprint::of_object`] finds it,
-    /// without making its footprint.
-    pub fn lowest_of(object: &Object) -> f64 {
-        surface_points(&object.shape, object.rotation, object.position)
-            .iter()
-            .map(|p| p.y)
-            .fold(f64::INFINITY, f64::min)
-    }
-
     /// Whether `p` is inside the polygon (or on its border).
     pub fn contains(&self, p: DVec2) -> bool {
         let n = self.outline.len();

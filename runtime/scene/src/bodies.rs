@@ -30,6 +30,17 @@ const STRIDE: f64 = 0.9;
 /// The speed (m/s, along the way the body faces) from which the stride is full.
 const STRIDE_SPEED: f64 = 1.2;
 
+/// What a hand holds, as the body's capsule widens for it.
+#[derive(Clone, Debug)]
+pub struct Held {
+    /// The holding wrist joint.
+    pub wrist: usize,
+    /// The height (m) of the held object's lowest point.
+    pub lowest: f64,
+    /// The held object's points (x, z) seen from above: its corners, or points round it.
+    pub outline: Vec<DVec2>,
+}
+
 /// The joints that shape an actor's body on the floor beyond its disc
 /// ([`Capsule`]): the feet, which stretch it along the way it faces, and the
 /// wrists, which widen it as the arms swing out.
@@ -94,8 +105,8 @@ impl BodyJoints {
     /// them there), facing `facing` and going at `velocity` (x, z), of
     /// disc `radius`, whole and carried: the disc stretched by the stride at that speed
     /// (see `STRIDE`), widened by as far as a wrist is further out from it than at
-    /// rest (each hand with how low it reaches: the fingertips, or the lowest point of
-    /// what it holds, `held` giving the holding joints and those points' heights), and,
+    /// rest, or as far as what the hand holds reaches further (each hand with how low it
+    /// reaches: the fingertips, or the lowest point of what it holds), and,
     /// whole, stretched to hold its feet and knees as well. The carried body is
     /// what the root's step moves (`Crowd::cores`); the planted feet stay behind.
     pub fn body(
@@ -103,7 +114,7 @@ impl BodyJoints {
         globals: &[Transform],
         soles: Option<[FootSpan; 2]>,
         (facing, velocity, radius): (DVec2, DVec2, f64),
-        held: &[(usize, f64)],
+        held: &[&Held],
     ) -> (Capsule, Capsule) {
         let root = floor_point(&globals[0]);
         let stride = STRIDE * radius * (velocity.dot(facing).abs() / STRIDE_SPEED).min(1.0);
@@ -114,13 +125,16 @@ impl BodyJoints {
         for (i, &(wrist, at_rest, reach)) in self.wrists.iter().enumerate() {
             if let Some(w) = globals.get(wrist) {
                 // How low the hand reaches, and what it holds.
-                let lowest = held
-                    .iter()
-                    .filter(|&&(joint, _)| joint == wrist)
-                    .fold(w.translation.y - reach, |low, &(_, y)| low.min(y));
+                let holds = || held.iter().filter(|h| h.wrist == wrist);
+                let lowest = holds().fold(w.translation.y - reach, |low, h| low.min(h.lowest));
                 let w = floor_point(w);
                 for body in [&mut whole, &mut core] {
-                    let out = radius + body.distance(w) - at_rest;
+                    // A cup carried out in front reaches past the wrist: its far side, and
+                    // the fingers round it, went 6 cm into a door's jamb.
+                    let farthest = holds()
+                        .flat_map(|h| &h.outline)
+                        .fold(body.distance(w), |far, &p| far.max(body.distance(p)));
+                    let out = radius + farthest - at_rest;
                     body.add_hand(
                         i,
                         HandReach {

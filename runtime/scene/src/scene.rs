@@ -2,6 +2,7 @@
 
 use crate::action::{ActionId, ActionInfo, ActionSpec, Ending, Event, Generator, Status};
 use crate::blackboard::{Blackboard, Note, Notes, Offer, SignalId};
+use crate::bodies::Held;
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
 use crate::input_pose::InputPose;
@@ -266,16 +267,33 @@ impl Scene {
         crowd.bodies.clear();
         crowd.cores.clear();
         // What each holding hand holds (both hands of a two-handed hold) reaches as low as
-        // its lowest point.
-        let held: Vec<(usize, usize, f64)> = self
+        // its lowest point and as far as its points seen from above.
+        let held: Vec<(usize, Held)> = self
             .held
             .iter()
             .flat_map(|&(o, h)| {
-                let lowest = troupe_nav::Footprint::lowest_of(&self.objects[o]);
-                h.wrists().map(move |wrist| (h.actor, wrist, lowest))
+                let object = &self.objects[o];
+                let points = troupe_nav::footprint::surface_points(
+                    &object.shape,
+                    object.rotation,
+                    object.position,
+                );
+                let lowest = points.iter().map(|p| p.y).fold(f64::INFINITY, f64::min);
+                let outline: Vec<DVec2> = points.iter().map(|p| DVec2::new(p.x, p.z)).collect();
+                h.wrists().map(move |wrist| {
+                    let outline = outline.clone();
+                    (
+                        h.actor,
+                        Held {
+                            wrist,
+                            lowest,
+                            outline,
+                        },
+                    )
+                })
             })
             .collect();
-        let mut holds: Vec<(usize, f64)> = Vec::new();
+        let mut holds: Vec<&Held> = Vec::new();
         for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
             let root = state.globals[0].translation;
             let under_root = DVec2::new(root.x, root.z);
@@ -294,7 +312,7 @@ impl Scene {
             let (whole, core) = match self.space.walking {
                 troupe_nav::Walking::Navigated => {
                     holds.clear();
-                    holds.extend(held.iter().filter(|h| h.0 == i).map(|h| (h.1, h.2)));
+                    holds.extend(held.iter().filter(|h| h.0 == i).map(|h| &h.1));
                     let motion = (facing, velocity, crowd.radii[i]);
                     self.body_joints[i].body(&state.globals, soles, motion, &holds)
                 }
