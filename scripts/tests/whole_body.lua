@@ -1,6 +1,7 @@
 -- Whole-body reach (issue 16): grasp, receive and plan_grasp lean with the spine and, for
--- low targets, bend the knees with the heels down, keeping the centre of mass over the
--- feet, before they call a target out of reach. Each case prints how far the body leans
+-- low targets, bend the knees (the heels rising once the ankles bend no further, the toes
+-- on the floor), keeping the centre of mass over the feet, before they call a target out
+-- of reach. Each case prints how far the body leans
 -- (the trunk's vl5 → vt1 axis, degrees) and how far the pelvis is lowered.
 
 local function report(name, plan)
@@ -14,13 +15,63 @@ local function grasped(ann, obj, opts)
   expect(obj.holder == ann, "holds " .. obj.name)
 end
 
--- Heels down: both ankles where they were standing, within 1 cm.
-local function ankles_stay(ann, before)
-  for i, j in ipairs({ "l_ankle", "r_ankle" }) do
+-- The balls of the feet (the metatarsal joints, which a rising heel rolls on) where they
+-- were standing, within 1 cm.
+local function balls_stay(ann, before)
+  for i, j in ipairs({ "l_metatarsal", "r_metatarsal" }) do
     local p = ann:joint_position(j)
     local d = math.sqrt((p[1] - before[i][1])^2 + (p[2] - before[i][2])^2 + (p[3] - before[i][3])^2)
     expect(d < 0.01, string.format("%s moved %.3f m", j, d))
   end
+end
+
+-- The template's foot, in ankle-to-ball lengths: the heel's back end 0.29 behind the
+-- ankle, the tip of the toes 0.23 ahead of the ball (metatarsal) joint.
+local HEEL, TOES = 0.29, 0.23
+
+-- `actor`'s ankles and balls of the feet as it stands flat on the floor: the feet's shape
+-- for `lowest_sole`.
+local function feet_standing(actor)
+  local feet = {}
+  for _, s in ipairs({ "l_", "r_" }) do
+    feet[#feet + 1] = { side = s, ankle = actor:joint_position(s .. "ankle"),
+                        ball = actor:joint_position(s .. "metatarsal") }
+  end
+  return feet
+end
+
+-- The pitch (radians, toes up positive) of the line from `a` to `b`.
+local function pitch(a, b)
+  return math.atan(b[2] - a[2], math.sqrt((b[1] - a[1])^2 + (b[3] - a[3])^2))
+end
+
+-- The height (m) of the lowest point of `actor`'s soles, below the floor if negative: per
+-- foot, the heel, the sole under the ball joint and under the tip of the toes, placed by
+-- the ankle and ball joints, the foot's pitch from them and the toes' own flexion.
+local function lowest_sole(actor, standing)
+  local low = math.huge
+  for _, f in ipairs(standing) do
+    local a, b = actor:joint_position(f.side .. "ankle"), actor:joint_position(f.side .. "metatarsal")
+    local len = math.sqrt((f.ball[1] - f.ankle[1])^2 + (f.ball[3] - f.ankle[3])^2)
+    local ya, yb = f.ankle[2], f.ball[2]
+    local foot = pitch(a, b) - pitch(f.ankle, f.ball)
+    local toes = foot - actor:dof(f.side .. "metatarsal_flexion")
+    low = math.min(low,
+      a[2] - HEEL * len * math.sin(foot) - ya * math.cos(foot),
+      b[2] - yb * math.cos(foot),
+      b[2] + TOES * len * math.sin(toes) - yb * math.cos(toes))
+  end
+  return low
+end
+
+-- The lowest point of `actor`'s soles over every tick until `done()` is true (or `seconds`).
+local function lowest_sole_until(actor, standing, done, seconds)
+  local lowest = 1
+  run_until(function()
+    lowest = math.min(lowest, lowest_sole(actor, standing))
+    return done()
+  end, seconds)
+  return lowest
 end
 
 -- A cup standing on a 0.9 m table top, 0.30 m in front of `actor`'s right wrist.
@@ -67,17 +118,19 @@ test("a cup on a 0.75 m café table 0.45 m in front of the shoulder", function()
   grasped(ann, cup, { hand = "right" })
 end)
 
-test("a ball on the floor 0.4 m ahead: bends the knees, heels down", function()
+test("a ball on the floor 0.4 m ahead: bends the knees, on the balls of the feet", function()
   local ann = troupe.actor{ name = "ann" }
   local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.1, at = {0, 0.1, 0.4} }
   local plan = troupe.plan_grasp(ann, ball)
   expect(plan ~= nil and plan.crouch > 0, "planned by crouching")
   report("ball on the floor", plan)
-  local ankles = { ann:joint_position("l_ankle"), ann:joint_position("r_ankle") }
+  local ankle = ann:joint_position("l_ankle")[2]
+  local balls = { ann:joint_position("l_metatarsal"), ann:joint_position("r_metatarsal") }
   grasped(ann, ball, {})
   expect(ann:position()[2] < 0.9, "the pelvis went down: " .. ann:position()[2])
   expect(ann:dof("l_knee_flexion") > 0.3, "knees bent: " .. ann:dof("l_knee_flexion"))
-  ankles_stay(ann, ankles)
+  balls_stay(ann, balls)
+  expect(ann:joint_position("l_ankle")[2] > ankle + 0.03, "the heels rose: ankle " .. ann:joint_position("l_ankle")[2])
   -- Walking off with the ball, the body rises smoothly and the feet stay on the floor.
   local w = ann:walk{ to = {0, 0, 1.5}, speed = 0.8 }
   local y, jump, lowest = ann:position()[2], 0, 1
@@ -141,21 +194,54 @@ test("reach leans for a point the arm alone misses, and crouches for a low one",
   expect(fixed:wait() == "failed", "right_arm only does not lean")
 end)
 
--- The lowest of `actor`'s ankles over every tick until `done()` is true (or `seconds`).
-local function lowest_ankle_until(actor, done, seconds)
-  local lowest = 1
+test("a crouch to the floor keeps every sole point on the floor: an adult, a child, a low place", function()
+  -- The ankles bend 30° at most: lowering the pelvis straight down, past 0.1 m, with the
+  -- heels down, the foot turned about the ankle and the toes went 8-11 cm into the floor.
+  local ann = troupe.actor{ name = "ann" }
+  local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.1, at = {0, 0.1, 0.4}, mass = 0.5 }
+  local kid = troupe.actor{ name = "kid", template = "child", at = {3, 0, 0} }
+  local small = troupe.object{ name = "small", shape = "sphere", radius = 0.07, at = {3, 0.07, 0.3}, mass = 0.2 }
+  local cal = troupe.actor{ name = "cal", at = {6, 0, 0} }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {6.25, 0.95, 0.3}, mass = 0.3 }
+  troupe.object{ name = "stand", shape = "cylinder", radius = 0.1, height = 0.9, at = {6.25, 0.45, 0.3},
+                 mass = 10, obstacle = false }
+  troupe.object{ name = "step", shape = "box", size = {0.4, 0.05, 0.3}, at = {6, 0.025, 0.45} }
+  local feet = { ann = feet_standing(ann), kid = feet_standing(kid), cal = feet_standing(cal) }
+  report("a child's ball on the floor", troupe.plan_grasp(kid, small))
+  grasped(cal, cup, { hand = "right" })
+  local g = { ann = ann:grasp{ object = ball }, kid = kid:grasp{ object = small },
+              cal = cal:place{ object = cup, at = {6, 0.1, 0.45} } }
+  local low = { ann = 1, kid = 1, cal = 1 }
+  local deepest = { ann = 0, kid = 0, cal = 0 }
+  local actors = { ann = ann, kid = kid, cal = cal }
   run_until(function()
-    lowest = math.min(lowest, actor:joint_position("l_ankle")[2], actor:joint_position("r_ankle")[2])
-    return done()
-  end, seconds)
-  return lowest
-end
+    local active = false
+    for name, a in pairs(actors) do
+      low[name] = math.min(low[name], lowest_sole(a, feet[name]))
+      deepest[name] = math.min(deepest[name], a:dof("root_y"))
+      active = active or g[name].status == "active"
+    end
+    return not active
+  end, 6)
+  run_until(function()
+    for name, a in pairs(actors) do low[name] = math.min(low[name], lowest_sole(a, feet[name])) end
+    return false
+  end, 0.5)
+  for _, name in ipairs({ "ann", "kid", "cal" }) do
+    print(string.format("%s (%s, crouched %.2f m): the lowest sole point %.3f m", name,
+                        g[name].kind, -deepest[name], low[name]))
+    expect(g[name].status == "completed", name .. ": " .. g[name].status .. " " .. tostring(g[name].error))
+    expect(deepest[name] < -0.25, string.format("%s crouched: %.3f m", name, deepest[name]))
+    expect(low[name] > -0.005, string.format("%s's soles stay on the floor: %.3f m", name, low[name]))
+  end
+end)
 
 test("a crouch keeps the feet on the floor however it ends: stopped, completed, placing", function()
   -- A cup on a 0.75 m table at the left: the grasp crouches. Interpolating the knees with
   -- the pelvis, the soles sank 10 cm halfway and stayed there when the grasp stopped.
   local ann = troupe.actor{ name = "ann" }
-  local standing = ann:joint_position("l_ankle")[2]
+  local feet = feet_standing(ann)
   troupe.object{ name = "table", shape = "box", size = {0.6, 0.75, 0.5}, at = {-0.8, 0.375, 0.45} }
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
                              at = {-0.65, 0.8, 0.35} }
@@ -163,34 +249,37 @@ test("a crouch keeps the feet on the floor however it ends: stopped, completed, 
   expect(plan ~= nil and plan.crouch > 0, "the grasp crouches")
   local g = ann:grasp{ object = cup, hand = "left", duration = 1.2 }
   local t0 = troupe.time()
-  local low = lowest_ankle_until(ann, function() return troupe.time() - t0 >= 0.5 end, 1)
+  local low = lowest_sole_until(ann, feet, function() return troupe.time() - t0 >= 0.5 end, 1)
   g:stop()
-  low = math.min(low, lowest_ankle_until(ann, function() return false end, 1))
-  print(string.format("stopped crouching grasp: pelvis %.3f m, lowest ankle %.3f m (standing %.3f)",
-                      ann:position()[2], low, standing))
+  low = math.min(low, lowest_sole_until(ann, feet, function() return false end, 1))
+  print(string.format("stopped crouching grasp: pelvis %.3f m, lowest sole point %.3f m",
+                      ann:position()[2], low))
   expect(ann:position()[2] < 0.95, "stopped halfway down: " .. ann:position()[2])
-  expect(low > standing - 0.01, string.format("the soles stay on the floor: ankle %.3f m, standing %.3f", low, standing))
+  expect(low > -0.005, string.format("the soles stay on the floor: %.3f m", low))
 
   -- Completed, then put down on a low table: every tick, the feet stay where they stand.
   local bob = troupe.actor{ name = "bob", at = {3, 0, 0} }
+  feet = feet_standing(bob)
   troupe.object{ name = "table2", shape = "box", size = {0.6, 0.75, 0.5}, at = {2.2, 0.375, 0.45} }
   local cup2 = troupe.object{ name = "cup2", shape = "cylinder", radius = 0.04, height = 0.1,
                               at = {2.35, 0.8, 0.35} }
   local g2 = bob:grasp{ object = cup2, hand = "left" }
-  low = lowest_ankle_until(bob, function() return g2.status ~= "active" end, 4)
+  low = lowest_sole_until(bob, feet, function() return g2.status ~= "active" end, 4)
   expect(g2.status == "completed", "grasp: " .. tostring(g2.error))
   local p = bob:place{ object = cup2, at = {2.3, 0.8, 0.5} }
-  low = math.min(low, lowest_ankle_until(bob, function() return p.status ~= "active" end, 4))
+  low = math.min(low, lowest_sole_until(bob, feet, function() return p.status ~= "active" end, 4))
   expect(p.status == "completed", "place: " .. tostring(p.error))
-  print(string.format("crouching grasp and place: lowest ankle %.3f m", low))
-  expect(low > standing - 0.01, string.format("grasp and place: ankle %.3f m, standing %.3f", low, standing))
+  print(string.format("crouching grasp and place: lowest sole point %.3f m", low))
+  expect(low > -0.005, string.format("grasp and place: the lowest sole point %.3f m", low))
 
   -- A hand reach to a low point crouches along its path, the soles on the floor too.
   local cal = troupe.actor{ name = "cal", at = {6, 0, 0} }
+  feet = feet_standing(cal)
   local r = cal:reach{ hand = "right", target = {5.8, 0.25, 0.35}, duration = 1.2 }
-  low = lowest_ankle_until(cal, function() return r.status ~= "active" end, 3)
+  low = lowest_sole_until(cal, feet, function() return r.status ~= "active" end, 3)
   expect(r.status == "completed", "reach: " .. tostring(r.error))
-  expect(low > standing - 0.01, string.format("reach: ankle %.3f m, standing %.3f", low, standing))
+  print(string.format("crouching reach: lowest sole point %.3f m", low))
+  expect(low > -0.005, string.format("reach: the lowest sole point %.3f m", low))
 end)
 
 test("a box held in both hands is placed on a sideboard, both hands on it all the way", function()

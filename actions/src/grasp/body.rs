@@ -1,14 +1,15 @@
 //! Whole-body reach: the posture that brings one or two wrists to their goals, as a
 //! person does — the arm first; then the spine, leaning and twisting; then, for a low
 //! target, the legs, lowering the pelvis straight down with the knees bent and the feet
-//! flat where they stand — keeping the centre of mass over the feet.
+//! where they stand (flat, then the heels rising once the ankles bend no further) —
+//! keeping the centre of mass over the feet.
 //!
 //! Each [`Stage`] widens the DOFs the inverse kinematics may move (within the action's
 //! scope); a posture counts only if the wrists reach their goals and the centre of mass,
 //! projected on the floor, stays within the feet's support rectangle.
 
 use crate::walk::Rig;
-use troupe_body::glam::DVec3;
+use troupe_body::glam::{DQuat, DVec2, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
 use troupe_body::kinematics::{center_of_mass, forward_kinematics};
@@ -37,7 +38,8 @@ pub enum Stage {
     /// The arms and the spine (lean and twist).
     Spine,
     /// The arms and the spine, with the pelvis lowered by the given step of
-    /// [`CROUCH_DEPTHS`] (knees bent, heels down).
+    /// [`CROUCH_DEPTHS`] (knees bent, the feet on the floor), or as deep as the legs go
+    /// when that is less.
     Crouch(usize),
 }
 
@@ -56,7 +58,7 @@ pub struct Reached {
 
 /// Why a stage did not reach: the wrists' remaining distance and angle, or a balance
 /// failure.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub enum Missed {
     /// The best remaining distance (m) and angle (rad) over the goals.
     By(f64, f64),
@@ -64,11 +66,20 @@ pub enum Missed {
     Balance(f64),
     /// The wrists reached, but only by leaning more than [`MAX_LEAN`] (radians).
     Lean(f64),
+    /// The crouch step was deeper than the legs go with the feet on the floor (they go
+    /// `deepest` metres): tried that deep instead, it missed as `then` says (`None`: a
+    /// shallower step already had tried it).
+    Legs {
+        /// How deep (metres) the legs go at most.
+        deepest: f64,
+        /// How the crouch as deep as the legs go missed.
+        then: Option<Box<Missed>>,
+    },
 }
 
-/// Lowers the pelvis of `q` by `depth` (raises it for a negative one) with the feet flat
-/// where they are (closed-form leg IK of the walk's rig); false, `q` partly changed, if a
-/// leg cannot reach its foot.
+/// Lowers the pelvis of `q` by `depth` (raises it for a negative one) with each foot
+/// where it stands: flat while its ankle bends far enough, else on the ball of the foot
+/// ([`stand_leg`]); false, `q` partly changed, if a leg cannot reach its foot.
 fn lower_pelvis(sk: &Skeleton, rig: &Rig, root_y: usize, q: &mut [f64], depth: f64) -> bool {
     let mut g = vec![Transform::IDENTITY; sk.joints().len()];
     forward_kinematics(sk, q, &mut g);
@@ -79,22 +90,18 @@ fn lower_pelvis(sk: &Skeleton, rig: &Rig, root_y: usize, q: &mut [f64], depth: f
     q[root_y] -= depth;
     for (leg, l) in rig.legs.iter().enumerate() {
         let ankle_joint = l.joints[0];
-        let ankle = g[ankle_joint].translation;
         let fwd = g[ankle_joint].rotation * DVec3::Z;
         let yaw = fwd.x.atan2(fwd.z);
+        // Where the ankle of the foot put flat would be: a crouch that starts with the
+        // heels raised (one already crouched) raises them from there, not again.
+        let pitch = fwd.y.atan2(fwd.x.hypot(fwd.z));
+        let ankle = g[ankle_joint].translation - rig.ankle_from_plant(leg, DVec2::ZERO, yaw, pitch)
+            + rig.ankle_from_plant(leg, DVec2::ZERO, yaw, 0.0);
         let hip = rig.hip_position(leg, root, heading, pelvis_rot);
-        let (vals, miss) = rig.solve_leg(
-            leg,
-            pelvis_rot,
-            heading + pelvis[2],
-            None,
-            hip,
-            ankle,
-            (yaw, 0.0, 0.0),
-        );
-        if miss > 1e-3 {
+        let Some(vals) = stand_leg(rig, leg, pelvis_rot, heading + pelvis[2], hip, ankle, yaw)
+        else {
             return false;
-        }
+        };
         for (i, &d) in l.dofs.iter().enumerate() {
             q[d] = vals[i];
         }
@@ -102,11 +109,79 @@ fn lower_pelvis(sk: &Skeleton, rig: &Rig, root_y: usize, q: &mut [f64], depth: f
     true
 }
 
+/// The DOF values of leg `leg` (in the rig's order) with its hip at `hip` (the pelvis at
+/// world rotation `pelvis`, yaw `pelvis_yaw`) and its foot, heading `yaw`, standing where
+/// a flat foot has its ankle at `ankle`: flat while the ankle's dorsiflexion stays within
+/// its limit, else with the heel raised just enough, the foot rolling on the ball joint
+/// and the toes flat on the floor, as a person squats. `None` when the leg cannot reach,
+/// or only past a joint's limit (the knee folded past 150°, the heel raised past what the
+/// toes bend): the pelvis is lower than the legs go with the feet on the floor.
+fn stand_leg(
+    rig: &Rig,
+    leg: usize,
+    pelvis: DQuat,
+    pelvis_yaw: f64,
+    hip: DVec3,
+    ankle: DVec3,
+    yaw: f64,
+) -> Option<[f64; 7]> {
+    let l = &rig.legs[leg];
+    let flat = rig.ankle_from_plant(leg, DVec2::ZERO, yaw, 0.0);
+    // The heel up by `rise` (radians): the ankle turns up about the ball joint, and the
+    // toes bend back by as much to stay on the floor.
+    let solve = |rise: f64| {
+        let at = ankle + rig.ankle_from_plant(leg, DVec2::ZERO, yaw, -rise) - flat;
+        rig.solve_leg(leg, pelvis, pelvis_yaw, None, hip, at, (yaw, -rise, -rise))
+    };
+    // Every DOF within its limits (a hair over: the limits are where the posture clamps),
+    // and the ankle reached.
+    let fits = |(vals, miss): ([f64; 7], f64)| {
+        let within =
+            (vals.iter().zip(&l.limits)).all(|(v, (lo, hi))| *v > lo - 1e-6 && *v < hi + 1e-6);
+        (within && miss <= 1e-3).then_some(vals)
+    };
+    // The templates' ankle flexion is positive toward dorsiflexion (its 30° bound).
+    let dorsiflexion = l.limits[4].1;
+    let (vals, miss) = solve(0.0);
+    if vals[4] <= dorsiflexion {
+        return fits((vals, miss));
+    }
+    // As far as the toes bend back (their DOF's sign read off a solve).
+    let toes = l.limits[6];
+    let most = if solve(1.0).0[6] < 0.0 {
+        -toes.0
+    } else {
+        toes.1
+    };
+    if solve(most).0[4] > dorsiflexion {
+        return None;
+    }
+    // Raising the heel takes the shank's lean off the ankle: bisect for the least rise
+    // that keeps the ankle within its limit.
+    let (mut lo, mut hi) = (0.0, most);
+    while hi - lo > 1e-7 {
+        let mid = 0.5 * (lo + hi);
+        if solve(mid).0[4] > dorsiflexion {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let (vals, miss) = solve(hi);
+    // A leg folded so far that the ankle's angle jumps (the knee near straight back)
+    // brackets a jump, not the limit.
+    if (vals[4] - dorsiflexion).abs() > 1e-3 {
+        return None;
+    }
+    fits((vals, miss))
+}
+
 /// The legs of a crouch on its way down (or back up): an action that moves `root_y`
 /// between two heights by interpolation solves the legs again for each height, the feet
-/// flat where they stood at its start. Interpolated too, the knees straighten faster than
-/// the pelvis rises (the leg's length is not linear in the knee's angle) and the soles
-/// went up to 10 cm into the floor halfway, and stayed there if the action stopped then.
+/// where they stood at its start (see [`stand_leg`]). Interpolated too, the knees
+/// straighten faster than the pelvis rises (the leg's length is not linear in the knee's
+/// angle) and the soles went up to 10 cm into the floor halfway, and stayed there if the
+/// action stopped then.
 pub struct CrouchLegs {
     rig: Rig,
     root_y: usize,
@@ -149,7 +224,7 @@ impl CrouchLegs {
         self.offset.iter().map(|&(d, _)| d)
     }
 
-    /// Sets the legs of `q` for its `root_y`: the feet flat where they stood at the start.
+    /// Sets the legs of `q` for its `root_y`: the feet where they stood at the start.
     /// A height the legs cannot reach leaves them as they are.
     pub fn apply(&mut self, skeleton: &Skeleton, q: &mut [f64]) {
         let depth = self.start[self.root_y] - q[self.root_y];
@@ -182,6 +257,11 @@ pub struct Shortfall {
     /// The least distance (metres) the centre of mass went beyond the feet, over the
     /// postures that reached but would fall.
     pub balance: Option<f64>,
+    /// How deep (metres) the legs crouch at most with the feet on the floor, when a
+    /// deeper crouch was wanted; with the least miss, lean and centre-of-mass distance
+    /// (as above) of the postures crouched that deep, for the error to name the legs when
+    /// it gives one of those.
+    pub legs: Option<(f64, [Option<f64>; 3])>,
 }
 
 impl Shortfall {
@@ -195,11 +275,28 @@ impl Shortfall {
             Missed::By(..) => {}
             Missed::Lean(lean) => self.lean = least(self.lean, lean),
             Missed::Balance(by) => self.balance = least(self.balance, by),
+            Missed::Legs { deepest, then } => {
+                let legs = self.legs.get_or_insert((deepest, [None; 3]));
+                legs.0 = legs.0.min(deepest);
+                if let Some(missed) = then {
+                    let figures = &mut legs.1;
+                    match *missed {
+                        Missed::By(miss, angle) if (miss + angle * 0.1).is_finite() => {
+                            figures[0] = least(figures[0], miss + angle * 0.1);
+                        }
+                        Missed::Lean(lean) => figures[1] = least(figures[1], lean),
+                        Missed::Balance(by) => figures[2] = least(figures[2], by),
+                        _ => {}
+                    }
+                    self.note(*missed);
+                }
+            }
         }
     }
 
     /// What limited the reach, for an error: the postures that reached but leaned too
-    /// far or would fall, then how near the others came (`best`: "the best grasp").
+    /// far or would fall, then how near the others came (`best`: "the best grasp"), and
+    /// the legs' deepest crouch when it limited that.
     pub fn describe(&self, best: &str) -> String {
         let mut parts = Vec::new();
         if let Some(lean) = self.lean {
@@ -219,6 +316,17 @@ impl Shortfall {
             (Some(miss), false) => parts.push(format!("otherwise it misses by {miss:.3} m")),
             (None, true) => parts.push("no posture reaches it".into()),
             (None, false) => {}
+        }
+        // The legs limited it when the figure given came from as deep as they go (or no
+        // posture was tried that deep: they crouch no deeper than a shallower step).
+        let shown = [self.miss, self.lean, self.balance];
+        if let Some((depth, _)) = self.legs.filter(|(_, figures)| {
+            figures.iter().all(Option::is_none)
+                || (figures.iter().zip(shown)).any(|(f, s)| f.is_some() && *f == s)
+        }) {
+            parts.push(format!(
+                "the legs crouch {depth:.2} m at most with the feet on the floor"
+            ));
         }
         parts.join("; ")
     }
@@ -328,15 +436,48 @@ impl<'a> BodyReach<'a> {
         stage: Stage,
         tolerance: (f64, f64),
     ) -> crate::error::Result<Result<Reached, Missed>> {
-        let sk = self.skeleton;
         let mut q = q0.to_vec();
         let mut crouch = 0.0;
+        let mut deepest = None;
         if let Stage::Crouch(i) = stage {
             crouch = CROUCH_DEPTHS[i];
             if !self.crouch(&mut q, crouch) {
-                return Ok(Err(Missed::By(f64::INFINITY, 0.0)));
+                // Deeper than the legs go with the feet on the floor: the first such step
+                // crouches as deep as they go instead, the later ones not at all.
+                let most = self.deepest_crouch(q0, crouch);
+                let above = if i == 0 { 0.0 } else { CROUCH_DEPTHS[i - 1] };
+                q.copy_from_slice(q0);
+                if most <= above + 1e-3 || !self.crouch(&mut q, most) {
+                    return Ok(Err(Missed::Legs {
+                        deepest: most,
+                        then: None,
+                    }));
+                }
+                crouch = most;
+                deepest = Some(most);
             }
         }
+        let result = self.solve_stage(q0, q, tasks, stage, tolerance, crouch)?;
+        Ok(match (result, deepest) {
+            (Err(missed), Some(deepest)) => Err(Missed::Legs {
+                deepest,
+                then: Some(Box::new(missed)),
+            }),
+            (result, _) => result,
+        })
+    }
+
+    /// The rest of [`BodyReach::reach_tasks`], from posture `q` crouched by `crouch`.
+    fn solve_stage(
+        &self,
+        q0: &[f64],
+        mut q: Vec<f64>,
+        tasks: &[(IkTask, Scope)],
+        stage: Stage,
+        tolerance: (f64, f64),
+        crouch: f64,
+    ) -> crate::error::Result<Result<Reached, Missed>> {
+        let sk = self.skeleton;
         let mut moving = Scope::EMPTY;
         for (task, arm) in tasks {
             let mut scope = *arm;
@@ -396,11 +537,28 @@ impl<'a> BodyReach<'a> {
         Ok(g[sk.joint("vt1")?].translation - g[sk.joint("vl5")?].translation)
     }
 
-    /// Lowers the pelvis of `q` by `depth` with the feet flat where they are; false if a
-    /// leg cannot reach its foot.
+    /// Lowers the pelvis of `q` by `depth` with the feet where they are (see
+    /// [`stand_leg`]); false if the legs cannot with the feet on the floor.
     fn crouch(&self, q: &mut [f64], depth: f64) -> bool {
         let Some(rig) = &self.rig else { return false };
         lower_pelvis(self.skeleton, rig, self.root_y, q, depth)
+    }
+
+    /// The deepest (metres, to a millimetre) the pelvis of `q0` goes down, at most
+    /// `below`, with the feet on the floor.
+    fn deepest_crouch(&self, q0: &[f64], below: f64) -> f64 {
+        let mut q = q0.to_vec();
+        let (mut lo, mut hi) = (0.0, below);
+        while hi - lo > 1e-3 {
+            let mid = 0.5 * (lo + hi);
+            q.copy_from_slice(q0);
+            if self.crouch(&mut q, mid) {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        lo
     }
 
     /// How far (metres) the centre of mass lies outside the feet's support rectangle, in
@@ -425,5 +583,139 @@ impl<'a> BodyReach<'a> {
         let (f, s) = (com.dot(fwd), com.dot(left));
         let beyond = |v: f64, lo: f64, hi: f64| (lo - v).max(v - hi).max(0.0);
         beyond(f, f0 - back, f1 + front).max(beyond(s, s0 - 0.04, s1 + 0.04))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_body::template::default_skeleton;
+
+    /// Each foot's heel, sole under the ball joint and sole under the tip of the toes
+    /// (the rig's points) in posture `g`: their heights.
+    fn soles(rig: &Rig, g: &[Transform]) -> Vec<[f64; 3]> {
+        (rig.legs.iter())
+            .map(|l| {
+                let [ankle, ball] = l.joints;
+                let heel = DVec3::new(0.0, -rig.ankle_height, l.heel.z);
+                [
+                    g[ankle].transform_point(heel).y,
+                    g[ball].transform_point(DVec3::new(0.0, -l.ball.y, 0.0)).y,
+                    g[ball].transform_point(l.toe_sole).y,
+                ]
+            })
+            .collect()
+    }
+
+    #[test]
+    fn past_the_ankles_limit_a_crouch_raises_the_heels_with_the_toes_on_the_floor() {
+        for (template, depths) in [
+            ("adult", [0.05, 0.2, 0.4, 0.5]),
+            ("child", [0.05, 0.1, 0.2, 0.3]),
+        ] {
+            let sk = default_skeleton(template).unwrap();
+            let rig = Rig::new(&sk).unwrap();
+            let root_y = sk.dof("root_y").unwrap();
+            let q0 = vec![0.0; sk.dof_count()];
+            let mut g0 = vec![Transform::IDENTITY; sk.joints().len()];
+            forward_kinematics(&sk, &q0, &mut g0);
+            let standing = soles(&rig, &g0);
+            for depth in depths {
+                let mut q = q0.clone();
+                assert!(
+                    lower_pelvis(&sk, &rig, root_y, &mut q, depth),
+                    "{template} {depth}"
+                );
+                let mut g = g0.clone();
+                forward_kinematics(&sk, &q, &mut g);
+                for (leg, l) in rig.legs.iter().enumerate() {
+                    for (i, &d) in l.dofs.iter().enumerate() {
+                        let (lo, hi) = l.limits[i];
+                        assert!(
+                            q[d] > lo - 1e-6 && q[d] < hi + 1e-6,
+                            "{template} {depth}: DOF {i} at {}",
+                            q[d]
+                        );
+                    }
+                    let ball = g[l.joints[1]].translation;
+                    assert!(
+                        (ball - g0[l.joints[1]].translation).length() < 1e-6,
+                        "{template} {depth}: the ball moved to {ball}"
+                    );
+                    let [heel, under_ball, tip] = soles(&rig, &g)[leg];
+                    // The foot rolls on the ball joint: the sole under it tilts up behind.
+                    assert!(
+                        under_ball > -1e-9 && tip.abs() < 1e-3,
+                        "{template} {depth}: ball {under_ball}, toes {tip}"
+                    );
+                    assert!(heel > -1e-9, "{template} {depth}: heel {heel}");
+                    let ankle = q[l.dofs[4]];
+                    if depth == 0.05 {
+                        // Shallow, the ankle bends: the foot flat as it stood.
+                        assert!(
+                            (heel - standing[leg][0]).abs() < 1e-6 && ankle < l.limits[4].1 - 0.01,
+                            "{template}: heel {heel}"
+                        );
+                    } else {
+                        // Deeper, the ankle at its limit and the heel off the floor.
+                        assert!(
+                            (ankle - l.limits[4].1).abs() < 1e-3 && heel > 0.02,
+                            "{template} {depth}: ankle {ankle}, heel {heel}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_crouch_deeper_than_the_knees_fold_is_refused_and_the_reach_goes_as_deep_as_they_do() {
+        for (template, too_deep, most) in [("adult", 0.6, (0.5, 0.6)), ("child", 0.4, (0.3, 0.4))] {
+            let sk = default_skeleton(template).unwrap();
+            let rig = Rig::new(&sk).unwrap();
+            let root_y = sk.dof("root_y").unwrap();
+            let q0 = vec![0.0; sk.dof_count()];
+            let mut q = q0.clone();
+            assert!(
+                !lower_pelvis(&sk, &rig, root_y, &mut q, too_deep),
+                "{template}"
+            );
+            let body = BodyReach::new(&sk, BodyReach::body_scope(&sk).unwrap()).unwrap();
+            let deepest = body.deepest_crouch(&q0, too_deep);
+            assert!(
+                deepest > most.0 && deepest < most.1,
+                "{template}: {deepest}"
+            );
+            let mut q = q0.clone();
+            assert!(body.crouch(&mut q, deepest));
+            // The knees then fold nearly as far as they go.
+            let l = &rig.legs[0];
+            assert!(
+                q[l.dofs[3]] > l.limits[3].1 - 0.05,
+                "{template}: knee {}",
+                q[l.dofs[3]]
+            );
+        }
+    }
+
+    #[test]
+    fn the_error_names_the_legs_when_the_deepest_crouch_gave_its_figure() {
+        let legs = |miss: f64| Missed::Legs {
+            deepest: 0.55,
+            then: Some(Box::new(Missed::By(miss, 0.0))),
+        };
+        let mut limited = Shortfall::default();
+        limited.note(Missed::By(0.08, 0.0));
+        limited.note(legs(0.04));
+        let said = limited.describe("the best grasp");
+        assert_eq!(said, "the best grasp misses by 0.040 m; the legs crouch 0.55 m at most with the feet on the floor");
+        // Crouching nearer did not help: the legs are not what limited it.
+        let mut not = Shortfall::default();
+        not.note(Missed::By(0.01, 0.0));
+        not.note(legs(0.04));
+        assert_eq!(
+            not.describe("the best grasp"),
+            "the best grasp misses by 0.010 m"
+        );
     }
 }

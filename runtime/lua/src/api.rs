@@ -444,7 +444,8 @@ fn sequence_track<'a>(method: &str, seq: &'a Sequence, dof: &str) -> mlua::Resul
 }
 
 /// Resolves a path from a script: as given if it exists, else relative to the scene
-/// file. A file found in neither place is an error that lists both.
+/// file. A file found in neither place is an error that lists both (once when they are
+/// the same: a scene run from its own folder).
 pub fn resolve_path(base_dir: &Path, path: &str) -> mlua::Result<std::path::PathBuf> {
     let p = Path::new(path);
     if p.is_absolute() || p.exists() {
@@ -454,14 +455,11 @@ pub fn resolve_path(base_dir: &Path, path: &str) -> mlua::Result<std::path::Path
     if beside.exists() {
         return Ok(beside);
     }
-    let tried = if p.is_absolute() {
-        crate::modules::shown(p)
+    let (given, beside) = (crate::modules::shown(p), crate::modules::shown(&beside));
+    let tried = if given == beside {
+        format!("{given}, beside the scene")
     } else {
-        format!(
-            "{} and, beside the scene, {}",
-            crate::modules::shown(p),
-            crate::modules::shown(&beside)
-        )
+        format!("{given} and, beside the scene, {beside}")
     };
     Err(lua_err(format!(
         "file `{path}` not found; looked for {tried}"
@@ -919,4 +917,33 @@ pub(crate) fn install(lua: &Lua) -> mlua::Result<()> {
 /// Turns a runtime error into a Lua error (for builders in other crates).
 pub fn to_lua_error(e: Error) -> mlua::Error {
     lua_err(e)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_missing_file_lists_each_place_it_looked_once() {
+        let here = std::env::current_dir().unwrap();
+        let message = |base: &Path| match resolve_path(base, "no_such_clip.bvh") {
+            Err(mlua::Error::RuntimeError(m)) => m,
+            other => panic!("{other:?}"),
+        };
+        // The scene's folder is where troupe runs: one place, named once.
+        let once = message(&here);
+        let path = here.join("no_such_clip.bvh").display().to_string();
+        assert_eq!(
+            once,
+            format!("file `no_such_clip.bvh` not found; looked for {path}, beside the scene")
+        );
+        // Elsewhere: both.
+        let elsewhere = here.join("no_such_folder");
+        let both = message(&elsewhere);
+        let beside = elsewhere.join("no_such_clip.bvh").display().to_string();
+        assert_eq!(
+            both,
+            format!("file `no_such_clip.bvh` not found; looked for {path} and, beside the scene, {beside}")
+        );
+    }
 }
