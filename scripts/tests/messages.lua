@@ -189,29 +189,6 @@ test("a character file not found, caught, is the message alone", function()
   expect(not e:find("runtime error", 1, true), e)
 end)
 
-test("a table raised with error says where, and what it holds", function()
-  -- It said `table: 0x55b593c03550`, with no place: Lua prints a table so, and adds its
-  -- place to a string only.
-  local b = troupe.actor{ name = "t1" }:behave(function() wait(0.1); error({ code = 42 }) end)
-  local _, err = b:wait()
-  expect(err:find("^[^\n]*messages%.lua:%d+: error value is a table { code = 42 }\n"), err)
-  expect(not err:find("table: 0x", 1, true), err)
-  -- The traceback is Lua's error's, as before.
-  expect(err:find("[C]: in function 'error'", 1, true) and not err:find("prelude", 1, true), err)
-  local m = troupe.actor{ name = "t2" }:behave(function() error({ message = "the cup is gone", code = 3 }) end)
-  local _, said = m:wait()
-  expect(said:find('^[^\n]*messages%.lua:%d+: the cup is gone %(error value is a table { message = "the cup is gone", code = 3 }%)'), said)
-  -- Otherwise error is Lua's: pcall gets the table itself, and a string names the place
-  -- its level says.
-  local ok, e = pcall(error, { code = 7 })
-  expect(not ok and type(e) == "table" and e.code == 7, "the table itself: " .. tostring(e))
-  local function refuse() error("refused", 2) end
-  local _, here = pcall(function() refuse() end)
-  local _, there = pcall(function() error("refused") end)
-  local line = function(e) return tonumber(e:match("^[^\n]*messages%.lua:(%d+): refused$")) end
-  expect(line(here) and line(there) == line(here) + 1, "the caller's line, then its own: " .. here .. " / " .. there)
-end)
-
 test("limits name the limit and the place", function()
   local b = troupe.actor{ name = "loop" }:behave(function() while true do end end)
   local _, err = b:wait()

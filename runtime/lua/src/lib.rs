@@ -215,7 +215,6 @@ impl Director {
         lua.set_named_registry_value("troupe.behavior_wait", wait)?;
         globals.raw_set("__troupe_behavior_wait", Value::Nil)?;
         globals.raw_set("__troupe_limit", Value::Nil)?;
-        globals.raw_set("__troupe_raised", Value::Nil)?;
         let own: Function = globals.get("__troupe_own_thread")?;
         lua.set_named_registry_value("troupe.own_thread", own)?;
         globals.raw_set("__troupe_own_thread", Value::Nil)?;

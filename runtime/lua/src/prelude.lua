@@ -38,18 +38,6 @@ coroutine.close = function(co)
   return caught(raw_close(co))
 end
 
--- Lua prints a table raised with `error` as `table: 0x…` and adds its place to a string
--- only: a behavior ended by `error({ code = 42 })` said no more. This `error` notes the
--- table and where it was raised, for the failure to say both (sandbox.rs); otherwise it
--- is Lua's, the level counted from its caller.
-local raw_error, note_raised = error, __troupe_raised
-_G.error = function(value, level)
-  if type(value) == "table" then note_raised(value, level) end
-  if level == nil then level = 1 end
-  if type(level) == "number" and level > 0 then level = level + 1 end
-  raw_error(value, level)
-end
-
 -- Lua 5.4's coroutine.wrap puts the place of the call that resumed it before a string
 -- error raised inside, which names its own place already: `s.lua:22: s.lua:22: wait() …`.
 -- This one passes the error on as it was raised (as Lua 5.3 did).

@@ -8,11 +8,6 @@
 //! prelude's `pcall`, `xpcall`, `coroutine.resume` and `coroutine.close` re-raise the
 //! limit's message (see `prelude.lua`) instead of returning it. The message names the
 //! limit and the `file:line` where it was hit.
-//!
-//! A table raised with `error` and not caught would end as Lua prints the value, `table:
-//! 0x…`, without a place (Lua adds its place to a string only): the prelude's `error`
-//! notes the table and where it was raised ([`Sandbox::note_raised`]), and the failure
-//! says both (`file:line: error value is a table { code = 42 }`).
 
 use mlua::{HookTriggers, Lua, MultiValue, Value, VmState};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -56,13 +51,7 @@ pub(crate) struct Sandbox {
     /// Whether the current memory limit is the scene's heap cap rather than the resume's
     /// allowance (to name the right one).
     heap_bound: std::sync::atomic::AtomicBool,
-    /// The last table the resume under way raised with `error` (itself in the registry,
-    /// at [`RAISED`]): its address and where it was raised.
-    raised: Mutex<Option<(String, String)>>,
 }
-
-/// The registry slot of the last table raised with `error`.
-const RAISED: &str = "troupe.raised";
 
 impl Sandbox {
     /// A sandbox of `limits`, its instruction hook installed on `lua`.
@@ -72,16 +61,7 @@ impl Sandbox {
             instructions: AtomicU64::new(0),
             tripped: Mutex::new(None),
             heap_bound: false.into(),
-            raised: Mutex::new(None),
         });
-        // Made now, the slot takes a table later without allocating (`error` may be
-        // raising because memory ran out).
-        lua.set_named_registry_value(RAISED, false)?;
-        let noted = sandbox.clone();
-        let note = lua.create_function(move |lua, (value, level): (mlua::Table, Value)| {
-            noted.note_raised(lua, value, level)
-        })?;
-        lua.globals().raw_set("__troupe_raised", note)?;
         let hook = sandbox.clone();
         lua.set_global_hook(
             HookTriggers::new().every_nth_instruction(HOOK_EVERY),
@@ -197,73 +177,6 @@ impl Sandbox {
         }
     }
 
-    /// Notes `table`, raised by the prelude's `error` with `level` (as Lua's: where, 1 the
-    /// function that called `error`, 0 nowhere), for the failure it may end in.
-    fn note_raised(&self, lua: &Lua, table: mlua::Table, level: Value) -> mlua::Result<()> {
-        let level = match level {
-            Value::Integer(l) => l,
-            Value::Number(l) if l.fract() == 0.0 => l as i64,
-            _ => 1,
-        };
-        // Level 0 is this function, 1 the prelude's `error`, 2 its caller.
-        let place = match usize::try_from(level) {
-            Ok(level) if level > 0 => lua
-                .inspect_stack(level + 1, |d| {
-                    location(d.source().short_src.as_deref(), d.current_line())
-                })
-                .unwrap_or_default(),
-            _ => String::new(),
-        };
-        let address = format!("{:p}", table.to_pointer());
-        lua.set_named_registry_value(RAISED, table)?;
-        *self.raised.lock().unwrap_or_else(|p| p.into_inner()) = Some((address, place));
-        Ok(())
-    }
-
-    /// The failure `message` (`table: 0x…` and a traceback) of the table last raised, in
-    /// words: `file:line: error value is a table { code = 42 }`, or, with a string
-    /// `message` field, `file:line: the cup is gone (error value is a table { message =
-    /// "the cup is gone", code = 3 })`. Any other message as it is, its traceback as
-    /// Lua's own `error` left it (see [`lua_error_traceback`]).
-    fn explain(&self, lua: &Lua, message: String) -> String {
-        let message = lua_error_traceback(&message);
-        let (first, rest) = message.split_once('\n').unwrap_or((&message, ""));
-        let raised = self
-            .raised
-            .lock()
-            .unwrap_or_else(|p| p.into_inner())
-            .clone();
-        let Some((address, place)) = raised else {
-            return message;
-        };
-        let table = lua.named_registry_value::<mlua::Table>(RAISED);
-        let (Some(got), Ok(table)) = (first.strip_prefix("table: "), table) else {
-            return message;
-        };
-        if got != address {
-            return message;
-        }
-        let (fields, lead) = table_fields(&table);
-        let value = format!("error value is a table {fields}");
-        let first = match lead {
-            Some(lead) => format!("{place}{lead} ({value})"),
-            None => format!("{place}{value}"),
-        };
-        if rest.is_empty() {
-            first
-        } else {
-            format!("{first}\n{rest}")
-        }
-    }
-
-    /// Forgets the table last raised (once a resume has ended).
-    fn forget_raised(&self, lua: &Lua) {
-        let mut raised = self.raised.lock().unwrap_or_else(|p| p.into_inner());
-        if raised.take().is_some() {
-            let _ = lua.set_named_registry_value(RAISED, false);
-        }
-    }
-
     /// Runs `f` (one resume) under the instruction budget, the memory allowance and the
     /// heap cap. A limit hit inside comes back as the error, with its location, whatever
     /// the script did to catch it.
@@ -290,7 +203,7 @@ impl Sandbox {
             (_, Some(msg)) => Failure::Limit(msg),
             (Err(e), None) => match root(&e) {
                 mlua::Error::MemoryError(_) => Failure::Memory(self.memory_message(lua)),
-                _ => Failure::Error(self.explain(lua, describe(&e))),
+                _ => Failure::Error(describe(&e)),
             },
         };
         self.relax(lua, Err(failure))
@@ -299,7 +212,6 @@ impl Sandbox {
     /// Between resumes, only the heap cap holds; memory a failed resume left is
     /// collected.
     fn relax<R>(&self, lua: &Lua, r: Result<R, Failure>) -> Result<R, Failure> {
-        self.forget_raised(lua);
         if matches!(r, Err(Failure::Limit(_) | Failure::Memory(_))) {
             let _ = lua.set_memory_limit(0);
             let _ = lua.gc_collect();
@@ -430,83 +342,4 @@ pub(crate) fn thread_location(thread: &mlua::Thread) -> Option<String> {
         }
     }
     None
-}
-
-/// `message` with its traceback as when `error` was Lua's: without the line of the
-/// prelude's `error`, and Lua's, which the traceback names by the prelude's variable
-/// (`[C]: in upvalue 'raw_error'`), named `error` again.
-fn lua_error_traceback(message: &str) -> String {
-    let prelude_error = |line: &str| {
-        (line.trim().strip_prefix("prelude:"))
-            .and_then(|l| l.split_once(": in function 'error'"))
-            .is_some_and(|(n, rest)| rest.is_empty() && n.parse::<u32>().is_ok())
-    };
-    (message.split('\n'))
-        .filter(|l| !prelude_error(l))
-        .map(|l| match l.trim() {
-            "[C]: in upvalue 'raw_error'" | "[C]: in upvalue 'error'" => {
-                l.replace(l.trim(), "[C]: in function 'error'")
-            }
-            _ => l.to_string(),
-        })
-        .collect::<Vec<_>>()
-        .join("\n")
-}
-
-/// The fields of `table` (`{ code = 42, [1] = "x" }`: at most eight, a string `message`
-/// first, then by key, values other than strings, numbers and booleans by their type),
-/// and its string `message` field.
-fn table_fields(table: &mlua::Table) -> (String, Option<String>) {
-    let scalar = |v: &Value| match v {
-        Value::String(s) => {
-            let s = s.to_string_lossy();
-            if s.chars().count() > 60 {
-                format!("{:?}…", s.chars().take(59).collect::<String>())
-            } else {
-                format!("{s:?}")
-            }
-        }
-        Value::Integer(i) => i.to_string(),
-        Value::Number(n) => n.to_string(),
-        Value::Boolean(b) => b.to_string(),
-        other => other.type_name().to_string(),
-    };
-    let mut message = None;
-    let mut entries = Vec::new();
-    for (key, value) in table.pairs::<Value, Value>().flatten() {
-        let key = match &key {
-            Value::String(k) => {
-                let k = k.to_string_lossy();
-                if k == "message" {
-                    if let Value::String(m) = &value {
-                        message = Some(m.to_string_lossy());
-                    }
-                }
-                let name = k.starts_with(|c: char| c.is_ascii_alphabetic() || c == '_')
-                    && k.chars().all(|c| c.is_ascii_alphanumeric() || c == '_');
-                if name {
-                    k
-                } else {
-                    format!("[{k:?}]")
-                }
-            }
-            other => format!("[{}]", scalar(other)),
-        };
-        entries.push((key != "message", key, scalar(&value)));
-    }
-    // The order a table is walked in varies from run to run.
-    entries.sort();
-    let more = entries.len() > 8;
-    let mut shown: Vec<String> = (entries.into_iter().take(8))
-        .map(|(_, k, v)| format!("{k} = {v}"))
-        .collect();
-    if more {
-        shown.push("…".into());
-    }
-    let fields = if shown.is_empty() {
-        "{}".to_string()
-    } else {
-        format!("{{ {} }}", shown.join(", "))
-    };
-    (fields, message)
 }
