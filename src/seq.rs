@@ -74,7 +74,8 @@ enum SeqCommand {
         height: Option<f64>,
         /// A retargeting map file (`BVH_JOINT TROUPE_JOINT` per line); default: the
         /// `.map` beside the BVH, else detect CMU or Mixamo names. Without --template, a
-        /// BVH written to glTF is turned upright by the axes it gives. BVH input only.
+        /// BVH written to glTF is turned upright by the axes it gives. BVH input only, with
+        /// --template or to glTF.
         #[arg(long)]
         map: Option<PathBuf>,
     },
@@ -521,6 +522,17 @@ fn convert(
                 m.display(),
                 input.display(),
                 input_format.name()
+            );
+        }
+        // It retargets onto a template, or gives the axes of a BVH written to glTF; any
+        // other conversion of a BVH would not read it.
+        if template.is_none() && !gltf_out {
+            bail!(
+                "--map {}: a retargeting map is read with --template, or for a BVH written \
+                 to glTF; converting {} to {} it would be ignored",
+                m.display(),
+                input.display(),
+                output.display()
             );
         }
     }

@@ -453,6 +453,15 @@ fn convert_refuses_a_map_on_an_input_other_than_bvh() {
             "{err}"
         );
     }
+    // A BVH converted without a template to BVH or a recording does not read it either.
+    let bvh = shared("pybvhrepo_cmu_12_01_walk.bvh");
+    for out in [temp("mapped-out.bvh"), temp("mapped-out2.trk")] {
+        let err = fails(&["seq", "convert", &s(&bvh), &s(&out), "--map", &s(&map)]);
+        assert!(
+            err.contains("a retargeting map is read with --template, or for a BVH written to glTF"),
+            "{err}"
+        );
+    }
 }
 
 #[test]

@@ -796,7 +796,9 @@ impl Walk {
     /// follows it (see [`Walk::follow_steering`]), where a walk that went on along its
     /// plan left the foot a stride behind and the pelvis sank to reach it.
     fn hold_for(&mut self, landing: &Landing) {
-        if landing.pinched && !self.steer.engaged {
+        // Only a walk along a path is steered (a followed or a velocity walk has no
+        // plan to hold back: steering it would shift its keyframed way for good).
+        if landing.pinched && !self.steer.engaged && matches!(self.route, Route::Path { .. }) {
             self.steer.engage(self.t, DVec2::ZERO);
         }
     }

@@ -193,11 +193,13 @@ fn room_on_the_right(
 
 /// The width (m, up to twice [`PASSAGE`]) of the passage across `along` at `position`:
 /// how far the nearest of the `footprints` is on its left and on its right (at most
-/// [`PASSAGE`] each), whatever their direction (a doorway in a thin wall, which a way
+/// [`PASSAGE`] each), whatever their direction but behind it (a doorway in a thin wall, which a way
 /// crosses at a slant, is as narrow as the door); `None` inside a footprint.
 fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> Option<f64> {
     let (mut left, mut right) = (PASSAGE, PASSAGE);
-    for f in footprints.within(PASSAGE + PASSAGE_AHEAD) {
+    // Within the footprints found round the body (a cell of the crowd's grid): one
+    // missed further off only makes the passage measure wider.
+    for f in footprints.within(PASSAGE) {
         if f.contains(position) {
             return None;
         }
@@ -205,6 +207,10 @@ fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -
             continue;
         };
         let (offset, d) = (nearest - position, nearest.distance(position));
+        // Behind: a doorway just come through is not one to step back into.
+        if offset.dot(along) < -PASSAGE_STEP {
+            continue;
+        }
         if along.perp_dot(offset) > 0.0 {
             left = left.min(d);
         } else {
