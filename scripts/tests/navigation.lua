@@ -122,6 +122,36 @@ test("where a walk to an object on the floor ends, the next walk starts", functi
   end
 end)
 
+test("walk to a painting on the far face of a wall ends on its side, through the doorway", function()
+  -- explore7/r_painting_wrongside.lua: the walker stood behind the wall, "facing" the
+  -- painting through it, a grasp away.
+  troupe.wall{ from = {-6, 2}, to = {-0.6, 2} }
+  troupe.wall{ from = {0.6, 2}, to = {6, 2} }
+  local painting = troupe.object{ name = "guernica", shape = "box", size = {0.8, 0.6, 0.04},
+                                  at = {-3, 1.5, 2.07}, mass = 3 }
+  local v = troupe.actor{ name = "v", at = {-3, 0, -0.5} }
+  local w = v:walk{ to = painting }
+  expect(run_until(function() return w.status ~= "active" end, 25), "ended")
+  expect(w.status == "completed", "completed: " .. tostring(w.error))
+  local p = v:position()
+  -- The wall spans z 1.95-2.05, the painting 2.05-2.09: its side is z > 2.05, and a
+  -- body stands its radius and clearance off the wall.
+  expect(p[3] > 2.05 + RADIUS, string.format("stands at (%.2f, %.2f), on the painting's side", p[1], p[3]))
+  local d = rect_dist(p[1], p[3], -3.4, -2.6, 2.05, 2.09)
+  expect(d < 0.6, string.format("%.2f m from the painting", d))
+  local want = math.atan(-3 - p[1], 2.07 - p[3])
+  expect(math.abs(v:dof("root_yaw") - want) < 0.15, string.format("faces it: %.2f vs %.2f", v:dof("root_yaw"), want))
+  -- A cup on a cupboard higher than the reach is walked to from the cupboard's side: the
+  -- reach ends over what the cup stands on.
+  troupe.object{ name = "cupboard", shape = "box", size = {1.0, 1.6, 0.5}, at = {4, 0.8, -2}, mass = 60 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {4.1, 1.65, -2.1} }
+  local c = v:walk{ to = cup }
+  expect(run_until(function() return c.status ~= "active" end, 25), "ended")
+  expect(c.status == "completed", "to the cup: " .. tostring(c.error))
+  d = flat_dist(v:position(), 4.1, -2.1)
+  expect(d < 0.75, string.format("%.2f m from the cup", d))
+end)
+
 test("walls from Lua: a walk goes through the doorway", function()
   local ann = troupe.actor{ name = "ann" }
   -- A wall across z = 2 with a 1.2 m door at x in [1, 2.2].
