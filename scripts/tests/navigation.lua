@@ -75,6 +75,83 @@ test("a goal enclosed by walls fails the walk with the reason", function()
   expect(flat_dist(p, 0, 0) < 0.01, "did not move")
 end)
 
+test("a start closed in: the reason names the walls round it, not what is near the goal", function()
+  local ann = troupe.actor{ name = "ann", at = {5, 0, 4.7} }
+  local c = { {4, 4}, {8, 4}, {8, 8}, {4, 8} }
+  for i = 1, 4 do
+    troupe.wall{ from = c[i], to = c[i % 4 + 1], thickness = 0.1, height = 2 }
+  end
+  troupe.object{ name = "stool", shape = "cylinder", radius = 0.2, height = 0.45, at = {6.5, 0.225, 6.5}, mass = 4 }
+  troupe.object{ name = "table", shape = "box", size = {2, 0.75, 1}, at = {0, 0.375, 2}, mass = 30 }
+  local w = ann:walk{ to = {0, 0, 0} }
+  expect(run_until(function() return w.status == "failed" end, 2), "failed: " .. w.status)
+  expect(w.error == "no path: wall 1, wall 4, wall 2 and wall 3 close the way from (5.00, 4.70) to (0.00, 0.00)",
+         w.error)
+  -- One obstacle alone: a start deep inside a stage, with no free point near.
+  troupe.object{ name = "stage", shape = "box", size = {4, 0.4, 4}, at = {-10, 0.2, 0}, mass = 500 }
+  local none, why = troupe.path({-10, 0}, {0, -3})
+  expect(none == nil and why == "no path: stage closes the way from (-10.00, 0.00) to (0.00, -3.00)", tostring(why))
+end)
+
+test("where a walk to an object on the floor ends, the next walk starts", function()
+  -- explore7/museum_wide.lua: `walk{ to = mask }` left a visitor of 1.76 m 0.3617 m from
+  -- the pedestal, a few millimetres inside its inflation for the radii 0.282-0.286 m:
+  -- every path from there failed ("amphora_ped close the way"), and so did its next 22 walks.
+  troupe.object{ name = "mask", shape = "box", size = {0.5, 1.0, 0.5}, at = {3.5, 0.5, 4.5}, mass = 50 }
+  troupe.object{ name = "amphora_ped", shape = "cylinder", radius = 0.25, height = 0.9, at = {0, 0.45, 6}, mass = 40 }
+  for _, r in ipairs({ 0.280, 0.282, 0.284, 0.286, 0.288 }) do
+    local path, why = troupe.path({2.8883, 4.4689}, {0, 5}, { radius = r })
+    expect(path ~= nil, string.format("radius %.3f: %s", r, tostring(why)))
+  end
+  local v = troupe.actor{ name = "v", at = {2.8883, 0, 4.4689}, height = 1.76, facing = -90 }
+  local w = v:walk{ to = {0, 0, 5} }
+  expect(run_until(function() return w.status ~= "active" end, 15), "ended")
+  expect(w.status == "completed", "walked on: " .. tostring(w.error))
+  -- Visitors of several sizes walk to the pedestal, then on from where they stand.
+  for i, h in ipairs({ 1.55, 1.68, 1.76, 1.9 }) do
+    local a = troupe.actor{ name = "a" .. i, at = {0.5, 0, 3 + 0.6 * i}, height = h, facing = 90 }
+    local to = a:walk{ to = "mask" }
+    expect(run_until(function() return to.status ~= "active" end, 20), "a" .. i .. " at the mask")
+    expect(to.status == "completed", string.format("a%d to the mask: %s", i, tostring(to.error)))
+    local p = a:position()
+    local path, why = troupe.path({p[1], p[3]}, {-0.8 * i, 2})
+    expect(path ~= nil, string.format("a%d: a path from (%.4f, %.4f): %s", i, p[1], p[3], tostring(why)))
+    local on = a:walk{ to = {-0.8 * i, 0, 2} }
+    expect(run_until(function() return on.status ~= "active" end, 20), "a" .. i .. " walked on")
+    expect(on.status == "completed", string.format("a%d on: %s", i, tostring(on.error)))
+  end
+end)
+
+test("walk to a painting on the far face of a wall ends on its side, through the doorway", function()
+  -- explore7/r_painting_wrongside.lua: the walker stood behind the wall, "facing" the
+  -- painting through it, a grasp away.
+  troupe.wall{ from = {-6, 2}, to = {-0.6, 2} }
+  troupe.wall{ from = {0.6, 2}, to = {6, 2} }
+  local painting = troupe.object{ name = "guernica", shape = "box", size = {0.8, 0.6, 0.04},
+                                  at = {-3, 1.5, 2.07}, mass = 3 }
+  local v = troupe.actor{ name = "v", at = {-3, 0, -0.5} }
+  local w = v:walk{ to = painting }
+  expect(run_until(function() return w.status ~= "active" end, 25), "ended")
+  expect(w.status == "completed", "completed: " .. tostring(w.error))
+  local p = v:position()
+  -- The wall spans z 1.95-2.05, the painting 2.05-2.09: its side is z > 2.05, and a
+  -- body stands its radius and clearance off the wall.
+  expect(p[3] > 2.05 + RADIUS, string.format("stands at (%.2f, %.2f), on the painting's side", p[1], p[3]))
+  local d = rect_dist(p[1], p[3], -3.4, -2.6, 2.05, 2.09)
+  expect(d < 0.6, string.format("%.2f m from the painting", d))
+  local want = math.atan(-3 - p[1], 2.07 - p[3])
+  expect(math.abs(v:dof("root_yaw") - want) < 0.15, string.format("faces it: %.2f vs %.2f", v:dof("root_yaw"), want))
+  -- A cup on a cupboard higher than the reach is walked to from the cupboard's side: the
+  -- reach ends over what the cup stands on.
+  troupe.object{ name = "cupboard", shape = "box", size = {1.0, 1.6, 0.5}, at = {4, 0.8, -2}, mass = 60 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {4.1, 1.65, -2.1} }
+  local c = v:walk{ to = cup }
+  expect(run_until(function() return c.status ~= "active" end, 25), "ended")
+  expect(c.status == "completed", "to the cup: " .. tostring(c.error))
+  d = flat_dist(v:position(), 4.1, -2.1)
+  expect(d < 0.75, string.format("%.2f m from the cup", d))
+end)
+
 test("walls from Lua: a walk goes through the doorway", function()
   local ann = troupe.actor{ name = "ann" }
   -- A wall across z = 2 with a 1.2 m door at x in [1, 2.2].

@@ -4,7 +4,7 @@
 
 use std::f64::consts::PI;
 use troupe_body::glam::DVec2;
-use troupe_scene::space::Walking;
+use troupe_scene::space::{Footprint, Walking, NEIGHBOUR_RANGE};
 use troupe_scene::GeneratorContext;
 
 /// Default distance (m) from an object's footprint edge to the body's centre when walking
@@ -83,11 +83,17 @@ impl Goal {
             Goal::Object { object, distance } => {
                 let o = world.objects.get(*object).ok_or("the object is gone")?;
                 let name = &o.name;
-                let footprint = troupe_scene::space::Footprint::of_object(o).0;
+                let footprint = Footprint::of_object(o).0;
                 let centre = footprint.centre();
-                stand_near(ctx, start, centre, radius, |dir| {
-                    footprint.reach(dir) + distance
-                })
+                let shoulders = shoulder_height(ctx);
+                let height = o.position.y;
+                stand_near(
+                    ctx,
+                    start,
+                    (centre, radius),
+                    |dir| footprint.reach(dir) + distance,
+                    |stand| hidden_by(ctx, (stand, shoulders), (footprint.nearest(stand), height)),
+                )
                 .map_err(|e| format!("no place to stand within reach of {name}: {e}"))?
             }
             Goal::Actor { actor, distance } => {
@@ -96,7 +102,8 @@ impl Goal {
                 let at = other.globals[0].translation;
                 let theirs = world.crowd.radii.get(*actor).copied().unwrap_or(radius);
                 let distance = distance.max(radius + theirs + LEAST_ACTOR_GAP);
-                stand_near(ctx, start, DVec2::new(at.x, at.z), radius, |_| distance)
+                let centre = DVec2::new(at.x, at.z);
+                stand_near(ctx, start, (centre, radius), |_| distance, |_| None)
                     .map_err(|e| format!("no place to stand near {name}: {e}"))?
             }
         };
@@ -108,14 +115,16 @@ impl Goal {
 }
 
 /// The first free standing point around `centre` (first on the side the body comes from,
-/// then turning away from it both ways, then a little further out), with the path to it
-/// (a straight line when walks do not navigate) and the heading that faces `centre`.
-fn stand_near(
-    ctx: &GeneratorContext,
+/// then turning away from it both ways, then a little further out) for a body of
+/// `radius`, from which nothing is `hidden_by` an obstacle (see [`hidden_by`]), with the
+/// path to it (a straight line when walks do not navigate) and the heading that faces
+/// `centre`.
+fn stand_near<'w>(
+    ctx: &'w GeneratorContext,
     start: DVec2,
-    centre: DVec2,
-    radius: f64,
+    (centre, radius): (DVec2, f64),
     distance: impl Fn(DVec2) -> f64,
+    hidden_by: impl Fn(DVec2) -> Option<&'w str>,
 ) -> Result<Planned, String> {
     let towards = (centre - start).try_normalize().unwrap_or(DVec2::Y);
     // The crowd's footprints are the world's obstacles, made once for every walk
@@ -133,6 +142,9 @@ fn stand_near(
             .any(|o| o.distance(stand) < inflated)
     };
     let mut last = String::from("every side is blocked");
+    // What stood between the first free point and the goal, for the reason when no point
+    // is left.
+    let mut behind: Option<&str> = None;
     for further in 0..=6 {
         for turn in 0..=12 {
             for side in [1.0, -1.0] {
@@ -144,6 +156,10 @@ fn stand_near(
                 let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
                 let stand = centre - dir * (distance(dir) + further as f64 * 0.1);
                 if blocked(stand) {
+                    continue;
+                }
+                if let Some(obstacle) = hidden_by(stand) {
+                    behind.get_or_insert(obstacle);
                     continue;
                 }
                 // Walks that do not navigate go there straight (see [`Walking`]).
@@ -168,7 +184,71 @@ fn stand_near(
             }
         }
     }
-    Err(last)
+    match behind {
+        Some(obstacle) if last == "every side is blocked" => {
+            Err(format!("every side is blocked or behind {obstacle}"))
+        }
+        _ => Err(last),
+    }
+}
+
+/// The obstacle (a wall, furniture) that stands between a body at `stand` and the point
+/// `target` (x, z) it would reach for at `height` (m), from its shoulders
+/// `shoulders` m high: one that the straight reach from the shoulders to the point goes
+/// through, not over, other than one the object rests on. A painting hung on one face of
+/// a wall is not within reach from the other side, however near; a cup on a table is,
+/// and one on a high cupboard too, from the cupboard's side.
+fn hidden_by<'w>(
+    ctx: &'w GeneratorContext,
+    (stand, shoulders): (DVec2, f64),
+    (target, height): (DVec2, f64),
+) -> Option<&'w str> {
+    let crowd = &ctx.world.crowd;
+    let length = (target - stand).length();
+    // The crowd's grid holds the footprints near a point within its cell; a longer reach
+    // (a `distance` the script set) looks at them all.
+    let near: Box<dyn Iterator<Item = &Footprint>> = if length <= NEIGHBOUR_RANGE {
+        Box::new(crowd.footprints_near(stand, length))
+    } else {
+        Box::new(crowd.footprints.iter())
+    };
+    // Just past the point, inside what the object stands on (the table under a cup): the
+    // reach ends over it, however high. Not so a wall that a painting hangs flush on,
+    // whose face the point lies on.
+    let past = target + (target - stand).normalize_or_zero() * THROUGH;
+    near.filter_map(|o| {
+        if o.contains(past) {
+            return None;
+        }
+        let (enter, leave) = o.span(stand, target)?;
+        // Touching a face (a painting flush on its wall, seen from the front) is no
+        // crossing: the reach must go a millimetre through.
+        if (leave - enter) * length < THROUGH {
+            return None;
+        }
+        // The reach goes down (or up) in a straight line: it is lowest over the obstacle
+        // where it goes in or comes out.
+        let at = |t: f64| shoulders + (height - shoulders) * t;
+        (o.top > at(enter).min(at(leave))).then_some(o.name.as_str())
+    })
+    .next()
+}
+
+/// How far (m) a reach must go through an obstacle's footprint to count as through it.
+const THROUGH: f64 = 0.001;
+
+/// How high (m) the walker's shoulders are, as it stood at the end of the last tick: where
+/// a reach for an object starts (the root's height for a body without shoulders).
+fn shoulder_height(ctx: &GeneratorContext) -> f64 {
+    let globals = &ctx.posture.globals;
+    ctx.skeleton
+        .joints()
+        .iter()
+        .zip(globals)
+        .filter(|(j, _)| j.name.ends_with("shoulder"))
+        .map(|(_, g)| g.translation.y)
+        .reduce(f64::max)
+        .unwrap_or_else(|| globals.first().map_or(0.0, |g| g.translation.y))
 }
 
 /// `points` with extra points [`CORNER_PIN`] before and after each corner the planner

@@ -104,6 +104,48 @@ impl Footprint {
             })
     }
 
+    /// The point of the polygon nearest `p`: `p` itself inside.
+    pub fn nearest(&self, p: DVec2) -> DVec2 {
+        if self.contains(p) {
+            return p;
+        }
+        self.nearest_point(p).unwrap_or(p)
+    }
+
+    /// The part of the segment `a`–`b` inside the polygon, as the fractions of the way from
+    /// `a` to `b` where it goes in and comes out; `None` if it stays outside (Cyrus–Beck
+    /// clipping against each edge's line).
+    pub fn span(&self, a: DVec2, b: DVec2) -> Option<(f64, f64)> {
+        let n = self.outline.len();
+        if n < 3 {
+            return None;
+        }
+        let (mut enter, mut leave) = (0.0f64, 1.0f64);
+        let d = b - a;
+        for (i, &p) in self.outline.iter().enumerate() {
+            let edge = self.outline[(i + 1) % n] - p;
+            // Inside is left of every edge (counter-clockwise): edge × (x − p) ≥ 0.
+            let at_a = edge.perp_dot(a - p);
+            let along = edge.perp_dot(d);
+            if along == 0.0 {
+                if at_a < 0.0 {
+                    return None;
+                }
+            } else {
+                let t = -at_a / along;
+                if along > 0.0 {
+                    enter = enter.max(t);
+                } else {
+                    leave = leave.min(t);
+                }
+            }
+            if enter > leave {
+                return None;
+            }
+        }
+        Some((enter, leave))
+    }
+
     /// A circle that holds the polygon: the centre of its corners and the farthest
     /// corner's distance from it.
     pub fn bounding_circle(&self) -> (DVec2, f64) {
@@ -307,6 +349,39 @@ mod tests {
         assert!(f.contains(DVec2::new(2.0, 0.9)));
         assert!(!f.contains(DVec2::new(2.9, 0.0)));
         assert!((f.distance(DVec2::new(2.0, 2.0)) - 1.0).abs() < 1e-9);
+    }
+
+    #[test]
+    fn a_segment_through_a_box_is_clipped_to_it_and_one_beside_it_is_not() {
+        let wall = Footprint::hull(
+            "wall",
+            &[
+                DVec2::new(-1.0, 1.95),
+                DVec2::new(1.0, 1.95),
+                DVec2::new(1.0, 2.05),
+                DVec2::new(-1.0, 2.05),
+            ],
+        );
+        let (a, b) = (DVec2::new(0.0, 1.0), DVec2::new(0.0, 3.0));
+        let (enter, leave) = wall.span(a, b).unwrap();
+        assert!((enter - 0.475).abs() < 1e-12 && (leave - 0.525).abs() < 1e-12);
+        // Ending on the face: only touching it.
+        let (enter, leave) = wall.span(a, DVec2::new(0.0, 1.95)).unwrap();
+        assert!(leave - enter < 1e-12, "{enter} {leave}");
+        // Beside the wall, and short of it.
+        assert!(wall
+            .span(DVec2::new(1.5, 1.0), DVec2::new(1.5, 3.0))
+            .is_none());
+        assert!(wall.span(a, DVec2::new(0.0, 1.9)).is_none());
+        // Wholly inside.
+        assert_eq!(
+            wall.span(DVec2::new(0.0, 2.0), DVec2::new(0.5, 2.0)),
+            Some((0.0, 1.0))
+        );
+        let near = |p: DVec2, q: DVec2| (wall.nearest(p) - q).length() < 1e-12;
+        assert!(near(DVec2::new(0.3, 1.0), DVec2::new(0.3, 1.95)));
+        assert!(near(DVec2::new(2.0, 3.05), DVec2::new(1.0, 2.05)));
+        assert!(near(DVec2::new(0.2, 2.0), DVec2::new(0.2, 2.0)));
     }
 
     #[test]

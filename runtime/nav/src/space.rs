@@ -7,7 +7,7 @@
 //! its obstacles stay the same: adding, moving, putting down or removing an obstacle
 //! makes the next query rebuild the meshes it asks for.
 
-use crate::footprint::Footprint;
+use crate::footprint::{segment_distance, Footprint};
 use polyanya::{Mesh, Triangulation};
 use std::sync::{Arc, Mutex};
 use troupe_body::glam::DVec2;
@@ -94,15 +94,18 @@ fn inside(corners: &[DVec2], p: DVec2) -> bool {
     odd
 }
 
-/// What a search does when the body starts within an obstacle's inflation (closer to it
-/// than its radius and [`CLEARANCE`]) but on the mesh.
+/// What a search round people standing ([`Space::path_around`]) does when the body
+/// starts within an obstacle's inflation (closer to it than its radius and
+/// [`CLEARANCE`]) but on the mesh.
 ///
 /// The mesh's inflation ([`Footprint::inflated`]) holds the exact one, so such a start
 /// is off the mesh and steps out to the nearest free point whatever this says; it counts
-/// as on the mesh only within the search's 5 mm of the mesh's edge. When the crate
-/// inflated the obstacles, its arcs inside the circle left slivers of mesh cut off from
-/// the rest, and a walker pressed 1 cm into a standing one's inflated disc found no way
-/// to a goal 2 m off, the way round open, for 50 s of the plaza.
+/// as on the mesh only within the search's 5 mm of the mesh's edge, where no path starts
+/// either (the search cannot start outside its polygon). [`Space::path`], among the
+/// furniture and walls alone, always steps out then. When the crate inflated the
+/// obstacles, its arcs inside the circle left slivers of mesh cut off from the rest, and
+/// a walker pressed 1 cm into a standing one's inflated disc found no way to a goal 2 m
+/// off, the way round open, for 50 s of the plaza.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Pressed {
     /// Search from where the body is, and fail if no path starts there.
@@ -132,14 +135,29 @@ pub enum NoPath {
         /// The body radius (with its clearance).
         radius: f64,
     },
-    /// The floor around the goal is cut off from the start's.
-    #[error("no path: {} close the way to ({:.2}, {:.2})", list(.enclosing), goal.x, goal.y)]
+    /// The floor around the goal, or around the start, is cut off from the other's.
+    #[error("no path: {}", enclosed_text(enclosing, *start, *goal))]
     Enclosed {
         /// The goal.
         goal: DVec2,
-        /// The obstacles nearest the goal, which close it in.
+        /// The obstacles that close in the end cut off, nearest it first.
         enclosing: Vec<String>,
+        /// The start, when it is the end cut off (the floor round it is the smaller, or no
+        /// free point is near it); `None` when the goal is.
+        start: Option<DVec2>,
     },
+}
+
+/// "a closes the way to (x, z)", "a and b close the way from (x, z) to (x, z)".
+fn enclosed_text(names: &[String], start: Option<DVec2>, goal: DVec2) -> String {
+    let verb = if names.len() == 1 { "closes" } else { "close" };
+    let from = start.map_or(String::new(), |s| format!(" from ({:.2}, {:.2})", s.x, s.y));
+    format!(
+        "{} {verb} the way{from} to ({:.2}, {:.2})",
+        list(names),
+        goal.x,
+        goal.y
+    )
 }
 
 /// "a", "a and b", "a, b and c".
@@ -301,9 +319,15 @@ impl Space {
         to: DVec2,
         radius: f64,
     ) -> Result<Vec<DVec2>, NoPath> {
-        self.search(obstacles, from, to, radius, Pressed::SearchFromHere, || {
-            self.mesh(obstacles, radius)
-        })
+        self.search(
+            obstacles,
+            from,
+            to,
+            radius,
+            Pressed::SearchFromHere,
+            true,
+            || self.mesh(obstacles, radius),
+        )
     }
 
     /// The shortest path as [`Space::path`] finds it, round `temporary` obstacles too
@@ -319,13 +343,18 @@ impl Space {
         pressed: Pressed,
     ) -> Result<Vec<DVec2>, NoPath> {
         let all: Vec<Footprint> = obstacles.iter().chain(temporary).cloned().collect();
-        self.search(&all, from, to, radius, pressed, || {
+        self.search(&all, from, to, radius, pressed, false, || {
             let inflated = inflation_mm(radius) as f64 / 1000.0;
             Arc::new(build_mesh(&self.floor(), &all, inflated))
         })
     }
 
     /// The shortest path from `from` to `to` among `obstacles` on the mesh `mesh` gives.
+    ///
+    /// `lasting`: the obstacles are furniture and walls only ([`Space::path`]), so a start
+    /// pressed into their inflation from which no path starts steps out whatever
+    /// `pressed` says: a walk that ended beside an obstacle must be able to leave it.
+    #[allow(clippy::too_many_arguments)]
     fn search(
         &self,
         obstacles: &[Footprint],
@@ -333,6 +362,7 @@ impl Space {
         to: DVec2,
         radius: f64,
         pressed: Pressed,
+        lasting: bool,
         mesh: impl FnOnce() -> Arc<Mesh>,
     ) -> Result<Vec<DVec2>, NoPath> {
         let floor = self.floor();
@@ -351,25 +381,39 @@ impl Space {
             });
         }
         let mesh = mesh();
+        let cut = Cut::new(&floor, obstacles, from, radius);
+        let on_mesh = mesh.point_in_mesh(v2(from));
+        let mut found = if on_mesh {
+            mesh.path(v2(from), v2(to))
+        } else {
+            None
+        };
         let mut points = Vec::new();
         let mut start = from;
-        if !mesh.point_in_mesh(v2(from)) {
-            if let Some(free) = nearest_free(&mesh, obstacles, from, inflated) {
-                points.push(free);
+        // A start within the mesh's 5 mm search tolerance of a cut-out outline counts as
+        // on the mesh, but the search cannot start outside its polygon and finds nothing
+        // (a visitor that `walk{ to = OBJECT }` left 3 mm inside a pedestal's inflation
+        // could not plan again: every walk it started failed).
+        let step_out = lasting || pressed == Pressed::StepOutIfStuck;
+        if found.is_none() && (!on_mesh || (step_out && !cut.clear(from))) {
+            // The nearest point clear of the obstacles as they are, as ever; if no path
+            // starts there either (it can lie within the search's tolerance of the mesh,
+            // at an outline's corner), the nearest clear of the outlines the mesh cuts.
+            if let Some(free) = nearest_free(&mesh, obstacles, from, radius + CLEARANCE) {
                 start = free;
-            }
-        }
-        let mut found = mesh.path(v2(start), v2(to));
-        let within = || obstacles.iter().any(|o| o.distance(from) < inflated);
-        if found.is_none() && pressed == Pressed::StepOutIfStuck && start == from && within() {
-            if let Some(free) = nearest_free(&mesh, obstacles, from, inflated) {
                 found = mesh.path(v2(free), v2(to));
-                if found.is_some() {
-                    points.push(free);
+            }
+            if found.is_none() {
+                if let Some(free) = nearest_on_mesh(&mesh, &cut, from) {
+                    start = free;
+                    found = mesh.path(v2(free), v2(to));
                 }
             }
+            if found.is_some() {
+                points.push(start);
+            }
         }
-        let found = found.ok_or_else(|| self.enclosed(obstacles, to, inflated))?;
+        let found = found.ok_or_else(|| enclosed(&mesh, &cut, obstacles, (from, start), to))?;
         points.extend(
             found
                 .path
@@ -381,23 +425,6 @@ impl Space {
             *last = to;
         }
         Ok(points)
-    }
-
-    /// The obstacles that close in `goal`: every one within reach of the nearest, by
-    /// distance.
-    fn enclosed(&self, obstacles: &[Footprint], goal: DVec2, inflated: f64) -> NoPath {
-        let mut near: Vec<(f64, &Footprint)> =
-            obstacles.iter().map(|o| (o.distance(goal), o)).collect();
-        near.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.name.cmp(&b.1.name)));
-        let closest = near.first().map_or(0.0, |n| n.0);
-        NoPath::Enclosed {
-            goal,
-            enclosing: near
-                .iter()
-                .filter(|(d, _)| *d <= closest + 2.0 * inflated + 1.0)
-                .map(|(_, o)| o.name.clone())
-                .collect(),
-        }
     }
 }
 
@@ -422,6 +449,82 @@ fn inflation_mm(radius: f64) -> i64 {
 /// How far (m) [`nearest_free`] looks.
 const FREE_SEARCH: f64 = 1.5;
 
+/// Farther (m) than the mesh's inflation that a point must lie outside the outlines the
+/// mesh cuts out to count as clear of them: the mesh is built in f32.
+const CUT_MARGIN: f64 = 0.001;
+
+/// What the mesh of a body leaves out near a point: the obstacles' outlines as the mesh
+/// cuts them out ([`Footprint::inflated`] by the mesh's inflation, a whole number of
+/// millimetres) and the floor's edge, so that a point clear of them lies on the mesh
+/// itself, not merely within the search's tolerance of it.
+struct Cut<'a> {
+    floor: &'a Floor,
+    obstacles: &'a [Footprint],
+    around: DVec2,
+    /// What the mesh inflated the obstacles by (m).
+    inflation: f64,
+    /// The outlines of the obstacles near `around`, made when first asked for.
+    grown: std::cell::OnceCell<Vec<Footprint>>,
+}
+
+impl<'a> Cut<'a> {
+    /// What the mesh for a body of `radius` among `obstacles` on `floor` cuts out within
+    /// [`FREE_SEARCH`] of `around`.
+    fn new(floor: &'a Floor, obstacles: &'a [Footprint], around: DVec2, radius: f64) -> Cut<'a> {
+        Cut {
+            floor,
+            obstacles,
+            around,
+            inflation: inflation_mm(radius) as f64 / 1000.0,
+            grown: std::cell::OnceCell::new(),
+        }
+    }
+
+    /// The grown outlines near `around`, named as their obstacles.
+    fn grown(&self) -> &[Footprint] {
+        self.grown.get_or_init(|| {
+            // An outline reaches at most 2 % further than the inflation.
+            let reach = 2.0 * self.inflation + FREE_SEARCH + CUT_MARGIN;
+            self.obstacles
+                .iter()
+                .filter(|o| o.outline.len() >= 3 && o.distance(self.around) < reach)
+                .map(|o| Footprint {
+                    name: o.name.clone(),
+                    outline: o.inflated(self.inflation + CUT_MARGIN),
+                    top: o.top,
+                })
+                .collect()
+        })
+    }
+
+    /// The obstacles whose cut-out outline holds `p` (within [`FREE_SEARCH`] of `around`).
+    fn holding(&self, p: DVec2) -> impl Iterator<Item = &str> + '_ {
+        self.grown()
+            .iter()
+            .filter(move |o| o.contains(p))
+            .map(|o| o.name.as_str())
+    }
+
+    /// Whether `p` is within the inflation of the floor's edge or of a hole's.
+    fn at_floor_edge(&self, p: DVec2) -> bool {
+        let near = |ring: &[DVec2]| {
+            (0..ring.len()).any(|i| {
+                let (a, b) = (ring[i], ring[(i + 1) % ring.len()]);
+                segment_distance(p, a, b) < self.inflation + CUT_MARGIN
+            })
+        };
+        !self.floor.contains(p)
+            || near(&self.floor.outline)
+            || self.floor.holes.iter().any(|h| near(h))
+    }
+
+    /// Whether a body centred at `p` (within [`FREE_SEARCH`] of `around`) stands clear of
+    /// everything the mesh cuts out, so on the mesh itself.
+    fn clear(&self, p: DVec2) -> bool {
+        self.holding(p).next().is_none() && !self.at_floor_edge(p)
+    }
+}
+
 /// The nearest point of the mesh to `p` (a body inflated by `inflated` among
 /// `obstacles`), searched on rings 2 cm apart up to [`FREE_SEARCH`].
 fn nearest_free(mesh: &Mesh, obstacles: &[Footprint], p: DVec2, inflated: f64) -> Option<DVec2> {
@@ -435,6 +538,204 @@ fn nearest_free(mesh: &Mesh, obstacles: &[Footprint], p: DVec2, inflated: f64) -
     let clear = |q: DVec2| near.iter().all(|o| o.distance(q) >= inflated);
     on_rings(p, |q| clear(q) && mesh.point_in_mesh(v2(q)))
         .or_else(|| on_rings(p, |q| mesh.point_in_mesh(v2(q))))
+}
+
+/// The nearest point to the point `cut` is about that lies on the mesh itself, clear of
+/// what the mesh cuts out, not merely within the search's tolerance (5 mm) of it, as a
+/// search's start must: on rings 2 cm apart up to [`FREE_SEARCH`].
+fn nearest_on_mesh(mesh: &Mesh, cut: &Cut, p: DVec2) -> Option<DVec2> {
+    on_rings(p, |q| cut.clear(q) && mesh.point_in_mesh(v2(q)))
+}
+
+/// Why no path joins `start` (the search's start; `from` before stepping out) to `goal`
+/// on `mesh`: the obstacles round the end whose floor is cut off from the other's.
+///
+/// Each end's floor is the part of the mesh its polygon is joined to across shared edges;
+/// the end cut off is the one on the smaller part, and what closes it in are the
+/// obstacles whose outlines make that part's outer boundary (not those standing inside
+/// it, nor those near the other end). An end off the mesh is closed in by the outlines
+/// that hold it.
+fn enclosed(
+    mesh: &Mesh,
+    cut: &Cut,
+    obstacles: &[Footprint],
+    (from, start): (DVec2, DVec2),
+    goal: DVec2,
+) -> NoPath {
+    let nearest_first = |mut names: Vec<(f64, String)>| -> Vec<String> {
+        // By the millimetre, so that obstacles as far, but for a rounding, go by name.
+        let mm = |d: f64| (d * 1000.0).round();
+        names.sort_by(|a, b| mm(a.0).total_cmp(&mm(b.0)).then(a.1.cmp(&b.1)));
+        names.dedup_by(|a, b| a.1 == b.1);
+        names.into_iter().map(|(_, n)| n).collect()
+    };
+    // The obstacles (or the floor's edge) whose cut-out outline holds `p`.
+    let holding = |p: DVec2| {
+        let mut names: Vec<(f64, String)> = obstacles
+            .iter()
+            .filter(|o| o.distance(p) < cut.inflation * 1.03 + CUT_MARGIN)
+            .map(|o| (o.distance(p), o.name.clone()))
+            .collect();
+        if names.is_empty() {
+            names.push((0.0, FLOOR_EDGE.into()));
+        }
+        nearest_first(names)
+    };
+    let enclosing = |names: Vec<String>, cut_off_start: bool| NoPath::Enclosed {
+        goal,
+        enclosing: names,
+        start: cut_off_start.then_some(from),
+    };
+    let (Some(s), Some(g)) = (locate(mesh, start), locate(mesh, goal)) else {
+        return if locate(mesh, start).is_none() {
+            enclosing(holding(start), true)
+        } else {
+            enclosing(holding(goal), false)
+        };
+    };
+    let layer = &mesh.layers[0];
+    let (from_start, from_goal) = (Island::of(layer, s), Island::of(layer, g));
+    if from_start.polygons.contains(&g) {
+        // Joined, yet the search found nothing: name what is near the goal.
+        let inflated = cut.inflation;
+        let mut near: Vec<(f64, String)> = obstacles
+            .iter()
+            .map(|o| (o.distance(goal), o.name.clone()))
+            .collect();
+        near.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let closest = near.first().map_or(0.0, |n| n.0);
+        near.retain(|(d, _)| *d <= closest + 2.0 * inflated + 1.0);
+        return enclosing(nearest_first(near), false);
+    }
+    let (end, island, cut_off_start) = if from_start.area <= from_goal.area {
+        (start, from_start, true)
+    } else {
+        (goal, from_goal, false)
+    };
+    let mut names = Vec::new();
+    for v in island.outer_boundary(layer) {
+        let before = names.len();
+        names.extend(
+            obstacles
+                .iter()
+                .filter(|o| o.distance(v) < cut.inflation * 1.03 + 2.0 * CUT_MARGIN)
+                .map(|o| (o.distance(end), o.name.clone())),
+        );
+        if names.len() == before {
+            names.push((f64::INFINITY, FLOOR_EDGE.into()));
+        }
+    }
+    enclosing(nearest_first(names), cut_off_start)
+}
+
+/// What [`NoPath::Enclosed`] calls the floor's edge (or a hole's) when it closes the way.
+const FLOOR_EDGE: &str = "the floor's edge";
+
+/// The polygon of the mesh's (single) layer that holds `p`, within the search's tolerance.
+fn locate(mesh: &Mesh, p: DVec2) -> Option<usize> {
+    let at = mesh.get_point_layer(v2(p)).into_iter().next()?;
+    // The crate packs the layer into the index's top 8 bits.
+    Some((at.polygon() & 0x00ff_ffff) as usize)
+}
+
+/// A part of a mesh's layer whose polygons are joined across shared edges.
+struct Island {
+    /// Its polygons, by index.
+    polygons: Vec<usize>,
+    /// Its area (m²).
+    area: f64,
+}
+
+impl Island {
+    /// The part of `layer` joined to polygon `first`.
+    fn of(layer: &polyanya::Layer, first: usize) -> Island {
+        let mut seen = vec![false; layer.polygons.len()];
+        let mut polygons = Vec::new();
+        let mut todo = vec![first];
+        seen[first] = true;
+        while let Some(p) = todo.pop() {
+            polygons.push(p);
+            for (a, b) in edges(layer, p) {
+                if let Some(q) = across(layer, p, a, b) {
+                    if !std::mem::replace(&mut seen[q], true) {
+                        todo.push(q);
+                    }
+                }
+            }
+        }
+        polygons.sort_unstable();
+        let area = polygons
+            .iter()
+            .map(|&p| signed_area(layer, &layer.polygons[p].vertices).abs())
+            .sum();
+        Island { polygons, area }
+    }
+
+    /// The corners (x, z) of the island's outer boundary: of the loops its unshared edges
+    /// make, the one turning the way its polygons do that holds the most floor (the
+    /// others go round what stands inside it).
+    fn outer_boundary(&self, layer: &polyanya::Layer) -> Vec<DVec2> {
+        let mut next: std::collections::BTreeMap<u32, Vec<u32>> = Default::default();
+        let mut turn = 0.0;
+        for &p in &self.polygons {
+            turn += signed_area(layer, &layer.polygons[p].vertices);
+            for (a, b) in edges(layer, p) {
+                if across(layer, p, a, b).is_none() {
+                    next.entry(a).or_default().push(b);
+                }
+            }
+        }
+        let mut best: (f64, Vec<u32>) = (0.0, Vec::new());
+        while let Some((&first, _)) = next.iter().find(|(_, to)| !to.is_empty()) {
+            let mut ring = vec![first];
+            let mut at = first;
+            while let Some(b) = next.get_mut(&at).and_then(|to| to.pop()) {
+                if b == first {
+                    break;
+                }
+                ring.push(b);
+                at = b;
+            }
+            let area = signed_area(layer, &ring) * turn.signum();
+            if area > best.0 {
+                best = (area, ring);
+            }
+        }
+        best.1.iter().map(|&v| corner(layer, v)).collect()
+    }
+}
+
+/// The edges (corner indices) of polygon `p` of `layer`, in its order.
+fn edges(layer: &polyanya::Layer, p: usize) -> impl Iterator<Item = (u32, u32)> + '_ {
+    let v = &layer.polygons[p].vertices;
+    (0..v.len()).map(move |i| (v[i], v[(i + 1) % v.len()]))
+}
+
+/// The polygon of `layer` other than `p` that shares its edge `a`–`b`, if any.
+fn across(layer: &polyanya::Layer, p: usize, a: u32, b: u32) -> Option<usize> {
+    let at_b = &layer.vertices.get(b as usize)?.polygons;
+    layer
+        .vertices
+        .get(a as usize)?
+        .polygons
+        .iter()
+        .find(|&&q| q != u32::MAX && q as usize != p && at_b.contains(&q))
+        .map(|&q| q as usize)
+}
+
+/// Corner `v` of `layer` as a floor point (x, z).
+fn corner(layer: &polyanya::Layer, v: u32) -> DVec2 {
+    let c = layer.vertices[v as usize].coords + layer.offset;
+    DVec2::new(c.x as f64, c.y as f64)
+}
+
+/// The signed area (m²) of the polygon through `layer`'s corners `ring`.
+fn signed_area(layer: &polyanya::Layer, ring: &[u32]) -> f64 {
+    let n = ring.len();
+    (0..n)
+        .map(|i| corner(layer, ring[i]).perp_dot(corner(layer, ring[(i + 1) % n])))
+        .sum::<f64>()
+        / 2.0
 }
 
 /// The first point around `p` that is `free`, on rings 2 cm apart up to [`FREE_SEARCH`],
@@ -565,6 +866,99 @@ mod tests {
             );
             assert!((path[0] - from).length() < 0.1, "{path:?}");
         }
+    }
+
+    /// A 0.5 m square pedestal centred at (`x`, `z`).
+    fn pedestal(name: &str, x: f64, z: f64) -> Footprint {
+        Footprint::hull(
+            name,
+            &[
+                DVec2::new(x - 0.25, z - 0.25),
+                DVec2::new(x + 0.25, z - 0.25),
+                DVec2::new(x + 0.25, z + 0.25),
+                DVec2::new(x - 0.25, z + 0.25),
+            ],
+        )
+    }
+
+    #[test]
+    fn a_start_a_few_millimetres_into_an_inflation_steps_out() {
+        // Where `walk{ to = mask }` left a visitor of 1.76 m in the museum
+        // (explore7/museum_wide.lua): 0.3617 m from the pedestal, within the search's
+        // 5 mm of the mesh for these radii, so on the mesh for the crate, but outside
+        // every polygon: the search found nothing, and every walk the visitor started
+        // failed ("amphora_ped close the way to (0.00, 5.00)").
+        let obstacles = [
+            pedestal("mask", 3.5, 4.5),
+            Footprint::disc("amphora_ped", DVec2::new(0.0, 6.0), 0.25),
+        ];
+        let (from, goal) = (DVec2::new(2.8883, 4.4689), DVec2::new(0.0, 5.0));
+        let space = Space::default();
+        for radius in [0.280, 0.282, 0.284, 0.286, 0.288, 0.3] {
+            let inflated = radius + CLEARANCE;
+            let path = space
+                .path(&obstacles, from, goal, radius)
+                .unwrap_or_else(|e| panic!("radius {radius}: {e}"));
+            assert_eq!(*path.last().unwrap(), goal);
+            // Pressed into the inflation, it steps out first, a few centimetres.
+            if obstacles[0].distance(from) < inflated {
+                assert!(obstacles[0].distance(path[0]) >= inflated, "{path:?}");
+                assert!((path[0] - from).length() < 0.1, "{path:?}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_start_closed_in_names_what_closes_it_not_what_is_near_the_goal() {
+        let mut space = Space::default();
+        let corners = [(4.0, 4.0), (8.0, 4.0), (8.0, 8.0), (4.0, 8.0)];
+        for i in 0..4 {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            space.walls.push(Wall {
+                from: DVec2::new(a.0, a.1),
+                to: DVec2::new(b.0, b.1),
+                thickness: 0.1,
+                height: 2.0,
+            });
+        }
+        let mut obstacles: Vec<Footprint> = space.wall_footprints().collect();
+        // A stool inside the room, clear of the walls, and the table near the goal.
+        obstacles.push(Footprint::disc("stool", DVec2::new(6.5, 6.5), 0.2));
+        obstacles.push(table());
+        let e = space
+            .path(&obstacles, DVec2::new(5.0, 4.7), DVec2::new(0.0, 1.0), 0.3)
+            .unwrap_err();
+        // Nearest the start first: wall 1 (0.65 m), 4 (0.95 m), 2 (2.95 m), 3 (3.25 m).
+        assert_eq!(
+            e.to_string(),
+            "no path: wall 1, wall 4, wall 2 and wall 3 close the way from (5.00, 4.70) to (0.00, 1.00)"
+        );
+        // The other way round, the goal is closed in.
+        let e = space
+            .path(&obstacles, DVec2::new(0.0, 1.0), DVec2::new(5.0, 4.7), 0.3)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "no path: wall 1, wall 4, wall 2 and wall 3 close the way to (5.00, 4.70)"
+        );
+        // A start deep inside one obstacle, with no free point within reach: it alone
+        // closes the way.
+        let stage = Footprint::hull(
+            "stage",
+            &[
+                DVec2::new(-12.0, -2.0),
+                DVec2::new(-8.0, -2.0),
+                DVec2::new(-8.0, 2.0),
+                DVec2::new(-12.0, 2.0),
+            ],
+        );
+        let e = space
+            .path(&[stage], DVec2::new(-10.0, 0.0), DVec2::new(0.0, -3.0), 0.3)
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            "no path: stage closes the way from (-10.00, 0.00) to (0.00, -3.00)"
+        );
     }
 
     #[test]
