@@ -245,11 +245,6 @@ fn footprint_gap_bound(a: (DVec2, f64), f: &Footprint) -> f64 {
     f.distance(a.0) - a.1
 }
 
-/// Seconds within which a walk that stops comes to rest (a walk's `route::STOP_TIME`):
-/// slowing down evenly from its speed, it covers at least half of what that speed would
-/// in any time up to this.
-pub const STOPS_WITHIN: f64 = 0.8;
-
 /// What is round a walker this tick, as the previous tick left it: the other bodies and
 /// the obstacles near.
 #[derive(Clone, Debug, Default)]
@@ -267,13 +262,15 @@ pub struct Surroundings<'a> {
 }
 
 impl<'a> Surroundings<'a> {
-    /// Where the bodies walking away from `from` will be at least `seconds` from now: each
-    /// moved on by half of what its velocity covers in that time, up to [`STOPS_WITHIN`],
-    /// which it covers even if it stops meanwhile; the others where they stand. `None`
-    /// when no body walks away. A foot landing behind someone walking ahead lands where
-    /// that one has gone from (see [`clear_foot`]), not where it stands now.
+    /// Where the bodies walking away from `from` will be `seconds` from now: each moved on
+    /// by half of what its velocity covers in that time, which it covers even if it stops
+    /// meanwhile, evenly over 0.8 s or more (a walk's stop), as long as `seconds` is at
+    /// most that; the others where they stand. `None` when no body walks away. A foot
+    /// landing behind someone walking ahead lands where that one has gone from (see
+    /// [`clear_foot`]), not where it stands now. (Not capped at 0.8 s, which the strikes
+    /// of slow walks pass: capped, the plaza's test layout put feet 4.4 cm into one
+    /// another, against none; docs/navigation.md, "Limits".)
     pub fn ahead(&self, from: DVec2, seconds: f64) -> Option<Surroundings<'a>> {
-        let seconds = seconds.min(STOPS_WITHIN);
         let velocity = |i: usize| self.velocities.get(i).copied().unwrap_or_default();
         let leaving = |i: usize, body: &Capsule| velocity(i).dot(body.centre - from) > 0.0;
         if seconds <= 0.0 || !self.bodies.iter().enumerate().any(|(i, b)| leaving(i, b)) {
