@@ -178,7 +178,7 @@ fn stand_leg(
 
 /// The legs of a crouch on its way down (or back up): an action that moves `root_y`
 /// between two heights by interpolation solves the legs again for each height, the feet
-/// where they stood at its start (see [`stand_leg`]). Interpolated too, the knees
+/// where they stood at its start (see `stand_leg`). Interpolated too, the knees
 /// straighten faster than the pelvis rises (the leg's length is not linear in the knee's
 /// angle) and the soles went up to 10 cm into the floor halfway, and stayed there if the
 /// action stopped then.
