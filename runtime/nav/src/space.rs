@@ -806,6 +806,19 @@ fn build_mesh(floor: &Floor, obstacles: &[Footprint], inflated: f64) -> Mesh {
 mod tests {
     use super::*;
 
+    /// Walls 0.1 m thick and 2 m high round the four `corners` (x, z), in turn.
+    fn walls_round(space: &mut Space, corners: [(f64, f64); 4]) {
+        for i in 0..4 {
+            let (a, b) = (corners[i], corners[(i + 1) % 4]);
+            space.walls.push(Wall {
+                from: DVec2::new(a.0, a.1),
+                to: DVec2::new(b.0, b.1),
+                thickness: 0.1,
+                height: 2.0,
+            });
+        }
+    }
+
     /// A 2 m × 1 m table centred at (0, 2).
     fn table() -> Footprint {
         Footprint::hull(
@@ -919,16 +932,7 @@ mod tests {
     #[test]
     fn a_start_closed_in_names_what_closes_it_not_what_is_near_the_goal() {
         let mut space = Space::default();
-        let corners = [(4.0, 4.0), (8.0, 4.0), (8.0, 8.0), (4.0, 8.0)];
-        for i in 0..4 {
-            let (a, b) = (corners[i], corners[(i + 1) % 4]);
-            space.walls.push(Wall {
-                from: DVec2::new(a.0, a.1),
-                to: DVec2::new(b.0, b.1),
-                thickness: 0.1,
-                height: 2.0,
-            });
-        }
+        walls_round(&mut space, [(4.0, 4.0), (8.0, 4.0), (8.0, 8.0), (4.0, 8.0)]);
         let mut obstacles: Vec<Footprint> = space.wall_footprints().collect();
         // A stool inside the room, clear of the walls, and the table near the goal.
         obstacles.push(Footprint::disc("stool", DVec2::new(6.5, 6.5), 0.2));
@@ -1027,16 +1031,7 @@ mod tests {
     #[test]
     fn a_goal_closed_in_by_walls_names_them() {
         let mut space = Space::default();
-        let corners = [(4.0, 4.0), (6.0, 4.0), (6.0, 6.0), (4.0, 6.0)];
-        for i in 0..4 {
-            let (a, b) = (corners[i], corners[(i + 1) % 4]);
-            space.walls.push(Wall {
-                from: DVec2::new(a.0, a.1),
-                to: DVec2::new(b.0, b.1),
-                thickness: 0.1,
-                height: 2.0,
-            });
-        }
+        walls_round(&mut space, [(4.0, 4.0), (6.0, 4.0), (6.0, 6.0), (4.0, 6.0)]);
         let mut obstacles: Vec<Footprint> = space.wall_footprints().collect();
         obstacles.push(table());
         let e = space
