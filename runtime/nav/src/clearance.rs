@@ -40,7 +40,7 @@
 //! reach's detours and avoidance; a knee bending forwards towards an obstacle, to the
 //! walk (`actions/src/walk/knees.rs`).
 
-use crate::footprint::Footprint;
+use crate::footprint::{nearest_on_segment, Footprint};
 use smallvec::SmallVec;
 use troupe_body::glam::DVec2;
 
@@ -577,17 +577,6 @@ fn nearest_between(a: (DVec2, DVec2), b: (DVec2, DVec2)) -> (DVec2, DVec2) {
     .into_iter()
     .min_by(|x, y| (x.0 - x.1).length().total_cmp(&(y.0 - y.1).length()))
     .unwrap_or((a.0, b.0))
-}
-
-/// The point of segment `a`–`b` nearest `p`.
-fn nearest_on_segment(p: DVec2, a: DVec2, b: DVec2) -> DVec2 {
-    let ab = b - a;
-    let t = if ab.length_squared() > 0.0 {
-        ((p - a).dot(ab) / ab.length_squared()).clamp(0.0, 1.0)
-    } else {
-        0.0
-    };
-    a + ab * t
 }
 
 /// The step nearest `wanted` (by projections in a fixed order) within every limit, each of

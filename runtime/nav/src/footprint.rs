@@ -93,10 +93,7 @@ impl Footprint {
     pub fn nearest_point(&self, p: DVec2) -> Option<DVec2> {
         let n = self.outline.len();
         (0..n)
-            .map(|i| {
-                let (a, b) = (self.outline[i], self.outline[(i + 1) % n]);
-                a + (b - a) * segment_fraction(p - a, b - a)
-            })
+            .map(|i| nearest_on_segment(p, self.outline[i], self.outline[(i + 1) % n]))
             .min_by(|x, y| {
                 (*x - p)
                     .length_squared()
@@ -231,6 +228,11 @@ pub fn segment_distance(p: DVec2, a: DVec2, b: DVec2) -> f64 {
 /// `ap` to the point, `ab` to the segment's end.
 fn segment_distance_squared(ap: DVec2, ab: DVec2) -> f64 {
     (ab * segment_fraction(ap, ab) - ap).length_squared()
+}
+
+/// The point of the segment `a`–`b` nearest `p`.
+pub fn nearest_on_segment(p: DVec2, a: DVec2, b: DVec2) -> DVec2 {
+    a + (b - a) * segment_fraction(p - a, b - a)
 }
 
 /// How far along the segment `ab` (0 at its start, 1 at its end) is the point of it
