@@ -144,6 +144,48 @@ test("a walk cancelled during its turn on the spot stops turning part way round"
   expect(ok, string.format("both feet down (ankles %.3f and %.3f m)", l, r))
 end)
 
+test("a walk stopped as it turns on the spot beside a stand: no leg flips, no sole under the floor", function()
+  -- The first step of the turn lifted the right foot beside a stand, which the clearance
+  -- held there while the body turned on: the hip twisted past its limit, and when the
+  -- stop let the foot go, its swing turned the other way round (the hip twisting 1.37
+  -- rad in a tick, the sole 34 mm into the floor). Now the held foot holds the body's
+  -- turn; let go late in its swing, it still turns the rest of the way quickly (0.23 rad
+  -- in a tick: docs/navigation.md, Limits).
+  local ankle = standing_ankle()
+  local probe = troupe.actor{ name = "probe2", at = {60, 0, 60} }
+  local ball = probe:joint_position("l_metatarsal")[2]
+  local f = math.rad(284)
+  local ann = troupe.actor{ name = "ann", at = {12, 0, -8}, facing = 284 }
+  troupe.object{ name = "stand", shape = "cylinder", radius = 0.1, height = 0.95, mass = 10,
+                 at = {12 + 0.5 * math.sin(f) - 0.2 * math.cos(f), 0.475, -8 + 0.5 * math.cos(f) + 0.2 * math.sin(f)} }
+  local twist = { ann:dof("l_hip_twist"), ann:dof("r_hip_twist") }
+  local worst_jump, lowest = 0, 0
+  local function watch()
+    local now = { ann:dof("l_hip_twist"), ann:dof("r_hip_twist") }
+    for i = 1, 2 do worst_jump = math.max(worst_jump, math.abs(now[i] - twist[i])) end
+    twist = now
+    for _, side in ipairs({ "l", "r" }) do
+      lowest = math.max(lowest, ball - ann:joint_position(side .. "_metatarsal")[2],
+                        ankle - ann:joint_position(side .. "_ankle")[2])
+    end
+  end
+  run_until(function() watch(); return troupe.time() >= 1.63 end, 2)
+  local walks = { { to = {10.17, 0, -9.21}, speed = 1.178, stop = 0.51 }, { to = {11.20, 0, -6.80}, speed = 1.275, stop = 1.85 } }
+  for _, o in ipairs(walks) do
+    local w = ann:walk{ to = o.to, speed = o.speed }
+    local t0 = troupe.time()
+    run_until(function() watch(); return troupe.time() >= t0 + o.stop end, 3)
+    w:stop()
+    expect(run_until(function() watch(); return w.status ~= "active" and w.status ~= "terminating" end, 6),
+           "the stopped walk ended: " .. w.status)
+  end
+  run_until(function() watch(); return false end, 0.5)
+  print(string.format("stopped twice turning on the spot: hip twist's largest change %.3f rad in a tick, soles %.1f mm under the floor at most",
+    worst_jump, lowest * 1000))
+  expect(worst_jump < 0.3, string.format("a hip twisted %.3f rad in a tick", worst_jump))
+  expect(lowest < 0.005, string.format("a sole %.1f mm under the floor", lowest * 1000))
+end)
+
 test("a velocity walk with a duration ends with both feet down", function()
   standing_ankle()
   local ann = troupe.actor{ name = "ann" }

@@ -48,7 +48,7 @@ pub use route::{Plan, RootSample, Route, Speed};
 
 use crate::error::{track_dofs, OptionError, Result};
 use route::wrap;
-use std::f64::consts::TAU;
+use std::f64::consts::{PI, TAU};
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
 use troupe_body::math::smoothstep;
@@ -290,6 +290,9 @@ pub struct Walk {
     last_floor: Option<DVec2>,
     /// Each thigh on the previous tick, as [`knees`] sees it.
     thighs: [Option<knees::Thigh>; 2],
+    /// Per leg, whether its foot was held where it was on the previous tick (see
+    /// [`Walk::hold_foot`]): a swinging foot held turns the body no more than a planted one.
+    held: [bool; 2],
     /// Per leg, the ankle target's correction for the subtalar offset (see
     /// [`Rig::subtalar_shift`]), from the previous tick's solution.
     subtalar: [DVec3; 2],
@@ -353,6 +356,7 @@ impl Walk {
             shoulders: shoulders::Shoulders::default(),
             last_floor: None,
             thighs: [None; 2],
+            held: [false; 2],
             subtalar: [DVec3::ZERO; 2],
             dt: 0.01,
         })
@@ -693,18 +697,24 @@ impl Walk {
     /// feet allow: the body stays within [`TURN_ON_PLANTED`] of each planted foot's
     /// heading, or, already further, turns no further from it. A body that must turn
     /// more steps round, each landing turned from the other foot (see
-    /// [`Walk::landing_yaw`]).
+    /// [`Walk::landing_yaw`]). A swinging foot held where it was on the last tick (see
+    /// [`Walk::hold_foot`]) holds the body as a planted one does: a foot held by the
+    /// clearance as it lifted beside a stand let the body turn on at the catch-up's rate
+    /// until the hip twisted past its limit (1.4 rad more than the foot, the leg flipping
+    /// round when the foot went on).
     fn turn_on_planted_feet(&self, turn: f64) -> f64 {
-        self.feet.iter().fold(turn, |turn, foot| match *foot {
-            Foot::Stance { yaw, .. } => {
-                let off = wrap(self.heading - yaw);
-                if turn > 0.0 {
-                    turn.min((TURN_ON_PLANTED - off).max(0.0))
-                } else {
-                    turn.max(-(TURN_ON_PLANTED + off).max(0.0))
-                }
+        (0..2).fold(turn, |turn, leg| {
+            let yaw = match self.feet[leg] {
+                Foot::Stance { yaw, .. } => yaw,
+                Foot::Swing { .. } if self.held[leg] => self.poses[leg].yaw,
+                Foot::Swing { .. } => return turn,
+            };
+            let off = wrap(self.heading - yaw);
+            if turn > 0.0 {
+                turn.min((TURN_ON_PLANTED - off).max(0.0))
+            } else {
+                turn.max(-(TURN_ON_PLANTED + off).max(0.0))
             }
-            Foot::Swing { .. } => turn,
         })
     }
 
@@ -1108,6 +1118,7 @@ impl Walk {
             sample.heading = self.heading + allowed;
         }
         self.heading = sample.heading;
+        self.held = [false; 2];
         let v = sample.speed;
         let a = self.activity(v);
         self.cadence = self.cadence_speed(plan, self.t);
@@ -1302,6 +1313,7 @@ impl Walk {
             _ => return false,
         }
         self.poses[leg] = pose;
+        self.held[leg] = true;
         true
     }
 
@@ -1407,7 +1419,15 @@ fn swing_through(
     let rebased = (ankle - target * s) / (1.0 - s);
     from.x = rebased.x;
     from.z = rebased.z;
-    *from_yaw = to.yaw + wrap(yaw - to.yaw) / (1.0 - ease);
+    // The swing turns the nearer way from `from_yaw` to the landing's, so the start stays
+    // within a half turn of it: a foot held late in its swing, its start put ever further
+    // back, crossed the half turn and swung round the other way (the hip twisting 1.4 rad
+    // in a tick). Kept there, the foot, still held whole, turns the rest of the way
+    // quickly once let go. (Turning it towards its landing while held, as far as the
+    // start allows, turned toes into what held it: in the plaza's twelve layouts 27
+    // contacts deeper than 1 cm against 4.)
+    const HALF_TURN: f64 = PI - 0.05;
+    *from_yaw = to.yaw + (wrap(yaw - to.yaw) / (1.0 - ease)).clamp(-HALF_TURN, HALF_TURN);
 }
 
 /// A smooth minimum of three values (log-sum-exp with temperature `k`); the plain minimum
