@@ -59,6 +59,57 @@ test("a table between an actor and its goal: no solid enters it", function()
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
 end)
 
+-- The farthest (m, on the floor) either ankle of `a` is from its root: a leg reaches
+-- about 0.85 m for an adult.
+local function widest_stance(a)
+  local r = a:position()
+  local far = 0
+  for _, side in ipairs({ "l", "r" }) do
+    local p = a:joint_position(side .. "_ankle")
+    far = math.max(far, math.sqrt((p[1] - r[1])^2 + (p[3] - r[3])^2))
+  end
+  return far
+end
+
+-- A followed path (a keyframed Global_motion) avoids no one: it goes where it was told.
+-- Its body used to go on through whoever stood on its way, its feet left stepping in
+-- place behind it (a leg 1.5 m from its root, 7.6 cm of a foot in another's leg, in the
+-- crossing example). Now it is held at the other's body, its clock waiting, and slides
+-- past where the way is open.
+test("a followed path through someone standing is held at their body, its feet under it", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.actor{ name = "bob", at = {0.15, 0, 2}, facing = 180 }
+  local path = troupe.sequence{ root_x = { {0, 0}, {4, 0} }, root_z = { {0, 0}, {4, 4} } }
+  local w = ann:walk{ follow = path }
+  local widest = 0
+  local ok, deepest, between = watch(function()
+    widest = math.max(widest, widest_stance(ann))
+    return w.status ~= "active"
+  end, 20)
+  local p = ann:position()
+  print(string.format("followed path past someone standing: %s at t = %.2f s at (%.2f, %.2f); deepest %.4f m (%s); feet at most %.2f m from the root",
+    w.status, troupe.time(), p[1], p[3], deepest, between, widest))
+  expect(ok and w.status == "completed", "the walk ended: " .. w.status .. " " .. tostring(w.error))
+  expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
+  expect(widest < 0.7, string.format("a foot %.2f m from the root", widest))
+  expect(p[3] > 3.5, string.format("went on to the path's end (z %.2f)", p[3]))
+end)
+
+-- A velocity walk goes straight ahead: at a wall it stops, and once it has stood there
+-- for 10 s it fails, saying where and what holds it.
+test("a velocity walk into a wall stops at it and fails, naming the wall", function()
+  local ann = troupe.actor{ name = "ann" }
+  troupe.wall{ from = {-2, 2}, to = {2, 2}, thickness = 0.2, height = 2 }
+  local w = ann:walk{ velocity = 1.2 }
+  local ok, deepest, between = watch(function() return w.status ~= "active" end, 20)
+  print(string.format("velocity walk into a wall: %s at t = %.2f s (%s); deepest %.4f m (%s); root at z %.2f",
+    w.status, troupe.time(), tostring(w.error), deepest, between, ann:position()[3]))
+  expect(ok and w.status == "failed", "the walk ended: " .. w.status)
+  expect(tostring(w.error):find("stuck for 10 s, held by wall", 1, true), tostring(w.error))
+  expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
+  expect(ann:position()[3] < 1.8, string.format("stopped before the wall: z %.2f", ann:position()[3]))
+end)
+
 test("eight actors on a circle swap: no two solids interpenetrate", function()
   local actors, walks = {}, {}
   for i = 1, 8 do

@@ -117,6 +117,19 @@ test("velocity walk: a function of time for a duration, then it stops", function
   expect(z > 3.5 and z < 5.8, "walked " .. z .. " m forward")
 end)
 
+test("a velocity walk asked to stand still for 11 s beside a wall is standing, not stuck", function()
+  -- A velocity or a followed walk held back for 10 s fails as stuck (docs/navigation.md);
+  -- one whose own speed is 0 meanwhile stands by request.
+  local ann = troupe.actor{ name = "ann" }
+  troupe.wall{ from = {-2, 0.6}, to = {2, 0.6}, thickness = 0.2, height = 2 }
+  local w = ann:walk{ velocity = function(t) if t < 11 then return 0 else return 0.5 end end, duration = 14 }
+  run_until(function() return w.status ~= "active" and w.status ~= "pending" end, 12)
+  expect(w.status == "active", "still walking at 12 s: " .. w.status .. " " .. tostring(w.error))
+  expect(run_until(function() return w.status == "failed" end, 13),
+         "then held by the wall for 10 s it fails: " .. w.status)
+  expect(tostring(w.error):find("stuck for 10 s, held by wall 1", 1, true), tostring(w.error))
+end)
+
 test("follow a keyframed Global_motion path", function()
   local ann = troupe.actor{ name = "ann" }
   local path = troupe.sequence{

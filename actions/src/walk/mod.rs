@@ -390,12 +390,21 @@ impl Walk {
 
     /// Why the walk is stuck, if it is (see [`STUCK_TIME`]): how far from its goal, and the
     /// obstacle nearest the body, among `footprints`.
-    fn stuck(&mut self, ctx: &GeneratorContext, footprints: &FootprintsAround) -> Option<String> {
-        let Route::Path { points, .. } = &self.route else {
-            return None;
-        };
+    fn stuck(
+        &mut self,
+        ctx: &GeneratorContext,
+        plan: &Plan,
+        footprints: &FootprintsAround,
+    ) -> Option<String> {
         let crowd = ctx.world.crowd;
         let at = *crowd.positions.get(ctx.actor)?;
+        // A followed or a velocity walk whose plan stands (a speed of 0 asked for) stands
+        // by request; only one held back while its plan goes on is stuck.
+        let path = matches!(self.route, Route::Path { .. });
+        if !path && plan.speed(self.steer.plan_time(self.t, self.t)) < STALLED_SPEED {
+            self.progress = Some((at, self.t));
+            return None;
+        }
         match self.progress {
             // Along the way, not towards the goal: a path may lead away from its end.
             Some((stood, _)) if (at - stood).length() < PROGRESS => {}
@@ -418,16 +427,23 @@ impl Walk {
             self.progress = Some((at, self.t));
             return None;
         }
-        let left = (*points.last()? - at).length();
+        let left = match &self.route {
+            Route::Path { points, .. } => {
+                format!(" {:.2} m from its goal", (*points.last()? - at).length())
+            }
+            Route::Follow(_) => {
+                let end = self.end_sample(plan).position;
+                format!(" {:.2} m from its path's end", (end - at).length())
+            }
+            Route::Velocity { .. } => String::new(),
+        };
         let against = footprints
             .within(1.0)
             .map(|f| (f.distance(at), &f.name))
             .min_by(|a, b| a.0.total_cmp(&b.0))
             .map(|(_, name)| format!(", held by {name}"))
             .unwrap_or_default();
-        Some(format!(
-            "stuck {left:.2} m from its goal for {STUCK_TIME} s{against}"
-        ))
+        Some(format!("stuck{left} for {STUCK_TIME} s{against}"))
     }
 
     /// A new plan round the actors standing in the way, from where the body is now to
@@ -806,9 +822,7 @@ impl Walk {
     /// follows it (see [`Walk::follow_steering`]), where a walk that went on along its
     /// plan left the foot a stride behind and the pelvis sank to reach it.
     fn hold_for(&mut self, landing: &Landing) {
-        // Only a walk along a path is steered (a followed or a velocity walk has no
-        // plan to hold back: steering it would shift its keyframed way for good).
-        if landing.pinched && !self.steer.engaged && matches!(self.route, Route::Path { .. }) {
+        if landing.pinched && !self.steer.engaged {
             self.steer.engage(self.t, DVec2::ZERO);
         }
     }
@@ -1152,9 +1166,7 @@ impl Walk {
         // benchmark's tick).
         let crowd = ctx.world.crowd;
         let navigated = ctx.world.space.walking == Walking::Navigated;
-        if let (Route::Path { .. }, Some(&from), true) =
-            (&self.route, crowd.positions.get(ctx.actor), navigated)
-        {
+        if let (Some(&from), true) = (crowd.positions.get(ctx.actor), navigated) {
             let clear = from + limit_step(&self.body(ctx), floor - from, around);
             if clear != floor {
                 if !self.steer.engaged {
@@ -1539,11 +1551,15 @@ impl Generator for Walk {
             crowd.footprints_around(at, std::mem::take(&mut self.found))
         });
         // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
+        // Every walk is steered, a followed or a velocity walk round its keyframed path or
+        // its line as one with a goal round its route (it takes no new route): a followed
+        // path went on through whoever stood on it, its feet pinched into stepping in
+        // place behind a body that went on (a leg 1.1 m short of its foot).
         let mut gathered = false;
-        if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
+        if let Some(footprints) = &footprints {
             let (t, near) = (self.t, (&mut self.near, &mut self.scratch));
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
-            if self.steer.engaged {
+            if self.steer.engaged && matches!(self.route, Route::Path { .. }) {
                 // Only a steered walk plans anew: the stall is looked at only for one.
                 let stalled = self.stalled(ctx, &plan);
                 if self.replan.due(self.t, self.steer.rate, stalled) {
@@ -1553,8 +1569,8 @@ impl Generator for Walk {
                 }
             }
         }
-        if let (Some(footprints), Route::Path { .. }) = (&footprints, &self.route) {
-            if let Some(why) = self.stuck(ctx, footprints) {
+        if let Some(footprints) = &footprints {
+            if let Some(why) = self.stuck(ctx, &plan, footprints) {
                 self.plan = Some(plan);
                 return Step::Failed(why);
             }
@@ -1689,10 +1705,11 @@ impl Generator for Walk {
     }
 
     /// The plan ahead, sampled every `NAVIGATION_SAMPLE` seconds from where its clock
-    /// is now, and the last avoidance decision; walks along a path only (`to`, `path`).
+    /// is now, and the last avoidance decision; walks that end only (not a velocity walk
+    /// without a duration).
     fn navigation(&self) -> Option<Navigation> {
         let plan = self.plan.as_ref()?;
-        if !matches!(self.route, Route::Path { .. }) || !plan.end_time.is_finite() {
+        if !plan.end_time.is_finite() {
             return None;
         }
         let now = self.steer.plan_time(self.t, self.t).min(plan.end_time);
