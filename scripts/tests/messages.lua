@@ -219,3 +219,64 @@ test("the test helpers name themselves and what they got", function()
   expect(said(test, "inner", function() end):find("test() defines a test at the scene's top level", 1, true),
          "a test inside a test would never run")
 end)
+
+test("a table raised with error is reported with its place and fields, not its address", function()
+  -- They said `table: 0x55…`, with the place only in the traceback.
+  local ann = troupe.actor{ name = "ann" }
+  local here
+  local b = ann:behave(function()
+    wait(0.05)
+    _, here = pcall(function() error("") end); error({ code = "blocked", msg = "the door is shut" })
+  end)
+  b:wait()
+  local e = ann:behavior_error()
+  expect(e:find(here .. '{code = "blocked", msg = "the door is shut"}\nstack traceback:', 1, true) == 1, e)
+  expect(not e:find("table: 0x", 1, true), e)
+  -- A coroutine the behavior made passes the table on; the place is where it was raised.
+  local bob = troupe.actor{ name = "bob", at = {2, 0, 0} }
+  b = bob:behave(function()
+    wait(0.05)
+    coroutine.wrap(function()
+      _, here = pcall(function() error("") end); error({ 1, 2, nested = { deep = { deeper = true } } })
+    end)()
+  end)
+  b:wait()
+  e = bob:behavior_error()
+  expect(e:find(here .. "{1, 2, nested = {deep = {…}}}\n", 1, true) == 1, e)
+  -- assert with a table message, and the function an action calls.
+  local cy = troupe.actor{ name = "cy", at = {4, 0, 0} }
+  b = cy:behave(function() wait(0.05); _, here = pcall(function() error("") end); assert(false, { why = 42.5 }) end)
+  b:wait()
+  expect(cy:behavior_error():find(here .. "{why = 42.5}\n", 1, true) == 1, cy:behavior_error())
+  e = says(function() ann:walk{ velocity = function(t) error({ code = 4 }) end, duration = 2 } end,
+    "walk: `velocity` failed at t = 0.00 s: ")
+  expect(e:find("messages%.lua:%d+: {code = 4}$"), e)
+  -- Caught, the table is the table; a table with __tostring reads as it says.
+  local ok, t = pcall(error, { code = 7 })
+  expect(not ok and type(t) == "table" and t.code == 7, "pcall gets the table")
+  local dan = troupe.actor{ name = "dan", at = {6, 0, 0} }
+  b = dan:behave(function()
+    wait(0.05)
+    error(setmetatable({}, { __tostring = function() return "a door is shut" end }))
+  end)
+  b:wait()
+  expect(dan:behavior_error():find("a door is shut\n", 1, true) == 1, dan:behavior_error())
+end)
+
+test("error and assert keep Lua's places: levels, tail calls, no place", function()
+  local _, e, here
+  _, e = pcall(function() return error("tail") end); _, here = pcall(function() error("") end)
+  expect(e == here .. "tail", e)
+  local function check(x) if not x then error("the caller's fault", 2) end end
+  _, e = pcall(function() check(false) end); _, here = pcall(function() error("") end)
+  expect(e == here .. "the caller's fault", e)
+  _, e = pcall(error, "no place", 0)
+  expect(e == "no place", e)
+  _, e = pcall(function() assert(false) end); _, here = pcall(function() error("") end)
+  expect(e == here .. "assertion failed!", e)
+  _, e = pcall(function() assert(nil, "why") end); _, here = pcall(function() error("") end)
+  expect(e == here .. "why", e)
+  expect(select("#", assert(1, 2, 3)) == 3, "assert returns its arguments")
+  _, e = pcall(function() error("x", "two") end)
+  expect(e:find("bad argument #2 to 'error'", 1, true), e)
+end)

@@ -152,6 +152,40 @@ test("walk to a painting on the far face of a wall ends on its side, through the
   expect(d < 0.75, string.format("%.2f m from the cup", d))
 end)
 
+test("walk to an actor behind a thin wall ends on their side, through the doorway", function()
+  -- The standing point a talk away was the first one on the walker's side: facing bob
+  -- through the wall, a metre off.
+  troupe.wall{ from = {-6, 2}, to = {-0.6, 2} }
+  troupe.wall{ from = {0.6, 2}, to = {6, 2} }
+  local ann = troupe.actor{ name = "ann", at = {-3, 0, 0.5} }
+  local bob = troupe.actor{ name = "bob", at = {-3, 0, 2.5}, facing = 180 }
+  local w = ann:walk{ to = bob }
+  expect(run_until(function() return w.status ~= "active" end, 25), "ended")
+  expect(w.status == "completed", "completed: " .. tostring(w.error))
+  local p, q = ann:position(), bob:position()
+  -- The wall spans z 1.95-2.05: bob's side is z > 2.05, a body's radius off the wall.
+  expect(p[3] > 2.05 + RADIUS, string.format("stands at (%.2f, %.2f), on bob's side", p[1], p[3]))
+  local d = flat_dist(p, q[1], q[3])
+  expect(math.abs(d - 1.0) < 0.25, string.format("%.2f m from bob", d))
+  local want = math.atan(q[1] - p[1], q[3] - p[3])
+  local off = math.abs((ann:dof("root_yaw") - want + math.pi) % (2 * math.pi) - math.pi)
+  expect(off < 0.15, string.format("faces bob: %.2f vs %.2f", ann:dof("root_yaw"), want))
+end)
+
+test("walk to an actor walled in on every side fails naming the wall", function()
+  local c = { {4, 4}, {6, 4}, {6, 6}, {4, 6} }
+  for i = 1, 4 do
+    troupe.wall{ from = c[i], to = c[i % 4 + 1], thickness = 0.1, height = 2 }
+  end
+  local ann = troupe.actor{ name = "ann" }
+  troupe.actor{ name = "bob", at = {5, 0, 5} }
+  local w = ann:walk{ to = "bob" }
+  expect(run_until(function() return w.status ~= "active" end, 2), "ended: " .. w.status)
+  expect(w.status == "failed", "failed: " .. w.status)
+  expect(w.error:find("no place to stand near bob: every side is blocked or behind wall %d"), w.error)
+  expect(flat_dist(ann:position(), 0, 0) < 0.01, "did not move")
+end)
+
 test("walls from Lua: a walk goes through the doorway", function()
   local ann = troupe.actor{ name = "ann" }
   -- A wall across z = 2 with a 1.2 m door at x in [1, 2.2].

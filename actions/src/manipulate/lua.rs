@@ -19,7 +19,7 @@ pub fn build_manipulate(
     let common = CommonOptions::parse(ctx, m, Some(&t), &["object", "keys"])?;
     let options = ManipulateOptions {
         object: object_arg(ctx.lua, m, "object", t.get("object")?)?,
-        keys: parse_keys(t.get("keys")?, common.duration)?,
+        keys: parse_keys(ctx.lua, t.get("keys")?, common.duration)?,
     };
     let (generator, scope) = ctx
         .with_scene(|s| options.manipulate(s, ctx.actor))?
@@ -31,7 +31,7 @@ pub fn build_manipulate(
 
 /// Object keys from `{ {t = s, at = {x, y, z}, rotation = {x, y, z}}, … }` or a Lua
 /// function `f(t) -> at[, rotation]` sampled every 0.04 s (4.4) over `duration`.
-fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
+fn parse_keys(lua: &mlua::Lua, v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
     let m = "manipulate";
     match v {
         Value::Table(list) => {
@@ -88,7 +88,7 @@ fn parse_keys(v: Value, duration: Option<f64>) -> mlua::Result<Vec<ObjectKey>> {
                     (i as f64 * STEP).min(duration)
                 };
                 let (at, r): (Value, Value) = f.call(time).map_err(|e| {
-                    let e = caught_text(&e);
+                    let e = caught_text(lua, &e);
                     err(m, format!("`keys` failed at t = {time:.2} s: {e}"))
                 })?;
                 let position = vec3(&at, &format!("{m}: keys({time})"))?;

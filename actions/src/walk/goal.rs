@@ -4,6 +4,7 @@
 
 use std::f64::consts::PI;
 use troupe_body::glam::DVec2;
+use troupe_body::{Skeleton, Transform};
 use troupe_scene::space::{Footprint, Walking, NEIGHBOUR_RANGE};
 use troupe_scene::GeneratorContext;
 
@@ -103,8 +104,18 @@ impl Goal {
                 let theirs = world.crowd.radii.get(*actor).copied().unwrap_or(radius);
                 let distance = distance.max(radius + theirs + LEAST_ACTOR_GAP);
                 let centre = DVec2::new(at.x, at.z);
-                stand_near(ctx, start, (centre, radius), |_| distance, |_| None)
-                    .map_err(|e| format!("no place to stand near {name}: {e}"))?
+                // Face to face, shoulders to shoulders: a point from which a wall (or a
+                // cupboard) stands between the two is no place to talk from.
+                let shoulders = shoulder_height(ctx);
+                let their_shoulders = shoulders_of(&world.actors[*actor].skeleton, &other.globals);
+                stand_near(
+                    ctx,
+                    start,
+                    (centre, radius),
+                    |_| distance,
+                    |stand| hidden_by(ctx, (stand, shoulders), (centre, their_shoulders)),
+                )
+                .map_err(|e| format!("no place to stand near {name}: {e}"))?
             }
         };
         Ok(Planned {
@@ -197,7 +208,8 @@ fn stand_near<'w>(
 /// `shoulders` m high: one that the straight reach from the shoulders to the point goes
 /// through, not over, other than one the object rests on. A painting hung on one face of
 /// a wall is not within reach from the other side, however near; a cup on a table is,
-/// and one on a high cupboard too, from the cupboard's side.
+/// and one on a high cupboard too, from the cupboard's side. For a walk to an actor the
+/// point is the other's shoulders: a wall between the two hides them, a table does not.
 fn hidden_by<'w>(
     ctx: &'w GeneratorContext,
     (stand, shoulders): (DVec2, f64),
@@ -240,8 +252,13 @@ const THROUGH: f64 = 0.001;
 /// How high (m) the walker's shoulders are, as it stood at the end of the last tick: where
 /// a reach for an object starts (the root's height for a body without shoulders).
 fn shoulder_height(ctx: &GeneratorContext) -> f64 {
-    let globals = &ctx.posture.globals;
-    ctx.skeleton
+    shoulders_of(ctx.skeleton, &ctx.posture.globals)
+}
+
+/// How high (m) the shoulders of a body of `skeleton` are in the posture of `globals`
+/// (the root's height for a body without shoulders).
+fn shoulders_of(skeleton: &Skeleton, globals: &[Transform]) -> f64 {
+    skeleton
         .joints()
         .iter()
         .zip(globals)

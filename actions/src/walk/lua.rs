@@ -159,7 +159,7 @@ pub fn build_walk(
                     for i in 0..n {
                         let time = i as f64 * PROFILE_DT;
                         let v: Value = f.call(time).map_err(|e| {
-                            let e = caught_text(&e);
+                            let e = caught_text(ctx.lua, &e);
                             err("walk", format!("`velocity` failed at t = {time:.2} s: {e}"))
                         })?;
                         let v = number(&v).ok_or_else(|| {

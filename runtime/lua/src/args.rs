@@ -113,9 +113,10 @@ pub fn error_text(e: &mlua::Error) -> String {
 
 /// The text of the error of a Lua function that Rust called (a walk's `velocity`), as a
 /// script sees an error it caught: [`error_text`] without the traceback mlua appends to
-/// the message (a failed behavior's report keeps it).
-pub fn caught_text(e: &mlua::Error) -> String {
-    let text = error_text(e);
+/// the message (a failed behavior's report keeps it), a table raised with `error` told
+/// by its place and fields rather than `table: 0x…`.
+pub fn caught_text(lua: &mlua::Lua, e: &mlua::Error) -> String {
+    let text = crate::error_value::explain(lua, error_text(e));
     match text.split_once("\nstack traceback:") {
         Some((message, _)) => message.to_string(),
         None => text,

@@ -15,6 +15,7 @@ pub mod api;
 pub mod args;
 mod dynamics;
 pub mod error;
+mod error_value;
 mod handles;
 pub mod kinds;
 mod messages;
@@ -203,6 +204,7 @@ impl Director {
             "__troupe_value_name",
             lua.create_function(|_, v: Value| Ok(args::value_name(&v)))?,
         )?;
+        error_value::install(lua)?;
         lua.load(include_str!("prelude.lua"))
             .set_name("=prelude")
             .exec()?;
@@ -928,6 +930,44 @@ mod tests {
         // The leak kept its memory in a global: the calm behavior may fail too once the
         // heap is full, but the scene itself ticks on.
         assert_eq!(s.scene().tick(), 100);
+    }
+
+    #[test]
+    fn a_table_raised_with_error_is_reported_with_its_place_and_fields() {
+        let mut s = session();
+        let err = s
+            .load_str(
+                "local x = 1\nerror({ msg = 'shut', code = 'blocked' })",
+                "top",
+            )
+            .unwrap_err()
+            .to_string();
+        assert!(
+            err.starts_with("top:2: {code = \"blocked\", msg = \"shut\"}\nstack traceback:"),
+            "{err}"
+        );
+        s.load_str(
+            "troupe.actor{ name = 'ann' }:behave(function()
+               wait(0)
+               error({ 'a', n = 1.5, t = { 1 } })
+             end)
+             troupe.actor{ name = 'bob' }:behave(function() error(42) end)",
+            "scene",
+        )
+        .unwrap();
+        for _ in 0..3 {
+            s.tick().unwrap();
+        }
+        let reports = s.behaviors();
+        let ann = reports[0].error.clone().expect("ann failed");
+        assert!(
+            ann.starts_with("scene:3: {\"a\", n = 1.5, t = {1}}\nstack traceback:"),
+            "{ann}"
+        );
+        assert!(ann.contains("[C]: in function 'error'"), "{ann}");
+        // Any other value is Lua's text of it, as before.
+        let bob = reports[1].error.clone().expect("bob failed");
+        assert!(bob.starts_with("42\nstack traceback:"), "{bob}");
     }
 
     #[test]

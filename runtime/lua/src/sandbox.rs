@@ -203,7 +203,7 @@ impl Sandbox {
             (_, Some(msg)) => Failure::Limit(msg),
             (Err(e), None) => match root(&e) {
                 mlua::Error::MemoryError(_) => Failure::Memory(self.memory_message(lua)),
-                _ => Failure::Error(describe(&e)),
+                _ => Failure::Error(crate::error_value::explain(lua, describe(&e))),
             },
         };
         self.relax(lua, Err(failure))
@@ -212,6 +212,7 @@ impl Sandbox {
     /// Between resumes, only the heap cap holds; memory a failed resume left is
     /// collected.
     fn relax<R>(&self, lua: &Lua, r: Result<R, Failure>) -> Result<R, Failure> {
+        crate::error_value::forget(lua);
         if matches!(r, Err(Failure::Limit(_) | Failure::Memory(_))) {
             let _ = lua.set_memory_limit(0);
             let _ = lua.gc_collect();
