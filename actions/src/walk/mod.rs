@@ -113,6 +113,10 @@ pub const STOP_STANCE: f64 = 0.45;
 /// Seconds over which the spine, arms and pelvis go from the posture the actor had to the
 /// walk's.
 pub const BLEND_IN_TIME: f64 = 0.4;
+/// Least pitch (radians) of a foot with its heel raised when a walk starts, that the walk
+/// lowers over [`BLEND_IN_TIME`] (see `Walk::start_pitch`); a foot pitched less is
+/// taken as flat.
+pub const RAISED_HEEL: f64 = 0.05;
 /// Seconds ahead at which a rising planned speed already sets the cadence.
 pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
@@ -293,6 +297,10 @@ pub struct Walk {
     /// Per leg, whether its foot was held where it was on the previous tick (see
     /// [`Walk::hold_foot`]): a swinging foot held turns the body no more than a planted one.
     held: [bool; 2],
+    /// Per leg, the foot's pitch when the walk started: below 0 for a heel raised (a
+    /// crouch stands on its toes), lowered as the pelvis blends in (see
+    /// [`Walk::start_pitch`]).
+    start_pitch: [f64; 2],
     /// Per leg, the ankle target's correction for the subtalar offset (see
     /// [`Rig::subtalar_shift`]), from the previous tick's solution.
     subtalar: [DVec3; 2],
@@ -357,6 +365,7 @@ impl Walk {
             last_floor: None,
             thighs: [None; 2],
             held: [false; 2],
+            start_pitch: [0.0; 2],
             subtalar: [DVec3::ZERO; 2],
             dt: 0.01,
         })
@@ -998,6 +1007,16 @@ impl Walk {
                 if roll > 0.0 && u > HEEL_OFF {
                     pitch = -roll * smoothstep((u - HEEL_OFF) / (1.0 - HEEL_OFF));
                 }
+                // A heel that was raised when the walk started comes down as the pelvis
+                // rises (see `Walk::legs_at`), over the second half of the rise: put down
+                // at once, under a pelvis still crouched, it bent the ankle past its limit
+                // and the toes went 8 cm into the floor (1.5 cm, coming down as the
+                // pelvis rose).
+                let down = smoothstep(2.0 * self.t / BLEND_IN_TIME - 1.0);
+                let raised = self.start_pitch[leg] * (1.0 - down);
+                if raised < 0.0 && raised < pitch {
+                    pitch = raised;
+                }
                 FootPose {
                     ankle: rig.ankle_from_plant(leg, plant, yaw, pitch),
                     yaw,
@@ -1091,6 +1110,22 @@ impl Walk {
             arms[i] = [flex, 0.06 * a, elbow0 + 0.6 * flex.max(0.0), 0.0];
         }
         (sway, vertical, [tilt, list, rot], spine, arms)
+    }
+
+    /// The pitch of foot `leg` (heading `yaw`) in the posture the walk starts from, if its
+    /// heel is raised (below [`RAISED_HEEL`]: the angle of the line from the ankle to the
+    /// ball against that line on a flat foot); else 0, a foot flat enough to stand on.
+    fn start_pitch(rig: &Rig, leg: usize, ctx: &GeneratorContext, yaw: f64) -> f64 {
+        let l = &rig.legs[leg];
+        let [ankle, ball] = l.joints.map(|j| ctx.posture.globals[j].translation);
+        let along = DQuat::from_rotation_y(-yaw) * (ball - ankle);
+        let flat = l.ball - DVec3::Y * rig.ankle_height;
+        let pitch = along.y.atan2(along.z) - flat.y.atan2(flat.z);
+        if pitch < -RAISED_HEEL {
+            pitch
+        } else {
+            0.0
+        }
     }
 
     /// The part of this walker's body its step carries, as the previous tick left it (see
@@ -1488,13 +1523,23 @@ impl Generator for Walk {
             };
         }
         let plan = Plan::new(&self.route, start, heading);
-        // Both feet start planted where they are, flat.
+        // Both feet start planted where they are, flat or with the heel raised.
+        let mut floor = f64::INFINITY;
         for leg in 0..2 {
             let g = ctx.posture.globals[rig.legs[leg].joints[0]];
             let fwd = g.rotation * DVec3::Z;
             let yaw = fwd.x.atan2(fwd.z);
+            let pitch = Walk::start_pitch(rig, leg, ctx, yaw);
+            self.start_pitch[leg] = pitch;
+            // The floor point under the ankle of the foot put flat, its ball where it is.
+            let raised = if pitch < 0.0 {
+                rig.ankle_from_plant(leg, DVec2::ZERO, yaw, pitch)
+            } else {
+                DVec3::Y * rig.ankle_height
+            };
+            floor = floor.min(g.translation.y - raised.y);
             self.feet[leg] = Foot::Stance {
-                plant: DVec2::new(g.translation.x, g.translation.z),
+                plant: DVec2::new(g.translation.x - raised.x, g.translation.z - raised.z),
                 yaw,
                 rocker: 0.0,
                 // The right foot starts late in its support: it lifts without rolling.
@@ -1507,8 +1552,6 @@ impl Generator for Walk {
         self.lambda = [0.0, 0.5];
         self.t = 0.0;
         self.start_q = q.clone();
-        let ankle = |leg: usize| ctx.posture.globals[rig.legs[leg].joints[0]].translation.y;
-        let floor = ankle(0).min(ankle(1)) - rig.ankle_height;
         let root = DVec3::new(start.x, 0.0, start.y);
         self.carrying = carry::Carrying::start(ctx, carry::heading_frame(root, heading), floor);
         self.settle_since = None;
@@ -1517,6 +1560,7 @@ impl Generator for Walk {
         self.twist = [None; 2];
         self.last_floor = None;
         self.thighs = [None; 2];
+        self.held = [false; 2];
         self.subtalar = [DVec3::ZERO; 2];
         self.steer = steer::Steer::start(ctx);
         self.replan = replan::Replan::default();
