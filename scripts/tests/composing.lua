@@ -434,6 +434,25 @@ test("carrying a box in both hands: both stay on it, level, as the walk brings i
   expect(box.holder == ann, "still held")
 end)
 
+test("carrying a ball picked up off the floor by a wall turns no arm joint faster than 8 rad/s", function()
+  -- The ball came up from the floor at arm's length, the shoulder's abduction at its
+  -- limit and the elbow straight: the carrying arm's solve found the arm another way in
+  -- one tick (the upper arm turning 0.42 rad, the elbow bending 0.45 rad).
+  troupe.wall{ from = {-3, 1.0}, to = {3, 1.0}, thickness = 0.1 }
+  local ball = troupe.object{ name = "ball", shape = "sphere", radius = 0.1, at = {0.3, 0.1, 0.80}, mass = 0.5 }
+  local ann = troupe.actor{ name = "ann", at = {-0.5, 0, -1.5} }
+  local to = ann:walk{ to = ball }
+  expect(run_until(function() return to.status == "completed" end, 10), "walked to the ball: " .. to.status)
+  local g = ann:grasp{ object = ball }
+  expect(g:wait() == "completed", "grasp: " .. tostring(g.error))
+  local w = ann:walk{ to = {-0.5, 0, -1.5} }
+  local fastest, where = require("support.solids").fastest_dof(ann, "right_arm", w)
+  print(string.format("carrying a ball off the floor: fastest arm DOF %.2f rad/s (%s)", fastest, where))
+  expect(w.status == "completed", "walk: " .. tostring(w.error))
+  expect(ball.holder == ann, "still holds the ball")
+  expect(fastest <= 8 + 1e-6, string.format("%s turned at %.2f rad/s", where, fastest))
+end)
+
 test("carrying a cup to a table: the hand passes over the table, the walk arrives, the cup goes down on it", function()
   local ann = troupe.actor{ name = "ann" }
   -- Taken from a stand at arm's length, the cup is carried out in front, over the table.

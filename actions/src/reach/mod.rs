@@ -58,7 +58,7 @@ pub const EXTERNAL_MARGIN: f64 = 0.03;
 /// another way at once: a shoulder's abduction jumped 31° in one tick (54 rad/s) going
 /// over another's arm. A reach whose arm is still held back when its time is up goes on
 /// until it has caught up, for up to [`CATCH_UP`]; `manipulate` and a hand following
-/// another's are held to it too ([`hold_to_joint_speed`]).
+/// another's and a walk's carrying arm are held to it too ([`hold_to_joint_speed`]).
 pub(crate) const MAX_JOINT_SPEED: f64 = 8.0;
 
 /// Longest a reach or a manipulation goes on past its duration (s) while its arm, held

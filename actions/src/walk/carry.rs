@@ -22,6 +22,7 @@
 //! the arm comes back.
 
 use crate::grasp::plan::ArmIk;
+use crate::reach::hold_to_joint_speed;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::math::smoothstep;
@@ -225,6 +226,12 @@ impl Carrying {
                 if arm.ik.solve(sk, &mut self.q, &goal.mul(&arm.grip)).is_err() {
                     continue;
                 }
+                // The solve may find the arm another way at once where a DOF locks at
+                // its limit: a ball carried up from the floor, the shoulder's abduction
+                // at its limit and the elbow straight, turned the upper arm 0.42 rad and
+                // bent the elbow 0.45 rad in a tick. The hand, and what it holds, lags
+                // its carrying place for a few ticks instead.
+                hold_to_joint_speed(&mut self.q, arm.values.iter().copied(), ctx.dt);
                 for (d, v) in arm.values.iter_mut() {
                     *v = self.q[*d];
                     out.set(*d, *v);
