@@ -117,6 +117,28 @@ test("velocity walk: a function of time for a duration, then it stops", function
   expect(z > 3.5 and z < 5.8, "walked " .. z .. " m forward")
 end)
 
+test("a followed path whose root_yaw turns the body round as it walks on moves it smoothly", function()
+  -- Walking on 3 m while turning to face back (or all the way round): held by its planted
+  -- feet, the walk's clock was pushed on along the way the body faced, not the way it
+  -- went, and the body jumped 0.13 m (0.22 m turning all the way round) in a tick.
+  for i, turn in ipairs({ math.pi, 2 * math.pi }) do
+    local ann = troupe.actor{ name = "ann" .. i, at = {4 * i, 0, 0} }
+    local w = ann:walk{ follow = troupe.sequence{ root_x = {{0, 0}, {4, 0}}, root_z = {{0, 0}, {4, 3}},
+                                                  root_yaw = {{0, 0}, {4, turn}} } }
+    local last, fastest = ann:position(), 0
+    expect(run_until(function()
+      local p = ann:position()
+      fastest = math.max(fastest, math.sqrt((p[1] - last[1])^2 + (p[3] - last[3])^2))
+      last = p
+      return w.status ~= "active" and w.status ~= "pending"
+    end, 10), "ended")
+    print(string.format("a followed path turning %.0f°: the root moved %.1f mm in a tick at most", math.deg(turn), fastest * 1000))
+    expect(w.status == "completed", "completed: " .. w.status .. " " .. tostring(w.error))
+    expect(fastest < 0.02, string.format("the root moved %.1f mm in a tick", fastest * 1000))
+    expect(flat_dist(ann:position(), 4 * i, 3) < 0.05, "at the path's end")
+  end
+end)
+
 test("a velocity walk asked to stand still for 11 s beside a wall is standing, not stuck", function()
   -- A velocity or a followed walk held back for 10 s fails as stuck (docs/navigation.md);
   -- one whose own speed is 0 meanwhile stands by request.

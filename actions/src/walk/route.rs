@@ -562,6 +562,9 @@ impl Recent {
     }
 }
 
+/// The time step (s) over which [`Plan::forward`] finds a followed path's way.
+const FORWARD_DT: f64 = 0.01;
+
 /// Fastest a stop may bring the body to rest, in seconds from cruising speed: the
 /// cadence keeps its rhythm for [`super::CADENCE_LOOKBACK`] after, so the feet catch up
 /// within a step.
@@ -853,6 +856,22 @@ impl Plan {
             } => profile.at(t - spot_turn).1,
             PlanKind::Follow { .. } => self.sample(t, 0.0).speed,
         }
+    }
+
+    /// The unit floor direction (x, z) the plan moves the body along at `t`: its heading's
+    /// on a route, which faces the way it goes; a followed path's own way, since its
+    /// heading may be a `root_yaw` track facing anywhere (a body turning round to walk on
+    /// backwards), its heading's where it stands still.
+    pub fn forward(&self, t: f64) -> DVec2 {
+        let sample = self.sample(t, 0.0);
+        let along = match &self.kind {
+            PlanKind::Follow { .. } => {
+                let ahead = self.sample(t + FORWARD_DT, 0.0);
+                (ahead.position - sample.position).try_normalize()
+            }
+            PlanKind::Along { .. } => None,
+        };
+        along.unwrap_or_else(|| direction(sample.heading))
     }
 
     /// The body's position, heading and speed `t` seconds after the start; `fallback` is

@@ -106,7 +106,8 @@ impl Steer {
         let mut s = plan.sample(self.plan_time(t, now), fallback);
         if self.engaged {
             s.position += self.offset + self.drift * (t - now).clamp(0.0, 0.5);
-            s.speed = (direction(s.heading) * s.speed * self.rate + self.drift).length();
+            let forward = plan.forward(self.plan_time(t, now));
+            s.speed = (forward * s.speed * self.rate + self.drift).length();
         }
         s
     }
@@ -176,7 +177,10 @@ impl Steer {
     /// moves the plan's clock, never back past where it stood on the last tick; the rest
     /// joins the offset.
     pub fn hold(&mut self, plan: &Plan, by: DVec2) {
-        let forward = direction(plan.sample(self.tau, 0.0).heading);
+        // Along the way the plan goes, not its heading: a followed path turned to face
+        // back as it walked on had its clock pushed on, not held, when held (the body
+        // jumping 0.13 m in a tick once let go).
+        let forward = plan.forward(self.tau);
         let speed = plan.speed(self.tau);
         let mut along = 0.0;
         if speed > 0.05 {
