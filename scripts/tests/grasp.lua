@@ -480,6 +480,27 @@ test("shake hands at 0.5 to 1.1 m apart, the other's hand hanging: it is held ou
   expect(s.error:find("cannot hold out the right hand to `far_ann` 2.50 m away") ~= nil, s.error)
 end)
 
+test("a hand that holds something shakes or holds no hand: refused at once, naming what it holds", function()
+  -- A shake with a cup in the hand ran: the other's fingers closed round the cup.
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {0.25, 1.05, 0.35}, mass = 0.3 }
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "ann holds the cup")
+  local s = ann:shake_hands{ other = bob }
+  expect(run_until(function() return s.status == "failed" end, 0.1), "failed at once: " .. s.status)
+  expect(tostring(s.error):find("the right hand already holds `cup`: place or release it first", 1, true), tostring(s.error))
+  -- The other's hand full: bob's shake with ann, who holds the cup in her right (once
+  -- bob's arm is his again: the follower the first shake gave him lets go).
+  local s2 = bob:shake_hands{ other = ann }
+  expect(run_until(function() return s2.status == "failed" end, 3), "failed as it starts: " .. s2.status)
+  expect(tostring(s2.error):find("`ann`'s right hand already holds `cup`", 1, true), tostring(s2.error))
+  -- With her left hand, which holds nothing, the shake goes on.
+  local s3 = ann:shake_hands{ other = bob, hand = "left", other_hand = "left" }
+  expect(run_until(function() return s3.status ~= "pending" end, 3), "the left shake starts: " .. s3.status)
+  expect(s3.status == "active", "the left shake runs: " .. s3.status .. " " .. tostring(s3.error))
+  expect(cup.holder == ann, "she still holds the cup")
+end)
+
 test("walking hand in hand 0.6 m apart, bodies apart: they walk together, the hold holds", function()
   -- Their discs do not touch: until held hands made them companions, each avoided the
   -- other and the hold broke ("the hands came apart").

@@ -711,6 +711,15 @@ impl HoldHand {
     }
 }
 
+/// The name of what the hand of `actor` at joint `wrist` holds in `world`, if anything.
+fn held_in<'w>(world: &'w World, actor: usize, wrist: usize) -> Option<&'w str> {
+    world
+        .held
+        .iter()
+        .find(|(_, h)| h.actor == actor && h.held_by(wrist))
+        .map(|&(object, _)| world.objects[object].name.as_str())
+}
+
 /// Signed distance from `p` to actor `actor`'s body solids in `world`.
 fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
     posed_distance(
@@ -756,6 +765,26 @@ impl Generator for HoldHand {
         let their_skeleton = &w.actors[self.other].skeleton;
         let theirs = HandModel::new(their_skeleton, self.other_side)?;
         self.other_wrist = theirs.sensors.wrist;
+        // A hand that holds something takes no other hand: a shake with a cup in it
+        // closed the other's fingers round the cup.
+        let mine = HandModel::new(ctx.skeleton, self.side)?.sensors.wrist;
+        for (actor, wrist, side) in [
+            (ctx.actor, mine, self.side),
+            (self.other, self.other_wrist, self.other_side),
+        ] {
+            if let Some(held) = held_in(w, actor, wrist) {
+                let whose = if actor == ctx.actor {
+                    "the".to_string()
+                } else {
+                    format!("`{other}`'s")
+                };
+                return Err(format!(
+                    "{whose} {} hand already holds `{held}`: place or release it first",
+                    side.name()
+                )
+                .into());
+            }
+        }
         // Their body as it will be once the hand is held out, or as it is.
         let posed;
         let their_globals: &[Transform] = if self.offered {
