@@ -320,7 +320,12 @@ fn candidates(
 }
 
 /// The name of what the `side` hand of `actor` holds in `world`, if it holds anything.
-fn held_in<'w>(world: &'w World, skeleton: &Skeleton, actor: usize, side: Side) -> Option<&'w str> {
+pub(crate) fn held_in<'w>(
+    world: &'w World,
+    skeleton: &Skeleton,
+    actor: usize,
+    side: Side,
+) -> Option<&'w str> {
     world.held.iter().find_map(|&(object, h)| {
         let on_side = h.wrists().any(|wrist| {
             skeleton

@@ -36,7 +36,8 @@ use crate::grasp::body::{BodyReach, CrouchLegs};
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};
 use crate::grasp::plan::{
-    frame_rotation, ArmIk, CLEARANCE, REACH_ANGLE, REACH_TOLERANCE, ROTATION_WEIGHT, SEARCH_STEP,
+    frame_rotation, held_in, ArmIk, CLEARANCE, REACH_ANGLE, REACH_TOLERANCE, ROTATION_WEIGHT,
+    SEARCH_STEP,
 };
 use crate::grasp::GraspType;
 use crate::reach::arm_detour::{ArmDetour, PlannedArm};
@@ -711,15 +712,6 @@ impl HoldHand {
     }
 }
 
-/// The name of what the hand of `actor` at joint `wrist` holds in `world`, if anything.
-fn held_in<'w>(world: &'w World, actor: usize, wrist: usize) -> Option<&'w str> {
-    world
-        .held
-        .iter()
-        .find(|(_, h)| h.actor == actor && h.held_by(wrist))
-        .map(|&(object, _)| world.objects[object].name.as_str())
-}
-
 /// Signed distance from `p` to actor `actor`'s body solids in `world`.
 fn body_distance(world: &World, actor: usize, p: DVec3) -> f64 {
     posed_distance(
@@ -767,12 +759,11 @@ impl Generator for HoldHand {
         self.other_wrist = theirs.sensors.wrist;
         // A hand that holds something takes no other hand: a shake with a cup in it
         // closed the other's fingers round the cup.
-        let mine = HandModel::new(ctx.skeleton, self.side)?.sensors.wrist;
-        for (actor, wrist, side) in [
-            (ctx.actor, mine, self.side),
-            (self.other, self.other_wrist, self.other_side),
+        for (actor, skeleton, side) in [
+            (ctx.actor, ctx.skeleton, self.side),
+            (self.other, their_skeleton, self.other_side),
         ] {
-            if let Some(held) = held_in(w, actor, wrist) {
+            if let Some(held) = held_in(w, skeleton, actor, side) {
                 let whose = if actor == ctx.actor {
                     "the".to_string()
                 } else {
