@@ -152,6 +152,35 @@ test("a ball on the floor 0.4 m ahead: bends the knees, on the balls of the feet
   expect(ball.holder == ann, "still holds the ball")
 end)
 
+test("a ball on the floor by a table: the crouch keeps the knees off it, or says it cannot", function()
+  -- The knees come forwards as the pelvis goes down: walked to a ball 5 cm out from a
+  -- café table's edge, the crouch put a thigh 48 mm into the table.
+  local results = {}
+  for i, out in ipairs({ 0.05, 0.15 }) do
+    local x = 10 * i
+    troupe.object{ name = "table" .. i, shape = "box", size = {0.84, 0.75, 0.87}, at = {x - 1.425, 0.375, -0.934}, mass = 20 }
+    local ball = troupe.object{ name = "ball" .. i, shape = "sphere", radius = 0.08, at = {x - 1.007 + out, 0.08, -0.85},
+                                mass = 0.4, obstacle = false }
+    local p1 = troupe.actor{ name = "p" .. i, height = 1.797, at = {x - 0.5, 0, 0.6}, facing = 180 }
+    local w = p1:walk{ to = ball }
+    expect(run_until(function() return w.status ~= "active" and w.status ~= "pending" end, 10), "walked")
+    local g = p1:grasp{ object = ball }
+    local deepest = 0
+    run_until(function()
+      deepest = math.max(deepest, (troupe.deepest_overlap()))
+      return g.status ~= "active" and g.status ~= "pending"
+    end, 6)
+    results[i] = { g = g, deepest = deepest }
+    print(string.format("a ball %.2f m out from a table's edge: grasp %s (%s); deepest %.4f m",
+      out, g.status, tostring(g.error), deepest))
+    expect(deepest <= 0.01, string.format("%.3f m into the table", deepest))
+  end
+  expect(results[1].g.status == "completed"
+         or tostring(results[1].g.error):find("the knees clear of `table1`", 1, true),
+         "by the edge: grasped, or refused naming the table: " .. tostring(results[1].g.error))
+  expect(results[2].g.status == "completed", "15 cm out: grasped: " .. tostring(results[2].g.error))
+end)
+
 test("a 0.4 m ball at 1.0 m, 0.45 m ahead, with both hands", function()
   local ann = troupe.actor{ name = "ann" }
   local ball = troupe.object{ name = "big", shape = "sphere", radius = 0.2, at = {0, 1.0, 0.45}, mass = 0.5 }

@@ -8,7 +8,7 @@
 //! that interpolation would take an arm through another actor's body or an obstacle,
 //! the hand goes round it through temporary goals instead ([`ArmDetour`], 4.6.3).
 
-use super::body::{BodyReach, CrouchLegs};
+use super::body::{furniture_round, BodyReach, CrouchLegs};
 use super::body::{REACH_ANGLE, REACH_TOLERANCE};
 use super::close::HandModel;
 use super::follow::FollowBody;
@@ -667,7 +667,8 @@ impl Release {
         let body_scope = BodyReach::body_scope(sk)?;
         if let Some(miss) = arm_miss {
             let allowed = ctx.scope.intersection(&body_scope);
-            let body = BodyReach::new(sk, allowed)?;
+            let furniture = furniture_round(ctx.world, ctx.actor, &obj.name);
+            let body = BodyReach::new(sk, allowed)?.keeping_knees_off(furniture);
             let reached = match body.search_beyond_the_arm(q0, &goals)? {
                 Ok(reached) => reached,
                 Err(shortfall) => {

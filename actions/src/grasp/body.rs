@@ -15,6 +15,8 @@ use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
 use troupe_body::kinematics::{center_of_mass, forward_kinematics};
 use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton, Transform};
+use troupe_scene::space::Footprint;
+use troupe_scene::World;
 
 /// A planned hand pose must be reachable within this distance (metres)…
 pub const REACH_TOLERANCE: f64 = 0.005;
@@ -29,6 +31,10 @@ pub const MAX_LEAN: f64 = 0.7;
 /// How far (metres) the centre of mass may go beyond the ankles and the balls of the feet:
 /// the heel behind the ankle and the toes ahead of the balls still carry weight.
 pub const SUPPORT_MARGIN: (f64, f64) = (0.05, 0.06);
+
+/// The least gap (m) a crouch leaves between a thigh and the furniture (see
+/// [`BodyReach::keeping_knees_off`]).
+pub const KNEE_CLEARANCE: f64 = 0.01;
 
 /// What the reach may move besides the arms.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
@@ -246,7 +252,7 @@ impl CrouchLegs {
 
 /// What kept every posture tried from counting, gathered over a search: an error then
 /// names what limited the reach, not only how far the wrists stayed from their goals.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
+#[derive(Clone, Debug, Default, PartialEq)]
 pub struct Shortfall {
     /// The least the wrists missed by (metres, plus 0.1 m per radian), over the postures
     /// that did not reach.
@@ -262,6 +268,9 @@ pub struct Shortfall {
     /// (as above) of the postures crouched that deep, for the error to name the legs when
     /// it gives one of those.
     pub legs: Option<(f64, [Option<f64>; 3])>,
+    /// What the knees would have gone into, crouched deeper (see
+    /// [`BodyReach::keeping_knees_off`]).
+    pub knees_by: Option<String>,
 }
 
 impl Shortfall {
@@ -324,12 +333,31 @@ impl Shortfall {
             figures.iter().all(Option::is_none)
                 || (figures.iter().zip(shown)).any(|(f, s)| f.is_some() && *f == s)
         }) {
+            let knees = match &self.knees_by {
+                Some(by) => format!(" and the knees clear of `{by}`"),
+                None => String::new(),
+            };
             parts.push(format!(
-                "the legs crouch {depth:.2} m at most with the feet on the floor"
+                "the legs crouch {depth:.2} m at most with the feet on the floor{knees}"
             ));
         }
         parts.join("; ")
     }
+}
+
+/// The obstacles within 1.5 m of actor `actor`'s root in `world` but the one called
+/// `except` (the object the hands go to), for [`BodyReach::keeping_knees_off`].
+pub fn furniture_round(world: &World, actor: usize, except: &str) -> Vec<Footprint> {
+    let Some(&at) = world.crowd.positions.get(actor) else {
+        return Vec::new();
+    };
+    world
+        .crowd
+        .footprints_around(at, Vec::new())
+        .within(1.5)
+        .filter(|f| f.name != except)
+        .cloned()
+        .collect()
 }
 
 /// Whole-body reaching for one actor's skeleton, limited to `allowed` DOFs besides the
@@ -341,6 +369,13 @@ pub struct BodyReach<'a> {
     legs: Scope,
     root_y: usize,
     rig: Option<Rig>,
+    /// The furniture round the body, which a crouch keeps the thighs off (see
+    /// [`BodyReach::keeping_knees_off`]).
+    obstacles: Vec<Footprint>,
+    /// The knee joints (left, right), if the skeleton has them.
+    knees: Option<[usize; 2]>,
+    /// What last held a crouch back by the knees.
+    knees_by: std::cell::RefCell<Option<String>>,
 }
 
 impl<'a> BodyReach<'a> {
@@ -353,7 +388,60 @@ impl<'a> BodyReach<'a> {
             legs: skeleton.scope("legs")?,
             root_y: skeleton.dof("root_y")?,
             rig: Rig::new(skeleton).ok(),
+            obstacles: Vec::new(),
+            knees: skeleton
+                .joint("l_knee")
+                .ok()
+                .zip(skeleton.joint("r_knee").ok())
+                .map(|(l, r)| [l, r]),
+            knees_by: Default::default(),
         })
+    }
+
+    /// Crouches no deeper than keeps each thigh [`KNEE_CLEARANCE`] off `obstacles` (or,
+    /// already nearer, no nearer): the knees come forwards as the pelvis goes down, and a
+    /// ball picked up from the floor by a café table put a thigh 48 mm into it.
+    pub fn keeping_knees_off(mut self, obstacles: Vec<Footprint>) -> BodyReach<'a> {
+        self.obstacles = obstacles;
+        self
+    }
+
+    /// What held a crouch back by the knees, the last time one was (see
+    /// [`BodyReach::keeping_knees_off`]).
+    pub fn knees_by(&self) -> Option<String> {
+        self.knees_by.borrow().clone()
+    }
+
+    /// The least gap (m) between a thigh of the body posed at `q` and the obstacles whose
+    /// top is above it, and which obstacle; `None` with none round.
+    fn thighs_gap(&self, q: &[f64]) -> Option<(f64, usize)> {
+        let (rig, knees) = (self.rig.as_ref()?, self.knees?);
+        if self.obstacles.is_empty() {
+            return None;
+        }
+        let mut g = vec![Transform::IDENTITY; self.skeleton.joints().len()];
+        forward_kinematics(self.skeleton, q, &mut g);
+        let heading = q[rig.root[3]];
+        let pelvis = [q[rig.pelvis[0]], q[rig.pelvis[1]], q[rig.pelvis[2]]];
+        let pelvis_rot = rig.pelvis_rotation(heading, pelvis);
+        let mut least: Option<(f64, usize)> = None;
+        for (leg, &knee) in knees.iter().enumerate() {
+            let hip = rig.hip_position(leg, g[0].translation, heading, pelvis_rot);
+            let knee = g[knee].translation;
+            let [r_hip, r_knee] = rig.legs[leg].thigh_radii;
+            for k in [0.5, 0.75, 1.0] {
+                let (p, r) = (hip.lerp(knee, k), r_hip + (r_knee - r_hip) * k);
+                for (i, f) in self.obstacles.iter().enumerate() {
+                    if p.y - r < f.top {
+                        let gap = f.distance(DVec2::new(p.x, p.z)) - r;
+                        if least.is_none_or(|(g, _)| gap < g) {
+                            least = Some((gap, i));
+                        }
+                    }
+                }
+            }
+        }
+        least
     }
 
     /// The stages `allowed` permits, cheapest first.
@@ -400,6 +488,7 @@ impl<'a> BodyReach<'a> {
                 Err(missed) => shortfall.note(missed),
             }
         }
+        shortfall.knees_by = self.knees_by();
         Ok(Err(shortfall))
     }
 
@@ -539,9 +628,23 @@ impl<'a> BodyReach<'a> {
 
     /// Lowers the pelvis of `q` by `depth` with the feet where they are (see
     /// [`stand_leg`]); false if the legs cannot with the feet on the floor.
+    /// Also false where the thighs would come nearer the furniture than
+    /// [`KNEE_CLEARANCE`] (see [`BodyReach::keeping_knees_off`]).
     fn crouch(&self, q: &mut [f64], depth: f64) -> bool {
         let Some(rig) = &self.rig else { return false };
-        lower_pelvis(self.skeleton, rig, self.root_y, q, depth)
+        let before = self.thighs_gap(q);
+        if !lower_pelvis(self.skeleton, rig, self.root_y, q, depth) {
+            return false;
+        }
+        match (self.thighs_gap(q), before) {
+            (Some((gap, i)), before)
+                if gap < KNEE_CLEARANCE && before.is_none_or(|(was, _)| gap < was) =>
+            {
+                *self.knees_by.borrow_mut() = Some(self.obstacles[i].name.clone());
+                false
+            }
+            _ => true,
+        }
     }
 
     /// The deepest (metres, to a millimetre) the pelvis of `q0` goes down, at most

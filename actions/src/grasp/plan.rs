@@ -15,7 +15,7 @@
 //! 4. candidates are ranked by a weighted sum of the translation and rotation from the
 //!    current hand pose, and the first one inverse kinematics can reach is kept.
 
-use super::body::{BodyReach, Shortfall, Stage};
+use super::body::{furniture_round, BodyReach, Shortfall, Stage};
 use super::close::HandModel;
 use super::decision::{decide, Decision, GraspType};
 use crate::error::OptionError;
@@ -556,7 +556,8 @@ pub fn plan_grasp(
         Some(s) => s,
         None => BodyReach::body_scope(skeleton)?,
     };
-    let body = BodyReach::new(skeleton, allowed)?;
+    let furniture = furniture_round(world, actor, &obj.name);
+    let body = BodyReach::new(skeleton, allowed)?.keeping_knees_off(furniture);
     let attempts: Vec<Vec<(Side, usize)>> = if two {
         let n = frames.iter().map(|(_, r)| r.len()).min().unwrap_or(0);
         (0..n)
@@ -625,6 +626,7 @@ pub fn plan_grasp(
         "" => String::new(),
         used => format!(" (even {used})"),
     };
+    shortfall.knees_by = body.knees_by();
     Err(crate::error::ActionError::Unfit(format!(
         "`{}` is out of reach of the {} hand{}{how}: {}",
         obj.name,

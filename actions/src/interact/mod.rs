@@ -32,7 +32,7 @@ pub mod options;
 pub use options::{GiveOptions, HoldHandOptions, ReceiveOptions};
 
 use crate::grasp::action::{CLOSE_SECONDS, OPEN_SECONDS};
-use crate::grasp::body::{BodyReach, CrouchLegs};
+use crate::grasp::body::{furniture_round, BodyReach, CrouchLegs};
 use crate::grasp::close::HandModel;
 use crate::grasp::pattern::{BoundPattern, HandPattern};
 use crate::grasp::plan::{
@@ -339,7 +339,8 @@ impl Give {
         let allowed = ctx
             .scope
             .intersection(&BodyReach::body_scope(ctx.skeleton)?);
-        let body = BodyReach::new(ctx.skeleton, allowed)?;
+        let furniture = furniture_round(w, ctx.actor, &obj.name);
+        let body = BodyReach::new(ctx.skeleton, allowed)?.keeping_knees_off(furniture);
         // A giver crouched or leaning (from picking the object up) stands up as it carries
         // the object: planned from its upright posture, not from the crouch.
         let from = match straightened(w, ctx.actor) {

@@ -21,7 +21,7 @@ pub mod options;
 pub use options::{ReachOptions, Reacher};
 
 use crate::error::{OptionError, Result};
-use crate::grasp::body::{BodyReach, CrouchLegs, Stage};
+use crate::grasp::body::{furniture_round, BodyReach, CrouchLegs, Stage};
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
@@ -280,7 +280,8 @@ impl Reach {
         if allowed.is_empty() {
             return Ok(());
         }
-        let reach = BodyReach::new(sk, allowed)?;
+        let furniture = furniture_round(ctx.world, ctx.actor, "");
+        let reach = BodyReach::new(sk, allowed)?.keeping_knees_off(furniture);
         let task = IkTask {
             effector: self.spec.effector,
             goal: Goal {
