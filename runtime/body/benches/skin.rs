@@ -1,8 +1,9 @@
 //! Skin benchmarks: what the viewer and the CPU pay per actor-frame for a skinned adult.
 //! Side by side in one run: the forward kinematics that give the joints' frames, the
 //! skinning transforms of the joints alone, those of every slot (the joints and the
-//! shoulders' helper joints, whose frames are computed from the posture: a swing-twist
-//! split and two slerps each), and the whole skin deformed on the CPU.
+//! helper joints, whose frames are computed from the posture: a swing-twist split and two
+//! slerps each, and for the sliding helpers at the hips, knees and elbows their move from
+//! the joint's centre), and the whole skin deformed on the CPU.
 //!
 //! Run: `cargo bench -p troupe-body --bench skin`.
 

@@ -960,7 +960,8 @@ fn vertex_colours_multiply_the_materials() {
 fn a_character_troupe_exported_moves_as_troupes_own_skin() {
     // troupe's skin written as `troupe export gltf` does, read back as a user's
     // character and dressed on the same body: its shoulders' helper joints turn as the
-    // skin's do, so raised arms deform alike.
+    // skin's do, and its hips', knees' and elbows' sliding helpers move as theirs do, so
+    // raised arms and a raised knee deform alike.
     let (skel, skin, c) = troupe_skin_read_back("helpers");
     let (low, high) = skin
         .positions
@@ -994,6 +995,8 @@ fn a_character_troupe_exported_moves_as_troupes_own_skin() {
             ("r_shoulder_twist", 30.0),
             ("l_shoulder_flexion", 150.0),
             ("r_elbow_flexion", 60.0),
+            ("l_hip_flexion", 100.0),
+            ("l_knee_flexion", 90.0),
         ],
     );
     let (ours, theirs) = (skin.deform(&g), d.deform(&g));

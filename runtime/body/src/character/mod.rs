@@ -173,9 +173,10 @@ enum Rule {
     /// Keeps its bind pose relative to its parent.
     Follows { parent: usize },
     /// One of the helper joints of troupe's own skin (a character troupe exported: its
-    /// shoulders' `l_shoulder_50`, `l_shoulder_twist_25`, …): turned from troupe's bind
-    /// pose as the helper turns (`Helper::frame`), placed along its parent at its bind
-    /// offset, so the skin it carries moves as troupe's does.
+    /// shoulders' `l_shoulder_50`, `l_shoulder_twist_25`, its hips' `l_hip_slide`, …):
+    /// turned from troupe's bind pose as the helper turns (`Helper::frame`), placed along
+    /// its parent at its bind offset and moved as the helper moves from its joint's
+    /// centre, so the skin it carries moves as troupe's does.
     Helper {
         helper: usize,
         parent: usize,
@@ -537,12 +538,18 @@ impl Dressing {
     /// joints made (steps 3 and 4 of [the module](self)), then the legs bent so that the
     /// feet stay on troupe's.
     pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
-        // How far each helper has turned from troupe's bind pose (the same for both
-        // passes below).
-        let helpers_turned: Vec<DQuat> = self
+        // How far each helper has turned from troupe's bind pose, and how far a sliding
+        // helper has moved from its joint's centre (the same for both passes below).
+        let helpers_turned: Vec<Transform> = self
             .helpers
             .iter()
-            .map(|(h, bind_inv)| h.frame(globals).rotation * *bind_inv)
+            .map(|(h, bind_inv)| {
+                let frame = h.frame(globals);
+                Transform::new(
+                    frame.rotation * *bind_inv,
+                    frame.translation - globals[h.joint].translation,
+                )
+            })
             .collect();
         let frames = self.rotated_frames(globals, &helpers_turned, &[]);
         if self.legs.is_empty() {
@@ -557,12 +564,13 @@ impl Dressing {
     }
 
     /// Every bone's world frame with the rotations of troupe's joints and the helpers'
-    /// turns `helpers_turned`, a mapped bone turned further by its entry of `turns`
-    /// (bone, world rotation) if it has one.
+    /// turns and moves `helpers_turned` (the world rotation from the bind, the world
+    /// offset from the joint's centre), a mapped bone turned further by its entry of
+    /// `turns` (bone, world rotation) if it has one.
     fn rotated_frames(
         &self,
         globals: &[Transform],
-        helpers_turned: &[DQuat],
+        helpers_turned: &[Transform],
         turns: &[(usize, DQuat)],
     ) -> Vec<Transform> {
         let mut frames: Vec<Transform> = Vec::with_capacity(self.bones.len());
@@ -597,8 +605,8 @@ impl Dressing {
                     parent,
                     offset,
                 } => Transform::new(
-                    helpers_turned[helper] * bone.bind.rotation,
-                    frames[parent].transform_point(offset),
+                    helpers_turned[helper].rotation * bone.bind.rotation,
+                    frames[parent].transform_point(offset) + helpers_turned[helper].translation,
                 ),
             };
             frames.push(frame);

@@ -47,7 +47,7 @@ impl SharedSkin {
     pub fn skinning_matrices(&self, globals: &[Transform]) -> Vec<DMat4> {
         let scale = DMat4::from_scale(DVec3::splat(self.scale));
         self.skin
-            .frames(globals)
+            .scaled_frames(globals, self.scale)
             .iter()
             .zip(&self.skin.rest)
             .map(|(frame, rest)| matrix(frame) * scale * matrix(&rest.inverse()))

@@ -18,8 +18,9 @@
 //! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
 //!    and smoothed over the surface so that they change continuously from vertex to vertex;
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
-//!    by a fraction of the joint's swing (across it) or twist (down the limb), so that a
-//!    bend folds less skin over.
+//!    by a fraction of the joint's swing (across it) or twist (down the limb), or, next
+//!    to the hips, knees and elbows, turned with the joint about a point moved into the
+//!    bend, so that a bend folds less skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
@@ -301,7 +302,15 @@ impl Skin {
     /// The frame of every skinning slot for joint frames `globals`: the joints' own, then
     /// each helper's.
     pub fn frames(&self, globals: &[Transform]) -> Vec<Transform> {
-        with_helpers(globals, &self.helpers)
+        self.scaled_frames(globals, 1.0)
+    }
+
+    /// [`Skin::frames`] for the joint frames `globals` of this skin's body scaled by
+    /// `scale` (a [`SharedSkin`]'s): the sliding helpers' moves scale with the body.
+    pub fn scaled_frames(&self, globals: &[Transform], scale: f64) -> Vec<Transform> {
+        let mut frames = globals.to_vec();
+        frames.extend(self.helpers.iter().map(|h| h.scaled_frame(globals, scale)));
+        frames
     }
 
     /// The skeleton joint a skinning slot follows: the slot's own joint, or the joint a
@@ -352,6 +361,9 @@ impl Skin {
         }
         for r in &mut skin.rest {
             r.translation *= scale;
+        }
+        for h in &mut skin.helpers {
+            h.pivot *= scale;
         }
         skin
     }

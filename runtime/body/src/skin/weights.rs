@@ -19,7 +19,9 @@
 //!    chain that bracket the joint's share, so the vertex turns by about the same part of
 //!    the bend but as a blend of two nearly equal rotations. Those helpers take the
 //!    joint's swing only; what is left of the joint's own weight goes down the limb's
-//!    twist helpers, by how far along the bone the vertex lies ([`TWIST_SPAN`]).
+//!    twist helpers, by how far along the bone the vertex lies ([`TWIST_SPAN`]). At the
+//!    hips, knees and elbows the joint's weight near the joint goes likewise to its
+//!    sliding helper, and back to the joint further down the limb.
 //! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
@@ -118,8 +120,10 @@ struct Chain {
     /// Helper slots across the joint and the fraction of the joint's swing each takes,
     /// ascending.
     links: Vec<(u16, f64)>,
-    /// Helper slots along the limb (the whole swing) and the fraction of the joint's
-    /// twist each takes, ascending.
+    /// Helper slots along the limb (the whole swing), ascending by the fraction of the
+    /// joint's twist each takes, and each one's place on the ladder: evenly spaced from
+    /// 0, the joint itself being at 1 (the shoulder's rungs at 0, ¼, ½ and ¾ of the
+    /// twist are at 0, ¼, ½ and ¾; a sliding helper is a ladder of one rung, at 0).
     ladder: Vec<(u16, f64)>,
     /// The bone at rest, from the joint to its child.
     bone: (DVec3, DVec3),
@@ -129,6 +133,7 @@ struct Chain {
 /// joint's twist, and where it takes all of it: below the armpit, and before the elbow's
 /// band (which blends the whole twist with the forearm). Starting at 0.1-0.2 or ending at
 /// 0.7 turned more triangles over at the 1.40 m adult's worst posture (95-96 against 85).
+/// Likewise where the limb's skin goes from a sliding helper back to its joint.
 const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
 
 impl Chains {
@@ -139,7 +144,8 @@ impl Chains {
     /// the arm and the chest (vt1, vt6), which are the clavicle's ancestors: counted at
     /// the chain's parent end, their share of an armpit vertex blends with the arm's
     /// through helpers a quarter of the bend apart, instead of a straight blend of the
-    /// chest and an arm turned by up to 180°.
+    /// chest and an arm turned by up to 180°. A joint with a ladder but no helpers across
+    /// it (a sliding helper's) has no parent's end: the band across it keeps its weights.
     pub(crate) fn new(
         helpers: &[Helper],
         first_slot: usize,
@@ -176,6 +182,13 @@ impl Chains {
         for c in &mut chains {
             c.links.sort_by(|a, b| a.1.total_cmp(&b.1));
             c.ladder.sort_by(|a, b| a.1.total_cmp(&b.1));
+            let rungs = c.ladder.len() as f64;
+            for (k, rung) in c.ladder.iter_mut().enumerate() {
+                rung.1 = k as f64 / rungs;
+            }
+            if c.links.is_empty() {
+                c.parents.clear();
+            }
         }
         Chains(chains)
     }
@@ -491,6 +504,7 @@ mod tests {
             twist: 0.0,
             axis: DVec3::NEG_Y,
             bind: DQuat::IDENTITY,
+            pivot: 0.0,
         }
     }
 
@@ -594,6 +608,33 @@ mod tests {
         assert!((weight_in(&row, 12) - 0.8).abs() < 1e-12, "{row:?}");
         assert!((weight_in(&row, 13) - 0.2).abs() < 1e-12, "{row:?}");
         assert_eq!(weight_in(&row, 2), 0.0);
+    }
+
+    #[test]
+    fn a_sliding_helper_takes_its_joints_weight_near_the_joint_and_no_parents() {
+        // Joint 2 (parent 1) with one sliding helper (slot 10); its bone runs 1 m down.
+        let slide = Helper {
+            twist: 1.0,
+            pivot: 0.05,
+            ..across(2, 1.0)
+        };
+        let chains = Chains::new(
+            &[slide],
+            10,
+            2,
+            |j| j.checked_sub(1),
+            |_| (DVec3::ZERO, DVec3::NEG_Y),
+        );
+        let at =
+            |along: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -along, 0.0));
+        let (from, to) = TWIST_SPAN;
+        // The band across the joint keeps its parent's weight; the joint's goes to the
+        // helper near the joint, back to the joint down the limb, half and half midway.
+        assert_eq!(at(0.5 * from), vec![(1, 0.4), (10, 0.6)]);
+        assert_eq!(at(to + 0.1), vec![(1, 0.4), (2, 0.6)]);
+        let row = at(0.5 * (from + to));
+        assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 2) - 0.3).abs() < 1e-12, "{row:?}");
     }
 
     /// A strip of `n` squares along x, 1 cm wide, as triangles.

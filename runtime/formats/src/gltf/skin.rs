@@ -5,8 +5,9 @@
 //!
 //! The skin's helper joints ([`troupe_body::skin::helpers`]) become joints of the rig
 //! ([`with_helper_joints`]): nodes under their joint's parent whose rotation is animated
-//! as the fraction of the joint's that the helper takes, so a glTF viewer's linear blend
-//! skinning deforms the skin as troupe's viewer does.
+//! as the fraction of the joint's that the helper takes (and, for the sliding helpers at
+//! the hips, knees and elbows, whose translation is animated too), so a glTF viewer's
+//! linear blend skinning deforms the skin as troupe's viewer does.
 
 use crate::rig::Rig;
 use glam::Vec3;
@@ -22,7 +23,9 @@ use troupe_body::{Skin, Transform};
 /// joints appended after its joints, in the skin's slot order, so that the skin's
 /// `JOINTS_0` slots are the rig's joints: each helper a child of its joint's parent, at
 /// the joint's rest offset, turned on every frame by [`troupe_body::skin::Helper::local_rotation`]
-/// of the joint's local rotation. The rig's rest becomes the skin's bind pose (the arms
+/// of the joint's local rotation and, if it slides, moved from that offset by
+/// [`troupe_body::skin::Helper::local_translation`] (an animated translation). The rig's
+/// rest becomes the skin's bind pose (the arms
 /// raised sideways, [`troupe_body::skin::bind_posture`]), so that the inverse bind
 /// matrices written from it bind the skin where it was made.
 pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
@@ -40,14 +43,23 @@ pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
     }
     for h in &skin.helpers {
         let rest = out.rest[h.joint];
+        let slot = out.names.len();
         out.names.push(h.name.clone());
         out.parents.push(Some(h.parent));
         out.rest.push(Transform::new(
             h.local_rotation(rest.rotation),
-            rest.translation,
+            rest.translation + h.local_translation(rest.rotation),
         ));
         for (frame, rotations) in out.rotations.iter_mut().enumerate() {
             rotations.push(h.local_rotation(rig.rotations[frame][h.joint]));
+        }
+        if h.pivot != 0.0 {
+            // Appended last, so `moving` stays increasing.
+            out.moving.push(slot);
+            for (frame, translations) in out.translations.iter_mut().enumerate() {
+                let local = rig.rotations[frame][h.joint];
+                translations.push(rest.translation + h.local_translation(local));
+            }
         }
     }
     out
@@ -309,6 +321,10 @@ mod tests {
         let mut seq = Sequence::new("raise");
         seq.meta.insert("rate".into(), "10".into());
         for (dof, v) in [
+            ("l_hip_flexion", 2.0),
+            ("l_hip_abduction", 0.6),
+            ("r_knee_flexion", 1.9),
+            ("r_elbow_flexion", 2.2),
             ("l_shoulder_abduction", 2.8),
             ("l_shoulder_flexion", 0.9),
             ("r_shoulder_twist", -1.2),
