@@ -480,6 +480,20 @@ test("shake hands at 0.5 to 1.1 m apart, the other's hand hanging: it is held ou
   expect(s.error:find("cannot hold out the right hand to `far_ann` 2.50 m away") ~= nil, s.error)
 end)
 
+test("a grasp that may not lean or crouch says so when the arm alone misses", function()
+  -- A grasp started as a dying receive still held the spine tried the arm alone and said
+  -- only "the best grasp misses by 0.336 m", where leaning would have reached.
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {0.2, 0.8, 0.75}, mass = 0.3 }
+  local ann = troupe.actor{ name = "ann" }
+  local g = ann:grasp{ object = cup, scope = "right_arm+right_hand" }
+  expect(run_until(function() return done(g) or g.status == "failed" end, 3), "ended: " .. g.status)
+  expect(g.status == "failed" and tostring(g.error):find("(the arm alone: the spine and the legs are outside the action's scope", 1, true),
+         tostring(g.error))
+  local g2 = ann:grasp{ object = cup }
+  expect(run_until(function() return done(g2) or g2.status == "failed" end, 6), "ended")
+  expect(g2.status == "completed", "with the whole body it reaches: " .. tostring(g2.error))
+end)
+
 test("a hand that holds something shakes or holds no hand: refused at once, naming what it holds", function()
   -- A shake with a cup in the hand ran: the other's fingers closed round the cup.
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1, at = {0.25, 1.05, 0.35}, mass = 0.3 }

@@ -623,6 +623,13 @@ pub fn plan_grasp(
     }
     let hands: Vec<&str> = frames.iter().map(|(s, _)| s.name()).collect();
     let how = match stages_used(&body) {
+        // The whole body was not the action's to move: said, since the same grasp may
+        // well reach leaning (one started as another action let go of the spine).
+        "" if !BodyReach::body_scope(skeleton)?.is_empty() => {
+            " (the arm alone: the spine and the legs are outside the action's scope, or \
+             another action has them)"
+                .to_string()
+        }
         "" => String::new(),
         used => format!(" (even {used})"),
     };
