@@ -397,8 +397,8 @@ impl Walk {
         end
     }
 
-    /// Why the walk is stuck, if it is (see [`STUCK_TIME`]): how far from its goal, and the
-    /// obstacle nearest the body, among `footprints`.
+    /// Why the walk is stuck, if it is (see [`STUCK_TIME`]): how far from its goal (or a
+    /// followed path's end), and the obstacle nearest the body, among `footprints`.
     fn stuck(
         &mut self,
         ctx: &GeneratorContext,
@@ -1113,8 +1113,9 @@ impl Walk {
     }
 
     /// The pitch of foot `leg` (heading `yaw`) in the posture the walk starts from, if its
-    /// heel is raised (below [`RAISED_HEEL`]: the angle of the line from the ankle to the
-    /// ball against that line on a flat foot); else 0, a foot flat enough to stand on.
+    /// heel is raised by more than [`RAISED_HEEL`] (the angle of the line from the ankle
+    /// to the ball against that line on a flat foot); else 0, a foot flat enough to stand
+    /// on.
     fn start_pitch(rig: &Rig, leg: usize, ctx: &GeneratorContext, yaw: f64) -> f64 {
         let l = &rig.legs[leg];
         let [ankle, ball] = l.joints.map(|j| ctx.posture.globals[j].translation);
@@ -1595,10 +1596,10 @@ impl Generator for Walk {
             crowd.footprints_around(at, std::mem::take(&mut self.found))
         });
         // Whether `self.near` holds this tick's neighbours (see [`steer::Steer::decide`]).
-        // Every walk is steered, a followed or a velocity walk round its keyframed path or
-        // its line as one with a goal round its route (it takes no new route): a followed
-        // path went on through whoever stood on it, its feet pinched into stepping in
-        // place behind a body that went on (a leg 1.1 m short of its foot).
+        // Every walk is steered: one with a goal round its route, a followed walk round its
+        // keyframed path, a velocity walk round its line; only one with a goal takes new
+        // routes. (A followed path went on through whoever stood on it, its feet pinched
+        // into stepping in place behind a body that went on: a leg 1.1 m short of its foot.)
         let mut gathered = false;
         if let Some(footprints) = &footprints {
             let (t, near) = (self.t, (&mut self.near, &mut self.scratch));
