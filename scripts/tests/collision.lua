@@ -97,7 +97,7 @@ end)
 
 -- A velocity walk goes straight ahead: at a wall it stops, and once it has stood there
 -- for 10 s it fails, saying where and what holds it.
-test("a velocity walk into a wall stops at it and fails, naming the wall", function()
+test("a velocity walk or a followed path into a wall stops at it and fails, naming the wall", function()
   local ann = troupe.actor{ name = "ann" }
   troupe.wall{ from = {-2, 2}, to = {2, 2}, thickness = 0.2, height = 2 }
   local w = ann:walk{ velocity = 1.2 }
@@ -108,6 +108,15 @@ test("a velocity walk into a wall stops at it and fails, naming the wall", funct
   expect(tostring(w.error):find("stuck for 10 s, held by wall", 1, true), tostring(w.error))
   expect(deepest <= LIMIT, string.format("%.3f m between %s", deepest, between))
   expect(ann:position()[3] < 1.8, string.format("stopped before the wall: z %.2f", ann:position()[3]))
+  -- A followed path into a wall says how far from its end it stopped.
+  troupe.wall{ from = {8, 2}, to = {12, 2}, thickness = 0.2, height = 2 }
+  local bob = troupe.actor{ name = "bob", at = {10, 0, 0} }
+  local f = bob:walk{ follow = troupe.sequence{ root_x = { {0, 0}, {4, 0} }, root_z = { {0, 0}, {4, 4} } } }
+  local ok2, deepest2 = watch(function() return f.status ~= "active" end, 20)
+  print(string.format("followed path into a wall: %s (%s); deepest %.4f m", f.status, tostring(f.error), deepest2))
+  expect(ok2 and f.status == "failed", "the followed walk ended: " .. f.status)
+  expect(tostring(f.error):find("^stuck 2%.%d%d m from its path's end for 10 s, held by wall 2"), tostring(f.error))
+  expect(deepest2 <= LIMIT, string.format("%.3f m", deepest2))
 end)
 
 test("eight actors on a circle swap: no two solids interpenetrate", function()
