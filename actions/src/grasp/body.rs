@@ -96,12 +96,10 @@ fn lower_pelvis(sk: &Skeleton, rig: &Rig, root_y: usize, q: &mut [f64], depth: f
     q[root_y] -= depth;
     for (leg, l) in rig.legs.iter().enumerate() {
         let ankle_joint = l.joints[0];
-        let fwd = g[ankle_joint].rotation * DVec3::Z;
-        let yaw = fwd.x.atan2(fwd.z);
+        let (yaw, pitch) = Rig::foot_heading_pitch(&g[ankle_joint]);
         // Where the ankle of the foot put flat would be: a crouch that starts with the
         // heels raised (one already crouched) raises them from there, not again.
-        let pitch = fwd.y.atan2(fwd.x.hypot(fwd.z));
-        let ankle = g[ankle_joint].translation - rig.ankle_from_plant(leg, DVec2::ZERO, yaw, pitch)
+        let ankle = rig.plant_under(leg, g[ankle_joint].translation, yaw, pitch)
             + rig.ankle_from_plant(leg, DVec2::ZERO, yaw, 0.0);
         let hip = rig.hip_position(leg, root, heading, pelvis_rot);
         let Some(vals) = stand_leg(rig, leg, pelvis_rot, heading + pelvis[2], hip, ankle, yaw)

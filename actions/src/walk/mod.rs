@@ -114,7 +114,7 @@ pub const STOP_STANCE: f64 = 0.45;
 /// walk's.
 pub const BLEND_IN_TIME: f64 = 0.4;
 /// Least pitch (radians) of a foot with its heel raised when a walk starts, that the walk
-/// lowers over [`BLEND_IN_TIME`] (see `Walk::start_pitch`); a foot pitched less is
+/// lowers over [`BLEND_IN_TIME`] (the walk's `start_pitch`); a foot pitched less is
 /// taken as flat.
 pub const RAISED_HEEL: f64 = 0.05;
 /// Seconds ahead at which a rising planned speed already sets the cadence.
@@ -299,7 +299,7 @@ pub struct Walk {
     held: [bool; 2],
     /// Per leg, the foot's pitch when the walk started: below 0 for a heel raised (a
     /// crouch stands on its toes), lowered as the pelvis blends in (see
-    /// [`Walk::start_pitch`]).
+    /// [`RAISED_HEEL`]).
     start_pitch: [f64; 2],
     /// Per leg, the ankle target's correction for the subtalar offset (see
     /// [`Rig::subtalar_shift`]), from the previous tick's solution.
@@ -1112,23 +1112,6 @@ impl Walk {
         (sway, vertical, [tilt, list, rot], spine, arms)
     }
 
-    /// The pitch of foot `leg` (heading `yaw`) in the posture the walk starts from, if its
-    /// heel is raised by more than [`RAISED_HEEL`] (the angle of the line from the ankle
-    /// to the ball against that line on a flat foot); else 0, a foot flat enough to stand
-    /// on.
-    fn start_pitch(rig: &Rig, leg: usize, ctx: &GeneratorContext, yaw: f64) -> f64 {
-        let l = &rig.legs[leg];
-        let [ankle, ball] = l.joints.map(|j| ctx.posture.globals[j].translation);
-        let along = DQuat::from_rotation_y(-yaw) * (ball - ankle);
-        let flat = l.ball - DVec3::Y * rig.ankle_height;
-        let pitch = along.y.atan2(along.z) - flat.y.atan2(flat.z);
-        if pitch < -RAISED_HEEL {
-            pitch
-        } else {
-            0.0
-        }
-    }
-
     /// The part of this walker's body its step carries, as the previous tick left it (see
     /// `troupe_nav::clearance`): the crowd's core capsule, or its disc.
     fn body(&self, ctx: &GeneratorContext) -> Capsule {
@@ -1528,19 +1511,21 @@ impl Generator for Walk {
         let mut floor = f64::INFINITY;
         for leg in 0..2 {
             let g = ctx.posture.globals[rig.legs[leg].joints[0]];
-            let fwd = g.rotation * DVec3::Z;
-            let yaw = fwd.x.atan2(fwd.z);
-            let pitch = Walk::start_pitch(rig, leg, ctx, yaw);
+            let (yaw, pitch) = Rig::foot_heading_pitch(&g);
+            // A heel raised by more than [`RAISED_HEEL`] (a crouch stands on its toes) is
+            // lowered as the walk blends in; a foot pitched less is flat enough to stand on.
+            let pitch = if pitch < -RAISED_HEEL { pitch } else { 0.0 };
             self.start_pitch[leg] = pitch;
-            // The floor point under the ankle of the foot put flat, its ball where it is.
-            let raised = if pitch < 0.0 {
-                rig.ankle_from_plant(leg, DVec2::ZERO, yaw, pitch)
+            // The floor point under the ankle of the foot put flat, its ball where it is
+            // (a flat foot's read as before, under the ankle, to the bit).
+            let plant = if pitch < 0.0 {
+                rig.plant_under(leg, g.translation, yaw, pitch)
             } else {
-                DVec3::Y * rig.ankle_height
+                g.translation - DVec3::Y * rig.ankle_height
             };
-            floor = floor.min(g.translation.y - raised.y);
+            floor = floor.min(plant.y);
             self.feet[leg] = Foot::Stance {
-                plant: DVec2::new(g.translation.x - raised.x, g.translation.z - raised.z),
+                plant: DVec2::new(plant.x, plant.z),
                 yaw,
                 rocker: 0.0,
                 // The right foot starts late in its support: it lifts without rolling.

@@ -322,6 +322,20 @@ impl Rig {
             * DQuat::from_rotation_y(a(2))
     }
 
+    /// The heading and pitch (toes up positive, as [`Rig::ankle_from_plant`] takes them)
+    /// of a foot whose ankle joint has the world frame `ankle`.
+    pub fn foot_heading_pitch(ankle: &Transform) -> (f64, f64) {
+        let fwd = ankle.rotation * DVec3::Z;
+        (fwd.x.atan2(fwd.z), fwd.y.atan2(fwd.x.hypot(fwd.z)))
+    }
+
+    /// The floor point (x, z, and the floor's height) a foot of `leg` with its ankle
+    /// joint at `ankle`, heading `yaw` and pitch `pitch`, is planted at: under the ankle
+    /// of the foot put flat, its heel or ball where it is (see [`Rig::ankle_from_plant`]).
+    pub fn plant_under(&self, leg: usize, ankle: DVec3, yaw: f64, pitch: f64) -> DVec3 {
+        ankle - self.ankle_from_plant(leg, DVec2::ZERO, yaw, pitch)
+    }
+
     /// World position of the ankle joint of a foot planted at floor point `plant` (under
     /// the ankle when flat) with heading `yaw` and pitch `pitch` (toes up positive): a
     /// positive pitch rolls about the heel (heel strike), a negative one about the ball
