@@ -102,14 +102,14 @@ impl Goal {
                 let name = &world.actors[*actor].name;
                 let at = other.globals[0].translation;
                 let theirs = world.crowd.radii.get(*actor).copied().unwrap_or(radius);
-                // What the hands hold widens the body as the clearance sees it (see
+                // What the hands hold lengthens the body as the clearance sees it (see
                 // `troupe_scene::bodies`): nearer than that reaches, the walk stood held
                 // by the other for good (a cup carried to one asked for at 0.8 m).
                 let mine = world
                     .crowd
                     .cores
                     .get(ctx.actor)
-                    .map_or(radius, |core| radius.max(core.radius));
+                    .map_or(radius, |core| radius.max(core.hands_ahead()));
                 let distance = distance.max(mine + theirs + LEAST_ACTOR_GAP);
                 let centre = DVec2::new(at.x, at.z);
                 // Face to face, shoulders to shoulders: a point from which a wall (or a

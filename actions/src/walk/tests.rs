@@ -1006,14 +1006,12 @@ fn a_landing_across_a_corner_from_the_body_jumps_round_it_rather_than_staying() 
             here(DVec2::new(-4.75, -3.25)),
         ],
     );
-    let walker = Capsule {
-        centre: here(DVec2::new(-3.2491204366805815, -2.917149769020532)),
-        axis: rotate(DVec2::new(-0.9876925467549307, 0.15640790608137242)),
-        half_length: 0.03811298390304806,
-        radius: 0.28811361059089663,
-        bare: 0.28811361059089663,
-        hands: [None; 2],
-    };
+    let walker = Capsule::new(
+        here(DVec2::new(-3.2491204366805815, -2.917149769020532)),
+        rotate(DVec2::new(-0.9876925467549307, 0.15640790608137242)),
+        0.03811298390304806,
+        0.28811361059089663,
+    );
     let around = Surroundings {
         bodies: vec![walker],
         obstacles: vec![&planter].into(),

@@ -106,13 +106,46 @@ impl FootSpan {
 /// How far (m) above an obstacle a hand passes over it: lower, the hand counts against it.
 pub const HAND_OVER: f64 = 0.05;
 
-/// A hand that widens a body on the floor beyond its [`Capsule::bare`] radius.
+/// How far a part of a body on the floor reaches along the line its capsule lies on: from
+/// `back` to `front` (m along the capsule's axis from its [`Capsule::origin`]) with
+/// `radius` round that.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Reach {
+    /// Where the part's segment starts (m along the axis from the origin).
+    pub back: f64,
+    /// Where it ends.
+    pub front: f64,
+    /// How far (m) the part reaches round its segment.
+    pub radius: f64,
+}
+
+impl Reach {
+    /// The reach that holds both this one and `other`.
+    fn with(self, other: Reach) -> Reach {
+        Reach {
+            back: self.back.min(other.back),
+            front: self.front.max(other.front),
+            radius: self.radius.max(other.radius),
+        }
+    }
+}
+
+/// A hand that makes a body on the floor reach further than its [`Capsule::bare`] part:
+/// out to the side it widens the capsule, out in front (or behind) it lengthens it, as a
+/// foot does (a tray carried in front widened the whole capsule by how far it was held
+/// out, and two waiters who met in a 1.4 m aisle filled it from wall to wall).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HandReach {
-    /// The radius (m) round the capsule's segment that the hand reaches.
-    pub radius: f64,
+    /// The capsule that holds the bare body and the hand, with what it holds.
+    pub reach: Reach,
     /// How low (m above the floor) the hand, and what it holds, reach.
     pub lowest: f64,
+    /// Whether the hand holds something.
+    pub holds: bool,
+    /// How far (m) ahead of the capsule's [`Capsule::origin`] the body reaches with this
+    /// hand, whatever its stride: as far as what the hand holds lengthens it, and its
+    /// radius round that (what a walk to someone keeps between them: `walk{ to = ACTOR }`).
+    pub ahead: f64,
 }
 
 /// A body on the floor as the clearance sees it: the segment `centre ± axis·half_length`
@@ -127,13 +160,33 @@ pub struct Capsule {
     pub half_length: f64,
     /// How far (m) the body reaches round the segment, its hands included.
     pub radius: f64,
-    /// How far (m) it reaches without its hands: the disc and the feet.
-    pub bare: f64,
-    /// The hands that widen it (see [`Capsule::radius_against`]).
+    /// The point on the segment's line from which [`Capsule::bare`] and the hands' reaches
+    /// are measured: the middle of the bare body's segment.
+    pub origin: DVec2,
+    /// How far it reaches without its hands: the disc and the feet.
+    pub bare: Reach,
+    /// The hands that make it reach further (see [`Capsule::against`]).
     pub hands: [Option<HandReach>; 2],
 }
 
 impl Capsule {
+    /// The segment `centre ± axis·half_length` with `radius` round it, and no hands.
+    pub fn new(centre: DVec2, axis: DVec2, half_length: f64, radius: f64) -> Capsule {
+        Capsule {
+            centre,
+            axis,
+            half_length,
+            radius,
+            origin: centre,
+            bare: Reach {
+                back: -half_length,
+                front: half_length,
+                radius,
+            },
+            hands: [None; 2],
+        }
+    }
+
     /// The body of `radius` whose root stands at `root` facing `axis` (a unit vector; zero
     /// for no facing) with its `feet` on the floor: its disc, stretched along `axis` by
     /// `stride` either way (where a walker's legs swing) and further as far as it takes to
@@ -167,38 +220,158 @@ impl Capsule {
                 }
             }
         }
-        Capsule {
-            centre: root + axis * (front + back) / 2.0,
+        Capsule::new(
+            root + axis * (front + back) / 2.0,
             axis,
-            half_length: (front - back) / 2.0,
-            radius: wide,
-            bare: wide,
-            hands: [None; 2],
+            (front - back) / 2.0,
+            wide,
+        )
+    }
+
+    /// What it takes this body to reach what a hand `held` and its arm's `joints` as
+    /// well, the hand reaching as low as `lowest`: each held point `(point, radius)` with
+    /// its radius round it (negative: a point that may lie that far outside), each joint
+    /// `(point, disc, at_rest)` allowed as far out from the segment as it stands at rest
+    /// within a disc of radius `disc`. The held points
+    /// first: the bare body's capsule widened by as far as one lies out to the side past
+    /// it, then lengthened to hold those in front of it or behind (a tray carried in front
+    /// lengthens the body, and no more widens it by how far it is held out). Then the
+    /// joints widen it by as far as each lies out from that segment, as an arm swinging out
+    /// does.
+    pub fn reaching(
+        &self,
+        held: impl Iterator<Item = (DVec2, f64)> + Clone,
+        joints: impl Iterator<Item = (DVec2, f64, f64)>,
+        lowest: f64,
+    ) -> HandReach {
+        let place = |p: DVec2| {
+            let from = p - self.origin;
+            if self.axis == DVec2::ZERO {
+                (0.0, from.length())
+            } else {
+                (from.dot(self.axis), from.dot(self.axis.perp()).abs())
+            }
+        };
+        let wide = held
+            .clone()
+            .map(|(p, radius)| place(p).1 + radius)
+            .fold(self.bare.radius, f64::max);
+        // The front as what is held takes it, from the origin: the stride left out.
+        let mut ahead = 0.0_f64;
+        let holds = held.clone().next().is_some();
+        let held = held.fold(
+            Reach {
+                radius: wide,
+                ..self.bare
+            },
+            |reach, (p, radius)| {
+                let (along, across) = place(p);
+                let inner = wide - radius;
+                let room = (inner * inner - across * across).max(0.0).sqrt();
+                ahead = ahead.max(along - room);
+                Reach {
+                    back: reach.back.min(along + room),
+                    front: reach.front.max(along - room),
+                    ..reach
+                }
+            },
+        );
+        let (a, b) = (
+            self.origin + self.axis * held.back,
+            self.origin + self.axis * held.front,
+        );
+        let reach = joints.fold(held, |reach, (p, disc, at_rest)| {
+            let out = disc + (p - nearest_on_segment(p, a, b)).length() - at_rest;
+            Reach {
+                radius: reach.radius.max(out),
+                ..reach
+            }
+        });
+        HandReach {
+            reach,
+            lowest,
+            holds,
+            ahead: ahead + reach.radius,
         }
     }
 
     /// Its hand `i` (0 or 1) reaches as `hand` says: a hand further out than the body
-    /// reaches widens it.
+    /// reaches widens or lengthens it.
     pub fn add_hand(&mut self, i: usize, hand: HandReach) {
-        self.radius = self.radius.max(hand.radius);
         self.hands[i] = Some(hand);
+        let whole = self
+            .hands
+            .iter()
+            .flatten()
+            .fold(self.bare, |r, h| r.with(h.reach));
+        (self.centre, self.half_length, self.radius) = self.placed(whole);
     }
 
-    /// How far (m) the body reaches round its segment towards an obstacle `top` metres
-    /// high: its radius, but a hand carried [`HAND_OVER`] or more above the obstacle
-    /// passes over it (a cup carried to a table).
-    pub fn radius_against(&self, top: f64) -> f64 {
-        self.hands
+    /// Where reach `r` lies: its segment's middle, half its length and its radius.
+    fn placed(&self, r: Reach) -> (DVec2, f64, f64) {
+        let middle = self.origin + self.axis * (r.back + r.front) / 2.0;
+        (middle, (r.front - r.back) / 2.0, r.radius)
+    }
+
+    /// The body as it reaches towards an obstacle `top` metres high (its segment's ends
+    /// and its radius): all of it, but a hand carried [`HAND_OVER`] or more above the
+    /// obstacle passes over it (a cup carried to a table).
+    pub fn against(&self, top: f64) -> ((DVec2, DVec2), f64) {
+        let reach = self
+            .hands
             .iter()
             .flatten()
             .filter(|h| h.lowest < top + HAND_OVER)
-            .fold(self.bare, |radius, h| radius.max(h.radius))
+            .fold(self.bare, |r, h| r.with(h.reach));
+        let (a, b) = (reach.back, reach.front);
+        (
+            (self.origin + self.axis * a, self.origin + self.axis * b),
+            reach.radius,
+        )
+    }
+
+    /// Whether a hand of the body holds something.
+    pub fn carries(&self) -> bool {
+        self.hands.iter().flatten().any(|h| h.holds)
+    }
+
+    /// How far (m) ahead of its middle ([`Capsule::origin`]) the body reaches with its
+    /// hands, whatever its stride (see [`HandReach::ahead`]); zero without hands.
+    pub fn hands_ahead(&self) -> f64 {
+        self.hands
+            .iter()
+            .flatten()
+            .fold(0.0, |far, h| far.max(h.ahead))
     }
 
     /// The same body moved by `by` (x, z).
     pub fn moved(&self, by: DVec2) -> Capsule {
         Capsule {
             centre: self.centre + by,
+            origin: self.origin + by,
+            ..*self
+        }
+    }
+
+    /// The disc round the middle of the bare body's segment, as wide as the body reaches
+    /// round its segment: what a step must not close on an obstacle whatever the
+    /// segment's length (see [`limit_step`]).
+    fn middle_disc(&self) -> Capsule {
+        let disc = |r: Reach| Reach {
+            back: 0.0,
+            front: 0.0,
+            ..r
+        };
+        Capsule {
+            centre: self.origin,
+            half_length: 0.0,
+            bare: disc(self.bare),
+            hands: self.hands.map(|h| {
+                h.map(|h| HandReach {
+                    reach: disc(h.reach),
+                    ..h
+                })
+            }),
             ..*self
         }
     }
@@ -218,6 +391,12 @@ impl Capsule {
     fn ends(&self) -> (DVec2, DVec2) {
         let half = self.axis * self.half_length;
         (self.centre - half, self.centre + half)
+    }
+
+    /// The gap (m) between this body and `other` (negative where they overlap).
+    pub fn gap(&self, other: &Capsule) -> f64 {
+        let (mine, theirs) = self.nearest_to(other);
+        (mine - theirs).length() - self.radius - other.radius
     }
 
     /// The nearest points of this capsule's segment and `other`'s (on this, on `other`).
@@ -349,17 +528,12 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
     // Against obstacles, the capsule and the disc round its middle: the capsule's length
     // changes with the stride and turns with the body, so one already touching could
     // slide its end along an obstacle while its middle closed on it.
-    let disc = Capsule {
-        half_length: 0.0,
-        ..*me
-    };
-    for body in [me, &disc] {
-        let (a, b) = body.ends();
+    for body in [me, &me.middle_disc()] {
         for f in &around.obstacles {
             if footprint_gap_bound(body.bound(), f) > reach + OBSTACLE_MARGIN {
                 continue;
             }
-            let radius = body.radius_against(f.top);
+            let ((a, b), radius) = body.against(f.top);
             let span = FootSpan {
                 heel: a,
                 toe: b,
@@ -389,18 +563,13 @@ pub fn nearest_gap(me: &Capsule, around: &Surroundings, within: f64) -> f64 {
             let (mine, theirs) = me.nearest_to(other);
             (mine - theirs).length() - me.radius - other.radius
         });
-    let span = FootSpan {
-        heel: me.ends().0,
-        toe: me.ends().1,
-        radius: me.radius,
-    };
     let obstacles = around
         .obstacles
         .iter()
         .filter(|f| footprint_gap_bound(me.bound(), f) < within)
         .map(|f| {
-            let radius = me.radius_against(f.top);
-            let span = FootSpan { radius, ..span };
+            let ((heel, toe), radius) = me.against(f.top);
+            let span = FootSpan { heel, toe, radius };
             nearest_to_footprint(f, &span).map_or(-radius, |(p, q)| (p - q).length() - radius)
         });
     bodies.chain(obstacles).fold(within, f64::min)
@@ -618,14 +787,7 @@ mod tests {
 
     /// A body of radius 0.3 at (x, z) facing +z, a stride of `half` either way.
     fn body(x: f64, z: f64, half: f64) -> Capsule {
-        Capsule {
-            centre: DVec2::new(x, z),
-            axis: DVec2::Y,
-            half_length: half,
-            radius: 0.3,
-            bare: 0.3,
-            hands: [None; 2],
-        }
+        Capsule::new(DVec2::new(x, z), DVec2::Y, half, 0.3)
     }
 
     fn bodies(list: &[Capsule]) -> Surroundings<'static> {
@@ -714,14 +876,12 @@ mod tests {
         let mut root = DVec2::ZERO;
         for tick in 0..120 {
             let turn = 0.01 * tick as f64;
-            let me = Capsule {
-                centre: root,
-                axis: DVec2::new(turn.cos(), turn.sin()),
-                half_length: (0.05 + 0.01 * tick as f64).min(0.5),
-                radius: 0.3,
-                bare: 0.3,
-                hands: [None; 2],
-            };
+            let me = Capsule::new(
+                root,
+                DVec2::new(turn.cos(), turn.sin()),
+                (0.05 + 0.01 * tick as f64).min(0.5),
+                0.3,
+            );
             let towards = (DVec2::new(0.5, 0.4) - root).normalize() * 0.013;
             root += limit_step(&me, towards, &around);
             assert!(
@@ -734,15 +894,17 @@ mod tests {
 
     #[test]
     fn a_hand_carried_above_an_obstacle_passes_over_it() {
-        // A body with a hand carried 0.4 m out in front, as low as 0.9 m; a table's edge
-        // 0.2 m in front of the disc (past the margin).
-        let hand = HandReach {
-            radius: 0.7,
-            lowest: 0.9,
-        };
-        let mut me = body(0.0, 0.0, 0.0);
+        // A body facing a table with a hand carried out in front, what it holds reaching
+        // 0.7 m from the body's middle and as low as 0.9 m; the table's edge 0.2 m in
+        // front of the disc (past the margin).
+        let mut me = Capsule::new(DVec2::ZERO, DVec2::X, 0.0, 0.3);
+        let held = std::iter::once((DVec2::new(0.7, 0.0), 0.0));
+        let hand = me.reaching(held, std::iter::empty(), 0.9);
+        let r = hand.reach;
+        assert!((r.front - 0.4).abs() < 1e-12 && (r.back, r.radius) == (0.0, 0.3));
+        assert!((hand.ahead - 0.7).abs() < 1e-12);
         me.add_hand(1, hand);
-        assert_eq!((me.radius, me.bare), (0.7, 0.3));
+        assert!((me.half_length - 0.2).abs() < 1e-12 && me.bare.radius == 0.3);
         let edge = (0.5 + OBSTACLE_MARGIN, -1.0);
         let step = DVec2::new(0.1, 0.0);
         for (top, passes) in [(0.75, true), (0.85, true), (0.86, false), (0.95, false)] {
@@ -762,6 +924,44 @@ mod tests {
                 "a table {top} m high: gap {gap}"
             );
         }
+    }
+
+    #[test]
+    fn a_tray_carried_in_front_lengthens_the_body_and_does_not_widen_it() {
+        // A tray 0.4 m wide carried in both hands 0.5–0.8 m in front of a body of radius
+        // 0.25 facing +z, the wrists beside it, between walls 1.3 m apart: the capsule
+        // reaches 0.9 m ahead (its rounded end round the tray's corners), and its sides
+        // keep 0.4 m from the walls (a radius of 0.8 round the body filled the aisle from
+        // wall to wall and held it for good).
+        let mut me = Capsule::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
+        let corners = [(-0.2, 0.5), (0.2, 0.5), (0.2, 0.8), (-0.2, 0.8)].map(DVec2::from);
+        let held = corners.into_iter().map(|p| (p, 0.0));
+        let wrist = std::iter::once((DVec2::new(0.2, 0.5), 0.25, 0.2));
+        let hand = me.reaching(held, wrist, 0.8);
+        assert!((hand.ahead - 0.9).abs() < 1e-12, "{hand:?}");
+        me.add_hand(0, hand);
+        assert_eq!(me.radius, 0.25);
+        assert!((me.centre.y - 0.325).abs() < 1e-12 && (me.half_length - 0.325).abs() < 1e-12);
+        let walls = [
+            square("left", (0.65, -3.0), (0.75, 3.0)),
+            square("right", (-0.75, -3.0), (-0.65, 3.0)),
+        ];
+        let around = Surroundings {
+            obstacles: walls.iter().collect(),
+            ..Surroundings::default()
+        };
+        assert!((nearest_gap(&me, &around, 2.0) - 0.4).abs() < 1e-12);
+        let aside = DVec2::new(0.1, 0.0);
+        assert_eq!(limit_step(&me, aside, &around), aside);
+        // Held out to one side instead, it widens the body on both.
+        let mut me = Capsule::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
+        let side = corners.map(|p| DVec2::new(p.y - 0.1, p.x));
+        me.add_hand(
+            0,
+            me.reaching(side.into_iter().map(|p| (p, 0.0)), std::iter::empty(), 0.8),
+        );
+        assert!((me.radius - 0.7).abs() < 1e-12, "{me:?}");
+        assert!(nearest_gap(&me, &around, 2.0) < 0.0);
     }
 
     #[test]
@@ -812,14 +1012,7 @@ mod tests {
             Some(DVec2::ZERO)
         );
         // Pinched between the planter and a body beside it: no landing there.
-        let body = Capsule {
-            centre: DVec2::new(-0.25, 0.5),
-            axis: DVec2::Y,
-            half_length: 0.0,
-            radius: 0.28,
-            bare: 0.28,
-            hands: [None; 2],
-        };
+        let body = Capsule::new(DVec2::new(-0.25, 0.5), DVec2::Y, 0.0, 0.28);
         let around = Surroundings {
             obstacles: smallvec![&planter],
             bodies: vec![body],
