@@ -538,6 +538,65 @@ test("carrying a cup through a doorway as someone comes the other way: hand and 
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
 end)
 
+-- Waiters take trays from stands at either end of an aisle `width` metres wide between
+-- two walls 8 m long, then walk to beyond the other end: each with the hand `hands[i]`
+-- ("both", "right", or nil for a walker with nothing), ann from the south, bob from the
+-- north. Returns when both have arrived, and the deepest interpenetration from a second
+-- into the walks (the hands just come off the stands before).
+local function waiters_in_an_aisle(width, hands, seconds)
+  troupe.wall{ from = {-width / 2, -4}, to = {-width / 2, 4}, thickness = 0.1 }
+  troupe.wall{ from = {width / 2, -4}, to = {width / 2, 4}, thickness = 0.1 }
+  local people, walks = {}, {}
+  for i, side in ipairs({ -1, 1 }) do
+    local name = i == 1 and "ann" or "bob"
+    local a = troupe.actor{ name = name, at = {0, 0, 6 * side}, facing = side < 0 and 0 or 180 }
+    troupe.object{ name = "stand_" .. name, shape = "box", size = {0.5, 0.8, 0.4}, at = {0, 0.4, 5.4 * side},
+                   mass = 20 }
+    local tray = troupe.object{ name = "tray_" .. name, shape = "box", size = {0.4, 0.03, 0.3},
+                                at = {0, 0.815, 5.4 * side}, mass = 1 }
+    people[i] = { actor = a, tray = tray, goal = {0, 0, -7 * side} }
+  end
+  for i, p in ipairs(people) do
+    if hands[i] then
+      local g = p.actor:grasp{ object = p.tray, hand = hands[i] }
+      expect(g:wait() == "completed", p.actor.name .. "'s grasp: " .. tostring(g.error))
+    end
+  end
+  for i, p in ipairs(people) do walks[i] = p.actor:walk{ to = p.goal } end
+  local start, deepest, what = troupe.time(), 0, "nothing"
+  run_until(function()
+    local d, a, b, sa, sb = troupe.deepest_overlap()
+    if troupe.time() - start > 1 and d > deepest then
+      deepest, what = d, string.format("%s's %s and %s", tostring(a), tostring(sa), tostring(b))
+    end
+    return walks[1].status ~= "active" and walks[2].status ~= "active"
+  end, seconds)
+  for i, w in ipairs(walks) do
+    expect(w.status == "completed", people[i].actor.name .. "'s walk: " .. w.status .. " " .. tostring(w.error))
+  end
+  return troupe.time() - start, deepest, what
+end
+
+test("two waiters carrying trays meet in a 1.6 m aisle: one steps back out of it and both arrive", function()
+  -- The body as the clearance sees it was widened all round by how far a tray was held
+  -- out in front, as wide as the aisle: both stood in it for good. Now a tray lengthens
+  -- it; abreast, with their elbows out, they are still too wide for the aisle, so one
+  -- steps back (docs/navigation.md, "Stand-offs").
+  local took, deepest, what = waiters_in_an_aisle(1.6, { "both", "both" }, 90)
+  print(string.format("trays in a 1.6 m aisle: both arrived %.1f s after setting off, deepest %.4f m (%s)",
+                      took, deepest, what))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
+end)
+
+test("a tray carried in one hand meets a walker in a 1.4 m aisle: one steps back out of it and both arrive", function()
+  -- The walker, held in its way, stepped in place and swayed faster than standing now
+  -- and then: it never waited long enough to step back, and both stood for good.
+  local took, deepest, what = waiters_in_an_aisle(1.4, { "right", nil }, 90)
+  print(string.format("a tray and a walker in a 1.4 m aisle: both arrived %.1f s after setting off, deepest %.4f m (%s)",
+                      took, deepest, what))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
+end)
+
 test("give and receive start at once during walks, which go on narrowed", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0, 0, 0.9}, facing = 180 }

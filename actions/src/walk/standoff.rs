@@ -10,13 +10,15 @@
 //! its own stream standing behind it steps back with it. See `docs/navigation.md`,
 //! "Stand-offs".
 
-use super::replan::WAITING_RATE;
+use super::replan::{STANDING, WAITING_RATE};
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{backs_off_for, FootprintsAround, GAP};
 use troupe_scene::GeneratorContext;
 
 /// Seconds a walk waits with someone face to face in its way before it may step back.
 pub const BACK_OFF_AFTER: f64 = 2.0;
+/// How near (m) to where it began to wait a body that sways or steps in place still waits.
+const IN_PLACE: f64 = 0.15;
 /// Speed (m/s) at which a walker steps back.
 pub const BACK_SPEED: f64 = 0.3;
 /// Largest gap (m) between two discs for the other to count as in my way.
@@ -56,8 +58,8 @@ const ASIDE_STEP: f64 = 0.1;
 /// Whether a walk stands in a stand-off, and since when it has waited.
 #[derive(Clone, Debug, Default)]
 pub struct Standoff {
-    /// Walk time since which the plan's clock has run slower than [`WAITING_RATE`].
-    waiting_since: Option<f64>,
+    /// Walk time since which the walk has waited, and where its body stood then.
+    waiting: Option<(f64, DVec2)>,
     /// Walk time since which the walk has stepped back, while it does.
     backing_since: Option<f64>,
 }
@@ -70,8 +72,8 @@ impl Standoff {
 
     /// Decides whether actor `ctx.actor` at `position`, going along the unit `along`,
     /// steps back this tick (then true), from the previous tick's crowd: those near it
-    /// (`others`, but its `companions`) and its plan clock's `rate`; `now` is the walk's
-    /// time.
+    /// (`others`, but its `companions`), its plan clock's `rate` and whether its body
+    /// stands; `now` is the walk's time.
     pub fn update(
         &mut self,
         ctx: &GeneratorContext,
@@ -80,21 +82,40 @@ impl Standoff {
         rate: f64,
         now: f64,
     ) -> bool {
-        if rate < WAITING_RATE {
-            self.waiting_since.get_or_insert(now);
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        // Held by the clearance, a body stands while its plan's clock runs on: it waits
+        // as much as one whose clock stands, and as long as it steps in place where it
+        // began to (carrying a cup into a doorway as someone came through it the other
+        // way, both stood in it for good; a walker facing a waiter in an aisle swayed
+        // faster than standing now and then, and never waited long enough to step back).
+        let standing = crowd
+            .velocities
+            .get(me)
+            .is_some_and(|v| v.length() < STANDING);
+        let in_place = self
+            .waiting
+            .is_some_and(|(_, at)| at.distance(position) < IN_PLACE);
+        if rate < WAITING_RATE || standing || in_place {
+            self.waiting.get_or_insert((now, position));
         } else {
-            self.waiting_since = None;
+            self.waiting = None;
             if !self.backing() {
                 // Neither waiting nor stepping back: nothing to look at (most ticks).
                 return false;
             }
         }
         let waited = self
-            .waiting_since
-            .is_some_and(|since| now - since >= BACK_OFF_AFTER);
-        let crowd = ctx.world.crowd;
-        let me = ctx.actor;
-        let radius = crowd.radii[me];
+            .waiting
+            .is_some_and(|(since, _)| now - since >= BACK_OFF_AFTER);
+        // How far a body reaches across the way: its disc, or, carrying something, as far
+        // as its hands and what they hold reach (two waiters carrying trays in an aisle).
+        let carried = |i: usize| crowd.cores.get(i).filter(|core| core.carries());
+        let across = |i: usize| {
+            let disc = crowd.radii[i];
+            carried(i).map_or(disc, |core| core.radius.max(disc))
+        };
+        let radius = across(me);
         let in_the_way = if self.backing() {
             STILL_IN_THE_WAY
         } else {
@@ -106,11 +127,16 @@ impl Standoff {
                 continue;
             }
             let offset = crowd.positions[j] - position;
-            let reach = radius + crowd.radii[j] + GAP;
+            let reach = radius + across(j) + GAP;
+            // The gap between the two: what the hands carry out in front counts.
+            let gap = match (crowd.cores.get(me), crowd.cores.get(j)) {
+                (Some(mine), Some(theirs)) if mine.carries() || theirs.carries() => {
+                    mine.gap(theirs) - GAP
+                }
+                _ => offset.length() - reach,
+            };
             // Ahead, on my way, and near.
-            if offset.dot(along) <= 0.0
-                || along.perp_dot(offset).abs() >= reach
-                || offset.length() - reach > in_the_way
+            if offset.dot(along) <= 0.0 || along.perp_dot(offset).abs() >= reach || gap > in_the_way
             {
                 continue;
             }
@@ -122,7 +148,7 @@ impl Standoff {
                 face_to_face = true;
             } else if towards > SAME_WAY
                 && crowd.velocities[j].dot(along) < -STEPPING_BACK
-                && offset.length() - reach < BACKED_INTO
+                && gap < BACKED_INTO
             {
                 backed_into = true;
             }
@@ -139,6 +165,7 @@ impl Standoff {
             })
         };
         let stand_off = backed_into || (face_to_face && (self.backing() || waited));
+
         let backing = begun || (stand_off && in_a_passage());
         self.backing_since = if backing {
             self.backing_since.or(Some(now))
