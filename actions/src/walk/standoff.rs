@@ -165,7 +165,6 @@ impl Standoff {
             })
         };
         let stand_off = backed_into || (face_to_face && (self.backing() || waited));
-
         let backing = begun || (stand_off && in_a_passage());
         self.backing_since = if backing {
             self.backing_since.or(Some(now))

@@ -232,12 +232,11 @@ impl Capsule {
     /// well, the hand reaching as low as `lowest`: each held point `(point, radius)` with
     /// its radius round it (negative: a point that may lie that far outside), each joint
     /// `(point, disc, at_rest)` allowed as far out from the segment as it stands at rest
-    /// within a disc of radius `disc`. The held points
-    /// first: the bare body's capsule widened by as far as one lies out to the side past
-    /// it, then lengthened to hold those in front of it or behind (a tray carried in front
-    /// lengthens the body, and no more widens it by how far it is held out). Then the
-    /// joints widen it by as far as each lies out from that segment, as an arm swinging out
-    /// does.
+    /// within a disc of radius `disc`. The held points first: the bare body's capsule
+    /// widened by as far as one lies out to the side past it, then lengthened to hold
+    /// those in front of it or behind (a tray carried in front lengthens the body, and no
+    /// more widens it by how far it is held out). Then the joints widen it by as far as
+    /// each lies out from that segment, as an arm swinging out does.
     pub fn reaching(
         &self,
         held: impl Iterator<Item = (DVec2, f64)> + Clone,
