@@ -2,8 +2,8 @@
 //! the shoulder's rotation, so that the skin across the shoulder follows a rotation about
 //! the joint's centre instead of a straight blend of the chest's and the arm's matrices,
 //! and the arm's twist spreads down the upper arm instead of wringing the armpit; and at
-//! the hips, knees and elbows one **sliding** helper each, which turns with its joint but
-//! about a point moved into the bend (see below).
+//! the hips, knees and elbows (and the skullbase) one **sliding** helper each, which turns
+//! with its joint but about a point moved into the bend (see below).
 //!
 //! Linear blend skinning averages the matrices of the joints that share a vertex; across
 //! a joint bent by θ the average of "not turned" and "turned by θ" shrinks the skin
@@ -62,6 +62,17 @@
 //! turned 1,324 over; one moved along the bone too (0.2 into the bend and 0.06 towards
 //! the child or the parent) turned 505 over but strayed 0.060 × height, or 642.
 //!
+//! The head has one too (`skullbase_slide`, [`SLIDING_MIDLINE`]), along the skullbase's
+//! bone to the top of the head: the neck's skin that the skullbase moves turns about a
+//! point moved towards the side the head nods or tilts to (the throat for a nod), and
+//! goes back to the skullbase by the bottom of the skull (`weights::HEAD_SPAN`), so the
+//! face stays rigid. A child's neck is short and its front and sides folded between vt1,
+//! vc4 and the skullbase with the head bent forward or sideways: this took the skin
+//! test's inverted triangles (six sizes, 50 full-range postures, pleats already
+//! unfolded) from 312 to 282, those at vc4 and the skullbase from 42 to 16; a pivot of
+//! 0.08 and 0.11 of the bone (1.5 and 2 cm) left 271 and 266, a helper at vc4 as well
+//! (the neck's middle) one fewer.
+//!
 //! A helper is not a joint of the skeleton: its frame is computed from the posture each
 //! time the skin is deformed ([`Helper::frame`]) and written to glTF files as a node under
 //! the joint's parent whose rotation is animated ([`Helper::local_rotation`]), and for a
@@ -80,6 +91,10 @@ const CHAINED: [&str; 1] = ["shoulder"];
 /// The joints given a sliding helper, without their side prefix: at the hips it took most
 /// of the groin's inverted triangles away, at the knees and elbows most of theirs.
 pub const SLIDING: [&str; 3] = ["hip", "knee", "elbow"];
+
+/// The joints of the midline given a sliding helper: the head's, whose nod and tilt
+/// folded the front and the sides of the neck (see the module's note).
+pub const SLIDING_MIDLINE: [&str; 1] = ["skullbase"];
 
 /// How far a sliding helper's pivot lies from its joint's centre, towards the inside of
 /// the bend, as a fraction of the bone's length (2.1 cm at a 1.75 m adult's hip): the
@@ -194,25 +209,22 @@ impl Helper {
 
 /// The helpers of a troupe template's skeleton: at each side's shoulder, across it one
 /// per [`SWING_FRACTIONS`] and along the upper arm one per [`TWIST_FRACTIONS`]; at each
-/// side's hip, knee and elbow one sliding helper (named `l_hip_slide`); ordered by joint,
-/// then as listed.
+/// side's hip, knee and elbow one sliding helper (named `l_hip_slide`), and one at the
+/// skullbase (`skullbase_slide`); ordered by joint, then as listed.
 pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
     let rest = super::volumes::rest_globals(skeleton);
     let bind_pose = super::volumes::bind_globals(skeleton);
     // A helper at the joint named so that turns as the joint does, whose fields the
-    // joint's helpers share (its parent, its bone's direction in its own frame towards
-    // its child, the twist's axis; its rotation at bind), and the bone's length.
+    // joint's helpers share (its parent, its bone's direction in its own frame, the
+    // twist's axis; its rotation at bind), and the bone's length.
     let at = |name: &str| -> Result<Option<(Helper, f64)>> {
         let joint = skeleton.joint(name)?;
         let Some(parent) = skeleton.joints()[joint].parent else {
             return Ok(None);
         };
-        let child = skeleton
-            .joints()
-            .iter()
-            .position(|j| j.parent == Some(joint))
-            .ok_or_else(|| Error::Invalid(format!("skin: {name} has no child joint")))?;
-        let bone = rest[child].translation - rest[joint].translation;
+        let bone = bone_end(skeleton, &rest, joint)
+            .ok_or_else(|| Error::Invalid(format!("skin: {name} has no child joint")))?
+            - rest[joint].translation;
         let helper = Helper {
             name: name.to_string(),
             joint,
@@ -260,8 +272,29 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
             });
         }
     }
+    for name in SLIDING_MIDLINE {
+        let Some((joint, length)) = at(name)? else {
+            continue;
+        };
+        out.push(Helper {
+            name: format!("{name}_slide"),
+            pivot: PIVOT_SHIFT * length,
+            ..joint
+        });
+    }
     out.sort_by_key(|h| h.joint);
     Ok(out)
+}
+
+/// Where joint `j`'s bone ends among joint frames `globals`: at its end site if it has
+/// one (the top of the head for the skullbase, whose children are the eyes), else at its
+/// first child; `None` for a joint with neither.
+pub(crate) fn bone_end(skeleton: &Skeleton, globals: &[Transform], j: usize) -> Option<DVec3> {
+    if let Some((_, offset)) = skeleton.end_sites().iter().find(|(e, _)| *e == j) {
+        return Some(globals[j].transform_point(*offset));
+    }
+    let child = skeleton.joints().iter().position(|c| c.parent == Some(j))?;
+    Some(globals[child].translation)
 }
 
 #[cfg(test)]
@@ -279,6 +312,21 @@ mod tests {
             bind: DQuat::IDENTITY,
             pivot: 0.0,
         }
+    }
+
+    #[test]
+    fn the_heads_sliding_helper_runs_up_to_the_top_of_the_head_not_to_an_eye() {
+        let t = &crate::templates()[0];
+        let skeleton = t.instantiate(t.default_params()).unwrap();
+        let head = helpers(&skeleton)
+            .unwrap()
+            .into_iter()
+            .find(|h| h.name == "skullbase_slide")
+            .unwrap();
+        assert_eq!(head.joint, skeleton.joint("skullbase").unwrap());
+        // Straight up in the rest pose (the eyes, the skullbase's children, lie forward).
+        assert!(head.axis.y > 0.99, "{:?}", head.axis);
+        assert!(head.pivot > 0.0 && head.swing == 1.0 && head.twist == 1.0);
     }
 
     #[test]

@@ -282,8 +282,20 @@ impl Skin {
             CHAIN_ENDS,
             |j| joints[j].parent,
             |j| {
-                let child = joints.iter().position(|c| c.parent == Some(j)).unwrap_or(j);
-                (joint_bind[j].translation, joint_bind[child].translation)
+                let end = helpers::bone_end(skeleton, &joint_bind, j);
+                (
+                    joint_bind[j].translation,
+                    end.unwrap_or(joint_bind[j].translation),
+                )
+            },
+            // The head is rigid: its skin goes back from the skullbase's helper to the
+            // skullbase itself by the jaw, not across the face.
+            |j| {
+                if joints[j].name == "skullbase" {
+                    weights::HEAD_SPAN
+                } else {
+                    weights::TWIST_SPAN
+                }
             },
         );
         let (joints, weights) =

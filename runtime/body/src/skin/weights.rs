@@ -127,6 +127,8 @@ struct Chain {
     ladder: Vec<(u16, f64)>,
     /// The bone at rest, from the joint to its child.
     bone: (DVec3, DVec3),
+    /// Where along the bone the ladder runs (see [`TWIST_SPAN`]).
+    span: (f64, f64),
 }
 
 /// Where along its bone (0 at the joint, 1 at the child) a vertex starts to take the
@@ -134,13 +136,19 @@ struct Chain {
 /// band (which blends the whole twist with the forearm). Starting at 0.1-0.2 or ending at
 /// 0.7 turned more triangles over at the 1.40 m adult's worst posture (95-96 against 85).
 /// Likewise where the limb's skin goes from a sliding helper back to its joint.
-const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
+pub(crate) const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
+/// [`TWIST_SPAN`] for the head's sliding helper, along the skullbase's bone to the top of
+/// the head: the neck is the helper's and the head its joint's, from the bottom of the
+/// skull, so that the face does not stretch as the head nods. (As many triangles turned
+/// over with the hand-over from 10 % below the joint to 10 % above it.)
+pub(crate) const HEAD_SPAN: (f64, f64) = (0.0, 0.2);
 
 impl Chains {
     /// The chains of `helpers`, whose slots start at `first_slot` (the number of joints),
     /// each with `ends` joints at its parent's end: the helped joint's parent and its next
     /// ancestors (`parent_of` gives a joint's parent); `bone` gives a helped joint's bone
-    /// at rest, from the joint to its child. At the shoulder the armpit is shared between
+    /// at rest, from the joint to its child, and `span` where along it the ladder runs
+    /// ([`TWIST_SPAN`], [`HEAD_SPAN`]). At the shoulder the armpit is shared between
     /// the arm and the chest (vt1, vt6), which are the clavicle's ancestors: counted at
     /// the chain's parent end, their share of an armpit vertex blends with the arm's
     /// through helpers a quarter of the bend apart, instead of a straight blend of the
@@ -152,6 +160,7 @@ impl Chains {
         ends: usize,
         parent_of: impl Fn(usize) -> Option<usize>,
         bone: impl Fn(usize) -> (DVec3, DVec3),
+        span: impl Fn(usize) -> (f64, f64),
     ) -> Chains {
         let mut chains: Vec<Chain> = Vec::new();
         for (i, h) in helpers.iter().enumerate() {
@@ -169,6 +178,7 @@ impl Chains {
                         links: Vec::new(),
                         ladder: Vec::new(),
                         bone: bone(h.joint),
+                        span: span(h.joint),
                     });
                     chains.last_mut().expect("just pushed")
                 }
@@ -266,7 +276,7 @@ impl Chains {
             let (_, w) = out.swap_remove(at);
             let (a, b) = c.bone;
             let along = (p - a).dot(b - a) / (b - a).length_squared();
-            let (from, to) = TWIST_SPAN;
+            let (from, to) = c.span;
             let twist = ((along - from) / (to - from)).clamp(0.0, 1.0);
             let stops: Vec<(u16, f64)> = c
                 .ladder
@@ -491,7 +501,14 @@ mod tests {
             .into_iter()
             .flat_map(|joint| [0.25, 0.5, 0.75].map(|swing| across(joint, swing)))
             .collect();
-        Chains::new(&helpers, 10, 1, |_| None, |_| (DVec3::ZERO, DVec3::NEG_Y))
+        Chains::new(
+            &helpers,
+            10,
+            1,
+            |_| None,
+            |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
+        )
     }
 
     /// A helper across joint `joint` (parent 1) taking `swing` of its swing.
@@ -556,6 +573,7 @@ mod tests {
             2,
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
         );
         // The parent's end holds 0.9 (0.3 from joint 1, 0.6 from joint 0): the joint's
         // share 0.1 lies between the start (the end's two joints) and the first helper.
@@ -584,7 +602,14 @@ mod tests {
             twist,
             ..across(2, 1.0)
         }));
-        let chains = Chains::new(&helpers, 10, 1, |_| None, |_| (DVec3::ZERO, DVec3::NEG_Y));
+        let chains = Chains::new(
+            &helpers,
+            10,
+            1,
+            |_| None,
+            |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
+        );
         let at = |along: f64| chains.route(&vec![(2, 1.0)], DVec3::new(0.02, -along, 0.0));
         let (from, to) = TWIST_SPAN;
         // Near the joint: the whole swing, no twist; near the child: the joint itself.
@@ -624,6 +649,7 @@ mod tests {
             2,
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
         );
         let at =
             |along: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -along, 0.0));
