@@ -40,7 +40,8 @@
 //! adult over the test's postures, none when counted from the bind.
 //!
 //! **Sliding helpers** ([`SLIDING`]). The limb's skin next to a hip, knee or elbow goes
-//! to a helper that turns as its joint does, but about a pivot [`PIVOT_SHIFT`] of the
+//! to a helper that turns as its joint does (but for most of the hip's twist, below), but
+//! about a pivot [`PIVOT_SHIFT`] of the
 //! bone's length from the joint's centre towards the side the bone swings to (the inside
 //! of the bend: the groin for a flexed hip, the back of a bent knee); further down the
 //! limb the skin goes back to the joint itself, as the upper arm's does to the shoulder
@@ -73,6 +74,20 @@
 //! 0.08 and 0.11 of the bone (1.5 and 2 cm) left 271 and 266, a helper at vc4 as well
 //! (the neck's middle) one fewer.
 //!
+//! **The thigh's twist.** A hip's sliding helper takes only a quarter of the hip's twist
+//! about the thigh ([`HIP_SLIDE_TWIST`]); the rest comes in down the thigh, as the skin
+//! goes back from the helper to the hip. Taking all of it, a hip flexed and twisted
+//! 30-45° wrung the crotch, whose skin both hips' helpers and the pelvis share about
+//! equally (the skin test's worst posture on four of its six sizes: a hip flexed 100°,
+//! adducted 16° and twisted −42°, 13-17 triangles turned over). With a quarter the
+//! test's inverted triangles (six sizes, 50 full-range postures) went from 282 to 206,
+//! those at the hips and the pelvis from 97 to 21, and each size's worst posture from
+//! 7-17 to 3-7; none of it 243, a half 211, three quarters 233 (0.15 and 0.35: 215 and
+//! 204). A second helper down the thigh (a ladder of two rungs, at a quarter and five
+//! eighths of the twist) did no better (218), and the knees' and elbows' helpers taking
+//! a half or a quarter of their twist a little worse (215, 212: the forearm's pronation
+//! handed in down the forearm folded more at the shoulders).
+//!
 //! A helper is not a joint of the skeleton: its frame is computed from the posture each
 //! time the skin is deformed ([`Helper::frame`]) and written to glTF files as a node under
 //! the joint's parent whose rotation is animated ([`Helper::local_rotation`]), and for a
@@ -89,8 +104,15 @@ use glam::{DQuat, DVec3};
 const CHAINED: [&str; 1] = ["shoulder"];
 
 /// The joints given a sliding helper, without their side prefix: at the hips it took most
-/// of the groin's inverted triangles away, at the knees and elbows most of theirs.
-pub const SLIDING: [&str; 3] = ["hip", "knee", "elbow"];
+/// of the groin's inverted triangles away, at the knees and elbows most of theirs. With
+/// each, how much of the joint's twist about the bone the helper takes: a quarter at the
+/// hip (see the module's note on the thigh's twist), all of it at the knee and elbow.
+pub const SLIDING: [(&str, f64); 3] = [("hip", HIP_SLIDE_TWIST), ("knee", 1.0), ("elbow", 1.0)];
+
+/// How much of the hip's twist its sliding helper takes: the rest comes in down the thigh
+/// as the skin goes back from the helper to the hip (`weights::TWIST_SPAN`), as the upper
+/// arm's twist does down its ladder, instead of wringing the groin and the crotch.
+pub const HIP_SLIDE_TWIST: f64 = 0.25;
 
 /// The joints of the midline given a sliding helper: the head's, whose nod and tilt
 /// folded the front and the sides of the neck (see the module's note).
@@ -126,7 +148,7 @@ pub struct Helper {
     /// How much of the joint's swing it takes, in (0, 1].
     pub swing: f64,
     /// How much of the joint's twist about [`Helper::axis`] it takes, in [0, 1] (all of
-    /// it for a sliding helper, which turns as the joint does).
+    /// it for the knees', elbows' and head's sliding helpers, a quarter for the hips').
     pub twist: f64,
     /// The bone's direction in the joint's own frame: the twist's axis.
     pub axis: DVec3,
@@ -260,7 +282,7 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
                 });
             }
         }
-        for name in SLIDING {
+        for (name, twist) in SLIDING {
             let name = format!("{side}{name}");
             let Some((joint, length)) = at(&name)? else {
                 continue;
@@ -268,6 +290,7 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
             out.push(Helper {
                 name: format!("{name}_slide"),
                 pivot: PIVOT_SHIFT * length,
+                twist,
                 ..joint
             });
         }
