@@ -70,9 +70,20 @@
 //! face stays rigid. A child's neck is short and its front and sides folded between vt1,
 //! vc4 and the skullbase with the head bent forward or sideways: this took the skin
 //! test's inverted triangles (six sizes, 50 full-range postures, pleats already
-//! unfolded) from 312 to 282, those at vc4 and the skullbase from 42 to 16; a pivot of
-//! 0.08 and 0.11 of the bone (1.5 and 2 cm) left 271 and 266, a helper at vc4 as well
-//! (the neck's middle) one fewer.
+//! unfolded) from 312 to 282, those at vc4 and the skullbase from 42 to 16 (its pivot
+//! 0.05 of the bone, 9 mm on a 1.75 m adult; 0.08 and 0.11, 1.5 and 2 cm, left 271 and
+//! 266; taking half of the head's twist, 231 against 206 once the hips took a quarter
+//! of theirs, below).
+//!
+//! The neck's own joint (vc4, halfway up) has one that takes only a quarter of its twist
+//! (its pivot 3.6 mm from the centre on a 1.75 m adult: the bone is short), the rest
+//! coming in up the neck as the skin goes back to vc4 (the thigh's twist below is the
+//! same idea): the neck's root, where vt1, vc4 and a clavicle share the skin, no longer
+//! wrings as the head turns with the neck bent. With the hips' quarter twist already in,
+//! the test's inverted triangles went from 206 to 174, those moved most by vt1 from 58
+//! to 30 (the pivot alone 205; half of the twist 184; a quarter with a pivot of 0.3 of
+//! the bone 174 too, but the 1.40 m adult's worst posture went from 3 to 5; none of the
+//! twist 179).
 //!
 //! **The thigh's twist.** A hip's sliding helper takes only a quarter of the hip's twist
 //! about the thigh ([`HIP_SLIDE_TWIST`]); the rest comes in down the thigh, as the skin
@@ -114,9 +125,11 @@ pub const SLIDING: [(&str, f64); 3] = [("hip", HIP_SLIDE_TWIST), ("knee", 1.0), 
 /// arm's twist does down its ladder, instead of wringing the groin and the crotch.
 pub const HIP_SLIDE_TWIST: f64 = 0.25;
 
-/// The joints of the midline given a sliding helper: the head's, whose nod and tilt
-/// folded the front and the sides of the neck (see the module's note).
-pub const SLIDING_MIDLINE: [&str; 1] = ["skullbase"];
+/// The joints of the midline given a sliding helper, with how much of the joint's twist
+/// each takes: the neck's (vc4, a quarter: the rest comes in up the neck) and the
+/// head's, whose bending and turning folded the root, the front and the sides of the
+/// neck (see the module's note).
+pub const SLIDING_MIDLINE: [(&str, f64); 2] = [("vc4", 0.25), ("skullbase", 1.0)];
 
 /// How far a sliding helper's pivot lies from its joint's centre, towards the inside of
 /// the bend, as a fraction of the bone's length (2.1 cm at a 1.75 m adult's hip): the
@@ -148,7 +161,8 @@ pub struct Helper {
     /// How much of the joint's swing it takes, in (0, 1].
     pub swing: f64,
     /// How much of the joint's twist about [`Helper::axis`] it takes, in [0, 1] (all of
-    /// it for the knees', elbows' and head's sliding helpers, a quarter for the hips').
+    /// it for the knees', elbows' and head's sliding helpers, a quarter for the hips' and
+    /// vc4's).
     pub twist: f64,
     /// The bone's direction in the joint's own frame: the twist's axis.
     pub axis: DVec3,
@@ -231,8 +245,8 @@ impl Helper {
 
 /// The helpers of a troupe template's skeleton: at each side's shoulder, across it one
 /// per [`SWING_FRACTIONS`] and along the upper arm one per [`TWIST_FRACTIONS`]; at each
-/// side's hip, knee and elbow one sliding helper (named `l_hip_slide`), and one at the
-/// skullbase (`skullbase_slide`); ordered by joint, then as listed.
+/// side's hip, knee and elbow one sliding helper (named `l_hip_slide`), and one at vc4
+/// and at the skullbase (`skullbase_slide`); ordered by joint, then as listed.
 pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
     let rest = super::volumes::rest_globals(skeleton);
     let bind_pose = super::volumes::bind_globals(skeleton);
@@ -295,13 +309,14 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
             });
         }
     }
-    for name in SLIDING_MIDLINE {
+    for (name, twist) in SLIDING_MIDLINE {
         let Some((joint, length)) = at(name)? else {
             continue;
         };
         out.push(Helper {
             name: format!("{name}_slide"),
             pivot: PIVOT_SHIFT * length,
+            twist,
             ..joint
         });
     }
