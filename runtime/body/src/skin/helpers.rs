@@ -116,9 +116,14 @@ const CHAINED: [&str; 1] = ["shoulder"];
 
 /// The joints given a sliding helper, without their side prefix: at the hips it took most
 /// of the groin's inverted triangles away, at the knees and elbows most of theirs. With
-/// each, how much of the joint's twist about the bone the helper takes: a quarter at the
-/// hip (see the module's note on the thigh's twist), all of it at the knee and elbow.
-pub const SLIDING: [(&str, f64); 3] = [("hip", HIP_SLIDE_TWIST), ("knee", 1.0), ("elbow", 1.0)];
+/// each, how much of the joint's twist about the bone the helper takes (a quarter at the
+/// hip, see the module's note on the thigh's twist; all of it at the knee and elbow) and
+/// how far its pivot lies from the joint's centre, as a fraction of the bone's length.
+pub const SLIDING: [(&str, f64, f64); 3] = [
+    ("hip", HIP_SLIDE_TWIST, PIVOT_SHIFT),
+    ("knee", 1.0, PIVOT_SHIFT),
+    ("elbow", 1.0, ELBOW_PIVOT_SHIFT),
+];
 
 /// How much of the hip's twist its sliding helper takes: the rest comes in down the thigh
 /// as the skin goes back from the helper to the hip (`weights::TWIST_SPAN`), as the upper
@@ -135,6 +140,17 @@ pub const SLIDING_MIDLINE: [(&str, f64); 2] = [("vc4", 0.25), ("skullbase", 1.0)
 /// the bend, as a fraction of the bone's length (2.1 cm at a 1.75 m adult's hip): the
 /// smallest that took most of the folds away (see the module's note).
 pub const PIVOT_SHIFT: f64 = 0.05;
+
+/// [`PIVOT_SHIFT`] at the elbow: 2.0 cm on a 1.75 m adult's forearm, about as far as the
+/// hip's and the knee's (2.1 and 2.2 cm) rather than 1.3 cm, for the crease of an elbow
+/// bent to its limit (150°, the forearm against the biceps). It took the skin test's
+/// inverted triangles from 167 to 160 (every size fewer or the same), the children's
+/// worst posture from 5-7 to 3-5. Measured before the edge-on pleats were unfolded
+/// (`pleats::EDGE_ON`), 0.08 took 174 to 167 and 0.11 of the forearm (2.8 cm) to 162
+/// with 2-3 at every size's worst posture, but that moves the elbow's skin by as much
+/// more as the knee's at 0.08, whose kink at the back of the knee kept the sliding
+/// helpers small.
+pub const ELBOW_PIVOT_SHIFT: f64 = 0.08;
 
 /// Fractions of its joint's swing the helpers across one joint turn by: three evenly
 /// spaced, so neighbours on the chain differ by a quarter of the bend (an arm raised by
@@ -296,14 +312,14 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
                 });
             }
         }
-        for (name, twist) in SLIDING {
+        for (name, twist, shift) in SLIDING {
             let name = format!("{side}{name}");
             let Some((joint, length)) = at(&name)? else {
                 continue;
             };
             out.push(Helper {
                 name: format!("{name}_slide"),
-                pivot: PIVOT_SHIFT * length,
+                pivot: shift * length,
                 twist,
                 ..joint
             });
