@@ -2,8 +2,8 @@
 //! the shoulder's rotation, so that the skin across the shoulder follows a rotation about
 //! the joint's centre instead of a straight blend of the chest's and the arm's matrices,
 //! and the arm's twist spreads down the upper arm instead of wringing the armpit; and at
-//! the hips, knees and elbows (and the skullbase) one **sliding** helper each, which turns
-//! with its joint but about a point moved into the bend (see below).
+//! the hips, knees and elbows (and at vc4 and the skullbase) one **sliding** helper each,
+//! which turns with its joint but about a point moved into the bend (see below).
 //!
 //! Linear blend skinning averages the matrices of the joints that share a vertex; across
 //! a joint bent by θ the average of "not turned" and "turned by θ" shrinks the skin
@@ -40,9 +40,9 @@
 //! adult over the test's postures, none when counted from the bind.
 //!
 //! **Sliding helpers** ([`SLIDING`]). The limb's skin next to a hip, knee or elbow goes
-//! to a helper that turns as its joint does (but for most of the hip's twist, below), but
-//! about a pivot [`PIVOT_SHIFT`] of the
-//! bone's length from the joint's centre towards the side the bone swings to (the inside
+//! to a helper that turns as its joint does (but for most of the hip's twist, below),
+//! about a pivot [`PIVOT_SHIFT`] of the bone's length ([`ELBOW_PIVOT_SHIFT`] at the
+//! elbow) from the joint's centre towards the side the bone swings to (the inside
 //! of the bend: the groin for a flexed hip, the back of a bent knee); further down the
 //! limb the skin goes back to the joint itself, as the upper arm's does to the shoulder
 //! down its twist helpers (`weights::TWIST_SPAN`). Turning about that pivot instead of
@@ -70,10 +70,10 @@
 //! face stays rigid. A child's neck is short and its front and sides folded between vt1,
 //! vc4 and the skullbase with the head bent forward or sideways: this took the skin
 //! test's inverted triangles (six sizes, 50 full-range postures, pleats already
-//! unfolded) from 312 to 282, those at vc4 and the skullbase from 42 to 16 (its pivot
-//! 0.05 of the bone, 9 mm on a 1.75 m adult; 0.08 and 0.11, 1.5 and 2 cm, left 271 and
-//! 266; taking half of the head's twist, 231 against 206 once the hips took a quarter
-//! of theirs, below).
+//! unfolded) from 312 to 282, those at vc4 and the skullbase from 42 to 16, with a pivot
+//! of 0.05 of the bone (9 mm on a 1.75 m adult; 0.08 and 0.11, 1.5 and 2 cm, left 271
+//! and 266; it is now 0.11, [`HEAD_PIVOT_SHIFT`]). Taking half of the head's twist did
+//! worse (231 against 206 once the hips took a quarter of theirs, below).
 //!
 //! The neck's own joint (vc4, halfway up) has one that takes only a quarter of its twist
 //! (its pivot 3.6 mm from the centre on a 1.75 m adult: the bone is short), the rest
@@ -131,9 +131,9 @@ pub const SLIDING: [(&str, f64, f64); 3] = [
 pub const HIP_SLIDE_TWIST: f64 = 0.25;
 
 /// The joints of the midline given a sliding helper, with how much of the joint's twist
-/// each takes and its pivot (as in [`SLIDING`]): the neck's (vc4, a quarter: the rest comes in up the neck) and the
-/// head's, whose bending and turning folded the root, the front and the sides of the
-/// neck (see the module's note).
+/// each takes and its pivot (as in [`SLIDING`]): the neck's (vc4, a quarter: the rest
+/// comes in up the neck) and the head's, whose bending and turning folded the root, the
+/// front and the sides of the neck (see the module's note).
 pub const SLIDING_MIDLINE: [(&str, f64, f64); 2] = [
     ("vc4", 0.25, PIVOT_SHIFT),
     ("skullbase", 1.0, HEAD_PIVOT_SHIFT),

@@ -20,8 +20,9 @@
 //!    and smoothed over the surface so that they change continuously from vertex to vertex;
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
 //!    by a fraction of the joint's swing (across it) or twist (down the limb), or, next
-//!    to the hips, knees and elbows, turned with the joint about a point moved into the
-//!    bend, so that a bend folds less skin over.
+//!    to the hips, knees, elbows, vc4 and the skullbase, turned with the joint (the hips'
+//!    and vc4's by a quarter of its twist) about a point moved into the bend, so that a
+//!    bend folds less skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).

@@ -20,8 +20,9 @@
 //!    the bend but as a blend of two nearly equal rotations. Those helpers take the
 //!    joint's swing only; what is left of the joint's own weight goes down the limb's
 //!    twist helpers, by how far along the bone the vertex lies ([`TWIST_SPAN`]). At the
-//!    hips, knees and elbows the joint's weight near the joint goes likewise to its
-//!    sliding helper, and back to the joint further down the limb.
+//!    hips, knees, elbows, vc4 and the skullbase the joint's weight near the joint goes
+//!    likewise to its sliding helper, and back to the joint further down the limb (up
+//!    the neck; by the bottom of the skull, [`HEAD_SPAN`]).
 //! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
