@@ -66,7 +66,7 @@
 //! The head has one too (`skullbase_slide`, [`SLIDING_MIDLINE`]), along the skullbase's
 //! bone to the top of the head: the neck's skin that the skullbase moves turns about a
 //! point moved towards the side the head nods or tilts to (the throat for a nod), and
-//! goes back to the skullbase by the bottom of the skull (`weights::HEAD_SPAN`), so the
+//! goes back to the skullbase by the jaw's underside (`weights::HEAD_SPAN`), so the
 //! face stays rigid. A child's neck is short and its front and sides folded between vt1,
 //! vc4 and the skullbase with the head bent forward or sideways: this took the skin
 //! test's inverted triangles (six sizes, 50 full-range postures, pleats already

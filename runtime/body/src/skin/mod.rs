@@ -290,7 +290,7 @@ impl Skin {
                 )
             },
             // The head is rigid: its skin goes back from the skullbase's helper to the
-            // skullbase itself by the jaw, not across the face.
+            // skullbase itself under the jaw, not across the face.
             |j| {
                 if joints[j].name == "skullbase" {
                     weights::HEAD_SPAN
