@@ -2,9 +2,9 @@
 //! degenerate triangles, normalised weights of at most four joints, and at 50 random
 //! postures within the joint limits (and 50 within half, 50 within a quarter of each
 //! range) no vertex far from its bones and only a bounded few triangles turned inside out,
-//! at the creases of strongly bent joints (the issue asked for none; skinning does not get
-//! there, see the bounds at the end of `check`). The counts are printed, by the joint that
-//! moves each inverted triangle most.
+//! at the creases of strongly bent joints, none at half or a quarter of the ranges (the
+//! issue asked for none at all; skinning does not get there, see the bounds at the end of
+//! `check`). The counts are printed, by the joint that moves each inverted triangle most.
 
 use std::collections::HashMap;
 use troupe_body::glam::DVec3;
@@ -167,6 +167,7 @@ fn check(skeleton: &Skeleton, label: &str) {
     let mut rng = Lcg(7);
     let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
     let mut worst_inverted = 0;
+    let mut all_inverted = 0;
     let mut worst_excess = (0.0f64, 0, 0);
     let mut moderate_inverted = 0;
     let mut slight_inverted = 0;
@@ -227,6 +228,9 @@ fn check(skeleton: &Skeleton, label: &str) {
                     .or_default() += 1;
             }
         }
+        if posture < 50 {
+            all_inverted += inverted;
+        }
         let worst = match posture / 50 {
             0 => &mut worst_inverted,
             1 => &mut moderate_inverted,
@@ -241,7 +245,7 @@ fn check(skeleton: &Skeleton, label: &str) {
         eprintln!("{label}: inverted triangles over the 50 postures at {span} ranges, by joint: {places:?}");
     }
     eprintln!(
-        "{label}: worst posture has {worst_inverted} inverted triangles ({moderate_inverted} at half ranges, {slight_inverted} at quarter ranges); a vertex strays at most {:.3} h ({excess:.3} m) further from its bones than at rest",
+        "{label}: worst posture has {worst_inverted} inverted triangles ({all_inverted} over the 50 at full ranges, {moderate_inverted} at half ranges, {slight_inverted} at quarter ranges); a vertex strays at most {:.3} h ({excess:.3} m) further from its bones than at rest",
         excess / h
     );
     assert!(
@@ -265,17 +269,21 @@ fn check(skeleton: &Skeleton, label: &str) {
     // arm), the skin made with the arms raised 45° (so an arm overhead bends the armpit
     // by 135°, not 180°), the wider smoothing (wider still at the groin and the upper
     // arms), the tiny edges collapsed, the thin triangles evened out and a person's trunk
-    // and hip ranges, the narrower bands at the root of the neck and the clavicles, and
-    // the sliding helpers at the hips, knees and elbows (turning with their joint about a
-    // point moved into the bend): at the worst posture, 0.04-0.07 % of the triangles at
-    // full ranges (9-17), at most one at half ranges, none at a quarter; at the root of
-    // the neck (vt1), the groin and the wrists. These bounds keep it there.
+    // and hip ranges, the narrower bands at the root of the neck and the clavicles, the
+    // sliding helpers at the hips, knees, elbows, vc4 and the skullbase (turning with
+    // their joint about a point moved into the bend; the hips' and vc4's with a quarter
+    // of its twist, the rest down the limb) and the pleats of the rest surface unfolded:
+    // at the worst posture, 0.008-0.021 % of the triangles at full ranges (2-5), none at
+    // half or a quarter of the ranges; 14-36 over the 50 full-range postures, most at the
+    // knuckles of a finger bent 80-90° (the wrist and the fingers), then the root of the
+    // neck (vt1). These bounds keep it there.
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
-        fraction(worst_inverted) <= 0.00075
-            && fraction(moderate_inverted) <= 0.00005
+        fraction(worst_inverted) <= 0.00025
+            && all_inverted <= 40
+            && moderate_inverted == 0
             && slight_inverted == 0,
-        "{label}: {worst_inverted} triangles turned inside out at full joint ranges, {moderate_inverted} at half ranges, {slight_inverted} at a quarter"
+        "{label}: {worst_inverted} triangles turned inside out at the worst full-range posture ({all_inverted} over the 50), {moderate_inverted} at half ranges, {slight_inverted} at a quarter"
     );
 }
 

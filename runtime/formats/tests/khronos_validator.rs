@@ -72,8 +72,8 @@ fn body(name: &str) -> Skeleton {
     t.instantiate(t.default_params()).unwrap()
 }
 
-/// A troupe body waving and walking forward, a knee raised (the skin's sliding helpers
-/// at the hip, knee and elbow move as well as turn).
+/// A troupe body waving and walking forward, a knee raised, the head nodding (the
+/// skin's sliding helpers at the hip, knee, elbow and skullbase move as well as turn).
 fn troupe_rig(skeleton: &Skeleton) -> Rig {
     let mut seq = Sequence::new("wave");
     seq.meta.insert("rate".into(), "30".into());
@@ -82,6 +82,7 @@ fn troupe_rig(skeleton: &Skeleton) -> Rig {
         ("r_elbow_flexion", 0.9),
         ("l_hip_flexion", 1.6),
         ("l_knee_flexion", 1.4),
+        ("skullbase_flexion", 0.6),
         ("root_z", 0.5),
     ] {
         let keys = vec![Key::new(0.0, 0.0), Key::new(0.5, v), Key::new(1.0, 0.0)];

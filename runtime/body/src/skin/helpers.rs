@@ -2,8 +2,8 @@
 //! the shoulder's rotation, so that the skin across the shoulder follows a rotation about
 //! the joint's centre instead of a straight blend of the chest's and the arm's matrices,
 //! and the arm's twist spreads down the upper arm instead of wringing the armpit; and at
-//! the hips, knees and elbows one **sliding** helper each, which turns with its joint but
-//! about a point moved into the bend (see below).
+//! the hips, knees and elbows (and at vc4 and the skullbase) one **sliding** helper each,
+//! which turns with its joint but about a point moved into the bend (see below).
 //!
 //! Linear blend skinning averages the matrices of the joints that share a vertex; across
 //! a joint bent by θ the average of "not turned" and "turned by θ" shrinks the skin
@@ -40,8 +40,9 @@
 //! adult over the test's postures, none when counted from the bind.
 //!
 //! **Sliding helpers** ([`SLIDING`]). The limb's skin next to a hip, knee or elbow goes
-//! to a helper that turns as its joint does, but about a pivot [`PIVOT_SHIFT`] of the
-//! bone's length from the joint's centre towards the side the bone swings to (the inside
+//! to a helper that turns as its joint does (but for most of the hip's twist, below),
+//! about a pivot [`PIVOT_SHIFT`] of the bone's length ([`ELBOW_PIVOT_SHIFT`] at the
+//! elbow) from the joint's centre towards the side the bone swings to (the inside
 //! of the bend: the groin for a flexed hip, the back of a bent knee); further down the
 //! limb the skin goes back to the joint itself, as the upper arm's does to the shoulder
 //! down its twist helpers (`weights::TWIST_SPAN`). Turning about that pivot instead of
@@ -62,6 +63,42 @@
 //! turned 1,324 over; one moved along the bone too (0.2 into the bend and 0.06 towards
 //! the child or the parent) turned 505 over but strayed 0.060 × height, or 642.
 //!
+//! The head has one too (`skullbase_slide`, [`SLIDING_MIDLINE`]), along the skullbase's
+//! bone to the top of the head: the neck's skin that the skullbase moves turns about a
+//! point moved towards the side the head nods or tilts to (the throat for a nod), and
+//! goes back to the skullbase by the jaw's underside (`weights::HEAD_SPAN`), so the
+//! face stays rigid. A child's neck is short and its front and sides folded between vt1,
+//! vc4 and the skullbase with the head bent forward or sideways: this took the skin
+//! test's inverted triangles (six sizes, 50 full-range postures, pleats already
+//! unfolded) from 312 to 282, those at vc4 and the skullbase from 42 to 16, with a pivot
+//! of 0.05 of the bone (9 mm on a 1.75 m adult; 0.08 and 0.11, 1.5 and 2 cm, left 271
+//! and 266; it is now 0.11, [`HEAD_PIVOT_SHIFT`]). Taking half of the head's twist did
+//! worse (231 against 206 once the hips took a quarter of theirs, below).
+//!
+//! The neck's own joint (vc4, halfway up) has one that takes only a quarter of its twist
+//! (its pivot 3.6 mm from the centre on a 1.75 m adult: the bone is short), the rest
+//! coming in up the neck as the skin goes back to vc4 (the thigh's twist below is the
+//! same idea): the neck's root, where vt1, vc4 and a clavicle share the skin, no longer
+//! wrings as the head turns with the neck bent. With the hips' quarter twist already in,
+//! the test's inverted triangles went from 206 to 174, those moved most by vt1 from 58
+//! to 30 (the pivot alone 205; half of the twist 184; a quarter with a pivot of 0.3 of
+//! the bone 174 too, but the 1.40 m adult's worst posture went from 3 to 5; none of the
+//! twist 179).
+//!
+//! **The thigh's twist.** A hip's sliding helper takes only a quarter of the hip's twist
+//! about the thigh ([`HIP_SLIDE_TWIST`]); the rest comes in down the thigh, as the skin
+//! goes back from the helper to the hip. Taking all of it, a hip flexed and twisted
+//! 30-45° wrung the crotch, whose skin both hips' helpers and the pelvis share about
+//! equally (the skin test's worst posture on four of its six sizes: a hip flexed 100°,
+//! adducted 16° and twisted −42°, 13-17 triangles turned over). With a quarter the
+//! test's inverted triangles (six sizes, 50 full-range postures) went from 282 to 206,
+//! those at the hips and the pelvis from 97 to 21, and each size's worst posture from
+//! 7-17 to 3-7; none of it 243, a half 211, three quarters 233 (0.15 and 0.35: 215 and
+//! 204). A second helper down the thigh (a ladder of two rungs, at a quarter and five
+//! eighths of the twist) did no better (218), and the knees' and elbows' helpers taking
+//! a half or a quarter of their twist a little worse (215, 212: the forearm's pronation
+//! handed in down the forearm folded more at the shoulders).
+//!
 //! A helper is not a joint of the skeleton: its frame is computed from the posture each
 //! time the skin is deformed ([`Helper::frame`]) and written to glTF files as a node under
 //! the joint's parent whose rotation is animated ([`Helper::local_rotation`]), and for a
@@ -78,13 +115,52 @@ use glam::{DQuat, DVec3};
 const CHAINED: [&str; 1] = ["shoulder"];
 
 /// The joints given a sliding helper, without their side prefix: at the hips it took most
-/// of the groin's inverted triangles away, at the knees and elbows most of theirs.
-pub const SLIDING: [&str; 3] = ["hip", "knee", "elbow"];
+/// of the groin's inverted triangles away, at the knees and elbows most of theirs. With
+/// each, how much of the joint's twist about the bone the helper takes (a quarter at the
+/// hip, see the module's note on the thigh's twist; all of it at the knee and elbow) and
+/// how far its pivot lies from the joint's centre, as a fraction of the bone's length.
+pub const SLIDING: [(&str, f64, f64); 3] = [
+    ("hip", HIP_SLIDE_TWIST, PIVOT_SHIFT),
+    ("knee", 1.0, PIVOT_SHIFT),
+    ("elbow", 1.0, ELBOW_PIVOT_SHIFT),
+];
+
+/// How much of the hip's twist its sliding helper takes: the rest comes in down the thigh
+/// as the skin goes back from the helper to the hip (`weights::TWIST_SPAN`), as the upper
+/// arm's twist does down its ladder, instead of wringing the groin and the crotch.
+pub const HIP_SLIDE_TWIST: f64 = 0.25;
+
+/// The joints of the midline given a sliding helper, with how much of the joint's twist
+/// each takes and its pivot (as in [`SLIDING`]): the neck's (vc4, a quarter: the rest
+/// comes in up the neck) and the head's, whose bending and turning folded the root, the
+/// front and the sides of the neck (see the module's note).
+pub const SLIDING_MIDLINE: [(&str, f64, f64); 2] = [
+    ("vc4", 0.25, PIVOT_SHIFT),
+    ("skullbase", 1.0, HEAD_PIVOT_SHIFT),
+];
 
 /// How far a sliding helper's pivot lies from its joint's centre, towards the inside of
 /// the bend, as a fraction of the bone's length (2.1 cm at a 1.75 m adult's hip): the
 /// smallest that took most of the folds away (see the module's note).
 pub const PIVOT_SHIFT: f64 = 0.05;
+
+/// [`PIVOT_SHIFT`] at the elbow: 2.0 cm on a 1.75 m adult's forearm, about as far as the
+/// hip's and the knee's (2.1 and 2.2 cm) rather than 1.3 cm, for the crease of an elbow
+/// bent to its limit (150°, the forearm against the biceps). It took the skin test's
+/// inverted triangles from 167 to 160 (every size fewer or the same), the children's
+/// worst posture from 5-7 to 3-5. Measured before the edge-on pleats were unfolded
+/// (`pleats::EDGE_ON`), 0.08 took 174 to 167 and 0.11 of the forearm (2.8 cm) to 162
+/// with 2-3 at every size's worst posture, but that moves the elbow's skin by as much
+/// more as the knee's at 0.08, whose kink at the back of the knee kept the sliding
+/// helpers small.
+pub const ELBOW_PIVOT_SHIFT: f64 = 0.08;
+
+/// [`PIVOT_SHIFT`] at the skullbase, of the head's height: 2.0 cm on a 1.75 m adult, the
+/// hip's and the knee's distance, rather than 9 mm. With everything else in, it took
+/// the skin test's inverted triangles from 160 to 147 (every size fewer or the same),
+/// those at vc4 and the skullbase from 12 to 2; 0.08 (1.5 cm) left 151. The face does
+/// not move with it (`weights::HEAD_SPAN`).
+pub const HEAD_PIVOT_SHIFT: f64 = 0.11;
 
 /// Fractions of its joint's swing the helpers across one joint turn by: three evenly
 /// spaced, so neighbours on the chain differ by a quarter of the bend (an arm raised by
@@ -111,7 +187,8 @@ pub struct Helper {
     /// How much of the joint's swing it takes, in (0, 1].
     pub swing: f64,
     /// How much of the joint's twist about [`Helper::axis`] it takes, in [0, 1] (all of
-    /// it for a sliding helper, which turns as the joint does).
+    /// it for the knees', elbows' and head's sliding helpers, a quarter for the hips' and
+    /// vc4's).
     pub twist: f64,
     /// The bone's direction in the joint's own frame: the twist's axis.
     pub axis: DVec3,
@@ -194,25 +271,22 @@ impl Helper {
 
 /// The helpers of a troupe template's skeleton: at each side's shoulder, across it one
 /// per [`SWING_FRACTIONS`] and along the upper arm one per [`TWIST_FRACTIONS`]; at each
-/// side's hip, knee and elbow one sliding helper (named `l_hip_slide`); ordered by joint,
-/// then as listed.
+/// side's hip, knee and elbow one sliding helper (named `l_hip_slide`), and one at vc4
+/// and at the skullbase (`skullbase_slide`); ordered by joint, then as listed.
 pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
     let rest = super::volumes::rest_globals(skeleton);
     let bind_pose = super::volumes::bind_globals(skeleton);
     // A helper at the joint named so that turns as the joint does, whose fields the
-    // joint's helpers share (its parent, its bone's direction in its own frame towards
-    // its child, the twist's axis; its rotation at bind), and the bone's length.
+    // joint's helpers share (its parent, its bone's direction in its own frame, the
+    // twist's axis; its rotation at bind), and the bone's length.
     let at = |name: &str| -> Result<Option<(Helper, f64)>> {
         let joint = skeleton.joint(name)?;
         let Some(parent) = skeleton.joints()[joint].parent else {
             return Ok(None);
         };
-        let child = skeleton
-            .joints()
-            .iter()
-            .position(|j| j.parent == Some(joint))
-            .ok_or_else(|| Error::Invalid(format!("skin: {name} has no child joint")))?;
-        let bone = rest[child].translation - rest[joint].translation;
+        let bone = bone_end(skeleton, &rest, joint)
+            .ok_or_else(|| Error::Invalid(format!("skin: {name} has no child joint")))?
+            - rest[joint].translation;
         let helper = Helper {
             name: name.to_string(),
             joint,
@@ -248,20 +322,43 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
                 });
             }
         }
-        for name in SLIDING {
+        for (name, twist, shift) in SLIDING {
             let name = format!("{side}{name}");
             let Some((joint, length)) = at(&name)? else {
                 continue;
             };
             out.push(Helper {
                 name: format!("{name}_slide"),
-                pivot: PIVOT_SHIFT * length,
+                pivot: shift * length,
+                twist,
                 ..joint
             });
         }
     }
+    for (name, twist, shift) in SLIDING_MIDLINE {
+        let Some((joint, length)) = at(name)? else {
+            continue;
+        };
+        out.push(Helper {
+            name: format!("{name}_slide"),
+            pivot: shift * length,
+            twist,
+            ..joint
+        });
+    }
     out.sort_by_key(|h| h.joint);
     Ok(out)
+}
+
+/// Where joint `j`'s bone ends among joint frames `globals`: at its end site if it has
+/// one (the top of the head for the skullbase, whose children are the eyes), else at its
+/// first child; `None` for a joint with neither.
+pub(crate) fn bone_end(skeleton: &Skeleton, globals: &[Transform], j: usize) -> Option<DVec3> {
+    if let Some((_, offset)) = skeleton.end_sites().iter().find(|(e, _)| *e == j) {
+        return Some(globals[j].transform_point(*offset));
+    }
+    let child = skeleton.joints().iter().position(|c| c.parent == Some(j))?;
+    Some(globals[child].translation)
 }
 
 #[cfg(test)]
@@ -279,6 +376,21 @@ mod tests {
             bind: DQuat::IDENTITY,
             pivot: 0.0,
         }
+    }
+
+    #[test]
+    fn the_heads_sliding_helper_runs_up_to_the_top_of_the_head_not_to_an_eye() {
+        let t = &crate::templates()[0];
+        let skeleton = t.instantiate(t.default_params()).unwrap();
+        let head = helpers(&skeleton)
+            .unwrap()
+            .into_iter()
+            .find(|h| h.name == "skullbase_slide")
+            .unwrap();
+        assert_eq!(head.joint, skeleton.joint("skullbase").unwrap());
+        // Straight up in the rest pose (the eyes, the skullbase's children, lie forward).
+        assert!(head.axis.y > 0.99, "{:?}", head.axis);
+        assert!(head.pivot > 0.0 && head.swing == 1.0 && head.twist == 1.0);
     }
 
     #[test]

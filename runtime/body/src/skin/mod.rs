@@ -14,13 +14,15 @@
 //!    once more into a coarse level of detail for actors far from the camera; its tiny
 //!    edges are collapsed (`collapse`) and its thin triangles evened out by edge flips
 //!    (`flips`) and tangential relaxation (`relax`), since thin triangles turn over
-//!    at the slightest bend;
+//!    at the slightest bend, and its few pleats (triangles facing into the body) unfolded
+//!    (`pleats`);
 //! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
 //!    and smoothed over the surface so that they change continuously from vertex to vertex;
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
 //!    by a fraction of the joint's swing (across it) or twist (down the limb), or, next
-//!    to the hips, knees and elbows, turned with the joint about a point moved into the
-//!    bend, so that a bend folds less skin over.
+//!    to the hips, knees, elbows, vc4 and the skullbase, turned with the joint (the hips'
+//!    and vc4's by a quarter of its twist) about a point moved into the bend, so that a
+//!    bend folds less skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
@@ -29,6 +31,7 @@ mod collapse;
 mod flips;
 pub mod helpers;
 mod library;
+mod pleats;
 mod regions;
 mod relax;
 mod surface;
@@ -232,10 +235,14 @@ impl Skin {
             *i = renumber[*i as usize];
         }
         // Thin triangles turn over at the slightest bend: flip the worst away, relax the
-        // vertices along the surface, flip again what is still thin and relax once more
-        // (more rounds changed nothing measurable).
+        // vertices along the surface, unfold the pleats (`pleats`), flip again what is
+        // still thin and relax once more (more rounds changed nothing measurable).
         flips::flip_slivers(&positions, &mut indices, 0.05);
         relax::relax(&mut positions, &indices, &field, 10);
+        // Unfold the pleats before the last flips and relaxation, which even out the
+        // triangles the unfolding leaves thin (unfolded after them, a sliver was left
+        // on the 0.96 m child's neck that turned over at a quarter of the ranges).
+        pleats::unfold(&mut positions, &indices, &field);
         flips::flip_slivers(&positions, &mut indices, THIN);
         relax::relax(&mut positions, &indices, &field, 5);
         let onto_kept = |coarse: &[u32]| -> Vec<u32> {
@@ -276,8 +283,20 @@ impl Skin {
             CHAIN_ENDS,
             |j| joints[j].parent,
             |j| {
-                let child = joints.iter().position(|c| c.parent == Some(j)).unwrap_or(j);
-                (joint_bind[j].translation, joint_bind[child].translation)
+                let end = helpers::bone_end(skeleton, &joint_bind, j);
+                (
+                    joint_bind[j].translation,
+                    end.unwrap_or(joint_bind[j].translation),
+                )
+            },
+            // The head is rigid: its skin goes back from the skullbase's helper to the
+            // skullbase itself under the jaw, not across the face.
+            |j| {
+                if joints[j].name == "skullbase" {
+                    weights::HEAD_SPAN
+                } else {
+                    weights::TWIST_SPAN
+                }
             },
         );
         let (joints, weights) =

@@ -125,16 +125,21 @@ impl Field {
         lerp(lerp(x00, x10, f.y), lerp(x01, x11, f.y), f.z)
     }
 
+    /// The field's gradient at `p` by central differences half a cell apart: outwards,
+    /// the surface's normal there (not normalised).
+    pub fn gradient(&self, p: DVec3) -> DVec3 {
+        let h = self.cell * 0.5;
+        let d =
+            |axis: DVec3| (self.value_at(p + axis * h) - self.value_at(p - axis * h)) / (2.0 * h);
+        DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z))
+    }
+
     /// `p` moved onto the zero level set along the field's gradient (two Newton steps;
     /// `p` itself where the gradient vanishes).
     pub fn project(&self, p: DVec3) -> DVec3 {
-        let h = self.cell * 0.5;
         let mut p = p;
         for _ in 0..2 {
-            let d = |axis: DVec3| {
-                (self.value_at(p + axis * h) - self.value_at(p - axis * h)) / (2.0 * h)
-            };
-            let gradient = DVec3::new(d(DVec3::X), d(DVec3::Y), d(DVec3::Z));
+            let gradient = self.gradient(p);
             let g2 = gradient.length_squared();
             if g2 < 1e-6 {
                 return p;

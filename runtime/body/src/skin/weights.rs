@@ -20,8 +20,9 @@
 //!    the bend but as a blend of two nearly equal rotations. Those helpers take the
 //!    joint's swing only; what is left of the joint's own weight goes down the limb's
 //!    twist helpers, by how far along the bone the vertex lies ([`TWIST_SPAN`]). At the
-//!    hips, knees and elbows the joint's weight near the joint goes likewise to its
-//!    sliding helper, and back to the joint further down the limb.
+//!    hips, knees, elbows, vc4 and the skullbase the joint's weight near the joint goes
+//!    likewise to its sliding helper, and back to the joint further down the limb (up
+//!    the neck; under the jaw, [`HEAD_SPAN`]).
 //! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
@@ -127,6 +128,8 @@ struct Chain {
     ladder: Vec<(u16, f64)>,
     /// The bone at rest, from the joint to its child.
     bone: (DVec3, DVec3),
+    /// Where along the bone the ladder runs (see [`TWIST_SPAN`]).
+    span: (f64, f64),
 }
 
 /// Where along its bone (0 at the joint, 1 at the child) a vertex starts to take the
@@ -134,13 +137,23 @@ struct Chain {
 /// band (which blends the whole twist with the forearm). Starting at 0.1-0.2 or ending at
 /// 0.7 turned more triangles over at the 1.40 m adult's worst posture (95-96 against 85).
 /// Likewise where the limb's skin goes from a sliding helper back to its joint.
-const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
+pub(crate) const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
+/// [`TWIST_SPAN`] for the head's sliding helper, along the skullbase's bone to the top of
+/// the head: the neck is the helper's and the head its joint's, handed over from 10 %
+/// of the way below the skullbase to 5 % above it (the jaw's underside), so that the face
+/// stays rigid as the head nods: at a 40° nod the 1.75 m adult's face moves by 0.1 mm
+/// against the skull, as without the helper. Handed over from 0 to 20 % (across the
+/// mouth), as many triangles turned over (147) but the mouth moved by 6.6 mm; lower, in
+/// the neck (from 30 % below to 10 % below, or 50 % to 20 %), the band folded: 105
+/// triangles over the 1.40 m adult's 50 postures alone, 13 at its worst posture.
+pub(crate) const HEAD_SPAN: (f64, f64) = (-0.1, 0.05);
 
 impl Chains {
     /// The chains of `helpers`, whose slots start at `first_slot` (the number of joints),
     /// each with `ends` joints at its parent's end: the helped joint's parent and its next
     /// ancestors (`parent_of` gives a joint's parent); `bone` gives a helped joint's bone
-    /// at rest, from the joint to its child. At the shoulder the armpit is shared between
+    /// at rest, from the joint to its child, and `span` where along it the ladder runs
+    /// ([`TWIST_SPAN`], [`HEAD_SPAN`]). At the shoulder the armpit is shared between
     /// the arm and the chest (vt1, vt6), which are the clavicle's ancestors: counted at
     /// the chain's parent end, their share of an armpit vertex blends with the arm's
     /// through helpers a quarter of the bend apart, instead of a straight blend of the
@@ -152,6 +165,7 @@ impl Chains {
         ends: usize,
         parent_of: impl Fn(usize) -> Option<usize>,
         bone: impl Fn(usize) -> (DVec3, DVec3),
+        span: impl Fn(usize) -> (f64, f64),
     ) -> Chains {
         let mut chains: Vec<Chain> = Vec::new();
         for (i, h) in helpers.iter().enumerate() {
@@ -169,6 +183,7 @@ impl Chains {
                         links: Vec::new(),
                         ladder: Vec::new(),
                         bone: bone(h.joint),
+                        span: span(h.joint),
                     });
                     chains.last_mut().expect("just pushed")
                 }
@@ -266,7 +281,7 @@ impl Chains {
             let (_, w) = out.swap_remove(at);
             let (a, b) = c.bone;
             let along = (p - a).dot(b - a) / (b - a).length_squared();
-            let (from, to) = TWIST_SPAN;
+            let (from, to) = c.span;
             let twist = ((along - from) / (to - from)).clamp(0.0, 1.0);
             let stops: Vec<(u16, f64)> = c
                 .ladder
@@ -491,7 +506,14 @@ mod tests {
             .into_iter()
             .flat_map(|joint| [0.25, 0.5, 0.75].map(|swing| across(joint, swing)))
             .collect();
-        Chains::new(&helpers, 10, 1, |_| None, |_| (DVec3::ZERO, DVec3::NEG_Y))
+        Chains::new(
+            &helpers,
+            10,
+            1,
+            |_| None,
+            |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
+        )
     }
 
     /// A helper across joint `joint` (parent 1) taking `swing` of its swing.
@@ -556,6 +578,7 @@ mod tests {
             2,
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
         );
         // The parent's end holds 0.9 (0.3 from joint 1, 0.6 from joint 0): the joint's
         // share 0.1 lies between the start (the end's two joints) and the first helper.
@@ -584,7 +607,14 @@ mod tests {
             twist,
             ..across(2, 1.0)
         }));
-        let chains = Chains::new(&helpers, 10, 1, |_| None, |_| (DVec3::ZERO, DVec3::NEG_Y));
+        let chains = Chains::new(
+            &helpers,
+            10,
+            1,
+            |_| None,
+            |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
+        );
         let at = |along: f64| chains.route(&vec![(2, 1.0)], DVec3::new(0.02, -along, 0.0));
         let (from, to) = TWIST_SPAN;
         // Near the joint: the whole swing, no twist; near the child: the joint itself.
@@ -624,6 +654,7 @@ mod tests {
             2,
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
         );
         let at =
             |along: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -along, 0.0));
