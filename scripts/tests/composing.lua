@@ -565,7 +565,7 @@ local function waiters_in_an_aisle(width, hands, seconds)
   for i, p in ipairs(people) do walks[i] = p.actor:walk{ to = p.goal } end
   local start, deepest, what = troupe.time(), 0, "nothing"
   run_until(function()
-    local d, a, b, sa, sb = troupe.deepest_overlap()
+    local d, a, b, sa = troupe.deepest_overlap()
     if troupe.time() - start > 1 and d > deepest then
       deepest, what = d, string.format("%s's %s and %s", tostring(a), tostring(sa), tostring(b))
     end
