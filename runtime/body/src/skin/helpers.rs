@@ -299,6 +299,15 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
         };
         Ok(Some((helper, bone.length())))
     };
+    // The sliding helper at the joint named so (see [`SLIDING`]).
+    let slide = |name: &str, twist: f64, shift: f64| -> Result<Option<Helper>> {
+        Ok(at(name)?.map(|(joint, length)| Helper {
+            name: format!("{name}_slide"),
+            pivot: shift * length,
+            twist,
+            ..joint
+        }))
+    };
     let mut out = Vec::new();
     for side in ["l_", "r_"] {
         for name in CHAINED {
@@ -323,28 +332,11 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
             }
         }
         for (name, twist, shift) in SLIDING {
-            let name = format!("{side}{name}");
-            let Some((joint, length)) = at(&name)? else {
-                continue;
-            };
-            out.push(Helper {
-                name: format!("{name}_slide"),
-                pivot: shift * length,
-                twist,
-                ..joint
-            });
+            out.extend(slide(&format!("{side}{name}"), twist, shift)?);
         }
     }
     for (name, twist, shift) in SLIDING_MIDLINE {
-        let Some((joint, length)) = at(name)? else {
-            continue;
-        };
-        out.push(Helper {
-            name: format!("{name}_slide"),
-            pivot: shift * length,
-            twist,
-            ..joint
-        });
+        out.extend(slide(name, twist, shift)?);
     }
     out.sort_by_key(|h| h.joint);
     Ok(out)

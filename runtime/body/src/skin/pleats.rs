@@ -99,26 +99,13 @@ pub(crate) fn unfold(positions: &mut [DVec3], indices: &[u32], field: &Field) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::skin::volumes::{Form, Join, Region, Volume};
-    use glam::DQuat;
+    use crate::skin::surface::sampled_sphere;
 
     #[test]
     fn a_pleat_pushed_into_a_sphere_is_unfolded_onto_its_surface() {
         let radius = 0.1;
-        let sphere = Volume {
-            form: Form::Ellipsoid {
-                center: DVec3::ZERO,
-                radii: DVec3::splat(radius),
-                rotation: DQuat::IDENTITY,
-            },
-            joint: 0,
-            region: Region::Skin,
-            join: Join::Add,
-            blend: 0.0,
-            reach: 0.01,
-        };
         let cell = 0.01;
-        let field = Field::sample(&[sphere], cell, |_, _| false);
+        let field = sampled_sphere(radius, cell);
         let (mut positions, indices) = field.triangulate();
         let facing_in = |p: &[DVec3]| {
             indices

@@ -72,26 +72,13 @@ pub(crate) fn relax(positions: &mut [DVec3], indices: &[u32], field: &Field, rou
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::skin::volumes::{Form, Join, Region, Volume};
-    use glam::DQuat;
+    use crate::skin::surface::sampled_sphere;
 
     #[test]
     fn relaxing_a_sphere_keeps_it_on_its_surface_and_improves_its_worst_triangle() {
         let radius = 0.1;
-        let sphere = Volume {
-            form: Form::Ellipsoid {
-                center: DVec3::ZERO,
-                radii: DVec3::splat(radius),
-                rotation: DQuat::IDENTITY,
-            },
-            joint: 0,
-            region: Region::Skin,
-            join: Join::Add,
-            blend: 0.0,
-            reach: 0.01,
-        };
         let cell = 0.01;
-        let field = Field::sample(&[sphere], cell, |_, _| false);
+        let field = sampled_sphere(radius, cell);
         let (mut positions, indices) = field.triangulate();
         let quality_of = |p: &[DVec3]| {
             indices

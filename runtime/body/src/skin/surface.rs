@@ -258,3 +258,23 @@ impl Field {
         (vertices, indices)
     }
 }
+
+/// A sphere of `radius` about the origin sampled with cells of `cell` metres: the field
+/// the tests of the mesh's smoothing passes work on.
+#[cfg(test)]
+pub(crate) fn sampled_sphere(radius: f64, cell: f64) -> Field {
+    use super::volumes::{Form, Region};
+    let sphere = Volume {
+        form: Form::Ellipsoid {
+            center: DVec3::ZERO,
+            radii: DVec3::splat(radius),
+            rotation: glam::DQuat::IDENTITY,
+        },
+        joint: 0,
+        region: Region::Skin,
+        join: Join::Add,
+        blend: 0.0,
+        reach: 0.01,
+    };
+    Field::sample(&[sphere], cell, |_, _| false)
+}
