@@ -57,7 +57,7 @@ use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
 use troupe_scene::space::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, FootprintsAround, Navigation,
+    clear_foot, foot_may_move, limit_step, nearest_gap, Body, FootprintsAround, Navigation,
     Surroundings, Walking,
 };
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
@@ -1114,11 +1114,11 @@ impl Walk {
 
     /// The part of this walker's body its step carries, as the previous tick left it (see
     /// `troupe_nav::clearance`): the crowd's core capsule, or its disc.
-    fn body(&self, ctx: &GeneratorContext) -> Capsule {
+    fn body(&self, ctx: &GeneratorContext) -> Body {
         let crowd = ctx.world.crowd;
         crowd.cores.get(ctx.actor).copied().unwrap_or_else(|| {
             let at = crowd.positions.get(ctx.actor).copied().unwrap_or_default();
-            Capsule::around(at, DVec2::ZERO, self.radius, 0.0, &[])
+            Body::around(at, DVec2::ZERO, self.radius, 0.0, &[])
         })
     }
 

@@ -11,7 +11,7 @@
 //!   collision detection). A body on the floor is a [`Capsule`] along the way it faces:
 //!   its disc (the body's radius) stretched forwards and backwards by its stride and as
 //!   far as its feet and knees stand, widened by a foot planted wide
-//!   ([`Capsule::around`]). Against each neighbour's capsule, the step from where the body
+//!   ([`Body::around`]). Against each neighbour's capsule, the step from where the body
 //!   stood may close at most **half** the gap between the two (less [`BODY_MARGIN`]),
 //!   measured between their nearest points; the neighbour, deciding from the same
 //!   previous tick, closes at most the other half, so together they never close more than
@@ -107,7 +107,7 @@ impl FootSpan {
 pub const HAND_OVER: f64 = 0.05;
 
 /// How far a part of a body on the floor reaches along the line its capsule lies on: from
-/// `back` to `front` (m along the capsule's axis from its [`Capsule::origin`]) with
+/// `back` to `front` (m along the capsule's axis from its [`Body::origin`]) with
 /// `radius` round that.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Reach {
@@ -130,7 +130,7 @@ impl Reach {
     }
 }
 
-/// A hand that makes a body on the floor reach further than its [`Capsule::bare`] part:
+/// A hand that makes a body on the floor reach further than its [`Body::bare`] part:
 /// out to the side it widens the capsule, out in front (or behind) it lengthens it, as a
 /// foot does (a tray carried in front widened the whole capsule by how far it was held
 /// out, and two waiters who met in a 1.4 m aisle filled it from wall to wall).
@@ -142,14 +142,14 @@ pub struct HandReach {
     pub lowest: f64,
     /// Whether the hand holds something.
     pub holds: bool,
-    /// How far (m) ahead of the capsule's [`Capsule::origin`] the body reaches with this
+    /// How far (m) ahead of the capsule's [`Body::origin`] the body reaches with this
     /// hand, whatever its stride: as far as what the hand holds lengthens it, and its
     /// radius round that (what a walk to someone keeps between them: `walk{ to = ACTOR }`).
     pub ahead: f64,
 }
 
-/// A body on the floor as the clearance sees it: the segment `centre ± axis·half_length`
-/// with `radius` round it.
+/// A body on the floor as its neighbours' clearance sees it: the segment `centre ±
+/// axis·half_length` with `radius` round it (see [`Body`] for what it is made of).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Capsule {
     /// The middle of the segment (x, z), on the line through the body's root along `axis`.
@@ -160,23 +160,86 @@ pub struct Capsule {
     pub half_length: f64,
     /// How far (m) the body reaches round the segment, its hands included.
     pub radius: f64,
-    /// The point on the segment's line from which [`Capsule::bare`] and the hands' reaches
-    /// are measured: the middle of the bare body's segment.
-    pub origin: DVec2,
-    /// How far it reaches without its hands: the disc and the feet.
-    pub bare: Reach,
-    /// The hands that make it reach further (see [`Capsule::against`]).
-    pub hands: [Option<HandReach>; 2],
 }
 
 impl Capsule {
-    /// The segment `centre ± axis·half_length` with `radius` round it, and no hands.
+    /// The segment `centre ± axis·half_length` with `radius` round it.
     pub fn new(centre: DVec2, axis: DVec2, half_length: f64, radius: f64) -> Capsule {
         Capsule {
             centre,
             axis,
             half_length,
             radius,
+        }
+    }
+
+    /// The same capsule moved by `by` (x, z).
+    pub fn moved(&self, by: DVec2) -> Capsule {
+        Capsule {
+            centre: self.centre + by,
+            ..*self
+        }
+    }
+
+    /// A circle (centre, radius) that holds the capsule.
+    fn bound(&self) -> (DVec2, f64) {
+        (self.centre, self.half_length + self.radius)
+    }
+
+    /// Distance (m) from `p` to the segment (not to the surface round it).
+    pub fn distance(&self, p: DVec2) -> f64 {
+        let (a, b) = self.ends();
+        (p - nearest_on_segment(p, a, b)).length()
+    }
+
+    /// The segment's two ends.
+    fn ends(&self) -> (DVec2, DVec2) {
+        let half = self.axis * self.half_length;
+        (self.centre - half, self.centre + half)
+    }
+
+    /// The gap (m) between this body and `other` (negative where they overlap).
+    pub fn gap(&self, other: &Capsule) -> f64 {
+        let (mine, theirs) = self.nearest_to(other);
+        (mine - theirs).length() - self.radius - other.radius
+    }
+
+    /// The nearest points of this capsule's segment and `other`'s (on this, on `other`).
+    fn nearest_to(&self, other: &Capsule) -> (DVec2, DVec2) {
+        nearest_between(self.ends(), other.ends())
+    }
+}
+
+/// A body on the floor as its own step sees it: its [`Capsule`], and what the capsule is
+/// made of, the bare body and each hand's reach along its line, which the step measures
+/// against obstacles of each height. Its neighbours copy only the capsule, every tick:
+/// this whole, copied, cost the crowd of `troupe bench` about 9 % of its speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Body {
+    /// The capsule that holds it all.
+    pub shape: Capsule,
+    /// The point on the segment's line from which [`Body::bare`] and the hands' reaches
+    /// are measured: the middle of the bare body's segment.
+    pub origin: DVec2,
+    /// How far it reaches without its hands: the disc and the feet.
+    pub bare: Reach,
+    /// The hands that make it reach further (see [`Body::against`]).
+    pub hands: [Option<HandReach>; 2],
+}
+
+impl std::ops::Deref for Body {
+    type Target = Capsule;
+
+    fn deref(&self) -> &Capsule {
+        &self.shape
+    }
+}
+
+impl Body {
+    /// The segment `centre ± axis·half_length` with `radius` round it, and no hands.
+    pub fn new(centre: DVec2, axis: DVec2, half_length: f64, radius: f64) -> Body {
+        Body {
+            shape: Capsule::new(centre, axis, half_length, radius),
             origin: centre,
             bare: Reach {
                 back: -half_length,
@@ -192,13 +255,7 @@ impl Capsule {
     /// `stride` either way (where a walker's legs swing) and further as far as it takes to
     /// hold each foot (with the foot's radius) that lies within the disc's width. A foot
     /// planted wider than that (a sidestep's wide stance) widens the capsule instead.
-    pub fn around(
-        root: DVec2,
-        axis: DVec2,
-        radius: f64,
-        stride: f64,
-        feet: &[FootSpan],
-    ) -> Capsule {
+    pub fn around(root: DVec2, axis: DVec2, radius: f64, stride: f64, feet: &[FootSpan]) -> Body {
         let (mut back, mut front) = if axis == DVec2::ZERO {
             (0.0, 0.0)
         } else {
@@ -220,7 +277,7 @@ impl Capsule {
                 }
             }
         }
-        Capsule::new(
+        Body::new(
             root + axis * (front + back) / 2.0,
             axis,
             (front - back) / 2.0,
@@ -303,7 +360,13 @@ impl Capsule {
             .iter()
             .flatten()
             .fold(self.bare, |r, h| r.with(h.reach));
-        (self.centre, self.half_length, self.radius) = self.placed(whole);
+        let (centre, half_length, radius) = self.placed(whole);
+        self.shape = Capsule {
+            centre,
+            half_length,
+            radius,
+            ..self.shape
+        };
     }
 
     /// Where reach `r` lies: its segment's middle, half its length and its radius.
@@ -334,7 +397,7 @@ impl Capsule {
         self.hands.iter().flatten().any(|h| h.holds)
     }
 
-    /// How far (m) ahead of its middle ([`Capsule::origin`]) the body reaches with its
+    /// How far (m) ahead of its middle ([`Body::origin`]) the body reaches with its
     /// hands, whatever its stride (see [`HandReach::ahead`]); zero without hands.
     pub fn hands_ahead(&self) -> f64 {
         self.hands
@@ -344,9 +407,9 @@ impl Capsule {
     }
 
     /// The same body moved by `by` (x, z).
-    pub fn moved(&self, by: DVec2) -> Capsule {
-        Capsule {
-            centre: self.centre + by,
+    pub fn moved(&self, by: DVec2) -> Body {
+        Body {
+            shape: self.shape.moved(by),
             origin: self.origin + by,
             ..*self
         }
@@ -355,15 +418,18 @@ impl Capsule {
     /// The disc round the middle of the bare body's segment, as wide as the body reaches
     /// round its segment: what a step must not close on an obstacle whatever the
     /// segment's length (see [`limit_step`]).
-    fn middle_disc(&self) -> Capsule {
+    fn middle_disc(&self) -> Body {
         let disc = |r: Reach| Reach {
             back: 0.0,
             front: 0.0,
             ..r
         };
-        Capsule {
-            centre: self.origin,
-            half_length: 0.0,
+        Body {
+            shape: Capsule {
+                centre: self.origin,
+                half_length: 0.0,
+                ..self.shape
+            },
             bare: disc(self.bare),
             hands: self.hands.map(|h| {
                 h.map(|h| HandReach {
@@ -373,34 +439,6 @@ impl Capsule {
             }),
             ..*self
         }
-    }
-
-    /// A circle (centre, radius) that holds the capsule.
-    fn bound(&self) -> (DVec2, f64) {
-        (self.centre, self.half_length + self.radius)
-    }
-
-    /// Distance (m) from `p` to the segment (not to the surface round it).
-    pub fn distance(&self, p: DVec2) -> f64 {
-        let (a, b) = self.ends();
-        (p - nearest_on_segment(p, a, b)).length()
-    }
-
-    /// The segment's two ends.
-    fn ends(&self) -> (DVec2, DVec2) {
-        let half = self.axis * self.half_length;
-        (self.centre - half, self.centre + half)
-    }
-
-    /// The gap (m) between this body and `other` (negative where they overlap).
-    pub fn gap(&self, other: &Capsule) -> f64 {
-        let (mine, theirs) = self.nearest_to(other);
-        (mine - theirs).length() - self.radius - other.radius
-    }
-
-    /// The nearest points of this capsule's segment and `other`'s (on this, on `other`).
-    fn nearest_to(&self, other: &Capsule) -> (DVec2, DVec2) {
-        nearest_between(self.ends(), other.ends())
     }
 }
 
@@ -501,7 +539,7 @@ impl Limit {
 /// this tick: `step` itself when it closes on nothing, else the nearest step that closes
 /// at most half the gap to each neighbour's body and the whole gap to each obstacle (see
 /// the module docs).
-pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
+pub fn limit_step(me: &Body, step: DVec2, around: &Surroundings) -> DVec2 {
     let reach = step.length();
     if reach == 0.0 {
         return step;
@@ -553,7 +591,7 @@ pub fn limit_step(me: &Capsule, step: DVec2, around: &Surroundings) -> DVec2 {
 
 /// The least gap (m) between body `me` and the bodies and obstacles `around` (negative
 /// when they overlap), or `within` if none is nearer than that.
-pub fn nearest_gap(me: &Capsule, around: &Surroundings, within: f64) -> f64 {
+pub fn nearest_gap(me: &Body, around: &Surroundings, within: f64) -> f64 {
     let bodies = around
         .bodies
         .iter()
@@ -785,13 +823,13 @@ mod tests {
     use smallvec::smallvec;
 
     /// A body of radius 0.3 at (x, z) facing +z, a stride of `half` either way.
-    fn body(x: f64, z: f64, half: f64) -> Capsule {
-        Capsule::new(DVec2::new(x, z), DVec2::Y, half, 0.3)
+    fn body(x: f64, z: f64, half: f64) -> Body {
+        Body::new(DVec2::new(x, z), DVec2::Y, half, 0.3)
     }
 
-    fn bodies(list: &[Capsule]) -> Surroundings<'static> {
+    fn bodies(list: &[Body]) -> Surroundings<'static> {
         Surroundings {
-            bodies: list.to_vec(),
+            bodies: list.iter().map(|b| b.shape).collect(),
             ..Surroundings::default()
         }
     }
@@ -875,7 +913,7 @@ mod tests {
         let mut root = DVec2::ZERO;
         for tick in 0..120 {
             let turn = 0.01 * tick as f64;
-            let me = Capsule::new(
+            let me = Body::new(
                 root,
                 DVec2::new(turn.cos(), turn.sin()),
                 (0.05 + 0.01 * tick as f64).min(0.5),
@@ -896,7 +934,7 @@ mod tests {
         // A body facing a table with a hand carried out in front, what it holds reaching
         // 0.7 m from the body's middle and as low as 0.9 m; the table's edge 0.2 m in
         // front of the disc (past the margin).
-        let mut me = Capsule::new(DVec2::ZERO, DVec2::X, 0.0, 0.3);
+        let mut me = Body::new(DVec2::ZERO, DVec2::X, 0.0, 0.3);
         let held = std::iter::once((DVec2::new(0.7, 0.0), 0.0));
         let hand = me.reaching(held, std::iter::empty(), 0.9);
         let r = hand.reach;
@@ -932,7 +970,7 @@ mod tests {
         // reaches 0.9 m ahead (its rounded end round the tray's corners), and its sides
         // keep 0.4 m from the walls (a radius of 0.8 round the body filled the aisle from
         // wall to wall and held it for good).
-        let mut me = Capsule::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
+        let mut me = Body::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
         let corners = [(-0.2, 0.5), (0.2, 0.5), (0.2, 0.8), (-0.2, 0.8)].map(DVec2::from);
         let held = corners.into_iter().map(|p| (p, 0.0));
         let wrist = std::iter::once((DVec2::new(0.2, 0.5), 0.25, 0.2));
@@ -953,7 +991,7 @@ mod tests {
         let aside = DVec2::new(0.1, 0.0);
         assert_eq!(limit_step(&me, aside, &around), aside);
         // Held out to one side instead, it widens the body on both.
-        let mut me = Capsule::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
+        let mut me = Body::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
         let side = corners.map(|p| DVec2::new(p.y - 0.1, p.x));
         me.add_hand(
             0,
@@ -1037,7 +1075,7 @@ mod tests {
         let ahead = body(0.0, 1.3, 0.2);
         let beside = body(1.0, 1.0, 0.0);
         let around = Surroundings {
-            bodies: vec![ahead, beside],
+            bodies: vec![ahead.shape, beside.shape],
             velocities: vec![DVec2::new(0.0, 1.3), DVec2::ZERO],
             ..Surroundings::default()
         };
@@ -1049,7 +1087,7 @@ mod tests {
         // Striking in 0.6 s: the one ahead has gone on at least 0.39 m; the other stays.
         let then = around.ahead(foot.heel, 0.6).unwrap();
         assert_eq!(then.bodies[0].centre, DVec2::new(0.0, 1.3 + 0.39));
-        assert_eq!(then.bodies[1], beside);
+        assert_eq!(then.bodies[1], beside.shape);
         assert_eq!(clear_foot(foot, &then), Some(DVec2::ZERO));
         // Someone walking towards the foot, or nobody walking: nothing moves.
         let coming = Surroundings {
@@ -1070,7 +1108,7 @@ mod tests {
             radius: 0.05,
         };
         let feet = [foot(0.35), foot(-0.3)];
-        let c = Capsule::around(DVec2::ZERO, DVec2::Y, 0.28, 0.0, &feet);
+        let c = Body::around(DVec2::ZERO, DVec2::Y, 0.28, 0.0, &feet);
         let (a, b) = c.ends();
         for f in &feet {
             for p in [f.heel, f.toe] {
@@ -1079,7 +1117,7 @@ mod tests {
             }
         }
         // Feet under the body: a disc.
-        let c = Capsule::around(
+        let c = Body::around(
             DVec2::ZERO,
             DVec2::Y,
             0.28,
@@ -1089,7 +1127,7 @@ mod tests {
         assert_eq!(c.half_length, 0.0);
         assert_eq!(c.centre, DVec2::ZERO);
         // Walking: at least the stride either way.
-        let c = Capsule::around(DVec2::ZERO, DVec2::Y, 0.28, 0.2, &[foot(-0.09)]);
+        let c = Body::around(DVec2::ZERO, DVec2::Y, 0.28, 0.2, &[foot(-0.09)]);
         assert_eq!((c.centre, c.half_length), (DVec2::ZERO, 0.2));
     }
 
@@ -1126,7 +1164,7 @@ mod tests {
         // and another's foot in the air inside the capsule that foot widened, 0.1 m
         // behind that foot and coming on along the capsule.
         let planted = foot(0.45, 0.0);
-        let capsule = Capsule::around(DVec2::ZERO, DVec2::Y, 0.28, 0.5, &[planted]);
+        let capsule = Body::around(DVec2::ZERO, DVec2::Y, 0.28, 0.5, &[planted]);
         let (from, to) = (foot(0.45, -0.45), foot(0.45, -0.39));
         let capsule_only = bodies(&[capsule]);
         assert!(
@@ -1134,7 +1172,7 @@ mod tests {
             "along the capsule, no deeper into it"
         );
         let with_feet = Surroundings {
-            bodies: vec![capsule],
+            bodies: vec![capsule.shape],
             feet: vec![planted],
             ..Surroundings::default()
         };

@@ -3,7 +3,7 @@
 //! The scene rebuilds it once a tick, before the actors step, so every walker decides
 //! from the same world whatever the thread count.
 
-use crate::clearance::{Capsule, FootSpan};
+use crate::clearance::{Body, Capsule, FootSpan};
 use crate::footprint::Footprint;
 use crate::space::Wall;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
@@ -31,8 +31,9 @@ pub struct Crowd {
     pub bodies: Vec<Capsule>,
     /// The part of each actor's body its root's step carries: its disc stretched by its
     /// stride and widened by its wrists, without the feet planted on the floor, which
-    /// stay where they are as the body moves (see [`crate::clearance::limit_step`]).
-    pub cores: Vec<Capsule>,
+    /// stay where they are as the body moves (see [`crate::clearance::limit_step`]),
+    /// with what it is made of (see [`crate::clearance::Body`]).
+    pub cores: Vec<Body>,
     /// The floor points (x, z) under each actor's ankles (left, right); its root's for
     /// a body without them. Gathered once a tick for every walker's avoidance, which
     /// looked them up in the neighbours' postures (a twentieth of the crowd

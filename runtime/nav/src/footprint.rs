@@ -18,7 +18,7 @@ pub struct Footprint {
     /// Corners in (x, z), counter-clockwise about +Y.
     pub outline: Vec<DVec2>,
     /// How high (m) the obstacle reaches above the floor: a hand carried higher passes
-    /// over it (see [`crate::clearance::Capsule::against`]); infinite when not
+    /// over it (see [`crate::clearance::Body::against`]); infinite when not
     /// known.
     pub top: f64,
 }

@@ -4,7 +4,7 @@
 
 use troupe_body::glam::DVec2;
 use troupe_body::{Skeleton, Transform};
-use troupe_nav::{Capsule, FootSpan};
+use troupe_nav::{Body, FootSpan};
 
 /// How far (m) a foot's solid reaches round the segment under it from its heel to its toe
 /// tip: the template's foot frustum (0.024 h at the ball) for bodies up to 2.08 m.
@@ -45,7 +45,7 @@ pub struct Held {
 }
 
 /// The joints that shape an actor's body on the floor beyond its disc
-/// ([`Capsule`]): the feet, which stretch it along the way it faces, and the
+/// ([`Body`]): the feet, which stretch it along the way it faces, and the
 /// elbows and wrists, which widen or lengthen it as the arms swing or carry out.
 #[derive(Clone, Debug, Default)]
 pub struct BodyJoints {
@@ -126,13 +126,13 @@ impl BodyJoints {
         soles: Option<[FootSpan; 2]>,
         (facing, velocity, radius): (DVec2, DVec2, f64),
         held: &[&Held],
-    ) -> (Capsule, Capsule) {
+    ) -> (Body, Body) {
         let root = floor_point(&globals[0]);
         let stride = STRIDE * radius * (velocity.dot(facing).abs() / STRIDE_SPEED).min(1.0);
         let (spans, count) = self.foot_spans(globals, soles);
         let feet = &spans[..count];
-        let mut whole = Capsule::around(root, facing, radius, stride, feet);
-        let mut core = Capsule::around(root, facing, radius, stride, &[]);
+        let mut whole = Body::around(root, facing, radius, stride, feet);
+        let mut core = Body::around(root, facing, radius, stride, &[]);
         for (i, &(wrist, at_rest, reach)) in self.wrists.iter().enumerate() {
             if let Some(w) = globals.get(wrist) {
                 // How low the hand reaches, and what it holds.

@@ -319,11 +319,11 @@ impl Scene {
                 // Nothing keeps bodies apart: their discs will do for the record.
                 troupe_nav::Walking::Straight => {
                     let disc =
-                        troupe_nav::Capsule::around(under_root, facing, crowd.radii[i], 0.0, &[]);
+                        troupe_nav::Body::around(under_root, facing, crowd.radii[i], 0.0, &[]);
                     (disc, disc)
                 }
             };
-            crowd.bodies.push(whole);
+            crowd.bodies.push(whole.shape);
             crowd.cores.push(core);
         }
         crowd.index();

@@ -10,7 +10,7 @@ use crate::{Error, Result, Scene};
 use troupe_body::glam::DVec2;
 pub use troupe_nav::avoid::{choose_velocity, Agent, GAP};
 pub use troupe_nav::clearance::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, Capsule, FootSpan, Surroundings,
+    clear_foot, foot_may_move, limit_step, nearest_gap, Body, Capsule, FootSpan, Surroundings,
     OBSTACLE_MARGIN,
 };
 pub use troupe_nav::crowd::ObjectStamp;
