@@ -510,6 +510,28 @@ test("a walk that a counter as high as its carrying hand holds back fails as stu
          w.status .. ": " .. tostring(w.error))
 end)
 
+test("a walk held back by a counter fails as stuck with a barista behind it; one held by someone on its goal waits on", function()
+  -- Anyone within 3 m kept a held walk waiting for ever: with the barista standing
+  -- behind the counter, ann stood at it for good. Only those on the move or standing in
+  -- its way on may make room now.
+  local ann = troupe.actor{ name = "ann", at = {0, 0, 0.86} }
+  troupe.actor{ name = "barista", at = {3, 0, -1.9}, facing = 0 }
+  troupe.object{ name = "counter", shape = "box", size = {0.8, 0.95, 0.5}, at = {3, 0.475, -1}, mass = 20 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {0, 1.0, 1.35}, mass = 0.3 }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local w = ann:walk{ to = troupe.get_object("counter") }
+  expect(run_until(function() return w.status ~= "active" end, 30), "the walk ended: " .. w.status)
+  expect(w.status == "failed" and tostring(w.error):find("^stuck [%d.]+ m from its goal for 10 s, held by counter$") ~= nil,
+         w.status .. ": " .. tostring(w.error))
+  -- Someone standing on the goal may step off it: that walk waits, however long.
+  troupe.actor{ name = "bob", at = {10, 0, 0} }
+  local cy = troupe.actor{ name = "cy", at = {13, 0, 0} }
+  local c = cy:walk{ to = {10, 0, 0} }
+  run(25)
+  expect(c.status == "active", "cy still waits for bob to make room: " .. c.status .. " " .. tostring(c.error))
+end)
+
 test("carrying a cup through a doorway as someone comes the other way: hand and cup keep off the walls", function()
   -- The body's clearance saw the carrying wrist but not the cup out in front of it nor
   -- the fingers round it: waiting for cid at the door, then setting off at a slant

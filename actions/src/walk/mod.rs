@@ -57,8 +57,8 @@ use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
 use troupe_scene::space::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, Body, FootprintsAround, Navigation,
-    Surroundings, Walking,
+    clear_foot, foot_may_move, limit_step, nearest_gap, segment_distance, Body, FootprintsAround,
+    Navigation, Surroundings, Walking,
 };
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
@@ -165,16 +165,22 @@ const STALLED_SPEED: f64 = 0.05;
 const ALONE: f64 = 1.5;
 
 /// Seconds a navigated walk's body may stay within [`PROGRESS`] of where it stood, with
-/// no other actor within [`UNATTENDED`] when it gives up, before the walk fails as stuck:
-/// held by the furniture or the walls where it cannot pass (a cup carried out in front
-/// against a counter as high as the hand), with nobody there who might move out of its
-/// way.
+/// nobody within [`UNATTENDED`] it may be waiting for when it gives up, before the walk
+/// fails as stuck: held by the furniture or the walls where it cannot pass (a cup carried
+/// out in front against a counter as high as the hand), with nobody there who might move
+/// out of its way.
 pub const STUCK_TIME: f64 = 10.0;
 /// How far (m) a walk's body must move to count as getting on (see [`STUCK_TIME`]).
 pub const PROGRESS: f64 = 0.05;
-/// With another actor within this distance (m), a walk that gets no nearer its goal may
-/// be waiting for them (to pass, to move off its goal), and is not stuck.
+/// With another actor within this distance (m) who is on the move or stands in its way
+/// on, a walk that gets no nearer its goal may be waiting for them (to pass, to move off
+/// its way or its goal), and is not stuck (see [`Walk::waiting_for_someone`]).
 pub const UNATTENDED: f64 = 3.0;
+/// Seconds of its plan ahead that make a held walk's way on (see [`UNATTENDED`]).
+const WAY_ON: f64 = 2.0;
+/// Gap (m) between two bodies' discs under which one standing beside a held walk's way
+/// on stands in it (see [`UNATTENDED`]).
+const IN_THE_WAY: f64 = 0.5;
 
 /// A swinging foot's landing farther than this (m) from where the steered body wants it,
 /// and getting no nearer, is stuck (see [`Walk::follow_steering`]).
@@ -426,12 +432,7 @@ impl Walk {
         if self.t - since < STUCK_TIME || self.stopped_at.is_some() {
             return None;
         }
-        let mut near = Vec::new();
-        crowd.near(at, &mut near);
-        if near
-            .iter()
-            .any(|&j| j != ctx.actor && (crowd.positions[j] - at).length() < UNATTENDED)
-        {
+        if self.waiting_for_someone(ctx, plan, at) {
             // Waiting for someone, who may move: the time counts again from now.
             self.progress = Some((at, self.t));
             return None;
@@ -453,6 +454,29 @@ impl Walk {
             .map(|(_, name)| format!(", held by {name}"))
             .unwrap_or_default();
         Some(format!("stuck{left} for {STUCK_TIME} s{against}"))
+    }
+
+    /// Whether the walk, its body held at `at`, may be waiting for another actor within
+    /// [`UNATTENDED`]: one on the move (who may be passing), or one standing in its way
+    /// on (the plan's next [`WAY_ON`] seconds, at most [`UNATTENDED`] long), who may move
+    /// off it. Anyone else there (a barista behind the counter that holds the walk back)
+    /// is no reason to wait for ever.
+    fn waiting_for_someone(&self, ctx: &GeneratorContext, plan: &Plan, at: DVec2) -> bool {
+        let crowd = ctx.world.crowd;
+        let me = ctx.actor;
+        let radius = crowd.radii.get(me).copied().unwrap_or_default();
+        let pt = self.steer.plan_time(self.t, self.t);
+        let onward = self.steer.offset + plan.sample(pt + WAY_ON, self.heading).position;
+        let way_end = at + (onward - at).clamp_length_max(UNATTENDED);
+        let mut near = Vec::new();
+        crowd.near(at, &mut near);
+        near.iter().any(|&j| {
+            let there = crowd.positions[j];
+            j != me
+                && (there - at).length() < UNATTENDED
+                && (crowd.velocities[j].length() > replan::STANDING
+                    || segment_distance(there, at, way_end) < radius + crowd.radii[j] + IN_THE_WAY)
+        })
     }
 
     /// A new plan round the actors standing in the way, from where the body is now to

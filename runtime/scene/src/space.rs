@@ -15,7 +15,7 @@ pub use troupe_nav::clearance::{
 };
 pub use troupe_nav::crowd::ObjectStamp;
 pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
-pub use troupe_nav::footprint::{surface_points, ON_FLOOR};
+pub use troupe_nav::footprint::{segment_distance, surface_points, ON_FLOOR};
 pub use troupe_nav::way::{backs_off_for, wait_line, Walker};
 pub use troupe_nav::{
     body_radius, path_length, Crowd, Floor, Footprint, FootprintsAround, NoPath, Pressed, Space,
