@@ -222,6 +222,39 @@ test("walk to an object ends within reach, facing it", function()
   expect(g.status == "completed", "grasped: " .. tostring(g.error))
 end)
 
+test("walk to a counter where someone stands ends at a free place beside them; with none free it waits its turn", function()
+  -- The point straight ahead was taken all the same: ann waited for the waiter to
+  -- leave it, and he, leaving, for her to let him by.
+  troupe.object{ name = "counter", shape = "box", size = {1.6, 0.95, 0.4}, at = {0, 0.475, 2.62}, mass = 60 }
+  local waiter = troupe.actor{ name = "waiter", at = {0, 0, 2.0} }
+  local ann = troupe.actor{ name = "ann", at = {0, 0, -1} }
+  local w = ann:walk{ to = "counter" }
+  expect(run_until(function() return w.status ~= "active" end, 10), "ended within 10 s: " .. w.status)
+  local p = ann:position()
+  local apart = flat_dist(p, 0, 2.0)
+  print(string.format("ann stands %.2f m from the waiter, %.2f m from the counter", apart,
+                      rect_dist(p[1], p[3], -0.8, 0.8, 2.42, 2.82)))
+  expect(w.status == "completed", w.status .. " " .. tostring(w.error))
+  expect(apart > 2 * RADIUS + 0.09, string.format("beside him: %.2f m apart", apart))
+  expect(rect_dist(p[1], p[3], -0.8, 0.8, 2.42, 2.82) < 0.75, "within reach of the counter")
+  local want = math.atan(0 - p[1], 2.62 - p[3])
+  expect(math.abs(ann:dof("root_yaw") - want) < 0.1, string.format("facing it: %.2f vs %.2f", ann:dof("root_yaw"), want))
+  -- A niche holds one: with its only place taken, the walk goes there and waits for it.
+  troupe.wall{ from = {9.5, 0}, to = {9.5, 2} }
+  troupe.wall{ from = {10.5, 0}, to = {10.5, 2} }
+  troupe.wall{ from = {9.5, 2}, to = {10.5, 2} }
+  local shelf = troupe.object{ name = "shelf", shape = "box", size = {0.9, 1.2, 0.3}, at = {10, 0.6, 1.8}, mass = 30 }
+  local cid = troupe.actor{ name = "cid", at = {10, 0, 1.1} }
+  local bob = troupe.actor{ name = "bob", at = {10, 0, -3} }
+  local b = bob:walk{ to = shelf }
+  run(8)
+  expect(b.status == "active", "bob waits for cid: " .. b.status .. " " .. tostring(b.error))
+  expect(cid:walk{ to = {12, 0, -1} }:wait() == "completed", "cid leaves")
+  expect(run_until(function() return b.status ~= "active" end, 10), "bob's walk ended: " .. b.status)
+  expect(b.status == "completed", b.status .. " " .. tostring(b.error))
+  expect(bob:position()[3] > 0.5, string.format("in the niche (z %.2f)", bob:position()[3]))
+end)
+
 test("walk to an actor ends about a metre away, facing them", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {3, 0, 4}, facing = 180 }

@@ -2,10 +2,11 @@
 //! to; turned into a route around the obstacles when the walk starts, from the world as
 //! it stood at the end of the previous tick.
 
+use super::replan::STANDING;
 use std::f64::consts::PI;
 use troupe_body::glam::DVec2;
 use troupe_body::{Skeleton, Transform};
-use troupe_scene::space::{Footprint, Walking, NEIGHBOUR_RANGE};
+use troupe_scene::space::{Footprint, Walking, GAP, NEIGHBOUR_RANGE};
 use troupe_scene::GeneratorContext;
 
 /// Default distance (m) from an object's footprint edge to the body's centre when walking
@@ -160,11 +161,19 @@ fn stand_near<'w>(
             .footprints_near(stand, inflated)
             .any(|o| o.distance(stand) < inflated)
     };
+    // Those standing round the goal (not the walker's companions, whose bodies touch its
+    // own as it sets off): a point where one stands is taken, as long as another is
+    // free. Going to a point someone stands on, the walk waited for them to leave it,
+    // and they (a waiter at the counter) waited for it to let them by.
+    let mut taken = people_standing(ctx, start, radius);
     let mut last = String::from("every side is blocked");
     // What stood between the first free point and the goal, for the reason when no point
     // is left.
     let mut behind: Option<&str> = None;
-    for further in 0..=6 {
+    for (avoiding_people, further) in [true, false]
+        .into_iter()
+        .flat_map(|people| (0..=6).map(move |further| (people, further)))
+    {
         for turn in 0..=12 {
             for side in [1.0, -1.0] {
                 if turn == 0 && side < 0.0 {
@@ -174,7 +183,7 @@ fn stand_near<'w>(
                 let (s, c) = a.sin_cos();
                 let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
                 let stand = centre - dir * (distance(dir) + further as f64 * 0.1);
-                if blocked(stand) {
+                if blocked(stand) || avoiding_people && taken(stand) {
                     continue;
                 }
                 if let Some(obstacle) = hidden_by(stand) {
@@ -208,6 +217,31 @@ fn stand_near<'w>(
             Err(format!("every side is blocked or behind {obstacle}"))
         }
         _ => Err(last),
+    }
+}
+
+/// Whether a body of `radius` standing at a point would come within [`LEAST_ACTOR_GAP`]
+/// of an actor standing now (slower than `STANDING`), other than the walker and those
+/// whose bodies touch its own at `start`.
+fn people_standing<'w>(
+    ctx: &GeneratorContext<'w>,
+    start: DVec2,
+    radius: f64,
+) -> impl FnMut(DVec2) -> bool + 'w {
+    let crowd = ctx.world.crowd;
+    let me = ctx.actor;
+    let mut near = Vec::new();
+    move |stand| {
+        near.clear();
+        // Everyone within a cell of the point (`Crowd::near`), far beyond any body.
+        crowd.near(stand, &mut near);
+        near.iter().any(|&j| {
+            let (p, r) = (crowd.positions[j], crowd.radii[j]);
+            j != me
+                && crowd.velocities[j].length() < STANDING
+                && (p - start).length() >= radius + r + GAP
+                && (p - stand).length() < radius + r + LEAST_ACTOR_GAP
+        })
     }
 }
 

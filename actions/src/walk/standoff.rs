@@ -54,6 +54,9 @@ const PASSAGE_AHEAD: f64 = 1.0;
 const ASIDE: f64 = 0.5;
 /// Step (m) at which that room is measured, and the gap it keeps from an obstacle.
 const ASIDE_STEP: f64 = 0.1;
+/// Room (m) behind a walker, along its way back, under which it cannot step back: the
+/// other steps back for it.
+const CORNERED: f64 = 0.3;
 
 /// Whether a walk stands in a stand-off, and since when it has waited.
 #[derive(Clone, Debug, Default)]
@@ -116,6 +119,22 @@ impl Standoff {
             carried(i).map_or(disc, |core| core.radius.max(disc))
         };
         let radius = across(me);
+        // Who steps back of two face to face: one with room behind it for one without,
+        // who faces it at all (a walker waiting at a niche's mouth for the one in it,
+        // who cannot step back into the shelf it came for and turns half away to go out:
+        // both stood for good), else the one later in the order of headings. Each reads
+        // the same world, so the two agree.
+        let cornered = |(at, way): (DVec2, DVec2), i: usize| {
+            room_towards(at, -way, across(i), footprints, CORNERED) < CORNERED
+        };
+        let backs_off = |towards: f64, theirs: ((DVec2, DVec2), usize)| match (
+            cornered((position, along), me),
+            cornered(theirs.0, theirs.1),
+        ) {
+            (false, true) => true,
+            (true, false) => false,
+            _ => towards < FACE_TO_FACE && backs_off_for(along, theirs.0 .1),
+        };
         let in_the_way = if self.backing() {
             STILL_IN_THE_WAY
         } else {
@@ -144,7 +163,7 @@ impl Standoff {
                 continue;
             };
             let towards = facing.dot(along);
-            if towards < FACE_TO_FACE && backs_off_for(along, facing) {
+            if towards < 0.0 && backs_off(towards, ((crowd.positions[j], facing), j)) {
                 face_to_face = true;
             } else if towards > SAME_WAY
                 && crowd.velocities[j].dot(along) < -STEPPING_BACK
@@ -184,30 +203,30 @@ impl Standoff {
         radius: f64,
         footprints: &FootprintsAround,
     ) -> DVec2 {
-        let room = room_on_the_right(position, along, radius, footprints);
+        let room = room_towards(position, along.perp(), radius, footprints, ASIDE);
         let aside = (room / (2.0 * ASIDE_STEP)).min(1.0);
         (-along + along.perp() * aside).normalize() * BACK_SPEED
     }
 }
 
-/// How far (m, at most [`ASIDE`]) a body of `radius` at `position` may move to the right
-/// of `along` before its disc comes within [`ASIDE_STEP`] of one of the `footprints`
-/// round it, measured every [`ASIDE_STEP`]: in a corridor, none for the walker by the
-/// wall on its right.
-fn room_on_the_right(
+/// How far (m, at most `furthest`) a body of `radius` at `position` may move along the
+/// unit `direction` before its disc comes within [`ASIDE_STEP`] of one of the
+/// `footprints` round it, measured every [`ASIDE_STEP`]: in a corridor, nothing to the
+/// right for the walker by the wall on its right.
+fn room_towards(
     position: DVec2,
-    along: DVec2,
+    direction: DVec2,
     radius: f64,
     footprints: &FootprintsAround,
+    furthest: f64,
 ) -> f64 {
-    let right = along.perp();
     let keep = radius + ASIDE_STEP;
-    let mut room = ASIDE;
-    for f in footprints.within(keep + ASIDE) {
+    let mut room = furthest;
+    for f in footprints.within(keep + furthest) {
         let mut d = 0.0;
         while d < room {
             let next = (d + ASIDE_STEP).min(room);
-            if f.distance(position + right * next) < keep {
+            if f.distance(position + direction * next) < keep {
                 room = d;
                 break;
             }
