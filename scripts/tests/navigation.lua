@@ -282,6 +282,33 @@ test("walk to an actor ends about a metre away, facing them", function()
   expect(math.abs(ends[1] - ends[2]) < 0.02, string.format("%.3f and %.3f m", ends[1], ends[2]))
 end)
 
+test("three sent to join bob at once all end round him, a metre away", function()
+  -- Each took the point on its own side of bob; the one that came last stood behind
+  -- the other two for good, its point taken. Now a walk whose point someone stands on
+  -- goes to another as near, if one is free.
+  local bob = troupe.actor{ name = "bob", facing = 180 }
+  local who, walks = {}, {}
+  for i, x in ipairs({ -1, 0, 1 }) do
+    who[i] = troupe.actor{ name = "a" .. i, at = {x, 0, -5 - 0.5 * (1 - math.abs(x))} }
+    walks[i] = who[i]:walk{ to = bob }
+  end
+  local deepest = 0
+  local ended = run_until(function()
+    deepest = math.max(deepest, (troupe.deepest_overlap()))
+    for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
+    return true
+  end, 30)
+  expect(ended, "all ended within 30 s: " .. walks[1].status .. ", " .. walks[2].status .. ", " .. walks[3].status)
+  for i, w in ipairs(walks) do
+    local p = who[i]:position()
+    local d = flat_dist(p, 0, 0)
+    print(string.format("a%d %s at (%.2f, %.2f), %.2f m from bob", i, w.status, p[1], p[3], d))
+    expect(w.status == "completed", "a" .. i .. ": " .. w.status .. " " .. tostring(w.error))
+    expect(math.abs(d - 1) < 0.08, string.format("a%d %.2f m from bob", i, d))
+  end
+  expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
+end)
+
 test("walk to an actor carrying a cup ends as near as the cup allows", function()
   -- The cup carried out in front widens the body as the clearance sees it: asked to stand
   -- 0.8 m from bob, the walk stood held by him at 0.87 m for good.

@@ -6,7 +6,7 @@ use super::replan::STANDING;
 use std::f64::consts::PI;
 use troupe_body::glam::DVec2;
 use troupe_body::{Skeleton, Transform};
-use troupe_scene::space::{Footprint, Walking, GAP, NEIGHBOUR_RANGE};
+use troupe_scene::space::{Footprint, Walking, NEIGHBOUR_RANGE};
 use troupe_scene::GeneratorContext;
 
 /// Default distance (m) from an object's footprint edge to the body's centre when walking
@@ -54,12 +54,14 @@ pub struct Planned {
 }
 
 impl Goal {
-    /// Plans the route from `start` for a body of `radius`, or says why there is none.
+    /// Plans the route from `start` for a body of `radius`, or says why there is none;
+    /// a standing point where someone stands (but the walker's `companions`) is taken.
     pub fn plan(
         &self,
         ctx: &GeneratorContext,
         start: DVec2,
         radius: f64,
+        companions: &[usize],
     ) -> Result<Planned, String> {
         let world = ctx.world;
         let planned = match self {
@@ -91,7 +93,7 @@ impl Goal {
                 let height = o.position.y;
                 stand_near(
                     ctx,
-                    start,
+                    (start, companions),
                     (centre, radius),
                     |dir| footprint.reach(dir) + distance,
                     |stand| hidden_by(ctx, (stand, shoulders), (footprint.nearest(stand), height)),
@@ -119,7 +121,7 @@ impl Goal {
                 let their_shoulders = shoulders_of(&world.actors[*actor].skeleton, &other.globals);
                 stand_near(
                     ctx,
-                    start,
+                    (start, companions),
                     (centre, radius),
                     |_| distance,
                     |stand| hidden_by(ctx, (stand, shoulders), (centre, their_shoulders)),
@@ -134,6 +136,24 @@ impl Goal {
     }
 }
 
+impl Goal {
+    /// How far floor point `p` is from what the walk goes to: from an object's footprint
+    /// or from an actor's centre, as they stand now; `None` for floor points, or when the
+    /// object or the actor is gone.
+    pub fn how_far(&self, ctx: &GeneratorContext, p: DVec2) -> Option<f64> {
+        let world = ctx.world;
+        match self {
+            Goal::Through(_) => None,
+            Goal::Object { object, .. } => Some(
+                Footprint::of_object(world.objects.get(*object)?)
+                    .0
+                    .distance(p),
+            ),
+            Goal::Actor { actor, .. } => Some(world.crowd.positions.get(*actor)?.distance(p)),
+        }
+    }
+}
+
 /// The first free standing point around `centre` (first on the side the body comes from,
 /// then turning away from it both ways, then a little further out) for a body of
 /// `radius`, from which nothing is `hidden_by` an obstacle (see [`hidden_by`]), with the
@@ -141,7 +161,7 @@ impl Goal {
 /// `centre`.
 fn stand_near<'w>(
     ctx: &'w GeneratorContext,
-    start: DVec2,
+    (start, companions): (DVec2, &[usize]),
     (centre, radius): (DVec2, f64),
     distance: impl Fn(DVec2) -> f64,
     hidden_by: impl Fn(DVec2) -> Option<&'w str>,
@@ -161,11 +181,11 @@ fn stand_near<'w>(
             .footprints_near(stand, inflated)
             .any(|o| o.distance(stand) < inflated)
     };
-    // Those standing round the goal (not the walker's companions, whose bodies touch its
-    // own as it sets off): a point where one stands is taken, as long as another is
-    // free. Going to a point someone stands on, the walk waited for them to leave it,
-    // and they (a waiter at the counter) waited for it to let them by.
-    let mut taken = people_standing(ctx, start, radius);
+    // Those standing round the goal (not the walker's companions): a point where one
+    // stands is taken, as long as another is free. Going to a point someone stands on,
+    // the walk waited for them to leave it, and they (a waiter at the counter) waited
+    // for it to let them by.
+    let mut taken = people_standing(ctx, companions, radius);
     let mut last = String::from("every side is blocked");
     // What stood between the first free point and the goal, for the reason when no point
     // is left.
@@ -221,13 +241,13 @@ fn stand_near<'w>(
 }
 
 /// Whether a body of `radius` standing at a point would come within [`LEAST_ACTOR_GAP`]
-/// of an actor standing now (slower than `STANDING`), other than the walker and those
-/// whose bodies touch its own at `start`.
-fn people_standing<'w>(
+/// of an actor standing now (slower than `STANDING`), other than the walker and its
+/// `companions` (see `Steer::companions`).
+pub fn people_standing<'w: 'c, 'c>(
     ctx: &GeneratorContext<'w>,
-    start: DVec2,
+    companions: &'c [usize],
     radius: f64,
-) -> impl FnMut(DVec2) -> bool + 'w {
+) -> impl FnMut(DVec2) -> bool + 'c {
     let crowd = ctx.world.crowd;
     let me = ctx.actor;
     let mut near = Vec::new();
@@ -238,8 +258,8 @@ fn people_standing<'w>(
         near.iter().any(|&j| {
             let (p, r) = (crowd.positions[j], crowd.radii[j]);
             j != me
+                && !companions.contains(&j)
                 && crowd.velocities[j].length() < STANDING
-                && (p - start).length() >= radius + r + GAP
                 && (p - stand).length() < radius + r + LEAST_ACTOR_GAP
         })
     }

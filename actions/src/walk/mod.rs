@@ -176,6 +176,9 @@ pub const PROGRESS: f64 = 0.05;
 /// on, a walk that gets no nearer its goal may be waiting for them (to pass, to move off
 /// its way or its goal), and is not stuck (see [`Walk::waiting_for_someone`]).
 pub const UNATTENDED: f64 = 3.0;
+/// How much further (m) from its object or actor than the one taken a walk's new
+/// standing point may be (see [`Walk::new_route`]).
+const AS_NEAR: f64 = 0.05;
 /// Seconds of its plan ahead that make a held walk's way on (see [`UNATTENDED`]).
 const WAY_ON: f64 = 2.0;
 /// Gap (m) between two bodies' discs under which one standing beside a held walk's way
@@ -496,8 +499,38 @@ impl Walk {
             .steer
             .sample(plan, self.t, self.t, self.heading)
             .position;
-        let ends = (here, goal);
         let companions = &self.steer.companions;
+        // A walk to an object or an actor whose standing point someone now stands on
+        // (three sent to join bob at once: the one that came last stood behind the other
+        // two for good) goes to another as near it, if one is free; not to one further
+        // out, behind those who stand there (at the mouth of a niche whose only place is
+        // taken: its occupant could not come out).
+        if let Some(kind) = &self.goal {
+            let mut taken = goal::people_standing(ctx, companions, self.radius);
+            let far = |p| kind.how_far(ctx, p).unwrap_or(f64::INFINITY);
+            // With none free, the plan is the first point, taken, as the walk's own was:
+            // the walk keeps its own.
+            let elsewhere = taken(goal)
+                .then(|| kind.plan(ctx, here, self.radius, companions).ok())
+                .flatten()
+                .filter(|planned| {
+                    planned
+                        .points
+                        .last()
+                        .is_some_and(|&(end, _)| !taken(end) && far(end) <= far(goal) + AS_NEAR)
+                });
+            drop(taken);
+            if let Some(planned) = elsewhere {
+                self.route = Route::Path {
+                    points: planned.points.into_iter().map(|(p, _)| p).collect(),
+                    heading: planned.heading.or(self.options.heading),
+                    speed: *speed,
+                };
+                self.steer.restart();
+                return Some(Plan::new(&self.route, here, self.heading));
+            }
+        }
+        let ends = (here, goal);
         let points = self
             .replan
             .route(ctx, self.t, ends, self.radius, (companions, stalled))?;
@@ -1522,8 +1555,10 @@ impl Generator for Walk {
         self.yaw = heading;
         self.heading = heading;
         self.plan_heading = heading;
+        // The companions first: a standing point where one of them stands is not taken.
+        self.steer = steer::Steer::start(ctx);
         if let Some(goal) = &self.goal {
-            let planned = goal.plan(ctx, start, self.radius)?;
+            let planned = goal.plan(ctx, start, self.radius, &self.steer.companions)?;
             self.route = Route::Path {
                 points: planned.points.into_iter().map(|(p, _)| p).collect(),
                 heading: planned.heading.or(self.options.heading),
@@ -1572,7 +1607,6 @@ impl Generator for Walk {
         self.thighs = [None; 2];
         self.held = [false; 2];
         self.subtalar = [DVec3::ZERO; 2];
-        self.steer = steer::Steer::start(ctx);
         self.replan = replan::Replan::default();
         self.shoulders = shoulders::Shoulders::default();
         self.plan = Some(plan);
