@@ -309,6 +309,42 @@ test("three sent to join bob at once all end round him, a metre away", function(
   expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
 end)
 
+test("two sent to each other meet face to face; one sent to someone walking off follows", function()
+  -- A walk to an actor went to where the other stood as it set off: these two crossed
+  -- and ended 4 m apart with their backs to each other, and shared_space.lua's bob
+  -- ended 3.6 m from ann, who had walked off to a cup.
+  local ann = troupe.actor{ name = "ann" }
+  local bob = troupe.actor{ name = "bob", at = {0.5, 0, 6}, facing = 180 }
+  local wa, wb = ann:walk{ to = bob }, bob:walk{ to = ann }
+  expect(run_until(function() return wa.status ~= "active" and wb.status ~= "active" end, 10),
+         "both ended within 10 s: " .. wa.status .. ", " .. wb.status)
+  expect(wa.status == "completed" and wb.status == "completed", wa.status .. ", " .. wb.status)
+  local p, q = ann:position(), bob:position()
+  local apart = flat_dist(p, q[1], q[3])
+  print(string.format("met %.2f m apart, between z %.2f and %.2f, at t = %.1f s", apart, p[3], q[3], troupe.time()))
+  expect(apart > 0.7 and apart < 1.2, string.format("%.2f m apart", apart))
+  expect(p[3] < q[3], "ann on her side, bob on his")
+  local faces = function(who, other)
+    local a, b = who:position(), other:position()
+    local want = math.atan(b[1] - a[1], b[3] - a[3])
+    local d = (who:dof("root_yaw") - want + math.pi) % (2 * math.pi) - math.pi
+    return math.abs(d) < 0.2, d
+  end
+  local ok_a, da = faces(ann, bob)
+  local ok_b, db = faces(bob, ann)
+  expect(ok_a and ok_b, string.format("facing each other (off by %.2f and %.2f rad)", da, db))
+  expect(math.abs(ann:dof("root_yaw")) < math.pi, string.format("ann never turned right round (yaw %.2f)", ann:dof("root_yaw")))
+  -- Someone walking off: the walk follows them and ends about a metre behind.
+  local cid = troupe.actor{ name = "cid", at = {10, 0, 3} }
+  local dan = troupe.actor{ name = "dan", at = {10, 0, 0} }
+  cid:walk{ to = {10, 0, 8}, speed = 0.8 }
+  local w = dan:walk{ to = cid }
+  expect(run_until(function() return w.status ~= "active" end, 20), "dan's walk ended: " .. w.status)
+  local behind = flat_dist(dan:position(), cid:position()[1], cid:position()[3])
+  print(string.format("dan ended %.2f m behind cid, at z %.2f", behind, dan:position()[3]))
+  expect(w.status == "completed" and math.abs(behind - 1) < 0.15, string.format("%s %.2f m behind", w.status, behind))
+end)
+
 test("walk to an actor carrying a cup ends as near as the cup allows", function()
   -- The cup carried out in front widens the body as the clearance sees it: asked to stand
   -- 0.8 m from bob, the walk stood held by him at 0.87 m for good.

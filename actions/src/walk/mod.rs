@@ -176,6 +176,12 @@ pub const PROGRESS: f64 = 0.05;
 /// on, a walk that gets no nearer its goal may be waiting for them (to pass, to move off
 /// its way or its goal), and is not stuck (see [`Walk::waiting_for_someone`]).
 pub const UNATTENDED: f64 = 3.0;
+/// Seconds between two looks at where the actor a walk goes to stands (see
+/// [`Walk::follow`]).
+const FOLLOW_INTERVAL: f64 = 0.5;
+/// How far (m) the actor a walk goes to must have moved since its route was planned
+/// for the walk to plan it again (see [`Walk::follow_actor`]).
+const FOLLOW_MOVED: f64 = 0.25;
 /// How much further (m) from its object or actor than the one taken a walk's new
 /// standing point may be (see [`Walk::new_route`]).
 const AS_NEAR: f64 = 0.05;
@@ -283,6 +289,9 @@ pub struct Walk {
     /// Where a planned walk goes: the route is planned around the obstacles when it
     /// starts. `None` walks the route as given.
     goal: Option<Goal>,
+    /// Where the actor a walk `to = ACTOR` goes to stood when its route was last planned,
+    /// and the walk time it was (see [`Walk::follow_actor`]).
+    aimed: Option<(DVec2, f64)>,
     /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
     radius: f64,
     /// How the body departs from the plan to avoid others (see [`steer`]).
@@ -363,6 +372,7 @@ impl Walk {
             cadence: 0.0,
             carrying: carry::Carrying::default(),
             goal: None,
+            aimed: None,
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
@@ -541,6 +551,47 @@ impl Walk {
         };
         self.steer.restart();
         Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// A new plan to where the actor this walk goes to now stands, when it has moved
+    /// [`FOLLOW_MOVED`] or more since the route was planned (looked at every
+    /// [`FOLLOW_INTERVAL`]): a walk to someone who walks on follows them, and two sent
+    /// to each other meet (each ended a metre from where the other had set off, the two
+    /// 4 m apart, their backs to each other). `None` leaves the plan as it is.
+    fn follow_actor(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        let (aimed, when) = self.aimed?;
+        let Some(Goal::Actor { actor, .. }) = &self.goal else {
+            return None;
+        };
+        if self.t - when < FOLLOW_INTERVAL {
+            return None;
+        }
+        let now_at = *ctx.world.crowd.positions.get(*actor)?;
+        if now_at.distance(aimed) < FOLLOW_MOVED {
+            return None;
+        }
+        // Looked at again after the interval, whether a route is found or not.
+        self.aimed = Some((now_at, self.t));
+        let Route::Path { speed, .. } = self.route else {
+            return None;
+        };
+        let here = self.steer.sample(plan, self.t, self.t, self.heading);
+        let goal = self.goal.as_ref()?;
+        let planned = goal
+            .plan(ctx, here.position, self.radius, &self.steer.companions)
+            .ok()?;
+        let route = Route::Path {
+            points: planned.points.into_iter().map(|(p, _)| p).collect(),
+            heading: planned.heading.or(self.options.heading),
+            speed,
+        };
+        // Already as near as the walk goes, or with the new point behind the body (the
+        // other came on faster): the walk ends as planned, rather than turn round for a
+        // few steps.
+        let new = Plan::continuing(&route, here.position, self.heading, here.speed)?;
+        self.route = route;
+        self.steer.restart();
+        Some(new)
     }
 
     /// Whether the body stands (slower than [`STALLED_SPEED`] on the previous tick) while
@@ -1557,8 +1608,12 @@ impl Generator for Walk {
         self.plan_heading = heading;
         // The companions first: a standing point where one of them stands is not taken.
         self.steer = steer::Steer::start(ctx);
+        self.aimed = None;
         if let Some(goal) = &self.goal {
             let planned = goal.plan(ctx, start, self.radius, &self.steer.companions)?;
+            if let Goal::Actor { actor, .. } = goal {
+                self.aimed = ctx.world.crowd.positions.get(*actor).map(|&p| (p, 0.0));
+            }
             self.route = Route::Path {
                 points: planned.points.into_iter().map(|(p, _)| p).collect(),
                 heading: planned.heading.or(self.options.heading),
@@ -1656,6 +1711,9 @@ impl Generator for Walk {
                     }
                 }
             }
+        }
+        if let Some(new) = self.follow_actor(ctx, &plan) {
+            plan = new;
         }
         if let Some(footprints) = &footprints {
             if let Some(why) = self.stuck(ctx, &plan, footprints) {

@@ -253,9 +253,14 @@ fn smoothstep_integral(u: f64) -> f64 {
 /// Progress along a route over time: distance s(t) and speed v(t).
 #[derive(Clone, Debug)]
 enum Profile {
-    /// Smooth ramp up over `ramp` seconds, cruise at `v`, smooth ramp down ending at `end`
-    /// (no ramp down when `end` is infinite).
-    Trapezoid { v: f64, ramp: f64, end: f64 },
+    /// Smooth ramp up from `v0` over `ramp` seconds, cruise at `v`, smooth ramp down
+    /// ending at `end` (no ramp down when `end` is infinite).
+    Trapezoid {
+        v0: f64,
+        v: f64,
+        ramp: f64,
+        end: f64,
+    },
     /// Samples of s and v every [`PROFILE_DT`] seconds; s is cubic-Hermite between them.
     Samples { s: Vec<f64>, v: Vec<f64> },
 }
@@ -263,17 +268,17 @@ enum Profile {
 impl Profile {
     fn at(&self, t: f64) -> (f64, f64) {
         match self {
-            Profile::Trapezoid { v, ramp, end } => {
+            Profile::Trapezoid { v0, v, ramp, end } => {
                 let t = t.max(0.0);
-                let (v, r, end) = (*v, *ramp, *end);
-                // Distance covered by the ramp up: v·r/2.
-                let up = |t: f64| v * r * smoothstep_integral(t / r);
+                let (v0, v, r, end) = (*v0, *v, *ramp, *end);
+                // Distance covered by the ramp up: (v0 + v)·r/2.
+                let up = |t: f64| v0 * t + (v - v0) * r * smoothstep_integral(t / r);
                 if t >= end {
                     let total = up(r) + v * (end - 2.0 * r) + v * r * 0.5;
                     return (total, 0.0);
                 }
                 let mut s = up(t.min(r)) + v * (t - r).max(0.0);
-                let mut speed = v * smoothstep(t / r);
+                let mut speed = v0 + (v - v0) * smoothstep(t / r);
                 if end.is_finite() && t > end - r {
                     // Mirror of the ramp up: the speed is v·(1 − smoothstep(x)), so
                     // remove v·∫smoothstep from what a cruise would have covered.
@@ -455,7 +460,7 @@ fn slowed_for_corners(line: &Polyline, trapezoid: &Profile, end: f64) -> Option<
         }
         *v = at.1.min(limit[j]);
     }
-    speed[0] = 0.0;
+    speed[0] = trapezoid.at(0.0).1;
     speed[steps] = 0.0;
     // Brake before and speed up after each slow stretch (v² changes by 2·a·ds a step).
     let dv2 = 2.0 * CORNER_ACCELERATION * ds;
@@ -642,6 +647,27 @@ fn track_at(track: &Track, t: f64) -> f64 {
 impl Plan {
     /// The plan of `route` for a body standing at `start` with heading `heading`.
     pub fn new(route: &Route, start: DVec2, heading: f64) -> Plan {
+        Plan::setting_off_at(route, start, heading, 0.0)
+    }
+
+    /// The plan of a body already walking at `speed` (m/s) along `heading`: `route` from
+    /// `start`, its speed going on from `speed` rather than from standing (a walk that
+    /// follows someone plans anew every half second or so, and each plan from standing
+    /// slowed it to a crawl). `None` when the route sets off with a turn on the spot
+    /// (see [`LARGEST_SETTING_OFF_TURN`]), or is not a path.
+    pub fn continuing(route: &Route, start: DVec2, heading: f64, speed: f64) -> Option<Plan> {
+        if !matches!(route, Route::Path { .. }) {
+            return None;
+        }
+        let plan = Plan::setting_off_at(route, start, heading, speed);
+        match &plan.kind {
+            PlanKind::Along { spot_turn, .. } if *spot_turn > 0.0 => None,
+            _ => Some(plan),
+        }
+    }
+
+    /// [`Plan::new`], the body walking at `v0` (m/s) as it starts (a path only).
+    fn setting_off_at(route: &Route, start: DVec2, heading: f64, v0: f64) -> Plan {
         match route {
             Route::Path {
                 points,
@@ -681,14 +707,17 @@ impl Plan {
                 let total = line.total();
                 let (v, ramp) = (*speed, RAMP_TIME);
                 // A short walk cannot reach the cruising speed: lower the peak so that the
-                // two ramps cover exactly the distance.
-                let v = v.min(total / ramp);
+                // two ramps cover exactly the distance. (A body already under way starts
+                // no faster than that.)
+                let v0 = v0.min(v).min(total / ramp);
+                let v = v.min(total / ramp - 0.5 * v0);
                 let end = if v > 0.0 {
-                    2.0 * ramp + (total - v * ramp) / v
+                    // The ramps cover (v0 + v)·r/2 and v·r/2.
+                    2.0 * ramp + (total - v * ramp - 0.5 * v0 * ramp) / v
                 } else {
                     0.0
                 };
-                let trapezoid = Profile::Trapezoid { v, ramp, end };
+                let trapezoid = Profile::Trapezoid { v0, v, ramp, end };
                 let (profile, end) =
                     slowed_for_corners(&line, &trapezoid, end).unwrap_or((trapezoid, end));
                 let start_turn = first_turn(&line, *end_heading, heading);
@@ -732,6 +761,7 @@ impl Plan {
                 let (profile, end) = match (speed, duration) {
                     (Speed::Constant(v), None) => (
                         Profile::Trapezoid {
+                            v0: 0.0,
                             v: *v,
                             ramp: RAMP_TIME,
                             end: f64::INFINITY,
@@ -742,6 +772,7 @@ impl Plan {
                         let ramp = RAMP_TIME.min(d / 2.0);
                         (
                             Profile::Trapezoid {
+                                v0: 0.0,
                                 v: *v,
                                 ramp,
                                 end: *d,
@@ -1132,6 +1163,66 @@ mod tests {
             assert_eq!(plan.speed(t).to_bits(), plan.sample(t, 0.0).speed.to_bits());
             t += 0.05;
         }
+    }
+
+    #[test]
+    fn a_plan_for_a_body_under_way_keeps_its_pace_and_still_ends_at_the_goal() {
+        // Heading +z at 1.1 m/s, the new route straight on (a walk following someone).
+        let far = Route::Path {
+            points: vec![DVec2::new(0.0, 4.0)],
+            heading: None,
+            speed: 1.2,
+        };
+        let plan = Plan::continuing(&far, DVec2::ZERO, 0.0, 1.1).expect("straight on");
+        assert!((plan.speed(0.0) - 1.1).abs() < 1e-12, "{}", plan.speed(0.0));
+        let end = plan.sample(plan.end_time, 0.0);
+        assert!((end.position - DVec2::new(0.0, 4.0)).length() < 1e-9);
+        assert!(end.speed.abs() < 1e-12);
+        // Sooner than from standing, by about half the ramp at that pace.
+        let standing = Plan::new(&far, DVec2::ZERO, 0.0);
+        let saved = standing.end_time - plan.end_time;
+        assert!(
+            (saved - 0.5 * RAMP_TIME * 1.1 / 1.2).abs() < 1e-9,
+            "{saved}"
+        );
+        // The distance is continuous and the speed its derivative (after the start,
+        // where the plan's time stops at 0).
+        let mut t = 0.05;
+        while t < plan.end_time {
+            let h = 1e-6;
+            let d = (plan.sample(t + h, 0.0).position - plan.sample(t - h, 0.0).position).length()
+                / (2.0 * h);
+            assert!(
+                (d - plan.sample(t, 0.0).speed).abs() < 1e-4,
+                "speed at {t}: {d}"
+            );
+            t += 0.05;
+        }
+        // Too short to stop from that pace at the ramp's deceleration: it starts slower,
+        // and still stops on the goal.
+        let near = Route::Path {
+            points: vec![DVec2::new(0.0, 0.3)],
+            heading: None,
+            speed: 1.2,
+        };
+        let plan = Plan::continuing(&near, DVec2::ZERO, 0.0, 1.1).expect("straight on");
+        assert!(
+            plan.speed(0.0) <= 0.3 / RAMP_TIME + 1e-12,
+            "{}",
+            plan.speed(0.0)
+        );
+        let end = plan.sample(plan.end_time, 0.0);
+        assert!((end.position - DVec2::new(0.0, 0.3)).length() < 1e-9);
+        // A route behind the body would set off with a turn on the spot: none.
+        let behind = Route::Path {
+            points: vec![DVec2::new(0.0, -2.0)],
+            heading: None,
+            speed: 1.2,
+        };
+        assert!(Plan::continuing(&behind, DVec2::ZERO, 0.0, 1.1).is_none());
+        // From standing, the plan is the one `Plan::new` makes, to the bit.
+        let again = Plan::continuing(&far, DVec2::ZERO, 0.0, 0.0).expect("straight on");
+        assert_eq!(again.end_time.to_bits(), standing.end_time.to_bits());
     }
 
     #[test]
