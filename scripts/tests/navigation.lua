@@ -343,6 +343,19 @@ test("two sent to each other meet face to face; one sent to someone walking off 
   local behind = flat_dist(dan:position(), cid:position()[1], cid:position()[3])
   print(string.format("dan ended %.2f m behind cid, at z %.2f", behind, dan:position()[3]))
   expect(w.status == "completed" and math.abs(behind - 1) < 0.15, string.format("%s %.2f m behind", w.status, behind))
+  -- Told to stop, a walk that follows stops, and stays stopped.
+  local eve = troupe.actor{ name = "eve", at = {20, 0, 3} }
+  local fay = troupe.actor{ name = "fay", at = {20, 0, 0} }
+  eve:walk{ to = {20, 0, 12}, speed = 1.0 }
+  local f = fay:walk{ to = eve }
+  run(3)
+  f:stop()
+  local z = fay:position()[3]
+  expect(run_until(function() return f.status ~= "active" end, 3), "stopped within 3 s: " .. f.status)
+  run(2)
+  local went = fay:position()[3] - z
+  print(string.format("fay went on %.2f m after stop()", went))
+  expect(f.status == "completed" and went < 1.5, string.format("%s, went on %.2f m", f.status, went))
 end)
 
 test("walk to an actor carrying a cup ends as near as the cup allows", function()

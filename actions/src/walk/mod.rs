@@ -496,6 +496,10 @@ impl Walk {
     /// the route's end (see [`replan`]), the body `stalled` or not (see
     /// [`Walk::stalled`]); `None` leaves the plan as it is.
     fn new_route(&mut self, ctx: &GeneratorContext, plan: &Plan, stalled: bool) -> Option<Plan> {
+        // A walk told to stop keeps its stopping plan.
+        if self.stopped_at.is_some() {
+            return None;
+        }
         let Route::Path {
             points,
             heading,
@@ -559,6 +563,10 @@ impl Walk {
     /// to each other meet (each ended a metre from where the other had set off, the two
     /// 4 m apart, their backs to each other). `None` leaves the plan as it is.
     fn follow_actor(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        // A walk told to stop keeps its stopping plan.
+        if self.stopped_at.is_some() {
+            return None;
+        }
         let (aimed, when) = self.aimed?;
         let Some(Goal::Actor { actor, .. }) = &self.goal else {
             return None;
