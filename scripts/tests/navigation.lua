@@ -309,10 +309,11 @@ test("three sent to join bob at once all end round him, a metre away", function(
   expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
 end)
 
-test("two sent to each other meet face to face; one sent to someone walking off follows", function()
+test("two sent to each other meet face to face; one sent to someone walking off or past follows", function()
   -- A walk to an actor went to where the other stood as it set off: these two crossed
   -- and ended 4 m apart with their backs to each other, and shared_space.lua's bob
-  -- ended 3.6 m from ann, who had walked off to a cup.
+  -- ended 3.6 m from ann, who had walked off to a cup. Now a walk follows the other,
+  -- and two coming to each other meet halfway.
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {0.5, 0, 6}, facing = 180 }
   local wa, wb = ann:walk{ to = bob }, bob:walk{ to = ann }
@@ -322,7 +323,7 @@ test("two sent to each other meet face to face; one sent to someone walking off 
   local p, q = ann:position(), bob:position()
   local apart = flat_dist(p, q[1], q[3])
   print(string.format("met %.2f m apart, between z %.2f and %.2f, at t = %.1f s", apart, p[3], q[3], troupe.time()))
-  expect(apart > 0.7 and apart < 1.2, string.format("%.2f m apart", apart))
+  expect(math.abs(apart - 1) < 0.1, string.format("%.2f m apart", apart))
   expect(p[3] < q[3], "ann on her side, bob on his")
   local faces = function(who, other)
     local a, b = who:position(), other:position()
@@ -343,6 +344,17 @@ test("two sent to each other meet face to face; one sent to someone walking off 
   local behind = flat_dist(dan:position(), cid:position()[1], cid:position()[3])
   print(string.format("dan ended %.2f m behind cid, at z %.2f", behind, dan:position()[3]))
   expect(w.status == "completed" and math.abs(behind - 1) < 0.15, string.format("%s %.2f m behind", w.status, behind))
+  -- One who walks past: the walk goes on to its end, turns and follows.
+  local gil = troupe.actor{ name = "gil", at = {30, 0, 0} }
+  local hal = troupe.actor{ name = "hal", at = {30.8, 0, 5}, facing = 180 }
+  hal:walk{ to = {30.8, 0, -4}, speed = 1.2 }
+  local g = gil:walk{ to = hal }
+  expect(run_until(function() return g.status ~= "active" end, 20), "gil's walk ended: " .. g.status)
+  local gap = flat_dist(gil:position(), hal:position()[1], hal:position()[3])
+  local ok_g, dg = faces(gil, hal)
+  print(string.format("gil ended %.2f m from hal, facing him within %.2f rad", gap, dg))
+  expect(g.status == "completed" and math.abs(gap - 1) < 0.15 and ok_g,
+         string.format("%s %.2f m from hal, off by %.2f rad", g.status, gap, dg))
   -- Told to stop, a walk that follows stops, and stays stopped.
   local eve = troupe.actor{ name = "eve", at = {20, 0, 3} }
   local fay = troupe.actor{ name = "fay", at = {20, 0, 0} }

@@ -101,32 +101,7 @@ impl Goal {
                 .map_err(|e| format!("no place to stand within reach of {name}: {e}"))?
             }
             Goal::Actor { actor, distance } => {
-                let other = world.states.get(*actor).ok_or("the actor is gone")?;
-                let name = &world.actors[*actor].name;
-                let at = other.globals[0].translation;
-                let theirs = world.crowd.radii.get(*actor).copied().unwrap_or(radius);
-                // What the hands hold lengthens the body as the clearance sees it (see
-                // `troupe_scene::bodies`): nearer than that reaches, the walk stood held
-                // by the other for good (a cup carried to one asked for at 0.8 m).
-                let mine = world
-                    .crowd
-                    .cores
-                    .get(ctx.actor)
-                    .map_or(radius, |core| radius.max(core.hands_ahead()));
-                let distance = distance.max(mine + theirs + LEAST_ACTOR_GAP);
-                let centre = DVec2::new(at.x, at.z);
-                // Face to face, shoulders to shoulders: a point from which a wall (or a
-                // cupboard) stands between the two is no place to talk from.
-                let shoulders = shoulder_height(ctx);
-                let their_shoulders = shoulders_of(&world.actors[*actor].skeleton, &other.globals);
-                stand_near(
-                    ctx,
-                    (start, companions),
-                    (centre, radius),
-                    |_| distance,
-                    |stand| hidden_by(ctx, (stand, shoulders), (centre, their_shoulders)),
-                )
-                .map_err(|e| format!("no place to stand near {name}: {e}"))?
+                to_actor(ctx, (start, radius, companions), (*actor, *distance), false)?
             }
         };
         Ok(Planned {
@@ -136,7 +111,69 @@ impl Goal {
     }
 }
 
+/// The route of a walk from `start` for a body of `radius` (with its `companions`) to
+/// `distance` from `actor`, facing them; `halfway`, to half that distance from the
+/// point halfway between the body and the other, who comes to meet it.
+fn to_actor(
+    ctx: &GeneratorContext,
+    (start, radius, companions): (DVec2, f64, &[usize]),
+    (actor, distance): (usize, f64),
+    halfway: bool,
+) -> Result<Planned, String> {
+    let world = ctx.world;
+    let other = world.states.get(actor).ok_or("the actor is gone")?;
+    let name = &world.actors[actor].name;
+    let at = other.globals[0].translation;
+    let theirs = world.crowd.radii.get(actor).copied().unwrap_or(radius);
+    // What the hands hold lengthens the body as the clearance sees it (see
+    // `troupe_scene::bodies`): nearer than that reaches, the walk stood held by the other
+    // for good (a cup carried to one asked for at 0.8 m).
+    let mine = world
+        .crowd
+        .cores
+        .get(ctx.actor)
+        .map_or(radius, |core| radius.max(core.hands_ahead()));
+    let distance = distance.max(mine + theirs + LEAST_ACTOR_GAP);
+    let them = DVec2::new(at.x, at.z);
+    let (centre, distance) = if halfway {
+        ((start + them) * 0.5, distance * 0.5)
+    } else {
+        (them, distance)
+    };
+    // Face to face, shoulders to shoulders: a point from which a wall (or a cupboard)
+    // stands between the two is no place to talk from.
+    let shoulders = shoulder_height(ctx);
+    let their_shoulders = shoulders_of(&world.actors[actor].skeleton, &other.globals);
+    stand_near(
+        ctx,
+        (start, companions),
+        (centre, radius),
+        |_| distance,
+        |stand| hidden_by(ctx, (stand, shoulders), (them, their_shoulders)),
+    )
+    .map_err(|e| format!("no place to stand near {name}: {e}"))
+}
+
 impl Goal {
+    /// [`Goal::plan`] for a walk to an actor who comes to meet the walker: the two meet
+    /// halfway, `distance` apart; `None` for other goals.
+    pub fn plan_meeting(
+        &self,
+        ctx: &GeneratorContext,
+        start: DVec2,
+        radius: f64,
+        companions: &[usize],
+    ) -> Option<Result<Planned, String>> {
+        let Goal::Actor { actor, distance } = self else {
+            return None;
+        };
+        let planned = to_actor(ctx, (start, radius, companions), (*actor, *distance), true);
+        Some(planned.map(|planned| Planned {
+            points: pin_corners(start, &planned.points),
+            heading: planned.heading,
+        }))
+    }
+
     /// How far floor point `p` is from what the walk goes to: from an object's footprint
     /// or from an actor's centre, as they stand now; `None` for floor points, or when the
     /// object or the actor is gone.

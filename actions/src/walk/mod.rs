@@ -182,6 +182,12 @@ const FOLLOW_INTERVAL: f64 = 0.5;
 /// How far (m) the actor a walk goes to must have moved since its route was planned
 /// for the walk to plan it again (see [`Walk::follow_actor`]).
 const FOLLOW_MOVED: f64 = 0.25;
+/// Speed (m/s) towards a walk's body at which the actor it goes to comes to meet it
+/// (see [`Walk::follow_actor`]).
+const COMING: f64 = 0.3;
+/// How much further (m) than its `distance` from the actor it goes to a walk must be for
+/// it to follow them (see [`Walk::follow_actor`]).
+const FOLLOW_SLACK: f64 = 0.5;
 /// How much further (m) from its object or actor than the one taken a walk's new
 /// standing point may be (see [`Walk::new_route`]).
 const AS_NEAR: f64 = 0.05;
@@ -568,7 +574,7 @@ impl Walk {
             return None;
         }
         let (aimed, when) = self.aimed?;
-        let Some(Goal::Actor { actor, .. }) = &self.goal else {
+        let Some(Goal::Actor { actor, distance }) = &self.goal else {
             return None;
         };
         if self.t - when < FOLLOW_INTERVAL {
@@ -584,19 +590,57 @@ impl Walk {
             return None;
         };
         let here = self.steer.sample(plan, self.t, self.t, self.heading);
+        // Near enough already: the walk ends as planned (two sent to each other, the
+        // last look finding the other just past where the walk ends, turned round on the
+        // spot for a step back and round again); or, the other having come on to where
+        // it ends, here, slowing down now (both stood held by each other for good).
+        if here.position.distance(now_at) < distance + FOLLOW_SLACK {
+            let end = self.end_sample(plan).position;
+            let theirs = ctx
+                .world
+                .crowd
+                .radii
+                .get(*actor)
+                .copied()
+                .unwrap_or(self.radius);
+            if end.distance(now_at) >= self.radius + theirs + goal::LEAST_ACTOR_GAP {
+                return None;
+            }
+            let mut stopping = plan.clone();
+            stopping.stop_at(self.steer.plan_time(self.t, self.t));
+            return Some(stopping);
+        }
         let goal = self.goal.as_ref()?;
-        let planned = goal
-            .plan(ctx, here.position, self.radius, &self.steer.companions)
-            .ok()?;
+        // One coming towards the body (two sent to each other) is met halfway: aiming a
+        // metre from where the other was at each look, the two came on to 0.65 m.
+        let towards = (here.position - now_at).normalize_or_zero();
+        let coming = ctx
+            .world
+            .crowd
+            .velocities
+            .get(*actor)
+            .copied()
+            .unwrap_or_default()
+            .dot(towards)
+            > COMING;
+        let companions = &self.steer.companions;
+        let planned = match coming {
+            true => goal.plan_meeting(ctx, here.position, self.radius, companions)?,
+            false => goal.plan(ctx, here.position, self.radius, companions),
+        }
+        .ok()?;
         let route = Route::Path {
             points: planned.points.into_iter().map(|(p, _)| p).collect(),
             heading: planned.heading.or(self.options.heading),
             speed,
         };
-        // Already as near as the walk goes, or with the new point behind the body (the
-        // other came on faster): the walk ends as planned, rather than turn round for a
-        // few steps.
-        let new = Plan::continuing(&route, here.position, self.heading, here.speed)?;
+        // Going on at the body's pace; with the new point behind the body (the other
+        // walked past it), from where it stands once its plan has brought it to a stop.
+        let new = match Plan::continuing(&route, here.position, self.heading, here.speed) {
+            Some(new) => new,
+            None if here.speed < STALLED_SPEED => Plan::new(&route, here.position, self.heading),
+            None => return None,
+        };
         self.route = route;
         self.steer.restart();
         Some(new)
