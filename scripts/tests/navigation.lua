@@ -370,6 +370,36 @@ test("two sent to each other meet face to face; one sent to someone walking off 
   expect(f.status == "completed" and went < 1.5, string.format("%s, went on %.2f m", f.status, went))
 end)
 
+test("sixteen gather round a performer: all arrive, those who find the ring full behind it", function()
+  -- Before a walk took another point when its own was taken, five of them stood for
+  -- good behind the first ring, their walks never ending.
+  local bob = troupe.actor{ name = "bob" }
+  local who, walks = {}, {}
+  for i = 1, 16 do
+    local a = (i - 1) * 2 * math.pi / 16 + 0.1
+    local r = 7 + (i % 3)
+    who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
+    walks[i] = who[i]:walk{ to = bob, distance = 1.5 }
+  end
+  local deepest = 0
+  local ended = run_until(function()
+    deepest = math.max(deepest, (troupe.deepest_overlap()))
+    for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
+    return true
+  end, 45)
+  local nearest, farthest, done = math.huge, 0, 0
+  for i, w in ipairs(walks) do
+    local d = flat_dist(who[i]:position(), 0, 0)
+    nearest, farthest = math.min(nearest, d), math.max(farthest, d)
+    if w.status == "completed" then done = done + 1 end
+  end
+  print(string.format("%d of 16 by %.1f s, from %.2f to %.2f m from bob, solids %.4f m", done, troupe.time(),
+                      nearest, farthest, deepest))
+  expect(ended and done == 16, string.format("%d of 16 arrived", done))
+  expect(nearest > 1.4 and farthest < 2.2, string.format("between %.2f and %.2f m", nearest, farthest))
+  expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
+end)
+
 test("walk to an actor carrying a cup ends as near as the cup allows", function()
   -- The cup carried out in front widens the body as the clearance sees it: asked to stand
   -- 0.8 m from bob, the walk stood held by him at 0.87 m for good.

@@ -44,6 +44,24 @@ pub enum Goal {
     },
 }
 
+/// Which free standing point a walk to an object or an actor takes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Choice {
+    /// The first from the side the walker comes from, turning away from it both ways,
+    /// then further out (a walk's start).
+    First,
+    /// The one nearest the walker, further out or not (a walk held on its way because
+    /// someone has come to stand on its point: the first free one from its side was on
+    /// the far side of a gathering crowd, and the walk went round it, through it).
+    Nearest,
+}
+
+/// How many metres of walking to a free standing point one metre further out from an
+/// object or an actor than the first ring counts as, when the point nearest the walker is
+/// chosen ([`Choice::Nearest`]): of four joining one, the last stood in a second row
+/// rather than go round to a place in the ring 1.3 m away.
+const FURTHER_OUT: f64 = 3.0;
+
 /// A planned route: the floor points after the start, and the heading to end with.
 pub struct Planned {
     /// Points to walk through, ending at the goal; each says whether the planner put it
@@ -55,13 +73,14 @@ pub struct Planned {
 
 impl Goal {
     /// Plans the route from `start` for a body of `radius`, or says why there is none;
-    /// a standing point where someone stands (but the walker's `companions`) is taken.
+    /// a standing point where someone stands (but the walker's `companions`) is taken,
+    /// and of those free, `choice` says which.
     pub fn plan(
         &self,
         ctx: &GeneratorContext,
         start: DVec2,
         radius: f64,
-        companions: &[usize],
+        (companions, choice): (&[usize], Choice),
     ) -> Result<Planned, String> {
         let world = ctx.world;
         let planned = match self {
@@ -93,7 +112,7 @@ impl Goal {
                 let height = o.position.y;
                 stand_near(
                     ctx,
-                    (start, companions),
+                    (start, companions, choice),
                     (centre, radius),
                     |dir| footprint.reach(dir) + distance,
                     |stand| hidden_by(ctx, (stand, shoulders), (footprint.nearest(stand), height)),
@@ -101,7 +120,8 @@ impl Goal {
                 .map_err(|e| format!("no place to stand within reach of {name}: {e}"))?
             }
             Goal::Actor { actor, distance } => {
-                to_actor(ctx, (start, radius, companions), (*actor, *distance), false)?
+                let to = (*actor, *distance);
+                to_actor(ctx, (start, radius, companions), to, (false, choice))?
             }
         };
         Ok(Planned {
@@ -118,7 +138,7 @@ fn to_actor(
     ctx: &GeneratorContext,
     (start, radius, companions): (DVec2, f64, &[usize]),
     (actor, distance): (usize, f64),
-    halfway: bool,
+    (halfway, choice): (bool, Choice),
 ) -> Result<Planned, String> {
     let world = ctx.world;
     let other = world.states.get(actor).ok_or("the actor is gone")?;
@@ -146,7 +166,7 @@ fn to_actor(
     let their_shoulders = shoulders_of(&world.actors[actor].skeleton, &other.globals);
     stand_near(
         ctx,
-        (start, companions),
+        (start, companions, choice),
         (centre, radius),
         |_| distance,
         |stand| hidden_by(ctx, (stand, shoulders), (them, their_shoulders)),
@@ -167,7 +187,8 @@ impl Goal {
         let Goal::Actor { actor, distance } = self else {
             return None;
         };
-        let planned = to_actor(ctx, (start, radius, companions), (*actor, *distance), true);
+        let to = (*actor, *distance);
+        let planned = to_actor(ctx, (start, radius, companions), to, (true, Choice::First));
         Some(planned.map(|planned| Planned {
             points: pin_corners(start, &planned.points),
             heading: planned.heading,
@@ -198,7 +219,7 @@ impl Goal {
 /// `centre`.
 fn stand_near<'w>(
     ctx: &'w GeneratorContext,
-    (start, companions): (DVec2, &[usize]),
+    (start, companions, choice): (DVec2, &[usize], Choice),
     (centre, radius): (DVec2, f64),
     distance: impl Fn(DVec2) -> f64,
     hidden_by: impl Fn(DVec2) -> Option<&'w str>,
@@ -227,46 +248,72 @@ fn stand_near<'w>(
     // What stood between the first free point and the goal, for the reason when no point
     // is left.
     let mut behind: Option<&str> = None;
-    for (avoiding_people, further) in [true, false]
-        .into_iter()
-        .flat_map(|people| (0..=6).map(move |further| (people, further)))
-    {
-        for turn in 0..=12 {
-            for side in [1.0, -1.0] {
-                if turn == 0 && side < 0.0 {
-                    continue;
-                }
-                let a = side * turn as f64 * PI / 12.0;
-                let (s, c) = a.sin_cos();
-                let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
-                let stand = centre - dir * (distance(dir) + further as f64 * 0.1);
-                if blocked(stand) || avoiding_people && taken(stand) {
-                    continue;
-                }
-                if let Some(obstacle) = hidden_by(stand) {
-                    behind.get_or_insert(obstacle);
-                    continue;
-                }
-                // Walks that do not navigate go there straight (see [`Walking`]).
-                let path = match ctx.world.space.walking {
-                    Walking::Navigated => ctx.world.space.path(obstacles, start, stand, radius),
-                    Walking::Straight => Ok(vec![stand]),
-                };
-                match path {
-                    Ok(points) => {
-                        let n = points.len();
-                        return Ok(Planned {
-                            points: points
-                                .into_iter()
-                                .enumerate()
-                                .map(|(i, q)| (q, i + 1 < n))
-                                .collect(),
-                            heading: Some(dir.x.atan2(dir.y)),
-                        });
-                    }
-                    Err(e) => last = e.to_string(),
-                }
+    // The points tried, in order: out from the side the walker comes from, turning away
+    // from it both ways in 15° steps, then 0.1 m further out; free of people first.
+    let points = [true, false].into_iter().flat_map(|avoiding_people| {
+        (0..=6).flat_map(move |further| {
+            (0..=12).flat_map(move |turn| {
+                [1.0, -1.0]
+                    .into_iter()
+                    .filter(move |&side| turn > 0 || side > 0.0)
+                    .map(move |side| (avoiding_people, further, side * turn as f64 * PI / 12.0))
+            })
+        })
+    });
+    let mut candidates: Vec<(bool, f64, DVec2, DVec2)> = points
+        .map(|(avoiding_people, further, a)| {
+            let (s, c) = a.sin_cos();
+            let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
+            let out = further as f64 * 0.1;
+            let stand = centre - dir * (distance(dir) + out);
+            (avoiding_people, out, stand, dir)
+        })
+        .collect();
+    if choice == Choice::Nearest {
+        // Those free of people nearest the walker first, each metre further out than
+        // the first ring counting as [`FURTHER_OUT`] metres to walk; the rest as they
+        // were.
+        let key = |&(people, out, stand, _): &(bool, f64, DVec2, DVec2)| {
+            (
+                !people,
+                if people {
+                    stand.distance(start) + FURTHER_OUT * out
+                } else {
+                    0.0
+                },
+            )
+        };
+        candidates.sort_by(|a, b| {
+            let (ka, kb) = (key(a), key(b));
+            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+        });
+    }
+    for (avoiding_people, _, stand, dir) in candidates {
+        if blocked(stand) || avoiding_people && taken(stand) {
+            continue;
+        }
+        if let Some(obstacle) = hidden_by(stand) {
+            behind.get_or_insert(obstacle);
+            continue;
+        }
+        // Walks that do not navigate go there straight (see [`Walking`]).
+        let path = match ctx.world.space.walking {
+            Walking::Navigated => ctx.world.space.path(obstacles, start, stand, radius),
+            Walking::Straight => Ok(vec![stand]),
+        };
+        match path {
+            Ok(points) => {
+                let n = points.len();
+                return Ok(Planned {
+                    points: points
+                        .into_iter()
+                        .enumerate()
+                        .map(|(i, q)| (q, i + 1 < n))
+                        .collect(),
+                    heading: Some(dir.x.atan2(dir.y)),
+                });
             }
+            Err(e) => last = e.to_string(),
         }
     }
     match behind {

@@ -188,6 +188,13 @@ const COMING: f64 = 0.3;
 /// How much further (m) than its `distance` from the actor it goes to a walk must be for
 /// it to follow them (see [`Walk::follow_actor`]).
 const FOLLOW_SLACK: f64 = 0.5;
+/// Seconds a walk's body may stand short of its plan's end, someone standing by its
+/// point, before it looks for another (see [`Walk::held_at_its_end`]).
+const HELD_AT_END: f64 = 2.0;
+/// How much further (m) than [`goal::LEAST_ACTOR_GAP`] from a walk's standing point
+/// someone stands by it (see [`Walk::held_at_its_end`]): the clearance keeps bodies
+/// closer than that.
+const HELD_MARGIN: f64 = 0.2;
 /// How much further (m) from its object or actor than the one taken a walk's new
 /// standing point may be (see [`Walk::new_route`]).
 const AS_NEAR: f64 = 0.05;
@@ -298,6 +305,9 @@ pub struct Walk {
     /// Where the actor a walk `to = ACTOR` goes to stood when its route was last planned,
     /// and the walk time it was (see [`Walk::follow_actor`]).
     aimed: Option<(DVec2, f64)>,
+    /// Walk time since which the body has stood held short of its plan's end (see
+    /// [`Walk::held_at_its_end`]).
+    held_since: Option<f64>,
     /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
     radius: f64,
     /// How the body departs from the plan to avoid others (see [`steer`]).
@@ -379,6 +389,7 @@ impl Walk {
             carrying: carry::Carrying::default(),
             goal: None,
             aimed: None,
+            held_since: None,
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
@@ -506,12 +517,7 @@ impl Walk {
         if self.stopped_at.is_some() {
             return None;
         }
-        let Route::Path {
-            points,
-            heading,
-            speed,
-        } = &self.route
-        else {
+        let Route::Path { points, .. } = &self.route else {
             return None;
         };
         let goal = *points.last()?;
@@ -519,37 +525,13 @@ impl Walk {
             .steer
             .sample(plan, self.t, self.t, self.heading)
             .position;
-        let companions = &self.steer.companions;
-        // A walk to an object or an actor whose standing point someone now stands on
-        // (three sent to join bob at once: the one that came last stood behind the other
-        // two for good) goes to another as near it, if one is free; not to one further
-        // out, behind those who stand there (at the mouth of a niche whose only place is
-        // taken: its occupant could not come out).
-        if let Some(kind) = &self.goal {
-            let mut taken = goal::people_standing(ctx, companions, self.radius);
-            let far = |p| kind.how_far(ctx, p).unwrap_or(f64::INFINITY);
-            // With none free, the plan is the first point, taken, as the walk's own was:
-            // the walk keeps its own.
-            let elsewhere = taken(goal)
-                .then(|| kind.plan(ctx, here, self.radius, companions).ok())
-                .flatten()
-                .filter(|planned| {
-                    planned
-                        .points
-                        .last()
-                        .is_some_and(|&(end, _)| !taken(end) && far(end) <= far(goal) + AS_NEAR)
-                });
-            drop(taken);
-            if let Some(planned) = elsewhere {
-                self.route = Route::Path {
-                    points: planned.points.into_iter().map(|(p, _)| p).collect(),
-                    heading: planned.heading.or(self.options.heading),
-                    speed: *speed,
-                };
-                self.steer.restart();
-                return Some(Plan::new(&self.route, here, self.heading));
-            }
+        if let Some(new) = self.another_place(ctx, (here, goal), 0.0) {
+            return Some(new);
         }
+        let Route::Path { heading, speed, .. } = &self.route else {
+            return None;
+        };
+        let companions = &self.steer.companions;
         let ends = (here, goal);
         let points = self
             .replan
@@ -561,6 +543,81 @@ impl Walk {
         };
         self.steer.restart();
         Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// A new plan from `here` to another free standing point, for a walk to an object or
+    /// an actor whose own point `end` someone now stands on (within `margin` m more than
+    /// [`goal::LEAST_ACTOR_GAP`] of its body there); `None` leaves the plan as it is.
+    ///
+    /// Three sent to join bob at once: the one that came last stood behind the other two
+    /// for good. It goes to the free point nearest it ([`goal::Choice::Nearest`]) if that
+    /// is as near the object or the actor, or, in the open, further out, behind those who
+    /// stand there (twenty gathering round a performer: the last eight stood for good in
+    /// a second row); not further out in a passage (at the mouth of a niche whose only
+    /// place is taken, its occupant could not come out).
+    fn another_place(
+        &mut self,
+        ctx: &GeneratorContext,
+        (here, end): (DVec2, DVec2),
+        margin: f64,
+    ) -> Option<Plan> {
+        let kind = self.goal.as_ref()?;
+        let Route::Path { speed, .. } = self.route else {
+            return None;
+        };
+        let companions = self.steer.companions.as_slice();
+        if !goal::people_standing(ctx, companions, self.radius + margin)(end) {
+            return None;
+        }
+        let far = |p| kind.how_far(ctx, p).unwrap_or(f64::INFINITY);
+        let open = |at: DVec2, heading: Option<f64>| {
+            let around = ctx.world.crowd.footprints_around(at, Vec::new());
+            let facing = heading.map_or(DVec2::Y, route::direction);
+            standoff::in_the_open(at, facing, &around)
+        };
+        let planned = kind
+            .plan(ctx, here, self.radius, (companions, goal::Choice::Nearest))
+            .ok()?;
+        // With none free, the plan is the first point, taken, as the walk's own was: the
+        // walk keeps its own.
+        let &(new_end, _) = planned.points.last()?;
+        if new_end.distance(end) <= PROGRESS
+            || goal::people_standing(ctx, companions, self.radius)(new_end)
+            || far(new_end) > far(end) + AS_NEAR && !open(new_end, planned.heading)
+        {
+            return None;
+        }
+        self.route = Route::Path {
+            points: planned.points.into_iter().map(|(p, _)| p).collect(),
+            heading: planned.heading.or(self.options.heading),
+            speed,
+        };
+        self.steer.restart();
+        Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// [`Walk::another_place`] for a walk whose plan has ended with its body held short
+    /// of its end for [`HELD_AT_END`] (someone came to stand by its point as it arrived),
+    /// looked at again every [`HELD_AT_END`].
+    fn held_at_its_end(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        let crowd = ctx.world.crowd;
+        let standing = crowd
+            .velocities
+            .get(ctx.actor)
+            .is_some_and(|v| v.length() < STALLED_SPEED);
+        let ended = self.steer.plan_time(self.t, self.t) >= plan.end_time;
+        if self.goal.is_none() || self.stopped_at.is_some() || !ended || !standing {
+            self.held_since = None;
+            return None;
+        }
+        let since = *self.held_since.get_or_insert(self.t);
+        if self.t - since < HELD_AT_END {
+            return None;
+        }
+        self.held_since = Some(self.t);
+        let here = *crowd.positions.get(ctx.actor)?;
+        let end = self.end_sample(plan).position;
+        self.another_place(ctx, (here, end), HELD_MARGIN)
     }
 
     /// A new plan to where the actor this walk goes to now stands, when it has moved
@@ -626,7 +683,12 @@ impl Walk {
         let companions = &self.steer.companions;
         let planned = match coming {
             true => goal.plan_meeting(ctx, here.position, self.radius, companions)?,
-            false => goal.plan(ctx, here.position, self.radius, companions),
+            false => goal.plan(
+                ctx,
+                here.position,
+                self.radius,
+                (companions, goal::Choice::First),
+            ),
         }
         .ok()?;
         let route = Route::Path {
@@ -1661,8 +1723,10 @@ impl Generator for Walk {
         // The companions first: a standing point where one of them stands is not taken.
         self.steer = steer::Steer::start(ctx);
         self.aimed = None;
+        self.held_since = None;
         if let Some(goal) = &self.goal {
-            let planned = goal.plan(ctx, start, self.radius, &self.steer.companions)?;
+            let companions = (self.steer.companions.as_slice(), goal::Choice::First);
+            let planned = goal.plan(ctx, start, self.radius, companions)?;
             if let Goal::Actor { actor, .. } = goal {
                 self.aimed = ctx.world.crowd.positions.get(*actor).map(|&p| (p, 0.0));
             }
@@ -1765,6 +1829,9 @@ impl Generator for Walk {
             }
         }
         if let Some(new) = self.follow_actor(ctx, &plan) {
+            plan = new;
+        }
+        if let Some(new) = self.held_at_its_end(ctx, &plan) {
             plan = new;
         }
         if let Some(footprints) = &footprints {

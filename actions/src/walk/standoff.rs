@@ -236,6 +236,13 @@ fn room_towards(
     room
 }
 
+/// Whether a body at `position`, facing the unit `along`, stands in the open: in no
+/// passage narrower than [`PASSAGE`] across `along` (see [`passage_width`]) among the
+/// `footprints` round it.
+pub fn in_the_open(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> bool {
+    passage_width(position, along, footprints).is_some_and(|w| w >= PASSAGE)
+}
+
 /// The width (m, up to twice [`PASSAGE`]) of the passage across `along` at `position`:
 /// how far the nearest of the `footprints` is on its left and on its right (at most
 /// [`PASSAGE`] each), whatever their direction but behind it (a doorway in a thin wall, which a way
