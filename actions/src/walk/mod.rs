@@ -561,7 +561,11 @@ impl Walk {
         (here, end): (DVec2, DVec2),
         margin: f64,
     ) -> Option<Plan> {
-        let kind = self.goal.as_ref()?;
+        // Floor points are where the script asked: the walk waits for them.
+        let kind = self
+            .goal
+            .as_ref()
+            .filter(|kind| !matches!(kind, Goal::Through(_)))?;
         let Route::Path { speed, .. } = self.route else {
             return None;
         };
