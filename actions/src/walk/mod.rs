@@ -174,7 +174,7 @@ pub const STUCK_TIME: f64 = 10.0;
 pub const PROGRESS: f64 = 0.05;
 /// With another actor within this distance (m) who is on the move or stands in its way
 /// on, a walk that gets no nearer its goal may be waiting for them (to pass, to move off
-/// its way or its goal), and is not stuck (see [`Walk::waiting_for_someone`]).
+/// its way or its goal), and is not stuck (see `Walk::waiting_for_someone`).
 pub const UNATTENDED: f64 = 3.0;
 /// Seconds between two looks at where the actor a walk goes to stands (see
 /// [`Walk::follow`]).

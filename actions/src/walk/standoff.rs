@@ -239,7 +239,7 @@ fn room_towards(
 /// Whether a body at `position`, facing the unit `along`, stands in the open: in no
 /// passage narrower than [`PASSAGE`] across `along` (see [`passage_width`]) among the
 /// `footprints` round it.
-pub fn in_the_open(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> bool {
+pub(super) fn in_the_open(position: DVec2, along: DVec2, footprints: &FootprintsAround) -> bool {
     passage_width(position, along, footprints).is_some_and(|w| w >= PASSAGE)
 }
 
