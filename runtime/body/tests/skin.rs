@@ -290,7 +290,7 @@ fn check(skeleton: &Skeleton, label: &str) {
     // full ranges (1-5), none at half or a quarter of the ranges; 2-20 over the 50
     // full-range postures (14-36 with the hands made closed), most at the root of the
     // neck (vt1), the armpit and the elbow's crease (the shoulders) and the crotch, 0-5
-    // at the hands (5-19 before). These bounds keep it there.
+    // at the hands (9-19 before). These bounds keep it there.
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
         fraction(worst_inverted) <= 0.00025
