@@ -5,8 +5,8 @@
 //! 1. **volumes** ([`volumes`]): rounded cones and ellipsoids over the solids, laid out
 //!    in the rest pose: torso, limbs, a palm and five fingers per hand, a head with jaw,
 //!    nose, ears, eye sockets and eyeballs; then each carried with its joint to the
-//!    **bind pose**, the arms raised 45° sideways ([`bind_posture`]), where the surface
-//!    and its weights are made;
+//!    **bind pose**, the arms raised 45° sideways and the fingers spread
+//!    ([`bind_posture`]), where the surface and its weights are made;
 //! 2. **surface** (`surface`): the volumes blended into one signed distance field (smooth
 //!    unions where neighbouring joints meet, carving for the eye sockets), its zero level
 //!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
@@ -103,7 +103,7 @@ const NARROWER_BANDS: [&str; 5] = [
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
 /// A skinned surface in the skeleton's bind pose ([`bind_posture`]: the rest pose with
-/// the arms raised 45° sideways).
+/// the arms raised 45° sideways and the fingers spread).
 #[derive(Clone, Debug)]
 pub struct Skin {
     /// Bind-pose vertex positions (m).

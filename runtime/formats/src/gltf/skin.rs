@@ -26,7 +26,7 @@ use troupe_body::{Skin, Transform};
 /// of the joint's local rotation and, if it slides, moved from that offset by
 /// [`troupe_body::skin::Helper::local_translation`] (an animated translation). The rig's
 /// rest becomes the skin's bind pose (the arms
-/// raised sideways, [`troupe_body::skin::bind_posture`]), so that the inverse bind
+/// raised sideways and the fingers spread, [`troupe_body::skin::bind_posture`]), so that the inverse bind
 /// matrices written from it bind the skin where it was made.
 pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
     let mut out = rig.clone();
