@@ -226,7 +226,7 @@ test("walk to a counter where someone stands ends at a free place beside them; w
   -- The point straight ahead was taken all the same: ann waited for the waiter to
   -- leave it, and he, leaving, for her to let him by.
   troupe.object{ name = "counter", shape = "box", size = {1.6, 0.95, 0.4}, at = {0, 0.475, 2.62}, mass = 60 }
-  local waiter = troupe.actor{ name = "waiter", at = {0, 0, 2.0} }
+  troupe.actor{ name = "waiter", at = {0, 0, 2.0} }
   local ann = troupe.actor{ name = "ann", at = {0, 0, -1} }
   local w = ann:walk{ to = "counter" }
   expect(run_until(function() return w.status ~= "active" end, 10), "ended within 10 s: " .. w.status)
@@ -292,7 +292,7 @@ test("three sent to join bob at once all end round him, a metre away", function(
     who[i] = troupe.actor{ name = "a" .. i, at = {x, 0, -5 - 0.5 * (1 - math.abs(x))} }
     walks[i] = who[i]:walk{ to = bob }
   end
-  local deepest = 0
+  local deepest = 0.0
   local ended = run_until(function()
     deepest = math.max(deepest, (troupe.deepest_overlap()))
     for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
@@ -381,13 +381,13 @@ test("sixteen gather round a performer: all arrive, those who find the ring full
     who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
     walks[i] = who[i]:walk{ to = bob, distance = 1.5 }
   end
-  local deepest = 0
+  local deepest = 0.0
   local ended = run_until(function()
     deepest = math.max(deepest, (troupe.deepest_overlap()))
     for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
     return true
   end, 45)
-  local nearest, farthest, done = math.huge, 0, 0
+  local nearest, farthest, done = math.huge, 0.0, 0
   for i, w in ipairs(walks) do
     local d = flat_dist(who[i]:position(), 0, 0)
     nearest, farthest = math.min(nearest, d), math.max(farthest, d)

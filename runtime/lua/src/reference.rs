@@ -306,7 +306,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
         "walk",
         "WalkOptions",
         &[
-            ("to", "Vec3|Object|Actor"),
+            ("to", "Vec3|Object|Actor|string"),
             ("path", "any"),
             ("velocity", "any"),
             ("follow", "Sequence|string"),
