@@ -142,6 +142,26 @@ test("three a side cross a 1.6 m doorway in a wall: those before it step back an
   all_pass("doorway", actors, walks, goals)
 end)
 
+test("someone standing in a doorway: after a wait the walker goes round by the other door", function()
+  -- A way round three times as long as the straight way was never taken: the walker
+  -- stood before the blocked doorway for good. A route may now be 1 m longer for each
+  -- second waited.
+  troupe.wall{ from = {-8, 3}, to = {-2.5, 3} }
+  troupe.wall{ from = {-1.5, 3}, to = {3.5, 3} }
+  troupe.wall{ from = {4.5, 3}, to = {8, 3} }
+  troupe.actor{ name = "blocker", at = {-2.0, 0, 3.0} }
+  local ann = troupe.actor{ name = "ann", at = {-2, 0, 0} }
+  local w = ann:walk{ to = {-2, 0, 6} }
+  local deepest = 0.0
+  local ended = run_until(function()
+    deepest = math.max(deepest, (troupe.deepest_overlap()))
+    return w.status ~= "active"
+  end, 60)
+  print(string.format("round by the other door: %s at t = %.1f s, solids %.4f m", w.status, troupe.time(), deepest))
+  expect(ended and w.status == "completed", w.status .. " " .. tostring(w.error))
+  expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
+end)
+
 test("troupe.deepest_overlap measures the two most overlapping body discs", function()
   troupe.actor{ name = "ann" }
   troupe.actor{ name = "bob", at = {3, 0, 0} }

@@ -30,8 +30,14 @@ pub const WAITING_RATE: f64 = 0.1;
 pub const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.
 const AROUND: f64 = 4.0;
-/// Longest new route taken, in times the straight distance to the goal (plus a metre).
+/// Longest new route taken, in times the straight distance to the goal (plus a metre,
+/// and [`DETOUR_PER_SECOND`] for each second the walk has waited).
 const LONGEST: f64 = 1.5;
+/// How much longer (m) a new route may be for each second a walk's body has stood held
+/// with nobody moving near: a way round is worth the time already lost waiting for
+/// those who do not move (a walker whose doorway someone stood in stood there for good,
+/// the other door 6 m along the wall: a route 13 m long against 3.4 m straight).
+const DETOUR_PER_SECOND: f64 = 1.0;
 /// Attempts in a row that found no route after which the next may step out of a
 /// standing body's inflation first ([`Pressed::StepOutIfStuck`]): the second attempt,
 /// after the walk has stood blocked 5 s. From the first, the twelve layouts of the plaza
@@ -47,6 +53,9 @@ const STEP_OUT_AFTER: u32 = 1;
 pub struct Replan {
     /// Walk time since which the walk has waited without a break.
     blocked_since: Option<f64>,
+    /// Walk time since which its body has stood held with nobody moving near (stalled:
+    /// see [`Replan::due`]), without a break.
+    still_since: Option<f64>,
     /// Walk time of the last new route (or of the last attempt).
     last: Option<f64>,
     /// How many new routes the walk has taken.
@@ -60,6 +69,11 @@ impl Replan {
     /// body `stalled`: see [`Replan::route`]), and says whether it has waited long enough
     /// to look for a new route.
     pub fn due(&mut self, now: f64, rate: f64, stalled: bool) -> bool {
+        self.still_since = if stalled {
+            self.still_since.or(Some(now))
+        } else {
+            None
+        };
         if rate >= WAITING_RATE && !stalled {
             self.blocked_since = None;
             return false;
@@ -94,7 +108,11 @@ impl Replan {
         } else {
             Pressed::SearchFromHere
         };
-        let found = Self::find(ctx, (from, goal), radius, (companions, stalled), pressed);
+        // Only a wait for those who stand counts: in a crowd on the move the way clears.
+        let waited = now - self.still_since.unwrap_or(now);
+        let longer = DETOUR_PER_SECOND * waited.max(0.0);
+        let around = (companions, stalled, longer);
+        let found = Self::find(ctx, (from, goal), radius, around, pressed);
         match found {
             Some(_) => {
                 self.count += 1;
@@ -110,7 +128,7 @@ impl Replan {
         ctx: &GeneratorContext,
         (from, goal): (DVec2, DVec2),
         radius: f64,
-        (companions, stalled): (&[usize], bool),
+        (companions, stalled, longer): (&[usize], bool, f64),
         pressed: Pressed,
     ) -> Option<Vec<DVec2>> {
         let crowd = ctx.world.crowd;
@@ -134,7 +152,7 @@ impl Replan {
         // Only the obstacles that can bear on a route short enough to be taken: each
         // query builds a mesh of its own, and among many obstacles (a field of pillars)
         // the build took a quarter of the tick of `troupe bench`'s crowd.
-        let window = RouteWindow::new(from, goal, radius + CLEARANCE);
+        let window = RouteWindow::new((from, goal), longer, radius + CLEARANCE);
         let obstacles: Vec<Footprint> = crowd
             .footprints
             .iter()
@@ -164,15 +182,21 @@ impl Replan {
         }
         // A way round that is much longer than waiting is worth (round a whole corridor,
         // say) is not taken.
-        if path_length(from, &points) > (goal - from).length() * LONGEST + 1.0 {
+        if path_length(from, &points) > longest(from, goal, longer) {
             return None;
         }
         Some(points)
     }
 }
 
+/// The longest new route taken from `from` to `to` (m), `longer` (m) for the time waited
+/// (see [`LONGEST`]).
+fn longest(from: DVec2, to: DVec2, longer: f64) -> f64 {
+    (to - from).length() * LONGEST + 1.0 + longer
+}
+
 /// Where a route short enough to be taken can lie: every point of a route no longer
-/// than `LONGEST` × the straight way + 1 m is within the ellipse whose foci are its ends
+/// than [`longest`] is within the ellipse whose foci are its ends
 /// (the sum of its distances to them is at most that length), so within the ellipse's
 /// bounding box. On a mesh without the obstacles outside the box (grown by the body's
 /// inflation), the shortest route is still right: if it leaves the box it is too long
@@ -183,11 +207,12 @@ struct RouteWindow {
 }
 
 impl RouteWindow {
-    /// The window of routes from `from` to `to` for a body inflated by `inflation` (m).
-    fn new(from: DVec2, to: DVec2, inflation: f64) -> RouteWindow {
+    /// The window of routes from `from` to `to`, `longer` (m) for the time waited, for a
+    /// body inflated by `inflation` (m).
+    fn new((from, to): (DVec2, DVec2), longer: f64, inflation: f64) -> RouteWindow {
         let straight = (to - from).length();
         let axis = (to - from).try_normalize().unwrap_or(DVec2::X);
-        let a = (straight * LONGEST + 1.0) / 2.0;
+        let a = longest(from, to, longer) / 2.0;
         let b = (a * a - straight * straight / 4.0).max(0.0).sqrt();
         let half = DVec2::new(
             (a * a * axis.x * axis.x + b * b * axis.y * axis.y).sqrt(),
@@ -244,8 +269,8 @@ mod tests {
     #[test]
     fn the_window_holds_every_route_short_enough_to_take() {
         let (from, to) = (DVec2::new(1.0, 2.0), DVec2::new(7.0, -3.0));
-        let w = RouteWindow::new(from, to, 0.0);
-        let longest = (to - from).length() * LONGEST + 1.0;
+        let w = RouteWindow::new((from, to), 0.0, 0.0);
+        let longest = longest(from, to, 0.0);
         // Points on the ellipse of routes of the longest length, all round it.
         for k in 0..360 {
             let dir = DVec2::from_angle((k as f64).to_radians());
@@ -268,6 +293,19 @@ mod tests {
         }
         // And a pillar well beyond it is left out.
         assert!(!w.may_touch(&Footprint::disc("far", DVec2::new(30.0, 0.0), 0.5)));
+    }
+
+    #[test]
+    fn a_longer_wait_takes_a_longer_way_round() {
+        let (from, to) = (DVec2::new(-2.6, 2.6), DVec2::new(-2.0, 6.0));
+        // Round by a door 6 m along: about 13 m against 3.5 m straight.
+        let round = 13.0;
+        assert!(longest(from, to, 0.0) < round);
+        assert!(longest(from, to, DETOUR_PER_SECOND * 15.0) > round);
+        // The window grows with it: the far door's jamb is in it only after the wait.
+        let jamb = Footprint::disc("jamb", DVec2::new(4.5, 3.0), 0.05);
+        assert!(!RouteWindow::new((from, to), 0.0, 0.36).may_touch(&jamb));
+        assert!(RouteWindow::new((from, to), 15.0, 0.36).may_touch(&jamb));
     }
 
     #[test]
