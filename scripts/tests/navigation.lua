@@ -203,6 +203,18 @@ test("walls from Lua: a walk goes through the doorway", function()
     "crossed the wall's line at x = " .. tostring(through))
 end)
 
+-- Runs until every walk in `walks` has ended (or `seconds` s): whether they all did,
+-- and the deepest two solids went into each other meanwhile (m).
+local function all_end(walks, seconds)
+  local deepest = 0.0
+  local ended = run_until(function()
+    deepest = math.max(deepest, (troupe.deepest_overlap()))
+    for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
+    return true
+  end, seconds)
+  return ended, deepest
+end
+
 test("walk to an object ends within reach, facing it", function()
   local ann = troupe.actor{ name = "ann" }
   troupe.object{ name = "table", shape = "box", size = {1.2, 0.75, 0.8}, at = {0, 0.375, 3}, mass = 30 }
@@ -292,12 +304,7 @@ test("three sent to join bob at once all end round him, a metre away", function(
     who[i] = troupe.actor{ name = "a" .. i, at = {x, 0, -5 - 0.5 * (1 - math.abs(x))} }
     walks[i] = who[i]:walk{ to = bob }
   end
-  local deepest = 0.0
-  local ended = run_until(function()
-    deepest = math.max(deepest, (troupe.deepest_overlap()))
-    for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
-    return true
-  end, 30)
+  local ended, deepest = all_end(walks, 30)
   expect(ended, "all ended within 30 s: " .. walks[1].status .. ", " .. walks[2].status .. ", " .. walks[3].status)
   for i, w in ipairs(walks) do
     local p = who[i]:position()
@@ -381,12 +388,7 @@ test("sixteen gather round a performer: all arrive, those who find the ring full
     who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
     walks[i] = who[i]:walk{ to = bob, distance = 1.5 }
   end
-  local deepest = 0.0
-  local ended = run_until(function()
-    deepest = math.max(deepest, (troupe.deepest_overlap()))
-    for _, w in ipairs(walks) do if w.status == "active" or w.status == "pending" then return false end end
-    return true
-  end, 45)
+  local ended, deepest = all_end(walks, 45)
   local nearest, farthest, done = math.huge, 0.0, 0
   for i, w in ipairs(walks) do
     local d = flat_dist(who[i]:position(), 0, 0)

@@ -1150,7 +1150,13 @@ mod tests {
             let b = plan.sample(t + 1e-7, 0.0).position;
             assert!((a - b).length() < 1e-6, "jump at {t}");
         }
-        let mut t = 0.0;
+        assert_speed_is_the_distance_rate(&plan, 0.0);
+    }
+
+    /// Every 0.05 s from `from` to its end, `plan`'s speed is the rate of its distance
+    /// (by central differences), and `Plan::speed` is exactly the sample's speed.
+    fn assert_speed_is_the_distance_rate(plan: &Plan, from: f64) {
+        let mut t = from;
         while t < plan.end_time {
             let h = 1e-6;
             let d = (plan.sample(t + h, 0.0).position - plan.sample(t - h, 0.0).position).length()
@@ -1159,7 +1165,6 @@ mod tests {
                 (d - plan.sample(t, 0.0).speed).abs() < 1e-4,
                 "speed at {t}: {d}"
             );
-            // The speed alone is exactly the sample's.
             assert_eq!(plan.speed(t).to_bits(), plan.sample(t, 0.0).speed.to_bits());
             t += 0.05;
         }
@@ -1185,19 +1190,9 @@ mod tests {
             (saved - 0.5 * RAMP_TIME * 1.1 / 1.2).abs() < 1e-9,
             "{saved}"
         );
-        // The distance is continuous and the speed its derivative (after the start,
-        // where the plan's time stops at 0).
-        let mut t = 0.05;
-        while t < plan.end_time {
-            let h = 1e-6;
-            let d = (plan.sample(t + h, 0.0).position - plan.sample(t - h, 0.0).position).length()
-                / (2.0 * h);
-            assert!(
-                (d - plan.sample(t, 0.0).speed).abs() < 1e-4,
-                "speed at {t}: {d}"
-            );
-            t += 0.05;
-        }
+        // The distance is continuous and the speed its rate (after the start, where the
+        // plan's time stops at 0 and the difference is one-sided).
+        assert_speed_is_the_distance_rate(&plan, 0.05);
         // Too short to stop from that pace at the ramp's deceleration: it starts slower,
         // and still stops on the goal.
         let near = Route::Path {
