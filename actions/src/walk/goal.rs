@@ -129,6 +129,42 @@ impl Goal {
             heading: planned.heading,
         })
     }
+
+    /// [`Goal::plan`] for a walk to an actor who comes to meet the walker: the two meet
+    /// halfway, `distance` apart; `None` for other goals.
+    pub fn plan_meeting(
+        &self,
+        ctx: &GeneratorContext,
+        start: DVec2,
+        radius: f64,
+        companions: &[usize],
+    ) -> Option<Result<Planned, String>> {
+        let Goal::Actor { actor, distance } = self else {
+            return None;
+        };
+        let to = (*actor, *distance);
+        let planned = to_actor(ctx, (start, radius, companions), to, (true, Choice::First));
+        Some(planned.map(|planned| Planned {
+            points: pin_corners(start, &planned.points),
+            heading: planned.heading,
+        }))
+    }
+
+    /// How far floor point `p` is from what the walk goes to: from an object's footprint
+    /// or from an actor's centre, as they stand now; `None` for floor points, or when the
+    /// object or the actor is gone.
+    pub fn how_far(&self, ctx: &GeneratorContext, p: DVec2) -> Option<f64> {
+        let world = ctx.world;
+        match self {
+            Goal::Through(_) => None,
+            Goal::Object { object, .. } => Some(
+                Footprint::of_object(world.objects.get(*object)?)
+                    .0
+                    .distance(p),
+            ),
+            Goal::Actor { actor, .. } => Some(world.crowd.positions.get(*actor)?.distance(p)),
+        }
+    }
 }
 
 /// The route of a walk from `start` for a body of `radius` (with its `companions`) to
@@ -172,44 +208,6 @@ fn to_actor(
         |stand| hidden_by(ctx, (stand, shoulders), (them, their_shoulders)),
     )
     .map_err(|e| format!("no place to stand near {name}: {e}"))
-}
-
-impl Goal {
-    /// [`Goal::plan`] for a walk to an actor who comes to meet the walker: the two meet
-    /// halfway, `distance` apart; `None` for other goals.
-    pub fn plan_meeting(
-        &self,
-        ctx: &GeneratorContext,
-        start: DVec2,
-        radius: f64,
-        companions: &[usize],
-    ) -> Option<Result<Planned, String>> {
-        let Goal::Actor { actor, distance } = self else {
-            return None;
-        };
-        let to = (*actor, *distance);
-        let planned = to_actor(ctx, (start, radius, companions), to, (true, Choice::First));
-        Some(planned.map(|planned| Planned {
-            points: pin_corners(start, &planned.points),
-            heading: planned.heading,
-        }))
-    }
-
-    /// How far floor point `p` is from what the walk goes to: from an object's footprint
-    /// or from an actor's centre, as they stand now; `None` for floor points, or when the
-    /// object or the actor is gone.
-    pub fn how_far(&self, ctx: &GeneratorContext, p: DVec2) -> Option<f64> {
-        let world = ctx.world;
-        match self {
-            Goal::Through(_) => None,
-            Goal::Object { object, .. } => Some(
-                Footprint::of_object(world.objects.get(*object)?)
-                    .0
-                    .distance(p),
-            ),
-            Goal::Actor { actor, .. } => Some(world.crowd.positions.get(*actor)?.distance(p)),
-        }
-    }
 }
 
 /// The first free standing point around `centre` (first on the side the body comes from,

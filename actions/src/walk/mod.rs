@@ -177,7 +177,7 @@ pub const PROGRESS: f64 = 0.05;
 /// its way or its goal), and is not stuck (see `Walk::waiting_for_someone`).
 pub const UNATTENDED: f64 = 3.0;
 /// Seconds between two looks at where the actor a walk goes to stands (see
-/// [`Walk::follow`]).
+/// [`Walk::follow_actor`]).
 const FOLLOW_INTERVAL: f64 = 0.5;
 /// How far (m) the actor a walk goes to must have moved since its route was planned
 /// for the walk to plan it again (see [`Walk::follow_actor`]).
@@ -196,7 +196,7 @@ const HELD_AT_END: f64 = 2.0;
 /// closer than that.
 const HELD_MARGIN: f64 = 0.2;
 /// How much further (m) from its object or actor than the one taken a walk's new
-/// standing point may be (see [`Walk::new_route`]).
+/// standing point may be, but in the open (see [`Walk::another_place`]).
 const AS_NEAR: f64 = 0.05;
 /// Seconds of its plan ahead that make a held walk's way on (see [`UNATTENDED`]).
 const WAY_ON: f64 = 2.0;
