@@ -48,7 +48,8 @@ const SMOOTHING_PER_REACH: f64 = 1.2;
 /// with).
 const MOST_EDGES: f64 = 7.745_966_692_414_834;
 /// How much wider the bands are where a vertex's nearest volume is one of the joints
-/// given this `band` in [`skin_weights`] (the groin, the lower belly and the upper arms), in
+/// given this `band` in [`skin_weights`] (the groin and the lower belly; the upper arms have
+/// [`UPPER_ARM`]), in
 /// both the smoothing length and its cap: a hip flexed to 120° folds a band shorter than
 /// about twice the skin's distance from the hip. 1.5 took the children's worst full-range
 /// posture from 71-103 inverted triangles to 56-69 and changed nothing at half ranges;
