@@ -286,15 +286,16 @@ fn check(skeleton: &Skeleton, label: &str) {
     // their joint about a point moved into the bend; the hips' and vc4's with a quarter
     // of its twist, the rest down the limb), the pleats of the rest surface unfolded and
     // the hands made with the fingers spread and the ring and little fingers'
-    // metacarpals half flexed: at the worst posture, 0.004-0.021 % of the triangles at
-    // full ranges (1-5), none at half or a quarter of the ranges; 2-20 over the 50
-    // full-range postures (14-36 with the hands made closed), most at the root of the
-    // neck (vt1), the armpit and the elbow's crease (the shoulders) and the crotch, 0-5
-    // at the hands (9-19 before). These bounds keep it there.
+    // metacarpals half flexed, and the upper arms' bands 1.4 ×, vt1's 0.7 × and the
+    // groin's 1.55 ×: at the worst posture, 0.004-0.013 % of the triangles at full
+    // ranges (1-3; 1-5 with the upper arms' and the groin's at 1.5 × and vt1's at 0.6 ×),
+    // none at half or a quarter of the ranges; 1-17 over the 50 full-range postures
+    // (2-20 before; 14-36 with the hands made closed), most at the root of the neck (vt1), the crotch and the hands, 0-5 at the
+    // hands (9-19 with them closed). These bounds keep it there.
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
-        fraction(worst_inverted) <= 0.00025
-            && all_inverted <= 22
+        fraction(worst_inverted) <= 0.00015
+            && all_inverted <= 17
             && at_hands <= 6
             && moderate_inverted == 0
             && slight_inverted == 0,

@@ -76,24 +76,20 @@ const CHAIN_ENDS: usize = 2;
 /// took the adults' worst full-range posture from 62-85 inverted triangles to 48-75
 /// (1.25 × and 1.75 × instead of 1.5 did worse: 87 for the 1.40 m adult, 107 for the
 /// 0.96 m child). Since the skin is made in the A-pose they matter less, but without
-/// them the 1.20 m child turns a triangle over at a quarter of the ranges.
-const WIDER_BANDS: [&str; 6] = [
-    "sacroiliac",
-    "l_hip",
-    "r_hip",
-    "vl5",
-    "l_shoulder",
-    "r_shoulder",
-];
+/// them the 1.20 m child turns a triangle over at a quarter of the ranges. The upper
+/// arms' are now a little narrower than the groin's (`weights::UPPER_ARM`, 1.4 ×).
+const WIDER_BANDS: [&str; 4] = ["sacroiliac", "l_hip", "r_hip", "vl5"];
+/// The upper arms (the shoulders' volumes), whose bands are `weights::UPPER_ARM` wide.
+const UPPER_ARM_BANDS: [&str; 2] = ["l_shoulder", "r_shoulder"];
 /// Joints whose volumes get narrower bands of weights (`weights::NARROWER`): the root
 /// of the neck (vc4, vt1) and the head's skullbase, whose weight otherwise reaches the top
 /// of a child's shoulders; and the clavicles (sternoclavicular), whose raising folded
 /// the crease between the neck and the trapezius: with them the triangles vt1 turns over
 /// in the skin test's 50 full-range postures, summed over its six sizes, went from 307 to
 /// 115 (all of them from 1,098 to 922, the worst posture of each size unchanged); wider
-/// bands there instead failed the test.
-const NARROWER_BANDS: [&str; 5] = [
-    "vt1",
+/// bands there instead failed the test. vt1's own band is now a little wider than these
+/// (`weights::NECK_ROOT`, 0.7 ×).
+const NARROWER_BANDS: [&str; 4] = [
     "vc4",
     "skullbase",
     "l_sternoclavicular",
@@ -270,8 +266,12 @@ impl Skin {
                 let name = j.name.as_str();
                 if WIDER_BANDS.contains(&name) {
                     weights::WIDER
+                } else if UPPER_ARM_BANDS.contains(&name) {
+                    weights::UPPER_ARM
                 } else if NARROWER_BANDS.contains(&name) {
                     weights::NARROWER
+                } else if name == "vt1" {
+                    weights::NECK_ROOT
                 } else {
                     1.0
                 }

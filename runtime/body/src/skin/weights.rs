@@ -48,12 +48,17 @@ const SMOOTHING_PER_REACH: f64 = 1.2;
 /// with).
 const MOST_EDGES: f64 = 7.745_966_692_414_834;
 /// How much wider the bands are where a vertex's nearest volume is one of the joints
-/// given this `band` in [`skin_weights`] (the groin, the lower belly and the upper arms), in
+/// given this `band` in [`skin_weights`] (the groin and the lower belly; the upper arms have
+/// [`UPPER_ARM`]), in
 /// both the smoothing length and its cap: a hip flexed to 120° folds a band shorter than
 /// about twice the skin's distance from the hip. 1.5 took the children's worst full-range
 /// posture from 71-103 inverted triangles to 56-69 and changed nothing at half ranges;
-/// 2 did worse for the smallest child.
-pub(crate) const WIDER: f64 = 1.5;
+/// 2 did worse for the smallest child. Raised later to 1.55 (with [`UPPER_ARM`] and
+/// [`NECK_ROOT`]): the hips' and the pelvis's inverted triangles in the skin test (summed
+/// over its six sizes' 50 full-range postures) went from 17 to 14, all of them from 46
+/// to 43 (1.4: 49; 1.6, 1.65 and 1.7 alike: 40, where [`SMOOTHING_ROUNDS`] caps the
+/// widest vertices' smoothing, so that those would need more rounds).
+pub(crate) const WIDER: f64 = 1.55;
 /// How much narrower the bands are at the root of the neck and the chest beside it (the
 /// joints given this `band`): a child's neck is short, and smoothed over the usual length
 /// the head's weight (skullbase) reached the top of the shoulders, where a head turned
@@ -62,8 +67,23 @@ pub(crate) const WIDER: f64 = 1.5;
 /// from 97 to 1, and at full ranges from 1,799 to 1,098; 0.45 and 0.75 did a little worse,
 /// vc4 and the skullbase without vt1 (or vt1 alone) much less.
 pub(crate) const NARROWER: f64 = 0.6;
+/// How much wider the bands are at the upper arms (the shoulders' volumes): a little less
+/// than the groin's [`WIDER`]. 1.5 (the groin's) was set before the skin was made in the
+/// A-pose; since then, and with the sliding helpers, 1.4 took the shoulders' inverted
+/// triangles in the skin test (summed over its six sizes' 50 full-range postures) from
+/// 18 to 5, all of them from 70 to 57, and the 0.96 m child's worst posture from 5 to 1
+/// (the elbow's crease and the armpit); 1.35 and 1.45 did as well (with [`NECK_ROOT`]:
+/// 44 and 47 against 46), 1.3 turned one over at half ranges, 1.6 failed (33 at the
+/// 0.96 m child's worst posture).
+pub(crate) const UPPER_ARM: f64 = 1.4;
+/// How narrow the band is at vt1, the root of the neck: a little wider than the
+/// [`NARROWER`] of vc4, the skullbase and the clavicles. With [`UPPER_ARM`] it took vt1's
+/// inverted triangles in the skin test from 23 (at 0.6) to 16 and all of them from 57 to
+/// 46; 0.65 and 0.75 gave 50 and 51 (0.75 leaves the 1.38 m child's worst posture at 3,
+/// one more than before), 0.8 alone failed the test (24 over the 1.20 m child's 50).
+pub(crate) const NECK_ROOT: f64 = 0.7;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
-/// neighbours' mean; enough for the widest band ((WIDER × MOST_EDGES)² = 135).
+/// neighbours' mean; enough for the widest band ((WIDER × MOST_EDGES)² = 144).
 const SMOOTHING_ROUNDS: usize = 150;
 
 /// Weights under this (after smoothing, in a normalised row) are dropped, continuously:
@@ -81,7 +101,8 @@ type Row = Vec<(u16, f64)>;
 
 /// The weights of every vertex of a closed surface (bind-pose positions `positions`,
 /// triangles `indices`); `band` scales the smoothing's length and cap for the vertices
-/// whose nearest volume is each joint's ([`WIDER`], [`NARROWER`] or 1).
+/// whose nearest volume is each joint's ([`WIDER`], [`UPPER_ARM`], [`NARROWER`],
+/// [`NECK_ROOT`] or 1).
 pub(crate) fn skin_weights(
     positions: &[DVec3],
     indices: &[u32],
