@@ -31,7 +31,8 @@ pub const STANDING: f64 = 0.1;
 /// Actors standing within this distance (m) are obstacles for the new route.
 const AROUND: f64 = 4.0;
 /// Longest new route taken, in times the straight distance to the goal (plus a metre,
-/// and [`DETOUR_PER_SECOND`] for each second the walk has waited).
+/// and [`DETOUR_PER_SECOND`] for each second the body has stood held with nobody moving
+/// near).
 const LONGEST: f64 = 1.5;
 /// How much longer (m) a new route may be for each second a walk's body has stood held
 /// with nobody moving near: a way round is worth the time already lost waiting for
