@@ -297,7 +297,7 @@ end)
 test("three sent to join bob at once all end round him, a metre away", function()
   -- Each took the point on its own side of bob; the one that came last stood behind
   -- the other two for good, its point taken. Now a walk whose point someone stands on
-  -- goes to another as near, if one is free.
+  -- goes to the free one nearest it.
   local bob = troupe.actor{ name = "bob", facing = 180 }
   local who, walks = {}, {}
   for i, x in ipairs({ -1, 0, 1 }) do
