@@ -71,6 +71,16 @@ pub struct Planned {
     pub heading: Option<f64>,
 }
 
+impl Planned {
+    /// The route with its planned corners pinned (see [`pin_corners`]), from `start`.
+    fn pinned(self, start: DVec2) -> Planned {
+        Planned {
+            points: pin_corners(start, &self.points),
+            heading: self.heading,
+        }
+    }
+}
+
 impl Goal {
     /// Plans the route from `start` for a body of `radius`, or says why there is none;
     /// a standing point where someone stands (but the walker's `companions`) is taken,
@@ -124,10 +134,7 @@ impl Goal {
                 to_actor(ctx, (start, radius, companions), to, (false, choice))?
             }
         };
-        Ok(Planned {
-            points: pin_corners(start, &planned.points),
-            heading: planned.heading,
-        })
+        Ok(planned.pinned(start))
     }
 
     /// [`Goal::plan`] for a walk to an actor who comes to meet the walker: the two meet
@@ -144,10 +151,7 @@ impl Goal {
         };
         let to = (*actor, *distance);
         let planned = to_actor(ctx, (start, radius, companions), to, (true, Choice::First));
-        Some(planned.map(|planned| Planned {
-            points: pin_corners(start, &planned.points),
-            heading: planned.heading,
-        }))
+        Some(planned.map(|planned| planned.pinned(start)))
     }
 
     /// How far floor point `p` is from what the walk goes to: from an object's footprint
@@ -258,34 +262,35 @@ fn stand_near<'w>(
             })
         })
     });
-    let mut candidates: Vec<(bool, f64, DVec2, DVec2)> = points
-        .map(|(avoiding_people, further, a)| {
-            let (s, c) = a.sin_cos();
-            let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
-            let out = further as f64 * 0.1;
-            let stand = centre - dir * (distance(dir) + out);
-            (avoiding_people, out, stand, dir)
-        })
-        .collect();
-    if choice == Choice::Nearest {
-        // Those free of people nearest the walker first, each metre further out than
-        // the first ring counting as [`FURTHER_OUT`] metres to walk; the rest as they
-        // were.
-        let key = |&(people, out, stand, _): &(bool, f64, DVec2, DVec2)| {
-            (
-                !people,
-                if people {
+    let candidates = points.map(|(avoiding_people, further, a)| {
+        let (s, c) = a.sin_cos();
+        let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
+        let out = further as f64 * 0.1;
+        let stand = centre - dir * (distance(dir) + out);
+        (avoiding_people, out, stand, dir)
+    });
+    // In that order (the first free one is taken, the rest not even made), or those
+    // free of people nearest the walker first, each metre further out than the first
+    // ring counting as [`FURTHER_OUT`] metres to walk, then the rest as they were.
+    let candidates: Box<dyn Iterator<Item = (bool, f64, DVec2, DVec2)>> = match choice {
+        Choice::First => Box::new(candidates),
+        Choice::Nearest => {
+            let key = |&(people, out, stand, _): &(bool, f64, DVec2, DVec2)| {
+                let walk = if people {
                     stand.distance(start) + FURTHER_OUT * out
                 } else {
                     0.0
-                },
-            )
-        };
-        candidates.sort_by(|a, b| {
-            let (ka, kb) = (key(a), key(b));
-            ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
-        });
-    }
+                };
+                (!people, walk)
+            };
+            let mut all: Vec<_> = candidates.collect();
+            all.sort_by(|a, b| {
+                let (ka, kb) = (key(a), key(b));
+                ka.0.cmp(&kb.0).then(ka.1.total_cmp(&kb.1))
+            });
+            Box::new(all.into_iter())
+        }
+    };
     for (avoiding_people, _, stand, dir) in candidates {
         if blocked(stand) || avoiding_people && taken(stand) {
             continue;

@@ -513,10 +513,6 @@ impl Walk {
     /// the route's end (see [`replan`]), the body `stalled` or not (see
     /// [`Walk::stalled`]); `None` leaves the plan as it is.
     fn new_route(&mut self, ctx: &GeneratorContext, plan: &Plan, stalled: bool) -> Option<Plan> {
-        // A walk told to stop keeps its stopping plan.
-        if self.stopped_at.is_some() {
-            return None;
-        }
         let Route::Path { points, .. } = &self.route else {
             return None;
         };
@@ -543,6 +539,16 @@ impl Walk {
         };
         self.steer.restart();
         Some(Plan::new(&self.route, here, self.heading))
+    }
+
+    /// The route through `planned`'s points, ending on its heading (or the walk's own),
+    /// at `speed` (m/s).
+    fn route_to(&self, planned: goal::Planned, speed: f64) -> Route {
+        Route::Path {
+            points: planned.points.into_iter().map(|(p, _)| p).collect(),
+            heading: planned.heading.or(self.options.heading),
+            speed,
+        }
     }
 
     /// A new plan from `here` to another free standing point, for a walk to an object or
@@ -591,11 +597,7 @@ impl Walk {
         {
             return None;
         }
-        self.route = Route::Path {
-            points: planned.points.into_iter().map(|(p, _)| p).collect(),
-            heading: planned.heading.or(self.options.heading),
-            speed,
-        };
+        self.route = self.route_to(planned, speed);
         self.steer.restart();
         Some(Plan::new(&self.route, here, self.heading))
     }
@@ -610,7 +612,8 @@ impl Walk {
             .get(ctx.actor)
             .is_some_and(|v| v.length() < STALLED_SPEED);
         let ended = self.steer.plan_time(self.t, self.t) >= plan.end_time;
-        if self.goal.is_none() || self.stopped_at.is_some() || !ended || !standing {
+        let to_a_place = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }));
+        if !to_a_place || !ended || !standing {
             self.held_since = None;
             return None;
         }
@@ -630,10 +633,6 @@ impl Walk {
     /// to each other meet (each ended a metre from where the other had set off, the two
     /// 4 m apart, their backs to each other). `None` leaves the plan as it is.
     fn follow_actor(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
-        // A walk told to stop keeps its stopping plan.
-        if self.stopped_at.is_some() {
-            return None;
-        }
         let (aimed, when) = self.aimed?;
         let Some(Goal::Actor { actor, distance }) = &self.goal else {
             return None;
@@ -695,11 +694,7 @@ impl Walk {
             ),
         }
         .ok()?;
-        let route = Route::Path {
-            points: planned.points.into_iter().map(|(p, _)| p).collect(),
-            heading: planned.heading.or(self.options.heading),
-            speed,
-        };
+        let route = self.route_to(planned, speed);
         // Going on at the body's pace; with the new point behind the body (the other
         // walked past it), from where it stands once its plan has brought it to a stop.
         let new = match Plan::continuing(&route, here.position, self.heading, here.speed) {
@@ -1734,11 +1729,7 @@ impl Generator for Walk {
             if let Goal::Actor { actor, .. } = goal {
                 self.aimed = ctx.world.crowd.positions.get(*actor).map(|&p| (p, 0.0));
             }
-            self.route = Route::Path {
-                points: planned.points.into_iter().map(|(p, _)| p).collect(),
-                heading: planned.heading.or(self.options.heading),
-                speed: self.options.speed,
-            };
+            self.route = self.route_to(planned, self.options.speed);
         }
         let plan = Plan::new(&self.route, start, heading);
         // Both feet start planted where they are, flat or with the heel raised.
@@ -1819,24 +1810,29 @@ impl Generator for Walk {
         // routes. (A followed path went on through whoever stood on it, its feet pinched
         // into stepping in place behind a body that went on: a leg 1.1 m short of its foot.)
         let mut gathered = false;
+        // A walk told to stop keeps its stopping plan: no new route, no other place, nobody
+        // followed (following, one went on 1.96 m after `stop()`).
+        let planning = self.stopped_at.is_none();
         if let Some(footprints) = &footprints {
             let (t, near) = (self.t, (&mut self.near, &mut self.scratch));
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
             if self.steer.engaged && matches!(self.route, Route::Path { .. }) {
                 // Only a steered walk plans anew: the stall is looked at only for one.
                 let stalled = self.stalled(ctx, &plan);
-                if self.replan.due(self.t, self.steer.rate, stalled) {
+                if self.replan.due(self.t, self.steer.rate, stalled) && planning {
                     if let Some(new) = self.new_route(ctx, &plan, stalled) {
                         plan = new;
                     }
                 }
             }
         }
-        if let Some(new) = self.follow_actor(ctx, &plan) {
-            plan = new;
-        }
-        if let Some(new) = self.held_at_its_end(ctx, &plan) {
-            plan = new;
+        if planning {
+            if let Some(new) = self.follow_actor(ctx, &plan) {
+                plan = new;
+            }
+            if let Some(new) = self.held_at_its_end(ctx, &plan) {
+                plan = new;
+            }
         }
         if let Some(footprints) = &footprints {
             if let Some(why) = self.stuck(ctx, &plan, footprints) {

@@ -127,8 +127,10 @@ impl Standoff {
         let cornered = |(at, way): (DVec2, DVec2), i: usize| {
             room_towards(at, -way, across(i), footprints, CORNERED) < CORNERED
         };
+        // Mine is found once, for the first neighbour that faces me.
+        let me_cornered = std::cell::OnceCell::new();
         let backs_off = |towards: f64, theirs: ((DVec2, DVec2), usize)| match (
-            cornered((position, along), me),
+            *me_cornered.get_or_init(|| cornered((position, along), me)),
             cornered(theirs.0, theirs.1),
         ) {
             (false, true) => true,
