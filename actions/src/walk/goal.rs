@@ -61,6 +61,18 @@ pub enum Choice {
 /// chosen ([`Choice::Nearest`]): of four joining one, the last stood in a second row
 /// rather than go round to a place in the ring 1.3 m away.
 const FURTHER_OUT: f64 = 3.0;
+/// How far out (m) beyond the first ring of standing points round an object the points
+/// tried go, in steps of [`ROW_STEP`]: further, the object is out of reach.
+const OBJECT_ROWS: f64 = 0.6;
+/// The same round an actor: a crowd gathering round a performer stands in rows (of
+/// twenty-four sent to one, three found the points 0.6 m out taken and went for free
+/// ones on the far side of the crowd, round it and through it, for good).
+const ACTOR_ROWS: f64 = 1.5;
+/// Metres between one row of standing points and the next.
+const ROW_STEP: f64 = 0.1;
+/// How much nearer or further (m) than asked from an object or an actor a walk held on
+/// its way may stand and end there (see [`Goal::stand_here`]).
+const AS_GOOD: f64 = 0.1;
 
 /// A planned route: the floor points after the start, and the heading to end with.
 pub struct Planned {
@@ -123,7 +135,7 @@ impl Goal {
                 stand_near(
                     ctx,
                     (start, companions, choice),
-                    (centre, radius),
+                    (centre, radius, OBJECT_ROWS),
                     |dir| footprint.reach(dir) + distance,
                     |stand| hidden_by(ctx, (stand, shoulders), (footprint.nearest(stand), height)),
                 )
@@ -152,6 +164,79 @@ impl Goal {
         let to = (*actor, *distance);
         let planned = to_actor(ctx, (start, radius, companions), to, (true, Choice::First));
         Some(planned.map(|planned| planned.pinned(start)))
+    }
+
+    /// The route of a walk that ends where its body stands, `here`, facing the object or
+    /// the actor it goes to, if that is as good a place as its standing point `end`: no
+    /// nearer than asked and no further out than `end` (within [`AS_GOOD`] each way),
+    /// clear of the obstacles, nothing between the two (in a crowd gathered round a
+    /// performer, one held in the first row on its way round to a free point stood
+    /// there for good, and another held in the second row on its way to the third).
+    /// `None` for floor points, or where `here` is no such place.
+    pub fn stand_here(
+        &self,
+        ctx: &GeneratorContext,
+        (here, end): (DVec2, DVec2),
+        radius: f64,
+    ) -> Option<Planned> {
+        let world = ctx.world;
+        let shoulders = shoulder_height(ctx);
+        // What the walk goes to, how far beyond the first ring of standing points round
+        // it the body and the walk's end are, and what stands between the body and it.
+        let (centre, [beyond, end_beyond], hidden) = match self {
+            Goal::Through(_) => return None,
+            Goal::Object { object, distance } => {
+                let o = world.objects.get(*object)?;
+                let footprint = Footprint::of_object(o).0;
+                let centre = footprint.centre();
+                let out = [here, end].map(|p| {
+                    let dir = (centre - p).normalize_or_zero();
+                    p.distance(centre) - footprint.reach(dir) - distance
+                });
+                let nearest = footprint.nearest(here);
+                let hidden = hidden_by(ctx, (here, shoulders), (nearest, o.position.y));
+                (centre, out, hidden)
+            }
+            Goal::Actor { actor, distance } => {
+                let other = world.states.get(*actor)?;
+                let at = other.globals[0].translation;
+                let them = DVec2::new(at.x, at.z);
+                let skeleton = &world.actors[*actor].skeleton;
+                let their_shoulders = shoulders_of(skeleton, &other.globals);
+                let hidden = hidden_by(ctx, (here, shoulders), (them, their_shoulders));
+                let wanted = actor_distance(ctx, radius, *actor, *distance);
+                (them, [here, end].map(|p| p.distance(them) - wanted), hidden)
+            }
+        };
+        let inflated = radius + troupe_scene::space::CLEARANCE;
+        let blocked = world
+            .crowd
+            .footprints_near(here, inflated)
+            .any(|o| o.distance(here) < inflated);
+        if beyond < -AS_GOOD
+            || beyond > end_beyond.max(0.0) + AS_GOOD
+            || blocked
+            || hidden.is_some()
+        {
+            return None;
+        }
+        let towards = centre - here;
+        Some(Planned {
+            points: vec![(here, false)],
+            heading: Some(towards.x.atan2(towards.y)),
+        })
+    }
+
+    /// For a walk to an actor, the circle (centre, radius) round them its body's disc
+    /// keeps out of on its way ([`AS_GOOD`] inside the ring it is to stand on: see
+    /// `Steer::keep_out_of`); `None` for other goals, or when the actor is gone.
+    pub fn circle_kept_out_of(&self, ctx: &GeneratorContext, radius: f64) -> Option<(DVec2, f64)> {
+        let Goal::Actor { actor, distance } = self else {
+            return None;
+        };
+        let them = *ctx.world.crowd.positions.get(*actor)?;
+        let wanted = actor_distance(ctx, radius, *actor, *distance);
+        Some((them, wanted - radius - AS_GOOD))
     }
 
     /// How far floor point `p` is from what the walk goes to: from an object's footprint
@@ -184,16 +269,7 @@ fn to_actor(
     let other = world.states.get(actor).ok_or("the actor is gone")?;
     let name = &world.actors[actor].name;
     let at = other.globals[0].translation;
-    let theirs = world.crowd.radii.get(actor).copied().unwrap_or(radius);
-    // What the hands hold lengthens the body as the clearance sees it (see
-    // `troupe_scene::bodies`): nearer than that reaches, the walk stood held by the other
-    // for good (a cup carried to one asked for at 0.8 m).
-    let mine = world
-        .crowd
-        .cores
-        .get(ctx.actor)
-        .map_or(radius, |core| radius.max(core.hands_ahead()));
-    let distance = distance.max(mine + theirs + LEAST_ACTOR_GAP);
+    let distance = actor_distance(ctx, radius, actor, distance);
     let them = DVec2::new(at.x, at.z);
     let (centre, distance) = if halfway {
         ((start + them) * 0.5, distance * 0.5)
@@ -207,22 +283,38 @@ fn to_actor(
     stand_near(
         ctx,
         (start, companions, choice),
-        (centre, radius),
+        (centre, radius, ACTOR_ROWS),
         |_| distance,
         |stand| hidden_by(ctx, (stand, shoulders), (them, their_shoulders)),
     )
     .map_err(|e| format!("no place to stand near {name}: {e}"))
 }
 
+/// How far (m) from `actor`'s centre a walk of a body of `radius` asked to stand
+/// `distance` from them stands: at least the two bodies' radii and [`LEAST_ACTOR_GAP`]
+/// apart.
+fn actor_distance(ctx: &GeneratorContext, radius: f64, actor: usize, distance: f64) -> f64 {
+    let crowd = &ctx.world.crowd;
+    let theirs = crowd.radii.get(actor).copied().unwrap_or(radius);
+    // What the hands hold lengthens the body as the clearance sees it (see
+    // `troupe_scene::bodies`): nearer than that reaches, the walk stood held by the other
+    // for good (a cup carried to one asked for at 0.8 m).
+    let mine = crowd
+        .cores
+        .get(ctx.actor)
+        .map_or(radius, |core| radius.max(core.hands_ahead()));
+    distance.max(mine + theirs + LEAST_ACTOR_GAP)
+}
+
 /// The first free standing point around `centre` (first on the side the body comes from,
-/// then turning away from it both ways, then a little further out) for a body of
-/// `radius`, from which nothing is `hidden_by` an obstacle (see [`hidden_by`]), with the
+/// then turning away from it both ways, then further out, up to `rows` metres) for a
+/// body of `radius`, from which nothing is `hidden_by` an obstacle (see [`hidden_by`]), with the
 /// path to it (a straight line when walks do not navigate) and the heading that faces
 /// `centre`.
 fn stand_near<'w>(
     ctx: &'w GeneratorContext,
     (start, companions, choice): (DVec2, &[usize], Choice),
-    (centre, radius): (DVec2, f64),
+    (centre, radius, rows): (DVec2, f64, f64),
     distance: impl Fn(DVec2) -> f64,
     hidden_by: impl Fn(DVec2) -> Option<&'w str>,
 ) -> Result<Planned, String> {
@@ -251,9 +343,10 @@ fn stand_near<'w>(
     // is left.
     let mut behind: Option<&str> = None;
     // The points tried, in order: out from the side the walker comes from, turning away
-    // from it both ways in 15° steps, then 0.1 m further out; free of people first.
-    let points = [true, false].into_iter().flat_map(|avoiding_people| {
-        (0..=6).flat_map(move |further| {
+    // from it both ways in 15° steps, then a row further out; free of people first.
+    let last_row = (rows / ROW_STEP).round() as usize;
+    let points = [true, false].into_iter().flat_map(move |avoiding_people| {
+        (0..=last_row).flat_map(move |further| {
             (0..=12).flat_map(move |turn| {
                 [1.0, -1.0]
                     .into_iter()
@@ -265,19 +358,29 @@ fn stand_near<'w>(
     let candidates = points.map(|(avoiding_people, further, a)| {
         let (s, c) = a.sin_cos();
         let dir = DVec2::new(towards.x * c - towards.y * s, towards.x * s + towards.y * c);
-        let out = further as f64 * 0.1;
+        let out = further as f64 * ROW_STEP;
         let stand = centre - dir * (distance(dir) + out);
         (avoiding_people, out, stand, dir)
     });
     // In that order (the first free one is taken, the rest not even made), or those
     // free of people nearest the walker first, each metre further out than the first
     // ring counting as [`FURTHER_OUT`] metres to walk, then the rest as they were.
+    // Near means round the centre, not through it: a free point across a crowd that
+    // gathered round a performer is a walk round the crowd (in, through it, the walker
+    // stood among those in the first row for good).
+    let round_the_centre = |stand: DVec2| {
+        let (from, to) = (start - centre, stand - centre);
+        let turn = from.angle_to(to).abs();
+        stand
+            .distance(start)
+            .max((from.length() - to.length()).abs() + from.length().min(to.length()) * turn)
+    };
     let candidates: Box<dyn Iterator<Item = (bool, f64, DVec2, DVec2)>> = match choice {
         Choice::First => Box::new(candidates),
         Choice::Nearest => {
             let key = |&(people, out, stand, _): &(bool, f64, DVec2, DVec2)| {
                 let walk = if people {
-                    stand.distance(start) + FURTHER_OUT * out
+                    round_the_centre(stand) + FURTHER_OUT * out
                 } else {
                     0.0
                 };

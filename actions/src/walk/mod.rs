@@ -95,6 +95,18 @@ pub const LOWEST_START: f64 = 0.2;
 
 /// Seconds to stand still, both feet down, before the walk reports it has finished.
 pub const SETTLE_TIME: f64 = 0.3;
+/// How near (m) a planted foot must be to its spot at the walk's end to stay down and
+/// count as settled (and its heading within [`SETTLED_YAW`]).
+const SETTLED_FOOT: f64 = 0.01;
+/// The same, once the plan has ended [`SHUFFLING`] seconds ago: a body pressed by those
+/// standing round it (in a ring round a performer) moves by a centimetre or so as they
+/// do, its spots with it, and its feet stepped after them for good, the walk never
+/// ending; a person there stands.
+const SETTLED_FOOT_PRESSED: f64 = 0.03;
+/// Seconds after the plan's end before a foot may stand that far from its spot.
+const SHUFFLING: f64 = 1.0;
+/// How near (radians) a planted foot's heading must be to its spot's to stay down.
+const SETTLED_YAW: f64 = 0.05;
 /// Seconds after a stop (`stop()`, `cancel()`, a pre-emption) by which a walk that has
 /// not finished as on arrival finishes once both its feet are down near each other
 /// ([`STOP_STANCE`]), wherever they stand.
@@ -188,11 +200,12 @@ const COMING: f64 = 0.3;
 /// How much further (m) than its `distance` from the actor it goes to a walk must be for
 /// it to follow them (see [`Walk::follow_actor`]).
 const FOLLOW_SLACK: f64 = 0.5;
-/// Seconds a walk's body may stand short of its plan's end, someone standing by its
-/// point, before it looks for another (see [`Walk::held_at_its_end`]).
+/// Seconds a walk's body may stand held, on its way or short of its plan's end, before it
+/// ends where it stands if that is as good a place, or, someone standing by its point
+/// at its end, looks for another (see [`Walk::held`]).
 const HELD_AT_END: f64 = 2.0;
 /// How much further (m) than [`goal::LEAST_ACTOR_GAP`] from a walk's standing point
-/// someone stands by it (see [`Walk::held_at_its_end`]): the clearance keeps bodies
+/// someone stands by it (see [`Walk::held`]): the clearance keeps bodies
 /// closer than that.
 const HELD_MARGIN: f64 = 0.2;
 /// How much further (m) from its object or actor than the one taken a walk's new
@@ -287,6 +300,9 @@ pub struct Walk {
     plan_heading: f64,
     start_q: Vec<f64>,
     settle_since: Option<f64>,
+    /// The walk time at which the plan (as steered) ended, while it stays ended (see
+    /// [`SHUFFLING`]).
+    ended_since: Option<f64>,
     /// Where the body last stood [`PROGRESS`] away from where it stood before, and the
     /// walk time it did (see [`STUCK_TIME`]).
     progress: Option<(DVec2, f64)>,
@@ -305,8 +321,8 @@ pub struct Walk {
     /// Where the actor a walk `to = ACTOR` goes to stood when its route was last planned,
     /// and the walk time it was (see [`Walk::follow_actor`]).
     aimed: Option<(DVec2, f64)>,
-    /// Walk time since which the body has stood held short of its plan's end (see
-    /// [`Walk::held_at_its_end`]).
+    /// Walk time since which the body has stood held, on its way or short of its plan's
+    /// end (see [`Walk::held`]).
     held_since: Option<f64>,
     /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
     radius: f64,
@@ -381,6 +397,7 @@ impl Walk {
             plan_heading: 0.0,
             start_q: Vec::new(),
             settle_since: None,
+            ended_since: None,
             progress: None,
             stopped_at: None,
             last_miss: 0.0,
@@ -431,6 +448,19 @@ impl Walk {
             end.position += self.steer.offset;
         }
         end
+    }
+
+    /// Whether a foot planted at `plant` heading `yaw` stays down rather than step to
+    /// `(spot, heading)`: near enough ([`SETTLED_FOOT`], or [`SETTLED_FOOT_PRESSED`]
+    /// once the plan has ended [`SHUFFLING`] seconds ago).
+    fn stays_at(&self, plant: DVec2, yaw: f64, (spot, heading): (DVec2, f64)) -> bool {
+        let pressed = self.ended_since.is_some_and(|t| self.t - t >= SHUFFLING);
+        let near = if pressed {
+            SETTLED_FOOT_PRESSED
+        } else {
+            SETTLED_FOOT
+        };
+        (spot - plant).length() < near && wrap(heading - yaw).abs() < SETTLED_YAW
     }
 
     /// Why the walk is stuck, if it is (see [`STUCK_TIME`]): how far from its goal (or a
@@ -568,17 +598,22 @@ impl Walk {
         margin: f64,
     ) -> Option<Plan> {
         // Floor points are where the script asked: the walk waits for them.
-        let kind = self
-            .goal
-            .as_ref()
-            .filter(|kind| !matches!(kind, Goal::Through(_)))?;
+        if !matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. })) {
+            return None;
+        }
         let Route::Path { speed, .. } = self.route else {
             return None;
         };
-        let companions = self.steer.companions.as_slice();
-        if !goal::people_standing(ctx, companions, self.radius + margin)(end) {
+        if !goal::people_standing(ctx, &self.steer.companions, self.radius + margin)(end) {
             return None;
         }
+        // Where the body stands may do as well (held by those round its point, a few
+        // centimetres short of it, one went round a crowd to a free point, through it).
+        if let Some(new) = self.end_here(ctx, (here, end)) {
+            return Some(new);
+        }
+        let kind = self.goal.as_ref()?;
+        let companions = self.steer.companions.as_slice();
         let far = |p| kind.how_far(ctx, p).unwrap_or(f64::INFINITY);
         let open = |at: DVec2, heading: Option<f64>| {
             let around = ctx.world.crowd.footprints_around(at, Vec::new());
@@ -602,18 +637,23 @@ impl Walk {
         Some(Plan::new(&self.route, here, self.heading))
     }
 
-    /// [`Walk::another_place`] for a walk whose plan has ended with its body held short
-    /// of its end for [`HELD_AT_END`] (someone came to stand by its point as it arrived),
-    /// looked at again every [`HELD_AT_END`].
-    fn held_at_its_end(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+    /// For a walk to an object or an actor whose body has stood held for [`HELD_AT_END`]
+    /// (looked at again every [`HELD_AT_END`]), on its way or short of its plan's end: a
+    /// plan that ends where it stands, facing what it goes to, if that is as good a place
+    /// ([`Goal::stand_here`]); else, its plan ended (someone came to stand by its point as
+    /// it arrived), [`Walk::another_place`].
+    fn held(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
         let crowd = ctx.world.crowd;
         let standing = crowd
             .velocities
             .get(ctx.actor)
             .is_some_and(|v| v.length() < STALLED_SPEED);
-        let ended = self.steer.plan_time(self.t, self.t) >= plan.end_time;
+        let tau = self.steer.plan_time(self.t, self.t);
+        let ended = tau >= plan.end_time;
+        // Held on its way: standing where the plan moves (not turning on the spot).
+        let held = ended || plan.speed(tau) >= STALLED_SPEED;
         let to_a_place = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }));
-        if !to_a_place || !ended || !standing {
+        if !to_a_place || !standing || !held {
             self.held_since = None;
             return None;
         }
@@ -624,7 +664,29 @@ impl Walk {
         self.held_since = Some(self.t);
         let here = *crowd.positions.get(ctx.actor)?;
         let end = self.end_sample(plan).position;
+        if let Some(new) = self.end_here(ctx, (here, end)) {
+            return Some(new);
+        }
+        if !ended {
+            return None;
+        }
         self.another_place(ctx, (here, end), HELD_MARGIN)
+    }
+
+    /// A plan that ends at `here`, where the body stands, facing the object or the actor
+    /// the walk goes to, if that is as good a place as its standing point `end`
+    /// ([`goal::Goal::stand_here`]); `None` leaves the plan as it is.
+    fn end_here(&mut self, ctx: &GeneratorContext, (here, end): (DVec2, DVec2)) -> Option<Plan> {
+        let Route::Path { speed, .. } = self.route else {
+            return None;
+        };
+        let planned = self
+            .goal
+            .as_ref()?
+            .stand_here(ctx, (here, end), self.radius)?;
+        self.route = self.route_to(planned, speed);
+        self.steer.restart();
+        Some(Plan::new(&self.route, here, self.heading))
     }
 
     /// A new plan to where the actor this walk goes to now stands, when it has moved
@@ -1148,8 +1210,7 @@ impl Walk {
             if roll.is_none() && lambda >= HEEL_OFF * sigma {
                 let landing = self.plan_landing(around, plan, leg, lambda, plant);
                 self.hold_for(&landing);
-                let still =
-                    (landing.plant - plant).length() < 0.01 && wrap(landing.yaw - yaw).abs() < 0.05;
+                let still = self.stays_at(plant, yaw, (landing.plant, landing.yaw));
                 self.feet[leg] = Foot::Stance {
                     plant,
                     yaw,
@@ -1169,9 +1230,7 @@ impl Walk {
                     _ => self.plan_landing(around, plan, leg, lambda, plant),
                 };
                 self.hold_for(&to);
-                let in_place = (to.plant - plant).length() < 0.01
-                    && wrap(to.yaw - yaw).abs() < 0.05
-                    && pose.pitch == 0.0;
+                let in_place = self.stays_at(plant, yaw, (to.plant, to.yaw)) && pose.pitch == 0.0;
                 if in_place {
                     // Already where it should land (a foot that started where the walk
                     // ends, or one staying down whose landing has not moved): it stays
@@ -1766,6 +1825,7 @@ impl Generator for Walk {
         let root = DVec3::new(start.x, 0.0, start.y);
         self.carrying = carry::Carrying::start(ctx, carry::heading_frame(root, heading), floor);
         self.settle_since = None;
+        self.ended_since = None;
         self.progress = None;
         self.stopped_at = None;
         self.twist = [None; 2];
@@ -1814,6 +1874,12 @@ impl Generator for Walk {
         // followed (following, one went on 1.96 m after `stop()`).
         let planning = self.stopped_at.is_none();
         if let Some(footprints) = &footprints {
+            let circle = self
+                .goal
+                .as_ref()
+                .and_then(|g| g.circle_kept_out_of(ctx, self.radius));
+            let at = crowd.positions.get(ctx.actor).copied().unwrap_or_default();
+            self.steer.keep_out_of(circle, (at, self.radius));
             let (t, near) = (self.t, (&mut self.near, &mut self.scratch));
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
             if self.steer.engaged && matches!(self.route, Route::Path { .. }) {
@@ -1830,7 +1896,7 @@ impl Generator for Walk {
             if let Some(new) = self.follow_actor(ctx, &plan) {
                 plan = new;
             }
-            if let Some(new) = self.held_at_its_end(ctx, &plan) {
+            if let Some(new) = self.held(ctx, &plan) {
                 plan = new;
             }
         }
@@ -1921,13 +1987,13 @@ impl Generator for Walk {
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
         if self.steer.plan_time(self.t, self.t) >= plan.end_time {
+            self.ended_since.get_or_insert(self.t);
             let end = self.end_sample(&plan);
             let settled = (0..2).all(|leg| match self.feet[leg] {
                 // Its heading too: a turn larger than a step takes more steps.
                 Foot::Stance { plant, yaw, .. } => {
-                    (plant - self.spot(&around, leg, &end, 1.0, 0.0).0).length() < 0.01
-                        && self.poses[leg].pitch == 0.0
-                        && wrap(yaw - end.heading).abs() < 0.05
+                    let spot = self.spot(&around, leg, &end, 1.0, 0.0).0;
+                    self.stays_at(plant, yaw, (spot, end.heading)) && self.poses[leg].pitch == 0.0
                 }
                 Foot::Swing { .. } => false,
             });
@@ -1937,6 +2003,8 @@ impl Generator for Walk {
             } else {
                 self.settle_since = None;
             }
+        } else {
+            self.ended_since = None;
         }
         if let Some(stopped_at) = self.stopped_at {
             // A walk held where it stands (its plan's clock, or its body, held by someone in

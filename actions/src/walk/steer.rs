@@ -17,7 +17,7 @@ use super::route::{direction, Plan, RootSample};
 use super::standoff::Standoff;
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{
-    choose_velocity, wait_line, Agent, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
+    choose_velocity, wait_line, Agent, Footprint, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
 };
 use troupe_scene::GeneratorContext;
 
@@ -40,6 +40,9 @@ const WAIT_BRAKING: f64 = 0.6;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
+/// How far (m) the centre of the disc a walk keeps out of moves, or its radius changes,
+/// before the disc is made again (see [`Steer::keep_out_of`]).
+const KEEP_OUT_MOVED: f64 = 0.02;
 /// Within this gap (m) between the disc and an obstacle, the sideways drift may not go
 /// towards it.
 const WALL_GUARD: f64 = 0.02;
@@ -88,6 +91,9 @@ pub struct Steer {
     /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
     /// past it.
     tau_before: f64,
+    /// A disc (centre, radius) avoidance keeps the body out of, as it does the obstacles,
+    /// and its footprint (see [`Steer::keep_out_of`]).
+    keep_out: Option<((DVec2, f64), Footprint)>,
 }
 
 impl Steer {
@@ -191,6 +197,27 @@ impl Steer {
         self.offset += by - forward * along;
     }
 
+    /// Keeps the body out of the disc `circle` (centre, radius) from now on, as avoidance
+    /// keeps it out of the obstacles, or out of none: a walk to an actor keeps out of the
+    /// circle it is to stand on (a crowd gathering round a performer: those going round
+    /// the first row to a free place sidestepped into the ring, between the performer
+    /// and the first row, and stood there for good). Not while the body is inside it.
+    pub fn keep_out_of(&mut self, circle: Option<(DVec2, f64)>, body: (DVec2, f64)) {
+        let outside = |&(centre, radius): &(DVec2, f64)| body.0.distance(centre) > radius + body.1;
+        let Some((centre, radius)) = circle.filter(outside) else {
+            self.keep_out = None;
+            return;
+        };
+        // Made again only once the other has moved (a footprint is a polygon).
+        let moved = self.keep_out.as_ref().is_none_or(|((c, r), _)| {
+            c.distance(centre) > KEEP_OUT_MOVED || (r - radius).abs() > KEEP_OUT_MOVED
+        });
+        if moved {
+            let disc = Footprint::disc("the ring round the one it goes to", centre, radius);
+            self.keep_out = Some(((centre, radius), disc));
+        }
+    }
+
     /// Follows a new plan from its start, which is where the body is now (a new route
     /// taken mid-walk, see [`super::replan`]): the offset is gone, the drift carries on.
     pub fn restart(&mut self) {
@@ -198,7 +225,7 @@ impl Steer {
     }
 
     /// Starts steering at plan time `tau`, on the plan (no offset), at its full rate and
-    /// with `drift`; the companions and the last decision carry on.
+    /// with `drift`; the companions, the last decision and the disc kept out of carry on.
     pub(super) fn engage(&mut self, tau: f64, drift: DVec2) {
         *self = Steer {
             engaged: true,
@@ -211,6 +238,7 @@ impl Steer {
             target: (1.0, drift),
             tau_before: tau,
             standoff: Standoff::default(),
+            keep_out: self.keep_out.take(),
         };
     }
 
@@ -386,7 +414,8 @@ impl Steer {
             return;
         }
         let (v, free) = if self.engaged {
-            let obstacles = footprints.within(OBSTACLE_RANGE);
+            let ring = self.keep_out.as_ref().map(|(_, disc)| disc);
+            let obstacles = footprints.within(OBSTACLE_RANGE).chain(ring);
             choose_velocity(body, preferred, agents, obstacles)
         } else {
             choose_velocity(body, preferred, agents, [])
