@@ -72,7 +72,7 @@ const ACTOR_ROWS: f64 = 1.5;
 const ROW_STEP: f64 = 0.1;
 /// How much nearer or further (m) than asked from an object or an actor a walk held on
 /// its way may stand and end there (see [`Goal::stand_here`]).
-const AS_GOOD: f64 = 0.1;
+pub const AS_GOOD: f64 = 0.1;
 
 /// A planned route: the floor points after the start, and the heading to end with.
 pub struct Planned {
