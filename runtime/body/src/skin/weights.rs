@@ -56,9 +56,12 @@ const MOST_EDGES: f64 = 7.745_966_692_414_834;
 /// 2 did worse for the smallest child. Raised later to 1.55 (with [`UPPER_ARM`] and
 /// [`NECK_ROOT`]): the hips' and the pelvis's inverted triangles in the skin test (summed
 /// over its six sizes' 50 full-range postures) went from 17 to 14, all of them from 46
-/// to 43 (1.4: 49; 1.6, 1.65 and 1.7 alike: 40, where [`SMOOTHING_ROUNDS`] caps the
-/// widest vertices' smoothing, so that those would need more rounds).
-pub(crate) const WIDER: f64 = 1.55;
+/// to 43 (1.4: 49); 1.6, 1.65 and 1.7 alike gave 40, because [`SMOOTHING_ROUNDS`] capped
+/// the widest vertices' smoothing. With the rounds they lack run for them alone
+/// (`diffuse`), 1.65 took the hips and the pelvis to 8 and all of them to 37, every size
+/// fewer or as many; 1.6 and 1.68 gave 38, 1.7 40 (the 1.38 m child's worst posture one
+/// worse), 1.85 and 2 gave 53 and 85 (the lower belly folding).
+pub(crate) const WIDER: f64 = 1.65;
 /// How much narrower the bands are at the root of the neck and the chest beside it (the
 /// joints given this `band`): a child's neck is short, and smoothed over the usual length
 /// the head's weight (skullbase) reached the top of the shoulders, where a head turned
@@ -83,7 +86,10 @@ pub(crate) const UPPER_ARM: f64 = 1.4;
 /// one more than before), 0.8 alone failed the test (24 over the 1.20 m child's 50).
 pub(crate) const NECK_ROOT: f64 = 0.7;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
-/// neighbours' mean; enough for the widest band ((WIDER × MOST_EDGES)² = 144).
+/// neighbours' mean, so they reach √150 edge lengths; the few vertices that ask for more
+/// ((WIDER × MOST_EDGES)² = 163 at the groin) get the rounds they lack alone (`diffuse`).
+/// 200 rounds for every vertex moved every vertex's weights a little, and the folds
+/// elsewhere with them.
 const SMOOTHING_ROUNDS: usize = 150;
 
 /// Weights under this (after smoothing, in a normalised row) are dropped, continuously:
@@ -353,6 +359,12 @@ struct Smoothing {
 /// repeated averaging grows as the square root of the rounds times the step, in edge
 /// lengths). Rows stay convex combinations of the rows before, so they keep summing to
 /// one.
+///
+/// A step cannot go past the neighbours' mean, so [`SMOOTHING_ROUNDS`] reach at most
+/// √150 edges. The vertices that ask for more (the widest of the groin's bands,
+/// [`WIDER`]) go on alone for as many more rounds at a whole step as they lack, the
+/// others holding the weights they have after [`SMOOTHING_ROUNDS`]: their weights are
+/// the same as if no vertex asked for more, and the wide bands reach as far as asked.
 fn diffuse(rows: &mut [Row], positions: &[DVec3], indices: &[u32], smoothing: &[Smoothing]) {
     let n = positions.len();
     let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
@@ -361,7 +373,9 @@ fn diffuse(rows: &mut [Row], positions: &[DVec3], indices: &[u32], smoothing: &[
             around[a as usize].push(b);
         }
     }
-    let step: Vec<f64> = (0..n)
+    // How many rounds' worth of whole steps each vertex asks for: the square of its
+    // smoothing in edge lengths.
+    let asked: Vec<f64> = (0..n)
         .map(|v| {
             let edges = &around[v];
             let mean_edge = edges
@@ -371,33 +385,55 @@ fn diffuse(rows: &mut [Row], positions: &[DVec3], indices: &[u32], smoothing: &[
                 / edges.len().max(1) as f64;
             let Smoothing { length, most_edges } = smoothing[v];
             let edges = (length / mean_edge.max(1e-9)).min(most_edges);
-            (edges * edges / SMOOTHING_ROUNDS as f64).min(1.0)
+            edges * edges
         })
         .collect();
+    let rounds = SMOOTHING_ROUNDS as f64;
+    let step: Vec<f64> = asked.iter().map(|&a| (a / rounds).min(1.0)).collect();
     let mut next: Vec<Row> = rows.to_vec();
     for _ in 0..SMOOTHING_ROUNDS {
         for (v, out) in next.iter_mut().enumerate() {
-            if around[v].is_empty() {
-                continue;
-            }
-            let k = step[v] / around[v].len() as f64;
-            out.clear();
-            out.extend(rows[v].iter().map(|&(j, w)| (j, w * (1.0 - step[v]))));
-            for &u in &around[v] {
-                for &(j, w) in &rows[u as usize] {
-                    match out.iter_mut().find(|(i, _)| *i == j) {
-                        Some((_, sum)) => *sum += w * k,
-                        None => out.push((j, w * k)),
-                    }
-                }
-            }
-            // Far from its joint a weight thins out to nothing: dropping it when it is
-            // negligible keeps the rows short (they would gather every joint within
-            // sixty rings) and changes no weight by more than a ten-thousandth.
-            out.retain(|&(_, w)| w >= NEGLIGIBLE);
+            average(rows, &around[v], v, step[v], out);
         }
         rows.clone_from_slice(&next);
     }
+    // The vertices that asked for more, each going on until it has had what it asked.
+    let wide: Vec<usize> = (0..n).filter(|&v| asked[v] > rounds).collect();
+    let most = wide.iter().map(|&v| asked[v]).fold(rounds, f64::max);
+    for round in SMOOTHING_ROUNDS..most.ceil() as usize {
+        for &v in &wide {
+            let step = (asked[v] - round as f64).clamp(0.0, 1.0);
+            let mut out = std::mem::take(&mut next[v]);
+            average(rows, &around[v], v, step, &mut out);
+            next[v] = out;
+        }
+        for &v in &wide {
+            rows[v].clone_from(&next[v]);
+        }
+    }
+}
+
+/// Into `out`, vertex `v`'s row of `rows` moved by `step` (0 to 1) towards the mean of
+/// its neighbours' (`around`).
+fn average(rows: &[Row], around: &[u32], v: usize, step: f64, out: &mut Row) {
+    if around.is_empty() {
+        return;
+    }
+    let k = step / around.len() as f64;
+    out.clear();
+    out.extend(rows[v].iter().map(|&(j, w)| (j, w * (1.0 - step))));
+    for &u in around {
+        for &(j, w) in &rows[u as usize] {
+            match out.iter_mut().find(|(i, _)| *i == j) {
+                Some((_, sum)) => *sum += w * k,
+                None => out.push((j, w * k)),
+            }
+        }
+    }
+    // Far from its joint a weight thins out to nothing: dropping it when it is
+    // negligible keeps the rows short (they would gather every joint within
+    // sixty rings) and changes no weight by more than a ten-thousandth.
+    out.retain(|&(_, w)| w >= NEGLIGIBLE);
 }
 
 /// The near weights of a vertex at rest position `p`, (joint, weight) pairs not
@@ -701,6 +737,47 @@ mod tests {
             })
             .collect();
         (positions, indices)
+    }
+
+    #[test]
+    fn vertices_asking_for_more_than_the_rounds_reach_get_it_alone() {
+        // A step at x = 0.3 m on a strip of 1 cm edges; the vertices right of it ask for
+        // a smoothing of `right`, those left of it for 5 cm.
+        let (positions, indices) = strip(60);
+        let smooth = |right: f64| -> Vec<Row> {
+            let mut rows: Vec<Row> = positions
+                .iter()
+                .map(|p| vec![(if p.x < 0.3 { 1 } else { 2 }, 1.0)])
+                .collect();
+            let smoothing: Vec<Smoothing> = positions
+                .iter()
+                .map(|p| Smoothing {
+                    length: if p.x < 0.3 { 0.05 } else { right },
+                    most_edges: f64::INFINITY,
+                })
+                .collect();
+            diffuse(&mut rows, &positions, &indices, &smoothing);
+            rows
+        };
+        // Both further than the rounds reach (the mean edge, diagonals included, is
+        // longer than 1 cm), the second twice as far as the first.
+        let reach = 0.015 * (SMOOTHING_ROUNDS as f64).sqrt();
+        let (capped, wider) = (smooth(reach), smooth(2.0 * reach));
+        let weight_of_1 = |row: &Row| row.iter().find(|(j, _)| *j == 1).map_or(0.0, |r| r.1);
+        for (v, p) in positions.iter().enumerate() {
+            if p.x < 0.3 {
+                // The others' weights are the same however far the wide side reaches.
+                assert_eq!(capped[v], wider[v], "at {p}");
+            } else if (0.35..0.5).contains(&p.x) {
+                // The wide side's ramp reaches further.
+                assert!(
+                    weight_of_1(&wider[v]) > weight_of_1(&capped[v]) + 1e-3,
+                    "at {p}"
+                );
+            }
+            let sum: f64 = wider[v].iter().map(|(_, w)| w).sum();
+            assert!((sum - 1.0).abs() < 5e-3, "{:?}", wider[v]);
+        }
     }
 
     #[test]
