@@ -68,7 +68,8 @@ pub(crate) const WIDER: f64 = 1.65;
 /// 45° or an arm raised folded the skin between five joints. 0.6 took the triangles
 /// turned over at half ranges, summed over the skin test's six sizes and 50 postures,
 /// from 97 to 1, and at full ranges from 1,799 to 1,098; 0.45 and 0.75 did a little worse,
-/// vc4 and the skullbase without vt1 (or vt1 alone) much less.
+/// vc4 and the skullbase without vt1 (or vt1 alone) much less. vc4 now has its own,
+/// narrower still ([`NECK`]).
 pub(crate) const NARROWER: f64 = 0.6;
 /// How much wider the bands are at the upper arms (the shoulders' volumes): a little less
 /// than the groin's [`WIDER`]. 1.5 (the groin's) was set before the skin was made in the
@@ -80,11 +81,20 @@ pub(crate) const NARROWER: f64 = 0.6;
 /// 0.96 m child's worst posture).
 pub(crate) const UPPER_ARM: f64 = 1.4;
 /// How narrow the band is at vt1, the root of the neck: a little wider than the
-/// [`NARROWER`] of vc4, the skullbase and the clavicles. With [`UPPER_ARM`] it took vt1's
+/// [`NARROWER`] of the skullbase and the clavicles (vc4's was that too, then). With [`UPPER_ARM`] it took vt1's
 /// inverted triangles in the skin test from 23 (at 0.6) to 16 and all of them from 57 to
 /// 46; 0.65 and 0.75 gave 50 and 51 (0.75 leaves the 1.38 m child's worst posture at 3,
 /// one more than before), 0.8 alone failed the test (24 over the 1.20 m child's 50).
 pub(crate) const NECK_ROOT: f64 = 0.7;
+/// How narrow the band is at vc4, the neck (its volume): narrower than the [`NARROWER`]
+/// of the skullbase and the clavicles, so that less of vc4's turn reaches the root of the
+/// neck, where vt1, vc4, a clavicle and the head's helper share the skin and a neck bent
+/// and twisted 30-35° with a clavicle raised to its 40° folded it. In the skin test
+/// (six sizes' 50 full-range postures, the groin at [`WIDER`]) it took vt1's inverted
+/// triangles from 16 to 11 and all of them from 37 to 32, every size fewer or as many;
+/// 0.4 and 0.5 gave 31 and 32 (0.4 one more for the 2.01 m adult), 0.35 33, 0.3 47,
+/// 0.55 35, 0.7 51.
+pub(crate) const NECK: f64 = 0.45;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
 /// neighbours' mean, so they reach √150 edge lengths; the few vertices that ask for more
 /// ((WIDER × MOST_EDGES)² = 163 at the groin) get the rounds they lack alone (`diffuse`).
@@ -108,7 +118,7 @@ type Row = Vec<(u16, f64)>;
 /// The weights of every vertex of a closed surface (bind-pose positions `positions`,
 /// triangles `indices`); `band` scales the smoothing's length and cap for the vertices
 /// whose nearest volume is each joint's ([`WIDER`], [`UPPER_ARM`], [`NARROWER`],
-/// [`NECK_ROOT`] or 1).
+/// [`NECK_ROOT`], [`NECK`] or 1).
 pub(crate) fn skin_weights(
     positions: &[DVec3],
     indices: &[u32],
