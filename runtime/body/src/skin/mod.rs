@@ -90,6 +90,8 @@ const UPPER_ARM_BANDS: [&str; 2] = ["l_shoulder", "r_shoulder"];
 /// bands there instead failed the test. vt1's own band is now a little wider than these
 /// (`weights::NECK_ROOT`, 0.7 ×), and vc4's narrower (`weights::NECK`, 0.45 ×).
 const NARROWER_BANDS: [&str; 3] = ["skullbase", "l_sternoclavicular", "r_sternoclavicular"];
+/// The palms (the wrists' volumes), whose bands are `weights::PALM` wide.
+const PALM_BANDS: [&str; 2] = ["l_wrist", "r_wrist"];
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -263,6 +265,8 @@ impl Skin {
                     weights::WIDER
                 } else if UPPER_ARM_BANDS.contains(&name) {
                     weights::UPPER_ARM
+                } else if PALM_BANDS.contains(&name) {
+                    weights::PALM
                 } else if NARROWER_BANDS.contains(&name) {
                     weights::NARROWER
                 } else if name == "vt1" {

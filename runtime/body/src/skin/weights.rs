@@ -95,6 +95,14 @@ pub(crate) const NECK_ROOT: f64 = 0.7;
 /// 0.4 and 0.5 gave 31 and 32 (0.4 one more for the 2.01 m adult), 0.35 33, 0.3 47,
 /// 0.55 35, 0.7 51.
 pub(crate) const NECK: f64 = 0.45;
+/// How much wider the bands are at the palms (the wrists' volumes): the knuckles'
+/// bands reach further into the palm, and the forearm's (the elbow's) weight no longer
+/// reaches a small hand's knuckles, where a little finger bent 64-84° with the wrist
+/// bent back 55-70° folded the skin. In the skin test (six sizes' 50 full-range
+/// postures, with [`WIDER`] and [`NECK`]) it took the hands' inverted triangles from 10
+/// to 7 and all of them from 32 to 29, every size fewer or as many; 1.4 and 1.6 gave the
+/// same, 1.2 and 1.3 8 at the hands, 2 8, 0.8 14.
+pub(crate) const PALM: f64 = 1.5;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
 /// neighbours' mean, so they reach √150 edge lengths; the few vertices that ask for more
 /// ((WIDER × MOST_EDGES)² = 163 at the groin) get the rounds they lack alone (`diffuse`).
@@ -118,7 +126,7 @@ type Row = Vec<(u16, f64)>;
 /// The weights of every vertex of a closed surface (bind-pose positions `positions`,
 /// triangles `indices`); `band` scales the smoothing's length and cap for the vertices
 /// whose nearest volume is each joint's ([`WIDER`], [`UPPER_ARM`], [`NARROWER`],
-/// [`NECK_ROOT`], [`NECK`] or 1).
+/// [`NECK_ROOT`], [`NECK`], [`PALM`] or 1).
 pub(crate) fn skin_weights(
     positions: &[DVec3],
     indices: &[u32],
