@@ -299,6 +299,8 @@ impl Skin {
                     weights::TWIST_SPAN
                 }
             },
+            // Nor does the head's weight reach the root of the neck.
+            |j| (joints[j].name == "skullbase").then_some(weights::HEAD_FLOOR),
         );
         let (joints, weights) =
             weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &band)

@@ -175,6 +175,10 @@ struct Chain {
     bone: (DVec3, DVec3),
     /// Where along the bone the ladder runs (see [`TWIST_SPAN`]).
     span: (f64, f64),
+    /// Where the joint's weight gives way to its parent's below the parent (see
+    /// [`HEAD_FLOOR`]): the parent, its place at rest, and the span as fractions of the
+    /// way from the joint down to the parent.
+    floor: Option<(u16, DVec3, (f64, f64))>,
 }
 
 /// Where along its bone (0 at the joint, 1 at the child) a vertex starts to take the
@@ -192,13 +196,29 @@ pub(crate) const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
 /// the neck (from 30 % below to 10 % below, or 50 % to 20 %), the band folded: 105
 /// triangles over the 1.40 m adult's 50 postures alone, 13 at its worst posture.
 pub(crate) const HEAD_SPAN: (f64, f64) = (-0.1, 0.05);
+/// How far down the neck the head's weight (the skullbase's, before its helper takes
+/// it) reaches, as fractions of the way from the skullbase down to vc4: all of it above
+/// 0.9 of the way, none below 1.6 (below vc4, a little past halfway to vt1), vc4 taking
+/// it in between. A child's neck is short, and smoothed over the surface the head's
+/// weight reached the root of the neck (13-25 % of the skin beside it, where vt1, vc4
+/// and a clavicle share it): a head turned 48° and tilted 30° swung that skin by its
+/// distance from the skullbase against its neighbours, with the neck bent and a
+/// clavicle raised. In the skin test (six sizes' 50 full-range postures, with
+/// [`WIDER`](super::weights::WIDER), [`NECK`] and [`PALM`]) it took the inverted
+/// triangles at the root of the neck (vt1) from 11 to none and all of them from 29 to
+/// 19; 0.9 to 1.5 gave 19, 0.9 to 1.4 20, 0.85 or 1.0 to 1.5 21, 1.1 to 1.5 27,
+/// 0.75 to 1.5 28 (the band in the neck folding), 1.0 to 2.0 25. Measured in the head's
+/// height instead, as [`HEAD_SPAN`] is (from 60 % to 30 % of it below the skullbase),
+/// 23: the children's vc4 lies higher in those terms (28 % below, the adults' 39 %).
+pub(crate) const HEAD_FLOOR: (f64, f64) = (0.9, 1.6);
 
 impl Chains {
     /// The chains of `helpers`, whose slots start at `first_slot` (the number of joints),
     /// each with `ends` joints at its parent's end: the helped joint's parent and its next
     /// ancestors (`parent_of` gives a joint's parent); `bone` gives a helped joint's bone
     /// at rest, from the joint to its child, and `span` where along it the ladder runs
-    /// ([`TWIST_SPAN`], [`HEAD_SPAN`]). At the shoulder the armpit is shared between
+    /// ([`TWIST_SPAN`], [`HEAD_SPAN`]), and `floor` how far below the joint its weight
+    /// reaches ([`HEAD_FLOOR`]; `None`: as smoothed). At the shoulder the armpit is shared between
     /// the arm and the chest (vt1, vt6), which are the clavicle's ancestors: counted at
     /// the chain's parent end, their share of an armpit vertex blends with the arm's
     /// through helpers a quarter of the bend apart, instead of a straight blend of the
@@ -211,6 +231,7 @@ impl Chains {
         parent_of: impl Fn(usize) -> Option<usize>,
         bone: impl Fn(usize) -> (DVec3, DVec3),
         span: impl Fn(usize) -> (f64, f64),
+        floor: impl Fn(usize) -> Option<(f64, f64)>,
     ) -> Chains {
         let mut chains: Vec<Chain> = Vec::new();
         for (i, h) in helpers.iter().enumerate() {
@@ -229,6 +250,7 @@ impl Chains {
                         ladder: Vec::new(),
                         bone: bone(h.joint),
                         span: span(h.joint),
+                        floor: floor(h.joint).map(|f| (h.parent as u16, bone(h.parent).0, f)),
                     });
                     chains.last_mut().expect("just pushed")
                 }
@@ -259,6 +281,26 @@ impl Chains {
     /// proportion to its partner's weight in each, so the routing is continuous over the
     /// surface: where a partner's weight fades to nothing its chain's share does too.
     fn route(&self, row: &Row, p: DVec3) -> Row {
+        // Below its floor a joint's weight is its parent's.
+        let mut floored: Row = row.clone();
+        for c in &self.0 {
+            let Some((parent, parent_at, (from, to))) = c.floor else {
+                continue;
+            };
+            let Some(at) = floored.iter().position(|&(j, _)| j == c.joint) else {
+                continue;
+            };
+            let down = (c.bone.1 - c.bone.0).normalize();
+            let way = (p - c.bone.0).dot(down) / (parent_at - c.bone.0).dot(down);
+            let keep = ((to - way) / (to - from)).clamp(0.0, 1.0);
+            if keep < 1.0 {
+                let w = floored[at].1;
+                floored[at].1 = w * keep;
+                add(&mut floored, parent, w * (1.0 - keep));
+                floored.retain(|&(_, w)| w > 0.0);
+            }
+        }
+        let row = &floored;
         let weight = |j: u16| row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
         let end_weight = |c: &Chain| c.parents.iter().map(|&p| weight(p)).sum::<f64>();
         let mut partners: Row = Vec::new();
@@ -588,6 +630,7 @@ mod tests {
             |_| None,
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         )
     }
 
@@ -654,6 +697,7 @@ mod tests {
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         );
         // The parent's end holds 0.9 (0.3 from joint 1, 0.6 from joint 0): the joint's
         // share 0.1 lies between the start (the end's two joints) and the first helper.
@@ -689,6 +733,7 @@ mod tests {
             |_| None,
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         );
         let at = |along: f64| chains.route(&vec![(2, 1.0)], DVec3::new(0.02, -along, 0.0));
         let (from, to) = TWIST_SPAN;
@@ -730,6 +775,7 @@ mod tests {
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         );
         let at =
             |along: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -along, 0.0));
@@ -741,6 +787,48 @@ mod tests {
         let row = at(0.5 * (from + to));
         assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
         assert!((weight_in(&row, 2) - 0.3).abs() < 1e-12, "{row:?}");
+    }
+
+    #[test]
+    fn below_its_floor_a_joints_weight_goes_to_its_parent() {
+        // Joint 2 (parent 1, 1 m below it) with one sliding helper (slot 10); its bone
+        // runs 1 m up; its weight gives way to the parent's from 0.5 to 1.5 of the way
+        // down to the parent, which is at rest 1 m down.
+        let slide = Helper {
+            twist: 1.0,
+            pivot: 0.05,
+            ..across(2, 1.0)
+        };
+        let chains = Chains::new(
+            &[slide],
+            10,
+            1,
+            |_| None,
+            |j| {
+                if j == 2 {
+                    (DVec3::ZERO, DVec3::Y)
+                } else {
+                    (DVec3::NEG_Y, DVec3::ZERO)
+                }
+            },
+            |_| TWIST_SPAN,
+            |j| (j == 2).then_some((0.5, 1.5)),
+        );
+        let at = |down: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -down, 0.0));
+        // Above the floor the joint's weight goes to its helper; below, to the parent.
+        assert_eq!(at(0.4), vec![(1, 0.4), (10, 0.6)]);
+        assert_eq!(at(1.6), vec![(1, 1.0)]);
+        let row = at(1.0);
+        assert!((weight_in(&row, 1) - 0.7).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
+        // Continuous, and summing to one.
+        for k in 0..200 {
+            let (a, b) = (at(k as f64 * 0.01), at(k as f64 * 0.01 + 1e-9));
+            for slot in [1, 2, 10] {
+                assert!((weight_in(&a, slot) - weight_in(&b, slot)).abs() < 1e-6);
+            }
+            assert!((a.iter().map(|(_, w)| w).sum::<f64>() - 1.0).abs() < 1e-12);
+        }
     }
 
     /// A strip of `n` squares along x, 1 cm wide, as triangles.
