@@ -22,7 +22,8 @@
 //!    twist helpers, by how far along the bone the vertex lies ([`TWIST_SPAN`]). At the
 //!    hips, knees, elbows, vc4 and the skullbase the joint's weight near the joint goes
 //!    likewise to its sliding helper, and back to the joint further down the limb (up
-//!    the neck; under the jaw, [`HEAD_SPAN`]).
+//!    the neck; under the jaw, [`HEAD_SPAN`]). First, below vc4 the head's weight gives
+//!    way to vc4's ([`HEAD_FLOOR`]), so that none of it reaches the root of the neck.
 //! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
