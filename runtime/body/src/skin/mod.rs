@@ -88,13 +88,10 @@ const UPPER_ARM_BANDS: [&str; 2] = ["l_shoulder", "r_shoulder"];
 /// in the skin test's 50 full-range postures, summed over its six sizes, went from 307 to
 /// 115 (all of them from 1,098 to 922, the worst posture of each size unchanged); wider
 /// bands there instead failed the test. vt1's own band is now a little wider than these
-/// (`weights::NECK_ROOT`, 0.7 ×).
-const NARROWER_BANDS: [&str; 4] = [
-    "vc4",
-    "skullbase",
-    "l_sternoclavicular",
-    "r_sternoclavicular",
-];
+/// (`weights::NECK_ROOT`, 0.7 ×), and vc4's narrower (`weights::NECK`, 0.45 ×).
+const NARROWER_BANDS: [&str; 3] = ["skullbase", "l_sternoclavicular", "r_sternoclavicular"];
+/// The palms (the wrists' volumes), whose bands are `weights::PALM` wide.
+const PALM_BANDS: [&str; 2] = ["l_wrist", "r_wrist"];
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -268,10 +265,14 @@ impl Skin {
                     weights::WIDER
                 } else if UPPER_ARM_BANDS.contains(&name) {
                     weights::UPPER_ARM
+                } else if PALM_BANDS.contains(&name) {
+                    weights::PALM
                 } else if NARROWER_BANDS.contains(&name) {
                     weights::NARROWER
                 } else if name == "vt1" {
                     weights::NECK_ROOT
+                } else if name == "vc4" {
+                    weights::NECK
                 } else {
                     1.0
                 }
@@ -298,6 +299,8 @@ impl Skin {
                     weights::TWIST_SPAN
                 }
             },
+            // Nor does the head's weight reach the root of the neck.
+            |j| (joints[j].name == "skullbase").then_some(weights::HEAD_FLOOR),
         );
         let (joints, weights) =
             weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &band)

@@ -22,7 +22,8 @@
 //!    twist helpers, by how far along the bone the vertex lies ([`TWIST_SPAN`]). At the
 //!    hips, knees, elbows, vc4 and the skullbase the joint's weight near the joint goes
 //!    likewise to its sliding helper, and back to the joint further down the limb (up
-//!    the neck; under the jaw, [`HEAD_SPAN`]).
+//!    the neck; under the jaw, [`HEAD_SPAN`]). First, below vc4 the head's weight gives
+//!    way to vc4's ([`HEAD_FLOOR`]), so that none of it reaches the root of the neck.
 //! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
@@ -56,16 +57,20 @@ const MOST_EDGES: f64 = 7.745_966_692_414_834;
 /// 2 did worse for the smallest child. Raised later to 1.55 (with [`UPPER_ARM`] and
 /// [`NECK_ROOT`]): the hips' and the pelvis's inverted triangles in the skin test (summed
 /// over its six sizes' 50 full-range postures) went from 17 to 14, all of them from 46
-/// to 43 (1.4: 49; 1.6, 1.65 and 1.7 alike: 40, where [`SMOOTHING_ROUNDS`] caps the
-/// widest vertices' smoothing, so that those would need more rounds).
-pub(crate) const WIDER: f64 = 1.55;
+/// to 43 (1.4: 49); 1.6, 1.65 and 1.7 alike gave 40, because [`SMOOTHING_ROUNDS`] capped
+/// the widest vertices' smoothing. With the rounds they lack run for them alone
+/// (`diffuse`), 1.65 took the hips and the pelvis to 8 and all of them to 37, every size
+/// fewer or as many; 1.6 and 1.68 gave 38, 1.7 40 (the 1.38 m child's worst posture one
+/// worse), 1.85 and 2 gave 53 and 85 (the lower belly folding).
+pub(crate) const WIDER: f64 = 1.65;
 /// How much narrower the bands are at the root of the neck and the chest beside it (the
 /// joints given this `band`): a child's neck is short, and smoothed over the usual length
 /// the head's weight (skullbase) reached the top of the shoulders, where a head turned
 /// 45° or an arm raised folded the skin between five joints. 0.6 took the triangles
 /// turned over at half ranges, summed over the skin test's six sizes and 50 postures,
 /// from 97 to 1, and at full ranges from 1,799 to 1,098; 0.45 and 0.75 did a little worse,
-/// vc4 and the skullbase without vt1 (or vt1 alone) much less.
+/// vc4 and the skullbase without vt1 (or vt1 alone) much less. vc4 now has its own,
+/// narrower still ([`NECK`]).
 pub(crate) const NARROWER: f64 = 0.6;
 /// How much wider the bands are at the upper arms (the shoulders' volumes): a little less
 /// than the groin's [`WIDER`]. 1.5 (the groin's) was set before the skin was made in the
@@ -77,13 +82,33 @@ pub(crate) const NARROWER: f64 = 0.6;
 /// 0.96 m child's worst posture).
 pub(crate) const UPPER_ARM: f64 = 1.4;
 /// How narrow the band is at vt1, the root of the neck: a little wider than the
-/// [`NARROWER`] of vc4, the skullbase and the clavicles. With [`UPPER_ARM`] it took vt1's
+/// [`NARROWER`] of the skullbase and the clavicles (vc4's was that too, then). With [`UPPER_ARM`] it took vt1's
 /// inverted triangles in the skin test from 23 (at 0.6) to 16 and all of them from 57 to
 /// 46; 0.65 and 0.75 gave 50 and 51 (0.75 leaves the 1.38 m child's worst posture at 3,
 /// one more than before), 0.8 alone failed the test (24 over the 1.20 m child's 50).
 pub(crate) const NECK_ROOT: f64 = 0.7;
+/// How narrow the band is at vc4, the neck (its volume): narrower than the [`NARROWER`]
+/// of the skullbase and the clavicles, so that less of vc4's turn reaches the root of the
+/// neck, where vt1, vc4, a clavicle and the head's helper share the skin and a neck bent
+/// and twisted 30-35° with a clavicle raised to its 40° folded it. In the skin test
+/// (six sizes' 50 full-range postures, the groin at [`WIDER`]) it took vt1's inverted
+/// triangles from 16 to 11 and all of them from 37 to 32, every size fewer or as many;
+/// 0.4 and 0.5 gave 31 and 32 (0.4 one more for the 2.01 m adult), 0.35 33, 0.3 47,
+/// 0.55 35, 0.7 51.
+pub(crate) const NECK: f64 = 0.45;
+/// How much wider the bands are at the palms (the wrists' volumes): the knuckles'
+/// bands reach further into the palm, and the forearm's (the elbow's) weight no longer
+/// reaches a small hand's knuckles, where a little finger bent 64-84° with the wrist
+/// bent back 55-70° folded the skin. In the skin test (six sizes' 50 full-range
+/// postures, with [`WIDER`] and [`NECK`]) it took the hands' inverted triangles from 10
+/// to 7 and all of them from 32 to 29, every size fewer or as many; 1.4 and 1.6 gave the
+/// same, 1.2 and 1.3 8 at the hands, 2 8, 0.8 14.
+pub(crate) const PALM: f64 = 1.5;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
-/// neighbours' mean; enough for the widest band ((WIDER × MOST_EDGES)² = 144).
+/// neighbours' mean, so they reach √150 edge lengths; the few vertices that ask for more
+/// ((WIDER × MOST_EDGES)² = 163 at the groin) get the rounds they lack alone (`diffuse`).
+/// 200 rounds for every vertex moved every vertex's weights a little, and the folds
+/// elsewhere with them.
 const SMOOTHING_ROUNDS: usize = 150;
 
 /// Weights under this (after smoothing, in a normalised row) are dropped, continuously:
@@ -102,7 +127,7 @@ type Row = Vec<(u16, f64)>;
 /// The weights of every vertex of a closed surface (bind-pose positions `positions`,
 /// triangles `indices`); `band` scales the smoothing's length and cap for the vertices
 /// whose nearest volume is each joint's ([`WIDER`], [`UPPER_ARM`], [`NARROWER`],
-/// [`NECK_ROOT`] or 1).
+/// [`NECK_ROOT`], [`NECK`], [`PALM`] or 1).
 pub(crate) fn skin_weights(
     positions: &[DVec3],
     indices: &[u32],
@@ -151,6 +176,10 @@ struct Chain {
     bone: (DVec3, DVec3),
     /// Where along the bone the ladder runs (see [`TWIST_SPAN`]).
     span: (f64, f64),
+    /// Where the joint's weight gives way to its parent's below the parent (see
+    /// [`HEAD_FLOOR`]): the parent, its place at rest, and the span as fractions of the
+    /// way from the joint down to the parent.
+    floor: Option<(u16, DVec3, (f64, f64))>,
 }
 
 /// Where along its bone (0 at the joint, 1 at the child) a vertex starts to take the
@@ -168,13 +197,29 @@ pub(crate) const TWIST_SPAN: (f64, f64) = (0.3, 0.8);
 /// the neck (from 30 % below to 10 % below, or 50 % to 20 %), the band folded: 105
 /// triangles over the 1.40 m adult's 50 postures alone, 13 at its worst posture.
 pub(crate) const HEAD_SPAN: (f64, f64) = (-0.1, 0.05);
+/// How far down the neck the head's weight (the skullbase's, before its helper takes
+/// it) reaches, as fractions of the way from the skullbase down to vc4: all of it above
+/// 0.9 of the way, none below 1.6 (below vc4, a little past halfway to vt1), vc4 taking
+/// it in between. A child's neck is short, and smoothed over the surface the head's
+/// weight reached the root of the neck (13-25 % of the skin beside it, where vt1, vc4
+/// and a clavicle share it): a head turned 48° and tilted 30° swung that skin by its
+/// distance from the skullbase against its neighbours, with the neck bent and a
+/// clavicle raised. In the skin test (six sizes' 50 full-range postures, with
+/// [`WIDER`](super::weights::WIDER), [`NECK`] and [`PALM`]) it took the inverted
+/// triangles at the root of the neck (vt1) from 11 to none and all of them from 29 to
+/// 19; 0.9 to 1.5 gave 19, 0.9 to 1.4 20, 0.85 or 1.0 to 1.5 21, 1.1 to 1.5 27,
+/// 0.75 to 1.5 28 (the band in the neck folding), 1.0 to 2.0 25. Measured in the head's
+/// height instead, as [`HEAD_SPAN`] is (from 60 % to 30 % of it below the skullbase),
+/// 23: the children's vc4 lies higher in those terms (28 % below, the adults' 39 %).
+pub(crate) const HEAD_FLOOR: (f64, f64) = (0.9, 1.6);
 
 impl Chains {
     /// The chains of `helpers`, whose slots start at `first_slot` (the number of joints),
     /// each with `ends` joints at its parent's end: the helped joint's parent and its next
     /// ancestors (`parent_of` gives a joint's parent); `bone` gives a helped joint's bone
     /// at rest, from the joint to its child, and `span` where along it the ladder runs
-    /// ([`TWIST_SPAN`], [`HEAD_SPAN`]). At the shoulder the armpit is shared between
+    /// ([`TWIST_SPAN`], [`HEAD_SPAN`]), and `floor` how far below the joint its weight
+    /// reaches ([`HEAD_FLOOR`]; `None`: as smoothed). At the shoulder the armpit is shared between
     /// the arm and the chest (vt1, vt6), which are the clavicle's ancestors: counted at
     /// the chain's parent end, their share of an armpit vertex blends with the arm's
     /// through helpers a quarter of the bend apart, instead of a straight blend of the
@@ -187,6 +232,7 @@ impl Chains {
         parent_of: impl Fn(usize) -> Option<usize>,
         bone: impl Fn(usize) -> (DVec3, DVec3),
         span: impl Fn(usize) -> (f64, f64),
+        floor: impl Fn(usize) -> Option<(f64, f64)>,
     ) -> Chains {
         let mut chains: Vec<Chain> = Vec::new();
         for (i, h) in helpers.iter().enumerate() {
@@ -205,6 +251,7 @@ impl Chains {
                         ladder: Vec::new(),
                         bone: bone(h.joint),
                         span: span(h.joint),
+                        floor: floor(h.joint).map(|f| (h.parent as u16, bone(h.parent).0, f)),
                     });
                     chains.last_mut().expect("just pushed")
                 }
@@ -235,6 +282,26 @@ impl Chains {
     /// proportion to its partner's weight in each, so the routing is continuous over the
     /// surface: where a partner's weight fades to nothing its chain's share does too.
     fn route(&self, row: &Row, p: DVec3) -> Row {
+        // Below its floor a joint's weight is its parent's.
+        let mut floored: Row = row.clone();
+        for c in &self.0 {
+            let Some((parent, parent_at, (from, to))) = c.floor else {
+                continue;
+            };
+            let Some(at) = floored.iter().position(|&(j, _)| j == c.joint) else {
+                continue;
+            };
+            let down = (c.bone.1 - c.bone.0).normalize();
+            let way = (p - c.bone.0).dot(down) / (parent_at - c.bone.0).dot(down);
+            let keep = ((to - way) / (to - from)).clamp(0.0, 1.0);
+            if keep < 1.0 {
+                let w = floored[at].1;
+                floored[at].1 = w * keep;
+                add(&mut floored, parent, w * (1.0 - keep));
+                floored.retain(|&(_, w)| w > 0.0);
+            }
+        }
+        let row = &floored;
         let weight = |j: u16| row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
         let end_weight = |c: &Chain| c.parents.iter().map(|&p| weight(p)).sum::<f64>();
         let mut partners: Row = Vec::new();
@@ -353,6 +420,12 @@ struct Smoothing {
 /// repeated averaging grows as the square root of the rounds times the step, in edge
 /// lengths). Rows stay convex combinations of the rows before, so they keep summing to
 /// one.
+///
+/// A step cannot go past the neighbours' mean, so [`SMOOTHING_ROUNDS`] reach at most
+/// √150 edges. The vertices that ask for more (the widest of the groin's bands,
+/// [`WIDER`]) go on alone for as many more rounds at a whole step as they lack, the
+/// others holding the weights they have after [`SMOOTHING_ROUNDS`]: their weights are
+/// the same as if no vertex asked for more, and the wide bands reach as far as asked.
 fn diffuse(rows: &mut [Row], positions: &[DVec3], indices: &[u32], smoothing: &[Smoothing]) {
     let n = positions.len();
     let mut around: Vec<Vec<u32>> = vec![Vec::new(); n];
@@ -361,7 +434,9 @@ fn diffuse(rows: &mut [Row], positions: &[DVec3], indices: &[u32], smoothing: &[
             around[a as usize].push(b);
         }
     }
-    let step: Vec<f64> = (0..n)
+    // How many rounds' worth of whole steps each vertex asks for: the square of its
+    // smoothing in edge lengths.
+    let asked: Vec<f64> = (0..n)
         .map(|v| {
             let edges = &around[v];
             let mean_edge = edges
@@ -371,33 +446,55 @@ fn diffuse(rows: &mut [Row], positions: &[DVec3], indices: &[u32], smoothing: &[
                 / edges.len().max(1) as f64;
             let Smoothing { length, most_edges } = smoothing[v];
             let edges = (length / mean_edge.max(1e-9)).min(most_edges);
-            (edges * edges / SMOOTHING_ROUNDS as f64).min(1.0)
+            edges * edges
         })
         .collect();
+    let rounds = SMOOTHING_ROUNDS as f64;
+    let step: Vec<f64> = asked.iter().map(|&a| (a / rounds).min(1.0)).collect();
     let mut next: Vec<Row> = rows.to_vec();
     for _ in 0..SMOOTHING_ROUNDS {
         for (v, out) in next.iter_mut().enumerate() {
-            if around[v].is_empty() {
-                continue;
-            }
-            let k = step[v] / around[v].len() as f64;
-            out.clear();
-            out.extend(rows[v].iter().map(|&(j, w)| (j, w * (1.0 - step[v]))));
-            for &u in &around[v] {
-                for &(j, w) in &rows[u as usize] {
-                    match out.iter_mut().find(|(i, _)| *i == j) {
-                        Some((_, sum)) => *sum += w * k,
-                        None => out.push((j, w * k)),
-                    }
-                }
-            }
-            // Far from its joint a weight thins out to nothing: dropping it when it is
-            // negligible keeps the rows short (they would gather every joint within
-            // sixty rings) and changes no weight by more than a ten-thousandth.
-            out.retain(|&(_, w)| w >= NEGLIGIBLE);
+            average(rows, &around[v], v, step[v], out);
         }
         rows.clone_from_slice(&next);
     }
+    // The vertices that asked for more, each going on until it has had what it asked.
+    let wide: Vec<usize> = (0..n).filter(|&v| asked[v] > rounds).collect();
+    let most = wide.iter().map(|&v| asked[v]).fold(rounds, f64::max);
+    for round in SMOOTHING_ROUNDS..most.ceil() as usize {
+        for &v in &wide {
+            let step = (asked[v] - round as f64).clamp(0.0, 1.0);
+            let mut out = std::mem::take(&mut next[v]);
+            average(rows, &around[v], v, step, &mut out);
+            next[v] = out;
+        }
+        for &v in &wide {
+            rows[v].clone_from(&next[v]);
+        }
+    }
+}
+
+/// Into `out`, vertex `v`'s row of `rows` moved by `step` (0 to 1) towards the mean of
+/// its neighbours' (`around`).
+fn average(rows: &[Row], around: &[u32], v: usize, step: f64, out: &mut Row) {
+    if around.is_empty() {
+        return;
+    }
+    let k = step / around.len() as f64;
+    out.clear();
+    out.extend(rows[v].iter().map(|&(j, w)| (j, w * (1.0 - step))));
+    for &u in around {
+        for &(j, w) in &rows[u as usize] {
+            match out.iter_mut().find(|(i, _)| *i == j) {
+                Some((_, sum)) => *sum += w * k,
+                None => out.push((j, w * k)),
+            }
+        }
+    }
+    // Far from its joint a weight thins out to nothing: dropping it when it is
+    // negligible keeps the rows short (they would gather every joint within
+    // sixty rings) and changes no weight by more than a ten-thousandth.
+    out.retain(|&(_, w)| w >= NEGLIGIBLE);
 }
 
 /// The near weights of a vertex at rest position `p`, (joint, weight) pairs not
@@ -534,6 +631,7 @@ mod tests {
             |_| None,
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         )
     }
 
@@ -600,6 +698,7 @@ mod tests {
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         );
         // The parent's end holds 0.9 (0.3 from joint 1, 0.6 from joint 0): the joint's
         // share 0.1 lies between the start (the end's two joints) and the first helper.
@@ -635,6 +734,7 @@ mod tests {
             |_| None,
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         );
         let at = |along: f64| chains.route(&vec![(2, 1.0)], DVec3::new(0.02, -along, 0.0));
         let (from, to) = TWIST_SPAN;
@@ -676,6 +776,7 @@ mod tests {
             |j| j.checked_sub(1),
             |_| (DVec3::ZERO, DVec3::NEG_Y),
             |_| TWIST_SPAN,
+            |_| None,
         );
         let at =
             |along: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -along, 0.0));
@@ -687,6 +788,48 @@ mod tests {
         let row = at(0.5 * (from + to));
         assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
         assert!((weight_in(&row, 2) - 0.3).abs() < 1e-12, "{row:?}");
+    }
+
+    #[test]
+    fn below_its_floor_a_joints_weight_goes_to_its_parent() {
+        // Joint 2 (parent 1, 1 m below it) with one sliding helper (slot 10); its bone
+        // runs 1 m up; its weight gives way to the parent's from 0.5 to 1.5 of the way
+        // down to the parent, which is at rest 1 m down.
+        let slide = Helper {
+            twist: 1.0,
+            pivot: 0.05,
+            ..across(2, 1.0)
+        };
+        let chains = Chains::new(
+            &[slide],
+            10,
+            1,
+            |_| None,
+            |j| {
+                if j == 2 {
+                    (DVec3::ZERO, DVec3::Y)
+                } else {
+                    (DVec3::NEG_Y, DVec3::ZERO)
+                }
+            },
+            |_| TWIST_SPAN,
+            |j| (j == 2).then_some((0.5, 1.5)),
+        );
+        let at = |down: f64| chains.route(&vec![(1, 0.4), (2, 0.6)], DVec3::new(0.02, -down, 0.0));
+        // Above the floor the joint's weight goes to its helper; below, to the parent.
+        assert_eq!(at(0.4), vec![(1, 0.4), (10, 0.6)]);
+        assert_eq!(at(1.6), vec![(1, 1.0)]);
+        let row = at(1.0);
+        assert!((weight_in(&row, 1) - 0.7).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
+        // Continuous, and summing to one.
+        for k in 0..200 {
+            let (a, b) = (at(k as f64 * 0.01), at(k as f64 * 0.01 + 1e-9));
+            for slot in [1, 2, 10] {
+                assert!((weight_in(&a, slot) - weight_in(&b, slot)).abs() < 1e-6);
+            }
+            assert!((a.iter().map(|(_, w)| w).sum::<f64>() - 1.0).abs() < 1e-12);
+        }
     }
 
     /// A strip of `n` squares along x, 1 cm wide, as triangles.
@@ -701,6 +844,47 @@ mod tests {
             })
             .collect();
         (positions, indices)
+    }
+
+    #[test]
+    fn vertices_asking_for_more_than_the_rounds_reach_get_it_alone() {
+        // A step at x = 0.3 m on a strip of 1 cm edges; the vertices right of it ask for
+        // a smoothing of `right`, those left of it for 5 cm.
+        let (positions, indices) = strip(60);
+        let smooth = |right: f64| -> Vec<Row> {
+            let mut rows: Vec<Row> = positions
+                .iter()
+                .map(|p| vec![(if p.x < 0.3 { 1 } else { 2 }, 1.0)])
+                .collect();
+            let smoothing: Vec<Smoothing> = positions
+                .iter()
+                .map(|p| Smoothing {
+                    length: if p.x < 0.3 { 0.05 } else { right },
+                    most_edges: f64::INFINITY,
+                })
+                .collect();
+            diffuse(&mut rows, &positions, &indices, &smoothing);
+            rows
+        };
+        // Both further than the rounds reach (the mean edge, diagonals included, is
+        // longer than 1 cm), the second twice as far as the first.
+        let reach = 0.015 * (SMOOTHING_ROUNDS as f64).sqrt();
+        let (capped, wider) = (smooth(reach), smooth(2.0 * reach));
+        let weight_of_1 = |row: &Row| row.iter().find(|(j, _)| *j == 1).map_or(0.0, |r| r.1);
+        for (v, p) in positions.iter().enumerate() {
+            if p.x < 0.3 {
+                // The others' weights are the same however far the wide side reaches.
+                assert_eq!(capped[v], wider[v], "at {p}");
+            } else if (0.35..0.5).contains(&p.x) {
+                // The wide side's ramp reaches further.
+                assert!(
+                    weight_of_1(&wider[v]) > weight_of_1(&capped[v]) + 1e-3,
+                    "at {p}"
+                );
+            }
+            let sum: f64 = wider[v].iter().map(|(_, w)| w).sum();
+            assert!((sum - 1.0).abs() < 5e-3, "{:?}", wider[v]);
+        }
     }
 
     #[test]
