@@ -25,7 +25,8 @@ performer:behave(function(self)
   wait(8)
   juggle:cancel()
 end)
-local nearest, farthest = math.huge, 0.0
+
+local standing, nearest, farthest = 0, math.huge, 0.0
 for i = 1, count do
   local angle = (i - 1) * 2 * math.pi / count + 0.3 * math.random()
   local far = 7 + 3 * math.random()
@@ -38,14 +39,17 @@ for i = 1, count do
   who:behave(function(self)
     wait(4 * math.random())
     local w = self:walk{ to = performer, distance = 1.5, speed = 1.0 + 0.4 * math.random() }
-    w:wait()
-    local p = self:position()
-    local d = math.sqrt(p[1] ^ 2 + p[3] ^ 2)
+    if w:wait() == "completed" then
+      local p = self:position()
+      local d = math.sqrt(p[1] ^ 2 + p[3] ^ 2)
+      standing, nearest, farthest = standing + 1, math.min(nearest, d), math.max(farthest, d)
+    else
+      print(string.format("%s did not get there: %s", self.name, tostring(w.error)))
+    end
     arrived = arrived + 1
-    nearest, farthest = math.min(nearest, d), math.max(farthest, d)
     if arrived == count then
-      print(string.format("all %d stand round the performer at t = %.1f s, from %.2f to %.2f m from him",
-        count, troupe.time(), nearest, farthest))
+      print(string.format("%d of %d stand round the performer at t = %.1f s, from %.2f to %.2f m from him",
+        standing, count, troupe.time(), nearest, farthest))
     end
     self:look_at{ target = performer, duration = 10 }:wait()
   end)
