@@ -409,6 +409,32 @@ for _, count in ipairs({ 16, 24, 40 }) do
   end)
 end
 
+test("thirty gather round a statue at 1 m: all arrive, in rows where the ring is full", function()
+  -- Round an object the standing points went 0.6 m out, the edge of reach, whatever the
+  -- distance asked: three of thirty waited behind the others for good. Asked further
+  -- than the grasp distance, the walk is to see it, and the rows go on as round an actor.
+  troupe.object{ name = "statue", shape = "cylinder", radius = 0.4, height = 2.0, at = {0, 1.0, 0}, mass = 500 }
+  local who, walks = {}, {}
+  for i = 1, 30 do
+    local a = (i - 1) * 2 * math.pi / 30 + 0.1
+    local r = 7 + (i % 3)
+    who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
+    walks[i] = who[i]:walk{ to = "statue", distance = 1.0 }
+  end
+  local ended, deepest = all_end(walks, 60)
+  local nearest, farthest, done = math.huge, 0.0, 0
+  for i, w in ipairs(walks) do
+    local d = flat_dist(who[i]:position(), 0, 0)
+    nearest, farthest = math.min(nearest, d), math.max(farthest, d)
+    if w.status == "completed" then done = done + 1 end
+  end
+  print(string.format("%d of 30 by %.1f s, from %.2f to %.2f m from the statue's axis, solids %.4f m", done,
+                      troupe.time(), nearest, farthest, deepest))
+  expect(ended and done == 30, string.format("%d of 30 arrived", done))
+  expect(nearest > 1.3 and farthest < 3.0, string.format("between %.2f and %.2f m", nearest, farthest))
+  expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
+end)
+
 test("walk to an actor carrying a cup ends as near as the cup allows", function()
   -- The cup carried out in front widens the body as the clearance sees it: asked to stand
   -- 0.8 m from bob, the walk stood held by him at 0.87 m for good.

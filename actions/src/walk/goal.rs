@@ -62,11 +62,15 @@ pub enum Choice {
 /// rather than go round to a place in the ring 1.3 m away.
 const FURTHER_OUT: f64 = 3.0;
 /// How far out (m) beyond the first ring of standing points round an object the points
-/// tried go, in steps of [`ROW_STEP`]: further, the object is out of reach.
+/// tried go, in steps of [`ROW_STEP`], for a walk to it at [`GRASP_DISTANCE`] or nearer:
+/// further, the object is out of reach, and the walk rather waits for a point to come
+/// free (a queue at a counter).
 const OBJECT_ROWS: f64 = 0.6;
-/// The same round an actor: a crowd gathering round a performer stands in rows (of
+/// The same round an actor, or an object walked to further than [`GRASP_DISTANCE`] (to
+/// be seen, not taken): a crowd gathering round a performer stands in rows (of
 /// twenty-four sent to one, three found the points 0.6 m out taken and went for free
-/// ones on the far side of the crowd, round it and through it, for good).
+/// ones on the far side of the crowd, round it and through it, for good; of thirty sent
+/// to a statue at 1 m, three waited for good behind the others).
 const ACTOR_ROWS: f64 = 1.5;
 /// Metres between one row of standing points and the next.
 const ROW_STEP: f64 = 0.1;
@@ -135,7 +139,7 @@ impl Goal {
                 stand_near(
                     ctx,
                     (start, companions, choice),
-                    (centre, radius, OBJECT_ROWS),
+                    (centre, radius, rows_round_an_object(*distance)),
                     |dir| footprint.reach(dir) + distance,
                     |stand| hidden_by(ctx, (stand, shoulders), (footprint.nearest(stand), height)),
                 )
@@ -288,6 +292,16 @@ fn to_actor(
         |stand| hidden_by(ctx, (stand, shoulders), (them, their_shoulders)),
     )
     .map_err(|e| format!("no place to stand near {name}: {e}"))
+}
+
+/// How far out the standing points round an object go for a walk to it at `distance`
+/// (see [`OBJECT_ROWS`], [`ACTOR_ROWS`]).
+fn rows_round_an_object(distance: f64) -> f64 {
+    if distance > GRASP_DISTANCE {
+        ACTOR_ROWS
+    } else {
+        OBJECT_ROWS
+    }
 }
 
 /// How far (m) from `actor`'s centre a walk of a body of `radius` asked to stand
