@@ -377,6 +377,27 @@ test("two sent to each other meet face to face; one sent to someone walking off 
   expect(f.status == "completed" and went < 1.5, string.format("%s, went on %.2f m", f.status, went))
 end)
 
+-- `count` actors on a circle 7-9 m round the origin, each sent to `to` at `distance`,
+-- run until every walk has ended (at most `seconds`): whether they all ended, how many
+-- arrived, the nearest and the farthest from the origin, and the deepest overlap.
+local function gather_round(to, count, distance, seconds)
+  local who, walks = {}, {}
+  for i = 1, count do
+    local a = (i - 1) * 2 * math.pi / count + 0.1
+    local r = 7 + (i % 3)
+    who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
+    walks[i] = who[i]:walk{ to = to, distance = distance }
+  end
+  local ended, deepest = all_end(walks, seconds)
+  local nearest, farthest, done = math.huge, 0.0, 0
+  for i, w in ipairs(walks) do
+    local d = flat_dist(who[i]:position(), 0, 0)
+    nearest, farthest = math.min(nearest, d), math.max(farthest, d)
+    if w.status == "completed" then done = done + 1 end
+  end
+  return ended, done, nearest, farthest, deepest
+end
+
 for _, count in ipairs({ 16, 24, 40 }) do
   test(count .. " gather round a performer: all arrive, in rows behind the first, none inside it", function()
     -- Before a walk took another point when its own was taken, five of sixteen stood for
@@ -387,20 +408,7 @@ for _, count in ipairs({ 16, 24, 40 }) do
     -- round and three found every point 0.6 m out taken; a body pressed by those round
     -- it stepped after its spots for good.
     local bob = troupe.actor{ name = "bob" }
-    local who, walks = {}, {}
-    for i = 1, count do
-      local a = (i - 1) * 2 * math.pi / count + 0.1
-      local r = 7 + (i % 3)
-      who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
-      walks[i] = who[i]:walk{ to = bob, distance = 1.5 }
-    end
-    local ended, deepest = all_end(walks, 50)
-    local nearest, farthest, done = math.huge, 0.0, 0
-    for i, w in ipairs(walks) do
-      local d = flat_dist(who[i]:position(), 0, 0)
-      nearest, farthest = math.min(nearest, d), math.max(farthest, d)
-      if w.status == "completed" then done = done + 1 end
-    end
+    local ended, done, nearest, farthest, deepest = gather_round(bob, count, 1.5, 50)
     print(string.format("%d of %d by %.1f s, from %.2f to %.2f m from bob, solids %.4f m", done, count,
                         troupe.time(), nearest, farthest, deepest))
     expect(ended and done == count, string.format("%d of %d arrived", done, count))
@@ -414,20 +422,7 @@ test("thirty gather round a statue at 1 m: all arrive, in rows where the ring is
   -- distance asked: three of thirty waited behind the others for good. Asked further
   -- than the grasp distance, the walk is to see it, and the rows go on as round an actor.
   troupe.object{ name = "statue", shape = "cylinder", radius = 0.4, height = 2.0, at = {0, 1.0, 0}, mass = 500 }
-  local who, walks = {}, {}
-  for i = 1, 30 do
-    local a = (i - 1) * 2 * math.pi / 30 + 0.1
-    local r = 7 + (i % 3)
-    who[i] = troupe.actor{ name = "p" .. i, at = {r * math.cos(a), 0, r * math.sin(a)} }
-    walks[i] = who[i]:walk{ to = "statue", distance = 1.0 }
-  end
-  local ended, deepest = all_end(walks, 60)
-  local nearest, farthest, done = math.huge, 0.0, 0
-  for i, w in ipairs(walks) do
-    local d = flat_dist(who[i]:position(), 0, 0)
-    nearest, farthest = math.min(nearest, d), math.max(farthest, d)
-    if w.status == "completed" then done = done + 1 end
-  end
+  local ended, done, nearest, farthest, deepest = gather_round("statue", 30, 1.0, 60)
   print(string.format("%d of 30 by %.1f s, from %.2f to %.2f m from the statue's axis, solids %.4f m", done,
                       troupe.time(), nearest, farthest, deepest))
   expect(ended and done == 30, string.format("%d of 30 arrived", done))

@@ -649,6 +649,16 @@ mod tests {
         }
     }
 
+    /// A sliding helper of joint `joint` (parent 1): its whole turn, twist too, about a
+    /// pivot 0.05 m from the joint's centre towards the bend.
+    fn sliding(joint: usize) -> Helper {
+        Helper {
+            twist: 1.0,
+            pivot: 0.05,
+            ..across(joint, 1.0)
+        }
+    }
+
     fn weight_in(row: &Row, j: u16) -> f64 {
         row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w)
     }
@@ -764,11 +774,7 @@ mod tests {
     #[test]
     fn a_sliding_helper_takes_its_joints_weight_near_the_joint_and_no_parents() {
         // Joint 2 (parent 1) with one sliding helper (slot 10); its bone runs 1 m down.
-        let slide = Helper {
-            twist: 1.0,
-            pivot: 0.05,
-            ..across(2, 1.0)
-        };
+        let slide = sliding(2);
         let chains = Chains::new(
             &[slide],
             10,
@@ -795,11 +801,7 @@ mod tests {
         // Joint 2 (parent 1, 1 m below it) with one sliding helper (slot 10); its bone
         // runs 1 m up; its weight gives way to the parent's from 0.5 to 1.5 of the way
         // down to the parent, which is at rest 1 m down.
-        let slide = Helper {
-            twist: 1.0,
-            pivot: 0.05,
-            ..across(2, 1.0)
-        };
+        let slide = sliding(2);
         let chains = Chains::new(
             &[slide],
             10,
