@@ -162,6 +162,58 @@ test("someone standing in a doorway: after a wait the walker goes round by the o
   expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
 end)
 
+test("someone standing in a corridor: a walk with patience gives up naming them, a more patient one goes on when they leave", function()
+  -- Two corridors 1.2 m wide, someone standing in the middle of each; in the second,
+  -- the one standing walks off after 5 s.
+  for _, x in ipairs({0, 5}) do
+    troupe.wall{ from = {x - 0.6, -1}, to = {x - 0.6, 8} }
+    troupe.wall{ from = {x + 0.6, -1}, to = {x + 0.6, 8} }
+  end
+  troupe.actor{ name = "blocker", at = {0, 0, 3} }
+  local leaver = troupe.actor{ name = "leaver", at = {5, 0, 3} }
+  local ann = troupe.actor{ name = "ann", at = {0, 0, 0} }
+  local bob = troupe.actor{ name = "bob", at = {5, 0, 0} }
+  local wa = ann:walk{ to = {0, 0, 6}, patience = 3 }
+  local wb = bob:walk{ to = {5, 0, 6}, patience = 6 }
+  -- Getting on is 0.05 s of the plan at 1.3 m/s: 6.5 cm nearer along the corridor.
+  local left, ta, tb, last_move, best = nil, nil, nil, 0, 0
+  run_until(function()
+    if not left and troupe.time() >= 5 then left = leaver:walk{ to = {5, 0, 9.5} } end
+    local _, z = flat(ann:position())
+    if not ta and z > best + 0.065 then last_move, best = troupe.time(), z end
+    if wa.status ~= "active" and not ta then ta = troupe.time() end
+    if wb.status ~= "active" and not tb then tb = troupe.time() end
+    return ta and tb
+  end, 40)
+  print(string.format("patience: ann %s at %.2f s (last moved on at %.2f s): %s; bob %s at %.2f s",
+    wa.status, ta or -1, last_move, tostring(wa.error), wb.status, tb or -1))
+  expect(wa.status == "failed", "ann gave up: " .. wa.status)
+  expect(tostring(wa.error):find("^waited 3 s %(its `patience`%) getting no nearer its goal, 3%.%d%d m from it: `blocker` in its way") ~= nil,
+         "the reason names the one in the way: " .. tostring(wa.error))
+  -- She gave up about 3 s after she last got on (the plan's clock, which the walk
+  -- measures, runs a few centimetres ahead of a body creeping up behind someone).
+  expect(ta >= last_move + 2.5 and ta <= last_move + 3.5,
+         string.format("gave up at %.2f s, last moved on at %.2f s", ta, last_move))
+  expect(wb.status == "completed", "bob went on once the way was clear: " .. wb.status .. " " .. tostring(wb.error))
+  expect(tb > 5, "bob arrived after the leaver left")
+end)
+
+test("a walk with patience that goes the long way round a table is getting on, and keeps it", function()
+  -- Its goal just behind a long table: for the first 3 s or so the walk goes further
+  -- from it, but on along its route.
+  local ann = troupe.actor{ name = "ann" }
+  troupe.object{ name = "table", shape = "box", size = {6, 0.75, 0.6}, at = {0, 0.375, 1.2}, mass = 30 }
+  local w = ann:walk{ to = {0, 0, 2.2}, patience = 1 }
+  local farthest = 0
+  expect(run_until(function()
+    local p = ann:position()
+    farthest = math.max(farthest, math.sqrt(p[1] ^ 2 + (p[3] - 2.2) ^ 2))
+    return w.status ~= "active"
+  end, 30), "ended")
+  expect(farthest > 3, string.format("went away from the goal: at most %.2f m from it", farthest))
+  expect(w.status == "completed", w.status .. " " .. tostring(w.error))
+end)
+
 test("troupe.deepest_overlap measures the two most overlapping body discs", function()
   troupe.actor{ name = "ann" }
   troupe.actor{ name = "bob", at = {3, 0, 0} }

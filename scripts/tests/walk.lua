@@ -211,6 +211,8 @@ test("bad input is a clear error", function()
   expect(err{ to = {1, 0, 1}, path = {{1, 1}} }:find("exactly one") ~= nil, "two routes")
   expect(err{ to = {1, 0, 1}, run = 3 }:find("run") ~= nil, "run out of range")
   expect(err{ to = {1, 0, 1}, stride = 2 }:find("unknown option") ~= nil, "unknown option")
+  expect(err{ to = {1, 0, 1}, patience = 0 }:find("`patience` must be a number of seconds above 0, got 0", 1, true) ~= nil, "no patience")
+  expect(err{ velocity = 1, patience = 5 }:find("`patience` (how long to wait for those in the way) applies to `to` and `path` walks", 1, true) ~= nil, "a velocity walk's patience")
   expect(err{ follow = troupe.sequence{ l_knee_flexion = {{0, 0}, {1, 1}} } }:find("root_x") ~= nil, "follow without root track")
 end)
 

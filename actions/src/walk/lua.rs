@@ -12,7 +12,7 @@ use troupe_lua::kinds::{BuildContext, CommonOptions};
 use troupe_scene::{ActionSpec, Generator};
 
 /// The walk's own option names (besides the common ones).
-const WALK_OPTIONS: [&str; 14] = [
+const WALK_OPTIONS: [&str; 15] = [
     "to",
     "distance",
     "path",
@@ -27,11 +27,12 @@ const WALK_OPTIONS: [&str; 14] = [
     "bounce",
     "run",
     "arms",
+    "patience",
 ];
 
 /// `actor:walk{ to = {x, 0, z} | path = {{x, z}, …} | velocity = number_or_function |
 /// follow = SEQUENCE_or_path, speed = m/s, heading = degrees, step_length, step_width,
-/// pelvis, arm_swing, bounce, run, arms = bool, <common options> }`.
+/// pelvis, arm_swing, bounce, run, arms = bool, patience = seconds, <common options> }`.
 pub fn build_walk(
     ctx: &BuildContext,
     args: MultiValue,
@@ -67,6 +68,7 @@ pub fn build_walk(
     if let Some(b) = opt_bool(&t, "walk", "arms")? {
         options.arms = b;
     }
+    options.patience = num("patience")?;
     let given: Vec<&str> = ["to", "path", "velocity", "follow"]
         .into_iter()
         .filter(|k| !matches!(t.get::<Value>(*k), Ok(Value::Nil)))
@@ -89,6 +91,12 @@ pub fn build_walk(
         return Err(err(
             "walk",
             format!("`heading` (the way to face on arrival) applies to `to` and `path` walks, not to a `{kind}` walk"),
+        ));
+    }
+    if options.patience.is_some() && !matches!(kind, "to" | "path") {
+        return Err(err(
+            "walk",
+            format!("`patience` (how long to wait for those in the way) applies to `to` and `path` walks, not to a `{kind}` walk"),
         ));
     }
     if kind != "velocity" && common.duration.is_some() {

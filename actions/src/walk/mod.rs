@@ -32,6 +32,7 @@ pub mod lanes;
 #[cfg(feature = "lua")]
 pub(crate) mod lua;
 pub mod options;
+pub mod patience;
 pub mod replan;
 pub mod rig;
 pub mod route;
@@ -57,8 +58,8 @@ use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
 use troupe_scene::space::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, segment_distance, Body, FootprintsAround,
-    Navigation, Surroundings, Walking,
+    clear_foot, foot_may_move, limit_step, nearest_gap, segment_distance, Body, Crowd,
+    FootprintsAround, Navigation, Surroundings, Walking,
 };
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
@@ -188,6 +189,9 @@ pub const PROGRESS: f64 = 0.05;
 /// on, a walk that gets no nearer its goal may be waiting for them (to pass, to move off
 /// its way or its goal), and is not stuck (see `Walk::waiting_for_someone`).
 pub const UNATTENDED: f64 = 3.0;
+/// How many of those in its way a walk that gives up names (see [`patience`]); the
+/// others are counted.
+const NAMED: usize = 3;
 /// Seconds between two looks at where the actor a walk goes to stands (see
 /// [`Walk::follow_actor`]).
 const FOLLOW_INTERVAL: f64 = 0.5;
@@ -308,6 +312,9 @@ pub struct Walk {
     progress: Option<(DVec2, f64)>,
     /// The walk time at which the walk was asked to stop, if it was (see [`STOP_DEADLINE`]).
     stopped_at: Option<f64>,
+    /// How long a walk with a goal waits for those in its way before it fails, if it is
+    /// to give up at all (see [`patience`]).
+    patience: Option<patience::Patience>,
     last_miss: f64,
     /// Each hip's twist on the previous tick (the leg IK's starting guess).
     twist: [Option<f64>; 2],
@@ -358,6 +365,31 @@ pub struct Walk {
     dt: f64,
 }
 
+/// A walk's way on from where its body is (see [`Walk::way_on`]).
+struct WayOn {
+    /// The walking actor.
+    me: usize,
+    /// Where its body is, and where the way on ends.
+    at: DVec2,
+    end: DVec2,
+    /// Its body's radius.
+    radius: f64,
+}
+
+impl WayOn {
+    /// Whether actor `j` is another within [`UNATTENDED`] of the body.
+    fn within(&self, crowd: &Crowd, j: usize) -> bool {
+        j != self.me && (crowd.positions[j] - self.at).length() < UNATTENDED
+    }
+
+    /// Whether actor `j`'s body is in the way (within [`IN_THE_WAY`] of touching the
+    /// walker's on it).
+    fn in_it(&self, crowd: &Crowd, j: usize) -> bool {
+        let reach = self.radius + crowd.radii[j] + IN_THE_WAY;
+        segment_distance(crowd.positions[j], self.at, self.end) < reach
+    }
+}
+
 /// Values the gait writes besides the legs: [root ×6, pelvis ×3, spine ×4, arms ×8].
 type UpperValues = ([f64; 6], [f64; 3], [f64; 4], [[f64; 4]; 2]);
 
@@ -400,6 +432,7 @@ impl Walk {
             ended_since: None,
             progress: None,
             stopped_at: None,
+            patience: options.patience.map(patience::Patience::new),
             last_miss: 0.0,
             twist: [None; 2],
             cadence: 0.0,
@@ -523,20 +556,93 @@ impl Walk {
     /// is no reason to wait for ever.
     fn waiting_for_someone(&self, ctx: &GeneratorContext, plan: &Plan, at: DVec2) -> bool {
         let crowd = ctx.world.crowd;
+        let mut near = Vec::new();
+        crowd.near(at, &mut near);
+        let way = self.way_on(ctx, plan, at);
+        near.iter().any(|&j| {
+            way.within(crowd, j)
+                && (crowd.velocities[j].length() > replan::STANDING || way.in_it(crowd, j))
+        })
+    }
+
+    /// The actors in the walk's way on from `at` (see [`Walk::waiting_for_someone`]),
+    /// nearest first.
+    fn in_its_way(&self, ctx: &GeneratorContext, plan: &Plan, at: DVec2) -> Vec<usize> {
+        let crowd = ctx.world.crowd;
+        let mut near = Vec::new();
+        crowd.near(at, &mut near);
+        let way = self.way_on(ctx, plan, at);
+        near.retain(|&j| way.within(crowd, j) && way.in_it(crowd, j));
+        near.sort_by(|&a, &b| {
+            let d = |j: usize| (crowd.positions[j] - at).length();
+            d(a).total_cmp(&d(b)).then(a.cmp(&b))
+        });
+        near
+    }
+
+    /// The body's way on from `at`: the plan's next [`WAY_ON`] seconds, at most
+    /// [`UNATTENDED`] long.
+    fn way_on(&self, ctx: &GeneratorContext, plan: &Plan, at: DVec2) -> WayOn {
+        let crowd = ctx.world.crowd;
         let me = ctx.actor;
         let radius = crowd.radii.get(me).copied().unwrap_or_default();
         let pt = self.steer.plan_time(self.t, self.t);
         let onward = self.steer.offset + plan.sample(pt + WAY_ON, self.heading).position;
-        let way_end = at + (onward - at).clamp_length_max(UNATTENDED);
-        let mut near = Vec::new();
-        crowd.near(at, &mut near);
-        near.iter().any(|&j| {
-            let there = crowd.positions[j];
-            j != me
-                && (there - at).length() < UNATTENDED
-                && (crowd.velocities[j].length() > replan::STANDING
-                    || segment_distance(there, at, way_end) < radius + crowd.radii[j] + IN_THE_WAY)
-        })
+        let end = at + (onward - at).clamp_length_max(UNATTENDED);
+        WayOn {
+            me,
+            at,
+            end,
+            radius,
+        }
+    }
+
+    /// Why the walk gives up, if its patience has run out (see [`patience`]): how long it
+    /// waited, how far from its goal, and who stands in its way.
+    fn impatient(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<String> {
+        let Route::Path { points, .. } = &self.route else {
+            return None;
+        };
+        let goal = *points.last()?;
+        if self.stopped_at.is_some() {
+            return None;
+        }
+        let left = plan.end_time - self.steer.plan_time(self.t, self.t);
+        let patience = self.patience.as_mut()?;
+        if left <= 0.0 {
+            // At its end, settling its feet or turning to face the way asked: arriving,
+            // not waiting (a new plan from there, to another place, counts afresh).
+            patience.restart();
+            return None;
+        }
+        if !patience.run_out(self.t, left) {
+            return None;
+        }
+        let limit = patience.limit();
+        let at = *ctx.world.crowd.positions.get(ctx.actor)?;
+        let names: Vec<String> = self
+            .in_its_way(ctx, plan, at)
+            .into_iter()
+            .filter_map(|j| ctx.world.actors.get(j).map(|a| format!("`{}`", a.name)))
+            .collect();
+        let who = match names.len() {
+            0 => String::new(),
+            1 => format!(": {} in its way", names[0]),
+            n if n <= NAMED => {
+                let (first, last) = names.split_at(n - 1);
+                format!(": {} and {} in its way", first.join(", "), last[0])
+            }
+            n => format!(
+                ": {} and {} more in its way",
+                names[..NAMED].join(", "),
+                n - NAMED
+            ),
+        };
+        Some(format!(
+            "waited {limit} s (its `patience`) getting no nearer its goal, {:.2} m from \
+             it{who}",
+            (goal - at).length()
+        ))
     }
 
     /// A new plan round the actors standing in the way, from where the body is now to
@@ -1828,6 +1934,9 @@ impl Generator for Walk {
         self.ended_since = None;
         self.progress = None;
         self.stopped_at = None;
+        if let Some(patience) = &mut self.patience {
+            patience.restart();
+        }
         self.twist = [None; 2];
         self.last_floor = None;
         self.thighs = [None; 2];
@@ -1905,6 +2014,10 @@ impl Generator for Walk {
                 self.plan = Some(plan);
                 return Step::Failed(why);
             }
+        }
+        if let Some(why) = self.impatient(ctx, &plan) {
+            self.plan = Some(plan);
+            return Step::Failed(why);
         }
         self.dt = ctx.dt;
         // What the clearance sees round the body (see [`surroundings`]).

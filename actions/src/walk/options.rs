@@ -3,8 +3,8 @@
 
 use crate::error::OptionError;
 
-/// The personification and speed options of a walk (fig. 6-11); 1 is the thesis' walk
-/// for every scale.
+/// The personification, speed and patience options of a walk (fig. 6-11); 1 is the
+/// thesis' walk for every scale.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct WalkOptions {
     /// Cruising speed in m/s for `to` and `path` walks.
@@ -27,6 +27,10 @@ pub struct WalkOptions {
     pub run: f64,
     /// Whether the walk swings the arms (false leaves the arm DOFs to other actions).
     pub arms: bool,
+    /// Seconds a `to` or `path` walk may go without getting nearer its goal (held by
+    /// people standing in its way) before it fails naming them; `None` waits as long as
+    /// it takes (see [`super::patience`]).
+    pub patience: Option<f64>,
 }
 
 impl Default for WalkOptions {
@@ -41,6 +45,7 @@ impl Default for WalkOptions {
             bounce: 1.0,
             run: 0.0,
             arms: true,
+            patience: None,
         }
     }
 }
@@ -64,7 +69,14 @@ impl WalkOptions {
                 ));
             }
         }
-        Ok(())
+        match self.patience {
+            Some(v) if !(v.is_finite() && v > 0.0) => Err(OptionError::invalid(
+                "patience",
+                "a number of seconds above 0",
+                v,
+            )),
+            _ => Ok(()),
+        }
     }
 }
 
@@ -134,5 +146,25 @@ mod tests {
                 "{e}"
             );
         }
+    }
+
+    #[test]
+    fn a_patience_of_no_time_is_refused() {
+        for v in [0.0, -1.0, f64::INFINITY, f64::NAN] {
+            let e = WalkOptions {
+                patience: Some(v),
+                ..WalkOptions::default()
+            }
+            .validate()
+            .expect_err("patience");
+            assert_eq!(e.option(), "patience");
+            assert!(e.to_string().contains("seconds above 0"), "{e}");
+        }
+        WalkOptions {
+            patience: Some(0.5),
+            ..WalkOptions::default()
+        }
+        .validate()
+        .unwrap();
     }
 }

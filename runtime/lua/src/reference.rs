@@ -320,6 +320,7 @@ pub const KIND_OPTIONS: &[KindOptions] = &[
             ("run", "any"),
             ("arms", "any"),
             ("distance", "number"),
+            ("patience", "number"),
         ],
     ),
     (
