@@ -176,7 +176,7 @@ test("someone standing in a corridor: a walk with patience gives up naming them,
   local wa = ann:walk{ to = {0, 0, 6}, patience = 3 }
   local wb = bob:walk{ to = {5, 0, 6}, patience = 6 }
   -- Getting on is 0.05 s of the plan at 1.3 m/s: 6.5 cm nearer along the corridor.
-  local left, ta, tb, last_move, best = nil, nil, nil, 0, 0
+  local left, ta, tb, last_move, best = nil, nil, nil, 0.0, 0.0
   run_until(function()
     if not left and troupe.time() >= 5 then left = leaver:walk{ to = {5, 0, 9.5} } end
     local _, z = flat(ann:position())
@@ -204,7 +204,7 @@ test("a walk with patience that goes the long way round a table is getting on, a
   local ann = troupe.actor{ name = "ann" }
   troupe.object{ name = "table", shape = "box", size = {6, 0.75, 0.6}, at = {0, 0.375, 1.2}, mass = 30 }
   local w = ann:walk{ to = {0, 0, 2.2}, patience = 1 }
-  local farthest = 0
+  local farthest = 0.0
   expect(run_until(function()
     local p = ann:position()
     farthest = math.max(farthest, math.sqrt(p[1] ^ 2 + (p[3] - 2.2) ^ 2))
