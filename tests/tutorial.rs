@@ -1,6 +1,6 @@
 //! The worked examples of the docs work as written: docs/first-behavior.md's Lua blocks,
-//! saved as the tutorial says, run, render and pass their test; docs/navigation.md's room
-//! prints what the page says it prints.
+//! saved as the tutorial says, run, render, print what it says and pass their test;
+//! docs/navigation.md's room prints what the page says it prints.
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -46,7 +46,11 @@ fn lua_blocks() -> Vec<String> {
 #[test]
 fn the_tutorial_runs_as_written() {
     let blocks = lua_blocks();
-    assert_eq!(blocks.len(), 4, "step 1, step 2, step 4 and the test");
+    assert_eq!(
+        blocks.len(),
+        5,
+        "step 1, step 2, step 4, step 5 and the test"
+    );
     // Run from an empty folder outside the repository: the standard library is built in.
     let dir = std::env::temp_dir().join(format!("troupe-tutorial-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
@@ -82,7 +86,29 @@ fn the_tutorial_runs_as_written() {
     );
     assert!(dir.join("ann.png").is_file());
 
-    std::fs::write(dir.join("greet_test.lua"), &blocks[3]).unwrap();
+    // Step 5 prints, word for word, what the tutorial says it prints.
+    std::fs::write(dir.join("door.lua"), &blocks[3]).unwrap();
+    let out = troupe(&dir, &["run", "door.lua"]);
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let tutorial = page("first-behavior.md");
+    let printed = tutorial
+        .split("troupe run door.lua")
+        .nth(1)
+        .and_then(|after| after.split("prints").nth(1))
+        .expect("the tutorial says what door.lua prints");
+    for line in self::blocks(printed, "```")[0].lines() {
+        assert!(text.contains(line), "no `{line}` in:\n{text}");
+    }
+    assert!(
+        text.contains("ann          actions: 1 completed, 0 cancelled, 1 failed"),
+        "{text}"
+    );
+
+    std::fs::write(dir.join("greet_test.lua"), &blocks[4]).unwrap();
     let out = troupe(&dir, &["test", "greet_test.lua"]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("1 passed, 0 failed"));
     troupe(&dir, &["lua-defs", "types/troupe.d.lua"]);
