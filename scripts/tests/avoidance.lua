@@ -198,6 +198,29 @@ test("someone standing in a corridor: a walk with patience gives up naming them,
   expect(tb > 5, "bob arrived after the leaver left")
 end)
 
+test("a walk that gives up in mid-stride stops, its feet side by side, before it fails", function()
+  -- It failed at once, a foot 6 cm up in the air for good.
+  troupe.wall{ from = {-0.6, -1}, to = {-0.6, 8} }
+  troupe.wall{ from = {0.6, -1}, to = {0.6, 8} }
+  troupe.actor{ name = "blocker", at = {0, 0, 3} }
+  local ann = troupe.actor{ name = "ann", at = {0, 0, 0} }
+  local w = ann:walk{ to = {0, 0, 6}, patience = 0.3 }
+  expect(run_until(function() return w.status ~= "active" end, 30), "ended")
+  expect(w.status == "failed" and tostring(w.error):find("`blocker` in its way", 1, true) ~= nil,
+         w.status .. " " .. tostring(w.error))
+  local function feet()
+    local l, r = ann:joint_position("l_ankle"), ann:joint_position("r_ankle")
+    return l, r, math.sqrt((l[1] - r[1]) ^ 2 + (l[3] - r[3]) ^ 2)
+  end
+  local l, r, apart = feet()
+  print(string.format("gave up at %.2f s: ankles %.3f and %.3f m up, %.3f m apart", troupe.time(), l[2], r[2], apart))
+  expect(math.abs(l[2] - r[2]) < 0.005, string.format("both feet down: ankles %.3f and %.3f m up", l[2], r[2]))
+  expect(apart < 0.45, string.format("side by side: %.3f m apart", apart))
+  run(2)
+  local l2, r2 = feet()
+  expect(math.abs(l2[2] - l[2]) + math.abs(r2[2] - r[2]) < 1e-9, "and stays so")
+end)
+
 test("a walk with patience that goes the long way round a table is getting on, and keeps it", function()
   -- Its goal just behind a long table: for the first 3 s or so the walk goes further
   -- from it, but on along its route.

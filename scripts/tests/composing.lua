@@ -509,7 +509,8 @@ local function held_by_the_counter(barista)
                              at = {0, 1.0, 1.35}, mass = 0.3 }
   expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
   local w = ann:walk{ to = troupe.get_object("counter") }
-  expect(run_until(function() return w.status ~= "active" end, 30), "the walk ended: " .. w.status)
+  -- Stuck after 10 s held, it stops, its feet brought together, and fails.
+  expect(run_until(function() return w.status ~= "active" end, 40), "the walk ended: " .. w.status)
   expect(w.status == "failed" and tostring(w.error):find("^stuck [%d.]+ m from its goal for 10 s, held by counter$") ~= nil,
          w.status .. ": " .. tostring(w.error))
 end

@@ -268,6 +268,8 @@ pub struct Walk {
     /// How long a walk with a goal waits for those in its way before it fails, if it is
     /// to give up at all (see [`patience`]).
     patience: Option<patience::Patience>,
+    /// Why the walk gives up (stuck, or out of patience), while it stops before it fails.
+    giving_up: Option<String>,
     last_miss: f64,
     /// Each hip's twist on the previous tick (the leg IK's starting guess).
     twist: [Option<f64>; 2],
@@ -361,6 +363,7 @@ impl Walk {
             progress: None,
             stopped_at: None,
             patience: options.patience.map(patience::Patience::new),
+            giving_up: None,
             last_miss: 0.0,
             twist: [None; 2],
             cadence: 0.0,
@@ -1464,6 +1467,7 @@ impl Generator for Walk {
         if let Some(patience) = &mut self.patience {
             patience.restart();
         }
+        self.giving_up = None;
         self.twist = [None; 2];
         self.last_floor = None;
         self.thighs = [None; 2];
@@ -1536,15 +1540,15 @@ impl Generator for Walk {
                 plan = new;
             }
         }
-        if let Some(footprints) = &footprints {
-            if let Some(why) = self.stuck(ctx, &plan, footprints) {
-                self.plan = Some(plan);
-                return Step::Failed(why);
-            }
-        }
-        if let Some(why) = self.impatient(ctx, &plan) {
-            self.plan = Some(plan);
-            return Step::Failed(why);
+        // A walk that gives up stops as one told to, its feet brought together, and then
+        // fails: failing at once left a foot in the air for good.
+        let stuck = footprints
+            .as_ref()
+            .and_then(|footprints| self.stuck(ctx, &plan, footprints));
+        if let Some(why) = stuck.or_else(|| self.impatient(ctx, &plan)) {
+            plan.stop_at(self.steer.plan_time(self.t, self.t));
+            self.stopped_at.get_or_insert(self.t);
+            self.giving_up = Some(why);
         }
         self.dt = ctx.dt;
         // What the clearance sees round the body (see [`surroundings`]).
@@ -1659,7 +1663,10 @@ impl Generator for Walk {
                 }
                 _ => false,
             };
-            done |= since >= STOP_DEADLINE + STOP_GRACE || (since >= STOP_DEADLINE && standing);
+            // One that gives up, held where it stands, fails as soon as both feet are down
+            // side by side: it has nowhere to slow down to.
+            let waited = self.giving_up.is_some() || since >= STOP_DEADLINE;
+            done |= since >= STOP_DEADLINE + STOP_GRACE || (waited && standing);
         }
         self.lists.keep(around);
         if let Some(footprints) = footprints {
@@ -1670,10 +1677,13 @@ impl Generator for Walk {
         self.steer.advance(ctx.dt);
         self.t += ctx.dt;
         self.plan = Some(plan);
-        if done {
-            Step::Finished
-        } else {
-            Step::Running
+        match (done, self.giving_up.take()) {
+            (true, Some(why)) => Step::Failed(why),
+            (true, None) => Step::Finished,
+            (false, giving_up) => {
+                self.giving_up = giving_up;
+                Step::Running
+            }
         }
     }
 
