@@ -199,7 +199,7 @@ impl Walk {
     /// Why the walk gives up, if its patience has run out (see [`super::patience`]): how long it
     /// waited, how far from its goal, and who stands in its way.
     pub(super) fn impatient(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<String> {
-        let Route::Path { points, .. } = &self.route else {
+        let (Some(patience), Route::Path { points, .. }) = (&mut self.patience, &self.route) else {
             return None;
         };
         let goal = *points.last()?;
@@ -207,7 +207,6 @@ impl Walk {
             return None;
         }
         let left = plan.end_time - self.steer.plan_time(self.t, self.t);
-        let patience = self.patience.as_mut()?;
         if left <= 0.0 {
             // At its end, settling its feet or turning to face the way asked: arriving,
             // not waiting (a new plan from there, to another place, counts afresh).
