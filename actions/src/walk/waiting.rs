@@ -27,9 +27,9 @@ const ALONE: f64 = 1.5;
 
 /// Seconds a navigated walk's body may stay within [`PROGRESS`] of where it stood, with
 /// nobody within [`UNATTENDED`] it may be waiting for when it gives up, before the walk
-/// fails as stuck: held by the furniture or the walls where it cannot pass (a cup carried
-/// out in front against a counter as high as the hand), with nobody there who might move
-/// out of its way.
+/// gives up as stuck (it stops, then fails): held by the furniture or the walls where it
+/// cannot pass (a cup carried out in front against a counter as high as the hand), with
+/// nobody there who might move out of its way.
 pub const STUCK_TIME: f64 = 10.0;
 /// How far (m) a walk's body must move to count as getting on (see [`STUCK_TIME`]).
 pub const PROGRESS: f64 = 0.05;
@@ -73,8 +73,9 @@ const IN_THE_WAY: f64 = 0.5;
 struct WayOn {
     /// The walking actor.
     me: usize,
-    /// Where its body is, and where the way on ends.
+    /// Where its body is.
     at: DVec2,
+    /// Where the way on ends.
     end: DVec2,
     /// Its body's radius.
     radius: f64,
