@@ -267,6 +267,19 @@ test("walk to a counter where someone stands ends at a free place beside them; w
   expect(bob:position()[3] > 0.5, string.format("in the niche (z %.2f)", bob:position()[3]))
 end)
 
+test("with patience, a walk to a shelf whose only place is taken gives up naming who stands there", function()
+  troupe.wall{ from = {9.5, 0}, to = {9.5, 2} }
+  troupe.wall{ from = {10.5, 0}, to = {10.5, 2} }
+  troupe.wall{ from = {9.5, 2}, to = {10.5, 2} }
+  local shelf = troupe.object{ name = "shelf", shape = "box", size = {0.9, 1.2, 0.3}, at = {10, 0.6, 1.8}, mass = 30 }
+  troupe.actor{ name = "cid", at = {10, 0, 1.1} }
+  local bob = troupe.actor{ name = "bob", at = {10, 0, -3} }
+  local b = bob:walk{ to = shelf, patience = 4 }
+  expect(run_until(function() return b.status ~= "active" end, 30), "ended: " .. b.status)
+  expect(b.status == "failed" and tostring(b.error):find("^waited 4 s %(its `patience`%) getting no nearer its goal, [%d.]+ m from it: `cid` in its way$") ~= nil,
+         b.status .. " " .. tostring(b.error))
+end)
+
 test("walk to an actor ends about a metre away, facing them", function()
   local ann = troupe.actor{ name = "ann" }
   local bob = troupe.actor{ name = "bob", at = {3, 0, 4}, facing = 180 }
