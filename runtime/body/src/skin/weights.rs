@@ -82,8 +82,11 @@ pub(crate) const NARROWER: f64 = 0.6;
 /// 18 to 5, all of them from 70 to 57, and the 0.96 m child's worst posture from 5 to 1
 /// (the elbow's crease and the armpit); 1.35 and 1.45 did as well (with [`NECK_ROOT`]:
 /// 44 and 47 against 46), 1.3 turned one over at half ranges, 1.6 failed (33 at the
-/// 0.96 m child's worst posture).
-pub(crate) const UPPER_ARM: f64 = 1.4;
+/// 0.96 m child's worst posture). Narrowed to 1.35 once the webs between the fingers had
+/// their helpers: the shoulders' from 3 to 1 and all of them from 14 to 12 (the elbow's
+/// crease at 147° with the arm raised and an arm raised 179° unfolded), every size fewer
+/// or as many; 1.32 and 1.37 gave 12 as well, 1.4 14, 1.45 15, 1.3 one at half ranges.
+pub(crate) const UPPER_ARM: f64 = 1.35;
 /// How narrow the band is at vt1, the root of the neck: a little wider than the
 /// [`NARROWER`] of the skullbase and the clavicles (vc4's was that too, then). With [`UPPER_ARM`] it took vt1's
 /// inverted triangles in the skin test from 23 (at 0.6) to 16 and all of them from 57 to
