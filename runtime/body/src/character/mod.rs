@@ -146,8 +146,9 @@ pub struct Dressing {
     /// The legs whose ankles are kept on troupe's feet.
     legs: Vec<Leg>,
     /// The skin's helper joints that bones of the character are (see [`Rule::Helper`]),
-    /// each with its frame's rotation in the pose troupe's skin is bound in, inverted.
-    helpers: Vec<(Helper, DQuat)>,
+    /// each with its frame's rotation in the pose troupe's skin is bound in, inverted, and
+    /// its place then in its parent's frame.
+    helpers: Vec<(Helper, DQuat, DVec3)>,
 }
 
 /// How one bone is posed from troupe's joint frames.
@@ -322,7 +323,7 @@ impl Character {
         // Bones named as the helper joints of troupe's skin for this skeleton.
         let skin_helpers = crate::skin::helpers::helpers(skeleton).unwrap_or_default();
         let bind_pose = crate::skin::bind_globals(skeleton);
-        let mut helpers: Vec<(Helper, DQuat)> = Vec::new();
+        let mut helpers: Vec<(Helper, DQuat, DVec3)> = Vec::new();
         let bones: Vec<Posed> = (0..self.bones.len())
             .map(|b| {
                 let bind = binds[b];
@@ -333,7 +334,14 @@ impl Character {
                 };
                 let helper = skin_helpers.iter().find(|h| h.name == self.bones[b].name);
                 if let (None, Some(parent), Some(h)) = (joint_of[b], self.bones[b].parent, helper) {
-                    helpers.push((h.clone(), h.frame(&bind_pose).rotation.inverse()));
+                    let frame = h.frame(&bind_pose);
+                    helpers.push((
+                        h.clone(),
+                        frame.rotation.inverse(),
+                        bind_pose[h.parent]
+                            .inverse()
+                            .transform_point(frame.translation),
+                    ));
                     return Posed {
                         bind,
                         rule: Rule::Helper {
@@ -543,12 +551,16 @@ impl Dressing {
         let helpers_turned: Vec<Transform> = self
             .helpers
             .iter()
-            .map(|(h, bind_inv)| {
+            .map(|(h, bind_inv, place)| {
                 let frame = h.frame(globals);
-                Transform::new(
-                    frame.rotation * *bind_inv,
-                    frame.translation - globals[h.joint].translation,
-                )
+                // Moved from where its parent carries it: for a helper at its joint's
+                // centre, from the joint's centre; for one between two joints, from its
+                // place between them at the bind.
+                let from = match h.pair {
+                    None => globals[h.joint].translation,
+                    Some(_) => globals[h.parent].transform_point(*place),
+                };
+                Transform::new(frame.rotation * *bind_inv, frame.translation - from)
             })
             .collect();
         let frames = self.rotated_frames(globals, &helpers_turned, &[]);

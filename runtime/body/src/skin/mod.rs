@@ -77,7 +77,7 @@ const CHAIN_ENDS: usize = 2;
 /// (1.25 × and 1.75 × instead of 1.5 did worse: 87 for the 1.40 m adult, 107 for the
 /// 0.96 m child). Since the skin is made in the A-pose they matter less, but without
 /// them the 1.20 m child turns a triangle over at a quarter of the ranges. The upper
-/// arms' are now a little narrower than the groin's (`weights::UPPER_ARM`, 1.4 ×).
+/// arms' are now a little narrower than the groin's (`weights::UPPER_ARM`, 1.35 ×).
 const WIDER_BANDS: [&str; 4] = ["sacroiliac", "l_hip", "r_hip", "vl5"];
 /// The upper arms (the shoulders' volumes), whose bands are `weights::UPPER_ARM` wide.
 const UPPER_ARM_BANDS: [&str; 2] = ["l_shoulder", "r_shoulder"];

@@ -24,6 +24,9 @@
 //!    likewise to its sliding helper, and back to the joint further down the limb (up
 //!    the neck; under the jaw, [`HEAD_SPAN`]). First, below vc4 the head's weight gives
 //!    way to vc4's ([`HEAD_FLOOR`]), so that none of it reaches the root of the neck.
+//!    Last, the weight two neighbouring fingers' knuckles share (the web between them)
+//!    goes through the helper between them ([`super::helpers::WEBS`]) in the same way:
+//!    onto the two of knuckle, helper and knuckle that bracket the pair's split.
 //! 4. **Four at most**: the four heaviest joints keep the excess of their weight over the
 //!    fifth heaviest (or over a trace of 5 %, whichever is more), so a joint's weight
 //!    reaches zero before it drops out and the weights stay continuous over the surface;
@@ -79,8 +82,11 @@ pub(crate) const NARROWER: f64 = 0.6;
 /// 18 to 5, all of them from 70 to 57, and the 0.96 m child's worst posture from 5 to 1
 /// (the elbow's crease and the armpit); 1.35 and 1.45 did as well (with [`NECK_ROOT`]:
 /// 44 and 47 against 46), 1.3 turned one over at half ranges, 1.6 failed (33 at the
-/// 0.96 m child's worst posture).
-pub(crate) const UPPER_ARM: f64 = 1.4;
+/// 0.96 m child's worst posture). Narrowed to 1.35 once the webs between the fingers had
+/// their helpers: the shoulders' from 3 to 1 and all of them from 14 to 12 (the elbow's
+/// crease at 147° with the arm raised and an arm raised 179° unfolded), every size fewer
+/// or as many; 1.32 and 1.37 gave 12 as well, 1.4 14, 1.45 15, 1.3 one at half ranges.
+pub(crate) const UPPER_ARM: f64 = 1.35;
 /// How narrow the band is at vt1, the root of the neck: a little wider than the
 /// [`NARROWER`] of the skullbase and the clavicles (vc4's was that too, then). With [`UPPER_ARM`] it took vt1's
 /// inverted triangles in the skin test from 23 (at 0.6) to 16 and all of them from 57 to
@@ -155,8 +161,22 @@ pub(crate) fn skin_weights(
         .collect()
 }
 
-/// The chains of skinning slots across the helped joints.
-pub(crate) struct Chains(Vec<Chain>);
+/// The chains of skinning slots across the helped joints, and the webs between pairs of
+/// joints.
+pub(crate) struct Chains(Vec<Chain>, Vec<Web>);
+
+/// The helpers between two joints (the web between two fingers' knuckles,
+/// `helpers::WEBS`): the skin that both joints share blends them through the helpers,
+/// as a chain does a joint and its parent.
+struct Web {
+    /// The joint the helpers take their share from ([`Helper::joint`]).
+    first: u16,
+    /// The other ([`Helper::pair`]).
+    second: u16,
+    /// The helpers' slots and their shares of the way from the first to the second,
+    /// ascending.
+    links: Vec<(u16, f64)>,
+}
 
 /// One helped joint's chain: its parent end, its helpers' slots by fraction, the joint.
 struct Chain {
@@ -234,9 +254,27 @@ impl Chains {
         span: impl Fn(usize) -> (f64, f64),
         floor: impl Fn(usize) -> Option<(f64, f64)>,
     ) -> Chains {
+        // A helper between two joints belongs to their web, not to a chain.
         let mut chains: Vec<Chain> = Vec::new();
+        let mut webs = Vec::new();
         for (i, h) in helpers.iter().enumerate() {
             let slot = (first_slot + i) as u16;
+            if let Some(pair) = &h.pair {
+                let (first, second) = (h.joint as u16, pair.joint as u16);
+                let at = webs
+                    .iter()
+                    .position(|w: &Web| w.first == first && w.second == second)
+                    .unwrap_or_else(|| {
+                        webs.push(Web {
+                            first,
+                            second,
+                            links: Vec::new(),
+                        });
+                        webs.len() - 1
+                    });
+                webs[at].links.push((slot, pair.share));
+                continue;
+            }
             let c = match chains.iter().position(|c| c.joint as usize == h.joint) {
                 Some(c) => &mut chains[c],
                 None => {
@@ -262,6 +300,9 @@ impl Chains {
                 c.ladder.push((slot, h.twist));
             }
         }
+        for w in &mut webs {
+            w.links.sort_by(|a, b| a.1.total_cmp(&b.1));
+        }
         for c in &mut chains {
             c.links.sort_by(|a, b| a.1.total_cmp(&b.1));
             c.ladder.sort_by(|a, b| a.1.total_cmp(&b.1));
@@ -273,7 +314,7 @@ impl Chains {
                 c.parents.clear();
             }
         }
-        Chains(chains)
+        Chains(chains, webs)
     }
 
     /// `row`, the weights of a vertex at rest position `p`, with the weights of each
@@ -381,6 +422,50 @@ impl Chains {
             add(&mut out, lo, w * (1.0 - t));
             add(&mut out, hi, w * t);
         }
+        // Between two joints (two knuckles): their weights onto the two stops of first,
+        // helpers and second that bracket the second's share of the pair, so that the web
+        // beside a bent finger turns as a blend of two rotations half the difference
+        // apart. A joint in two pairs (the middle finger's knuckle, between the index's
+        // and the ring's) splits its weight between them in proportion to its partner's
+        // weight in each, as vt1 does between the shoulders' chains, so the routing stays
+        // continuous where a partner's weight fades out.
+        let w = |j: u16| out.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
+        let mut partners: Row = Vec::new();
+        for web in &self.1 {
+            let (wa, wb) = (w(web.first), w(web.second));
+            if wa > 0.0 && wb > 0.0 {
+                add(&mut partners, web.first, wb);
+                add(&mut partners, web.second, wa);
+            }
+        }
+        let partner_total = |j: u16| {
+            partners
+                .iter()
+                .find(|(i, _)| *i == j)
+                .map_or(0.0, |(_, w)| *w)
+        };
+        let mut paired: Row = out
+            .iter()
+            .filter(|&&(j, _)| partner_total(j) <= 0.0)
+            .copied()
+            .collect();
+        for web in &self.1 {
+            let (wa, wb) = (w(web.first), w(web.second));
+            if wa <= 0.0 || wb <= 0.0 {
+                continue;
+            }
+            let a = wa * wb / partner_total(web.first);
+            let b = wb * wa / partner_total(web.second);
+            let total = a + b;
+            let stops: Vec<(u16, f64)> = std::iter::once((web.first, 0.0))
+                .chain(web.links.iter().copied())
+                .chain(std::iter::once((web.second, 1.0)))
+                .collect();
+            let (lo, hi, t) = bracket(&stops, b / total);
+            add(&mut paired, lo, total * (1.0 - t));
+            add(&mut paired, hi, total * t);
+        }
+        let mut out = paired;
         out.retain(|&(_, w)| w > 0.0);
         out
     }
@@ -646,6 +731,7 @@ mod tests {
             axis: DVec3::NEG_Y,
             bind: DQuat::IDENTITY,
             pivot: 0.0,
+            pair: None,
         }
     }
 
@@ -656,6 +742,72 @@ mod tests {
             twist: 1.0,
             pivot: 0.05,
             ..across(joint, 1.0)
+        }
+    }
+
+    /// Webs between joints 2 and 3 and between 3 and 4 (three knuckles side by side, the
+    /// palm joint 1), a helper halfway across each in slots 10 and 11.
+    fn webs() -> Chains {
+        let web = |first: usize, second: usize| Helper {
+            pair: Some(crate::skin::helpers::Pair {
+                joint: second,
+                bind: DQuat::IDENTITY,
+                share: 0.5,
+            }),
+            ..across(first, 1.0)
+        };
+        Chains::new(
+            &[web(2, 3), web(3, 4)],
+            10,
+            1,
+            |_| None,
+            |_| (DVec3::ZERO, DVec3::NEG_Y),
+            |_| TWIST_SPAN,
+            |_| None,
+        )
+    }
+
+    #[test]
+    fn two_knuckles_share_the_web_through_the_helper_between_them() {
+        let webs = webs();
+        // The second knuckle's share of the pair, 0.4, lies between the first (0) and
+        // the helper (0.5); the palm keeps its weight.
+        let row = webs.route(&vec![(1, 0.5), (2, 0.3), (3, 0.2)], DVec3::ZERO);
+        assert!((weight_in(&row, 2) - 0.1).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert_eq!(weight_in(&row, 3), 0.0);
+        assert_eq!(weight_in(&row, 1), 0.5);
+        // A knuckle alone, or beside the palm only, keeps its weight.
+        assert_eq!(
+            webs.route(&vec![(1, 0.4), (2, 0.6)], DVec3::ZERO),
+            vec![(1, 0.4), (2, 0.6)]
+        );
+        // The middle knuckle between two: split by its neighbours' weights, half to each
+        // web, and each web's pair halfway: all on the helpers.
+        let row = webs.route(&vec![(1, 0.2), (2, 0.2), (3, 0.4), (4, 0.2)], DVec3::ZERO);
+        let total: f64 = row.iter().map(|(_, w)| w).sum();
+        assert!((total - 1.0).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_in(&row, 11) - 0.4).abs() < 1e-12, "{row:?}");
+        // Continuous where a neighbour's weight fades out, or the pair's split crosses
+        // the helper.
+        for (a, b) in [
+            (
+                vec![(1, 0.2), (2, 0.3), (3, 0.5), (4, 1e-9)],
+                vec![(1, 0.2 + 1e-9), (2, 0.3), (3, 0.5)],
+            ),
+            (
+                vec![(1, 0.2), (2, 0.4 + 1e-9), (3, 0.4 - 1e-9)],
+                vec![(1, 0.2), (2, 0.4 - 1e-9), (3, 0.4 + 1e-9)],
+            ),
+        ] {
+            let (a, b) = (webs.route(&a, DVec3::ZERO), webs.route(&b, DVec3::ZERO));
+            for slot in [1, 2, 3, 4, 10, 11] {
+                assert!(
+                    (weight_in(&a, slot) - weight_in(&b, slot)).abs() < 1e-6,
+                    "{a:?} / {b:?}"
+                );
+            }
         }
     }
 

@@ -6,8 +6,9 @@
 //! The skin's helper joints ([`troupe_body::skin::helpers`]) become joints of the rig
 //! ([`with_helper_joints`]): nodes under their joint's parent whose rotation is animated
 //! as the fraction of the joint's that the helper takes (and, for the sliding helpers at
-//! the hips, knees and elbows, whose translation is animated too), so a glTF viewer's
-//! linear blend skinning deforms the skin as troupe's viewer does.
+//! the hips, knees and elbows, whose translation is animated too; for the helpers
+//! between two fingers, both from the two knuckles' frames), so a glTF viewer's linear
+//! blend skinning deforms the skin as troupe's viewer does.
 
 use crate::rig::Rig;
 use glam::Vec3;
@@ -24,7 +25,10 @@ use troupe_body::{Skin, Transform};
 /// `JOINTS_0` slots are the rig's joints: each helper a child of its joint's parent, at
 /// the joint's rest offset, turned on every frame by [`troupe_body::skin::Helper::local_rotation`]
 /// of the joint's local rotation and, if it slides, moved from that offset by
-/// [`troupe_body::skin::Helper::local_translation`] (an animated translation). The rig's
+/// [`troupe_body::skin::Helper::local_translation`] (an animated translation); a helper
+/// between two joints ([`troupe_body::skin::Helper::pair`]) hangs under its parent (the
+/// wrist) with its rotation and translation animated by
+/// [`troupe_body::skin::Helper::pair_local`] of the two joints' frames there. The rig's
 /// rest becomes the skin's bind pose (the arms
 /// raised sideways and the fingers spread, [`troupe_body::skin::bind_posture`]), so that the inverse bind
 /// matrices written from it bind the skin where it was made.
@@ -42,8 +46,50 @@ pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
         }
     }
     for h in &skin.helpers {
-        let rest = out.rest[h.joint];
         let slot = out.names.len();
+        if let Some(pair) = &h.pair {
+            // Between two joints (a web between two fingers): from the two joints' frames
+            // in the helper's parent's, composed down the rig from it; rotation and
+            // translation both animated.
+            let rests = out.rest.clone();
+            let local = |frame: Option<usize>| {
+                let place = |j: usize| match frame {
+                    None => rests[j],
+                    Some(f) => {
+                        let translation = match rig.moving.iter().position(|&m| m == j) {
+                            Some(i) => rig.translations[f][i],
+                            None => rests[j].translation,
+                        };
+                        Transform::new(rig.rotations[f][j], translation)
+                    }
+                };
+                let below = |j: usize| {
+                    let mut chain = vec![j];
+                    while let Some(p) = rig.parents[*chain.last().expect("not empty")] {
+                        if p == h.parent {
+                            break;
+                        }
+                        chain.push(p);
+                    }
+                    chain
+                        .iter()
+                        .rev()
+                        .fold(Transform::IDENTITY, |t, &k| t.mul(&place(k)))
+                };
+                h.pair_local(pair, below(h.joint), below(pair.joint))
+            };
+            out.names.push(h.name.clone());
+            out.parents.push(Some(h.parent));
+            out.rest.push(local(None));
+            out.moving.push(slot);
+            for frame in 0..out.rotations.len() {
+                let t = local(Some(frame));
+                out.rotations[frame].push(t.rotation);
+                out.translations[frame].push(t.translation);
+            }
+            continue;
+        }
+        let rest = out.rest[h.joint];
         out.names.push(h.name.clone());
         out.parents.push(Some(h.parent));
         out.rest.push(Transform::new(
@@ -330,6 +376,13 @@ mod tests {
             ("r_shoulder_twist", -1.2),
             ("l_sternoclavicular_elevation", 0.5),
             ("root_yaw", 0.7),
+            // The webs' helpers: a little finger bent beside a ring finger bent back,
+            // its metacarpal flexed, and the index turned towards the thumb.
+            ("l_pinky1_flexion", 1.5),
+            ("l_ring1_flexion", -0.3),
+            ("l_ring1_pivot", -0.3),
+            ("l_pinky0_flexion", 0.3),
+            ("l_index1_pivot", 0.3),
         ] {
             let keys = vec![Key::new(0.0, 0.0), Key::new(1.0, v)];
             seq.add_track(Track::new(dof, keys).unwrap()).unwrap();
