@@ -197,8 +197,8 @@ impl Walk {
         }
     }
 
-    /// Why the walk gives up, if its patience has run out (see [`super::patience`]): how long it
-    /// waited, how far from its goal, and who stands in its way.
+    /// Why the walk gives up, if its patience has run out (see [`super::patience`]): how
+    /// long it waited, how far from its goal, and who stands in its way.
     pub(super) fn impatient(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<String> {
         let (Some(patience), Route::Path { points, .. }) = (&mut self.patience, &self.route) else {
             return None;
