@@ -99,6 +99,13 @@
 //! a half or a quarter of their twist a little worse (215, 212: the forearm's pronation
 //! handed in down the forearm folded more at the shoulders).
 //!
+//! **The hip's deep pivot** ([`HIP_DEEP_PIVOT`]). Past a right angle a hip's pivot eases
+//! out (a smoothstep over [`DEEP_BEND`], 90° to 120°) to 2.5 times as far from the
+//! joint's centre, so a thigh flexed to its limit slides the crotch's and the lower
+//! belly's skin further out of the groin, while a person sitting (90°) moves as before.
+//! In the skin test it took the inverted triangles at the hips and the pelvis from 8 to
+//! 1 and all of them from 12 to 5, the vertices straying no further from their bones.
+//!
 //! **The webs between the fingers** ([`WEBS`]). The skin of the web between two
 //! neighbouring fingers is shared by the palm (the wrist) and both knuckles, whose
 //! rotations can differ by a finger's whole bend (90°) and the neighbour's bend back
@@ -133,13 +140,31 @@ const CHAINED: [&str; 1] = ["shoulder"];
 /// The joints given a sliding helper, without their side prefix: at the hips it took most
 /// of the groin's inverted triangles away, at the knees and elbows most of theirs. With
 /// each, how much of the joint's twist about the bone the helper takes (a quarter at the
-/// hip, see the module's note on the thigh's twist; all of it at the knee and elbow) and
-/// how far its pivot lies from the joint's centre, as a fraction of the bone's length.
-pub const SLIDING: [(&str, f64, f64); 3] = [
-    ("hip", HIP_SLIDE_TWIST, PIVOT_SHIFT),
-    ("knee", 1.0, PIVOT_SHIFT),
-    ("elbow", 1.0, ELBOW_PIVOT_SHIFT),
+/// hip, see the module's note on the thigh's twist; all of it at the knee and elbow), how
+/// far its pivot lies from the joint's centre, as a fraction of the bone's length, and
+/// how much further out it moves in a deep bend ([`Helper::deep`]: at the hip only).
+pub const SLIDING: [(&str, f64, f64, f64); 3] = [
+    ("hip", HIP_SLIDE_TWIST, PIVOT_SHIFT, HIP_DEEP_PIVOT),
+    ("knee", 1.0, PIVOT_SHIFT, 1.0),
+    ("elbow", 1.0, ELBOW_PIVOT_SHIFT, 1.0),
 ];
+
+/// How far out a hip's pivot lies once the hip is flexed deep ([`DEEP_BEND`]), as a
+/// multiple of [`PIVOT_SHIFT`]: 2.5 × (5.3 cm at a 1.75 m adult's hip, against 2.1 cm)
+/// at 120°, its flexion's limit. Past 90° the crotch and the lower belly folded between a
+/// thigh flexed 106-115° and the pelvis (and the lumbar spine bent forward): the skin
+/// test's six sizes turned 8 triangles over there (of 12 in all over their 50 full-range
+/// postures), 1 with this (of 5), the vertices straying no further from their bones
+/// (0.036 × height at most). 1.6 × left 11 (2 × 10, 3 × 5, 4 × 16 with the skin
+/// straying 0.043 × height). A larger pivot at every
+/// bend took the folds down too (1.6 × its forward part: 8) but moves a sitting actor's
+/// thighs (see the module's note); up to 90° this one moves nothing.
+pub const HIP_DEEP_PIVOT: f64 = 2.5;
+
+/// The swing (degrees) from which a sliding helper's pivot eases out to [`Helper::deep`]
+/// times [`Helper::pivot`], and the swing where it gets there: from a right angle (a
+/// person sitting, unchanged) to the hip's flexion limit.
+pub const DEEP_BEND: (f64, f64) = (90.0, 120.0);
 
 /// The neighbouring fingers' first joints (knuckles), without their side prefix, whose
 /// web gets a helper between them (see the module's note on the webs).
@@ -232,6 +257,12 @@ pub struct Helper {
     /// How far from the joint's centre, towards the side the bone swings to, the helper
     /// turns about (m): zero but for the sliding helpers (see [`Helper::local_translation`]).
     pub pivot: f64,
+    /// How far out the pivot lies once the joint is bent deep, as a multiple of
+    /// [`Helper::pivot`]: it stays at [`Helper::pivot`] up to a swing of
+    /// [`DEEP_BEND`]`.0` and eases out to this many times as far at [`DEEP_BEND`]`.1`
+    /// (see [`Helper::pivot_at`]); 1 (a fixed pivot) but for the hips' helpers
+    /// ([`HIP_DEEP_PIVOT`]).
+    pub deep: f64,
     /// For a helper between two joints (the web between two fingers), the second joint:
     /// the helper then lies between the two joints and turns by a blend of their turns
     /// from the bind, both counted in `parent`'s frame, which is then not `joint`'s
@@ -298,8 +329,18 @@ impl Helper {
         else {
             return DVec3::ZERO;
         };
-        let pivot = towards * self.pivot;
+        let pivot = towards * self.pivot_at(2.0 * swing.w.abs().min(1.0).acos());
         self.bind * (pivot - swing * pivot)
+    }
+
+    /// How far from the joint's centre the helper turns about when the bone has swung by
+    /// `swing` (radians) from the bind: [`Helper::pivot`], easing out (a smoothstep) to
+    /// [`Helper::deep`] times that from [`DEEP_BEND`]`.0` to [`DEEP_BEND`]`.1`, so the
+    /// move stays continuous.
+    pub fn pivot_at(&self, swing: f64) -> f64 {
+        let (from, to) = (DEEP_BEND.0.to_radians(), DEEP_BEND.1.to_radians());
+        let t = ((swing - from) / (to - from)).clamp(0.0, 1.0);
+        self.pivot * (1.0 + (self.deep - 1.0) * t * t * (3.0 - 2.0 * t))
     }
 
     /// The helper's frame among joint frames `globals`: at the joint's centre moved by
@@ -382,15 +423,17 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
             axis: (rest[joint].rotation.inverse() * bone).normalize(),
             bind: bind_pose[parent].rotation.inverse() * bind_pose[joint].rotation,
             pivot: 0.0,
+            deep: 1.0,
             pair: None,
         };
         Ok(Some((helper, bone.length())))
     };
     // The sliding helper at the joint named so (see [`SLIDING`]).
-    let slide = |name: &str, twist: f64, shift: f64| -> Result<Option<Helper>> {
+    let slide = |name: &str, twist: f64, shift: f64, deep: f64| -> Result<Option<Helper>> {
         Ok(at(name)?.map(|(joint, length)| Helper {
             name: format!("{name}_slide"),
             pivot: shift * length,
+            deep,
             twist,
             ..joint
         }))
@@ -418,8 +461,8 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
                 });
             }
         }
-        for (name, twist, shift) in SLIDING {
-            out.extend(slide(&format!("{side}{name}"), twist, shift)?);
+        for (name, twist, shift, deep) in SLIDING {
+            out.extend(slide(&format!("{side}{name}"), twist, shift, deep)?);
         }
         // Between neighbouring knuckles, hanging from the wrist (the palm), which the
         // metacarpals and the knuckles hang from.
@@ -446,7 +489,7 @@ pub(crate) fn helpers(skeleton: &Skeleton) -> Result<Vec<Helper>> {
         }
     }
     for (name, twist, shift) in SLIDING_MIDLINE {
-        out.extend(slide(name, twist, shift)?);
+        out.extend(slide(name, twist, shift, 1.0)?);
     }
     out.sort_by_key(|h| h.joint);
     Ok(out)
@@ -477,6 +520,7 @@ mod tests {
             axis: -DVec3::Y,
             bind: DQuat::IDENTITY,
             pivot: 0.0,
+            deep: 1.0,
             pair: None,
         }
     }
@@ -672,6 +716,53 @@ mod tests {
         for axis in [DVec3::X, DVec3::Z, DVec3::new(1.0, 0.0, -2.0).normalize()] {
             let local = DQuat::from_axis_angle(axis, 1e-7);
             assert!(slide.local_translation(local).length() < 1e-7);
+        }
+    }
+
+    #[test]
+    fn a_hips_pivot_eases_out_past_a_right_angle_and_stays_continuous() {
+        let fixed = Helper {
+            pivot: 0.1,
+            ..helper(1.0, 1.0)
+        };
+        let deep = Helper {
+            deep: 2.5,
+            ..fixed.clone()
+        };
+        let moved = |h: &Helper, bend: f64| h.local_translation(DQuat::from_rotation_x(-bend));
+        // Up to a right angle (a person sitting) it moves as a fixed pivot does.
+        for degrees in [0.0, 30.0, 60.0, 89.9, 90.0] {
+            let bend = f64::to_radians(degrees);
+            assert!(moved(&deep, bend).abs_diff_eq(moved(&fixed, bend), 1e-12));
+        }
+        // From the limit on, as a pivot 2.5 times as far would: d·(1 − cos θ) into the
+        // bend and d·sin θ along the bone.
+        for degrees in [120.0, 130.0] {
+            let bend = f64::to_radians(degrees);
+            let want = DVec3::new(0.0, -0.25 * bend.sin(), 0.25 * (1.0 - bend.cos()));
+            assert!(moved(&deep, bend).abs_diff_eq(want, 1e-12), "{degrees}");
+        }
+        // In between it eases out, continuously (under 3 mm a tenth of a degree, where a jump
+        // would be of centimetres) and further at each step.
+        assert!((deep.pivot_at(f64::to_radians(105.0)) - 0.1 * 1.75).abs() < 1e-12);
+        let mut last = moved(&deep, f64::to_radians(89.0));
+        for k in 1..=400 {
+            let bend = f64::to_radians(89.0 + 0.1 * k as f64);
+            let now = moved(&deep, bend);
+            assert!((now - last).length() < 3e-3, "{bend}");
+            assert!(now.z > last.z);
+            last = now;
+        }
+        // Knees, elbows and the midline keep a fixed pivot; only the hips' goes out.
+        let t = &crate::templates()[0];
+        let skeleton = t.instantiate(t.default_params()).unwrap();
+        for h in helpers(&skeleton).unwrap() {
+            let want = if h.name.ends_with("hip_slide") {
+                HIP_DEEP_PIVOT
+            } else {
+                1.0
+            };
+            assert_eq!(h.deep, want, "{}", h.name);
         }
     }
 }

@@ -731,6 +731,7 @@ mod tests {
             axis: DVec3::NEG_Y,
             bind: DQuat::IDENTITY,
             pivot: 0.0,
+            deep: 1.0,
             pair: None,
         }
     }
