@@ -129,6 +129,7 @@
 //! skin the same.
 
 use crate::error::{Error, Result};
+use crate::math::smoothstep;
 use crate::skeleton::Skeleton;
 use crate::transform::Transform;
 use glam::{DQuat, DVec3};
@@ -339,8 +340,7 @@ impl Helper {
     /// move stays continuous.
     pub fn pivot_at(&self, swing: f64) -> f64 {
         let (from, to) = (DEEP_BEND.0.to_radians(), DEEP_BEND.1.to_radians());
-        let t = ((swing - from) / (to - from)).clamp(0.0, 1.0);
-        self.pivot * (1.0 + (self.deep - 1.0) * t * t * (3.0 - 2.0 * t))
+        self.pivot * (1.0 + (self.deep - 1.0) * smoothstep((swing - from) / (to - from)))
     }
 
     /// The helper's frame among joint frames `globals`: at the joint's centre moved by
