@@ -343,7 +343,7 @@ impl Chains {
             }
         }
         let row = &floored;
-        let weight = |j: u16| row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
+        let weight = |j: u16| weight_of(row, j);
         let end_weight = |c: &Chain| c.parents.iter().map(|&p| weight(p)).sum::<f64>();
         let mut partners: Row = Vec::new();
         for c in &self.0 {
@@ -352,18 +352,9 @@ impl Chains {
             }
             add(&mut partners, c.joint, end_weight(c));
         }
-        let partner_total = |j: u16| {
-            partners
-                .iter()
-                .find(|(i, _)| *i == j)
-                .map_or(0.0, |(_, w)| *w)
-        };
+        let partner_total = |j: u16| weight_of(&partners, j);
         // Joints in no chain with a partner keep their weight.
-        let mut out: Row = row
-            .iter()
-            .filter(|&&(j, _)| partner_total(j) <= 0.0)
-            .copied()
-            .collect();
+        let mut out = unpartnered(row, &partners);
         for c in &self.0 {
             let (we, wj) = (end_weight(c), weight(c.joint));
             if we <= 0.0 || wj <= 0.0 {
@@ -429,7 +420,7 @@ impl Chains {
         // and the ring's) splits its weight between them in proportion to its partner's
         // weight in each, as vt1 does between the shoulders' chains, so the routing stays
         // continuous where a partner's weight fades out.
-        let w = |j: u16| out.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w);
+        let w = |j: u16| weight_of(&out, j);
         let mut partners: Row = Vec::new();
         for web in &self.1 {
             let (wa, wb) = (w(web.first), w(web.second));
@@ -438,17 +429,8 @@ impl Chains {
                 add(&mut partners, web.second, wa);
             }
         }
-        let partner_total = |j: u16| {
-            partners
-                .iter()
-                .find(|(i, _)| *i == j)
-                .map_or(0.0, |(_, w)| *w)
-        };
-        let mut paired: Row = out
-            .iter()
-            .filter(|&&(j, _)| partner_total(j) <= 0.0)
-            .copied()
-            .collect();
+        let partner_total = |j: u16| weight_of(&partners, j);
+        let mut paired = unpartnered(&out, &partners);
         for web in &self.1 {
             let (wa, wb) = (w(web.first), w(web.second));
             if wa <= 0.0 || wb <= 0.0 {
@@ -480,6 +462,19 @@ fn bracket<T: Copy>(stops: &[(T, f64)], x: f64) -> (T, T, f64) {
         .unwrap_or(stops.len() - 2);
     let ((lo, at_lo), (hi, at_hi)) = (stops[k], stops[k + 1]);
     (lo, hi, ((x - at_lo) / (at_hi - at_lo)).clamp(0.0, 1.0))
+}
+
+/// Joint `j`'s weight in `row` (0 if it has none).
+fn weight_of(row: &Row, j: u16) -> f64 {
+    row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w)
+}
+
+/// The joints of `row` with no weight among `partners`, with their weights.
+fn unpartnered(row: &Row, partners: &Row) -> Row {
+    row.iter()
+        .filter(|&&(j, _)| weight_of(partners, j) <= 0.0)
+        .copied()
+        .collect()
 }
 
 /// Adds `w` to joint `j`'s weight in `row`.
@@ -774,10 +769,10 @@ mod tests {
         // The second knuckle's share of the pair, 0.4, lies between the first (0) and
         // the helper (0.5); the palm keeps its weight.
         let row = webs.route(&vec![(1, 0.5), (2, 0.3), (3, 0.2)], DVec3::ZERO);
-        assert!((weight_in(&row, 2) - 0.1).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
-        assert_eq!(weight_in(&row, 3), 0.0);
-        assert_eq!(weight_in(&row, 1), 0.5);
+        assert!((weight_of(&row, 2) - 0.1).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert_eq!(weight_of(&row, 3), 0.0);
+        assert_eq!(weight_of(&row, 1), 0.5);
         // A knuckle alone, or beside the palm only, keeps its weight.
         assert_eq!(
             webs.route(&vec![(1, 0.4), (2, 0.6)], DVec3::ZERO),
@@ -788,8 +783,8 @@ mod tests {
         let row = webs.route(&vec![(1, 0.2), (2, 0.2), (3, 0.4), (4, 0.2)], DVec3::ZERO);
         let total: f64 = row.iter().map(|(_, w)| w).sum();
         assert!((total - 1.0).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 11) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 11) - 0.4).abs() < 1e-12, "{row:?}");
         // Continuous where a neighbour's weight fades out, or the pair's split crosses
         // the helper.
         for (a, b) in [
@@ -805,15 +800,11 @@ mod tests {
             let (a, b) = (webs.route(&a, DVec3::ZERO), webs.route(&b, DVec3::ZERO));
             for slot in [1, 2, 3, 4, 10, 11] {
                 assert!(
-                    (weight_in(&a, slot) - weight_in(&b, slot)).abs() < 1e-6,
+                    (weight_of(&a, slot) - weight_of(&b, slot)).abs() < 1e-6,
                     "{a:?} / {b:?}"
                 );
             }
         }
-    }
-
-    fn weight_in(row: &Row, j: u16) -> f64 {
-        row.iter().find(|(i, _)| *i == j).map_or(0.0, |(_, w)| *w)
     }
 
     #[test]
@@ -821,9 +812,9 @@ mod tests {
         let chains = chains();
         // The joint's share 0.4 lies between the helpers at 0.25 and 0.5.
         let row = chains.route(&vec![(1, 0.6), (2, 0.4), (7, 0.0)], DVec3::ZERO);
-        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 11) - 0.6).abs() < 1e-12, "{row:?}");
-        assert_eq!(weight_in(&row, 1) + weight_in(&row, 2), 0.0);
+        assert!((weight_of(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 11) - 0.6).abs() < 1e-12, "{row:?}");
+        assert_eq!(weight_of(&row, 1) + weight_of(&row, 2), 0.0);
         // A parent alone, or a joint alone, keeps its weight.
         assert_eq!(chains.route(&vec![(1, 1.0)], DVec3::ZERO), vec![(1, 1.0)]);
         assert_eq!(
@@ -836,7 +827,7 @@ mod tests {
             chains.route(&vec![(1, 0.5 - 1e-9), (2, 0.5 + 1e-9)], DVec3::ZERO),
         );
         for slot in [1, 2, 10, 11, 12] {
-            assert!((weight_in(&below, slot) - weight_in(&above, slot)).abs() < 1e-6);
+            assert!((weight_of(&below, slot) - weight_of(&above, slot)).abs() < 1e-6);
         }
     }
 
@@ -846,8 +837,8 @@ mod tests {
         let row = chains().route(&vec![(1, 0.5), (2, 0.25), (3, 0.25)], DVec3::ZERO);
         let total: f64 = row.iter().map(|(_, w)| w).sum();
         assert!((total - 1.0).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 11) - 0.5).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 14) - 0.5).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 11) - 0.5).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 14) - 0.5).abs() < 1e-12, "{row:?}");
     }
 
     #[test]
@@ -868,10 +859,10 @@ mod tests {
         let row = chains.route(&vec![(0, 0.6), (1, 0.3), (2, 0.1)], DVec3::ZERO);
         let total: f64 = row.iter().map(|(_, w)| w).sum();
         assert!((total - 1.0).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 0) - 0.4).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 1) - 0.2).abs() < 1e-12, "{row:?}");
-        assert_eq!(weight_in(&row, 2), 0.0);
+        assert!((weight_of(&row, 10) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 0) - 0.4).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 1) - 0.2).abs() < 1e-12, "{row:?}");
+        assert_eq!(weight_of(&row, 2), 0.0);
         // Without the joint, the end's joints keep their weights.
         assert_eq!(
             chains.route(&vec![(0, 0.6), (1, 0.4)], DVec3::ZERO),
@@ -906,22 +897,22 @@ mod tests {
         assert_eq!(at(to + 0.1), vec![(2, 1.0)]);
         // Three eighths of the twist: halfway between the quarter and the half.
         let row = at(from + 0.375 * (to - from));
-        assert!((weight_in(&row, 14) - 0.5).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 15) - 0.5).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 14) - 0.5).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 15) - 0.5).abs() < 1e-12, "{row:?}");
         // Continuous along the bone, and summing to one.
         for k in 0..100 {
             let (a, b) = (at(k as f64 * 0.01), at(k as f64 * 0.01 + 1e-9));
             for slot in [2, 13, 14, 15, 16] {
-                assert!((weight_in(&a, slot) - weight_in(&b, slot)).abs() < 1e-6);
+                assert!((weight_of(&a, slot) - weight_of(&b, slot)).abs() < 1e-6);
             }
             assert!((a.iter().map(|(_, w)| w).sum::<f64>() - 1.0).abs() < 1e-12);
         }
         // Across the joint first: the armpit's share past the last helper across it goes
         // on down the ladder's first rung (near the joint, no twist).
         let row = chains.route(&vec![(1, 0.2), (2, 0.8)], DVec3::ZERO);
-        assert!((weight_in(&row, 12) - 0.8).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 13) - 0.2).abs() < 1e-12, "{row:?}");
-        assert_eq!(weight_in(&row, 2), 0.0);
+        assert!((weight_of(&row, 12) - 0.8).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 13) - 0.2).abs() < 1e-12, "{row:?}");
+        assert_eq!(weight_of(&row, 2), 0.0);
     }
 
     #[test]
@@ -945,8 +936,8 @@ mod tests {
         assert_eq!(at(0.5 * from), vec![(1, 0.4), (10, 0.6)]);
         assert_eq!(at(to + 0.1), vec![(1, 0.4), (2, 0.6)]);
         let row = at(0.5 * (from + to));
-        assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 2) - 0.3).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 2) - 0.3).abs() < 1e-12, "{row:?}");
     }
 
     #[test]
@@ -975,13 +966,13 @@ mod tests {
         assert_eq!(at(0.4), vec![(1, 0.4), (10, 0.6)]);
         assert_eq!(at(1.6), vec![(1, 1.0)]);
         let row = at(1.0);
-        assert!((weight_in(&row, 1) - 0.7).abs() < 1e-12, "{row:?}");
-        assert!((weight_in(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 1) - 0.7).abs() < 1e-12, "{row:?}");
+        assert!((weight_of(&row, 10) - 0.3).abs() < 1e-12, "{row:?}");
         // Continuous, and summing to one.
         for k in 0..200 {
             let (a, b) = (at(k as f64 * 0.01), at(k as f64 * 0.01 + 1e-9));
             for slot in [1, 2, 10] {
-                assert!((weight_in(&a, slot) - weight_in(&b, slot)).abs() < 1e-6);
+                assert!((weight_of(&a, slot) - weight_of(&b, slot)).abs() < 1e-6);
             }
             assert!((a.iter().map(|(_, w)| w).sum::<f64>() - 1.0).abs() < 1e-12);
         }
