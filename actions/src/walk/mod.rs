@@ -1677,13 +1677,12 @@ impl Generator for Walk {
         self.steer.advance(ctx.dt);
         self.t += ctx.dt;
         self.plan = Some(plan);
-        match (done, self.giving_up.take()) {
-            (true, Some(why)) => Step::Failed(why),
-            (true, None) => Step::Finished,
-            (false, giving_up) => {
-                self.giving_up = giving_up;
-                Step::Running
-            }
+        if !done {
+            Step::Running
+        } else if let Some(why) = self.giving_up.take() {
+            Step::Failed(why)
+        } else {
+            Step::Finished
         }
     }
 
