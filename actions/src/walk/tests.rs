@@ -1,6 +1,7 @@
 //! The walking motor's measurable claims, run through a real scene (scheduler, blending,
 //! forward kinematics) and measured on the resulting joint positions.
 
+use super::feet::Landing;
 use super::*;
 use crate::error::ActionError;
 use troupe_body::kinematics::forward_kinematics;
