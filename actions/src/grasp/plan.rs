@@ -19,6 +19,7 @@ use super::body::{furniture_round, BodyReach, Shortfall, Stage};
 use super::close::HandModel;
 use super::decision::{decide, Decision, GraspType};
 use crate::error::OptionError;
+use troupe_body::collision::{BodyVolumes, Capsule, Volume};
 use troupe_body::glam::{DMat3, DQuat, DVec3};
 use troupe_body::ik::{Goal, IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::{rotation_error, scope_dofs_moving, Effector};
@@ -39,9 +40,25 @@ pub const AVOID_DISTANCE: f64 = 0.08;
 /// … and this far when a frame allows it: the two hands' solids (about 5 cm round each
 /// palm) then do not interpenetrate.
 pub const APART_DISTANCE: f64 = 0.11;
-/// Cost added to a frame whose palm is nearer the giving palm than [`APART_DISTANCE`]:
-/// it is tried after every frame that keeps the hands apart.
-const NEAR_PENALTY: f64 = 10.0;
+/// Cost added to a frame tried only after every other: one whose palm is nearer the
+/// giving palm than [`APART_DISTANCE`], or whose hand lies in the furniture by the object
+/// (see [`FINGERS_RESTING`]).
+const TRIED_LAST: f64 = 10.0;
+/// How far (m) a hand sensor may press into the furniture round the object (fingertips
+/// resting on the table beside a cup's foot) at a grasp frame; the hand's solids may not
+/// go into it at all. A frame whose hand lies deeper backs off, or is tried last: a book,
+/// a phone or a tray lying flat on a table was taken by its edge, the fingers under it
+/// and the hand 2-6 cm in the table.
+pub const FINGERS_RESTING: f64 = 0.003;
+/// Objects whose surface is within this distance (m) of the grasped object's centre are
+/// the furniture round it, for [`FINGERS_RESTING`].
+const FURNITURE_RANGE: f64 = 0.5;
+/// Most steps of [`SEARCH_STEP`] a hand in the furniture backs away from the object.
+const BACK_STEPS: usize = 20;
+/// A hand sensor within this gap (m) of the object's surface still touches it.
+const TOUCHING: f64 = 0.03;
+/// Cost per metre a hand lies in the furniture, among the frames tried last.
+const DEPTH_COST: f64 = 20.0;
 
 /// Which hand(s) a grasp uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -452,6 +469,10 @@ pub fn plan_grasp(
         .map(|j| g[j].translation)
         .unwrap_or(root.translation + DVec3::Y * 0.6);
     let one_of = options.hand == HandChoice::Auto && !two;
+    let furniture = Furniture::round(world, object);
+    let body_volumes = BodyVolumes::new(skeleton);
+    let mut placed = Vec::new();
+    body_volumes.place(g, &mut placed);
     let mut first_error = None;
     // Each hand's grasp frames, cheapest first.
     let mut frames: Vec<(Side, Vec<Frame>)> = Vec::new();
@@ -475,6 +496,9 @@ pub fn plan_grasp(
                     )
                 })
                 .collect();
+            // The hand as the solids' measure sees it (its sensors and the solids its
+            // joints carry), in the wrist frame.
+            let hand = HandVolumes::new(&model, (&body_volumes, &placed), &local, &wrist_now);
             let outward = match side {
                 Side::Right => -actor_left,
                 Side::Left => actor_left,
@@ -511,17 +535,33 @@ pub fn plan_grasp(
                 if !free {
                     continue;
                 }
+                // A hand in the furniture the object lies on (a palm on a phone lying on
+                // a table, the hand's solid below the phone's top) backs away from the
+                // object while it still touches it, until it is clear; else the frame is
+                // tried last, the shallower first.
+                let wrist_at = |origin: DVec3| Transform::new(rot, origin - rot * hs.palm);
                 let mut penalty = 0.0;
+                let depth = furniture.depth(&hand, &wrist_at(origin));
+                if depth > 0.0 {
+                    let backed = (1..=BACK_STEPS)
+                        .map(|k| origin - a * (k as f64 * SEARCH_STEP))
+                        .take_while(|&at| hand.touches(obj, &wrist_at(at)))
+                        .find(|&at| furniture.depth(&hand, &wrist_at(at)) <= 0.0);
+                    match backed {
+                        Some(at) => origin = at,
+                        None => penalty = TRIED_LAST + DEPTH_COST * depth,
+                    }
+                }
                 if let Some(avoid) = options.avoid {
                     let apart = (origin - avoid).length();
                     if apart < AVOID_DISTANCE {
                         continue;
                     }
                     if apart < APART_DISTANCE {
-                        penalty = NEAR_PENALTY;
+                        penalty += TRIED_LAST;
                     }
                 }
-                let wrist = Transform::new(rot, origin - rot * hs.palm);
+                let wrist = wrist_at(origin);
                 let angle = rotation_error(wrist_now.rotation, rot).length();
                 let cost = (origin - palm_now).length() + ROTATION_WEIGHT * angle + penalty;
                 ranked.push((cost, wrist, origin));
@@ -585,7 +625,7 @@ pub fn plan_grasp(
                 if matches!(stage, Stage::Crouch(_)) && attempt[0].1 >= MAX_CROUCH_FRAMES {
                     continue;
                 }
-                if attempt.iter().any(|&(s, k)| frame(s, k).0 >= NEAR_PENALTY) != near {
+                if attempt.iter().any(|&(s, k)| frame(s, k).0 >= TRIED_LAST) != near {
                     continue;
                 }
                 let goals: Vec<(Side, Transform)> =
@@ -645,6 +685,109 @@ pub fn plan_grasp(
 
 /// A candidate grasp frame: its cost, the wrist's goal pose and the palm centre's goal.
 type Frame = (f64, Transform, DVec3);
+
+/// The furniture round an object being grasped: the other objects (not held) whose
+/// surface lies within [`FURNITURE_RANGE`] of its centre (the table it lies on, the shelf
+/// beside it), which a hand keeps out of (see [`FINGERS_RESTING`]).
+struct Furniture(Vec<Volume>);
+
+impl Furniture {
+    /// The furniture round object `object` of `world`.
+    fn round(world: &World, object: usize) -> Furniture {
+        let Some(obj) = world.objects.get(object) else {
+            return Furniture(Vec::new());
+        };
+        Furniture(
+            world
+                .objects
+                .iter()
+                .enumerate()
+                .filter(|&(i, o)| {
+                    i != object
+                        && world.holder(i).is_none()
+                        && object_distance(o, obj.position) < FURNITURE_RANGE
+                })
+                .map(|(_, o)| Volume::Shape {
+                    shape: o.shape,
+                    pose: Transform::new(o.rotation, o.position),
+                })
+                .collect(),
+        )
+    }
+
+    /// How deep (m) `hand` with its wrist at `wrist` lies in the furniture at most, its
+    /// sensors counted from [`FINGERS_RESTING`] (negative: how far it stays clear; `-inf`
+    /// with no furniture).
+    fn depth(&self, hand: &HandVolumes, wrist: &Transform) -> f64 {
+        let mut deepest = f64::NEG_INFINITY;
+        for volume in &self.0 {
+            for (c, r) in hand.sensors(wrist) {
+                deepest = deepest.max(volume.sphere_depth(c, r) - FINGERS_RESTING);
+            }
+            for solid in hand.solids.iter().map(|k| k.placed(wrist)) {
+                let depth = if solid.a == solid.b && solid.ra == solid.rb {
+                    volume.sphere_depth(solid.a, solid.ra)
+                } else if volume.may_touch(&solid) {
+                    volume.capsule_depth(&solid).0
+                } else {
+                    continue;
+                };
+                deepest = deepest.max(depth);
+            }
+        }
+        deepest
+    }
+}
+
+/// A hand as the grasp's sensors and the solids' measure (`troupe.deepest_overlap`) see
+/// it, in its wrist's frame: its sensors (spheres) and the solids its joints carry (a
+/// ball round the palm for the templates).
+struct HandVolumes {
+    /// The sensors: (centre, radius).
+    sensors: Vec<(DVec3, f64)>,
+    /// The solids, as the capsules that cover them.
+    solids: Vec<Capsule>,
+}
+
+impl HandVolumes {
+    /// The hand of `model` as it is now: its wrist at `wrist_now`, its sensors at
+    /// `sensors` (wrist frame), the body's solids `body` placed at `placed` (world).
+    fn new(
+        model: &HandModel,
+        (body, placed): (&BodyVolumes, &[Capsule]),
+        sensors: &[(DVec3, f64)],
+        wrist_now: &Transform,
+    ) -> HandVolumes {
+        let to_wrist = wrist_now.inverse();
+        let solids = placed
+            .iter()
+            .enumerate()
+            .filter(|&(i, _)| {
+                let joint = body.joint(i);
+                joint == model.sensors.wrist || model.joints.contains(&joint)
+            })
+            .map(|(_, world)| world.placed(&to_wrist))
+            .collect();
+        HandVolumes {
+            sensors: sensors.to_vec(),
+            solids,
+        }
+    }
+
+    /// The sensors with the wrist at `wrist` (world).
+    fn sensors<'a>(&'a self, wrist: &'a Transform) -> impl Iterator<Item = (DVec3, f64)> + 'a {
+        self.sensors
+            .iter()
+            .map(move |&(c, r)| (wrist.transform_point(c), r))
+    }
+
+    /// Whether some sensor of the hand, its wrist at `wrist`, is within [`TOUCHING`] of
+    /// `object`'s surface.
+    fn touches(&self, object: &Object, wrist: &Transform) -> bool {
+        self.sensors(wrist)
+            .any(|(c, r)| object_distance(object, c) - r < TOUCHING)
+    }
+}
 
 /// The frames of each hand tried by the arm and the lean.
 const MAX_FRAMES: usize = 8;
