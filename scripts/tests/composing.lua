@@ -610,6 +610,17 @@ test("two waiters carrying trays meet in a 1.6 m aisle: one steps back out of it
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
 end)
 
+test("two waiters carrying trays meet in a 1.55 m aisle: the one stepping back is not stopped by its new routes", function()
+  -- A walk held by the clearance takes a new route every two seconds or so, and each
+  -- one forgot the stand-off: the waiter stepping back stopped 1.1 m from the other,
+  -- and neither then waited the two seconds it takes to step back again (both stood
+  -- for good). The stand-off now carries over to the new route.
+  local took, deepest, what = waiters_in_an_aisle(1.55, { "both", "both" }, 90)
+  print(string.format("trays in a 1.55 m aisle: both arrived %.1f s after setting off, deepest %.4f m (%s)",
+                      took, deepest, what))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
+end)
+
 test("a tray carried in one hand meets a walker in a 1.4 m aisle: one steps back out of it and both arrive", function()
   -- The walker, held in its way, stepped in place and swayed faster than standing now
   -- and then: it never waited long enough to step back, and both stood for good.

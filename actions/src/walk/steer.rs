@@ -225,7 +225,12 @@ impl Steer {
     }
 
     /// Starts steering at plan time `tau`, on the plan (no offset), at its full rate and
-    /// with `drift`; the companions, the last decision and the disc kept out of carry on.
+    /// with `drift`; the companions, the last decision, the disc kept out of and the
+    /// stand-off (how long the walk has waited face to face, whether it steps back)
+    /// carry on. A walk held by the clearance takes a new route every two seconds or
+    /// so, and each one forgot the stand-off: two waiters with trays in an aisle stood
+    /// face to face for good, the one stepping back stopped by its next route and
+    /// neither waiting the two seconds it takes to step back again.
     pub(super) fn engage(&mut self, tau: f64, drift: DVec2) {
         *self = Steer {
             engaged: true,
@@ -237,7 +242,7 @@ impl Steer {
             decision: self.decision,
             target: (1.0, drift),
             tau_before: tau,
-            standoff: Standoff::default(),
+            standoff: std::mem::take(&mut self.standoff),
             keep_out: self.keep_out.take(),
         };
     }
