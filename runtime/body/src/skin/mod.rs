@@ -92,6 +92,18 @@ const UPPER_ARM_BANDS: [&str; 2] = ["l_shoulder", "r_shoulder"];
 const NARROWER_BANDS: [&str; 3] = ["skullbase", "l_sternoclavicular", "r_sternoclavicular"];
 /// The palms (the wrists' volumes), whose bands are `weights::PALM` wide.
 const PALM_BANDS: [&str; 2] = ["l_wrist", "r_wrist"];
+/// The middle phalanges of the index, middle and ring fingers, whose bands are
+/// `weights::FINGER_MIDDLE` wide.
+const FINGER_MIDDLE_BANDS: [&str; 6] = [
+    "l_index2",
+    "r_index2",
+    "l_middle2",
+    "r_middle2",
+    "l_ring2",
+    "r_ring2",
+];
+/// The little fingers' first phalanges, whose bands are `weights::LITTLE_KNUCKLE` wide.
+const LITTLE_KNUCKLE_BANDS: [&str; 2] = ["l_pinky1", "r_pinky1"];
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -267,6 +279,10 @@ impl Skin {
                     weights::UPPER_ARM
                 } else if PALM_BANDS.contains(&name) {
                     weights::PALM
+                } else if FINGER_MIDDLE_BANDS.contains(&name) {
+                    weights::FINGER_MIDDLE
+                } else if LITTLE_KNUCKLE_BANDS.contains(&name) {
+                    weights::LITTLE_KNUCKLE
                 } else if NARROWER_BANDS.contains(&name) {
                     weights::NARROWER
                 } else if name == "vt1" {

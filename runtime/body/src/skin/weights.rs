@@ -110,6 +110,25 @@ pub(crate) const NECK: f64 = 0.45;
 /// to 7 and all of them from 32 to 29, every size fewer or as many; 1.4 and 1.6 gave the
 /// same, 1.2 and 1.3 8 at the hands, 2 8, 0.8 14.
 pub(crate) const PALM: f64 = 1.5;
+/// How much narrower the bands are at the middle phalanges of the index, middle and ring
+/// fingers (the volumes of their middle joints, `index2`, …): the phalanx is short, and
+/// smoothed over the usual length the knuckle's and the last joint's weights met on it,
+/// so a vertex there blended three joints turned by 61°, 169° and 243° from the palm (the
+/// 1.20 m child's ring finger, its knuckle at 61°, its middle joint at 108° and its last
+/// joint at 74°), which folded it. In the skin test (six sizes' 50 full-range postures)
+/// it took that fold away, no other moving; 0.65 and 0.75 did the same, 0.85 and 1.2 not,
+/// and the little finger's middle phalanx narrowed as well (0.65-0.8) folded the 2.01 m
+/// adult's little finger bent 82° and 109° instead.
+pub(crate) const FINGER_MIDDLE: f64 = 0.7;
+/// How much narrower the band is at the little finger's first phalanx (the volume of its
+/// knuckle, `pinky1`): less of its weight, and of its middle joint's, reaches the web
+/// beside the ring finger and the palm, where the 0.96 m child's little finger bent 83°
+/// (its middle joint 101°) beside a ring finger turned away folded the skin shared by the
+/// palm (the wrist), the knuckle, the web's helper and the middle joint. In the skin test
+/// it took that fold away, no other moving; 0.8 and 0.9 did the same, 0.7 folded one at
+/// the 1.38 m child's wrist, 1.2 one at the 0.96 m child's palm. (All the knuckles'
+/// bands at 0.8, measured a round before, folded more: 18 against 14.)
+pub(crate) const LITTLE_KNUCKLE: f64 = 0.85;
 /// Smoothing rounds: each moves a vertex's weights at most all the way to its
 /// neighbours' mean, so they reach √150 edge lengths; the few vertices that ask for more
 /// ((WIDER × MOST_EDGES)² = 163 at the groin) get the rounds they lack alone (`diffuse`).
@@ -133,7 +152,7 @@ type Row = Vec<(u16, f64)>;
 /// The weights of every vertex of a closed surface (bind-pose positions `positions`,
 /// triangles `indices`); `band` scales the smoothing's length and cap for the vertices
 /// whose nearest volume is each joint's ([`WIDER`], [`UPPER_ARM`], [`NARROWER`],
-/// [`NECK_ROOT`], [`NECK`], [`PALM`] or 1).
+/// [`NECK_ROOT`], [`NECK`], [`PALM`], [`FINGER_MIDDLE`], [`LITTLE_KNUCKLE`] or 1).
 pub(crate) fn skin_weights(
     positions: &[DVec3],
     indices: &[u32],
