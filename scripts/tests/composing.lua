@@ -621,6 +621,31 @@ test("two waiters carrying trays meet in a 1.55 m aisle: the one stepping back i
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
 end)
 
+test("a cup carried along a path that ends 0.9 m before someone standing: the walk ends where the body is held", function()
+  -- The cup carried out in front reaches the guest's body 13 cm before the path's end:
+  -- the waiter waited there for the guest to make room, for good, and the hand-over
+  -- never came (the café example). Held near its end by someone standing, a walk to a
+  -- point or along a path now ends where it stands.
+  local waiter = troupe.actor{ name = "waiter", at = {0, 0, 0} }
+  local guest = troupe.actor{ name = "guest", at = {3.0, 0, 3.0}, facing = 180 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {0.3, 1.0, 0.35}, mass = 0.3 }
+  expect(waiter:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local t0 = troupe.time()
+  local w = waiter:walk{ path = { {1.0, 1.9}, {3.0, 2.1} }, heading = 0, speed = 1.0 }
+  local solids = require("support.solids")
+  local ok, deepest, between = solids.watch(function() return solids.ended(w) end, 30)
+  local p = waiter:position()
+  local short = math.sqrt((p[1] - 3.0)^2 + (p[3] - 2.1)^2)
+  print(string.format("held near its end: the walk %s %.1f s after it started, %.2f m short, deepest %.4f m (%s)",
+                      w.status, troupe.time() - t0, short, deepest, between))
+  expect(ok and w.status == "completed", "the walk ended: " .. w.status .. " " .. tostring(w.error))
+  expect(short > 0.02 and short < 0.3, string.format("ended %.2f m short of its end", short))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, between))
+  local g = waiter:give{ object = cup, to = guest, hand = "right" }
+  expect(g:wait() == "completed", "handed over: " .. tostring(g.error))
+end)
+
 test("a tray carried in one hand meets a walker in a 1.4 m aisle: one steps back out of it and both arrive", function()
   -- The walker, held in its way, stepped in place and swayed faster than standing now
   -- and then: it never waited long enough to step back, and both stood for good.

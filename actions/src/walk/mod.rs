@@ -202,6 +202,9 @@ pub struct Walk {
     /// Walk time since which the body has stood held, on its way or short of its plan's
     /// end (see [`Walk::held`]).
     held_since: Option<f64>,
+    /// Walk time since which a walk to a point or along a path has stood held near its
+    /// end, and its plan's time then (see [`Walk::held`]).
+    held_near_end: Option<(f64, f64)>,
     /// The body's radius, for planning (see [`troupe_scene::space::body_radius`]).
     radius: f64,
     /// How the body departs from the plan to avoid others (see [`steer`]).
@@ -287,6 +290,7 @@ impl Walk {
             goal: None,
             aimed: None,
             held_since: None,
+            held_near_end: None,
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
             near: Vec::new(),
@@ -846,6 +850,7 @@ impl Generator for Walk {
         self.steer = steer::Steer::start(ctx);
         self.aimed = None;
         self.held_since = None;
+        self.held_near_end = None;
         if let Some(goal) = &self.goal {
             let companions = (self.steer.companions.as_slice(), goal::Choice::First);
             let planned = goal.plan(ctx, start, self.radius, companions)?;

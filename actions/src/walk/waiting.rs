@@ -56,6 +56,17 @@ const FOLLOW_SLACK: f64 = 0.5;
 /// ends where it stands if that is as good a place, or, someone standing by its point
 /// at its end, looks for another (see [`Walk::held`]).
 const HELD_AT_END: f64 = 2.0;
+/// How near (m) its end a walk to a point or along a path ends where its body stands
+/// held, its plan ended (see [`Walk::held`]): a waiter carrying a cup out in front along
+/// a path ending 0.9 m before the guest it was for was held 13 cm short by the guest's
+/// body, and waited for the guest to make room for good, the guest waiting for the cup.
+const NEAR_END: f64 = 0.3;
+/// Seconds a walk to a point or along a path stands held near its end by someone
+/// standing there before it ends where it stands (see [`NEAR_END`]).
+const HELD_NEAR_END: f64 = 5.0;
+/// Seconds of its plan a walk held near its end may get on and still count as held (see
+/// [`NEAR_END`]).
+const PLAN_PROGRESS: f64 = 0.05;
 /// How much further (m) than [`goal::LEAST_ACTOR_GAP`] from a walk's standing point
 /// someone stands by it (see [`Walk::held`]): the clearance keeps bodies
 /// closer than that.
@@ -341,7 +352,8 @@ impl Walk {
     /// (looked at again every [`HELD_AT_END`]), on its way or short of its plan's end: a
     /// plan that ends where it stands, facing what it goes to, if that is as good a place
     /// ([`Goal::stand_here`]); else, its plan ended (someone came to stand by its point as
-    /// it arrived), [`Walk::another_place`].
+    /// it arrived), [`Walk::another_place`]. For a walk to a point or along a path,
+    /// [`Walk::held_near_end`].
     pub(super) fn held(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
         let crowd = ctx.world.crowd;
         let standing = crowd
@@ -353,7 +365,10 @@ impl Walk {
         // Held on its way: standing where the plan moves (not turning on the spot).
         let held = ended || plan.speed(tau) >= STALLED_SPEED;
         let to_a_place = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }));
-        if !to_a_place || !standing || !held {
+        if !to_a_place {
+            return self.held_near_end(ctx, plan, tau);
+        }
+        if !standing || !held {
             self.held_since = None;
             return None;
         }
@@ -371,6 +386,54 @@ impl Walk {
             return None;
         }
         self.another_place(ctx, (here, end), HELD_MARGIN)
+    }
+
+    /// For a walk to a point or along a path (plan time `tau` on `plan`) whose body has
+    /// stood within [`NEAR_END`] of its end for [`HELD_NEAR_END`], its plan's clock held
+    /// (getting no more than [`PLAN_PROGRESS`] on), someone standing in its way and
+    /// nobody passing: a plan that ends where it stands, with the heading the route was
+    /// to end with. The body shuffles as it is held, so whether it stands is read on the
+    /// plan's clock.
+    fn held_near_end(&mut self, ctx: &GeneratorContext, plan: &Plan, tau: f64) -> Option<Plan> {
+        let Route::Path { speed, heading, .. } = self.route else {
+            return None;
+        };
+        let here = *ctx.world.crowd.positions.get(ctx.actor)?;
+        if here.distance(self.end_sample(plan).position) >= NEAR_END {
+            self.held_near_end = None;
+            return None;
+        }
+        // Held by someone standing there, not by someone passing.
+        let crowd = ctx.world.crowd;
+        let mut near = Vec::new();
+        crowd.near(here, &mut near);
+        let way = self.way_on(ctx, plan, here);
+        let near = near.into_iter().filter(|&j| way.within(crowd, j));
+        let (mut passing, mut standing_in_it) = (false, false);
+        for j in near {
+            passing |= crowd.velocities[j].length() > replan::STANDING;
+            standing_in_it |= way.in_it(crowd, j);
+        }
+        if passing || !standing_in_it {
+            self.held_near_end = None;
+            return None;
+        }
+        let (since, then) = *self.held_near_end.get_or_insert((self.t, tau));
+        if tau - then > PLAN_PROGRESS {
+            self.held_near_end = Some((self.t, tau));
+            return None;
+        }
+        if self.t - since < HELD_NEAR_END {
+            return None;
+        }
+        self.held_near_end = None;
+        self.route = Route::Path {
+            points: vec![here],
+            heading,
+            speed,
+        };
+        self.steer.restart();
+        Some(Plan::new(&self.route, here, self.heading))
     }
 
     /// A plan that ends at `here`, where the body stands, facing the object or the actor
