@@ -510,7 +510,7 @@ local function held_by_the_counter(barista)
   expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
   local w = ann:walk{ to = troupe.get_object("counter") }
   -- Stuck after 10 s held, it stops, its feet brought together, and fails.
-  expect(run_until(function() return w.status ~= "active" end, 40), "the walk ended: " .. w.status)
+  expect(run_until(function() return w.status ~= "active" end, 50), "the walk ended: " .. w.status)
   expect(w.status == "failed" and tostring(w.error):find("^stuck [%d.]+ m from its goal for 10 s, held by counter$") ~= nil,
          w.status .. ": " .. tostring(w.error))
 end
@@ -644,6 +644,23 @@ test("a cup carried along a path that ends 0.9 m before someone standing: the wa
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, between))
   local g = waiter:give{ object = cup, to = guest, hand = "right" }
   expect(g:wait() == "completed", "handed over: " .. tostring(g.error))
+end)
+
+test("a cup taken at a counter beside someone comes in to the chest as the body turns to leave", function()
+  -- Brought in over the walk's first second, the cup turned with the body still at
+  -- arm's length, and the forearm swept 3.7 cm into the arm of the one standing beside.
+  troupe.object{ name = "counter", shape = "box", size = {2.0, 1.0, 0.5}, at = {0, 0.5, 0}, mass = 80 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.04, height = 0.1,
+                             at = {0.0, 1.05, -0.12}, obstacle = false }
+  local ann = troupe.actor{ name = "ann", at = {0, 0, -0.6}, facing = 0 }
+  troupe.actor{ name = "bob", at = {-0.65, 0, -0.6}, facing = 0 }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local w = ann:walk{ to = {0.3, 0, -3} }
+  local solids = require("support.solids")
+  local ok, deepest, between = solids.watch(function() return solids.ended(w) end, 20)
+  print(string.format("turned away from the counter: deepest %.4f m (%s)", deepest, between))
+  expect(ok and w.status == "completed", "the walk: " .. w.status .. " " .. tostring(w.error))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, between))
 end)
 
 test("a tray carried in one hand meets a walker in a 1.4 m aisle: one steps back out of it and both arrive", function()

@@ -36,6 +36,12 @@ use troupe_scene::{DofWriter, GeneratorContext};
 /// place: about two steps.
 pub const CARRY_TIME: f64 = 1.0;
 
+/// Seconds over which what one hand carries comes in to the chest as the body starts
+/// turning on the spot, and goes back out once it has turned. Carried a forearm ahead,
+/// it swept round with the body: five taking cups at a counter 0.6 m apart, one turning
+/// to leave put its cup hand 9.3 cm into the one beside it.
+pub const TUCK_TIME: f64 = 0.4;
+
 /// How far (rad) the carrying upper arm hangs forward of vertical.
 const UPPER_ARM_FORWARD: f64 = 0.25;
 
@@ -49,6 +55,9 @@ const TRUNK_GAP: f64 = 0.04;
 #[derive(Default)]
 pub struct Carrying {
     loads: Vec<Load>,
+    /// How far (0 to 1) the one-handed loads are brought in to the chest while the body
+    /// turns on the spot (see [`TUCK_TIME`]).
+    tuck: f64,
     /// The joint the shoulders hang from (the upper thorax), if the body has one: a load
     /// starts out moving with it, so that the arms need not stretch or fold as the trunk
     /// straightens from a reach (the walk's blend-in) before the load has come in.
@@ -78,6 +87,9 @@ struct Load {
     from: DVec3,
     /// Its centre's carrying place in the heading frame.
     to: DVec3,
+    /// Its carrying place as the body turns on the spot (see [`TUCK_TIME`]): as near the
+    /// chest as it clears the trunk.
+    tucked: DVec3,
     /// The arms that hold it: the attached hand's first.
     arms: Vec<CarryingArm>,
 }
@@ -156,28 +168,34 @@ impl Carrying {
             }
             let rest = self.rest.get_or_insert_with(|| Rest::of(sk));
             let turn = heading.rotation.inverse() * obj.rotation;
+            let to = carrying_place(rest, &obj.shape, turn, &arms, self.floor);
+            let tucked = DVec3::new(to.x, to.y, clear_of_trunk(rest, &obj.shape, turn).min(to.z));
             self.loads.push(Load {
                 object,
                 since: t,
                 turn,
                 from: trunk.inverse().transform_point(obj.position),
-                to: carrying_place(rest, &obj.shape, turn, &arms, self.floor),
+                to,
+                tucked,
                 arms,
             });
         }
     }
 
     /// Moves the carrying arms at walk time `t`, the root this tick on the floor at `root`
-    /// turned by `yaw`, and `upper` this tick's root, pelvis and spine values as written.
-    /// A load that is no longer held as it was, or whose arms another action has taken, is
-    /// let go; what the hands have taken up since is taken up.
+    /// turned by `yaw` (`turning` on the spot or not), and `upper` this tick's root,
+    /// pelvis and spine values as written. A load that is no longer held as it was, or
+    /// whose arms another action has taken, is let go; what the hands have taken up since
+    /// is taken up.
     pub fn step(
         &mut self,
         ctx: &GeneratorContext,
-        (t, root, yaw): (f64, DVec3, f64),
+        (t, root, yaw, turning): (f64, DVec3, f64, bool),
         upper: &[(usize, f64)],
         out: &mut DofWriter,
     ) {
+        let towards = if turning { 1.0 } else { 0.0 };
+        self.tuck += (towards - self.tuck).clamp(-ctx.dt / TUCK_TIME, ctx.dt / TUCK_TIME);
         let scope = out.scope();
         self.loads.retain(|load| {
             load.arms.iter().all(|arm| arm.in_scope(scope))
@@ -217,7 +235,7 @@ impl Carrying {
             // Where it was on the trunk, turned as it was on the heading; then where it
             // is carried.
             let from = trunk.transform_point(load.from);
-            let to = heading.transform_point(load.to);
+            let to = heading.transform_point(load.to.lerp(load.tucked, smoothstep(self.tuck)));
             let goal = Transform::new(heading.rotation * load.turn, from.lerp(to, s));
             for arm in &mut load.arms {
                 for &(d, v) in &arm.values {
@@ -318,6 +336,17 @@ impl Rest {
     }
 }
 
+/// The least distance (z, heading frame) ahead of the root at which an object of `shape`
+/// turned by `turn` clears the front of the trunk at `rest` by [`TRUNK_GAP`].
+fn clear_of_trunk(rest: &Rest, shape: &Shape, turn: DQuat) -> f64 {
+    // How far the object reaches back towards the body from its centre.
+    let back = surface_points(shape, turn, DVec3::ZERO)
+        .iter()
+        .map(|p| -p.z)
+        .fold(0.0, f64::max);
+    rest.trunk_front + TRUNK_GAP + back
+}
+
 /// The carrying place, in the heading frame, of the centre of an object of `shape` turned
 /// by `turn` in that frame and held by `arms`; `floor` is the floor's height under the body.
 fn carrying_place(
@@ -327,12 +356,7 @@ fn carrying_place(
     arms: &[CarryingArm],
     floor: f64,
 ) -> DVec3 {
-    // How far the object reaches back towards the body from its centre.
-    let back = surface_points(shape, turn, DVec3::ZERO)
-        .iter()
-        .map(|p| -p.z)
-        .fold(0.0, f64::max);
-    let clear = rest.trunk_front + TRUNK_GAP + back;
+    let clear = clear_of_trunk(rest, shape, turn);
     let lifted = |p: DVec3| p + DVec3::Y * floor;
     if arms.len() > 1 {
         // Two hands: centred before the belly, its centre at the elbows' height.

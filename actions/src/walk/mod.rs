@@ -1059,8 +1059,9 @@ impl Generator for Walk {
             }
         }
         let root_at = DVec3::new(rig.root_rest.x + root[0], 0.0, rig.root_rest.z + root[2]);
+        let turning = plan.turns_on_the_spot(self.steer.plan_time(self.t, self.t));
         self.carrying
-            .step(ctx, (self.t, root_at, root[3]), &upper, out);
+            .step(ctx, (self.t, root_at, root[3], turning), &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
         if self.steer.plan_time(self.t, self.t) >= plan.end_time {
