@@ -79,6 +79,10 @@ const CHAIN_ENDS: usize = 2;
 /// them the 1.20 m child turns a triangle over at a quarter of the ranges. The upper
 /// arms' are now a little narrower than the groin's (`weights::UPPER_ARM`, 1.35 ×).
 const WIDER_BANDS: [&str; 4] = ["sacroiliac", "l_hip", "r_hip", "vl5"];
+/// The lower belly leaning on the pelvis beside a flexed hip (`weights::Lean`): the
+/// lower spine's weight, the pelvis taking it, and the hips whose sliding helpers'
+/// weight says how much of it goes.
+const LEAN: [&str; 4] = ["vl5", "sacroiliac", "l_hip", "r_hip"];
 /// The upper arms (the shoulders' volumes), whose bands are `weights::UPPER_ARM` wide.
 const UPPER_ARM_BANDS: [&str; 2] = ["l_shoulder", "r_shoulder"];
 /// Joints whose volumes get narrower bands of weights (`weights::NARROWER`): the root
@@ -318,6 +322,24 @@ impl Skin {
             // Nor does the head's weight reach the root of the neck.
             |j| (joints[j].name == "skullbase").then_some(weights::HEAD_FLOOR),
         );
+        let named = |name: &str| joints.iter().position(|j| j.name == name);
+        let chains = match (named(LEAN[0]), named(LEAN[1])) {
+            (Some(from), Some(to)) => chains.leaning(weights::Lean {
+                from: from as u16,
+                to: to as u16,
+                by: helpers
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, h)| {
+                        h.swing >= 1.0
+                            && h.pair.is_none()
+                            && LEAN[2..].contains(&joints[h.joint].name.as_str())
+                    })
+                    .map(|(i, _)| (joint_bind.len() + i) as u16)
+                    .collect(),
+            }),
+            _ => chains,
+        };
         let (joints, weights) =
             weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &band)
                 .into_iter()

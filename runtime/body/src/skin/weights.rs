@@ -182,7 +182,21 @@ pub(crate) fn skin_weights(
 
 /// The chains of skinning slots across the helped joints, and the webs between pairs of
 /// joints.
-pub(crate) struct Chains(Vec<Chain>, Vec<Web>);
+pub(crate) struct Chains(Vec<Chain>, Vec<Web>, Option<Lean>);
+
+/// The lower belly's skin leaning on the pelvis beside a flexed hip: where the hips'
+/// sliding helpers (`by`) have weight `w` (the larger of the two), that share of the
+/// lower spine's (`from`, vl5) weight goes to the pelvis (`to`), so that the belly
+/// above the groin blends the pelvis and the flexed hip's helper rather than three
+/// rotations: the lumbar spine bent forward squeezes the belly above vl5 while the
+/// thigh comes up into it, and the three-way blend folded a triangle there (the 1.20 m
+/// child's hip flexed 106° with vl5 bent 37° forward). Continuous: where the helpers'
+/// weight fades out nothing moves.
+pub(crate) struct Lean {
+    pub(crate) from: u16,
+    pub(crate) to: u16,
+    pub(crate) by: Vec<u16>,
+}
 
 /// The helpers between two joints (the web between two fingers' knuckles,
 /// `helpers::WEBS`): the skin that both joints share blends them through the helpers,
@@ -333,7 +347,12 @@ impl Chains {
                 c.parents.clear();
             }
         }
-        Chains(chains, webs)
+        Chains(chains, webs, None)
+    }
+
+    /// These chains with the lower belly leaning on the pelvis (see [`Lean`]).
+    pub(crate) fn leaning(self, lean: Lean) -> Chains {
+        Chains(self.0, self.1, Some(lean))
     }
 
     /// `row`, the weights of a vertex at rest position `p`, with the weights of each
@@ -467,6 +486,23 @@ impl Chains {
             add(&mut paired, hi, total * t);
         }
         let mut out = paired;
+        // The lower belly beside a flexed hip: a hip's helper's share of vl5's weight
+        // onto the pelvis.
+        if let Some(lean) = &self.2 {
+            let by = lean
+                .by
+                .iter()
+                .map(|&h| weight_of(&out, h))
+                .fold(0.0, f64::max);
+            let w = weight_of(&out, lean.from);
+            if by > 0.0 && w > 0.0 {
+                let moved = w * by.min(1.0);
+                for e in out.iter_mut().filter(|e| e.0 == lean.from) {
+                    e.1 -= moved;
+                }
+                add(&mut out, lean.to, moved);
+            }
+        }
         out.retain(|&(_, w)| w > 0.0);
         out
     }
@@ -858,6 +894,29 @@ mod tests {
         assert!((total - 1.0).abs() < 1e-12, "{row:?}");
         assert!((weight_of(&row, 11) - 0.5).abs() < 1e-12, "{row:?}");
         assert!((weight_of(&row, 14) - 0.5).abs() < 1e-12, "{row:?}");
+    }
+
+    #[test]
+    fn beside_a_hips_helper_its_share_of_the_lower_spines_weight_goes_to_the_pelvis() {
+        // Joint 5 the lower spine, 4 the pelvis, 6 and 7 the hips' helpers (in no chain).
+        let chains = chains().leaning(Lean {
+            from: 5,
+            to: 4,
+            by: vec![6, 7],
+        });
+        let row = chains.route(&vec![(5, 0.5), (4, 0.3), (6, 0.2)], DVec3::ZERO);
+        let expect = [(5, 0.4), (4, 0.4), (6, 0.2)];
+        for (j, w) in expect {
+            assert!((weight_of(&row, j) - w).abs() < 1e-12, "{row:?}");
+        }
+        // The larger of the two helpers' weights counts.
+        let row = chains.route(&vec![(5, 0.5), (4, 0.2), (6, 0.2), (7, 0.1)], DVec3::ZERO);
+        assert!((weight_of(&row, 5) - 0.4).abs() < 1e-12, "{row:?}");
+        // Continuous: as the helpers' weight fades out, nothing moves.
+        let row = chains.route(&vec![(5, 0.5), (4, 0.5 - 1e-9), (6, 1e-9)], DVec3::ZERO);
+        assert!((weight_of(&row, 5) - 0.5).abs() < 1e-8, "{row:?}");
+        let row = chains.route(&vec![(5, 0.5), (4, 0.5)], DVec3::ZERO);
+        assert_eq!(row, vec![(5, 0.5), (4, 0.5)]);
     }
 
     #[test]
