@@ -81,21 +81,19 @@ fn record(example: &Path, threads: &[&str]) -> String {
         example.display(),
         String::from_utf8_lossy(&out.stderr)
     );
-    for line in stdout.lines().filter(|l| l.contains("actions:")) {
-        assert!(
-            line.trim_end().ends_with(" 0 failed"),
-            "{}: {line}",
-            example.display()
-        );
-    }
-    assert!(
-        !stdout.contains("behavior of"),
-        "{}: {stdout}",
-        example.display()
-    );
+    nothing_failed(&example.display().to_string(), &stdout);
     let bytes = std::fs::read(&trk).unwrap();
     std::fs::remove_file(&trk).ok();
     format!("{:x}", Sha256::digest(&bytes))
+}
+
+/// Asserts that the summary `troupe run` printed for example `name` counts no failed
+/// action and names no failed behavior.
+fn nothing_failed(name: &str, stdout: &str) {
+    for line in stdout.lines().filter(|l| l.contains("actions:")) {
+        assert!(line.trim_end().ends_with(" 0 failed"), "{name}: {line}");
+    }
+    assert!(!stdout.contains("behavior of"), "{name}: {stdout}");
 }
 
 fn committed() -> BTreeMap<String, String> {
@@ -191,9 +189,6 @@ fn every_example_with_a_story_runs_to_its_end() {
             !stdout.contains("before the scene was idle"),
             "{name} did not end within {STORY_SECONDS} s: {stdout}"
         );
-        for line in stdout.lines().filter(|l| l.contains("actions:")) {
-            assert!(line.trim_end().ends_with(" 0 failed"), "{name}: {line}");
-        }
-        assert!(!stdout.contains("behavior of"), "{name}: {stdout}");
+        nothing_failed(&name, &stdout);
     }
 }
