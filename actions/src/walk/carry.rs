@@ -38,8 +38,8 @@ pub const CARRY_TIME: f64 = 1.0;
 
 /// Seconds over which what one hand carries comes in to the chest as the body starts
 /// turning on the spot, and goes back out once it has turned. Carried a forearm ahead,
-/// it swept round with the body: five taking cups at a counter 0.6 m apart, one turning
-/// to leave put its cup hand 9.3 cm into the one beside it.
+/// it swept round with the body: turning to leave a counter with a cup just taken from
+/// it, the forearm went 3.7 cm into the arm of the one standing beside.
 pub const TUCK_TIME: f64 = 0.4;
 
 /// How far (rad) the carrying upper arm hangs forward of vertical.

@@ -57,9 +57,10 @@ const FOLLOW_SLACK: f64 = 0.5;
 /// at its end, looks for another (see [`Walk::held`]).
 const HELD_AT_END: f64 = 2.0;
 /// How near (m) its end a walk to a point or along a path ends where its body stands
-/// held, its plan ended (see [`Walk::held`]): a waiter carrying a cup out in front along
-/// a path ending 0.9 m before the guest it was for was held 13 cm short by the guest's
-/// body, and waited for the guest to make room for good, the guest waiting for the cup.
+/// held, its plan's clock held (see [`Walk::held_near_end`]): a waiter carrying a cup
+/// out in front along a path ending 0.9 m before the guest it was for was held 13 cm
+/// short by the guest's body, and waited for the guest to make room for good, the guest
+/// waiting for the cup.
 const NEAR_END: f64 = 0.3;
 /// Seconds a walk to a point or along a path stands held near its end by someone
 /// standing there before it ends where it stands (see [`NEAR_END`]).
