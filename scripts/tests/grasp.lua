@@ -146,14 +146,14 @@ test("a book, a phone and a tray lying flat on a table are taken with the hand o
     local thing = troupe.object{ name = t.name, shape = "box", size = t.size,
                                  at = {x, 0.75 + t.size[2] / 2, -0.05}, mass = 0.5 }
     local g = ann:grasp{ object = thing }
-    local lift
+    local lift ---@type Action?
     local ok, deepest, between = solids.watch(function()
       if not lift and g.status == "completed" then
         lift = ann:manipulate{ object = thing, keys = { { t = 0.6, at = {x, 1.0, -0.15} } } }
       end
       return lift ~= nil and solids.ended(lift)
     end, 10)
-    expect(ok and lift.status == "completed", t.name .. ": grasp " .. g.status .. " " .. tostring(g.error))
+    expect(ok and lift ~= nil and lift.status == "completed", t.name .. ": grasp " .. g.status .. " " .. tostring(g.error))
     print(string.format("%s taken and lifted, the deepest solids %.4f m (%s)", t.name, deepest, between))
     expect(deepest <= 0.002, string.format("%s: %.3f m deep (%s)", t.name, deepest, between))
   end
