@@ -15,6 +15,7 @@
 
 use sha2::{Digest, Sha256};
 use std::collections::BTreeMap;
+use std::ffi::OsStr;
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -65,16 +66,27 @@ fn record(example: &Path, threads: &[&str]) -> String {
     let dir = std::env::temp_dir().join(format!("troupe-golden-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let trk = dir.join(format!("{name}-{}.trk", threads.join("")));
+    let mut args: Vec<&OsStr> = ["run", "--seconds", SECONDS, "--seed", SEED]
+        .map(OsStr::new)
+        .to_vec();
+    args.extend(threads.iter().map(OsStr::new));
+    args.extend([OsStr::new("--record"), trk.as_os_str()]);
+    run_example(example, &args);
+    let bytes = std::fs::read(&trk).unwrap();
+    std::fs::remove_file(&trk).ok();
+    format!("{:x}", Sha256::digest(&bytes))
+}
+
+/// Runs `troupe` with `args` and then `example`, checking that it succeeds with no action
+/// or behavior failing; returns what it printed.
+fn run_example(example: &Path, args: &[&OsStr]) -> String {
     let out = Command::new(troupe())
         .current_dir(repo())
-        .args(["run", "--seconds", SECONDS, "--seed", SEED])
-        .args(threads)
-        .arg("--record")
-        .arg(&trk)
+        .args(args)
         .arg(example)
         .output()
         .unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     assert!(
         out.status.success(),
         "{}: {}",
@@ -82,9 +94,7 @@ fn record(example: &Path, threads: &[&str]) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     nothing_failed(&example.display().to_string(), &stdout);
-    let bytes = std::fs::read(&trk).unwrap();
-    std::fs::remove_file(&trk).ok();
-    format!("{:x}", Sha256::digest(&bytes))
+    stdout
 }
 
 /// Asserts that the summary `troupe run` printed for example `name` counts no failed
@@ -166,29 +176,19 @@ fn every_example_with_a_story_runs_to_its_end() {
         if OPEN_ENDED.contains(&name.as_str()) {
             continue;
         }
-        let out = Command::new(troupe())
-            .current_dir(repo())
-            .args([
-                "run",
-                "--until-idle",
-                "--max-seconds",
-                STORY_SECONDS,
-                "--seed",
-                SEED,
-            ])
-            .arg(&example)
-            .output()
-            .unwrap();
-        let stdout = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{name}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        let args = [
+            "run",
+            "--until-idle",
+            "--max-seconds",
+            STORY_SECONDS,
+            "--seed",
+            SEED,
+        ]
+        .map(OsStr::new);
+        let stdout = run_example(&example, &args);
         assert!(
             !stdout.contains("before the scene was idle"),
             "{name} did not end within {STORY_SECONDS} s: {stdout}"
         );
-        nothing_failed(&name, &stdout);
     }
 }

@@ -167,13 +167,23 @@ impl Walk {
     /// off it. Anyone else there (a barista behind the counter that holds the walk back)
     /// is no reason to wait for ever.
     fn waiting_for_someone(&self, ctx: &GeneratorContext, plan: &Plan, at: DVec2) -> bool {
+        let (passing, standing_in_it) = self.who_holds(ctx, plan, at);
+        passing || standing_in_it
+    }
+
+    /// Whether anyone within [`UNATTENDED`] of the walk's body, held at `at`, is on the
+    /// move, and whether anyone there stands in its way on (see [`Walk::way_on`]).
+    fn who_holds(&self, ctx: &GeneratorContext, plan: &Plan, at: DVec2) -> (bool, bool) {
         let crowd = ctx.world.crowd;
         let mut near = Vec::new();
         crowd.near(at, &mut near);
         let way = self.way_on(ctx, plan, at);
-        near.iter().any(|&j| {
-            way.within(crowd, j)
-                && (crowd.velocities[j].length() > replan::STANDING || way.in_it(crowd, j))
+        let near = near.into_iter().filter(|&j| way.within(crowd, j));
+        near.fold((false, false), |(passing, standing_in_it), j| {
+            (
+                passing || crowd.velocities[j].length() > replan::STANDING,
+                standing_in_it || way.in_it(crowd, j),
+            )
         })
     }
 
@@ -284,13 +294,12 @@ impl Walk {
         let points = self
             .replan
             .route(ctx, self.t, ends, self.radius, (companions, stalled))?;
-        self.route = Route::Path {
+        let route = Route::Path {
             points,
             heading: *heading,
             speed: *speed,
         };
-        self.steer.restart();
-        Some(Plan::new(&self.route, here, self.heading))
+        Some(self.take_route(route, here))
     }
 
     /// A new plan from `here` to another free standing point, for a walk to an object or
@@ -344,9 +353,7 @@ impl Walk {
         {
             return None;
         }
-        self.route = self.route_to(planned, speed);
-        self.steer.restart();
-        Some(Plan::new(&self.route, here, self.heading))
+        Some(self.take_route(self.route_to(planned, speed), here))
     }
 
     /// For a walk to an object or an actor whose body has stood held for [`HELD_AT_END`]
@@ -356,19 +363,18 @@ impl Walk {
     /// it arrived), [`Walk::another_place`]. For a walk to a point or along a path,
     /// [`Walk::held_near_end`].
     pub(super) fn held(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        let tau = self.steer.plan_time(self.t, self.t);
+        if !matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. })) {
+            return self.held_near_end(ctx, plan, tau);
+        }
         let crowd = ctx.world.crowd;
         let standing = crowd
             .velocities
             .get(ctx.actor)
             .is_some_and(|v| v.length() < STALLED_SPEED);
-        let tau = self.steer.plan_time(self.t, self.t);
         let ended = tau >= plan.end_time;
         // Held on its way: standing where the plan moves (not turning on the spot).
         let held = ended || plan.speed(tau) >= STALLED_SPEED;
-        let to_a_place = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }));
-        if !to_a_place {
-            return self.held_near_end(ctx, plan, tau);
-        }
         if !standing || !held {
             self.held_since = None;
             return None;
@@ -405,16 +411,7 @@ impl Walk {
             return None;
         }
         // Held by someone standing there, not by someone passing.
-        let crowd = ctx.world.crowd;
-        let mut near = Vec::new();
-        crowd.near(here, &mut near);
-        let way = self.way_on(ctx, plan, here);
-        let near = near.into_iter().filter(|&j| way.within(crowd, j));
-        let (mut passing, mut standing_in_it) = (false, false);
-        for j in near {
-            passing |= crowd.velocities[j].length() > replan::STANDING;
-            standing_in_it |= way.in_it(crowd, j);
-        }
+        let (passing, standing_in_it) = self.who_holds(ctx, plan, here);
         if passing || !standing_in_it {
             self.held_near_end = None;
             return None;
@@ -428,13 +425,20 @@ impl Walk {
             return None;
         }
         self.held_near_end = None;
-        self.route = Route::Path {
+        let route = Route::Path {
             points: vec![here],
             heading,
             speed,
         };
+        Some(self.take_route(route, here))
+    }
+
+    /// Takes `route` from `here`, where the body is, mid-walk: its plan, the steering
+    /// following it from its start (see [`super::steer::Steer::restart`]).
+    fn take_route(&mut self, route: Route, here: DVec2) -> Plan {
+        self.route = route;
         self.steer.restart();
-        Some(Plan::new(&self.route, here, self.heading))
+        Plan::new(&self.route, here, self.heading)
     }
 
     /// A plan that ends at `here`, where the body stands, facing the object or the actor
@@ -448,9 +452,7 @@ impl Walk {
             .goal
             .as_ref()?
             .stand_here(ctx, (here, end), self.radius)?;
-        self.route = self.route_to(planned, speed);
-        self.steer.restart();
-        Some(Plan::new(&self.route, here, self.heading))
+        Some(self.take_route(self.route_to(planned, speed), here))
     }
 
     /// A new plan to where the actor this walk goes to now stands, when it has moved
