@@ -26,6 +26,12 @@
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
 //! files and here on the CPU ([`Skin::deform`], used by the tests and exporters).
+//!
+//! The folds counted in these modules' comments ("the skin test's 50 full-range
+//! postures") are over the test's former single draw of 50 postures, which the knobs
+//! were set by; other draws fold about 80 times as many per posture. A change is now
+//! judged by `examples/skin_folds.rs`, over draws chosen by and draws held out
+//! (docs/skin-notes.md, "More draws").
 
 mod collapse;
 mod flips;

@@ -64,8 +64,14 @@ const MOST_EDGES: f64 = 7.745_966_692_414_834;
 /// the widest vertices' smoothing. With the rounds they lack run for them alone
 /// (`diffuse`), 1.65 took the hips and the pelvis to 8 and all of them to 37, every size
 /// fewer or as many; 1.6 and 1.68 gave 38, 1.7 40 (the 1.38 m child's worst posture one
-/// worse), 1.85 and 2 gave 53 and 85 (the lower belly folding).
-pub(crate) const WIDER: f64 = 1.65;
+/// worse), 1.85 and 2 gave 53 and 85 (the lower belly folding). Those 50 postures were
+/// too few: the weights had been tuned to them, and ten other draws of 50 folded about
+/// 80 times as many per posture (`examples/skin_folds.rs`). Measured on those draws, five to choose
+/// by and five held out, 1.8 turned 1,510 triangles over against 1,666 at 1.65, fewer on
+/// both halves (475 + 1,035 against 510 + 1,156) and at the hips above all (the hips and
+/// the pelvis 1,004 → 848); 1.5 1,987, 2.0 1,558, 2.3 11,294 (almost all at the hips
+/// and the pelvis).
+pub(crate) const WIDER: f64 = 1.8;
 /// How much narrower the bands are at the root of the neck and the chest beside it (the
 /// joints given this `band`): a child's neck is short, and smoothed over the usual length
 /// the head's weight (skullbase) reached the top of the shoulders, where a head turned
