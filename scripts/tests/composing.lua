@@ -621,13 +621,14 @@ test("two waiters carrying trays meet in a 1.55 m aisle: the one stepping back i
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
 end)
 
-test("a cup carried along a path that ends 0.9 m before someone standing: the walk ends where the body is held", function()
-  -- The cup carried out in front reaches the guest's body 13 cm before the path's end:
-  -- the waiter waited there for the guest to make room, for good, and the hand-over
-  -- never came (the café example). Held near its end by someone standing, a walk to a
-  -- point or along a path now ends where it stands.
+test("a cup carried along a path that ends 0.5 m before someone standing: the walk ends where the body is held", function()
+  -- The body reaches the guest's before the path's end: the waiter waited there for the
+  -- guest to make room, for good, and the hand-over never came (the café example, where
+  -- the cup carried out in front did it 0.9 m before the guest, before a cup carried
+  -- close beside someone came in to the chest). Held near its end by someone standing,
+  -- a walk to a point or along a path now ends where it stands.
   local waiter = troupe.actor{ name = "waiter", at = {0, 0, 0} }
-  local guest = troupe.actor{ name = "guest", at = {3.0, 0, 3.0}, facing = 180 }
+  local guest = troupe.actor{ name = "guest", at = {3.0, 0, 2.6}, facing = 180 }
   local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
                              at = {0.3, 1.0, 0.35}, mass = 0.3 }
   expect(waiter:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
@@ -662,6 +663,35 @@ test("a cup taken at a counter beside someone comes in to the chest as the body 
   expect(ok and w.status == "completed", "the walk: " .. w.status .. " " .. tostring(w.error))
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, between))
 end)
+
+-- Five take cups at a counter, 0.6 m apart, and the middle one leaves. Tucked only while
+-- turning on the spot, its cup went back out as the body, still stepping round, set off
+-- along its curve, and the carrying hand went 4-8 cm into a neighbour's arm or chest;
+-- brought in to the side of the chest, the hand still reached a neighbour's arm, out to
+-- its own cup. Carried close beside someone, a cup now stays in front of the middle of
+-- the chest.
+for _, case in ipairs({ { "right", -2 }, { "right", 2 }, { "left", -2 }, { "left", 2 } }) do
+  local hand, x = case[1], case[2]
+  test(string.format("five take cups at a counter 0.6 m apart: the middle one leaves with its cup in the %s hand to x = %d, its arm kept out of its neighbours", hand, x), function()
+    troupe.object{ name = "counter", shape = "box", size = {4.0, 1.0, 0.5}, at = {0, 0.5, 0}, mass = 80 }
+    local people, grasps = {}, {}
+    for i = -2, 2 do
+      people[i] = troupe.actor{ name = "p" .. (i + 3), at = {0.6 * i, 0, -0.6}, facing = 0 }
+      local cup = troupe.object{ name = "cup" .. (i + 3), shape = "cylinder", radius = 0.04, height = 0.1,
+                                 at = {0.6 * i, 1.05, -0.12}, obstacle = false }
+      grasps[i] = people[i]:grasp{ object = cup, hand = i == 0 and hand or "right" }
+    end
+    for i = -2, 2 do
+      expect(grasps[i]:wait() == "completed", people[i].name .. "'s grasp: " .. tostring(grasps[i].error))
+    end
+    local w = people[0]:walk{ to = {x, 0, -3} }
+    local solids = require("support.solids")
+    local ok, deepest, between = solids.watch(function() return solids.ended(w) end, 20)
+    print(string.format("the %s hand's cup, leaving to x = %d: deepest %.4f m (%s)", hand, x, deepest, between))
+    expect(ok and w.status == "completed", "the walk: " .. w.status .. " " .. tostring(w.error))
+    expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, between))
+  end)
+end
 
 test("a tray carried in one hand meets a walker in a 1.4 m aisle: one steps back out of it and both arrive", function()
   -- The walker, held in its way, stepped in place and swayed faster than standing now

@@ -42,6 +42,16 @@ pub const CARRY_TIME: f64 = 1.0;
 /// it, the forearm went 3.7 cm into the arm of the one standing beside.
 pub const TUCK_TIME: f64 = 0.4;
 
+/// Gap (m) between the body (with what it carries) and another body below which a
+/// one-hand load is tucked as for a turn (see [`TUCK_TIME`]), as a person keeps a cup
+/// close among others. Not beside furniture: the load goes out over the table it is
+/// carried to.
+pub const TUCK_NEAR: f64 = 0.15;
+
+/// How far out to its side (a fraction of the carrying place's) a tucked load stays:
+/// most of the way in to the middle of the chest, the forearm across it.
+const TUCK_ACROSS: f64 = 0.3;
+
 /// How far (rad) the carrying upper arm hangs forward of vertical.
 const UPPER_ARM_FORWARD: f64 = 0.25;
 
@@ -169,7 +179,11 @@ impl Carrying {
             let rest = self.rest.get_or_insert_with(|| Rest::of(sk));
             let turn = heading.rotation.inverse() * obj.rotation;
             let to = carrying_place(rest, &obj.shape, turn, &arms, self.floor);
-            let tucked = DVec3::new(to.x, to.y, clear_of_trunk(rest, &obj.shape, turn).min(to.z));
+            let tucked = DVec3::new(
+                to.x * TUCK_ACROSS,
+                to.y,
+                clear_of_trunk(rest, &obj.shape, turn).min(to.z),
+            );
             self.loads.push(Load {
                 object,
                 since: t,

@@ -70,7 +70,7 @@ use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
-use troupe_scene::space::{limit_step, nearest_gap, Body, Navigation, Surroundings, Walking};
+use troupe_scene::space::{limit_step, nearest_gaps, Body, Navigation, Surroundings, Walking};
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// How far (m) the pelvis may be lowered below the gait's height for the legs to reach
@@ -998,9 +998,12 @@ impl Generator for Walk {
         // whose swing would now go sideways into the other, hang still as they turn,
         // twisted back so that the bent elbows keep the forearms along the way and not
         // towards the other, and swing less as anything comes close.
+        let mut near_body = f64::INFINITY;
         if let Some(footprints) = &footprints {
             let me = self.body(ctx);
-            let gap = nearest_gap(&me, &around, shoulders::ARMS_CLEAR);
+            let (bodies, obstacles) = nearest_gaps(&me, &around, shoulders::ARMS_CLEAR);
+            near_body = bodies;
+            let gap = bodies.min(obstacles);
             // `gather` left this tick's neighbours in `self.near`.
             let around = (self.near.as_slice(), footprints);
             self.shoulders
@@ -1059,7 +1062,10 @@ impl Generator for Walk {
             }
         }
         let root_at = DVec3::new(rig.root_rest.x + root[0], 0.0, rig.root_rest.z + root[2]);
-        let turning = plan.turns_on_the_spot(self.steer.plan_time(self.t, self.t));
+        // Turning on the spot, or close beside someone: what one hand carries comes in
+        // to the chest.
+        let turning = plan.turns_on_the_spot(self.steer.plan_time(self.t, self.t))
+            || near_body < carry::TUCK_NEAR;
         self.carrying
             .step(ctx, (self.t, root_at, root[3], turning), &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.

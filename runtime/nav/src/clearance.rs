@@ -592,6 +592,13 @@ pub fn limit_step(me: &Body, step: DVec2, around: &Surroundings) -> DVec2 {
 /// The least gap (m) between body `me` and the bodies and obstacles `around` (negative
 /// when they overlap), or `within` if none is nearer than that.
 pub fn nearest_gap(me: &Body, around: &Surroundings, within: f64) -> f64 {
+    let (bodies, obstacles) = nearest_gaps(me, around, within);
+    bodies.min(obstacles)
+}
+
+/// The least gaps (m) between body `me` and the bodies `around`, and between it and the
+/// obstacles `around` (negative when they overlap), each `within` if none is nearer.
+pub fn nearest_gaps(me: &Body, around: &Surroundings, within: f64) -> (f64, f64) {
     let bodies = around
         .bodies
         .iter()
@@ -609,7 +616,10 @@ pub fn nearest_gap(me: &Body, around: &Surroundings, within: f64) -> f64 {
             let span = FootSpan { heel, toe, radius };
             nearest_to_footprint(f, &span).map_or(-radius, |(p, q)| (p - q).length() - radius)
         });
-    bodies.chain(obstacles).fold(within, f64::min)
+    (
+        bodies.fold(within, f64::min),
+        obstacles.fold(within, f64::min),
+    )
 }
 
 /// Whether a foot in the air may move from span `from` to span `to` this tick: it closes
@@ -999,6 +1009,26 @@ mod tests {
         );
         assert!((me.radius - 0.7).abs() < 1e-12, "{me:?}");
         assert!(nearest_gap(&me, &around, 2.0) < 0.0);
+    }
+
+    #[test]
+    fn the_nearest_gaps_to_bodies_and_to_obstacles_are_told_apart() {
+        // A body of radius 0.25 with another 0.7 m to its side (the gap 0.2 m) and a wall's
+        // face 0.55 m away on the other (0.3 m).
+        let me = Body::new(DVec2::ZERO, DVec2::Y, 0.0, 0.25);
+        let other = Body::new(DVec2::new(0.7, 0.0), DVec2::Y, 0.0, 0.25);
+        let wall = square("wall", (-0.65, -1.0), (-0.55, 1.0));
+        let around = Surroundings {
+            bodies: vec![other.shape],
+            obstacles: smallvec![&wall],
+            ..Surroundings::default()
+        };
+        let (bodies, obstacles) = nearest_gaps(&me, &around, 2.0);
+        assert!((bodies - 0.2).abs() < 1e-12, "{bodies}");
+        assert!((obstacles - 0.3).abs() < 1e-9, "{obstacles}");
+        assert_eq!(nearest_gap(&me, &around, 2.0), bodies);
+        // Beyond `within`, each is `within`.
+        assert_eq!(nearest_gaps(&me, &around, 0.1), (0.1, 0.1));
     }
 
     #[test]
