@@ -114,6 +114,25 @@ const FINGER_MIDDLE_BANDS: [&str; 6] = [
 ];
 /// The little fingers' first phalanges, whose bands are `weights::LITTLE_KNUCKLE` wide.
 const LITTLE_KNUCKLE_BANDS: [&str; 2] = ["l_pinky1", "r_pinky1"];
+/// How wide the band of weights of the vertices nearest to joint `name`'s volumes is, as
+/// a multiple of the usual (the lists above and vt1's and vc4's own; 1 for the rest).
+fn band_of(name: &str) -> f64 {
+    let bands: [(&[&str], f64); 8] = [
+        (&WIDER_BANDS, weights::WIDER),
+        (&UPPER_ARM_BANDS, weights::UPPER_ARM),
+        (&PALM_BANDS, weights::PALM),
+        (&FINGER_MIDDLE_BANDS, weights::FINGER_MIDDLE),
+        (&LITTLE_KNUCKLE_BANDS, weights::LITTLE_KNUCKLE),
+        (&NARROWER_BANDS, weights::NARROWER),
+        (&["vt1"], weights::NECK_ROOT),
+        (&["vc4"], weights::NECK),
+    ];
+    bands
+        .iter()
+        .find(|(names, _)| names.contains(&name))
+        .map_or(1.0, |&(_, width)| width)
+}
+
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
@@ -279,31 +298,7 @@ impl Skin {
             .collect();
         let normals = vertex_normals(&positions, &indices);
         let joints = skeleton.joints();
-        let band: Vec<f64> = joints
-            .iter()
-            .map(|j| {
-                let name = j.name.as_str();
-                if WIDER_BANDS.contains(&name) {
-                    weights::WIDER
-                } else if UPPER_ARM_BANDS.contains(&name) {
-                    weights::UPPER_ARM
-                } else if PALM_BANDS.contains(&name) {
-                    weights::PALM
-                } else if FINGER_MIDDLE_BANDS.contains(&name) {
-                    weights::FINGER_MIDDLE
-                } else if LITTLE_KNUCKLE_BANDS.contains(&name) {
-                    weights::LITTLE_KNUCKLE
-                } else if NARROWER_BANDS.contains(&name) {
-                    weights::NARROWER
-                } else if name == "vt1" {
-                    weights::NECK_ROOT
-                } else if name == "vc4" {
-                    weights::NECK
-                } else {
-                    1.0
-                }
-            })
-            .collect();
+        let band: Vec<f64> = joints.iter().map(|j| band_of(&j.name)).collect();
         let chains = weights::Chains::new(
             &helpers,
             joint_bind.len(),
