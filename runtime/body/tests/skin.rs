@@ -299,7 +299,7 @@ fn check(skeleton: &Skeleton, label: &str) {
     // flexed by 120° asks for a band longer than the pelvis (docs/viewer.md). So a few
     // triangles turn over in the last quarter of the ranges (docs/skin-notes.md has every
     // step and the draws behind these figures): over each size's 200 postures within the
-    // whole ranges 24-50 (0.12-0.25 a posture, 4-10 at the worst, 0-2 at the hands), within
+    // whole ranges 18-50 (0.09-0.25 a posture, 2-10 at the worst, 0-2 at the hands), within
     // three quarters 0-1, within half or a quarter none. The bounds keep them there: a
     // change that folds more fails.
     let [full, three_quarters, half, quarter] = &spans[..] else {

@@ -21,7 +21,7 @@
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
 //!    by a fraction of the joint's swing (across it) or twist (down the limb), or, next
 //!    to the hips, knees, elbows, vc4 and the skullbase, turned with the joint (the hips'
-//!    and vc4's by a quarter of its twist) about a point moved into the bend, so that a
+//!    by 0.4 of its twist, vc4's by a quarter) about a point moved into the bend, so that a
 //!    bend folds less skin over.
 //!
 //! The skin deforms by linear blend skinning, the same on the GPU (the viewer), in glTF
