@@ -13,9 +13,12 @@
 //! `cargo run --release -p troupe-body --example skin_folds`
 
 use std::collections::BTreeMap;
-use troupe_body::glam::DVec3;
 use troupe_body::kinematics::forward_kinematics;
 use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
+
+#[path = "../tests/support/postures.rs"]
+mod postures;
+use postures::{inverted, posture, Lcg};
 
 /// The draws chosen by, and those held out.
 const CHOOSE_BY: std::ops::Range<u64> = 8..13;
@@ -23,61 +26,20 @@ const HELD_OUT: std::ops::Range<u64> = 13..18;
 /// Postures per draw.
 const POSTURES: usize = 50;
 
-/// A small deterministic generator (64-bit LCG), the skin test's.
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
-/// A random posture within `part` of every joint's range around zero.
-fn posture(skeleton: &Skeleton, rng: &mut Lcg, part: f64) -> Vec<f64> {
-    skeleton
-        .dofs()
-        .iter()
-        .map(|d| {
-            if d.min.is_finite() && d.max.is_finite() {
-                (d.min + (d.max - d.min) * rng.next()) * part
-            } else {
-                0.0
-            }
-        })
-        .collect()
-}
-
 /// The name of the joint that moves each inverted triangle of `skin` most, at posture
 /// `q`.
-fn inverted(skeleton: &Skeleton, skin: &Skin, q: &[f64]) -> Vec<String> {
+fn inverted_at(skeleton: &Skeleton, skin: &Skin, q: &[f64]) -> Vec<String> {
     let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
     forward_kinematics(skeleton, q, &mut globals);
     let posed = skin.deform(&globals);
     let frames = skin.frames(&globals);
-    let rest = |i: usize| DVec3::from(skin.positions[i].map(f64::from));
-    let mut out = Vec::new();
-    for t in skin.indices.chunks_exact(3) {
-        let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
-        let rest_n = (rest(b) - rest(a)).cross(rest(c) - rest(a));
-        let posed_n = (posed[b] - posed[a]).cross(posed[c] - posed[a]);
-        let turned: DVec3 = [a, b, c]
-            .iter()
-            .flat_map(|&v| skin.joints[v].iter().zip(&skin.weights[v]))
-            .map(|(&j, &w)| {
-                let j = j as usize;
-                frames[j].rotation * skin.rest[j].rotation.inverse() * rest_n * w as f64
-            })
-            .sum();
-        if posed_n.dot(turned) <= 0.0 {
-            let joint = skin.slot_joint(skin.joints[a][0] as usize);
-            out.push(skeleton.joints()[joint].name.clone());
-        }
-    }
-    out
+    inverted(skin, &posed, &frames)
+        .map(|t| {
+            let first = skin.indices[3 * t] as usize;
+            let joint = skin.slot_joint(skin.joints[first][0] as usize);
+            skeleton.joints()[joint].name.clone()
+        })
+        .collect()
 }
 
 fn main() {
@@ -97,7 +59,7 @@ fn main() {
                     let mut rng = Lcg(draw + if part < 1.0 { 100 } else { 0 });
                     for _ in 0..POSTURES {
                         let q = posture(&skeleton, &mut rng, part);
-                        for joint in inverted(&skeleton, &skin, &q) {
+                        for joint in inverted_at(&skeleton, &skin, &q) {
                             n += 1;
                             if tally {
                                 *by_joint.entry(joint).or_default() += 1;

@@ -13,17 +13,9 @@ use troupe_body::kinematics::forward_kinematics;
 use troupe_body::skin::MAX_TRIANGLES;
 use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
 
-/// A small deterministic generator (64-bit LCG), so the postures are the same every run.
-struct Lcg(u64);
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
+#[path = "support/postures.rs"]
+mod postures;
+use postures::{inverted, Lcg};
 
 /// The bone segments of a joint: to each child joint and end site (a point for a leaf).
 fn bones(skeleton: &Skeleton, globals: &[Transform], j: usize) -> Vec<(DVec3, DVec3)> {
@@ -206,17 +198,7 @@ fn check(skeleton: &Skeleton, label: &str) {
     let mut posture = 0;
     for span in &mut spans {
         for _ in 0..span.postures {
-            let q: Vec<f64> = skeleton
-                .dofs()
-                .iter()
-                .map(|d| {
-                    if d.min.is_finite() && d.max.is_finite() {
-                        (d.min + (d.max - d.min) * rng.next()) * span.part
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
+            let q = postures::posture(skeleton, &mut rng, span.part);
             forward_kinematics(skeleton, &q, &mut globals);
             let posed = skin.deform(&globals);
             let frames = skin.frames(&globals);
@@ -233,39 +215,23 @@ fn check(skeleton: &Skeleton, label: &str) {
                     worst_excess = (excess, posture, v);
                 }
             }
-            // Inverted triangles: a triangle whose skinned normal points against its rest
-            // normal turned by the rotations of its three vertices' joints (and helpers),
-            // blended by their weights (the rotation skinning gives the triangle), beyond
-            // 90°.
-            let mut inverted = 0;
-            for t in skin.indices.chunks_exact(3) {
-                let [a, b, c] = [t[0], t[1], t[2]].map(|i| i as usize);
-                let rest_n = (pos(t[1]) - pos(t[0])).cross(pos(t[2]) - pos(t[0]));
-                let posed_n = (posed[b] - posed[a]).cross(posed[c] - posed[a]);
-                let mut turned = DVec3::ZERO;
-                for v in [a, b, c] {
-                    for (&j, &w) in skin.joints[v].iter().zip(&skin.weights[v]) {
-                        let j = j as usize;
-                        turned += frames[j].rotation
-                            * skin.rest[j].rotation.inverse()
-                            * rest_n
-                            * w as f64;
-                    }
+            // Inverted triangles (`postures::inverted`), each counted at the joint that
+            // most moves its first vertex.
+            let mut inverted_here = 0;
+            for t in inverted(&skin, &posed, &frames) {
+                inverted_here += 1;
+                let first = skin.indices[3 * t] as usize;
+                let joint = skin.slot_joint(skin.joints[first][0] as usize);
+                if in_hand[joint] {
+                    span.at_hands += 1;
                 }
-                if posed_n.dot(turned) <= 0.0 {
-                    inverted += 1;
-                    let joint = skin.slot_joint(skin.joints[a][0] as usize);
-                    if in_hand[joint] {
-                        span.at_hands += 1;
-                    }
-                    *span
-                        .by_joint
-                        .entry(skeleton.joints()[joint].name.clone())
-                        .or_default() += 1;
-                }
+                *span
+                    .by_joint
+                    .entry(skeleton.joints()[joint].name.clone())
+                    .or_default() += 1;
             }
-            span.all += inverted;
-            span.worst = span.worst.max(inverted);
+            span.all += inverted_here;
+            span.worst = span.worst.max(inverted_here);
             posture += 1;
         }
     }
