@@ -37,7 +37,8 @@ use troupe_scene::{DofWriter, GeneratorContext};
 pub const CARRY_TIME: f64 = 1.0;
 
 /// Seconds over which what one hand carries comes in to the chest as the body starts
-/// turning on the spot, and goes back out once it has turned. Carried a forearm ahead,
+/// turning on the spot or comes close beside someone ([`TUCK_NEAR`]), and goes back out
+/// once it has turned and nobody is that close. Carried a forearm ahead,
 /// it swept round with the body: turning to leave a counter with a cup just taken from
 /// it, the forearm went 3.7 cm into the arm of the one standing beside.
 pub const TUCK_TIME: f64 = 0.4;
@@ -66,7 +67,7 @@ const TRUNK_GAP: f64 = 0.04;
 pub struct Carrying {
     loads: Vec<Load>,
     /// How far (0 to 1) the one-handed loads are brought in to the chest while the body
-    /// turns on the spot (see [`TUCK_TIME`]).
+    /// turns on the spot or passes close beside someone (see [`TUCK_TIME`]).
     tuck: f64,
     /// The joint the shoulders hang from (the upper thorax), if the body has one: a load
     /// starts out moving with it, so that the arms need not stretch or fold as the trunk
@@ -97,8 +98,8 @@ struct Load {
     from: DVec3,
     /// Its centre's carrying place in the heading frame.
     to: DVec3,
-    /// Its carrying place as the body turns on the spot (see [`TUCK_TIME`]): as near the
-    /// chest as it clears the trunk.
+    /// Its carrying place when tucked (see [`TUCK_TIME`]): as near the chest as it clears
+    /// the trunk, and most of the way to its middle ([`TUCK_ACROSS`]).
     tucked: DVec3,
     /// The arms that hold it: the attached hand's first.
     arms: Vec<CarryingArm>,
@@ -197,18 +198,19 @@ impl Carrying {
     }
 
     /// Moves the carrying arms at walk time `t`, the root this tick on the floor at `root`
-    /// turned by `yaw` (`turning` on the spot or not), and `upper` this tick's root,
+    /// turned by `yaw` (`tuck`: whether what one hand carries is to come in, see
+    /// [`TUCK_TIME`]), and `upper` this tick's root,
     /// pelvis and spine values as written. A load that is no longer held as it was, or
     /// whose arms another action has taken, is let go; what the hands have taken up since
     /// is taken up.
     pub fn step(
         &mut self,
         ctx: &GeneratorContext,
-        (t, root, yaw, turning): (f64, DVec3, f64, bool),
+        (t, root, yaw, tuck): (f64, DVec3, f64, bool),
         upper: &[(usize, f64)],
         out: &mut DofWriter,
     ) {
-        let towards = if turning { 1.0 } else { 0.0 };
+        let towards = if tuck { 1.0 } else { 0.0 };
         self.tuck += (towards - self.tuck).clamp(-ctx.dt / TUCK_TIME, ctx.dt / TUCK_TIME);
         let scope = out.scope();
         self.loads.retain(|load| {

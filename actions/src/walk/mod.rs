@@ -1064,10 +1064,10 @@ impl Generator for Walk {
         let root_at = DVec3::new(rig.root_rest.x + root[0], 0.0, rig.root_rest.z + root[2]);
         // Turning on the spot, or close beside someone: what one hand carries comes in
         // to the chest.
-        let turning = plan.turns_on_the_spot(self.steer.plan_time(self.t, self.t))
+        let tuck = plan.turns_on_the_spot(self.steer.plan_time(self.t, self.t))
             || near_body < carry::TUCK_NEAR;
         self.carrying
-            .step(ctx, (self.t, root_at, root[3], turning), &upper, out);
+            .step(ctx, (self.t, root_at, root[3], tuck), &upper, out);
         // Finished once the plan has ended and both feet stand at their final spots.
         let mut done = false;
         if self.steer.plan_time(self.t, self.t) >= plan.end_time {
