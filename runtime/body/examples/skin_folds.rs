@@ -18,7 +18,7 @@ use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
 
 #[path = "../tests/support/postures.rs"]
 mod postures;
-use postures::{inverted, posture, Lcg};
+use postures::{counted_at, inverted, posture, Lcg};
 
 /// The draws chosen by, and those held out.
 const CHOOSE_BY: std::ops::Range<u64> = 8..13;
@@ -34,11 +34,7 @@ fn inverted_at(skeleton: &Skeleton, skin: &Skin, q: &[f64]) -> Vec<String> {
     let posed = skin.deform(&globals);
     let frames = skin.frames(&globals);
     inverted(skin, &posed, &frames)
-        .map(|t| {
-            let first = skin.indices[3 * t] as usize;
-            let joint = skin.slot_joint(skin.joints[first][0] as usize);
-            skeleton.joints()[joint].name.clone()
-        })
+        .map(|t| skeleton.joints()[counted_at(skin, t)].name.clone())
         .collect()
 }
 

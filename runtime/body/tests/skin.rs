@@ -15,7 +15,7 @@ use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
 
 #[path = "support/postures.rs"]
 mod postures;
-use postures::{inverted, Lcg};
+use postures::{counted_at, inverted, Lcg};
 
 /// The bone segments of a joint: to each child joint and end site (a point for a leaf).
 fn bones(skeleton: &Skeleton, globals: &[Transform], j: usize) -> Vec<(DVec3, DVec3)> {
@@ -220,8 +220,7 @@ fn check(skeleton: &Skeleton, label: &str) {
             let mut inverted_here = 0;
             for t in inverted(&skin, &posed, &frames) {
                 inverted_here += 1;
-                let first = skin.indices[3 * t] as usize;
-                let joint = skin.slot_joint(skin.joints[first][0] as usize);
+                let joint = counted_at(&skin, t);
                 if in_hand[joint] {
                     span.at_hands += 1;
                 }

@@ -63,3 +63,10 @@ pub fn inverted<'a>(
         })
         .map(|(t, _)| t)
 }
+
+/// The joint an inverted triangle `t` of `skin` is counted at: the one that moves its first
+/// vertex most (a helper's joint for a helper).
+pub fn counted_at(skin: &Skin, t: usize) -> usize {
+    let first = skin.indices[3 * t] as usize;
+    skin.slot_joint(skin.joints[first][0] as usize)
+}
