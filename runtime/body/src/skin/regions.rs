@@ -128,8 +128,8 @@ fn gap(d: &RegionDistances, a: Region, b: Region) -> f64 {
 
 impl CutSkin {
     /// Cuts `skin`'s full-detail surface along the edges between regions. A triangle
-    /// touching three regions (where three meet) is kept whole, its vertices each in its
-    /// own region.
+    /// touching three regions (where three meet) is cut into three, one piece per
+    /// corner meeting at its centroid.
     pub fn new(skin: &super::Skin) -> CutSkin {
         Self::cutting(skin, &skin.indices)
     }
@@ -169,37 +169,57 @@ impl CutSkin {
                 )
             })
         };
+        // The point on the edge from skin vertex `a` to `b` where the interpolated gap
+        // between their regions is zero, as its copy in `region`: made once per edge
+        // and region, from the edge's lower-numbered end, so that the triangles on both
+        // sides of the edge share it.
+        let mut cross = |cut: &mut CutSkin, a: u32, b: u32, region: Region| {
+            let (a, b) = (a.min(b), a.max(b));
+            *points.entry((a, b, region)).or_insert_with(|| {
+                let (ra, rb) = (regions[a as usize], regions[b as usize]);
+                let (ga, gb) = (
+                    gap(&skin.region_distances[a as usize], ra, rb),
+                    gap(&skin.region_distances[b as usize], ra, rb),
+                );
+                let s = (ga / (ga - gb)).clamp(0.0, 1.0) as f32;
+                cut.push_blend(skin, &[(a as usize, 1.0 - s), (b as usize, s)], region)
+            })
+        };
         for t in triangles.chunks_exact(3) {
-            let r = [t[0], t[1], t[2]].map(|v| regions[v as usize]);
-            let lone = (0..3).find(|&k| r[(k + 1) % 3] == r[(k + 2) % 3] && r[k] != r[(k + 1) % 3]);
-            let Some(k) = lone else {
-                // One region, or three: as it is.
+            let t = [t[0], t[1], t[2]];
+            let r = t.map(|v| regions[v as usize]);
+            if r[0] == r[1] && r[1] == r[2] {
                 for k in 0..3 {
                     let v = corner(&mut cut, &mut copies, t[k], r[k]);
                     cut.indices.push(v);
                 }
                 continue;
+            }
+            let lone = (0..3).find(|&k| r[(k + 1) % 3] == r[(k + 2) % 3]);
+            let Some(k) = lone else {
+                // Three regions: each corner's piece runs from it along its two edges
+                // to their cut points and the centroid, where the three meet.
+                let centre = |cut: &mut CutSkin, region: Region| {
+                    let third = 1.0 / 3.0;
+                    let blend = t.map(|v| (v as usize, third));
+                    cut.push_blend(skin, &blend, region)
+                };
+                for k in 0..3 {
+                    let [o, p, q] = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]];
+                    let region = r[k];
+                    let (op, oq) = (cross(&mut cut, o, p, region), cross(&mut cut, o, q, region));
+                    let m = centre(&mut cut, region);
+                    let o = corner(&mut cut, &mut copies, o, region);
+                    cut.indices.extend([o, op, m, o, m, oq]);
+                }
+                continue;
             };
             // Vertex `k` alone in its region, the other two in another: the edge crosses
-            // the two sides from `k`, where the interpolated gap between them is zero.
+            // the two sides from `k`.
             let (alone, rest) = (r[k], r[(k + 1) % 3]);
             let [o, p, q] = [t[k], t[(k + 1) % 3], t[(k + 2) % 3]];
-            let mut cross = |cut: &mut CutSkin, to: u32, region: Region| {
-                let key = (o.min(to), o.max(to), region);
-                if let Some(&i) = points.get(&key) {
-                    return i;
-                }
-                let (ga, gb) = (
-                    gap(&skin.region_distances[o as usize], alone, rest),
-                    gap(&skin.region_distances[to as usize], alone, rest),
-                );
-                let s = (ga / (ga - gb)).clamp(0.0, 1.0) as f32;
-                let i = cut.push_between(skin, o as usize, to as usize, s, region);
-                points.insert(key, i);
-                i
-            };
-            let (op_a, oq_a) = (cross(&mut cut, p, alone), cross(&mut cut, q, alone));
-            let (op_b, oq_b) = (cross(&mut cut, p, rest), cross(&mut cut, q, rest));
+            let (op_a, oq_a) = (cross(&mut cut, o, p, alone), cross(&mut cut, o, q, alone));
+            let (op_b, oq_b) = (cross(&mut cut, o, p, rest), cross(&mut cut, o, q, rest));
             let o = corner(&mut cut, &mut copies, o, alone);
             let (p, q) = (
                 corner(&mut cut, &mut copies, p, rest),
@@ -228,22 +248,24 @@ impl CutSkin {
         (self.positions.len() - 1) as u32
     }
 
-    /// Appends the point `s` of the way from skin vertex `a` to `b`, its weights the
-    /// four heaviest of the two's blended and normalised; returns its index.
-    fn push_between(
-        &mut self,
-        skin: &super::Skin,
-        a: usize,
-        b: usize,
-        s: f32,
-        region: Region,
-    ) -> u32 {
-        let lerp = |x: [f32; 3], y: [f32; 3]| [0, 1, 2].map(|i| x[i] + (y[i] - x[i]) * s);
-        let normal = glam::Vec3::from(lerp(skin.normals[a], skin.normals[b]))
+    /// Appends the blend of skin vertices `shares` (each vertex with its share, the
+    /// shares summing to one), its weights the four heaviest of theirs blended and
+    /// normalised; returns its index.
+    fn push_blend(&mut self, skin: &super::Skin, shares: &[(usize, f32)], region: Region) -> u32 {
+        let mix = |of: &[[f32; 3]]| {
+            let mut out = [0.0f32; 3];
+            for &(v, share) in shares {
+                for (o, x) in out.iter_mut().zip(of[v]) {
+                    *o += x * share;
+                }
+            }
+            out
+        };
+        let normal = glam::Vec3::from(mix(&skin.normals))
             .normalize_or_zero()
             .to_array();
-        let mut blend: Vec<(u16, f32)> = Vec::with_capacity(8);
-        for (v, share) in [(a, 1.0 - s), (b, s)] {
+        let mut blend: Vec<(u16, f32)> = Vec::with_capacity(12);
+        for &(v, share) in shares {
             for (&j, &w) in skin.joints[v].iter().zip(&skin.weights[v]) {
                 match blend.iter_mut().find(|(k, _)| *k == j) {
                     Some((_, total)) => *total += w * share,
@@ -260,12 +282,7 @@ impl CutSkin {
             joints[i] = j;
             weights[i] = w / sum;
         }
-        self.push(
-            lerp(skin.positions[a], skin.positions[b]),
-            normal,
-            (joints, weights),
-            region,
-        )
+        self.push(mix(&skin.positions), normal, (joints, weights), region)
     }
 }
 
@@ -316,6 +333,88 @@ mod tests {
         );
         // Regions the body lacks are far, not infinite.
         assert!(a.cloth[2] > 1.0 && a.cloth[2].is_finite() && a.eye.is_finite());
+    }
+
+    #[test]
+    fn a_triangle_where_three_regions_meet_is_cut_in_three_and_the_cut_stays_closed() {
+        use crate::transform::Transform;
+        // A tetrahedron with a corner in each of three regions on two faces and in two
+        // regions on the other two, whose cuts share the first two's edges' points.
+        let corners = [
+            ([0.0, 0.0, 1.0], Region::Skin),
+            ([1.0, 0.0, 0.0], Region::Shirt),
+            ([0.0, 1.0, 0.0], Region::Trousers),
+            ([0.0, 0.0, 0.0], Region::Skin),
+        ];
+        let distances = |own: Region| RegionDistances {
+            cloth: [0, 1, 2, 3].map(|r| if r == own as usize { 0.0 } else { 0.02 }),
+            eye: 1.0,
+            on_eye: [0.0; 3],
+        };
+        let skin = crate::skin::Skin {
+            positions: corners.map(|(p, _)| p).to_vec(),
+            normals: vec![[0.0, 1.0, 0.0]; 4],
+            joints: vec![[0; 4]; 4],
+            weights: vec![[1.0, 0.0, 0.0, 0.0]; 4],
+            regions: corners.map(|(_, r)| r).to_vec(),
+            region_distances: corners.map(|(_, r)| distances(r)).to_vec(),
+            // Counter-clockwise seen from outside.
+            indices: vec![0, 1, 2, 0, 3, 1, 1, 3, 2, 2, 3, 0],
+            far_indices: Vec::new(),
+            farthest_indices: Vec::new(),
+            rest: vec![Transform::IDENTITY],
+            helpers: Vec::new(),
+        };
+        let cut = CutSkin::new(&skin);
+        for t in cut.indices.chunks_exact(3) {
+            let r = t
+                .iter()
+                .map(|&v| cut.regions[v as usize])
+                .collect::<Vec<_>>();
+            assert!(r[0] == r[1] && r[1] == r[2], "triangle {t:?} in {r:?}");
+        }
+        assert_eq!(
+            cut.indices.len() / 3,
+            2 * 6 + 2 * 3,
+            "a face of three regions in three pieces of two triangles, of two in three"
+        );
+        let area = |positions: &[[f32; 3]], indices: &[u32]| -> f32 {
+            indices
+                .chunks_exact(3)
+                .map(|t| {
+                    let [a, b, c] = [0, 1, 2].map(|k| glam::Vec3::from(positions[t[k] as usize]));
+                    (b - a).cross(c - a).length() / 2.0
+                })
+                .sum()
+        };
+        let (before, after) = (
+            area(&skin.positions, &skin.indices),
+            area(&cut.positions, &cut.indices),
+        );
+        assert!(
+            (before - after).abs() < 1e-5,
+            "area {before} became {after}"
+        );
+        // Welded by position, every edge is there once each way.
+        let mut welded: std::collections::HashMap<[u32; 3], u32> = Default::default();
+        let id: Vec<u32> = cut
+            .positions
+            .iter()
+            .map(|p| {
+                let n = welded.len() as u32;
+                *welded.entry(p.map(f32::to_bits)).or_insert(n)
+            })
+            .collect();
+        let mut edges: std::collections::HashMap<(u32, u32), u32> = Default::default();
+        for t in cut.indices.chunks_exact(3) {
+            for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {
+                *edges.entry((id[a as usize], id[b as usize])).or_default() += 1;
+            }
+        }
+        for (&(a, b), &n) in &edges {
+            assert_eq!(n, 1, "edge {a}-{b} used {n} times");
+            assert_eq!(edges.get(&(b, a)), Some(&1), "edge {a}-{b} open");
+        }
     }
 
     #[test]
