@@ -78,6 +78,13 @@ fn distances_to_bones(
     out
 }
 
+/// Triangle `t` rotated to start at its lowest vertex (the same triangle, the same way
+/// round).
+fn rotated(t: [usize; 3]) -> [usize; 3] {
+    let k = (0..3).min_by_key(|&k| t[k]).expect("three corners");
+    [t[k], t[(k + 1) % 3], t[(k + 2) % 3]]
+}
+
 /// The postures' sets: each spans this part of every joint's range around zero, and has
 /// this many postures.
 const SPANS: [(f64, usize); 4] = [(1.0, 200), (0.75, 200), (0.5, 200), (0.25, 200)];
@@ -97,7 +104,7 @@ struct Span {
     by_joint: HashMap<String, usize>,
 }
 
-fn check(skeleton: &Skeleton, label: &str) {
+fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
     let started = std::time::Instant::now();
     let skin = Skin::build(skeleton).unwrap();
     let built = started.elapsed();
@@ -138,6 +145,64 @@ fn check(skeleton: &Skeleton, label: &str) {
     // Euler characteristic V - E + F: 2 for one closed surface of genus 0.
     let chi = n as i64 - (edges.len() / 2) as i64 + tris as i64;
     assert_eq!(chi, 2, "{label}: Euler characteristic {chi}");
+
+    // Its own mirror image across the sagittal plane (x = 0): every vertex's image a
+    // vertex, every triangle's image a triangle, and every vertex's weights its image's,
+    // the left's joints and helpers for the right's.
+    let at: HashMap<[u32; 3], usize> = skin
+        .positions
+        .iter()
+        .enumerate()
+        .map(|(v, p)| (p.map(f32::to_bits), v))
+        .collect();
+    let image: Vec<usize> = skin
+        .positions
+        .iter()
+        .map(|&[x, y, z]| {
+            // The seam's vertices are their own images (x = 0, whatever its sign).
+            let key = [if x == 0.0 { x } else { -x }, y, z].map(f32::to_bits);
+            *at.get(&key)
+                .unwrap_or_else(|| panic!("{label}: no vertex at the image of {x}, {y}, {z}"))
+        })
+        .collect();
+    let triangles: std::collections::HashSet<[usize; 3]> = skin
+        .indices
+        .chunks_exact(3)
+        .map(|t| rotated([t[0], t[1], t[2]].map(|v| v as usize)))
+        .collect();
+    for t in &triangles {
+        let mirrored = rotated([image[t[0]], image[t[2]], image[t[1]]]);
+        assert!(
+            triangles.contains(&mirrored),
+            "{label}: triangle {t:?} has no mirror image"
+        );
+    }
+    let slot_name = |slot: u16| {
+        let joints = skeleton.joints().len();
+        let slot = slot as usize;
+        match slot.checked_sub(joints) {
+            Some(h) => skin.helpers[h].name.clone(),
+            None => skeleton.joints()[slot].name.clone(),
+        }
+    };
+    let other_side = |name: String| match name.split_at_checked(2) {
+        Some(("l_", rest)) => format!("r_{rest}"),
+        Some(("r_", rest)) => format!("l_{rest}"),
+        _ => name,
+    };
+    for (v, &w) in image.iter().enumerate() {
+        let mut shares: HashMap<String, f32> = HashMap::new();
+        for k in 0..4 {
+            *shares.entry(slot_name(skin.joints[v][k])).or_default() += skin.weights[v][k];
+            *shares
+                .entry(other_side(slot_name(skin.joints[w][k])))
+                .or_default() -= skin.weights[w][k];
+        }
+        assert!(
+            shares.values().all(|d| d.abs() < 1e-6),
+            "{label}: the weights of vertex {v} and of its image {w} differ: {shares:?}"
+        );
+    }
 
     // No degenerate triangles at rest: three distinct vertices, not (nearly) on a line.
     let pos = |i: u32| DVec3::from(skin.positions[i as usize].map(f64::from));
@@ -263,35 +328,35 @@ fn check(skeleton: &Skeleton, label: &str) {
     // by θ, a linear blend of two rotations folds when L < 2·r·tan(θ/2); the groin at a hip
     // flexed by 120° asks for a band longer than the pelvis (docs/viewer.md). So a few
     // triangles turn over in the last quarter of the ranges (docs/skin-notes.md has every
-    // step and the draws behind these figures): over each size's 200 postures within the
-    // whole ranges 18-50 (0.09-0.25 a posture, 2-10 at the worst, 0-2 at the hands), within
-    // three quarters 0-1, within half or a quarter none. The bounds keep them there: a
-    // change that folds more fails.
-    let [full, three_quarters, half, quarter] = &spans[..] else {
+    // step and the draws behind these figures). Each size's skin is a sample of its own of
+    // where the grid's samples fall, and its folds change with that as much as with the
+    // weights (docs/skin-notes.md, "The two sides mirrored"), so the six sizes are bounded
+    // together (`every_template_at_several_sizes_is_skinned_soundly`), and each on its own
+    // only loosely: over its 200 postures within the whole ranges 15-71 (3-7 at the worst
+    // posture), none within half or a quarter of the ranges.
+    let [full, _, half, quarter] = &spans[..] else {
         unreachable!("four sets of postures")
     };
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
-        full.all as f64 <= 0.3 * full.postures as f64
-            && fraction(full.worst) <= 0.0005
-            && full.at_hands <= 3,
-        "{label}: {} triangles turned inside out over the {} postures within the whole ranges ({} at the worst, {} at the hands)",
+        full.all as f64 <= 0.4 * full.postures as f64 && fraction(full.worst) <= 0.0005,
+        "{label}: {} triangles turned inside out over the {} postures within the whole ranges ({} at the worst)",
         full.all,
         full.postures,
         full.worst,
-        full.at_hands
     );
     assert!(
-        three_quarters.all <= 1 && half.all == 0 && quarter.all == 0,
-        "{label}: {}, {} and {} triangles turned inside out within three quarters, half and a quarter of the ranges",
-        three_quarters.all,
+        half.all == 0 && quarter.all == 0,
+        "{label}: {} and {} triangles turned inside out within half and a quarter of the ranges",
         half.all,
         quarter.all
     );
+    spans
 }
 
 #[test]
 fn every_template_at_several_sizes_is_skinned_soundly() {
+    let mut totals: [Span; 4] = Default::default();
     for t in templates() {
         for scale in [0.8, 1.0, 1.15] {
             let params = TemplateParams {
@@ -299,9 +364,34 @@ fn every_template_at_several_sizes_is_skinned_soundly() {
                 mass: t.default_mass * scale.powi(3),
             };
             let skeleton = t.instantiate(params).unwrap();
-            check(&skeleton, &format!("{} {:.2} m", t.name, params.height));
+            let spans = check(&skeleton, &format!("{} {:.2} m", t.name, params.height));
+            for (total, span) in totals.iter_mut().zip(spans) {
+                total.postures += span.postures;
+                total.all += span.all;
+                total.at_hands += span.at_hands;
+            }
         }
     }
+    // The six sizes together: over their 1,200 postures within the whole ranges 214
+    // triangles turned over, 9 of them at the hands; within three quarters 3. The bounds
+    // keep them there: a change that folds more fails.
+    let [full, three_quarters, ..] = &totals;
+    eprintln!(
+        "all sizes: {} inverted triangles over {} postures within the whole ranges ({} at the hands), {} within three quarters",
+        full.all, full.postures, full.at_hands, three_quarters.all
+    );
+    assert!(
+        full.all as f64 <= 0.2 * full.postures as f64 && full.at_hands <= 10,
+        "{} triangles turned inside out over the {} postures of every size within the whole ranges ({} at the hands)",
+        full.all,
+        full.postures,
+        full.at_hands
+    );
+    assert!(
+        three_quarters.all <= 3,
+        "{} triangles turned inside out over the postures of every size within three quarters of the ranges",
+        three_quarters.all
+    );
 }
 
 #[test]
@@ -326,7 +416,7 @@ fn the_skin_cut_along_its_regions_is_the_same_surface_one_region_per_triangle() 
     }
 }
 
-/// `cut`, made from `skin`'s `triangles`: more triangles, almost all in one region each;
+/// `cut`, made from `skin`'s `triangles`: more triangles, each in one region;
 /// the same area; closed once the copies on the edges are welded, as `triangles` are;
 /// weights normalised.
 fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangles: &[u32]) {
@@ -344,12 +434,12 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
         .count();
     let used: std::collections::HashSet<u32> = triangles.iter().copied().collect();
     eprintln!(
-        "{level} level cut: {} vertices and {tris} triangles (uncut: {} and {}); {mixed} triangles where three regions meet",
+        "{level} level cut: {} vertices and {tris} triangles (uncut: {} and {}); {mixed} triangles in more than one region",
         cut.positions.len(),
         used.len(),
         triangles.len() / 3
     );
-    assert!(tris > triangles.len() / 3 && mixed * 500 < tris, "{level}");
+    assert!(tris > triangles.len() / 3 && mixed == 0, "{level}");
     // The same surface: as much area, and closed once the copies on the edges are
     // welded (every edge between two welded vertices once each way).
     let area = |positions: &[[f32; 3]], indices: &[u32]| -> f64 {
@@ -370,9 +460,8 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
         (after - before).abs() < 1e-6 * before,
         "{level}: area {before} m² became {after} m²"
     );
-    // Welded, the cut is closed wherever the triangles it was cut from are: every edge
-    // once each way. (The coarse level, simplified without the full level's care for
-    // pinches, has a few edges that are not.)
+    // Welded, the cut is closed as the triangles it was cut from are: every edge once
+    // each way (every level is simplified with the same care for pinches).
     let mut welded: HashMap<[u32; 3], u32> = HashMap::new();
     let mut weld = |p: [f32; 3]| {
         let n = welded.len() as u32;
@@ -404,6 +493,11 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
         open.len()
     );
     assert_eq!(open, open_before, "{level}: the cut opened or closed edges");
+    assert!(
+        open.is_empty(),
+        "{level}: {} edges not shared once each way",
+        open.len()
+    );
     // No holes, though: every edge has its reverse (the viewer culls back faces, so a
     // hole would show through the body).
     let mut directed = std::collections::HashSet::new();

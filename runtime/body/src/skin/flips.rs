@@ -20,8 +20,14 @@ pub(crate) fn quality(a: DVec3, b: DVec3, c: DVec3) -> f64 {
 }
 
 /// Flips the longest edge of every triangle of quality under `poor` when that makes both
-/// triangles of the pair better and turns neither over; repeats until nothing changes.
-pub(crate) fn flip_slivers(positions: &[DVec3], indices: &mut [u32], poor: f64) {
+/// triangles of the pair better and turns neither over, and `may_join` allows the new
+/// edge between the pair's third vertices; repeats until nothing changes.
+pub(crate) fn flip_slivers(
+    positions: &[DVec3],
+    indices: &mut [u32],
+    poor: f64,
+    may_join: impl Fn(u32, u32) -> bool,
+) {
     let tri = |indices: &[u32], t: usize| [indices[3 * t], indices[3 * t + 1], indices[3 * t + 2]];
     let mut edges: HashMap<(u32, u32), usize> = HashMap::new();
     for t in 0..indices.len() / 3 {
@@ -57,7 +63,11 @@ pub(crate) fn flip_slivers(positions: &[DVec3], indices: &mut [u32], poor: f64) 
                 .into_iter()
                 .find(|&v| v != a && v != b)
                 .expect("a triangle has a third vertex");
-            if c == d || edges.contains_key(&(c, d)) || edges.contains_key(&(d, c)) {
+            if c == d
+                || edges.contains_key(&(c, d))
+                || edges.contains_key(&(d, c))
+                || !may_join(c, d)
+            {
                 continue;
             }
             let (n1, n2) = ([c, a, d], [d, b, c]);

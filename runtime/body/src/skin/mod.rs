@@ -9,13 +9,15 @@
 //!    ([`bind_posture`]), where the surface and its weights are made;
 //! 2. **surface** (`surface`): the volumes blended into one signed distance field (smooth
 //!    unions where neighbouring joints meet, carving for the eye sockets), its zero level
-//!    set extracted by marching tetrahedra into a closed mesh, which is then simplified
-//!    (meshoptimizer's quadric edge collapse) to at most [`MAX_TRIANGLES`] triangles, and
-//!    once more into a coarse level of detail for actors far from the camera; its tiny
-//!    edges are collapsed (`collapse`) and its thin triangles evened out by edge flips
-//!    (`flips`) and tangential relaxation (`relax`), since thin triangles turn over
-//!    at the slightest bend, and its few pleats (triangles facing into the body) unfolded
-//!    (`pleats`);
+//!    set extracted by marching tetrahedra on the left of the sagittal plane and
+//!    mirrored into a closed mesh (`mirror`: the right side is the left's mirror image,
+//!    through every step below), which is then simplified (meshoptimizer's quadric edge
+//!    collapse) to at most [`MAX_TRIANGLES`] triangles; its tiny edges are collapsed
+//!    (`collapse`) and its thin triangles evened out by edge flips (`flips`) and
+//!    tangential relaxation (`relax`), since thin triangles turn over at the slightest
+//!    bend, and its few pleats (triangles facing into the body) unfolded (`pleats`);
+//!    the finished surface is simplified again into the coarse levels of detail for
+//!    actors far from the camera;
 //! 3. **weights** (`weights`): at most four joints per vertex, blended across each joint
 //!    and smoothed over the surface so that they change continuously from vertex to vertex;
 //!    across the big joints the blend runs through [`helpers`], in-between joints turned
@@ -37,6 +39,7 @@ mod collapse;
 mod flips;
 pub mod helpers;
 mod library;
+mod mirror;
 mod pleats;
 mod regions;
 mod relax;
@@ -54,6 +57,7 @@ use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
 use crate::transform::Transform;
 use glam::DVec3;
+use mirror::Mirror;
 use volumes::Volume;
 
 /// The most triangles a skin has at full detail.
@@ -193,18 +197,14 @@ impl Skin {
             .map(|v| v.form.bounds().1.y)
             .fold(0.0f64, f64::max);
         let field = surface::Field::sample(&volumes, height / CELLS_PER_HEIGHT, blends);
-        let (dense_positions, dense_indices) = field.triangulate();
-        if dense_indices.is_empty() {
+        // The left side only, mirrored: see `mirror` for why.
+        let (left_positions, dense_left) = field.triangulate_left();
+        if dense_left.is_empty() {
             return Err(Error::Invalid(
                 "skin: the body's volumes enclose nothing".into(),
             ));
         }
-        let points: Vec<[f32; 3]> = dense_positions
-            .iter()
-            .map(|p| p.as_vec3().to_array())
-            .collect();
-        let adapter = meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&points), 12, 0)
-            .map_err(|e| Error::Invalid(format!("skin: {e}")))?;
+        let (dense_mirror, dense_positions, _) = Mirror::whole(&left_positions, &dense_left);
         // Regions are decided on the dense surface and carried through simplification as
         // attributes, so that collapses keep the edges between them (sleeves, collar,
         // waistband) along rows of vertices.
@@ -212,32 +212,15 @@ impl Skin {
             .iter()
             .map(|&p| regions::distances_at(p, &volumes).region())
             .collect();
-        let full = simplify_closed(
-            &dense_indices,
-            &adapter,
-            &dense_regions,
-            MAX_TRIANGLES,
-            0.004 * height,
+        let full = Simplifier {
+            positions: &dense_positions,
+            mirror: &dense_mirror,
+            regions: &dense_regions,
             height,
-        )?;
-        let farthest = simplify_closed(
-            &full,
-            &adapter,
-            &dense_regions,
-            FARTHEST_TRIANGLES,
-            0.04 * height,
-            height,
-        )?;
-        let far = meshopt::simplify(
-            &full,
-            &adapter,
-            FAR_TRIANGLES * 3,
-            (0.02 * height) as f32,
-            meshopt::SimplifyOptions::ErrorAbsolute,
-            None,
-        );
+        }
+        .simplify(&dense_left, MAX_TRIANGLES, 0.004 * height)?;
         // Keep only the vertices the full mesh uses, in first-use order.
-        let mut remap = vec![u32::MAX; points.len()];
+        let mut remap = vec![u32::MAX; dense_positions.len()];
         let mut positions = Vec::new();
         let mut regions = Vec::new();
         for &i in &full {
@@ -247,14 +230,18 @@ impl Skin {
                 regions.push(dense_regions[i as usize]);
             }
         }
+        let mirror = dense_mirror.renumbered(&remap, positions.len());
         let mut indices: Vec<u32> = full.iter().map(|&i| remap[i as usize]).collect();
-        let merged = collapse::collapse_short_edges(
+        // The steps below run over the whole surface, each made symmetric again from its
+        // left side after it (`Mirror::symmetric`).
+        collapse::collapse_short_edges(
             &mut positions,
             &mut indices,
             TINY_EDGE * height / CELLS_PER_HEIGHT,
+            |a, b| mirror.same_side(a, b),
         );
-        // Renumber the vertices left, in first-use order, and point the coarse level's
-        // triangles at the vertices theirs were merged into.
+        mirror.symmetric(&mut positions, &mut indices);
+        // Renumber the vertices left, in first-use order.
         let mut renumber = vec![u32::MAX; positions.len()];
         let mut kept = 0u32;
         for &i in &indices {
@@ -265,33 +252,41 @@ impl Skin {
         }
         let mut positions = gather(&positions, &renumber, kept as usize);
         let mut regions = gather(&regions, &renumber, kept as usize);
+        let mirror = mirror.renumbered(&renumber, kept as usize);
         for i in &mut indices {
             *i = renumber[*i as usize];
         }
+        let may_join = |a, b| mirror.may_join(a, b);
         // Thin triangles turn over at the slightest bend: flip the worst away, relax the
         // vertices along the surface, unfold the pleats (`pleats`), flip again what is
         // still thin and relax once more (more rounds changed nothing measurable).
-        flips::flip_slivers(&positions, &mut indices, 0.05);
+        flips::flip_slivers(&positions, &mut indices, 0.05, may_join);
+        mirror.symmetric(&mut positions, &mut indices);
         relax::relax(&mut positions, &indices, &field, 10);
+        mirror.symmetric_positions(&mut positions);
         // Unfold the pleats before the last flips and relaxation, which even out the
         // triangles the unfolding leaves thin (unfolded after them, a sliver was left
         // on the 0.96 m child's neck that turned over at a quarter of the ranges).
         pleats::unfold(&mut positions, &indices, &field);
-        flips::flip_slivers(&positions, &mut indices, THIN);
+        mirror.symmetric_positions(&mut positions);
+        flips::flip_slivers(&positions, &mut indices, THIN, may_join);
+        mirror.symmetric(&mut positions, &mut indices);
         relax::relax(&mut positions, &indices, &field, 5);
-        let onto_kept = |coarse: &[u32]| -> Vec<u32> {
-            coarse
-                .chunks_exact(3)
-                .map(|t| {
-                    [t[0], t[1], t[2]]
-                        .map(|i| renumber[merged[remap[i as usize] as usize] as usize])
-                })
-                .filter(|t| t[0] != t[1] && t[1] != t[2] && t[0] != t[2])
-                .flatten()
-                .collect()
-        };
-        let (far_indices, farthest_indices) = (onto_kept(&far), onto_kept(&farthest));
+        mirror.symmetric_positions(&mut positions);
         smooth_regions(&mut regions, &indices);
+        // The coarse levels of detail: the full level simplified further, over its
+        // vertices.
+        let coarse = Simplifier {
+            positions: &positions,
+            mirror: &mirror,
+            regions: &regions,
+            height,
+        };
+        let left = mirror.left_of(&indices);
+        let (far_indices, farthest_indices) = (
+            coarse.simplify(&left, FAR_TRIANGLES, 0.02 * height)?,
+            coarse.simplify(&left, FARTHEST_TRIANGLES, 0.04 * height)?,
+        );
         let region_distances = positions
             .iter()
             .map(|&p| regions::distances_at(p, &volumes))
@@ -467,73 +462,110 @@ fn with_helpers(globals: &[Transform], helpers: &[Helper]) -> Vec<Transform> {
     frames
 }
 
-/// Simplifies the closed mesh `dense` to at most `triangles` triangles (moving the
-/// surface by at most `error` m where it can), keeping it closed. Edge collapse can pinch
-/// a thin part (a fingertip, an ear's rim) into an edge shared by four triangles; where
-/// that happens the vertices around it are locked and the simplification runs again, so
-/// those few spots keep their fine triangles.
-fn simplify_closed(
-    dense: &[u32],
-    adapter: &meshopt::VertexDataAdapter<'_>,
-    regions: &[Region],
-    triangles: usize,
-    error: f64,
+/// The vertices of a symmetric closed mesh, and what its simplification keeps to.
+struct Simplifier<'a> {
+    /// Every vertex, the right's the mirror images of the left's.
+    positions: &'a [DVec3],
+    /// Which vertex is whose mirror image.
+    mirror: &'a Mirror,
+    /// Each vertex's region: collapses keep the edges between regions.
+    regions: &'a [Region],
+    /// The body's height, which the cost of changing region is a part of.
     height: f64,
-) -> Result<Vec<u32>> {
-    // One attribute per region, 1 where the vertex has it: changing region along a
-    // collapse costs as much as moving the surface by REGION_WEIGHT × height.
-    const REGIONS: usize = 6;
-    const REGION_WEIGHT: f64 = 0.01;
-    let mut attributes = vec![0.0f32; regions.len() * REGIONS];
-    for (v, &r) in regions.iter().enumerate() {
-        attributes[v * REGIONS + r as usize] = 1.0;
-    }
-    let weights = [(REGION_WEIGHT * height) as f32; REGIONS];
-    let mut lock = vec![false; adapter.vertex_count];
-    let mut rings: Option<Vec<Vec<u32>>> = None;
-    for _ in 0..12 {
-        let full = meshopt::simplify_with_attributes_and_locks(
-            dense,
-            adapter,
-            &attributes,
-            &weights,
-            REGIONS * std::mem::size_of::<f32>(),
-            &lock,
-            triangles * 3,
-            error as f32,
-            meshopt::SimplifyOptions::ErrorAbsolute | meshopt::SimplifyOptions::Regularize,
-            None,
-        );
-        let pinched = pinched_vertices(&full);
-        if pinched.is_empty() {
-            return Ok(full);
+}
+
+impl Simplifier<'_> {
+    /// Simplifies the left side `left` of the mesh (triangles with no vertex on the
+    /// right) to at most `triangles` triangles in all (moving the surface by at most
+    /// `error` m where it can), and returns the whole mesh, the left and its mirror
+    /// image, closed. The seam stays on the plane: meshoptimizer collapses a vertex on
+    /// the open rim only along the rim. Edge collapse can pinch a thin part (a
+    /// fingertip, an ear's rim) into an edge shared by four triangles; where that
+    /// happens the vertices around it are locked and the simplification runs again, so
+    /// those few spots keep their fine triangles.
+    fn simplify(&self, left: &[u32], triangles: usize, error: f64) -> Result<Vec<u32>> {
+        let Simplifier {
+            positions,
+            mirror,
+            regions,
+            height,
+        } = *self;
+        let points: Vec<[f32; 3]> = positions.iter().map(|p| p.as_vec3().to_array()).collect();
+        let adapter = meshopt::VertexDataAdapter::new(meshopt::typed_to_bytes(&points), 12, 0)
+            .map_err(|e| Error::Invalid(format!("skin: {e}")))?;
+        // One attribute per region, 1 where the vertex has it: changing region along a
+        // collapse costs as much as moving the surface by REGION_WEIGHT × height.
+        const REGIONS: usize = 6;
+        const REGION_WEIGHT: f64 = 0.01;
+        let mut attributes = vec![0.0f32; regions.len() * REGIONS];
+        for (v, &r) in regions.iter().enumerate() {
+            attributes[v * REGIONS + r as usize] = 1.0;
         }
-        let rings = rings.get_or_insert_with(|| neighbours_of(dense, adapter.vertex_count));
-        // Lock each pinched vertex and its dense neighbourhood, three rings deep.
-        let mut frontier = pinched;
-        for _ in 0..3 {
-            let mut next = Vec::new();
-            for v in frontier {
-                if !lock[v as usize] {
-                    lock[v as usize] = true;
-                }
-                next.extend(
-                    rings[v as usize]
-                        .iter()
-                        .copied()
-                        .filter(|&n| !lock[n as usize]),
-                );
-            }
-            frontier = next;
-        }
-        for v in frontier {
+        let weights = [(REGION_WEIGHT * height) as f32; REGIONS];
+        let mut lock = vec![false; adapter.vertex_count];
+        // The seam's vertices kept about an edge's length apart: that of an equilateral
+        // triangle of the surface's mean area at the level's count.
+        let area: f64 = left
+            .chunks_exact(3)
+            .map(|t| {
+                let [a, b, c] = [t[0], t[1], t[2]].map(|v| positions[v as usize]);
+                (b - a).cross(c - a).length() / 2.0
+            })
+            .sum();
+        let spacing = (4.0 * area / (3f64.sqrt() * (triangles / 2) as f64)).sqrt();
+        for v in Mirror::along_seam(left, positions, spacing) {
             lock[v as usize] = true;
         }
-    }
-    Err(Error::Invalid(
+        let mut rings: Option<Vec<Vec<u32>>> = None;
+        for _ in 0..12 {
+            let simplified = meshopt::simplify_with_attributes_and_locks(
+                left,
+                &adapter,
+                &attributes,
+                &weights,
+                REGIONS * std::mem::size_of::<f32>(),
+                &lock,
+                triangles / 2 * 3,
+                error as f32,
+                meshopt::SimplifyOptions::ErrorAbsolute | meshopt::SimplifyOptions::Regularize,
+                None,
+            );
+            let whole = mirror.with_mirror_image(&simplified);
+            // A pinch on the right is its partner's on the left (whose vertices come first).
+            let pinched: Vec<u32> = pinched_vertices(&whole)
+                .into_iter()
+                .map(|v| mirror.partner(v).min(v))
+                .collect();
+            if pinched.is_empty() {
+                return Ok(whole);
+            }
+            let rings = rings.get_or_insert_with(|| neighbours_of(left, adapter.vertex_count));
+            // Lock each pinched vertex and its dense neighbourhood, three rings deep.
+            let mut frontier = pinched;
+            for _ in 0..3 {
+                let mut next = Vec::new();
+                for v in frontier {
+                    if !lock[v as usize] {
+                        lock[v as usize] = true;
+                    }
+                    next.extend(
+                        rings[v as usize]
+                            .iter()
+                            .copied()
+                            .filter(|&n| !lock[n as usize]),
+                    );
+                }
+                frontier = next;
+            }
+            for v in frontier {
+                lock[v as usize] = true;
+            }
+        }
+        Err(Error::Invalid(
         "skin: the simplified surface stayed pinched (an edge shared by more than two triangles)"
             .into(),
     ))
+    }
 }
 
 /// Vertices of edges that are not shared by exactly two opposite triangles.
