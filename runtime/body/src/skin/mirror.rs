@@ -138,9 +138,13 @@ impl Mirror {
         out
     }
 
-    /// The mirror image of vertex `v` (itself on the seam).
-    pub fn partner(&self, v: u32) -> u32 {
-        self.partner[v as usize]
+    /// Vertex `v` if it is on the left or the seam, else its mirror image: the vertex of
+    /// the pair that the left side has.
+    pub fn on_left(&self, v: u32) -> u32 {
+        match self.side[v as usize] {
+            Side::Right => self.partner[v as usize],
+            Side::Left | Side::Seam => v,
+        }
     }
 
     /// Whether `a` and `b` lie on the same side (or both on the seam): an edge between
@@ -199,8 +203,9 @@ mod tests {
         let (mirror, positions, indices) = Mirror::whole(&half, &left);
         assert_eq!(positions.len(), 5, "one vertex off the seam, one partner");
         assert_eq!(positions[4], DVec3::new(-1.0, 0.0, 0.0));
-        assert_eq!(mirror.partner(2), 4);
-        assert_eq!(mirror.partner(0), 0);
+        assert_eq!((mirror.partner[2], mirror.partner[4]), (4, 2));
+        assert_eq!(mirror.partner[0], 0);
+        assert_eq!((mirror.on_left(4), mirror.on_left(2)), (2, 2));
         let mut edges = std::collections::HashMap::new();
         for t in indices.chunks_exact(3) {
             for (a, b) in [(t[0], t[1]), (t[1], t[2]), (t[2], t[0])] {

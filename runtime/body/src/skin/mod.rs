@@ -31,9 +31,10 @@
 //!
 //! The folds counted in these modules' comments ("the skin test's 50 full-range
 //! postures") are over the test's former single draw of 50 postures, which the knobs
-//! were set by; other draws fold about 80 times as many per posture. A change is now
+//! were set by, and on the surface before its two sides were mirrored; other draws fold
+//! about 80 times as many per posture, and other grids as many again. A change is now
 //! judged by `examples/skin_folds.rs`, over draws chosen by and draws held out
-//! (docs/skin-notes.md, "More draws").
+//! (docs/skin-notes.md, "More draws" and "The two sides mirrored").
 
 mod collapse;
 mod flips;
@@ -531,10 +532,10 @@ impl Simplifier<'_> {
                 None,
             );
             let whole = mirror.with_mirror_image(&simplified);
-            // A pinch on the right is its partner's on the left (whose vertices come first).
+            // A pinch on the right is its mirror image's on the left.
             let pinched: Vec<u32> = pinched_vertices(&whole)
                 .into_iter()
-                .map(|v| mirror.partner(v).min(v))
+                .map(|v| mirror.on_left(v))
                 .collect();
             if pinched.is_empty() {
                 return Ok(whole);
