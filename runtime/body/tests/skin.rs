@@ -10,7 +10,7 @@
 use std::collections::HashMap;
 use troupe_body::glam::DVec3;
 use troupe_body::kinematics::forward_kinematics;
-use troupe_body::skin::MAX_TRIANGLES;
+use troupe_body::skin::{FARTHEST_TRIANGLES, FAR_TRIANGLES, MAX_TRIANGLES};
 use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
 
 #[path = "support/postures.rs"]
@@ -122,6 +122,11 @@ fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
     assert!(
         tris <= MAX_TRIANGLES && tris > 5_000,
         "{label}: {tris} triangles"
+    );
+    let (far, farthest) = (skin.far_indices.len() / 3, skin.farthest_indices.len() / 3);
+    assert!(
+        far <= FAR_TRIANGLES && farthest <= FARTHEST_TRIANGLES,
+        "{label}: {far} and {farthest} triangles at the coarse levels"
     );
 
     // Closed: every directed edge appears once, and its reverse once.
@@ -397,22 +402,25 @@ fn every_template_at_several_sizes_is_skinned_soundly() {
 #[test]
 fn the_skin_cut_along_its_regions_is_the_same_surface_one_region_per_triangle() {
     use troupe_body::skin::CutSkin;
-    let t = &templates()[0];
-    let skeleton = t
-        .instantiate(TemplateParams {
-            height: t.default_height,
-            mass: t.default_mass,
-        })
-        .unwrap();
-    let skin = Skin::build(&skeleton).unwrap();
-    // Both levels of detail: the full one (glTF files), the coarse one (the viewer's
-    // actors far away, coloured by vertex).
-    for (level, cut, triangles) in [
-        ("full", CutSkin::new(&skin), &skin.indices),
-        ("far", CutSkin::far(&skin), &skin.far_indices),
-        ("farthest", CutSkin::farthest(&skin), &skin.farthest_indices),
-    ] {
-        check_cut(level, &skin, &cut, triangles);
+    // The skins a scene uses: each template's at its default height (every other height
+    // shares it).
+    for t in templates() {
+        let skeleton = t
+            .instantiate(TemplateParams {
+                height: t.default_height,
+                mass: t.default_mass,
+            })
+            .unwrap();
+        let skin = Skin::build(&skeleton).unwrap();
+        // Every level of detail: the full one (glTF files), the coarse ones (the viewer's
+        // actors far away, coloured by vertex).
+        for (level, cut, triangles) in [
+            ("full", CutSkin::new(&skin), &skin.indices),
+            ("far", CutSkin::far(&skin), &skin.far_indices),
+            ("farthest", CutSkin::farthest(&skin), &skin.farthest_indices),
+        ] {
+            check_cut(&format!("{} {level}", t.name), &skin, &cut, triangles);
+        }
     }
 }
 
@@ -530,5 +538,51 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
     for ws in &cut.weights {
         let sum: f32 = ws.iter().sum();
         assert!((sum - 1.0).abs() < 1e-5, "{level}: weights {ws:?}");
+    }
+    // Its own mirror image, as the skin it is cut from: each vertex's image a vertex of
+    // its region, to the bit or (a point cut from the edge's other end) within a
+    // micrometre, and each triangle's image a triangle.
+    // A place's bits, -0 taken for 0.
+    let bits = |[x, y, z]: [f32; 3]| [x + 0.0, y, z].map(f32::to_bits);
+    let at: HashMap<([u32; 3], troupe_body::skin::Region), usize> = cut
+        .positions
+        .iter()
+        .zip(&cut.regions)
+        .enumerate()
+        .map(|(v, (&p, &r))| ((bits(p), r), v))
+        .collect();
+    let place = |v: usize| DVec3::from(cut.positions[v].map(f64::from));
+    let image: Vec<usize> = (0..cut.positions.len())
+        .map(|v| {
+            let (p @ [x, y, z], r) = (cut.positions[v], cut.regions[v]);
+            at.get(&(bits([-x, y, z]), r)).copied().unwrap_or_else(|| {
+                let want = place(v) * DVec3::new(-1.0, 1.0, 1.0);
+                let nearest = (0..cut.positions.len())
+                    .filter(|&w| cut.regions[w] == r)
+                    .min_by(|&a, &b| {
+                        (place(a) - want)
+                            .length()
+                            .total_cmp(&(place(b) - want).length())
+                    })
+                    .expect("the vertex's own region");
+                let off = (place(nearest) - want).length();
+                assert!(
+                    off < 1e-6,
+                    "{level}: vertex {v} at {p:?} has no image ({off:e} m off)"
+                );
+                nearest
+            })
+        })
+        .collect();
+    let cut_triangles: std::collections::HashSet<[usize; 3]> = cut
+        .indices
+        .chunks_exact(3)
+        .map(|t| rotated([t[0], t[1], t[2]].map(|v| v as usize)))
+        .collect();
+    for t in &cut_triangles {
+        assert!(
+            cut_triangles.contains(&rotated([image[t[0]], image[t[2]], image[t[1]]])),
+            "{level}: cut triangle {t:?} has no mirror image"
+        );
     }
 }

@@ -107,6 +107,16 @@ impl Mirror {
         }
     }
 
+    /// The right's `values` made the `image`s of their partners' (a value for each
+    /// vertex).
+    pub fn symmetric_values<T>(&self, values: &mut [T], image: impl Fn(&T) -> T) {
+        for v in 0..values.len() {
+            if self.side[v] == Side::Right {
+                values[v] = image(&values[self.partner[v] as usize]);
+            }
+        }
+    }
+
     /// Vertices along the seam of the left side `left` (its open rim: each edge that no
     /// other triangle has the other way round) about `spacing` m apart, from each loop's
     /// lowest-numbered vertex on: the seam's vertices a simplification keeps, so that
