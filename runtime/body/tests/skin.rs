@@ -78,6 +78,21 @@ fn distances_to_bones(
     out
 }
 
+/// Asserts that every triangle of `indices` has its mirror image among them, `image`
+/// giving each vertex's image (the image wound the other way, to face out as well).
+fn assert_mirrored_triangles(label: &str, indices: &[u32], image: &[usize]) {
+    let triangles: std::collections::HashSet<[usize; 3]> = indices
+        .chunks_exact(3)
+        .map(|t| rotated([t[0], t[1], t[2]].map(|v| v as usize)))
+        .collect();
+    for t in &triangles {
+        assert!(
+            triangles.contains(&rotated([image[t[0]], image[t[2]], image[t[1]]])),
+            "{label}: triangle {t:?} has no mirror image"
+        );
+    }
+}
+
 /// Triangle `t` rotated to start at its lowest vertex (the same triangle, the same way
 /// round).
 fn rotated(t: [usize; 3]) -> [usize; 3] {
@@ -170,18 +185,7 @@ fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
                 .unwrap_or_else(|| panic!("{label}: no vertex at the image of {x}, {y}, {z}"))
         })
         .collect();
-    let triangles: std::collections::HashSet<[usize; 3]> = skin
-        .indices
-        .chunks_exact(3)
-        .map(|t| rotated([t[0], t[1], t[2]].map(|v| v as usize)))
-        .collect();
-    for t in &triangles {
-        let mirrored = rotated([image[t[0]], image[t[2]], image[t[1]]]);
-        assert!(
-            triangles.contains(&mirrored),
-            "{label}: triangle {t:?} has no mirror image"
-        );
-    }
+    assert_mirrored_triangles(label, &skin.indices, &image);
     let slot_name = |slot: u16| {
         let joints = skeleton.joints().len();
         let slot = slot as usize;
@@ -574,15 +578,5 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
             })
         })
         .collect();
-    let cut_triangles: std::collections::HashSet<[usize; 3]> = cut
-        .indices
-        .chunks_exact(3)
-        .map(|t| rotated([t[0], t[1], t[2]].map(|v| v as usize)))
-        .collect();
-    for t in &cut_triangles {
-        assert!(
-            cut_triangles.contains(&rotated([image[t[0]], image[t[2]], image[t[1]]])),
-            "{level}: cut triangle {t:?} has no mirror image"
-        );
-    }
+    assert_mirrored_triangles(level, &cut.indices, &image);
 }
