@@ -7,8 +7,9 @@
 //! This counts them over ten draws of 50 postures within the whole joint ranges for every
 //! template at three sizes, split into five draws to choose a change by and five held
 //! out to check it on, over ten draws within three quarters of the ranges, where few
-//! should, and over ten within half, where none should. A triangle is inverted as in the test: its skinned normal points
-//! against its rest normal turned by the rotations skinning blends for it.
+//! should, and over ten within half, where none should. A triangle is inverted as in
+//! the test: its skinned normal points against its rest normal turned by the rotations
+//! skinning blends for it.
 //!
 //! `cargo run --release -p troupe-body --example skin_folds`
 

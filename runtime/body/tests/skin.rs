@@ -93,6 +93,16 @@ fn assert_mirrored_triangles(label: &str, indices: &[u32], image: &[usize]) {
     }
 }
 
+/// A place's bits, -0 taken for 0 (a vertex on the sagittal plane is its own image).
+fn place_bits([x, y, z]: [f32; 3]) -> [u32; 3] {
+    [x + 0.0, y, z].map(f32::to_bits)
+}
+
+/// The bits of the mirror image of a place across the sagittal plane (x = 0).
+fn image_bits([x, y, z]: [f32; 3]) -> [u32; 3] {
+    place_bits([-x, y, z])
+}
+
 /// Triangle `t` rotated to start at its lowest vertex (the same triangle, the same way
 /// round).
 fn rotated(t: [usize; 3]) -> [usize; 3] {
@@ -173,16 +183,14 @@ fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
         .positions
         .iter()
         .enumerate()
-        .map(|(v, p)| (p.map(f32::to_bits), v))
+        .map(|(v, &p)| (place_bits(p), v))
         .collect();
     let image: Vec<usize> = skin
         .positions
         .iter()
-        .map(|&[x, y, z]| {
-            // The seam's vertices are their own images (x = 0, whatever its sign).
-            let key = [if x == 0.0 { x } else { -x }, y, z].map(f32::to_bits);
-            *at.get(&key)
-                .unwrap_or_else(|| panic!("{label}: no vertex at the image of {x}, {y}, {z}"))
+        .map(|&p| {
+            *at.get(&image_bits(p))
+                .unwrap_or_else(|| panic!("{label}: no vertex at the image of {p:?}"))
         })
         .collect();
     assert_mirrored_triangles(label, &skin.indices, &image);
@@ -546,20 +554,18 @@ fn check_cut(level: &str, skin: &Skin, cut: &troupe_body::skin::CutSkin, triangl
     // Its own mirror image, as the skin it is cut from: each vertex's image a vertex of
     // its region, to the bit or (a point cut from the edge's other end) within a
     // micrometre, and each triangle's image a triangle.
-    // A place's bits, -0 taken for 0.
-    let bits = |[x, y, z]: [f32; 3]| [x + 0.0, y, z].map(f32::to_bits);
     let at: HashMap<([u32; 3], troupe_body::skin::Region), usize> = cut
         .positions
         .iter()
         .zip(&cut.regions)
         .enumerate()
-        .map(|(v, (&p, &r))| ((bits(p), r), v))
+        .map(|(v, (&p, &r))| ((place_bits(p), r), v))
         .collect();
     let place = |v: usize| DVec3::from(cut.positions[v].map(f64::from));
     let image: Vec<usize> = (0..cut.positions.len())
         .map(|v| {
-            let (p @ [x, y, z], r) = (cut.positions[v], cut.regions[v]);
-            at.get(&(bits([-x, y, z]), r)).copied().unwrap_or_else(|| {
+            let (p, r) = (cut.positions[v], cut.regions[v]);
+            at.get(&(image_bits(p), r)).copied().unwrap_or_else(|| {
                 let want = place(v) * DVec3::new(-1.0, 1.0, 1.0);
                 let nearest = (0..cut.positions.len())
                     .filter(|&w| cut.regions[w] == r)
