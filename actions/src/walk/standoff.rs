@@ -143,22 +143,28 @@ impl Standoff {
             IN_THE_WAY
         };
         let (mut face_to_face, mut backed_into) = (false, false);
+        let mine = crowd.cores.get(me);
+        let i_carry = mine.is_some_and(|core| core.carries());
         for &j in others {
             if j == me || companions.contains(&j) {
                 continue;
             }
+            // Ahead, on my way, and near: behind me first, which needs neither body's
+            // reach (about half of those near, looked at for a tenth of the work).
             let offset = crowd.positions[j] - position;
+            if offset.dot(along) <= 0.0 {
+                continue;
+            }
             let reach = radius + across(j) + GAP;
+            if along.perp_dot(offset).abs() >= reach {
+                continue;
+            }
             // The gap between the two: what the hands carry out in front counts.
-            let gap = match (crowd.cores.get(me), crowd.cores.get(j)) {
-                (Some(mine), Some(theirs)) if mine.carries() || theirs.carries() => {
-                    mine.gap(theirs) - GAP
-                }
+            let gap = match (mine, crowd.cores.get(j)) {
+                (Some(mine), Some(theirs)) if i_carry || theirs.carries() => mine.gap(theirs) - GAP,
                 _ => offset.length() - reach,
             };
-            // Ahead, on my way, and near.
-            if offset.dot(along) <= 0.0 || along.perp_dot(offset).abs() >= reach || gap > in_the_way
-            {
+            if gap > in_the_way {
                 continue;
             }
             let Some(&facing) = crowd.facings.get(j) else {
