@@ -3,29 +3,34 @@
 //! the motion on the body it is meant for).
 //!
 //! A [`Character`] is what a file gave, in the file's own space: a skinned mesh in its
-//! bind pose, its bones (bind frames from the inverse bind matrices) and, for each bone,
-//! the troupe joint it follows (from a name map; `formats::character` reads files).
+//! bind pose, its bones (bind frames from the inverse bind matrices, rest frames from the
+//! file's nodes) and, for each bone, the troupe joint it follows (from a name map;
+//! `formats::character` reads files). Most files stand in their bind pose at rest; one
+//! bound in another posture (troupe's own skin is bound with the hips a little
+//! flexed, `skin::binding`) is fitted by the pose it stands in at rest, and skinned from
+//! the one it is bound in.
 //! [`Character::dress`] fits it to one skeleton and height, giving a [`Dressing`]:
 //!
 //! 1. **Placement**: the character is turned so that its hips-to-head line and its
 //!    left-right axis lie along those of troupe's rest posture (so it faces +Z, troupe's
 //!    front, whatever axes the file used), scaled to the actor's height (its mesh's
-//!    extent along up) and its hips put over troupe's.
+//!    extent along up, at rest) and its hips put over troupe's.
 //! 2. **Rest poses reconciled**: each mapped bone gets a constant rotation `A`, the
-//!    shortest arc from its direction in the bind pose (towards the centroid of the
+//!    shortest arc from its direction in the file's rest pose (towards the centroid of the
 //!    nearest mapped bones below it) to the direction from where it stands in troupe's
 //!    rest posture to troupe's rest joints of those bones; an upper arm or a thigh aims
 //!    at the end of its limb (the wrist, the foot), so the limb hangs straight. So a
 //!    character bound in T-pose hangs its arms as troupe's rest posture does, and a
 //!    narrow-shouldered one still puts its hands by troupe's hands. The topmost mapped
 //!    bone (the hips) keeps its orientation; a mapped bone with no mapped bone below it
-//!    keeps its parent's `A`; the bones of a foot keep their bind orientation (`A` = 1):
-//!    a bind pose and troupe's rest posture both stand flat-footed. Last, the character
+//!    keeps its parent's `A`; the bones of a foot keep their rest orientation (`A` = 1):
+//!    a file's rest pose and troupe's both stand flat-footed. Last, the character
 //!    is lifted so that its lowest vertex in troupe's rest posture is on the floor.
 //! 3. **Posing**: a mapped bone takes the world rotation its troupe joint has made since
-//!    rest, `R(q) = Rⱼ(q)·Rⱼ(0)⁻¹·A·R_bind`; its position follows the character's own
+//!    rest, `R(q) = Rⱼ(q)·Rⱼ(0)⁻¹·A·R_rest`; its position follows the character's own
 //!    bone chain (the character keeps its proportions), and the topmost mapped bone is
-//!    carried by its troupe joint. A bone with no troupe joint keeps its bind pose
+//!    carried by its troupe joint; its skinning matrix takes the mesh from the bone's
+//!    bind frame there. A bone with no troupe joint keeps its rest pose
 //!    relative to its parent, so its skinning matrix is its nearest mapped ancestor's:
 //!    troupe joints with no bone (extra vertebrae, fingers of a character without finger
 //!    bones) are thereby folded into the nearest mapped bone, whose world rotation
@@ -62,8 +67,8 @@ pub const REQUIRED_JOINTS: [&str; 6] = [
 /// limb's end when rest poses are reconciled.
 const LIMB_ROOTS: [&str; 2] = ["shoulder", "hip"];
 
-/// Troupe joints (without their `l_`/`r_`) of the foot: their bones keep their bind
-/// orientation at rest, since a character's bind pose and troupe's rest posture both
+/// Troupe joints (without their `l_`/`r_`) of the foot: their bones keep their
+/// orientation at rest, since a character's rest pose and troupe's rest posture both
 /// stand flat-footed. Aiming them at troupe's foot joints instead would tilt a foot
 /// whose bones are placed otherwise (CesiumMan's toe bone sits at the ball, 4 cm ahead
 /// of the ankle, troupe's 18 cm): toes up, heel 3 cm into the floor.
@@ -83,8 +88,13 @@ pub struct Bone {
     pub name: String,
     /// The parent bone (an index into the character's bones, always smaller).
     pub parent: Option<usize>,
-    /// The bone's frame in the bind pose (the inverse of its inverse bind matrix).
+    /// The bone's frame in the bind pose (the inverse of its inverse bind matrix): where
+    /// the mesh is bound to it.
     pub bind: Transform,
+    /// The bone's frame in the file's rest pose (its node's transform, composed from the
+    /// scene's root): the pose a modeller shows the character in, which is fitted to
+    /// troupe's rest posture. Most files' is their bind pose.
+    pub rest: Transform,
     /// The troupe joint whose motion it follows, if mapped.
     pub joint: Option<String>,
 }
@@ -146,7 +156,7 @@ pub struct Dressing {
     /// The legs whose ankles are kept on troupe's feet.
     legs: Vec<Leg>,
     /// The skin's helper joints that bones of the character are (see [`Rule::Helper`]),
-    /// each with its frame's rotation in the pose troupe's skin is bound in, inverted, and
+    /// each with its frame's rotation in the pose troupe's skin is made in, inverted, and
     /// its place then in its parent's frame.
     helpers: Vec<(Helper, DQuat, DVec3)>,
 }
@@ -154,8 +164,10 @@ pub struct Dressing {
 /// How one bone is posed from troupe's joint frames.
 #[derive(Clone, Debug)]
 struct Posed {
-    /// Placed bind frame.
+    /// Placed bind frame: where the mesh is bound to the bone.
     bind: Transform,
+    /// Placed rest frame: what the bone's rule turns and carries.
+    rest: Transform,
     /// How its position and rotation are found.
     rule: Rule,
 }
@@ -171,12 +183,13 @@ enum Rule {
         parent: usize,
         offset: DVec3,
     },
-    /// Keeps its bind pose relative to its parent.
+    /// Keeps its rest pose relative to its parent.
     Follows { parent: usize },
     /// One of the helper joints of troupe's own skin (a character troupe exported: its
     /// shoulders' `l_shoulder_50`, `l_shoulder_twist_25`, its hips' `l_hip_slide`, …):
-    /// turned from troupe's bind pose as the helper turns (`Helper::frame`), placed along
-    /// its parent at its bind offset and moved as the helper moves from its joint's
+    /// turned from the pose troupe's skin is made in (its file's rest pose) as the helper
+    /// turns (`Helper::frame`), placed along its parent at its rest offset and moved as
+    /// the helper moves from its joint's
     /// centre, so the skin it carries moves as troupe's does.
     Helper {
         helper: usize,
@@ -186,6 +199,36 @@ enum Rule {
 }
 
 impl Character {
+    /// The mesh standing in the file's rest pose (in the file's space): each vertex
+    /// carried by its weights from its bones' bind frames to their rest frames; the
+    /// bind-pose positions themselves where the two poses are one (most files).
+    fn at_rest(&self) -> Vec<DVec3> {
+        let bound = |p: &[f32; 3]| DVec3::from(p.map(f64::from));
+        if self.bones.iter().all(|b| b.rest == b.bind) {
+            return self.positions.iter().map(bound).collect();
+        }
+        let moved: Vec<Transform> = self
+            .bones
+            .iter()
+            .map(|b| b.rest.mul(&b.bind.inverse()))
+            .collect();
+        self.positions
+            .iter()
+            .zip(self.joints.iter().zip(&self.weights))
+            .map(|(p, (js, ws))| {
+                let p = bound(p);
+                js.iter()
+                    .zip(ws)
+                    .filter(|(_, &w)| w > 0.0)
+                    // A bone that does not exist is named as an error by `dress`.
+                    .map(|(&j, &w)| {
+                        moved.get(j as usize).map_or(p, |m| m.transform_point(p)) * w as f64
+                    })
+                    .sum()
+            })
+            .collect()
+    }
+
     /// Fits the character to `skeleton` at standing height `height` (metres); an error
     /// names the troupe joints it lacks bones for, or a mapped joint the skeleton does
     /// not have.
@@ -222,7 +265,7 @@ impl Character {
                 missing.join(", ")
             )));
         }
-        let at = |name: &str| bone_of(name).map(|b| self.bones[b].bind.translation);
+        let at = |name: &str| bone_of(name).map(|b| self.bones[b].rest.translation);
         let rest = rest_globals(skeleton);
         let troupe_at = |name: &str| skeleton.joint(name).ok().map(|j| rest[j].translation);
         // The character's frame (up from hips to head, left from its right side) is
@@ -243,23 +286,26 @@ impl Character {
             .iter()
             .map(|p| turn * DVec3::from(p.map(f64::from)))
             .collect();
-        let (low, high) = turned.iter().fold((f64::MAX, f64::MIN), |(lo, hi), p| {
-            (lo.min(p.y), hi.max(p.y))
-        });
+        // Its height is its mesh's extent standing at rest.
+        let (low, high) = self
+            .at_rest()
+            .iter()
+            .fold((f64::MAX, f64::MIN), |(lo, hi), p| {
+                let p = turn * *p;
+                (lo.min(p.y), hi.max(p.y))
+            });
         if turned.is_empty() || !(high - low).is_finite() || high - low <= 0.0 {
             return Err(invalid("its mesh has no height".into()));
         }
         let scale = height / (high - low);
         let hips_bone = bone_of("sacroiliac").unwrap_or(0);
         let hips = rest[joint_of[hips_bone].unwrap_or(0)].translation;
-        let hips_char = turn * self.bones[hips_bone].bind.translation * scale;
+        let hips_char = turn * self.bones[hips_bone].rest.translation * scale;
         let shift = DVec3::new(hips.x - hips_char.x, -low * scale, hips.z - hips_char.z);
         let place = |p: DVec3| turn * p * scale + shift;
-        let binds: Vec<Transform> = self
-            .bones
-            .iter()
-            .map(|b| Transform::new(turn * b.bind.rotation, place(b.bind.translation)))
-            .collect();
+        let placed = |t: &Transform| Transform::new(turn * t.rotation, place(t.translation));
+        let binds: Vec<Transform> = self.bones.iter().map(|b| placed(&b.bind)).collect();
+        let rests: Vec<Transform> = self.bones.iter().map(|b| placed(&b.rest)).collect();
 
         // The nearest mapped ancestor of each bone, and which bones are mapped.
         let mapped_above: Vec<Option<usize>> = (0..self.bones.len())
@@ -283,8 +329,8 @@ impl Character {
         for b in 0..self.bones.len() {
             let parent = self.bones[b].parent;
             standing[b] = match parent {
-                Some(p) => standing[p] + align[p] * (binds[b].translation - binds[p].translation),
-                None => binds[b].translation,
+                Some(p) => standing[p] + align[p] * (rests[b].translation - rests[p].translation),
+                None => rests[b].translation,
             };
             align[b] = parent.map_or(DQuat::IDENTITY, |p| align[p]);
             let (Some(j), Some(_)) = (joint_of[b], mapped_above[b]) else {
@@ -315,7 +361,7 @@ impl Character {
             let centroid = |f: &dyn Fn(usize) -> DVec3| {
                 below.iter().map(|&c| f(c)).sum::<DVec3>() / below.len() as f64
             };
-            let from = centroid(&|c| binds[c].translation) - binds[b].translation;
+            let from = centroid(&|c| rests[c].translation) - rests[b].translation;
             let to = centroid(&|c| rest[joint_of[c].unwrap_or(j)].translation) - standing[b];
             align[b] = arc(from, to);
         }
@@ -326,11 +372,11 @@ impl Character {
         let mut helpers: Vec<(Helper, DQuat, DVec3)> = Vec::new();
         let bones: Vec<Posed> = (0..self.bones.len())
             .map(|b| {
-                let bind = binds[b];
+                let (bind, rest) = (binds[b], rests[b]);
                 let offset_from = |parent: usize| {
-                    binds[parent]
+                    rests[parent]
                         .inverse()
-                        .transform_vector(bind.translation - binds[parent].translation)
+                        .transform_vector(rest.translation - rests[parent].translation)
                 };
                 let helper = skin_helpers.iter().find(|h| h.name == self.bones[b].name);
                 if let (None, Some(parent), Some(h)) = (joint_of[b], self.bones[b].parent, helper) {
@@ -344,6 +390,7 @@ impl Character {
                     ));
                     return Posed {
                         bind,
+                        rest,
                         rule: Rule::Helper {
                             helper: helpers.len() - 1,
                             parent,
@@ -369,7 +416,7 @@ impl Character {
                         align: DQuat::IDENTITY,
                     },
                 };
-                Posed { bind, rule }
+                Posed { bind, rest, rule }
             })
             .collect();
 
@@ -461,6 +508,7 @@ impl Dressing {
         }
         for bone in &mut self.bones {
             bone.bind.translation.y += height;
+            bone.rest.translation.y += height;
         }
     }
 
@@ -546,7 +594,7 @@ impl Dressing {
     /// joints made (steps 3 and 4 of [the module](self)), then the legs bent so that the
     /// feet stay on troupe's.
     pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
-        // How far each helper has turned from troupe's bind pose, and how far a sliding
+        // How far each helper has turned from the pose troupe's skin is made in, and how far a sliding
         // helper has moved from its joint's centre (the same for both passes below).
         let helpers_turned: Vec<Transform> = self
             .helpers
@@ -596,8 +644,8 @@ impl Dressing {
                 Rule::Carried { joint, align } => {
                     let m = moved(joint);
                     Transform::new(
-                        m.rotation * align * bone.bind.rotation,
-                        m.transform_point(bone.bind.translation),
+                        m.rotation * align * bone.rest.rotation,
+                        m.transform_point(bone.rest.translation),
                     )
                 }
                 Rule::Mapped {
@@ -606,18 +654,18 @@ impl Dressing {
                     parent,
                     offset,
                 } => Transform::new(
-                    turn * moved(joint).rotation * align * bone.bind.rotation,
+                    turn * moved(joint).rotation * align * bone.rest.rotation,
                     frames[parent].transform_point(offset),
                 ),
                 Rule::Follows { parent } => {
-                    frames[parent].mul(&self.bones[parent].bind.inverse().mul(&bone.bind))
+                    frames[parent].mul(&self.bones[parent].rest.inverse().mul(&bone.rest))
                 }
                 Rule::Helper {
                     helper,
                     parent,
                     offset,
                 } => Transform::new(
-                    helpers_turned[helper].rotation * bone.bind.rotation,
+                    helpers_turned[helper].rotation * bone.rest.rotation,
                     frames[parent].transform_point(offset) + helpers_turned[helper].translation,
                 ),
             };
@@ -703,6 +751,7 @@ mod tests {
                     name: j.name.clone(),
                     parent: j.parent,
                     bind: Transform::new(DQuat::IDENTITY, t.translation),
+                    rest: Transform::new(DQuat::IDENTITY, t.translation),
                     joint: Some(j.name.clone()),
                 })
                 .collect(),

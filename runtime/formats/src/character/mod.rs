@@ -5,7 +5,8 @@
 //! - **The skin**: a file with no skin is an error; with several, the one with the most
 //!   joints is taken (ties: the first), and every mesh node it skins is drawn; meshes
 //!   of other skins are left out (a warning names them). Only triangle primitives are
-//!   read. Inverse bind matrices are required (the bind pose comes from them).
+//!   read. Inverse bind matrices are required (the bind pose comes from them); the rest
+//!   pose the character is fitted by is the nodes' own transforms.
 //! - **Weights**: `JOINTS_0`/`WEIGHTS_0`, and `JOINTS_1`/`WEIGHTS_1` when present; of a
 //!   vertex's influences the four largest are kept and renormalised to sum to one
 //!   (weights that do not sum to one are renormalised too); a vertex whose weights are
@@ -125,6 +126,20 @@ pub fn read_character(path: impl AsRef<Path>, bones: &[(String, String)]) -> Res
             .and_then(|n| n.name().map(str::to_string))
             .unwrap_or_else(|| format!("node {n}"))
     };
+    // Each node's frame at rest: its transform composed down from the scene's root.
+    let local: Vec<DMat4> = gltf
+        .nodes()
+        .map(|n| DMat4::from_cols_array_2d(&n.transform().matrix().map(|c| c.map(f64::from))))
+        .collect();
+    let at_rest = |node: usize| {
+        let (mut m, mut n, mut steps) = (local[node], node, 0);
+        while let Some(p) = node_parent[n].filter(|_| steps <= node_parent.len()) {
+            m = local[p] * m;
+            n = p;
+            steps += 1;
+        }
+        m
+    };
     let mut character_bones = Vec::with_capacity(order.len());
     for &k in &order {
         let node = joint_nodes[k];
@@ -135,14 +150,35 @@ pub fn read_character(path: impl AsRef<Path>, bones: &[(String, String)]) -> Res
                 node_name(node)
             ))
         })?;
+        let node_at_rest = |node: usize| {
+            rigid(at_rest(node)).ok_or_else(|| {
+                bad(format!(
+                    "joint `{}`: its node's transform is not invertible",
+                    node_name(node)
+                ))
+            })
+        };
         let mut p = node_parent[node];
         while let Some(q) = p.filter(|q| !bone_of_node.contains_key(q)) {
             p = node_parent[q];
         }
+        let parent = p.and_then(|q| bone_of_node.get(&q).map(|&b| (q, b)));
+        // The rest pose as the nodes turn each bone from its parent, from the topmost
+        // bone's bind frame: whatever the nodes above the skeleton do (turn Z up into Y
+        // up, scale centimetres) is already in the inverse bind matrices.
+        let rest = match parent {
+            Some((q, b)) => {
+                let from_parent = node_at_rest(q)?.inverse().mul(&node_at_rest(node)?);
+                let parent_rest: &Bone = &character_bones[b];
+                parent_rest.rest.mul(&from_parent)
+            }
+            None => bind,
+        };
         character_bones.push(Bone {
             name: node_name(node),
-            parent: p.and_then(|q| bone_of_node.get(&q).copied()),
+            parent: parent.map(|(_, b)| b),
             bind,
+            rest,
             joint: None,
         });
     }
