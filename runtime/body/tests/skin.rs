@@ -343,20 +343,22 @@ fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
     // Skinning folds the inner side of a strongly bent joint unless its band of weights is
     // long enough: on a band of length L that turns the skin at distance r from the joint
     // by θ, a linear blend of two rotations folds when L < 2·r·tan(θ/2); the groin at a hip
-    // flexed by 120° asks for a band longer than the pelvis (docs/viewer.md). So a few
-    // triangles turn over in the last quarter of the ranges (docs/skin-notes.md has every
-    // step and the draws behind these figures). Each size's skin is a sample of its own of
-    // where the grid's samples fall, and its folds change with that as much as with the
-    // weights (docs/skin-notes.md, "The two sides mirrored"), so the six sizes are bounded
-    // together (`every_template_at_several_sizes_is_skinned_soundly`), and each on its own
-    // only loosely: over its 200 postures within the whole ranges 15-71 (3-7 at the worst
+    // flexed by 120° from where the skin is bound asks for a band longer than the pelvis
+    // (docs/viewer.md); bound with the hips a little flexed (`skin::binding`) it turns 100°
+    // at most. So a few triangles turn over in the last quarter of the ranges
+    // (docs/skin-notes.md has every step and the draws behind these figures). Each size's
+    // skin is a sample of its own of where the grid's samples fall, and its folds change
+    // with that as much as with the weights (docs/skin-notes.md, "The two sides
+    // mirrored"), so the six sizes are bounded together
+    // (`every_template_at_several_sizes_is_skinned_soundly`), and each on its own only
+    // loosely: over its 200 postures within the whole ranges 7-55 (2-6 at the worst
     // posture), none within half or a quarter of the ranges.
     let [full, _, half, quarter] = &spans[..] else {
         unreachable!("four sets of postures")
     };
     let fraction = |k: usize| k as f64 / tris as f64;
     assert!(
-        full.all as f64 <= 0.4 * full.postures as f64 && fraction(full.worst) <= 0.0005,
+        full.all as f64 <= 0.3 * full.postures as f64 && fraction(full.worst) <= 0.0005,
         "{label}: {} triangles turned inside out over the {} postures within the whole ranges ({} at the worst)",
         full.all,
         full.postures,
@@ -389,23 +391,23 @@ fn every_template_at_several_sizes_is_skinned_soundly() {
             }
         }
     }
-    // The six sizes together: over their 1,200 postures within the whole ranges 214
-    // triangles turned over, 9 of them at the hands; within three quarters 3. The bounds
-    // keep them there: a change that folds more fails.
+    // The six sizes together: over their 1,200 postures within the whole ranges 131
+    // triangles turned over (214 bound where the skin is made), 9 of them at the hands;
+    // within three quarters 2. The bounds keep them there: a change that folds more fails.
     let [full, three_quarters, ..] = &totals;
     eprintln!(
         "all sizes: {} inverted triangles over {} postures within the whole ranges ({} at the hands), {} within three quarters",
         full.all, full.postures, full.at_hands, three_quarters.all
     );
     assert!(
-        full.all as f64 <= 0.2 * full.postures as f64 && full.at_hands <= 10,
+        full.all as f64 <= 0.125 * full.postures as f64 && full.at_hands <= 10,
         "{} triangles turned inside out over the {} postures of every size within the whole ranges ({} at the hands)",
         full.all,
         full.postures,
         full.at_hands
     );
     assert!(
-        three_quarters.all <= 3,
+        three_quarters.all <= 2,
         "{} triangles turned inside out over the postures of every size within three quarters of the ranges",
         three_quarters.all
     );

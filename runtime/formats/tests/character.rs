@@ -965,11 +965,13 @@ fn a_character_troupe_exported_moves_as_troupes_own_skin() {
     // little finger deform alike (within the fit's own error at the hands, 5-7 mm: a
     // mistake in the webs' helpers of a knuckle's width moved them by 0.3 mm more).
     let (skel, skin, c) = troupe_skin_read_back("helpers");
+    // Its height standing in troupe's rest posture (the skin is bound a little bent; its
+    // file stands in the posture it is made in, and is fitted so).
     let (low, high) = skin
-        .positions
+        .deform(&troupe_body::skin::rest_globals(&skel))
         .iter()
-        .fold((f32::MAX, f32::MIN), |(l, h), p| (l.min(p[1]), h.max(p[1])));
-    let d = c.dress(&skel, (high - low) as f64).unwrap();
+        .fold((f64::MAX, f64::MIN), |(l, h), p| (l.min(p.y), h.max(p.y)));
+    let d = c.dress(&skel, high - low).unwrap();
     // The file's vertices that are the skin's own (the others lie on the edges between
     // regions), by their exact bind positions.
     let of: std::collections::HashMap<[u32; 3], usize> = skin

@@ -251,7 +251,13 @@ mod tests {
         let scaled = a.to_skin();
         for (s, o) in scaled.rest.iter().zip(&own.rest) {
             assert!((s.translation - o.translation).length() < 1e-9);
-            assert!(s.rotation.angle_between(o.rotation) < 1e-9);
+            // Compared by components: `angle_between` of two equal rotations turned
+            // about x by 30° (the hips' and knees' in the bound posture) is 3·10⁻⁸, the
+            // arccosine's rounding.
+            assert!(
+                s.rotation.abs_diff_eq(o.rotation, 1e-12),
+                "{s:?} against {o:?}"
+            );
         }
         // And its surface is where that build puts the body's: the same bounds, within the
         // surface grid's cell (height/400, 3.75 mm), and the same area within 1 %.

@@ -6,7 +6,9 @@
 //!    in the rest pose: torso, limbs, a palm and five fingers per hand, a head with jaw,
 //!    nose, ears, eye sockets and eyeballs; then each carried with its joint to the
 //!    **bind pose**, the arms raised 45° sideways and the fingers spread
-//!    ([`bind_posture`]), where the surface and its weights are made;
+//!    ([`bind_posture`]), where the surface and its weights are made (and from where
+//!    their own weights carry them to the posture they are bound in, the hips and the
+//!    clavicles a little bent: [`binding`]);
 //! 2. **surface** (`surface`): the volumes blended into one signed distance field (smooth
 //!    unions where neighbouring joints meet, carving for the eye sockets), its zero level
 //!    set extracted by marching tetrahedra on the left of the sagittal plane and
@@ -36,6 +38,7 @@
 //! judged by `examples/skin_folds.rs`, over draws chosen by and draws held out
 //! (docs/skin-notes.md, "More draws" and "The two sides mirrored").
 
+pub mod binding;
 mod collapse;
 mod flips;
 pub mod helpers;
@@ -48,6 +51,7 @@ mod surface;
 pub mod volumes;
 mod weights;
 
+pub use binding::bound_posture;
 pub use helpers::Helper;
 pub use library::{template_scale, SharedSkin, SkinLibrary};
 pub use regions::{CutSkin, RegionDistances, PUPIL_EDGE};
@@ -141,13 +145,14 @@ fn band_of(name: &str) -> f64 {
 /// Grid cells per metre of standing height when sampling the body's field.
 const CELLS_PER_HEIGHT: f64 = 400.0;
 
-/// A skinned surface in the skeleton's bind pose ([`bind_posture`]: the rest pose with
-/// the arms raised 45° sideways and the fingers spread).
+/// A skinned surface made in the skeleton's bind pose ([`bind_posture`]: the rest pose
+/// with the arms raised 45° sideways and the fingers spread) and bound a little bent
+/// ([`bound_posture`]).
 #[derive(Clone, Debug)]
 pub struct Skin {
-    /// Bind-pose vertex positions (m).
+    /// Vertex positions (m) in the posture the skin is bound in ([`bound_posture`]).
     pub positions: Vec<[f32; 3]>,
-    /// Bind-pose unit vertex normals.
+    /// Unit vertex normals there.
     pub normals: Vec<[f32; 3]>,
     /// Up to four skinning slots per vertex: the skeleton's joints, then the
     /// [`helpers`](Skin::helpers) (slot `joints + i` is helper `i`).
@@ -165,8 +170,12 @@ pub struct Skin {
     pub far_indices: Vec<u32>,
     /// Coarser still, over the same vertices, for actors further away.
     pub farthest_indices: Vec<u32>,
-    /// Bind-pose frame of every slot, the skeleton's joints then the helpers.
+    /// The frame of every slot, the skeleton's joints then the helpers, in the posture the
+    /// skin is bound in ([`bound_posture`]): what skinning turns it from.
     pub rest: Vec<Transform>,
+    /// The frame of every slot in the posture the skin is made in ([`bind_posture`]): a
+    /// file's rest pose, as a modeller shows the character unposed.
+    pub made: Vec<Transform>,
     /// Helper joints at the big joints, after the skeleton's joints among the slots.
     pub helpers: Vec<Helper>,
 }
@@ -176,6 +185,13 @@ impl Skin {
     /// and mass); a skeleton lacking the template's joints or solids is an error naming
     /// the first one missing.
     pub fn build(skeleton: &Skeleton) -> Result<Skin> {
+        let (made, mirror) = Skin::made(skeleton)?;
+        Ok(made.bound_at(&binding::bound_globals(skeleton), &mirror))
+    }
+
+    /// The skin made and bound in the bind posture (see [`Skin::build`]), and which
+    /// vertex is whose mirror image.
+    fn made(skeleton: &Skeleton) -> Result<(Skin, Mirror)> {
         let helpers = helpers::helpers(skeleton)?;
         let joint_bind = volumes::bind_globals(skeleton);
         let rest = with_helpers(&joint_bind, &helpers);
@@ -349,7 +365,7 @@ impl Skin {
             weights::skin_weights(&positions, &indices, &volumes, &neighbours, &chains, &band)
                 .into_iter()
                 .unzip();
-        Ok(Skin {
+        let made = Skin {
             positions: positions.iter().map(|p| p.as_vec3().to_array()).collect(),
             normals,
             joints,
@@ -359,9 +375,25 @@ impl Skin {
             indices,
             far_indices,
             farthest_indices,
+            made: rest.clone(),
             rest,
             helpers,
-        })
+        };
+        Ok((made, mirror))
+    }
+
+    /// This skin, made and bound in the same posture, bound instead where the skeleton's
+    /// joints are at `globals` (see [`binding`]): its own weights carry it there, and its
+    /// two sides stay each other's mirror images to the bit (a vertex blending a left and a
+    /// right joint sums their parts in the order of its slots, which differs between a
+    /// vertex and its image).
+    fn bound_at(mut self, globals: &[Transform], mirror: &Mirror) -> Skin {
+        let mut positions = self.deform(globals);
+        mirror.symmetric_positions(&mut positions);
+        self.normals = vertex_normals(&positions, &self.indices);
+        self.positions = positions.iter().map(|p| p.as_vec3().to_array()).collect();
+        self.rest = self.frames(globals);
+        self
     }
 
     /// The frame of every skinning slot for joint frames `globals`: the joints' own, then
@@ -398,7 +430,7 @@ impl Skin {
         let n = self.positions.len();
         n * (12 + 12 + 8 + 16 + 1 + std::mem::size_of::<RegionDistances>())
             + (self.indices.len() + self.far_indices.len() + self.farthest_indices.len()) * 4
-            + self.rest.len() * std::mem::size_of::<Transform>()
+            + (self.rest.len() + self.made.len()) * std::mem::size_of::<Transform>()
     }
 
     /// Skinning transforms for joint frames `globals`, one per slot (joints, then
@@ -424,7 +456,7 @@ impl Skin {
             d.cloth = d.cloth.map(|x| x * k);
             d.eye *= k;
         }
-        for r in &mut skin.rest {
+        for r in skin.rest.iter_mut().chain(&mut skin.made) {
             r.translation *= scale;
         }
         for h in &mut skin.helpers {

@@ -382,6 +382,7 @@ mod tests {
             far_indices: Vec::new(),
             farthest_indices: Vec::new(),
             rest: vec![Transform::IDENTITY],
+            made: vec![Transform::IDENTITY],
             helpers: Vec::new(),
         };
         let cut = CutSkin::new(&skin);

@@ -29,15 +29,18 @@ use troupe_body::{Skin, Transform};
 /// between two joints ([`troupe_body::skin::Helper::pair`]) hangs under its parent (the
 /// wrist) with its rotation and translation animated by
 /// [`troupe_body::skin::Helper::pair_local`] of the two joints' frames there. The rig's
-/// rest becomes the skin's bind pose (the arms
-/// raised sideways and the fingers spread, [`troupe_body::skin::bind_posture`]), so that the inverse bind
-/// matrices written from it bind the skin where it was made.
+/// rest becomes the posture the skin is made in (the arms raised sideways and the fingers
+/// spread, [`troupe_body::skin::bind_posture`]), which a modeller shows unposed; the
+/// inverse bind matrices are written from the posture it is bound in
+/// ([`troupe_body::skin::bound_posture`], [`Skin::rest`]: see [`to_gltf_bound`]).
+///
+/// [`to_gltf_bound`]: super::write::to_gltf_bound
 pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
     let mut out = rig.clone();
     for j in 0..rig.rest.len() {
         let bind = match rig.parents[j] {
-            Some(p) => skin.rest[p].rotation.inverse() * skin.rest[j].rotation,
-            None => skin.rest[j].rotation,
+            Some(p) => skin.made[p].rotation.inverse() * skin.made[j].rotation,
+            None => skin.made[j].rotation,
         };
         // Only the joints the bind pose turns: the others keep their exact rest rotation
         // (recomputed from the globals it would differ in the last bits).
@@ -356,8 +359,9 @@ mod tests {
     use troupe_motion::sequence::{Key, Sequence, Track};
 
     /// What a glTF viewer computes from the written rig (each node's global transform
-    /// times its inverse bind matrix, the inverse of its rest global) is the skin's own
-    /// skinning transforms, helpers included, on every frame.
+    /// times its inverse bind matrix, the inverse of the skin's frame in the posture it
+    /// is bound in) is the skin's own skinning transforms, helpers included, on every
+    /// frame.
     #[test]
     fn a_viewer_of_the_written_rig_skins_with_the_skins_own_transforms() {
         let t = template("adult").unwrap();
@@ -390,7 +394,8 @@ mod tests {
         let rig = Rig::from_sequence(&skeleton, &seq).unwrap();
         let written = with_helper_joints(&rig, &skin);
         assert_eq!(written.names.len(), skin.rest.len());
-        let bind = written.rest_globals();
+        // The inverse bind matrices' frames (`to_gltf_bound`).
+        let bind = &skin.rest;
         for k in 0..written.times.len() {
             let nodes = written.globals(k);
             let joints = &rig.globals(k)[..];

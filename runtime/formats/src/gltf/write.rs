@@ -16,7 +16,7 @@ use json::validation::{Checked::Valid, USize64};
 use json::{Index, Root};
 use std::borrow::Cow;
 use std::path::Path;
-use troupe_body::{Dressing, Skin};
+use troupe_body::{Dressing, Skin, Transform};
 use troupe_motion::object_motion::ObjectMotion;
 
 /// A growing binary buffer and the document whose buffer views and accessors point into
@@ -133,6 +133,20 @@ pub fn to_gltf_with_objects(
     name: &str,
     bin_uri: Option<&str>,
 ) -> (Root, Vec<u8>) {
+    to_gltf_bound(rig, None, objects, name, bin_uri)
+}
+
+/// [`to_gltf_with_objects`], the skin's inverse bind matrices written from the joints'
+/// global frames `bound` (one per joint of `rig`) instead of from its rest: a troupe
+/// skin is bound in a posture of its own ([`Skin::rest`]), not in the rest pose its file
+/// shows.
+pub(crate) fn to_gltf_bound(
+    rig: &Rig,
+    bound: Option<&[Transform]>,
+    objects: &[(&ObjectMotion, Rig)],
+    name: &str,
+    bin_uri: Option<&str>,
+) -> (Root, Vec<u8>) {
     let n = rig.names.len();
     let mut b = Builder {
         root: Root {
@@ -172,9 +186,15 @@ pub fn to_gltf_with_objects(
         _ => None,
     };
 
-    // Inverse bind matrices: inverse of each joint's global rest transform (column major).
-    let ibm: Vec<f32> = rig
-        .rest_globals()
+    // Inverse bind matrices: inverse of each joint's global bind transform (column major),
+    // its rest's unless bound elsewhere.
+    let rest = rig.rest_globals();
+    debug_assert!(
+        bound.is_none_or(|b| b.len() == n),
+        "a bind frame for each joint"
+    );
+    let ibm: Vec<f32> = bound
+        .unwrap_or(&rest)
         .iter()
         .flat_map(|g| {
             DMat4::from_rotation_translation(g.rotation, g.translation)
@@ -302,7 +322,8 @@ fn document(
         Some(skin) => with_helper_joints(rig, skin),
         None => rig.clone(),
     };
-    let (mut root, mut bytes) = to_gltf_with_objects(rig, objects, name, uri);
+    let bound = skin.map(|skin| skin.rest.as_slice());
+    let (mut root, mut bytes) = to_gltf_bound(rig, bound, objects, name, uri);
     if let Some(skin) = skin {
         add_skin(&mut root, &mut bytes, skin, name);
     }
