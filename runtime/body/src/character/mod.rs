@@ -6,10 +6,9 @@
 //! bind pose, its bones (bind frames from the inverse bind matrices, rest frames from the
 //! file's nodes) and, for each bone, the troupe joint it follows (from a name map;
 //! `formats::character` reads files). Most files stand in their bind pose at rest; one
-//! bound in another posture (troupe's own skin is bound with the hips a little
-//! flexed, `skin::binding`) is fitted by the pose it stands in at rest, and skinned from
-//! the one it is bound in.
-//! [`Character::dress`] fits it to one skeleton and height, giving a [`Dressing`]:
+//! bound in another posture (troupe's own skin is bound with the hips a little flexed,
+//! `skin::binding`) is fitted by the pose it stands in at rest, and skinned from the one
+//! it is bound in. [`Character::dress`] fits it to one skeleton and height, giving a [`Dressing`]:
 //!
 //! 1. **Placement**: the character is turned so that its hips-to-head line and its
 //!    left-right axis lie along those of troupe's rest posture (so it faces +Z, troupe's
@@ -189,8 +188,8 @@ enum Rule {
     /// shoulders' `l_shoulder_50`, `l_shoulder_twist_25`, its hips' `l_hip_slide`, …):
     /// turned from the pose troupe's skin is made in (its file's rest pose) as the helper
     /// turns (`Helper::frame`), placed along its parent at its rest offset and moved as
-    /// the helper moves from its joint's
-    /// centre, so the skin it carries moves as troupe's does.
+    /// the helper moves from its joint's centre, so the skin it carries moves as troupe's
+    /// does.
     Helper {
         helper: usize,
         parent: usize,
@@ -594,8 +593,9 @@ impl Dressing {
     /// joints made (steps 3 and 4 of [the module](self)), then the legs bent so that the
     /// feet stay on troupe's.
     pub fn bone_frames(&self, globals: &[Transform]) -> Vec<Transform> {
-        // How far each helper has turned from the pose troupe's skin is made in, and how far a sliding
-        // helper has moved from its joint's centre (the same for both passes below).
+        // How far each helper has turned from the pose troupe's skin is made in, and how
+        // far a sliding helper has moved from its joint's centre (the same for both passes
+        // below).
         let helpers_turned: Vec<Transform> = self
             .helpers
             .iter()

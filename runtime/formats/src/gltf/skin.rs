@@ -31,10 +31,8 @@ use troupe_body::{Skin, Transform};
 /// [`troupe_body::skin::Helper::pair_local`] of the two joints' frames there. The rig's
 /// rest becomes the posture the skin is made in (the arms raised sideways and the fingers
 /// spread, [`troupe_body::skin::bind_posture`]), which a modeller shows unposed; the
-/// inverse bind matrices are written from the posture it is bound in
-/// ([`troupe_body::skin::bound_posture`], [`Skin::rest`]: see [`to_gltf_bound`]).
-///
-/// [`to_gltf_bound`]: super::write::to_gltf_bound
+/// writer takes the inverse bind matrices from the posture it is bound in
+/// ([`troupe_body::skin::bound_posture`], [`Skin::rest`]), not from this rest.
 pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
     let mut out = rig.clone();
     for j in 0..rig.rest.len() {
