@@ -675,6 +675,18 @@ fn malformed_files_are_errors_naming_the_file_never_panics() {
             .remove("inverseBindMatrices");
     });
     assert!(error_of(&no_ibm, &map).contains("no inverse bind matrices"));
+    // A joint node scaled to nothing: its rest pose cannot be found.
+    let flat = cesium_variant("flat-joint.glb", |json, _| {
+        let joint = json["skins"][0]["joints"][3].as_u64().unwrap() as usize;
+        let node = json["nodes"][joint].as_object_mut().unwrap();
+        node.remove("matrix");
+        node.insert("scale".into(), json!([0.0, 0.0, 0.0]));
+    });
+    let text = error_of(&flat, &map);
+    assert!(
+        text.contains("its node's transform is not invertible"),
+        "{text}"
+    );
     let err = read_character(dir.join("absent.glb"), &map)
         .unwrap_err()
         .to_string();
