@@ -47,7 +47,7 @@ mod feet;
 
 use crate::error::{Error, Result};
 use crate::skeleton::Skeleton;
-use crate::skin::{rest_globals, Helper};
+use crate::skin::{linear_blend, rest_globals, Helper};
 use crate::transform::Transform;
 use feet::Leg;
 use glam::{DQuat, DVec3};
@@ -202,30 +202,19 @@ impl Character {
     /// carried by its weights from its bones' bind frames to their rest frames; the
     /// bind-pose positions themselves where the two poses are one (most files).
     fn at_rest(&self) -> Vec<DVec3> {
-        let bound = |p: &[f32; 3]| DVec3::from(p.map(f64::from));
         if self.bones.iter().all(|b| b.rest == b.bind) {
-            return self.positions.iter().map(bound).collect();
+            return self
+                .positions
+                .iter()
+                .map(|p| DVec3::from(p.map(f64::from)))
+                .collect();
         }
         let moved: Vec<Transform> = self
             .bones
             .iter()
             .map(|b| b.rest.mul(&b.bind.inverse()))
             .collect();
-        self.positions
-            .iter()
-            .zip(self.joints.iter().zip(&self.weights))
-            .map(|(p, (js, ws))| {
-                let p = bound(p);
-                js.iter()
-                    .zip(ws)
-                    .filter(|(_, &w)| w > 0.0)
-                    // A bone that does not exist is named as an error by `dress`.
-                    .map(|(&j, &w)| {
-                        moved.get(j as usize).map_or(p, |m| m.transform_point(p)) * w as f64
-                    })
-                    .sum()
-            })
-            .collect()
+        linear_blend(&self.positions, &self.joints, &self.weights, &moved)
     }
 
     /// Fits the character to `skeleton` at standing height `height` (metres); an error
@@ -688,18 +677,7 @@ impl Dressing {
     /// blend skinning.
     pub fn deform(&self, globals: &[Transform]) -> Vec<DVec3> {
         let m = self.skinning_transforms(globals);
-        self.positions
-            .iter()
-            .zip(self.slots.iter().zip(&self.weights))
-            .map(|(p, (ss, ws))| {
-                let p = DVec3::from(p.map(f64::from));
-                ss.iter()
-                    .zip(ws)
-                    .filter(|(_, &w)| w > 0.0)
-                    .map(|(&s, &w)| m[s as usize].transform_point(p) * w as f64)
-                    .sum()
-            })
-            .collect()
+        linear_blend(&self.positions, &self.slots, &self.weights, &m)
     }
 }
 

@@ -468,19 +468,37 @@ impl Skin {
     /// The skin's vertex positions for joint frames `globals`, by linear blend skinning.
     pub fn deform(&self, globals: &[Transform]) -> Vec<DVec3> {
         let m = self.skinning_transforms(globals);
-        self.positions
-            .iter()
-            .zip(self.joints.iter().zip(&self.weights))
-            .map(|(p, (js, ws))| {
-                let p = DVec3::from(p.map(f64::from));
-                js.iter()
-                    .zip(ws)
-                    .filter(|(_, &w)| w > 0.0)
-                    .map(|(&j, &w)| m[j as usize].transform_point(p) * w as f64)
-                    .sum()
-            })
-            .collect()
+        linear_blend(&self.positions, &self.joints, &self.weights, &m)
     }
+}
+
+/// `positions` moved by linear blend skinning: each point the sum of its slots'
+/// `transforms` applied to it, by its weights (a weight of zero left out; a slot with no
+/// transform keeps the point where it is for its weight, which only a file's bad bone
+/// index gives, named as an error by `Character::dress`).
+pub(crate) fn linear_blend(
+    positions: &[[f32; 3]],
+    slots: &[[u16; 4]],
+    weights: &[[f32; 4]],
+    transforms: &[Transform],
+) -> Vec<DVec3> {
+    positions
+        .iter()
+        .zip(slots.iter().zip(weights))
+        .map(|(p, (ss, ws))| {
+            let p = DVec3::from(p.map(f64::from));
+            ss.iter()
+                .zip(ws)
+                .filter(|(_, &w)| w > 0.0)
+                .map(|(&s, &w)| {
+                    transforms
+                        .get(s as usize)
+                        .map_or(p, |m| m.transform_point(p))
+                        * w as f64
+                })
+                .sum()
+        })
+        .collect()
 }
 
 /// The items of `list` whose `renumber` is not `u32::MAX`, each at that index.

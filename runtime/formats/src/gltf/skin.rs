@@ -36,14 +36,15 @@ use troupe_body::{Skin, Transform};
 pub fn with_helper_joints(rig: &Rig, skin: &Skin) -> Rig {
     let mut out = rig.clone();
     for j in 0..rig.rest.len() {
-        let bind = match rig.parents[j] {
+        let made = match rig.parents[j] {
             Some(p) => skin.made[p].rotation.inverse() * skin.made[j].rotation,
             None => skin.made[j].rotation,
         };
-        // Only the joints the bind pose turns: the others keep their exact rest rotation
-        // (recomputed from the globals it would differ in the last bits).
-        if rig.rest[j].rotation.angle_between(bind) > 1e-9 {
-            out.rest[j].rotation = bind.normalize();
+        // Only the joints the posture the skin is made in turns: the others keep their
+        // exact rest rotation (recomputed from the globals it would differ in the last
+        // bits).
+        if rig.rest[j].rotation.angle_between(made) > 1e-9 {
+            out.rest[j].rotation = made.normalize();
         }
     }
     for h in &skin.helpers {
