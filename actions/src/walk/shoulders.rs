@@ -74,22 +74,28 @@ impl Shoulders {
                 best = (need, side);
             }
         };
+        // One `CLEAR` or more away, or not beside, needs no turn: passed over before the
+        // rest is weighed (most of those near; the same turns).
         for &j in near {
-            if j == me || companions.contains(&j) {
-                continue;
-            }
             let d = crowd.positions[j] - p;
             let ahead = d.dot(forward).abs();
+            if ahead >= ALONGSIDE {
+                continue;
+            }
             let lateral = d.dot(left);
             let gap = lateral.abs() - r - crowd.radii[j];
-            if ahead < ALONGSIDE {
-                let need = smoothstep((CLEAR - gap) / CLEAR) * smoothstep(1.0 - ahead / ALONGSIDE);
-                consider(need, lateral.signum());
+            if gap >= CLEAR || j == me || companions.contains(&j) {
+                continue;
             }
+            let need = smoothstep((CLEAR - gap) / CLEAR) * smoothstep(1.0 - ahead / ALONGSIDE);
+            consider(need, lateral.signum());
         }
         let h = 0.05;
         for f in footprints.within(r + CLEAR) {
             let gap = f.distance(p) - r;
+            if gap >= CLEAR {
+                continue;
+            }
             // Which side it is on, and how much it is beside rather than ahead.
             let slope = (f.distance(p + left * h) - f.distance(p - left * h)) / (2.0 * h);
             let need = smoothstep((CLEAR - gap) / CLEAR) * slope.abs().min(1.0);
