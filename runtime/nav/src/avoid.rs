@@ -125,6 +125,12 @@ static DEVIATIONS: std::sync::LazyLock<[[f64; TURNS.len()]; SPEEDS.len()]> =
         })
     });
 
+/// The least of each row of [`DEVIATIONS`]: the candidate going straight on, and no row's
+/// less than the row's before (the rows go slower).
+static LEAST: std::sync::LazyLock<[f64; SPEEDS.len()]> = std::sync::LazyLock::new(|| {
+    DEVIATIONS.map(|row| row.iter().copied().fold(f64::INFINITY, f64::min))
+});
+
 /// A neighbour as one decision sees it: what every candidate velocity shares, found once.
 struct Neighbour {
     /// From me to them.
@@ -252,7 +258,12 @@ impl<'a> Surroundings<'a> {
         // is weighed (its penalty starts at its deviation), and most of the fan has: they
         // are passed over on the table's figure, with a margin far above the rounding of
         // the deviation that `Surroundings::penalty` computes, so the same ones lose.
-        for (k, deviations) in SPEEDS.iter().zip(DEVIATIONS.iter()) {
+        for ((k, deviations), &least) in SPEEDS.iter().zip(DEVIATIONS.iter()).zip(LEAST.iter()) {
+            // Slower rows deviate more (`LEAST` only grows): once a row's least deviation
+            // has lost, so has every candidate left.
+            if known && least * base > best.1 + 1e-9 * base {
+                break;
+            }
             for (&(s, c), &deviation) in FAN.iter().zip(deviations) {
                 if known && deviation * base > best.1 + 1e-9 * base {
                     continue;
@@ -345,6 +356,17 @@ mod tests {
 
     fn agent(x: f64, z: f64, vx: f64, vz: f64) -> Agent {
         Agent::disc(DVec2::new(x, z), DVec2::new(vx, vz), 0.28)
+    }
+
+    #[test]
+    fn a_slower_row_of_candidates_never_deviates_less() {
+        // What lets `Surroundings::best` stop at the first row that has lost.
+        for pair in LEAST.windows(2) {
+            assert!(pair[0] <= pair[1], "{LEAST:?}");
+        }
+        for (row, least) in DEVIATIONS.iter().zip(LEAST.iter()) {
+            assert!(row.iter().all(|d| d >= least));
+        }
     }
 
     #[test]
