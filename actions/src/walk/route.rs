@@ -905,6 +905,16 @@ impl Plan {
         along.unwrap_or_else(|| direction(sample.heading))
     }
 
+    /// [`Plan::forward`] at `t`, where the plan's sample at `t` (of any fallback heading)
+    /// is `sample`: on a route its heading's direction, without sampling again.
+    pub fn forward_at(&self, t: f64, sample: &RootSample) -> DVec2 {
+        match &self.kind {
+            // A route's heading does not depend on the fallback.
+            PlanKind::Along { .. } => direction(sample.heading),
+            PlanKind::Follow { .. } => self.forward(t),
+        }
+    }
+
     /// The body's position, heading and speed `t` seconds after the start; `fallback` is
     /// the heading to keep where the route gives none (a followed path at rest).
     pub fn sample(&self, t: f64, fallback: f64) -> RootSample {

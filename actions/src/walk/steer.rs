@@ -109,10 +109,11 @@ impl Steer {
     /// The steered plan at walk time `t`: position with the offset (as it drifts, for up
     /// to half a second ahead), speed with the rate and the drift.
     pub fn sample(&self, plan: &Plan, t: f64, now: f64, fallback: f64) -> RootSample {
-        let mut s = plan.sample(self.plan_time(t, now), fallback);
+        let tau = self.plan_time(t, now);
+        let mut s = plan.sample(tau, fallback);
         if self.engaged {
+            let forward = plan.forward_at(tau, &s);
             s.position += self.offset + self.drift * (t - now).clamp(0.0, 0.5);
-            let forward = plan.forward(self.plan_time(t, now));
             s.speed = (forward * s.speed * self.rate + self.drift).length();
         }
         s
