@@ -4,15 +4,16 @@
 //! and drifts it sideways, so both would wait for good; new routes round people
 //! standing find none where the people fill the way. In a passage narrower than 2.6 m
 //! (obstacle to obstacle), after [`BACK_OFF_AFTER`] of waiting with someone face to
-//! face in its way, the walker that comes later in the order of headings
-//! (`troupe_nav::way::backs_off_for`, the same for a whole stream) steps back, and to
-//! its right where there is room, until nobody it backs off for is in its way; one of
-//! its own stream standing behind it steps back with it. See `docs/navigation.md`,
-//! "Stand-offs".
+//! face in its way, one of the two steps back, and to its right where there is room,
+//! until nobody it backs off for is in its way: the one with the much shorter way back
+//! out of the passage (or the only one that can step back at all), else the one that
+//! comes later in the order of headings (`troupe_nav::way::backs_off_for`, the same for
+//! a whole stream). One of its own stream standing behind it steps back with it. See
+//! `docs/navigation.md`, "Stand-offs".
 
 use super::replan::{STANDING, WAITING_RATE};
 use troupe_body::glam::DVec2;
-use troupe_scene::space::{backs_off_for, FootprintsAround, GAP};
+use troupe_scene::space::{backs_off_for, Crowd, FootprintsAround, GAP};
 use troupe_scene::GeneratorContext;
 
 /// Seconds a walk waits with someone face to face in its way before it may step back.
@@ -54,6 +55,12 @@ const PASSAGE_AHEAD: f64 = 1.0;
 const ASIDE: f64 = 0.5;
 /// Step (m) at which that room is measured, and the gap it keeps from an obstacle.
 const ASIDE_STEP: f64 = 0.1;
+/// Furthest (m) looked back along a walker's way for the end of the passage it stands
+/// in (see [`way_out`]): beyond, two walkers deep in a long aisle are as far from its ends.
+const WAY_OUT_FURTHEST: f64 = 3.0;
+/// By how much (m) one walker's way out of a passage must be the shorter for it, rather
+/// than the one later in the order of headings, to step back.
+const NEARER_OUT: f64 = 0.25;
 /// Room (m) behind a walker, along its way back, under which it cannot step back: the
 /// other steps back for it.
 const CORNERED: f64 = 0.3;
@@ -119,23 +126,30 @@ impl Standoff {
             carried(i).map_or(disc, |core| core.radius.max(disc))
         };
         let radius = across(me);
-        // Who steps back of two face to face: one with room behind it for one without,
-        // who faces it at all (a walker waiting at a niche's mouth for the one in it,
-        // who cannot step back into the shelf it came for and turns half away to go out:
-        // both stood for good), else the one later in the order of headings. Each reads
-        // the same world, so the two agree.
-        let cornered = |(at, way): (DVec2, DVec2), i: usize| {
-            room_towards(at, -way, across(i), footprints, CORNERED) < CORNERED
-        };
+        // Who steps back of two face to face: the one with the shorter way back out of
+        // the passage, when the other's is much longer or stopped (a walker at a niche's
+        // mouth, for the one in it with a shelf behind), whoever the other faces; else the
+        // one later in the order of headings. Each reads the same world, both bodies as
+        // the crowd has them, so the two agree.
+        let way_out_of = |i: usize| way_out(crowd, crowd.positions[i], crowd.facings[i], across(i));
         // Mine is found once, for the first neighbour that faces me.
-        let me_cornered = std::cell::OnceCell::new();
-        let backs_off = |towards: f64, theirs: ((DVec2, DVec2), usize)| match (
-            *me_cornered.get_or_init(|| cornered((position, along), me)),
-            cornered(theirs.0, theirs.1),
-        ) {
-            (false, true) => true,
-            (true, false) => false,
-            _ => towards < FACE_TO_FACE && backs_off_for(along, theirs.0 .1),
+        let my_way_out = std::cell::OnceCell::new();
+        let backing = self.backing();
+        let backs_off = |towards: f64, (j, facing): (usize, DVec2)| {
+            // One stepping back goes on for whoever faces it: once it stood cornered at
+            // the end of an aisle it had stepped back along, the other, now the one with
+            // the way out, stood too, for good (two waiters with trays).
+            if backing {
+                return true;
+            }
+            match (*my_way_out.get_or_init(|| way_out_of(me)), way_out_of(j)) {
+                (Some(_), None) => return true,
+                (None, Some(_)) => return false,
+                (Some(mine), Some(theirs)) if mine + NEARER_OUT < theirs => return true,
+                (Some(mine), Some(theirs)) if theirs + NEARER_OUT < mine => return false,
+                _ => {}
+            }
+            towards < FACE_TO_FACE && backs_off_for(along, facing)
         };
         let in_the_way = if self.backing() {
             STILL_IN_THE_WAY
@@ -171,7 +185,7 @@ impl Standoff {
                 continue;
             };
             let towards = facing.dot(along);
-            if towards < 0.0 && backs_off(towards, ((crowd.positions[j], facing), j)) {
+            if towards < 0.0 && backs_off(towards, (j, facing)) {
                 face_to_face = true;
             } else if towards > SAME_WAY
                 && crowd.velocities[j].dot(along) < -STEPPING_BACK
@@ -244,6 +258,38 @@ fn room_towards(
     room
 }
 
+/// How far (m) a body reaching `radius` across its way, at `position` and facing the
+/// unit `way`, would step straight back before it stood out of every passage narrower
+/// than [`PASSAGE`], measured every [`PASSAGE_STEP`] among the crowd's footprints round
+/// each point: `None` if an obstacle stops it within [`CORNERED`] (it cannot step back),
+/// [`WAY_OUT_FURTHEST`] if the passage goes on further back or an obstacle stops it
+/// further on (one straight back, which a step back turns round: the stand at an aisle's
+/// end). Only what it would come nearer to stops it: a wall beside, however near, does
+/// not (a walker at a niche's mouth, a hand's breadth from one of its walls, counted as
+/// cornered as the one with the shelf behind it).
+fn way_out(crowd: &Crowd, position: DVec2, way: DVec2, radius: f64) -> Option<f64> {
+    let keep = radius + ASIDE_STEP;
+    let steps = |m: f64| (m / PASSAGE_STEP).round() as usize;
+    let mut found = Vec::new();
+    for step in 1..=steps(WAY_OUT_FURTHEST) {
+        let back = |step: usize| position - way * (step as f64 * PASSAGE_STEP);
+        let (from, to) = (back(step - 1), back(step));
+        let around = crowd.footprints_around(to, found);
+        let stopped = around.within(keep).any(|f| {
+            let near = f.distance(to);
+            near < keep && near < f.distance(from)
+        });
+        if stopped {
+            return (step > steps(CORNERED)).then_some(WAY_OUT_FURTHEST);
+        }
+        if passage_width(to, way, &around).is_some_and(|w| w >= PASSAGE) {
+            return Some(step as f64 * PASSAGE_STEP);
+        }
+        found = around.into_found();
+    }
+    Some(WAY_OUT_FURTHEST)
+}
+
 /// Whether a body at `position`, facing the unit `along`, stands in the open: in no
 /// passage narrower than [`PASSAGE`] across `along` (see [`passage_width`]) among the
 /// `footprints` round it.
@@ -267,8 +313,12 @@ fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -
             continue;
         };
         let (offset, d) = (nearest - position, nearest.distance(position));
-        // Behind: a doorway just come through is not one to step back into.
-        if offset.dot(along) < -PASSAGE_STEP {
+        // Wholly behind: a doorway just come through is not one to step back into. A
+        // wall beside that goes on ahead counts, wherever its nearest point is: one
+        // walking out of a niche at a slant, its nearest point on one side behind it,
+        // counted as in the open and never stepped back for the one at its mouth.
+        let ahead = |p: &DVec2| (*p - position).dot(along) >= -PASSAGE_STEP;
+        if offset.dot(along) < -PASSAGE_STEP && !f.outline.iter().any(ahead) {
             continue;
         }
         if along.perp_dot(offset) > 0.0 {
@@ -278,4 +328,81 @@ fn passage_width(position: DVec2, along: DVec2, footprints: &FootprintsAround) -
         }
     }
     Some(left + right)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use troupe_scene::space::Footprint;
+
+    /// A box's footprint from its corners (x0, z0) and (x1, z1).
+    fn block(name: &str, (x0, z0): (f64, f64), (x1, z1): (f64, f64)) -> Footprint {
+        let corners = [(x0, z0), (x1, z0), (x1, z1), (x0, z1)].map(|(x, z)| DVec2::new(x, z));
+        Footprint::hull(name, &corners)
+    }
+
+    fn crowd_among(footprints: Vec<Footprint>) -> Crowd {
+        let mut crowd = Crowd::default();
+        crowd.set_footprints(footprints);
+        crowd
+    }
+
+    /// The niche of `scripts/tests/navigation.lua`: 1 m wide, 2 m deep, open to -z, a
+    /// shelf at its back.
+    fn niche() -> Crowd {
+        crowd_among(vec![
+            block("west wall", (9.45, 0.0), (9.55, 2.0)),
+            block("east wall", (10.45, 0.0), (10.55, 2.0)),
+            block("back wall", (9.45, 1.95), (10.55, 2.05)),
+            block("shelf", (9.55, 1.65), (10.45, 1.95)),
+        ])
+    }
+
+    #[test]
+    fn a_wall_beside_leaves_the_way_out_of_a_niche_open() {
+        // A hand's breadth (0.07 m) from the west wall, at the niche's mouth: the room
+        // measured round the disc (`room_towards`) is none, though stepping back never
+        // comes nearer the wall.
+        let (at, facing, radius) = (DVec2::new(9.83, 0.3), DVec2::Y, 0.28);
+        let crowd = niche();
+        let around = crowd.footprints_around(at, Vec::new());
+        assert!(room_towards(at, -facing, radius, &around, CORNERED) < CORNERED);
+        let out = way_out(&crowd, at, facing, radius).expect("a way out");
+        assert!(out > 0.3 && out < 2.0, "{out} m out");
+    }
+
+    #[test]
+    fn a_shelf_close_behind_leaves_no_way_out() {
+        // In the niche facing out of it, the shelf 0.55 m behind.
+        let crowd = niche();
+        assert_eq!(
+            way_out(&crowd, DVec2::new(10.0, 1.1), DVec2::NEG_Y, 0.28),
+            None
+        );
+        // Facing the shelf at the niche's mouth, its back to the open.
+        assert!(way_out(&crowd, DVec2::new(10.0, 0.3), DVec2::Y, 0.28).is_some());
+    }
+
+    #[test]
+    fn the_way_out_of_an_aisle_is_the_shorter_nearer_its_end() {
+        // An aisle 1.6 m wide from z = -4 to 4.
+        let walls = vec![
+            block("west wall", (-0.85, -4.0), (-0.75, 4.0)),
+            block("east wall", (0.75, -4.0), (0.85, 4.0)),
+        ];
+        let crowd = crowd_among(walls.clone());
+        let out = |z: f64| way_out(&crowd, DVec2::new(0.3, z), DVec2::Y, 0.28);
+        // Facing north at z = -3, stepping back south: out past the walls' ends.
+        let near = out(-3.0).expect("a way out");
+        assert!(near > 1.0 && near < 2.5, "{near} m out");
+        // In the middle: further than is looked.
+        assert_eq!(out(0.0), Some(WAY_OUT_FURTHEST));
+        assert!(near + NEARER_OUT < WAY_OUT_FURTHEST);
+        // With a stand on the aisle's line beyond its south end, it would come to the
+        // stand further back than a step: it steps back round it, as far out as it can be.
+        let stand = block("stand", (-0.25, -5.6), (0.25, -5.2));
+        let crowd = crowd_among([walls, vec![stand]].concat());
+        let on_line = way_out(&crowd, DVec2::new(0.3, -3.0), DVec2::Y, 0.28);
+        assert_eq!(on_line, Some(WAY_OUT_FURTHEST));
+    }
 }
