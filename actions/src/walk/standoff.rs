@@ -59,8 +59,11 @@ const ASIDE_STEP: f64 = 0.1;
 /// in (see [`way_out`]): beyond, two walkers deep in a long aisle are as far from its ends.
 const WAY_OUT_FURTHEST: f64 = 3.0;
 /// By how much (m) one walker's way out of a passage must be the shorter for it, rather
-/// than the one later in the order of headings, to step back.
-const NEARER_OUT: f64 = 0.25;
+/// than the one later in the order of headings, to step back: a metre, so that where the
+/// ways out differ less (two groups before a doorway, or in a corridor) the order of
+/// headings decides, for a whole stream at once (with a quarter of a metre, walkers of
+/// both sides of a doorway stepped back, each for another, and feet met its wall).
+const NEARER_OUT: f64 = 1.0;
 /// Room (m) behind a walker, along its way back, under which it cannot step back: the
 /// other steps back for it.
 const CORNERED: f64 = 0.3;
@@ -392,9 +395,9 @@ mod tests {
         ];
         let crowd = crowd_among(walls.clone());
         let out = |z: f64| way_out(&crowd, DVec2::new(0.3, z), DVec2::Y, 0.28);
-        // Facing north at z = -3, stepping back south: out past the walls' ends.
-        let near = out(-3.0).expect("a way out");
-        assert!(near > 1.0 && near < 2.5, "{near} m out");
+        // Facing north half a metre inside, stepping back south: out past the walls' ends.
+        let near = out(-3.5).expect("a way out");
+        assert!(near > 0.5 && near < 2.0, "{near} m out");
         // In the middle: further than is looked.
         assert_eq!(out(0.0), Some(WAY_OUT_FURTHEST));
         assert!(near + NEARER_OUT < WAY_OUT_FURTHEST);
