@@ -958,7 +958,14 @@ impl Generator for Walk {
             if self.steer.engaged && matches!(self.route, Route::Path { .. }) {
                 // Only a steered walk plans anew: the stall is looked at only for one.
                 let stalled = self.stalled(ctx, &plan);
-                if self.replan.due(self.t, self.steer.rate, stalled) && planning {
+                // Only held with nobody moving near: in a crowd on the move a last look
+                // every 2 s put more feet into one another in the plaza.
+                let last_look = stalled && self.stuck_soon();
+                if self
+                    .replan
+                    .due(self.t, self.steer.rate, (stalled, last_look))
+                    && planning
+                {
                     if let Some(new) = self.new_route(ctx, &plan, stalled) {
                         plan = new;
                     }

@@ -68,8 +68,9 @@ pub struct Replan {
 impl Replan {
     /// Notes whether the walk waits at walk time `now` (its plan clock `rate`, or its
     /// body `stalled`: see [`Replan::route`]), and says whether it has waited long enough
-    /// to look for a new route.
-    pub fn due(&mut self, now: f64, rate: f64, stalled: bool) -> bool {
+    /// to look for a new route; for its `last_look` before it gives up as stuck, the wait
+    /// between attempts is [`REPLAN_INTERVAL`] however many found nothing.
+    pub fn due(&mut self, now: f64, rate: f64, (stalled, last_look): (bool, bool)) -> bool {
         self.still_since = if stalled {
             self.still_since.or(Some(now))
         } else {
@@ -80,8 +81,11 @@ impl Replan {
             return false;
         }
         let since = *self.blocked_since.get_or_insert(now);
-        let interval =
-            (REPLAN_INTERVAL * 2f64.powi(self.failures.min(8) as i32)).min(LONGEST_INTERVAL);
+        let interval = if last_look {
+            REPLAN_INTERVAL
+        } else {
+            (REPLAN_INTERVAL * 2f64.powi(self.failures.min(8) as i32)).min(LONGEST_INTERVAL)
+        };
         now - since >= BLOCKED_TIME && self.last.is_none_or(|t| now - t >= interval)
     }
 
@@ -240,31 +244,31 @@ mod tests {
     #[test]
     fn a_new_route_is_due_after_waiting_and_not_too_often() {
         let mut r = Replan::default();
-        assert!(!r.due(0.0, 0.0, false));
-        assert!(!r.due(0.5, 0.05, false));
-        assert!(r.due(1.0, 0.0, false));
+        assert!(!r.due(0.0, 0.0, (false, false)));
+        assert!(!r.due(0.5, 0.05, (false, false)));
+        assert!(r.due(1.0, 0.0, (false, false)));
         r.last = Some(1.0);
         // Waiting on: not again before the interval.
-        assert!(!r.due(2.5, 0.0, false));
-        assert!(r.due(3.0, 0.0, false));
+        assert!(!r.due(2.5, 0.0, (false, false)));
+        assert!(r.due(3.0, 0.0, (false, false)));
         // Walking again resets the wait.
-        assert!(!r.due(5.0, 0.5, false));
-        assert!(!r.due(5.5, 0.0, false));
-        assert!(!r.due(6.0, 0.0, false));
-        assert!(r.due(6.5, 0.0, false));
+        assert!(!r.due(5.0, 0.5, (false, false)));
+        assert!(!r.due(5.5, 0.0, (false, false)));
+        assert!(!r.due(6.0, 0.0, (false, false)));
+        assert!(r.due(6.5, 0.0, (false, false)));
     }
 
     #[test]
     fn a_stalled_body_counts_as_waiting_whatever_its_plan_clock() {
         let mut r = Replan::default();
-        assert!(!r.due(0.0, 1.0, true));
-        assert!(!r.due(0.5, 1.0, true));
-        assert!(r.due(1.0, 1.0, true));
+        assert!(!r.due(0.0, 1.0, (true, false)));
+        assert!(!r.due(0.5, 1.0, (true, false)));
+        assert!(r.due(1.0, 1.0, (true, false)));
         // Moving again resets the wait.
         let mut r = Replan::default();
-        assert!(!r.due(0.0, 1.0, true));
-        assert!(!r.due(0.5, 1.0, false));
-        assert!(!r.due(1.0, 1.0, true));
+        assert!(!r.due(0.0, 1.0, (true, false)));
+        assert!(!r.due(0.5, 1.0, (false, false)));
+        assert!(!r.due(1.0, 1.0, (true, false)));
     }
 
     #[test]
@@ -316,13 +320,18 @@ mod tests {
             failures: 1,
             ..Replan::default()
         };
-        assert!(!r.due(9.0, 0.0, false));
+        assert!(!r.due(9.0, 0.0, (false, false)));
         // One failure: 4 s, not 2.
-        assert!(!r.due(13.0, 0.0, false));
-        assert!(r.due(14.0, 0.0, false));
+        assert!(!r.due(13.0, 0.0, (false, false)));
+        assert!(r.due(14.0, 0.0, (false, false)));
         // Many: at most 16 s.
         r.failures = 30;
-        assert!(!r.due(25.0, 0.0, false));
-        assert!(r.due(26.0, 0.0, false));
+        assert!(!r.due(25.0, 0.0, (false, false)));
+        assert!(r.due(26.0, 0.0, (false, false)));
+        // But a last look before giving up as stuck waits 2 s only.
+        r.last = Some(26.0);
+        assert!(!r.due(27.0, 0.0, (false, false)));
+        assert!(!r.due(27.0, 0.0, (false, true)));
+        assert!(r.due(28.0, 0.0, (false, true)));
     }
 }

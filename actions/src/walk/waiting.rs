@@ -33,6 +33,9 @@ const ALONE: f64 = 1.5;
 pub const STUCK_TIME: f64 = 10.0;
 /// How far (m) a walk's body must move to count as getting on (see [`STUCK_TIME`]).
 pub const PROGRESS: f64 = 0.05;
+/// Seconds before it would give up as stuck in which a walk takes a last look for a
+/// route, however long the wait between its attempts has grown (see [`Walk::stuck_soon`]).
+const LAST_LOOK: f64 = 5.0;
 /// With another actor within this distance (m) who is on the move or stands in its way
 /// on, a walk that gets no nearer its goal may be waiting for them (to pass, to move off
 /// its way or its goal), and is not stuck (see `Walk::waiting_for_someone`).
@@ -159,6 +162,18 @@ impl Walk {
             .map(|(_, name)| format!(", held by {name}"))
             .unwrap_or_default();
         Some(format!("stuck{left} for {STUCK_TIME} s{against}"))
+    }
+
+    /// Whether the walk would give up as stuck within [`LAST_LOOK`], its body not having
+    /// got on: then, held with nobody moving near, it looks for a route whatever the wait
+    /// between attempts. Pressed
+    /// against the wall beside a doorway as three walkers came through it, a walker
+    /// looked for routes round them three times (each round the wall's far end, too long)
+    /// and was to wait 16 s for the next; the doorway cleared, and it gave up as stuck
+    /// 5 s later, 4.9 m from its goal through the doorway.
+    pub(super) fn stuck_soon(&self) -> bool {
+        self.progress
+            .is_some_and(|(_, since)| self.t - since >= STUCK_TIME - LAST_LOOK)
     }
 
     /// Whether the walk, its body held at `at`, may be waiting for another actor within
