@@ -166,11 +166,10 @@ impl Walk {
 
     /// Whether the walk would give up as stuck within [`LAST_LOOK`], its body not having
     /// got on: then, held with nobody moving near, it looks for a route whatever the wait
-    /// between attempts. Pressed
-    /// against the wall beside a doorway as three walkers came through it, a walker
-    /// looked for routes round them three times (each round the wall's far end, too long)
-    /// and was to wait 16 s for the next; the doorway cleared, and it gave up as stuck
-    /// 5 s later, 4.9 m from its goal through the doorway.
+    /// between attempts. Pressed against the wall beside a doorway as three walkers came
+    /// through it, a walker looked for routes round them three times (each round the
+    /// wall's far end, too long) and was to wait 16 s for the next; the doorway cleared,
+    /// and it gave up as stuck 5 s later, 4.9 m from its goal through the doorway.
     pub(super) fn stuck_soon(&self) -> bool {
         self.progress
             .is_some_and(|(_, since)| self.t - since >= STUCK_TIME - LAST_LOOK)
