@@ -69,7 +69,7 @@ impl Replan {
     /// Notes whether the walk waits at walk time `now` (its plan clock `rate`, or its
     /// body `stalled`: see [`Replan::route`]), and says whether it has waited long enough
     /// to look for a new route; for its `last_look` before it gives up as stuck, the wait
-    /// between attempts is [`REPLAN_INTERVAL`] however many found nothing.
+    /// between attempts is the shortest (2 s) however many found nothing.
     pub fn due(&mut self, now: f64, rate: f64, (stalled, last_look): (bool, bool)) -> bool {
         self.still_since = if stalled {
             self.still_since.or(Some(now))
