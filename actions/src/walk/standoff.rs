@@ -137,12 +137,13 @@ impl Standoff {
         let way_out_of = |i: usize| way_out(crowd, crowd.positions[i], crowd.facings[i], across(i));
         // Mine is found once, for the first neighbour that faces me.
         let my_way_out = std::cell::OnceCell::new();
-        let backing = self.backing();
+        // Whether it stepped back on the last tick (`backing`, below, is this tick's).
+        let was_backing = self.backing();
         let backs_off = |towards: f64, (j, facing): (usize, DVec2)| {
             // One stepping back goes on for whoever faces it: once it stood cornered at
             // the end of an aisle it had stepped back along, the other, now the one with
             // the way out, stood too, for good (two waiters with trays).
-            if backing {
+            if was_backing {
                 return true;
             }
             match (*my_way_out.get_or_init(|| way_out_of(me)), way_out_of(j)) {
@@ -154,7 +155,7 @@ impl Standoff {
             }
             towards < FACE_TO_FACE && backs_off_for(along, facing)
         };
-        let in_the_way = if self.backing() {
+        let in_the_way = if was_backing {
             STILL_IN_THE_WAY
         } else {
             IN_THE_WAY
@@ -208,7 +209,7 @@ impl Standoff {
                 passage_width(position + ahead, along, footprints).is_some_and(|w| w < PASSAGE)
             })
         };
-        let stand_off = backed_into || (face_to_face && (self.backing() || waited));
+        let stand_off = backed_into || (face_to_face && (was_backing || waited));
         let backing = begun || (stand_off && in_a_passage());
         self.backing_since = if backing {
             self.backing_since.or(Some(now))
