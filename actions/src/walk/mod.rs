@@ -125,6 +125,12 @@ pub const BLEND_IN_TIME: f64 = 0.4;
 /// lowers over [`BLEND_IN_TIME`] (the walk's `start_pitch`); a foot pitched less is
 /// taken as flat.
 pub const RAISED_HEEL: f64 = 0.05;
+/// Fastest change (m/s per second) of the speed the spine's and the arms' motion is set by:
+/// a walk held up in its tracks has its speed drop to nothing in a tick, and its elbows
+/// straightened from 0.3 rad to 0 within it (the free hand coming down 2 cm into a stand
+/// beside it). Faster than a plan's own stop (1.3 m/s to rest over 0.8 s), which it
+/// leaves as it was.
+pub const UPPER_BODY_EASE: f64 = 3.0;
 /// Seconds ahead at which a rising planned speed already sets the cadence.
 pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
@@ -235,6 +241,8 @@ pub struct Walk {
     /// Per leg, the ankle target's correction for the subtalar offset (see
     /// [`Rig::subtalar_shift`]), from the previous tick's solution.
     subtalar: [DVec3; 2],
+    /// The speed the spine's and the arms' motion is set by (see [`UPPER_BODY_EASE`]).
+    upper_speed: f64,
     /// The tick period (s).
     dt: f64,
 }
@@ -304,6 +312,7 @@ impl Walk {
             held: [false; 2],
             start_pitch: [0.0; 2],
             subtalar: [DVec3::ZERO; 2],
+            upper_speed: 0.0,
             dt: 0.01,
         })
     }
@@ -508,12 +517,13 @@ impl Walk {
     }
 
     /// Pelvis, spine and arm values for phase `phi` (in cycles) at activity `a` and
-    /// relative velocity `rv`; plus the root's lateral sway and vertical offset.
+    /// relative velocity `rv` (the spine and arms at `upper`'s, see [`UPPER_BODY_EASE`]);
+    /// plus the root's lateral sway and vertical offset.
     fn oscillations(
         &self,
         phi: f64,
-        a: f64,
-        rv: f64,
+        (a, rv): (f64, f64),
+        upper: (f64, f64),
         sigma: f64,
     ) -> (f64, f64, [f64; 3], [f64; 4], [[f64; 4]; 2]) {
         let o = &self.options;
@@ -533,6 +543,7 @@ impl Walk {
             * (2.0 * TAU * (phi - 0.5 * sigma)).cos();
         let drop = (0.015 + 0.01 * rv + 0.10 * o.run) * ht;
         let vertical = a * (bounce - drop);
+        let (a, rv) = (upper.0, upper.1.min(2.5));
         // Spine: the thorax turns against the pelvis; lean grows with speed and running.
         let lean = (0.03 + 0.03 * rv + 0.25 * o.run) * a;
         let counter = (0.03 + 0.03 * rv) * a * c1;
@@ -600,7 +611,14 @@ impl Walk {
             self.poses[leg] = self.step_foot(around, plan, leg, lambda, sigma);
         }
         let rv = v / self.rig.thigh_height;
-        let (sway, vertical, mut pelvis, spine, arms) = self.oscillations(phi, a, rv, sigma);
+        let most = UPPER_BODY_EASE * ctx.dt;
+        self.upper_speed += (v - self.upper_speed).clamp(-most, most);
+        let upper = (
+            self.activity(self.upper_speed),
+            self.upper_speed / self.rig.thigh_height,
+        );
+        let (sway, vertical, mut pelvis, spine, arms) =
+            self.oscillations(phi, (a, rv), upper, sigma);
         // The pelvis blends in from the posture the actor had before the legs are solved
         // for it (the legs must reach the feet from where the pelvis really is).
         let k = smoothstep(self.t / BLEND_IN_TIME);
