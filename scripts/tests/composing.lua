@@ -563,15 +563,17 @@ end)
 -- Waiters take trays from stands at either end of an aisle `width` metres wide between
 -- two walls 8 m long, then walk to beyond the other end: each with the hand `hands[i]`
 -- ("both", "right", or nil for a walker with nothing), ann from the south, bob from the
--- north. Returns when both have arrived, and the deepest interpenetration from a second
--- into the walks (the hands just come off the stands before).
-local function waiters_in_an_aisle(width, hands, seconds)
+-- north, ann moved across by `dx` (0 if nil). `each_tick(ann)`, if given, is called on
+-- every tick of the walks. Returns when both have arrived, and the deepest
+-- interpenetration from a second into the walks (the hands just come off the stands
+-- before).
+local function waiters_in_an_aisle(width, hands, seconds, dx, each_tick)
   troupe.wall{ from = {-width / 2, -4}, to = {-width / 2, 4}, thickness = 0.1 }
   troupe.wall{ from = {width / 2, -4}, to = {width / 2, 4}, thickness = 0.1 }
   local people, walks = {}, {}
   for i, side in ipairs({ -1, 1 }) do
     local name = i == 1 and "ann" or "bob"
-    local a = troupe.actor{ name = name, at = {0, 0, 6 * side}, facing = side < 0 and 0 or 180 }
+    local a = troupe.actor{ name = name, at = {i == 1 and dx or 0, 0, 6 * side}, facing = side < 0 and 0 or 180 }
     troupe.object{ name = "stand_" .. name, shape = "box", size = {0.5, 0.8, 0.4}, at = {0, 0.4, 5.4 * side},
                    mass = 20 }
     local tray = troupe.object{ name = "tray_" .. name, shape = "box", size = {0.4, 0.03, 0.3},
@@ -591,6 +593,7 @@ local function waiters_in_an_aisle(width, hands, seconds)
     if troupe.time() - start > 1 and d > deepest then
       deepest, what = d, string.format("%s's %s and %s", tostring(a), tostring(sa), tostring(b))
     end
+    if each_tick then each_tick(people[1].actor) end
     return walks[1].status ~= "active" and walks[2].status ~= "active"
   end, seconds)
   for i, w in ipairs(walks) do
@@ -619,6 +622,46 @@ test("two waiters carrying trays meet in a 1.55 m aisle: the one stepping back i
   print(string.format("trays in a 1.55 m aisle: both arrived %.1f s after setting off, deepest %.4f m (%s)",
                       took, deepest, what))
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
+end)
+
+for _, dx in ipairs({ -0.1, -0.15 }) do
+  test(string.format("a waiter with a tray in one hand, moved %.2f m, waiting beside a stand for a walker in the aisle, keeps her free hand off it", dx), function()
+    -- Held up at the aisle's mouth beside the stand she took the tray from, her walk's
+    -- speed dropped to nothing in a tick, and with it the gait's bend of the elbows
+    -- (0.3 rad to none): her free left hand came down 2.2 cm into the stand (1.96 cm
+    -- moved 15 cm). The spine's and arms' motion now eases to rest, and a free arm keeps
+    -- off the furniture (docs/navigation.md, "Free hands").
+    local last, jump, at = nil, 0, 0
+    local took, deepest, what = waiters_in_an_aisle(1.4, { "right" }, 90, dx, function(ann)
+      local e = ann:dof("l_elbow_flexion")
+      if last and math.abs(e - last) > jump then jump, at = math.abs(e - last), troupe.time() end
+      last = e
+    end)
+    print(string.format("a tray and a walker in a 1.4 m aisle, ann moved %.2f m: both arrived %.1f s after "
+                        .. "setting off, deepest %.4f m (%s), her free elbow at most %.3f rad in a tick", dx, took,
+                        deepest, what, jump))
+    expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
+    expect(jump < 0.05, string.format("her free elbow moved %.3f rad in a tick at %.2f s", jump, at))
+  end)
+end
+
+test("turning back from a shelf in a room's corner with a cup in one hand, the free hand keeps off the shelf", function()
+  -- The body turns on the spot, its arms with it: the free left hand swept 4.7 cm into
+  -- the shelf the cup was taken from (docs/navigation.md, "Free hands").
+  troupe.wall{ from = {1, -3}, to = {1, 1}, thickness = 0.1 }
+  troupe.wall{ from = {-3, 1}, to = {1, 1}, thickness = 0.1 }
+  troupe.object{ name = "shelf", shape = "box", size = {0.2, 0.9, 0.2}, at = {0.85, 0.45, 0.85}, mass = 20 }
+  local cup = troupe.object{ name = "cup", shape = "cylinder", radius = 0.035, height = 0.1,
+                             at = {0.85, 1.0, 0.85}, mass = 0.2, obstacle = false }
+  local ann = troupe.actor{ name = "ann", at = {0.5, 0, 0.6}, facing = 30 }
+  expect(ann:grasp{ object = cup, hand = "right" }:wait() == "completed", "grasped")
+  local w = ann:walk{ to = {-2, 0, -2} }
+  local solids = require("support.solids")
+  local ok, deepest, between = solids.watch(function() return solids.ended(w) end, 20)
+  print(string.format("turning back from the corner's shelf: the walk %s, deepest %.4f m (%s)", w.status,
+                      deepest, between))
+  expect(ok and w.status == "completed", "the walk ended: " .. w.status .. " " .. tostring(w.error))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, between))
 end)
 
 test("a cup carried along a path that ends 0.5 m before someone standing: the walk ends where the body is held", function()

@@ -33,6 +33,7 @@ pub mod cycle;
 pub mod feet;
 pub mod footing;
 pub mod goal;
+pub mod hands;
 pub mod knees;
 pub mod lanes;
 #[cfg(feature = "lua")]
@@ -227,6 +228,9 @@ pub struct Walk {
     replan: replan::Replan,
     /// How far the shoulders are turned to pass someone (see [`shoulders`]).
     shoulders: shoulders::Shoulders,
+    /// How far the free arms depart from the gait to keep off the furniture (see
+    /// [`hands`]).
+    hands: hands::FreeHands,
     /// The root's floor point on the previous tick, where the feet held it.
     last_floor: Option<DVec2>,
     /// Each thigh on the previous tick, as [`knees`] sees it.
@@ -307,6 +311,7 @@ impl Walk {
             found: Vec::new(),
             replan: replan::Replan::default(),
             shoulders: shoulders::Shoulders::default(),
+            hands: hands::FreeHands::default(),
             last_floor: None,
             thighs: [None; 2],
             held: [false; 2],
@@ -1023,11 +1028,11 @@ impl Generator for Walk {
         // whose swing would now go sideways into the other, hang still as they turn,
         // twisted back so that the bent elbows keep the forearms along the way and not
         // towards the other, and swing less as anything comes close.
-        let mut near_body = f64::INFINITY;
+        let (mut near_body, mut near_obstacle) = (f64::INFINITY, f64::INFINITY);
         if let Some(footprints) = &footprints {
             let me = self.body(ctx);
             let (bodies, obstacles) = nearest_gaps(&me, &around, shoulders::ARMS_CLEAR);
-            near_body = bodies;
+            (near_body, near_obstacle) = (bodies, obstacles);
             let gap = bodies.min(obstacles);
             // `gather` left this tick's neighbours in `self.near`.
             let around = (self.near.as_slice(), footprints);
@@ -1075,6 +1080,15 @@ impl Generator for Walk {
             out.set(d, v);
         }
         if self.options.arms {
+            // A hand that holds nothing keeps off the furniture beside it (see [`hands`]).
+            let scope = out.scope();
+            let free = [0, 1].map(|i| {
+                Walk::held_by_arm(ctx, i).is_none()
+                    && rig.arms[i][..3].iter().all(|&d| scope.contains(d))
+            });
+            let obstacles = (&around.obstacles[..], near_obstacle);
+            self.hands
+                .keep_clear(ctx, (rig.arms, free), &upper, obstacles, &mut arms);
             for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {
                 // A hand that holds something keeps its arm out of the swing, which would
                 // lower the load to the thigh: the carrying moves it (see [`carry`]).

@@ -1,7 +1,7 @@
 //! Forward kinematics: from DOF values to every joint's global (REF) transform.
 
 use crate::math;
-use crate::skeleton::{DofKind, Skeleton};
+use crate::skeleton::{Dof, DofKind, Joint, Skeleton};
 use crate::transform::Transform;
 use glam::{DQuat, DVec3};
 
@@ -24,32 +24,48 @@ pub fn forward_kinematics(skeleton: &Skeleton, q: &[f64], globals: &mut [Transfo
     debug_assert_eq!(q.len(), skeleton.dof_count());
     let dofs = skeleton.dofs();
     for (j, joint) in skeleton.joints().iter().enumerate() {
-        let mut frame = match joint.parent {
-            Some(p) => {
-                let parent = globals[p];
-                Transform::new(
-                    parent.rotation,
-                    parent.translation + parent.rotation * joint.offset,
-                )
-            }
-            None => Transform::from_translation(joint.offset),
-        };
-        for d in joint.dofs.clone() {
-            // Many DOFs (fingers, eyes) sit at zero: their transform is the identity.
-            if q[d] != 0.0 {
-                // Compose in place: a rotation DOF only turns the frame, a translation
-                // only moves it (cheaper than a full transform product).
-                let dof = &dofs[d];
-                match dof.kind {
-                    DofKind::Rotation => frame.rotation *= DQuat::from_axis_angle(dof.axis, q[d]),
-                    DofKind::Translation => {
-                        frame.translation += frame.rotation * (dof.axis * q[d]);
-                    }
+        globals[j] = frame_of(joint, dofs, joint.parent.map(|p| &globals[p]), q);
+    }
+}
+
+/// The global transform of joint `j` for posture `q`, given its parent's (`None` for a
+/// root): what [`forward_kinematics`] computes for it, to the bit, for a chain of joints
+/// placed alone.
+pub fn joint_frame(
+    skeleton: &Skeleton,
+    j: usize,
+    parent: Option<&Transform>,
+    q: &[f64],
+) -> Transform {
+    frame_of(&skeleton.joints()[j], skeleton.dofs(), parent, q)
+}
+
+/// `joint`'s global transform for posture `q` (its skeleton's DOFs `dofs`), given its
+/// parent's.
+#[inline(always)]
+fn frame_of(joint: &Joint, dofs: &[Dof], parent: Option<&Transform>, q: &[f64]) -> Transform {
+    let mut frame = match parent {
+        Some(parent) => Transform::new(
+            parent.rotation,
+            parent.translation + parent.rotation * joint.offset,
+        ),
+        None => Transform::from_translation(joint.offset),
+    };
+    for d in joint.dofs.clone() {
+        // Many DOFs (fingers, eyes) sit at zero: their transform is the identity.
+        if q[d] != 0.0 {
+            // Compose in place: a rotation DOF only turns the frame, a translation only
+            // moves it (cheaper than a full transform product).
+            let dof = &dofs[d];
+            match dof.kind {
+                DofKind::Rotation => frame.rotation *= DQuat::from_axis_angle(dof.axis, q[d]),
+                DofKind::Translation => {
+                    frame.translation += frame.rotation * (dof.axis * q[d]);
                 }
             }
         }
-        globals[j] = frame;
     }
+    frame
 }
 
 /// The local transform of joint `j` relative to its parent for posture `q`.
@@ -185,6 +201,25 @@ mod tests {
 
     fn assert_close(a: DVec3, b: DVec3) {
         assert!((a - b).length() < 1e-9, "{a} != {b}");
+    }
+
+    #[test]
+    fn a_chain_placed_alone_has_the_frames_of_the_whole_body_to_the_bit() {
+        let s = adult(1.75);
+        let q: Vec<f64> = (0..s.dof_count())
+            .map(|d| 0.1 * ((d % 7) as f64 - 3.0))
+            .collect();
+        let g = fk(&s, &q);
+        let mut chain = vec![s.joint("l_wrist").unwrap()];
+        while let Some(p) = s.joints()[*chain.last().unwrap()].parent {
+            chain.push(p);
+        }
+        let mut parent: Option<Transform> = None;
+        for &j in chain.iter().rev() {
+            let frame = joint_frame(&s, j, parent.as_ref(), &q);
+            assert_eq!(frame, g[j], "{}", s.joints()[j].name);
+            parent = Some(frame);
+        }
     }
 
     #[test]
