@@ -69,6 +69,8 @@ struct Arm {
     volumes: Vec<(usize, usize, Capsule)>,
     /// Shoulder flexion, shoulder abduction, elbow flexion.
     dofs: [usize; 3],
+    /// Every DOF of the chain's joints.
+    chain_dofs: Vec<usize>,
     /// From the shoulder to the far side of the hand (m): how far the arm reaches.
     reach: f64,
 }
@@ -124,11 +126,13 @@ impl Arm {
             .filter(|&&(_, j, _)| j == wrist)
             .map(|(_, _, c)| c.a.length().max(c.b.length()) + c.ra.max(c.rb))
             .fold(0.0, f64::max);
+        let chain_dofs = chain.iter().flat_map(|&j| joints[j].dofs.clone()).collect();
         Some(Arm {
             chain,
             shoulder,
             volumes,
             dofs,
+            chain_dofs,
             reach: to_wrist + hand,
         })
     }
@@ -217,7 +221,6 @@ impl FreeHands {
         }
         let last = &ctx.posture.globals;
         let steps = (OUT_RATE * ctx.dt, BACK_RATE * ctx.dt);
-        let mut q_ready = false;
         for (i, arm) in found.iter().enumerate() {
             // Back towards the gait, unless the obstacles say otherwise.
             let mut next = self.offsets[i].map(|o| o - o.clamp(-steps.1, steps.1));
@@ -247,13 +250,17 @@ impl FreeHands {
                 // spine's torsions, turned by the shoulders, often are not; unclamped, the
                 // arm was measured 3.5 cm from where it ended up).
                 let dofs = sk.dofs();
-                if !q_ready {
+                // Only the chain's values are read: those, not the whole posture, are
+                // taken from the last tick's.
+                if self.q.len() != ctx.posture.q.len() {
                     self.q.clear();
                     self.q.extend_from_slice(&ctx.posture.q);
-                    for &(d, v) in upper {
-                        self.q[d] = dofs[d].clamp(v);
-                    }
-                    q_ready = true;
+                }
+                for &d in &arm.chain_dofs {
+                    self.q[d] = ctx.posture.q[d];
+                }
+                for &(d, v) in upper {
+                    self.q[d] = dofs[d].clamp(v);
                 }
                 for (k, &v) in arms[i][..3].iter().enumerate() {
                     self.q[arm.dofs[k]] = dofs[arm.dofs[k]].clamp(v);
