@@ -631,7 +631,9 @@ for _, dx in ipairs({ -0.1, -0.15 }) do
     -- (0.3 rad to none): her free left hand came down 2.2 cm into the stand (1.96 cm
     -- moved 15 cm). The spine's and arms' motion now eases to rest, and a free arm keeps
     -- off the furniture (docs/navigation.md, "Free hands").
-    local last, jump, at = nil, 0, 0
+    ---@type number?
+    local last = nil
+    local jump, at = 0.0, 0.0
     local took, deepest, what = waiters_in_an_aisle(1.4, { "right" }, 90, dx, function(ann)
       local e = ann:dof("l_elbow_flexion")
       if last and math.abs(e - last) > jump then jump, at = math.abs(e - last), troupe.time() end

@@ -175,7 +175,7 @@ impl Arm {
 
     /// A bound from above of [`Arm::worst`] for the arm placed by `frame` (given a joint):
     /// each volume taken as the sphere round it, three distances to each obstacle where
-    /// the measure takes nine.
+    /// the measure takes seven.
     fn worst_bound(
         &self,
         frame: impl Fn(usize) -> Transform,
@@ -285,13 +285,12 @@ impl FreeHands {
 /// DOFs' limits: from the last tick's, `last`, the least further change that takes it
 /// out (a few Gauss–Newton steps on its deepest point), each DOF within `out` (radians)
 /// of `last`; or where it is already out, `back` towards the gait if that keeps it out
-/// by [`HYSTERESIS`] more. Starting
-/// from the last tick's keeps the arm going round the obstacle one way (from the gait's
-/// own values each tick, it went over a stand's corner and back by its side in turn,
-/// through it). Where the arm hangs straight into what is under it, the first steps'
-/// direction is all the derivatives tell (moving it up is of the second order there);
-/// at `out` a tick it goes that way until it is out. `frames` holds the chain's frames
-/// for `q`; `q` and the frames below the shoulder are scratch.
+/// by [`HYSTERESIS`] more. Starting from the last tick's keeps the arm going round the
+/// obstacle one way (from the gait's own values each tick, it went over a stand's corner
+/// and back by its side in turn, through it). Where the arm hangs straight into what is
+/// under it, the first steps' direction is all the derivatives tell (moving it up is of
+/// the second order there); at `out` a tick it goes that way until it is out. `frames`
+/// holds the chain's frames for `q`; `q` and the frames below the shoulder are scratch.
 fn departure(
     sk: &Skeleton,
     arm: &Arm,

@@ -128,9 +128,8 @@ pub const BLEND_IN_TIME: f64 = 0.4;
 pub const RAISED_HEEL: f64 = 0.05;
 /// Fastest change (m/s per second) of the speed the spine's and the arms' motion is set by:
 /// a walk held up in its tracks has its speed drop to nothing in a tick, and its elbows
-/// straightened from 0.3 rad to 0 within it (the free hand coming down 2 cm into a stand
-/// beside it). Faster than a plan's own stop (1.3 m/s to rest over 0.8 s), which it
-/// leaves as it was.
+/// straightened from 0.3 rad to 0 within it (a pop to see). Faster than a plan's own stop
+/// (1.3 m/s to rest over 0.8 s), which it leaves as it was.
 pub const UPPER_BODY_EASE: f64 = 3.0;
 /// Seconds ahead at which a rising planned speed already sets the cadence.
 pub const CADENCE_LOOKAHEAD: f64 = 0.3;
