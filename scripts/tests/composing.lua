@@ -630,7 +630,7 @@ for _, dx in ipairs({ -0.1, -0.15 }) do
     -- speed dropped to nothing in a tick, and with it the gait's bend of the elbows
     -- (0.3 rad to none): her free left hand came down 2.2 cm into the stand (1.96 cm
     -- moved 15 cm). The spine's and arms' motion now eases to rest, and a free arm keeps
-    -- off the furniture (docs/navigation.md, "Free hands").
+    -- off the furniture (docs/navigation.md, "Solids": a free hand is kept off the furniture).
     ---@type number?
     local last = nil
     local jump, at = 0.0, 0.0
@@ -649,7 +649,7 @@ end
 
 test("turning back from a shelf in a room's corner with a cup in one hand, the free hand keeps off the shelf", function()
   -- The body turns on the spot, its arms with it: the free left hand swept 4.7 cm into
-  -- the shelf the cup was taken from (docs/navigation.md, "Free hands").
+  -- the shelf the cup was taken from (docs/navigation.md, "Solids": a free hand …).
   troupe.wall{ from = {1, -3}, to = {1, 1}, thickness = 0.1 }
   troupe.wall{ from = {-3, 1}, to = {1, 1}, thickness = 0.1 }
   troupe.object{ name = "shelf", shape = "box", size = {0.2, 0.9, 0.2}, at = {0.85, 0.45, 0.85}, mass = 20 }
