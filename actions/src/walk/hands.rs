@@ -17,6 +17,7 @@
 
 use troupe_body::collision::Capsule;
 use troupe_body::glam::{DVec2, DVec3};
+use troupe_body::jacobian::chain_dofs;
 use troupe_body::kinematics::joint_frame;
 use troupe_body::{Skeleton, Transform};
 use troupe_scene::space::Footprint;
@@ -65,11 +66,11 @@ struct Arm {
     /// changed here.
     shoulder: usize,
     /// The upper arm's, forearm's and hand's capsules, each with its joint's place in
-    /// `chain` and its joint.
-    volumes: Vec<(usize, usize, Capsule)>,
+    /// `chain`.
+    volumes: Vec<(usize, Capsule)>,
     /// Shoulder flexion, shoulder abduction, elbow flexion.
     dofs: [usize; 3],
-    /// Every DOF of the chain's joints.
+    /// Every DOF of the chain's joints (`jacobian::chain_dofs`).
     chain_dofs: Vec<usize>,
     /// From the shoulder to the far side of the hand (m): how far the arm reaches.
     reach: f64,
@@ -105,7 +106,7 @@ impl Arm {
         chain.reverse();
         let shoulder_joint = skeleton.dofs()[dofs[0]].joint;
         let shoulder = chain.iter().position(|&j| j == shoulder_joint)?;
-        let volumes: Vec<(usize, usize, Capsule)> = skeleton
+        let volumes: Vec<(usize, Capsule)> = skeleton
             .solids()
             .iter()
             .filter_map(|(j, s)| {
@@ -113,7 +114,7 @@ impl Arm {
                     .iter()
                     .position(|c| c == j)
                     .filter(|&k| k >= shoulder)?;
-                Some((at, *j, Capsule::covering(&s.shape, s.center, s.orientation)))
+                Some((at, Capsule::covering(&s.shape, s.center, s.orientation)))
             })
             .collect();
         // Along the chain, from the shoulder to the wrist, then to the hand's far side.
@@ -123,10 +124,10 @@ impl Arm {
             .sum();
         let hand = volumes
             .iter()
-            .filter(|&&(_, j, _)| j == wrist)
-            .map(|(_, _, c)| c.a.length().max(c.b.length()) + c.ra.max(c.rb))
+            .filter(|&&(at, _)| chain[at] == wrist)
+            .map(|(_, c)| c.a.length().max(c.b.length()) + c.ra.max(c.rb))
             .fold(0.0, f64::max);
-        let chain_dofs = chain.iter().flat_map(|&j| joints[j].dofs.clone()).collect();
+        let chain_dofs = chain_dofs(skeleton, chain[0], wrist).ok()?;
         Some(Arm {
             chain,
             shoulder,
@@ -146,17 +147,17 @@ impl Arm {
         }
     }
 
-    /// How far the arm placed by `frame` (given a joint's place in the chain and the
-    /// joint) comes within [`HAND_MARGIN`] of the obstacles `near` of `obstacles` (m; at
-    /// most 0 when it keeps clear).
+    /// How far the arm placed by `frame` (given a joint's place in the chain) comes
+    /// within [`HAND_MARGIN`] of the obstacles `near` of `obstacles` (m; at most 0 when
+    /// it keeps clear).
     fn worst(
         &self,
-        frame: impl Fn(usize, usize) -> Transform,
+        frame: impl Fn(usize) -> Transform,
         (near, obstacles): (&[usize], &[&Footprint]),
     ) -> f64 {
         let mut worst = f64::NEG_INFINITY;
-        for &(at, joint, capsule) in &self.volumes {
-            let placed = capsule.placed(&frame(at, joint));
+        for &(at, capsule) in &self.volumes {
+            let placed = capsule.placed(&frame(at));
             // A sphere (the hand) once; a limb at its ends and middle.
             let samples: &[f64] = if capsule.a == capsule.b {
                 &[0.5]
@@ -173,17 +174,17 @@ impl Arm {
         worst
     }
 
-    /// A bound from above of [`Arm::worst`] for the arm placed by `frame` (given a joint):
-    /// each volume taken as the sphere round it, three distances to each obstacle where
-    /// the measure takes seven.
+    /// A bound from above of [`Arm::worst`] for the arm placed by `frame` (given a
+    /// joint's place in the chain): each volume taken as the sphere round it, three
+    /// distances to each obstacle where the measure takes seven.
     fn worst_bound(
         &self,
         frame: impl Fn(usize) -> Transform,
         (near, obstacles): (&[usize], &[&Footprint]),
     ) -> f64 {
         let mut worst = f64::NEG_INFINITY;
-        for &(_, joint, capsule) in &self.volumes {
-            let (centre, radius) = capsule.placed(&frame(joint)).bound();
+        for &(at, capsule) in &self.volumes {
+            let (centre, radius) = capsule.placed(&frame(at)).bound();
             for &k in near {
                 worst = worst.max(radius + HAND_MARGIN - prism_distance(obstacles[k], centre));
             }
@@ -243,8 +244,8 @@ impl FreeHands {
             // measure itself.
             let measured = !near.0.is_empty()
                 && (!resting
-                    || (arm.worst_bound(|j| last[j], near) >= -LOOKED_AT
-                        && arm.worst(|_, j| last[j], near) >= -LOOKED_AT));
+                    || (arm.worst_bound(|at| last[arm.chain[at]], near) >= -LOOKED_AT
+                        && arm.worst(|at| last[arm.chain[at]], near) >= -LOOKED_AT));
             if measured {
                 // The values as the posture will have them: within their DOFs' limits (the
                 // spine's torsions, turned by the shoulders, often are not; unclamped, the
@@ -304,7 +305,7 @@ fn departure(
             q[arm.dofs[k]] = base[k] + delta[k];
         }
         arm.place(sk, q, frames, arm.shoulder);
-        arm.worst(|at, _| frames[at], near)
+        arm.worst(|at| frames[at], near)
     };
     // A departure `wanted` of DOF `k`, within its limits and `step` of the last tick's.
     let within = |k: usize, wanted: f64, step: f64| {
@@ -383,7 +384,7 @@ mod tests {
         let q = vec![0.0; sk.dof_count()];
         let mut frames = vec![Transform::IDENTITY; arm.chain.len()];
         arm.place(&sk, &q, &mut frames, 0);
-        let &(at, _, hand) = arm.volumes.last().unwrap();
+        let &(at, hand) = arm.volumes.last().unwrap();
         let hand = hand.placed(&frames[at]);
         let (c, r) = (hand.point(0.5), hand.radius(0.5));
         let corners = [(-0.1, -0.1), (0.4, -0.1), (0.4, 0.1), (-0.1, 0.1)];
@@ -419,14 +420,14 @@ mod tests {
             q[arm.dofs[k]] += delta[k];
         }
         arm.place(sk, &q, &mut frames, 0);
-        (delta, arm.worst(|at, _| frames[at], near))
+        (delta, arm.worst(|at| frames[at], near))
     }
 
     #[test]
     fn a_hand_hanging_into_a_stand_is_taken_out_of_it_within_a_second() {
         let (sk, arm, q, frames, stand) = hanging_over_a_stand(0.02);
         let obstacles = [&stand];
-        let before = arm.worst(|at, _| frames[at], (&[0], &obstacles));
+        let before = arm.worst(|at| frames[at], (&[0], &obstacles));
         assert!(before > 0.03, "{before}");
         let (delta, after) = ticks(&sk, &arm, &q, &stand, 100);
         assert!(after <= 0.0, "{after} with {delta:?}");

@@ -1079,19 +1079,18 @@ impl Generator for Walk {
             out.set(d, v);
         }
         if self.options.arms {
+            let holding = [0, 1].map(|i| Walk::held_by_arm(ctx, i).is_some());
             // A hand that holds nothing keeps off the furniture beside it (see [`hands`]).
             let scope = out.scope();
-            let free = [0, 1].map(|i| {
-                Walk::held_by_arm(ctx, i).is_none()
-                    && rig.arms[i][..3].iter().all(|&d| scope.contains(d))
-            });
+            let free =
+                [0, 1].map(|i| !holding[i] && rig.arms[i][..3].iter().all(|&d| scope.contains(d)));
             let obstacles = (&around.obstacles[..], near_obstacle);
             self.hands
                 .keep_clear(ctx, (rig.arms, free), &upper, obstacles, &mut arms);
             for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {
                 // A hand that holds something keeps its arm out of the swing, which would
                 // lower the load to the thigh: the carrying moves it (see [`carry`]).
-                if Walk::held_by_arm(ctx, i).is_some() {
+                if holding[i] {
                     continue;
                 }
                 for (&d, &v) in dofs.iter().zip(values) {
