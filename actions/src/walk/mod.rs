@@ -969,12 +969,9 @@ impl Generator for Walk {
         // followed (following, one went on 1.96 m after `stop()`).
         let planning = self.stopped_at.is_none();
         if let Some(footprints) = &footprints {
-            let circle = self
-                .goal
-                .as_ref()
-                .and_then(|g| g.circle_kept_out_of(ctx, self.radius));
+            let ring = self.goal.as_ref().and_then(|g| g.ring(ctx, self.radius));
             let at = crowd.positions.get(ctx.actor).copied().unwrap_or_default();
-            self.steer.keep_out_of(circle, (at, self.radius));
+            self.steer.keep_out_of(ctx, ring, (at, self.radius));
             let (t, near) = (self.t, (&mut self.near, &mut self.scratch));
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
             if self.steer.engaged && matches!(self.route, Route::Path { .. }) {

@@ -12,6 +12,7 @@
 //! without the way also stops at a line before the crossing (`troupe_nav::way`); in a
 //! counter-flow the pull back onto the plan keeps a lane to the right ([`super::lanes`]).
 
+use super::goal::Ring;
 use super::lanes;
 use super::route::{direction, Plan, RootSample};
 use super::standoff::Standoff;
@@ -40,8 +41,8 @@ const WAIT_BRAKING: f64 = 0.6;
 /// Obstacles within this distance (m) are looked at while steering.
 const OBSTACLE_RANGE: f64 = 2.0;
 
-/// How far (m) the centre of the disc a walk keeps out of moves, or its radius changes,
-/// before the disc is made again (see [`Steer::keep_out_of`]).
+/// How far (m) what the ring a walk keeps out of goes round moves, or the ring's reach
+/// changes, before the ring is made again (see [`Steer::keep_out_of`]).
 const KEEP_OUT_MOVED: f64 = 0.02;
 /// Within this gap (m) between the disc and an obstacle, the sideways drift may not go
 /// towards it.
@@ -91,9 +92,9 @@ pub struct Steer {
     /// The plan's time on the last tick: [`Steer::hold`] does not take the clock back
     /// past it.
     tau_before: f64,
-    /// A disc (centre, radius) avoidance keeps the body out of, as it does the obstacles,
-    /// and its footprint (see [`Steer::keep_out_of`]).
-    keep_out: Option<((DVec2, f64), Footprint)>,
+    /// A ring avoidance keeps the body out of, as it does the obstacles, and its
+    /// footprint (see [`Steer::keep_out_of`]).
+    keep_out: Option<(Ring, Footprint)>,
 }
 
 impl Steer {
@@ -198,24 +199,34 @@ impl Steer {
         self.offset += by - forward * along;
     }
 
-    /// Keeps the body out of the disc `circle` (centre, radius) from now on, as avoidance
-    /// keeps it out of the obstacles, or out of none: a walk to an actor keeps out of the
-    /// circle it is to stand on (a crowd gathering round a performer: those going round
-    /// the first row to a free place sidestepped into the ring, between the performer
-    /// and the first row, and stood there for good). Not while the body is inside it.
-    pub fn keep_out_of(&mut self, circle: Option<(DVec2, f64)>, body: (DVec2, f64)) {
-        let outside = |&(centre, radius): &(DVec2, f64)| body.0.distance(centre) > radius + body.1;
-        let Some((centre, radius)) = circle.filter(outside) else {
+    /// Keeps the body out of `ring` from now on, as avoidance keeps it out of the
+    /// obstacles, or out of none: a walk to an actor, or to an object it goes to see,
+    /// keeps out of the ring it is to stand on (see [`super::goal::Ring`]; a crowd
+    /// gathering round a performer: those going round the first row to a free place
+    /// sidestepped into the ring, between the performer and the first row, and stood
+    /// there for good). Not while the body's disc (`body`: centre, radius) is inside it.
+    pub fn keep_out_of(
+        &mut self,
+        ctx: &GeneratorContext,
+        ring: Option<Ring>,
+        (at, radius): (DVec2, f64),
+    ) {
+        let Some(ring) = ring else {
             self.keep_out = None;
             return;
         };
-        // Made again only once the other has moved (a footprint is a polygon).
-        let moved = self.keep_out.as_ref().is_none_or(|((c, r), _)| {
-            c.distance(centre) > KEEP_OUT_MOVED || (r - radius).abs() > KEEP_OUT_MOVED
+        // Made again only once what it goes round has moved (a footprint is a polygon).
+        let moved = self.keep_out.as_ref().is_none_or(|(made, _)| {
+            made.at.distance(ring.at) > KEEP_OUT_MOVED
+                || (made.reach - ring.reach).abs() > KEEP_OUT_MOVED
         });
         if moved {
-            let disc = Footprint::disc("the ring round the one it goes to", centre, radius);
-            self.keep_out = Some(((centre, radius), disc));
+            self.keep_out = ring.footprint(ctx).map(|footprint| (ring, footprint));
+        }
+        if let Some((_, footprint)) = &self.keep_out {
+            if ring.holds(footprint, at, radius) {
+                self.keep_out = None;
+            }
         }
     }
 
