@@ -69,6 +69,26 @@ impl Ring {
         }
     }
 
+    /// The least move that takes the disc of `radius` at `p` out of the ring (`footprint`
+    /// being the ring's own); `None` when it is out.
+    pub fn out_of(&self, footprint: &Footprint, p: DVec2, radius: f64) -> Option<DVec2> {
+        if !self.holds(footprint, p, radius) {
+            return None;
+        }
+        match self.object {
+            None => {
+                let from = (p - self.at).try_normalize().unwrap_or(DVec2::X);
+                Some(self.at + from * (self.reach + radius) - p)
+            }
+            Some(_) => {
+                let edge = footprint.nearest_point(p)?;
+                let out = (p - edge).try_normalize()?;
+                let out = if footprint.contains(p) { -out } else { out };
+                Some(edge + out * radius - p)
+            }
+        }
+    }
+
     /// The ring as a footprint: a disc round an actor; round an object, its footprint
     /// grown by the reach (`Footprint::inflated`); `None` when the object is gone.
     pub fn footprint(&self, ctx: &GeneratorContext) -> Option<Footprint> {
@@ -611,4 +631,57 @@ fn pin_corners(start: DVec2, points: &[(DVec2, bool)]) -> Vec<(DVec2, bool)> {
         prev = p;
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_point_inside_an_actors_ring_is_moved_out_to_its_edge() {
+        let ring = Ring {
+            at: DVec2::new(1.0, 2.0),
+            reach: 1.2,
+            object: None,
+        };
+        let disc = Footprint::disc("ring", ring.at, ring.reach);
+        let p = ring.at + DVec2::new(0.0, 1.0);
+        let out = ring.out_of(&disc, p, 0.2).expect("inside");
+        assert!(((p + out).distance(ring.at) - 1.4).abs() < 1e-12);
+        assert!(out.x.abs() < 1e-12 && out.y > 0.0, "straight out: {out}");
+        assert_eq!(
+            ring.out_of(&disc, ring.at + DVec2::new(1.41, 0.0), 0.2),
+            None
+        );
+    }
+
+    #[test]
+    fn a_point_inside_an_objects_ring_is_moved_out_beside_its_nearest_side() {
+        // An object's ring is its footprint grown: here a 2 m × 1 m box's.
+        let grown = Footprint::hull(
+            "ring",
+            &[
+                DVec2::new(-1.0, -0.5),
+                DVec2::new(1.0, -0.5),
+                DVec2::new(1.0, 0.5),
+                DVec2::new(-1.0, 0.5),
+            ],
+        );
+        let ring = Ring {
+            at: DVec2::ZERO,
+            reach: 0.5,
+            object: Some(0),
+        };
+        // Inside it, near its long side: out across that side, the disc just clear.
+        let out = ring
+            .out_of(&grown, DVec2::new(0.3, 0.4), 0.2)
+            .expect("inside");
+        assert!((out - DVec2::new(0.0, 0.3)).length() < 1e-12, "{out}");
+        // Outside it but within the disc's radius: out to the radius.
+        let out = ring
+            .out_of(&grown, DVec2::new(1.1, 0.0), 0.2)
+            .expect("touching");
+        assert!((out - DVec2::new(0.1, 0.0)).length() < 1e-12, "{out}");
+        assert_eq!(ring.out_of(&grown, DVec2::new(1.3, 0.0), 0.2), None);
+    }
 }

@@ -44,6 +44,12 @@ const OBSTACLE_RANGE: f64 = 2.0;
 /// How far (m) what the ring a walk keeps out of goes round moves, or the ring's reach
 /// changes, before the ring is made again (see [`Steer::keep_out_of`]).
 const KEEP_OUT_MOVED: f64 = 0.02;
+/// How far (m) a body's disc may be inside the ring a walk keeps out of and still be
+/// kept out of it (see [`Steer::keep_out_of`]).
+const INSIDE_THE_RING: f64 = 0.05;
+/// How far (m) outside the ring a walk keeps out of its steered point is kept: the body
+/// follows it a few millimetres behind.
+const RING_MARGIN: f64 = 0.01;
 /// Within this gap (m) between the disc and an obstacle, the sideways drift may not go
 /// towards it.
 const WALL_GUARD: f64 = 0.02;
@@ -223,8 +229,11 @@ impl Steer {
         if moved {
             self.keep_out = ring.footprint(ctx).map(|footprint| (ring, footprint));
         }
+        // A body that has only touched the ring is still kept out of it (see
+        // `Steer::decide`); one further in (set down there, or sent to someone who came
+        // to stand beside it) walks out as it may.
         if let Some((_, footprint)) = &self.keep_out {
-            if ring.holds(footprint, at, radius) {
+            if ring.holds(footprint, at, radius - INSIDE_THE_RING) {
                 self.keep_out = None;
             }
         }
@@ -290,6 +299,17 @@ impl Steer {
         };
         let pt = self.plan_time(now, now);
         let dt = ctx.dt;
+        // Nor does the steered point (the plan's, moved by the offset) go into the ring
+        // kept out of: avoidance keeps the body out of it only as it weighs everything
+        // else, and among forty gathering round a performer one walker's offset grew
+        // 0.4 m inwards as it went round those in its way, the plan's own point outside
+        // the ring, and it ended 0.24 m inside it.
+        if let Some((ring, footprint)) = &self.keep_out {
+            let steered = plan.sample(pt, 0.0).position + self.offset;
+            if let Some(out) = ring.out_of(footprint, steered, radius + RING_MARGIN) {
+                self.offset += out;
+            }
+        }
         if pt >= plan.end_time {
             // The plan has ended: step back onto its end, then settle.
             let back = (-self.offset * END_RETURN).clamp_length_max(MAX_DRIFT);
@@ -348,9 +368,12 @@ impl Steer {
         let (rate, drift) = self.target;
         self.rate += (rate - self.rate).clamp(-RATE_CHANGE * dt, RATE_CHANGE * dt);
         self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
-        // The drift never takes the disc into an obstacle: the velocity it chose may,
-        // while the drift changes within its limits, carry the body on sideways.
-        for f in footprints.within(radius + WALL_GUARD) {
+        // The drift never takes the disc into an obstacle, nor into the ring it keeps out
+        // of: the velocity it chose may, while the drift changes within its limits, carry
+        // the body on sideways (of forty gathering round a performer, one went 0.2 m into
+        // the ring so, and once inside it is not kept out).
+        let ring = self.keep_out.as_ref().map(|(_, footprint)| footprint);
+        for f in footprints.within(radius + WALL_GUARD).chain(ring) {
             let gap = f.distance(position) - radius;
             if gap < WALL_GUARD {
                 let h = 0.01;
