@@ -356,7 +356,9 @@ test("three sent to join bob at once all end round him, a metre away", function(
     local d = flat_dist(p, 0, 0)
     print(string.format("a%d %s at (%.2f, %.2f), %.2f m from bob", i, w.status, p[1], p[3], d))
     expect(w.status == "completed", "a" .. i .. ": " .. w.status .. " " .. tostring(w.error))
-    expect(math.abs(d - 1) < 0.08, string.format("a%d %.2f m from bob", i, d))
+    -- Held short of its point, a walk ends where it stands if that is no more than 10 cm
+    -- nearer than asked (`Goal::stand_here`); one of these is held by the others so.
+    expect(d >= 0.9 and d < 1.08, string.format("a%d %.2f m from bob", i, d))
   end
   expect(deepest <= 0.01, string.format("solids %.3f m into each other", deepest))
 end)

@@ -543,26 +543,34 @@ const RECENT: usize = 4;
 /// time gives the same sample, bit for bit.
 #[derive(Clone, Debug, Default)]
 struct Recent {
-    /// (time's bits, fallback heading's bits where it matters, the sample), oldest
-    /// replaced first.
-    slots: [Cell<Option<(u64, u64, RootSample)>>; RECENT],
+    /// (time's bits, fallback heading's bits where it matters, the sample and, on a
+    /// route, the way it moves), oldest replaced first.
+    slots: [Cell<Option<(u64, u64, Sampled)>>; RECENT],
     /// The slot the next new sample goes in.
     next: Cell<usize>,
 }
 
+/// One sample as [`Recent`] keeps it: on a route, with the route's unit direction there
+/// (what [`Plan::motion`] asks for), found with the sample at no cost.
+#[derive(Clone, Copy, Debug)]
+struct Sampled {
+    sample: RootSample,
+    way: Option<DVec2>,
+}
+
 impl Recent {
     /// The sample at the time and fallback of bits `key`, if it is one of the last few.
-    fn get(&self, key: (u64, u64)) -> Option<RootSample> {
+    fn get(&self, key: (u64, u64)) -> Option<Sampled> {
         self.slots.iter().find_map(|slot| match slot.get() {
-            Some((t, f, sample)) if (t, f) == key => Some(sample),
+            Some((t, f, sampled)) if (t, f) == key => Some(sampled),
             _ => None,
         })
     }
 
-    /// Keeps `sample`, at the time and fallback of bits `key`, in place of the oldest.
-    fn keep(&self, key: (u64, u64), sample: RootSample) {
+    /// Keeps `sampled`, at the time and fallback of bits `key`, in place of the oldest.
+    fn keep(&self, key: (u64, u64), sampled: Sampled) {
         let next = self.next.get();
-        self.slots[next].set(Some((key.0, key.1, sample)));
+        self.slots[next].set(Some((key.0, key.1, sampled)));
         self.next.set((next + 1) % RECENT);
     }
 }
@@ -905,13 +913,43 @@ impl Plan {
         along.unwrap_or_else(|| direction(sample.heading))
     }
 
-    /// [`Plan::forward`] at `t`, where the plan's sample at `t` (of any fallback heading)
-    /// is `sample`: on a route its heading's direction, without sampling again.
-    pub fn forward_at(&self, t: f64, sample: &RootSample) -> DVec2 {
+    /// The plan's velocity at `t` as a unit floor direction (x, z) and a speed (the
+    /// speed [`Plan::sample`]'s): on a route, the route's own direction at the distance
+    /// covered, where [`Plan::forward`] has the heading's, the same but as the body turns
+    /// onto a new route while setting off; on a followed path, [`Plan::forward`]. No
+    /// heading is found on a route: the cadence asks for the steered speed at three times
+    /// a tick, and at three every 20 ms over a second ahead for each landing planned.
+    pub fn motion(&self, t: f64) -> (DVec2, f64) {
         match &self.kind {
-            // A route's heading does not depend on the fallback.
-            PlanKind::Along { .. } => direction(sample.heading),
-            PlanKind::Follow { .. } => self.forward(t),
+            PlanKind::Along {
+                line,
+                profile,
+                spot_turn,
+                ..
+            } => {
+                if let Some(Sampled {
+                    sample,
+                    way: Some(way),
+                }) = self.recent.get((t.to_bits(), 0))
+                {
+                    return (way, sample.speed);
+                }
+                let (s, speed) = self.covered(profile, *spot_turn, t);
+                (line.at(s).1, speed)
+            }
+            PlanKind::Follow { .. } => (self.forward(t), self.sample(t, 0.0).speed),
+        }
+    }
+
+    /// The distance along a route (`profile`, after `spot_turn` seconds on the spot)
+    /// covered by `t`, and the speed there, the stop asked for included.
+    fn covered(&self, profile: &Profile, spot_turn: f64, t: f64) -> (f64, f64) {
+        match self.stop.filter(|s| t > s.at) {
+            Some(stop) => {
+                let (d, v) = stop.at(t);
+                (stop.s + d, v)
+            }
+            None => profile.at(t - spot_turn),
         }
     }
 
@@ -924,16 +962,17 @@ impl Plan {
             PlanKind::Follow { .. } => fallback.to_bits(),
         };
         let key = (t.to_bits(), fallback_bits);
-        if let Some(sample) = self.recent.get(key) {
-            return sample;
+        if let Some(sampled) = self.recent.get(key) {
+            return sampled.sample;
         }
-        let sample = self.sample_anew(t, fallback);
-        self.recent.keep(key, sample);
-        sample
+        let sampled = self.sample_anew(t, fallback);
+        self.recent.keep(key, sampled);
+        sampled.sample
     }
 
-    /// [`Plan::sample`], found from the route and the speed profile.
-    fn sample_anew(&self, t: f64, fallback: f64) -> RootSample {
+    /// [`Plan::sample`], found from the route and the speed profile; on a route with the
+    /// route's direction there.
+    fn sample_anew(&self, t: f64, fallback: f64) -> Sampled {
         let stopping = self.stop.filter(|s| t > s.at);
         match &self.kind {
             PlanKind::Along {
@@ -943,13 +982,7 @@ impl Plan {
                 end_turn,
                 spot_turn,
             } => {
-                let (s, speed) = match stopping {
-                    Some(stop) => {
-                        let (d, v) = stop.at(t);
-                        (stop.s + d, v)
-                    }
-                    None => profile.at(t - spot_turn),
-                };
+                let (s, speed) = self.covered(profile, *spot_turn, t);
                 let (position, tangent) = line.at(s);
                 let k = if *spot_turn > 0.0 {
                     match stopping {
@@ -979,19 +1012,25 @@ impl Plan {
                 if let Some(e) = end_turn.filter(|e| t > e.at) {
                     heading += e.turn * smoothstep((t - e.at) / e.duration);
                 }
-                RootSample {
-                    position,
-                    heading,
-                    speed,
+                Sampled {
+                    sample: RootSample {
+                        position,
+                        heading,
+                        speed,
+                    },
+                    way: Some(tangent),
                 }
             }
             PlanKind::Follow { .. } if stopping.is_some() => {
                 let stop = stopping.expect("matched");
                 let (d, speed) = stop.at(t);
-                RootSample {
-                    position: stop.from.position + direction(stop.from.heading) * d,
-                    heading: stop.from.heading,
-                    speed,
+                Sampled {
+                    sample: RootSample {
+                        position: stop.from.position + direction(stop.from.heading) * d,
+                        heading: stop.from.heading,
+                        speed,
+                    },
+                    way: None,
                 }
             }
             PlanKind::Follow {
@@ -1016,10 +1055,13 @@ impl Plan {
                     None if vel.length() > 0.05 => heading_of(vel),
                     None => fallback,
                 };
-                RootSample {
-                    position: offset + rotate(p, *turn),
-                    heading,
-                    speed: vel.length(),
+                Sampled {
+                    sample: RootSample {
+                        position: offset + rotate(p, *turn),
+                        heading,
+                        speed: vel.length(),
+                    },
+                    way: None,
                 }
             }
         }
