@@ -47,9 +47,9 @@ pub enum Goal {
 /// The ring round an actor, or round an object walked to be seen, that a walk's body
 /// keeps out of on its way (see [`Goal::ring`]): its disc kept out of it, the body's
 /// centre comes no nearer than [`AS_GOOD`] inside the ring of standing points. Of
-/// thirty sent to a statue at 1 m, one sidestepping those round it went on inwards,
-/// 0.2 m past the ring, and stood there held by those behind it; then, on its way to
-/// another place, 0.3 m from the statue for good.
+/// thirty sent to a statue at 1 m, with nothing kept round it, one sidestepping those
+/// round it ended 0.2 m nearer than its point; in another draw one, held so by those
+/// behind it, then stood 0.3 m from the statue for good on its way to another place.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ring {
     /// Where the actor or the object stands (x, z).

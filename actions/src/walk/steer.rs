@@ -220,7 +220,8 @@ impl Steer {
     /// keeps out of the ring it is to stand on (see [`super::goal::Ring`]; a crowd
     /// gathering round a performer: those going round the first row to a free place
     /// sidestepped into the ring, between the performer and the first row, and stood
-    /// there for good). Not while the body's disc (`body`: centre, radius) is inside it.
+    /// there for good). Not once the body's disc (`body`: centre, radius) is more than
+    /// 5 cm inside it (`INSIDE_THE_RING`).
     pub fn keep_out_of(
         &mut self,
         ctx: &GeneratorContext,
@@ -313,7 +314,7 @@ impl Steer {
         // kept out of: avoidance keeps the body out of it only as it weighs everything
         // else, and among forty gathering round a performer one walker's offset grew
         // 0.4 m inwards as it went round those in its way, the plan's own point outside
-        // the ring, and it ended 0.24 m inside it.
+        // the ring, and it ended 1.36 m from him, asked 1.5 m.
         if let Some((ring, footprint)) = &self.keep_out {
             let steered = plan.sample(pt, 0.0).position + self.offset;
             if let Some(out) = ring.out_of(footprint, steered, radius + RING_MARGIN) {
@@ -380,8 +381,7 @@ impl Steer {
         self.drift += (drift - self.drift).clamp_length_max(DRIFT_CHANGE * dt);
         // The drift never takes the disc into an obstacle, nor into the ring it keeps out
         // of: the velocity it chose may, while the drift changes within its limits, carry
-        // the body on sideways (of forty gathering round a performer, one went 0.2 m into
-        // the ring so, and once inside it is not kept out).
+        // the body on sideways.
         let ring = self.keep_out.as_ref().map(|(_, footprint)| footprint);
         for f in footprints.within(radius + WALL_GUARD).chain(ring) {
             let gap = f.distance(position) - radius;
