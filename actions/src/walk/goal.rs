@@ -48,8 +48,8 @@ pub enum Goal {
 /// keeps out of on its way (see [`Goal::ring`]): its disc kept out of it, the body's
 /// centre comes no nearer than [`AS_GOOD`] inside the ring of standing points. Of
 /// thirty sent to a statue at 1 m, with nothing kept round it, one sidestepping those
-/// round it ended 0.2 m nearer than its point; in another draw one, held so by those
-/// behind it, then stood 0.3 m from the statue for good on its way to another place.
+/// round it ended 0.2 m nearer than its point; in another draw one, as far in, then
+/// stood 0.3 m from the statue for good on its way to another place.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ring {
     /// Where the actor or the object stands (x, z).
