@@ -886,13 +886,11 @@ impl Plan {
     /// The body's speed `t` seconds after the start: [`Plan::sample`]'s `speed`, without
     /// finding the position and heading (the cadence asks for several speeds a tick).
     pub fn speed(&self, t: f64) -> f64 {
-        if let Some(stop) = self.stop.filter(|s| t > s.at) {
-            return stop.at(t).1;
-        }
         match &self.kind {
             PlanKind::Along {
                 profile, spot_turn, ..
-            } => profile.at(t - spot_turn).1,
+            } => self.covered(profile, *spot_turn, t).1,
+            // A followed path's sample has its stop in it.
             PlanKind::Follow { .. } => self.sample(t, 0.0).speed,
         }
     }
