@@ -63,7 +63,7 @@ pub struct Penetration {
 }
 
 /// Whether a sphere (centre `c`, `radius`) is more than `margin` away from everything
-/// within `bound` of `centre` (a [`Capsule::bounding_sphere`]), so more than `margin`
+/// within `bound` of `centre` (a [`Capsule::bound`]), so more than `margin`
 /// from what that sphere holds: a quick test before measuring it against a capsule (a
 /// reach in a crowd has a few hundred round it, nearly all far). The nanometre keeps
 /// rounding from deciding what the exact measure would not.
@@ -73,7 +73,7 @@ pub fn sphere_beyond(c: DVec3, radius: f64, margin: f64, (centre, bound): (DVec3
 }
 
 /// Volumes a sphere is tested against many times, each capsule with the sphere that holds
-/// it ([`Capsule::bounding_sphere`]), found once: a reach in a crowd tests its arm's
+/// it ([`Capsule::bound`]), found once: a reach in a crowd tests its arm's
 /// sensors at every IK iteration, and plans its temporary goals over hundreds of
 /// thousands of points, against a few hundred capsules, nearly all of them far (finding
 /// each bound at each test was 105 M of the 145 M instructions a plan took in the crowd
@@ -92,7 +92,7 @@ impl<'a> VolumesAround<'a> {
         let bounds = volumes
             .iter()
             .map(|v| match v {
-                Volume::Capsule(k) => Some(k.bounding_sphere()),
+                Volume::Capsule(k) => Some(k.bound()),
                 Volume::Shape { .. } => None,
             })
             .collect();
@@ -119,15 +119,6 @@ impl<'a> VolumesAround<'a> {
 }
 
 impl Capsule {
-    /// The centre and radius of a sphere that holds the capsule: every point of it lies
-    /// within the radius of the centre.
-    pub fn bounding_sphere(&self) -> (DVec3, f64) {
-        (
-            (self.a + self.b) / 2.0,
-            (self.b - self.a).length() / 2.0 + self.ra.max(self.rb),
-        )
-    }
-
     /// The point of the segment at `t`.
     #[inline]
     pub fn point(&self, t: f64) -> DVec3 {
@@ -181,7 +172,8 @@ impl Capsule {
         }
     }
 
-    /// A sphere around the capsule: its centre and radius.
+    /// The centre and radius of a sphere that holds the capsule: every point of it lies
+    /// within the radius of the centre.
     pub fn bound(&self) -> (DVec3, f64) {
         let c = (self.a + self.b) / 2.0;
         (c, (self.b - self.a).length() / 2.0 + self.ra.max(self.rb))
@@ -592,7 +584,7 @@ mod tests {
             let (a, b, c) = (point(), point(), point() * 1.5);
             let k = cap(a.into(), b.into(), next() * 0.2, next() * 0.2);
             let (radius, margin) = (next() * 0.1, next() * 0.05);
-            if sphere_beyond(c, radius, margin, k.bounding_sphere()) {
+            if sphere_beyond(c, radius, margin, k.bound()) {
                 passed_over += 1;
                 let depth = Volume::Capsule(k).sphere(c, radius).depth;
                 assert!(depth <= -margin, "{k:?} {c}");
