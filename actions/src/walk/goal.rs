@@ -60,6 +60,10 @@ pub struct Ring {
     object: Option<usize>,
 }
 
+/// How near (m) its outline a point is taken to be on it by [`Ring::out_of`]: far below
+/// anything a body measures, far above rounding.
+const ON_THE_OUTLINE: f64 = 1e-9;
+
 impl Ring {
     /// Whether the disc of `radius` at `p` reaches into the ring.
     pub fn holds(&self, footprint: &Footprint, p: DVec2, radius: f64) -> bool {
@@ -82,8 +86,21 @@ impl Ring {
             }
             Some(_) => {
                 let edge = footprint.nearest_point(p)?;
-                let out = (p - edge).try_normalize()?;
-                let out = if footprint.contains(p) { -out } else { out };
+                let away = p - edge;
+                let out = if away.length() > ON_THE_OUTLINE {
+                    let out = away.normalize();
+                    if footprint.contains(p) {
+                        -out
+                    } else {
+                        out
+                    }
+                } else {
+                    // On the outline (within rounding, which points `away` anywhere): out
+                    // along its normal there, found from a point just outside (the
+                    // footprint is a convex hull).
+                    let beyond = p + (p - footprint.centre()).try_normalize()? * 1e-6;
+                    (beyond - footprint.nearest_point(beyond)?).try_normalize()?
+                };
                 Some(edge + out * radius - p)
             }
         }
@@ -683,5 +700,10 @@ mod tests {
             .expect("touching");
         assert!((out - DVec2::new(0.1, 0.0)).length() < 1e-12, "{out}");
         assert_eq!(ring.out_of(&grown, DVec2::new(1.3, 0.0), 0.2), None);
+        // On the outline itself: out across that side too.
+        let out = ring
+            .out_of(&grown, DVec2::new(1.0, 0.2), 0.2)
+            .expect("on the outline");
+        assert!((out - DVec2::new(0.2, 0.0)).length() < 1e-9, "{out}");
     }
 }
