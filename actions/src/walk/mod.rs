@@ -136,9 +136,10 @@ pub const CADENCE_LOOKAHEAD: f64 = 0.3;
 /// Seconds back over which a falling planned speed still sets the cadence.
 pub const CADENCE_LOOKBACK: f64 = 0.6;
 
-/// Fastest the body turns about the vertical (rad/s), about a person's quick pivot: a
-/// little above the plan's own turns (a half turn over [`route::TURN_TIME`] peaks at
-/// 5.9 rad/s), so it holds back only a plan whose clock jumped (see `Walk::pose`).
+/// Fastest the body turns about the vertical (rad/s), about a person's quick pivot: well
+/// above the plan's own turns (setting off, at most 60° over [`route::TURN_TIME`], which
+/// peaks at 2 rad/s; on the spot, [`route::SPOT_TURN_RATE`]), so it holds back only a
+/// plan whose clock jumped (see `Walk::pose`).
 pub const MAX_TURN_RATE: f64 = 6.0;
 
 /// Fastest (rad/s) a body that its planted feet held back from the plan's heading turns
