@@ -624,6 +624,19 @@ test("two waiters carrying trays meet in a 1.55 m aisle: the one stepping back i
   expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
 end)
 
+test("waiters with trays in a 1.55 m aisle, ann moved -0.2 m: the one stepping back out of it steps aside by the stand beyond", function()
+  -- Bob stepped back out of the aisle and stood against the stand beyond its end, ann at
+  -- its mouth, their trays touching: counted as cornered (the stand close behind him),
+  -- he waited for her to step back, and she, bob beside her way, waited for him: both
+  -- stood for good. Now a walker with something close behind but room to its right is
+  -- not cornered: it steps aside until the other is well beside its way
+  -- (docs/navigation.md, "Stand-offs").
+  local took, deepest, what = waiters_in_an_aisle(1.55, { "both", "both" }, 90, -0.2)
+  print(string.format("trays in a 1.55 m aisle, ann moved -0.2 m: both arrived %.1f s after setting off, "
+                      .. "deepest %.4f m (%s)", took, deepest, what))
+  expect(deepest <= 0.01, string.format("%.3f m deep: %s", deepest, what))
+end)
+
 for _, dx in ipairs({ -0.1, -0.15 }) do
   test(string.format("a waiter with a tray in one hand, moved %.2f m, waiting beside a stand for a walker in the aisle, keeps her free hand off it", dx), function()
     -- Held up at the aisle's mouth beside the stand she took the tray from, her walk's

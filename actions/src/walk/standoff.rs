@@ -8,7 +8,9 @@
 //! until nobody it backs off for is in its way: the one with the much shorter way back
 //! out of the passage (or the only one that can step back at all), else the one that
 //! comes later in the order of headings (`troupe_nav::way::backs_off_for`, the same for
-//! a whole stream). One of its own stream standing behind it steps back with it. See
+//! a whole stream). One with something close behind but room to its right (out of an
+//! aisle, by the stand beyond its end) steps aside only, until the other is well beside
+//! its way. One of its own stream standing behind it steps back with it. See
 //! `docs/navigation.md`, "Stand-offs".
 
 use super::replan::{STANDING, WAITING_RATE};
@@ -160,6 +162,12 @@ impl Standoff {
         } else {
             IN_THE_WAY
         };
+        // Stepping back with no room behind goes aside only (see `Standoff::preferred`).
+        let stepping_aside = was_backing
+            && crowd
+                .radii
+                .get(me)
+                .is_some_and(|&disc| blocked_behind(position, along, disc, footprints));
         let (mut face_to_face, mut backed_into) = (false, false);
         let mine = crowd.cores.get(me);
         let i_carry = mine.is_some_and(|core| core.carries());
@@ -174,7 +182,16 @@ impl Standoff {
                 continue;
             }
             let reach = radius + across(j) + GAP;
-            if along.perp_dot(offset).abs() >= reach {
+            // Stepping aside, it goes on until the other is well beside its way, as a
+            // step back goes on until the other is well ahead (`STILL_IN_THE_WAY`): let
+            // go as soon as they stood clear, a waiter stepped aside and back again by
+            // the stand beyond an aisle's end, the other held by their trays.
+            let beside = if stepping_aside {
+                reach + (STILL_IN_THE_WAY - IN_THE_WAY)
+            } else {
+                reach
+            };
+            if along.perp_dot(offset).abs() >= beside {
                 continue;
             }
             // The gap between the two: what the hands carry out in front counts.
@@ -222,7 +239,8 @@ impl Standoff {
     /// The velocity a body of `radius` at `position`, going along the unit `along`,
     /// would like as it steps back: back along its way at [`BACK_SPEED`], and as much to
     /// its right as the `footprints` round it leave room (up to 0.5 m, keeping 0.1 m);
-    /// avoidance then keeps it off those behind and beside it.
+    /// with something close behind it (`blocked_behind`), aside only. Avoidance then
+    /// keeps it off those behind and beside it.
     pub fn preferred(
         position: DVec2,
         along: DVec2,
@@ -231,8 +249,28 @@ impl Standoff {
     ) -> DVec2 {
         let room = room_towards(position, along.perp(), radius, footprints, ASIDE);
         let aside = (room / (2.0 * ASIDE_STEP)).min(1.0);
-        (-along + along.perp() * aside).normalize() * BACK_SPEED
+        let back = if blocked_behind(position, along, radius, footprints) {
+            0.0
+        } else {
+            1.0
+        };
+        (-along * back + along.perp() * aside)
+            .try_normalize()
+            .unwrap_or(-along)
+            * BACK_SPEED
     }
+}
+
+/// Whether a body of `radius` at `position`, going along the unit `along`, has less than
+/// [`CORNERED`] of room straight behind it among the `footprints` round it: a step back
+/// then goes aside only (the stand beyond an aisle's end, with the open floor beside it).
+fn blocked_behind(
+    position: DVec2,
+    along: DVec2,
+    radius: f64,
+    footprints: &FootprintsAround,
+) -> bool {
+    room_towards(position, -along, radius, footprints, CORNERED) < CORNERED
 }
 
 /// How far (m, at most `furthest`) a body of `radius` at `position` may move along the
@@ -265,8 +303,10 @@ fn room_towards(
 /// How far (m) a body reaching `radius` across its way, at `position` and facing the
 /// unit `way`, would step straight back before it stood out of every passage narrower
 /// than [`PASSAGE`], measured every [`PASSAGE_STEP`] among the crowd's footprints round
-/// each point: `None` if an obstacle stops it within [`CORNERED`] (it cannot step back),
-/// [`WAY_OUT_FURTHEST`] if the passage goes on further back or an obstacle stops it
+/// each point: `None` if an obstacle stops it within [`CORNERED`] and it has no room to
+/// step aside to its right either (it is cornered), the distance it went back if it has
+/// (it makes way aside: see [`Standoff::preferred`]), [`WAY_OUT_FURTHEST`] if the passage
+/// goes on further back or an obstacle stops it
 /// further on (one straight back, which a step back turns round: the stand at an aisle's
 /// end). Only what it would come nearer to stops it: a wall beside, however near, does
 /// not (a walker at a niche's mouth, a hand's breadth from one of its walls, counted as
@@ -283,8 +323,15 @@ fn way_out(crowd: &Crowd, position: DVec2, way: DVec2, radius: f64) -> Option<f6
             let near = f.distance(to);
             near < keep && near < f.distance(from)
         });
+        if stopped && step > steps(CORNERED) {
+            return Some(WAY_OUT_FURTHEST);
+        }
         if stopped {
-            return (step > steps(CORNERED)).then_some(WAY_OUT_FURTHEST);
+            // Something close behind: cornered, unless there is room to step aside to
+            // the right, as a step back goes (see `Standoff::preferred`).
+            let here = crowd.footprints_around(position, Vec::new());
+            let aside = room_towards(position, way.perp(), radius, &here, ASIDE);
+            return (aside >= ASIDE).then_some(step as f64 * PASSAGE_STEP);
         }
         if passage_width(to, way, &around).is_some_and(|w| w >= PASSAGE) {
             return Some(step as f64 * PASSAGE_STEP);
@@ -408,5 +455,29 @@ mod tests {
         let crowd = crowd_among([walls, vec![stand]].concat());
         let on_line = way_out(&crowd, DVec2::new(0.3, -3.0), DVec2::Y, 0.28);
         assert_eq!(on_line, Some(WAY_OUT_FURTHEST));
+    }
+
+    #[test]
+    fn a_stand_close_behind_with_the_open_floor_aside_is_no_corner() {
+        // A waiter reaching 0.41 m with its tray, stepped back out of the aisle above to
+        // beside the stand beyond its north end, facing back into it: the stand is close
+        // behind, the open floor to its right (east, facing south).
+        let walls = vec![
+            block("west wall", (-0.85, -4.0), (-0.75, 4.0)),
+            block("east wall", (0.75, -4.0), (0.85, 4.0)),
+            block("stand", (-0.25, 5.2), (0.25, 5.6)),
+        ];
+        let crowd = crowd_among(walls);
+        let (at, facing, radius) = (DVec2::new(0.45, 4.65), DVec2::NEG_Y, 0.41);
+        let around = crowd.footprints_around(at, Vec::new());
+        assert!(blocked_behind(at, facing, radius, &around));
+        // Its way out is a step: it is the one to make way, not the one in the aisle.
+        let out = way_out(&crowd, at, facing, radius).expect("room aside");
+        assert!(out <= 0.3, "{out} m out");
+        assert!(out + NEARER_OUT < WAY_OUT_FURTHEST);
+        // And it makes way aside only, to its right.
+        let v = Standoff::preferred(at, facing, radius, &around);
+        assert!(v.dot(facing).abs() < 1e-12, "{v}");
+        assert!((v - DVec2::X * BACK_SPEED).length() < 1e-12, "{v}");
     }
 }
