@@ -490,6 +490,34 @@ for _, turn in ipairs({ 0.1, 0.0999, 0.0998 }) do
   end)
 end
 
+test("a walker boxed in by people standing round it ends where it stands, facing the one it goes to", function()
+  -- Of forty gathering round a performer (the circle turned 0.0998 rad), one stood in the
+  -- second row between four who had arrived, its point in the third; each new route led
+  -- out between two of them, too narrow for avoidance to let it through, and someone in
+  -- the first row stood between it and bob, so it did not end there either: it stood for
+  -- good. The same pocket: four standing round it, one of them before it.
+  local bob = troupe.actor{ name = "bob", facing = 270 }
+  for i, p in ipairs({ { -2.40, 0.87 }, { -2.29, -0.12 }, { -1.42, 0.64 }, { -1.49, 0.03 } }) do
+    troupe.actor{ name = "s" .. i, at = { p[1], 0, p[2] }, facing = 90 }
+  end
+  local me = troupe.actor{ name = "me", at = { -2.02, 0, 0.41 }, facing = 90 }
+  local settled = troupe.time()
+  run_until(function() return troupe.time() - settled >= 1.5 end, 2)
+  local walk = me:walk{ to = bob, distance = 1.5 }
+  local start = troupe.time()
+  run_until(function() return walk.status ~= "active" and walk.status ~= "pending" end, 30)
+  local p = me:position()
+  local d = flat_dist(p, 0, 0)
+  local facing = math.deg(math.atan(-p[1], -p[3]))
+  local turned = math.abs((me:dof("root_yaw") * 180 / math.pi - facing + 180) % 360 - 180)
+  print(string.format("boxed in: %s after %.1f s, %.2f m from bob, facing him within %.1f°", walk.status,
+                      troupe.time() - start, d, turned))
+  expect(walk.status == "completed", "the walk " .. walk.status .. ": " .. tostring(walk.error))
+  expect(troupe.time() - start < 15, string.format("%.1f s", troupe.time() - start))
+  expect(d > 1.5 and d < 3.0, string.format("%.2f m from bob", d))
+  expect(turned < 10, string.format("%.1f° from facing him", turned))
+end)
+
 test("walk to an actor carrying a cup ends as near as the cup allows", function()
   -- The cup carried out in front widens the body as the clearance sees it: asked to stand
   -- 0.8 m from bob, the walk stood held by him at 0.87 m for good.

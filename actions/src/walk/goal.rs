@@ -251,19 +251,22 @@ impl Goal {
     /// nearer than asked and no further out than `end` (within [`AS_GOOD`] each way),
     /// clear of the obstacles, nothing between the two (in a crowd gathered round a
     /// performer, one held in the first row on its way round to a free point stood
-    /// there for good, and another held in the second row on its way to the third).
-    /// `None` for floor points, or where `here` is no such place.
+    /// there for good, and another held in the second row on its way to the third). A
+    /// body `boxed` in where it stands may have someone between the two and stand as far
+    /// out as the rows of standing points go. `None` for floor points, or where `here` is
+    /// no such place.
     pub fn stand_here(
         &self,
         ctx: &GeneratorContext,
         (here, end): (DVec2, DVec2),
         radius: f64,
+        boxed: bool,
     ) -> Option<Planned> {
         let world = ctx.world;
         let shoulders = shoulder_height(ctx);
         // What the walk goes to, how far beyond the first ring of standing points round
         // it the body and the walk's end are, and what stands between the body and it.
-        let (centre, [beyond, end_beyond], hidden) = match self {
+        let (centre, [beyond, end_beyond], hidden, rows) = match self {
             Goal::Through(_) => return None,
             Goal::Object { object, distance } => {
                 let o = world.objects.get(*object)?;
@@ -275,7 +278,7 @@ impl Goal {
                 });
                 let nearest = footprint.nearest(here);
                 let hidden = hidden_by(ctx, (here, shoulders), (nearest, o.position.y));
-                (centre, out, hidden)
+                (centre, out, hidden, rows_round_an_object(*distance))
             }
             Goal::Actor { actor, distance } => {
                 let other = world.states.get(*actor)?;
@@ -285,7 +288,8 @@ impl Goal {
                 let their_shoulders = shoulders_of(skeleton, &other.globals);
                 let hidden = hidden_by(ctx, (here, shoulders), (them, their_shoulders));
                 let wanted = actor_distance(ctx, radius, *actor, *distance);
-                (them, [here, end].map(|p| p.distance(them) - wanted), hidden)
+                let out = [here, end].map(|p| p.distance(them) - wanted);
+                (them, out, hidden, ACTOR_ROWS)
             }
         };
         let inflated = radius + troupe_scene::space::CLEARANCE;
@@ -293,10 +297,15 @@ impl Goal {
             .crowd
             .footprints_near(here, inflated)
             .any(|o| o.distance(here) < inflated);
+        let furthest = if boxed {
+            rows.max(end_beyond)
+        } else {
+            end_beyond.max(0.0)
+        };
         if beyond < -AS_GOOD
-            || beyond > end_beyond.max(0.0) + AS_GOOD
+            || beyond > furthest + AS_GOOD
             || blocked
-            || hidden.is_some()
+            || (hidden.is_some() && !boxed)
         {
             return None;
         }

@@ -209,6 +209,9 @@ pub struct Walk {
     /// Walk time since which the body has stood held, on its way or short of its plan's
     /// end (see [`Walk::held`]).
     held_since: Option<f64>,
+    /// Walk time since which, and where, the body has stood with nobody moving near
+    /// (see [`Walk::boxed_in`]).
+    stalled_since: Option<(f64, DVec2)>,
     /// Walk time since which a walk to a point or along a path has stood held near its
     /// end, and its plan's time then (see [`Walk::held`]).
     held_near_end: Option<(f64, f64)>,
@@ -302,6 +305,7 @@ impl Walk {
             goal: None,
             aimed: None,
             held_since: None,
+            stalled_since: None,
             held_near_end: None,
             radius: troupe_scene::space::body_radius(skeleton),
             steer: steer::Steer::default(),
@@ -873,6 +877,7 @@ impl Generator for Walk {
         self.steer = steer::Steer::start(ctx);
         self.aimed = None;
         self.held_since = None;
+        self.stalled_since = None;
         self.held_near_end = None;
         if let Some(goal) = &self.goal {
             let companions = (self.steer.companions.as_slice(), goal::Choice::First);
@@ -987,6 +992,11 @@ impl Generator for Walk {
                     && planning
                 {
                     if let Some(new) = self.new_route(ctx, &plan, stalled) {
+                        plan = new;
+                    }
+                }
+                if planning {
+                    if let Some(new) = self.boxed_in(ctx, &plan) {
                         plan = new;
                     }
                 }

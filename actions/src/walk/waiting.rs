@@ -59,6 +59,9 @@ const FOLLOW_SLACK: f64 = 0.5;
 /// ends where it stands if that is as good a place, or, someone standing by its point
 /// at its end, looks for another (see [`Walk::held`]).
 const HELD_AT_END: f64 = 2.0;
+/// Seconds a walk to an object or an actor may stand in one place, nobody moving within
+/// [`ALONE`], before it ends there if it can (see [`Walk::boxed_in`]).
+const BOXED_IN: f64 = 5.0;
 /// How near (m) its end a walk to a point or along a path ends where its body stands
 /// held, its plan's clock held (see [`Walk::held_near_end`]): a waiter carrying a cup
 /// out in front along a path ending 0.9 m before the guest it was for was held 13 cm
@@ -344,7 +347,7 @@ impl Walk {
         }
         // Where the body stands may do as well (held by those round its point, a few
         // centimetres short of it, one went round a crowd to a free point, through it).
-        if let Some(new) = self.end_here(ctx, (here, end)) {
+        if let Some(new) = self.end_here(ctx, (here, end), false) {
             return Some(new);
         }
         let kind = self.goal.as_ref()?;
@@ -400,7 +403,7 @@ impl Walk {
         self.held_since = Some(self.t);
         let here = *crowd.positions.get(ctx.actor)?;
         let end = self.end_sample(plan).position;
-        if let Some(new) = self.end_here(ctx, (here, end)) {
+        if let Some(new) = self.end_here(ctx, (here, end), false) {
             return Some(new);
         }
         if !ended {
@@ -458,15 +461,51 @@ impl Walk {
     /// A plan that ends at `here`, where the body stands, facing the object or the actor
     /// the walk goes to, if that is as good a place as its standing point `end`
     /// ([`goal::Goal::stand_here`]); `None` leaves the plan as it is.
-    fn end_here(&mut self, ctx: &GeneratorContext, (here, end): (DVec2, DVec2)) -> Option<Plan> {
+    fn end_here(
+        &mut self,
+        ctx: &GeneratorContext,
+        (here, end): (DVec2, DVec2),
+        boxed: bool,
+    ) -> Option<Plan> {
         let Route::Path { speed, .. } = self.route else {
             return None;
         };
         let planned = self
             .goal
             .as_ref()?
-            .stand_here(ctx, (here, end), self.radius)?;
+            .stand_here(ctx, (here, end), self.radius, boxed)?;
         Some(self.take_route(self.route_to(planned, speed), here))
+    }
+
+    /// For a walk to an object or an actor whose body has stood within [`PROGRESS`] of one
+    /// place, with nobody moving within [`ALONE`], for [`BOXED_IN`] while its plan goes
+    /// on: a plan that ends where it stands, facing what it goes to, if it stands no
+    /// nearer than asked and within the rows of standing points ([`Goal::stand_here`],
+    /// `boxed`), whoever stands between. Boxed in by those who arrived round it in a crowd
+    /// gathered round a performer, one walker in the second row, its point in the third,
+    /// took a new route out between two of them every two seconds, each too narrow for
+    /// avoidance to let it through, and stood for good.
+    pub(super) fn boxed_in(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+        let here = *ctx.world.crowd.positions.get(ctx.actor)?;
+        // Stalled but for the plan's own speed: each new route starts from standing, and
+        // the walk takes one every two seconds.
+        let tau = self.steer.plan_time(self.t, self.t);
+        let boxed = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }))
+            && tau < plan.end_time
+            && self.nobody_moving_near(ctx);
+        let stood = self
+            .stalled_since
+            .filter(|&(_, at)| boxed && at.distance(here) < PROGRESS);
+        let Some((since, _)) = stood else {
+            self.stalled_since = boxed.then_some((self.t, here));
+            return None;
+        };
+        if self.t - since < BOXED_IN {
+            return None;
+        }
+        self.stalled_since = None;
+        let end = self.end_sample(plan).position;
+        self.end_here(ctx, (here, end), true)
     }
 
     /// A new plan to where the actor this walk goes to now stands, when it has moved
@@ -556,6 +595,15 @@ impl Walk {
     /// it instead: counted stalled too, bodies pressed in `troupe bench`'s crowd took new
     /// routes every 2 s and cost it a fifth of its speed.
     pub(super) fn stalled(&self, ctx: &GeneratorContext, plan: &Plan) -> bool {
+        let tau = self.steer.plan_time(self.t, self.t);
+        // A plan that itself goes slower (turning on the spot, or round a sharp corner)
+        // does not stall the body.
+        tau < plan.end_time && plan.speed(tau) >= STALLED_SPEED && self.nobody_moving_near(ctx)
+    }
+
+    /// Whether the body stands (slower than [`STALLED_SPEED`] on the previous tick) with
+    /// nobody moving within [`ALONE`].
+    fn nobody_moving_near(&self, ctx: &GeneratorContext) -> bool {
         let crowd = ctx.world.crowd;
         let (Some(&at), Some(velocity)) = (
             crowd.positions.get(ctx.actor),
@@ -563,13 +611,7 @@ impl Walk {
         ) else {
             return false;
         };
-        let tau = self.steer.plan_time(self.t, self.t);
-        // A plan that itself goes slower (turning on the spot, or round a sharp corner)
-        // does not stall the body.
-        if velocity.length() >= STALLED_SPEED
-            || tau >= plan.end_time
-            || plan.speed(tau) < STALLED_SPEED
-        {
+        if velocity.length() >= STALLED_SPEED {
             return false;
         }
         let mut near = Vec::new();
