@@ -306,11 +306,11 @@ fn room_towards(
 /// each point: `None` if an obstacle stops it within [`CORNERED`] and it has no room to
 /// step aside to its right either (it is cornered), the distance it went back if it has
 /// (it makes way aside: see [`Standoff::preferred`]), [`WAY_OUT_FURTHEST`] if the passage
-/// goes on further back or an obstacle stops it
-/// further on (one straight back, which a step back turns round: the stand at an aisle's
-/// end). Only what it would come nearer to stops it: a wall beside, however near, does
-/// not (a walker at a niche's mouth, a hand's breadth from one of its walls, counted as
-/// cornered as the one with the shelf behind it).
+/// goes on further back or an obstacle stops it further on (one straight back, which a
+/// step back turns round: the stand at an aisle's end). Only what it would come nearer
+/// to stops it: a wall beside, however near, does not (a walker at a niche's mouth, a
+/// hand's breadth from one of its walls, counted as cornered as the one with the shelf
+/// behind it).
 fn way_out(crowd: &Crowd, position: DVec2, way: DVec2, radius: f64) -> Option<f64> {
     let keep = radius + ASIDE_STEP;
     let steps = |m: f64| (m / PASSAGE_STEP).round() as usize;
