@@ -996,7 +996,7 @@ impl Generator for Walk {
                     }
                 }
                 if planning {
-                    if let Some(new) = self.boxed_in(ctx, &plan) {
+                    if let Some(new) = self.boxed_in(ctx, &plan, stalled) {
                         plan = new;
                     }
                 }

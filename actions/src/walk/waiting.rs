@@ -485,14 +485,22 @@ impl Walk {
     /// gathered round a performer, one walker in the second row, its point in the third,
     /// took a new route out between two of them every two seconds, each too narrow for
     /// avoidance to let it through, and stood for good.
-    pub(super) fn boxed_in(&mut self, ctx: &GeneratorContext, plan: &Plan) -> Option<Plan> {
+    ///
+    /// `stalled` is [`Walk::stalled`] this tick: when it holds, nobody moves near, found
+    /// once; when it does not, the plan's own speed may be why (each new route starts
+    /// from standing, and a walk held so takes one every two seconds), and who moves near
+    /// is looked at here.
+    pub(super) fn boxed_in(
+        &mut self,
+        ctx: &GeneratorContext,
+        plan: &Plan,
+        stalled: bool,
+    ) -> Option<Plan> {
         let here = *ctx.world.crowd.positions.get(ctx.actor)?;
-        // Stalled but for the plan's own speed: each new route starts from standing, and
-        // the walk takes one every two seconds.
         let tau = self.steer.plan_time(self.t, self.t);
         let boxed = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }))
             && tau < plan.end_time
-            && self.nobody_moving_near(ctx);
+            && (stalled || self.nobody_moving_near(ctx));
         let stood = self
             .stalled_since
             .filter(|&(_, at)| boxed && at.distance(here) < PROGRESS);
