@@ -20,7 +20,7 @@ use troupe_body::glam::{DVec2, DVec3};
 use troupe_body::jacobian::chain_dofs;
 use troupe_body::kinematics::joint_frame;
 use troupe_body::{Skeleton, Transform};
-use troupe_scene::space::Footprint;
+use troupe_scene::space::{Footprint, Surroundings};
 use troupe_scene::GeneratorContext;
 
 /// How far (m) a free arm keeps from an obstacle's sides and top.
@@ -195,8 +195,8 @@ impl Arm {
 
 impl FreeHands {
     /// Moves the free arms' values `arms` (per arm, as the gait wrote them: shoulder
-    /// flexion, abduction, elbow flexion, twist) off the obstacles `obstacles` near the
-    /// body, the nearest `gap` (m) from the body's capsule; `free[i]` says whether arm `i`
+    /// flexion, abduction, elbow flexion, twist) off the obstacles near the body
+    /// (`around`'s), the nearest `gap` (m) from the body's capsule; `free[i]` says whether arm `i`
     /// (left, right) holds nothing and is the walk's to move, and `upper` holds this
     /// tick's root, pelvis and spine values.
     pub fn keep_clear(
@@ -204,7 +204,7 @@ impl FreeHands {
         ctx: &GeneratorContext,
         (arm_dofs, free): ([[usize; 4]; 2], [bool; 2]),
         upper: &[(usize, f64)],
-        (obstacles, gap): (&[&Footprint], f64),
+        (around, gap): (&Surroundings, f64),
         arms: &mut [[f64; 4]; 2],
     ) {
         if gap >= BODY_CLEAR && self.offsets == [[0.0; 3]; 2] {
@@ -220,6 +220,7 @@ impl FreeHands {
         if found.len() < 2 {
             return;
         }
+        let obstacles = &around.obstacles[..];
         let last = &ctx.posture.globals;
         let steps = (OUT_RATE * ctx.dt, BACK_RATE * ctx.dt);
         for (i, arm) in found.iter().enumerate() {
@@ -229,10 +230,10 @@ impl FreeHands {
             let at = DVec2::new(shoulder.x, shoulder.z);
             self.near.clear();
             if free[i] {
-                self.near.extend(
-                    (0..obstacles.len())
-                        .filter(|&k| obstacles[k].distance(at) < arm.reach + LOOKED_AT),
-                );
+                let range = arm.reach + LOOKED_AT;
+                self.near.extend((0..obstacles.len()).filter(|&k| {
+                    around.circle_gap(k, (at, 0.0)) < range && obstacles[k].distance(at) < range
+                }));
             }
             let near = (self.near.as_slice(), obstacles);
             let resting = self.offsets[i] == [0.0; 3];

@@ -63,6 +63,7 @@ pub use waiting::{PROGRESS, STUCK_TIME, UNATTENDED};
 use crate::error::{track_dofs, OptionError, Result};
 use feet::{Foot, FootPose};
 use route::wrap;
+use smallvec::SmallVec;
 use std::f64::consts::TAU;
 use std::sync::Arc;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
@@ -71,7 +72,9 @@ use troupe_body::sensors::Side;
 use troupe_body::{Scope, Skeleton};
 use troupe_motion::Sequence;
 use troupe_scene::holding::Holder;
-use troupe_scene::space::{limit_step, nearest_gaps, Body, Navigation, Surroundings, Walking};
+use troupe_scene::space::{
+    limit_step, nearest_gaps, Body, Footprint, Navigation, Surroundings, Walking,
+};
 use troupe_scene::{DofWriter, Generator, GeneratorContext, StartError, Step};
 
 /// How far (m) the pelvis may be lowered below the gait's height for the legs to reach
@@ -729,11 +732,11 @@ impl Walk {
         // among furniture end here.
         let rig = &self.rig;
         let reach = rig.hip_half_width + rig.legs[0].thigh + rig.legs[0].thigh_radii[0] + 0.1;
-        let near: Vec<_> = around
-            .obstacles
-            .iter()
-            .copied()
-            .filter(|f| f.distance(floor) <= reach)
+        let near: SmallVec<[&Footprint; 8]> = (around.obstacles.iter().enumerate())
+            .filter(|&(k, f)| {
+                around.circle_gap(k, (floor, 0.0)) <= reach && f.distance(floor) <= reach
+            })
+            .map(|(_, &f)| f)
             .collect();
         if near.is_empty() {
             self.thighs = [None; 2];
@@ -1041,8 +1044,8 @@ impl Generator for Walk {
             let (bodies, obstacles) = nearest_gaps(&me, &around, shoulders::ARMS_CLEAR);
             (near_body, near_obstacle) = (bodies, obstacles);
             let gap = bodies.min(obstacles);
-            // `gather` left this tick's neighbours in `self.near`.
-            let around = (self.near.as_slice(), footprints);
+            // Those near enough to turn for are among those `gather` kept.
+            let around = (self.lists.close(), footprints);
             self.shoulders
                 .update(ctx, self.heading, &self.steer.companions, around, gap);
         }
@@ -1092,7 +1095,7 @@ impl Generator for Walk {
             let scope = out.scope();
             let free =
                 [0, 1].map(|i| !holding[i] && rig.arms[i][..3].iter().all(|&d| scope.contains(d)));
-            let obstacles = (&around.obstacles[..], near_obstacle);
+            let obstacles = (&around, near_obstacle);
             self.hands
                 .keep_clear(ctx, (rig.arms, free), &upper, obstacles, &mut arms);
             for (i, (dofs, values)) in rig.arms.iter().zip(&arms).enumerate() {

@@ -968,6 +968,21 @@ impl Plan {
         sampled.sample
     }
 
+    /// Where [`Plan::sample`] puts the body at `t`, found without its heading on a route
+    /// (the steering's look a tenth of a second ahead, every tick, wants no more: the
+    /// heading was a third of its cost). Not kept among the recent samples.
+    pub fn position(&self, t: f64) -> DVec2 {
+        match &self.kind {
+            PlanKind::Along {
+                line,
+                profile,
+                spot_turn,
+                ..
+            } => line.at(self.covered(profile, *spot_turn, t).0).0,
+            PlanKind::Follow { .. } => self.sample(t, 0.0).position,
+        }
+    }
+
     /// [`Plan::sample`], found from the route and the speed profile; on a route with the
     /// route's direction there.
     fn sample_anew(&self, t: f64, fallback: f64) -> Sampled {
@@ -1204,7 +1219,8 @@ mod tests {
     }
 
     /// Every 0.05 s from `from` to its end, `plan`'s speed is the rate of its distance
-    /// (by central differences), and `Plan::speed` is exactly the sample's speed.
+    /// (by central differences), and `Plan::speed` and `Plan::position` are exactly the
+    /// sample's speed and position.
     fn assert_speed_is_the_distance_rate(plan: &Plan, from: f64) {
         let mut t = from;
         while t < plan.end_time {
@@ -1215,7 +1231,13 @@ mod tests {
                 (d - plan.sample(t, 0.0).speed).abs() < 1e-4,
                 "speed at {t}: {d}"
             );
-            assert_eq!(plan.speed(t).to_bits(), plan.sample(t, 0.0).speed.to_bits());
+            let sample = plan.sample(t, 0.0);
+            assert_eq!(plan.speed(t).to_bits(), sample.speed.to_bits());
+            let position = plan.position(t);
+            assert_eq!(
+                (position.x.to_bits(), position.y.to_bits()),
+                (sample.position.x.to_bits(), sample.position.y.to_bits())
+            );
             t += 0.05;
         }
     }

@@ -18,7 +18,8 @@ use super::route::{direction, Plan, RootSample};
 use super::standoff::Standoff;
 use troupe_body::glam::DVec2;
 use troupe_scene::space::{
-    choose_velocity, wait_line, Agent, Footprint, FootprintsAround, Walker, GAP, NEIGHBOUR_RANGE,
+    choose_velocity, choose_velocity_bounded, wait_line, Agent, Footprint, FootprintsAround,
+    Walker, GAP, NEIGHBOUR_RANGE,
 };
 use troupe_scene::GeneratorContext;
 
@@ -334,8 +335,7 @@ impl Steer {
             return false;
         }
         let here = plan.sample(pt, 0.0);
-        let ahead = plan.sample(pt + 0.1, 0.0);
-        let planned = (ahead.position - here.position) / 0.1;
+        let planned = (plan.position(pt + 0.1) - here.position) / 0.1;
         // Back to the path, more firmly as the end nears so the walk ends at its goal.
         let remaining = plan.end_time - pt;
         let gain = if remaining < 2.0 { END_RETURN } else { RETURN };
@@ -464,9 +464,9 @@ impl Steer {
             return;
         }
         let (v, free) = if self.engaged {
-            let ring = self.keep_out.as_ref().map(|(_, disc)| disc);
-            let obstacles = footprints.within(OBSTACLE_RANGE).chain(ring);
-            choose_velocity(body, preferred, agents, obstacles)
+            let ring = (self.keep_out.as_ref()).map(|(_, disc)| (disc, disc.bounding_circle()));
+            let obstacles = footprints.within_bounded(OBSTACLE_RANGE).chain(ring);
+            choose_velocity_bounded(body, preferred, agents, obstacles)
         } else {
             choose_velocity(body, preferred, agents, [])
         };

@@ -27,6 +27,10 @@ pub struct Lists {
     velocities: Vec<DVec2>,
     /// The feet's list.
     feet: Vec<FootSpan>,
+    /// The obstacles' circles' list.
+    bounds: Vec<(DVec2, f64)>,
+    /// The actors near whose bodies and feet were gathered this tick, in actor order.
+    close: Vec<usize>,
 }
 
 impl Lists {
@@ -35,6 +39,13 @@ impl Lists {
         self.bodies = around.bodies;
         self.velocities = around.velocities;
         self.feet = around.feet;
+        self.bounds = around.bounds;
+    }
+
+    /// The actors near whose bodies and feet this tick's surroundings hold (every one the
+    /// crowd found within a stride and a step of the body's reach), in actor order.
+    pub fn close(&self) -> &[usize] {
+        &self.close
     }
 }
 
@@ -57,10 +68,13 @@ pub fn gather<'a>(
         velocities: std::mem::take(&mut lists.velocities),
         feet: std::mem::take(&mut lists.feet),
         obstacles: Default::default(),
+        bounds: std::mem::take(&mut lists.bounds),
     };
     around.bodies.clear();
     around.velocities.clear();
     around.feet.clear();
+    around.bounds.clear();
+    lists.close.clear();
     let (Some(&from), Some(&radius)) = (crowd.positions.get(me), crowd.radii.get(me)) else {
         return around;
     };
@@ -76,6 +90,7 @@ pub fn gather<'a>(
         if (crowd.positions[j] - from).length() - reach - crowd.radii[j] - FEET_OUT > RANGE {
             continue;
         }
+        lists.close.push(j);
         if let Some(&body) = crowd.bodies.get(j) {
             around.bodies.push(body);
             around
@@ -86,7 +101,10 @@ pub fn gather<'a>(
             around.feet.extend(feet);
         }
     }
-    around.obstacles = footprints.within(reach + RANGE).collect();
+    for (footprint, bound) in footprints.within_bounded(reach + RANGE) {
+        around.obstacles.push(footprint);
+        around.bounds.push(bound);
+    }
     around
 }
 

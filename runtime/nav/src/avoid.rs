@@ -77,6 +77,19 @@ pub fn choose_velocity<'a>(
     others: &[Agent],
     obstacles: impl IntoIterator<Item = &'a Footprint>,
 ) -> (DVec2, bool) {
+    let bounded = obstacles.into_iter().map(|f| (f, f.bounding_circle()));
+    choose_velocity_bounded(me, preferred, others, bounded)
+}
+
+/// [`choose_velocity`], each obstacle given with the circle round it (centre, radius:
+/// [`Footprint::bounding_circle`]), as the crowd keeps them: a decision among furniture
+/// need not find them again.
+pub fn choose_velocity_bounded<'a>(
+    me: &Agent,
+    preferred: DVec2,
+    others: &[Agent],
+    obstacles: impl IntoIterator<Item = (&'a Footprint, (DVec2, f64))>,
+) -> (DVec2, bool) {
     let speed = preferred.length();
     let base = if speed > 1e-6 { speed } else { 0.5 };
     let forward = match preferred.try_normalize() {
@@ -187,7 +200,7 @@ impl<'a> Surroundings<'a> {
         preferred: DVec2,
         fastest: f64,
         (others, mut list): (&[Agent], Vec<Neighbour>),
-        obstacles: impl IntoIterator<Item = &'a Footprint>,
+        obstacles: impl IntoIterator<Item = (&'a Footprint, (DVec2, f64))>,
     ) -> Surroundings<'a> {
         list.clear();
         list.extend(others.iter().map(|o| {
@@ -215,8 +228,7 @@ impl<'a> Surroundings<'a> {
         let reach = me.radius + fastest * OBSTACLE_LOOKAHEAD;
         let obstacles = obstacles
             .into_iter()
-            .filter_map(|footprint| {
-                let (centre, bound) = footprint.bounding_circle();
+            .filter_map(|(footprint, (centre, bound))| {
                 // No candidate comes within my radius of it in time: leave it out.
                 if (centre - me.position).length() - bound >= reach {
                     return None;
@@ -452,7 +464,7 @@ mod tests {
             preferred,
             base,
             (others, Vec::new()),
-            obstacles.iter().copied(),
+            obstacles.iter().map(|&f| (f, f.bounding_circle())),
         );
         let mut best = (preferred, world.penalty(preferred, f64::INFINITY));
         if best.1 <= 0.0 {
@@ -479,13 +491,7 @@ mod tests {
         // Crowds of 1 to 12 walkers and standers round a walker, some touching it, a
         // pillar now and then; the preferred velocity of any speed (none too) and way.
         let pillar = Footprint::disc("pillar", DVec2::new(0.4, 1.1), 0.2);
-        let mut seed = 12345u64;
-        let mut random = move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::test_random(12345);
         let mut chose_a_turn = 0;
         for case in 0..2000 {
             let me = agent(0.0, 0.0, random() - 0.5, random() * 1.5);

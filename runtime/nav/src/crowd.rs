@@ -229,6 +229,19 @@ impl<'a> FootprintsAround<'a> {
             .map(move |&i| &crowd.footprints[i])
     }
 
+    /// [`FootprintsAround::within`], each with the circle round it (centre, radius: see
+    /// [`Footprint::bounding_circle`]), which the crowd keeps.
+    pub fn within_bounded(
+        &self,
+        range: f64,
+    ) -> impl Iterator<Item = (&'a Footprint, (DVec2, f64))> + '_ {
+        let (crowd, at) = (self.crowd, self.at);
+        self.found
+            .iter()
+            .filter(move |&&i| crowd.footprint_reaches(i, at, range))
+            .map(move |&i| (&crowd.footprints[i], crowd.bounds[i]))
+    }
+
     /// The list the footprints were found in, to find them in again.
     pub fn into_found(self) -> Vec<usize> {
         self.found

@@ -58,29 +58,36 @@ impl Footprint {
         )
     }
 
+    /// The polygon's edges, each from a corner to the next, the last back to the first.
+    fn edges(&self) -> impl Iterator<Item = (DVec2, DVec2)> + '_ {
+        // Pairs read round the outline rather than indexed `(i + 1) % n`, a division per
+        // edge: every walker among furniture measures footprints many times a tick.
+        let closing = self
+            .outline
+            .last()
+            .copied()
+            .zip(self.outline.first().copied());
+        self.outline.windows(2).map(|w| (w[0], w[1])).chain(closing)
+    }
+
     /// Whether `p` is inside the polygon (or on its border).
     pub fn contains(&self, p: DVec2) -> bool {
-        let n = self.outline.len();
-        n >= 3
-            && (0..n).all(|i| {
-                let (a, b) = (self.outline[i], self.outline[(i + 1) % n]);
-                (b - a).perp_dot(p - a) >= 0.0
-            })
+        self.outline.len() >= 3 && self.edges().all(|(a, b)| (b - a).perp_dot(p - a) >= 0.0)
     }
 
     /// Distance from `p` to the polygon: 0 inside.
     pub fn distance(&self, p: DVec2) -> f64 {
         // One pass: inside while left of every edge; the square root once, of the least
         // squared distance to an edge (the same number as the least distance).
-        let n = self.outline.len();
-        let mut inside = n >= 3;
+        let mut inside = self.outline.len() >= 3;
         let mut nearest = f64::INFINITY;
-        for (i, &a) in self.outline.iter().enumerate() {
-            let b = self.outline[(i + 1) % n];
+        // Read by `for_each`, which runs through the chained closing edge without asking
+        // at each edge which part it is in.
+        self.edges().for_each(|(a, b)| {
             let (ab, ap) = (b - a, p - a);
             inside &= ab.perp_dot(ap) >= 0.0;
             nearest = nearest.min(segment_distance_squared(ap, ab));
-        }
+        });
         if inside {
             0.0
         } else {
@@ -91,9 +98,8 @@ impl Footprint {
     /// The point of the polygon's outline nearest `p` (`p` itself is not on it unless it
     /// lies on an edge); `None` for a footprint without an outline.
     pub fn nearest_point(&self, p: DVec2) -> Option<DVec2> {
-        let n = self.outline.len();
-        (0..n)
-            .map(|i| nearest_on_segment(p, self.outline[i], self.outline[(i + 1) % n]))
+        self.edges()
+            .map(|(a, b)| nearest_on_segment(p, a, b))
             .min_by(|x, y| {
                 (*x - p)
                     .length_squared()
