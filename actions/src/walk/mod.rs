@@ -985,7 +985,7 @@ impl Generator for Walk {
             gathered = self.steer.decide(ctx, (&plan, footprints), t, near);
             if self.steer.engaged && matches!(self.route, Route::Path { .. }) {
                 // Only a steered walk plans anew: the stall is looked at only for one.
-                let stalled = self.stalled(ctx, &plan);
+                let stalled = self.stalled(ctx, &plan, gathered);
                 // Only held with nobody moving near: in a crowd on the move a last look
                 // every 2 s put more feet into one another in the plaza.
                 let last_look = stalled && self.stuck_soon();
@@ -999,7 +999,7 @@ impl Generator for Walk {
                     }
                 }
                 if planning {
-                    if let Some(new) = self.boxed_in(ctx, &plan, stalled) {
+                    if let Some(new) = self.boxed_in(ctx, &plan, (stalled, gathered)) {
                         plan = new;
                     }
                 }

@@ -489,18 +489,18 @@ impl Walk {
     /// `stalled` is [`Walk::stalled`] this tick: when it holds, nobody moves near, found
     /// once; when it does not, the plan's own speed may be why (each new route starts
     /// from standing, and a walk held so takes one every two seconds), and who moves near
-    /// is looked at here.
+    /// is looked at here (`gathered`: as for [`Walk::stalled`]).
     pub(super) fn boxed_in(
         &mut self,
         ctx: &GeneratorContext,
         plan: &Plan,
-        stalled: bool,
+        (stalled, gathered): (bool, bool),
     ) -> Option<Plan> {
         let here = *ctx.world.crowd.positions.get(ctx.actor)?;
         let tau = self.steer.plan_time(self.t, self.t);
         let boxed = matches!(self.goal, Some(Goal::Object { .. } | Goal::Actor { .. }))
             && tau < plan.end_time
-            && (stalled || self.nobody_moving_near(ctx));
+            && (stalled || self.nobody_moving_near(ctx, gathered));
         let stood = self
             .stalled_since
             .filter(|&(_, at)| boxed && at.distance(here) < PROGRESS);
@@ -601,17 +601,22 @@ impl Walk {
     /// clearance against the furniture or people standing, or by its feet, where the plan
     /// goes on (see [`replan::Replan::route`]). A body held by a moving crowd waits for
     /// it instead: counted stalled too, bodies pressed in `troupe bench`'s crowd took new
-    /// routes every 2 s and cost it a fifth of its speed.
-    pub(super) fn stalled(&self, ctx: &GeneratorContext, plan: &Plan) -> bool {
+    /// routes every 2 s and cost it a fifth of its speed. `gathered`: the steering found
+    /// this tick's neighbours in `Walk::near` (see `Walk::nobody_moving_near`).
+    pub(super) fn stalled(&self, ctx: &GeneratorContext, plan: &Plan, gathered: bool) -> bool {
         let tau = self.steer.plan_time(self.t, self.t);
         // A plan that itself goes slower (turning on the spot, or round a sharp corner)
         // does not stall the body.
-        tau < plan.end_time && plan.speed(tau) >= STALLED_SPEED && self.nobody_moving_near(ctx)
+        tau < plan.end_time
+            && plan.speed(tau) >= STALLED_SPEED
+            && self.nobody_moving_near(ctx, gathered)
     }
 
     /// Whether the body stands (slower than [`STALLED_SPEED`] on the previous tick) with
-    /// nobody moving within [`ALONE`].
-    fn nobody_moving_near(&self, ctx: &GeneratorContext) -> bool {
+    /// nobody moving within [`ALONE`]: among the actors the crowd finds near it, which
+    /// `Walk::near` holds when `gathered` (the steering found them this tick), else
+    /// found here.
+    fn nobody_moving_near(&self, ctx: &GeneratorContext, gathered: bool) -> bool {
         let crowd = ctx.world.crowd;
         let (Some(&at), Some(velocity)) = (
             crowd.positions.get(ctx.actor),
@@ -622,8 +627,13 @@ impl Walk {
         if velocity.length() >= STALLED_SPEED {
             return false;
         }
-        let mut near = Vec::new();
-        crowd.near(at, &mut near);
+        let mut found = Vec::new();
+        let near = if gathered {
+            &self.near
+        } else {
+            crowd.near(at, &mut found);
+            &found
+        };
         near.iter().all(|&j| {
             j == ctx.actor
                 || (crowd.positions[j] - at).length() > ALONE

@@ -146,12 +146,13 @@ pub fn wait_line(
     }
     let mine = line_angle(along);
     for j in others {
-        let moving = j.body.velocity.length();
-        if moving < MOVING {
+        // One facing nowhere crosses nobody's way. (Asked before the speed, which takes a
+        // square root: most of those near do not have the way.)
+        if j.rank.map(|b| precedence_of_ranks(mine, b)) != Some(Precedence::Theirs) {
             continue;
         }
-        // One facing nowhere crosses nobody's way.
-        if j.rank.map(|b| precedence_of_ranks(mine, b)) != Some(Precedence::Theirs) {
+        let moving = j.body.velocity.length();
+        if moving < MOVING {
             continue;
         }
         let velocity = j.facing * moving.max(ASSUMED_SPEED);
