@@ -291,7 +291,8 @@ impl Profile {
             Profile::Samples { s, v } => {
                 let n = s.len();
                 let x = (t.max(0.0) / PROFILE_DT).min((n - 1) as f64);
-                let i = (x.floor() as usize).min(n.saturating_sub(2));
+                // `x` is not negative: its truncation is its floor, without a call to `floor`.
+                let i = (x as usize).min(n.saturating_sub(2));
                 if n < 2 {
                     return (s[0], v[0]);
                 }
