@@ -196,9 +196,9 @@ impl Arm {
 impl FreeHands {
     /// Moves the free arms' values `arms` (per arm, as the gait wrote them: shoulder
     /// flexion, abduction, elbow flexion, twist) off the obstacles near the body
-    /// (`around`'s), the nearest `gap` (m) from the body's capsule; `free[i]` says whether arm `i`
-    /// (left, right) holds nothing and is the walk's to move, and `upper` holds this
-    /// tick's root, pelvis and spine values.
+    /// (`around`'s), the nearest `gap` (m) from the body's capsule; `free[i]` says whether
+    /// arm `i` (left, right) holds nothing and is the walk's to move, and `upper` holds
+    /// this tick's root, pelvis and spine values.
     pub fn keep_clear(
         &mut self,
         ctx: &GeneratorContext,

@@ -52,9 +52,10 @@ impl Default for Shoulders {
 impl Shoulders {
     /// The turn actor `ctx.actor`, heading `heading`, wants now: towards the closest
     /// neighbour (not in `companions`) or obstacle beside it. `near`, in actor order,
-    /// holds at least every actor whose disc comes within [`ALONGSIDE`] ahead or behind
-    /// and [`CLEAR`] across (the walk gives those whose surroundings it gathered this
-    /// tick, which reach over a metre further), and `footprints` the obstacles round it.
+    /// holds at least every actor within 0.9 m ahead or behind (`ALONGSIDE`) whose disc
+    /// comes within [`CLEAR`] across (the walk gives those whose surroundings it gathered
+    /// this tick, which reach over a metre further), and `footprints` the obstacles round
+    /// it.
     pub fn wanted(
         ctx: &GeneratorContext,
         heading: f64,

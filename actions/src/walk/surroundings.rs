@@ -43,7 +43,8 @@ impl Lists {
     }
 
     /// The actors near whose bodies and feet this tick's surroundings hold (every one the
-    /// crowd found within a stride and a step of the body's reach), in actor order.
+    /// crowd found whose reach, feet out, comes within `RANGE` of the body's), in actor
+    /// order.
     pub fn close(&self) -> &[usize] {
         &self.close
     }

@@ -514,9 +514,9 @@ impl<'a> Surroundings<'a> {
 
     /// A lower bound (m) on the gap between the circle `a` (centre, radius) and obstacle
     /// `k`, from the circle round the obstacle (`bounds`), or −∞ without one. It costs a
-    /// tenth of the footprint's own distance and is never above it, so a test that it
-    /// passes (`> x`, `>= x`) needs no measuring: in a crowd among furniture most of the
-    /// obstacles near are passed over so.
+    /// square root, a fraction of the footprint's own distance, and is never above that
+    /// distance, so a test that it passes (`> x`, `>= x`) needs no measuring: in a crowd
+    /// among furniture most of the obstacles near are passed over so.
     pub fn circle_gap(&self, k: usize, a: (DVec2, f64)) -> f64 {
         match self.bounds.get(k) {
             // The slack keeps the two measures' rounding from ever disagreeing.
