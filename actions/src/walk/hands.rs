@@ -174,22 +174,34 @@ impl Arm {
         worst
     }
 
-    /// A bound from above of [`Arm::worst`] for the arm placed by `frame` (given a
-    /// joint's place in the chain): each volume taken as the sphere round it, three
-    /// distances to each obstacle where the measure takes seven.
-    fn worst_bound(
+    /// Whether a bound from above of [`Arm::worst`] for the arm placed by `frame` (given
+    /// a joint's place in the chain) reaches `floor`: each volume taken as the sphere round
+    /// it, three distances to each obstacle `near` (of `around`'s) where the measure takes
+    /// seven; and an obstacle whose circle (`Surroundings::obstacle_bound`) already keeps
+    /// a sphere under `floor` is not measured against it, the prism over the footprint
+    /// being never nearer than the circle.
+    fn bound_reaches(
         &self,
         frame: impl Fn(usize) -> Transform,
-        (near, obstacles): (&[usize], &[&Footprint]),
-    ) -> f64 {
-        let mut worst = f64::NEG_INFINITY;
+        (near, around): (&[usize], &Surroundings),
+        floor: f64,
+    ) -> bool {
         for &(at, capsule) in &self.volumes {
             let (centre, radius) = capsule.placed(&frame(at)).bound();
+            let under = DVec2::new(centre.x, centre.z);
             for &k in near {
-                worst = worst.max(radius + HAND_MARGIN - prism_distance(obstacles[k], centre));
+                let (c, r) = around.obstacle_bound(k);
+                // The slack keeps the two measures' rounding from ever disagreeing.
+                if radius + HAND_MARGIN - ((under - c).length() - r) < floor - 1e-9 {
+                    continue;
+                }
+                let prism = prism_distance(around.obstacles[k], centre);
+                if radius + HAND_MARGIN - prism >= floor {
+                    return true;
+                }
             }
         }
-        worst
+        false
     }
 }
 
@@ -245,7 +257,7 @@ impl FreeHands {
             // measure itself.
             let measured = !near.0.is_empty()
                 && (!resting
-                    || (arm.worst_bound(|at| last[arm.chain[at]], near) >= -LOOKED_AT
+                    || (arm.bound_reaches(|at| last[arm.chain[at]], (near.0, around), -LOOKED_AT)
                         && arm.worst(|at| last[arm.chain[at]], near) >= -LOOKED_AT));
             if measured {
                 // The values as the posture will have them: within their DOFs' limits (the
@@ -422,6 +434,45 @@ mod tests {
         }
         arm.place(sk, &q, &mut frames, 0);
         (delta, arm.worst(|at| frames[at], near))
+    }
+
+    #[test]
+    fn the_circles_change_no_answer_of_the_spheres_bound() {
+        // The hanging arm beside stands moved about it, 3,000 times: `bound_reaches` says
+        // what the spheres' bound measured against every stand says, whether the circles
+        // passed a stand over or not.
+        let (_, arm, _, frames, stand) = hanging_over_a_stand(0.02);
+        let mut next = crate::walk::test_random(5);
+        let (mut reached, mut not) = (0, 0);
+        for _ in 0..3000 {
+            let mut moved = |f: &Footprint| {
+                let by = DVec2::new(next() - 0.5, next() - 0.5) * 1.2;
+                let outline: Vec<DVec2> = f.outline.iter().map(|&p| p + by).collect();
+                Footprint::hull("stand", &outline).with_top(f.top + (next() - 0.5) * 0.4)
+            };
+            let stands = [moved(&stand), moved(&stand)];
+            let around = Surroundings {
+                obstacles: stands.iter().collect(),
+                bounds: stands.iter().map(Footprint::bounding_circle).collect(),
+                ..Surroundings::default()
+            };
+            let floor = -LOOKED_AT;
+            let measured = arm.volumes.iter().any(|&(at, capsule)| {
+                let (centre, radius) = capsule.placed(&frames[at]).bound();
+                (stands.iter()).any(|f| radius + HAND_MARGIN - prism_distance(f, centre) >= floor)
+            });
+            let near = [0, 1];
+            assert_eq!(
+                arm.bound_reaches(|at| frames[at], (&near, &around), floor),
+                measured
+            );
+            if measured {
+                reached += 1;
+            } else {
+                not += 1;
+            }
+        }
+        assert!(reached > 300 && not > 300, "{reached} {not}");
     }
 
     #[test]

@@ -732,11 +732,12 @@ impl Walk {
         // among furniture end here.
         let rig = &self.rig;
         let reach = rig.hip_half_width + rig.legs[0].thigh + rig.legs[0].thigh_radii[0] + 0.1;
-        let near: SmallVec<[&Footprint; 8]> = (around.obstacles.iter().enumerate())
+        let near: SmallVec<[(&Footprint, (DVec2, f64)); 8]> = (around.obstacles.iter())
+            .enumerate()
             .filter(|&(k, f)| {
                 around.circle_gap(k, (floor, 0.0)) <= reach && f.distance(floor) <= reach
             })
-            .map(|(_, &f)| f)
+            .map(|(k, &f)| (f, around.obstacle_bound(k)))
             .collect();
         if near.is_empty() {
             self.thighs = [None; 2];
@@ -1195,6 +1196,18 @@ impl Generator for Walk {
             goal,
             velocities: self.steer.decision,
         })
+    }
+}
+
+/// A test's reproducible random numbers in [0, 1): a 64-bit linear congruential generator
+/// seeded with `seed` (Knuth's MMIX constants), its top 53 bits.
+#[cfg(test)]
+fn test_random(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
     }
 }
 

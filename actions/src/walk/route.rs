@@ -1396,13 +1396,7 @@ mod tests {
         // people standing has such legs): a corner shorter than the grid of
         // `slowed_for_corners` once spread its turn's limit over whole cells: a plaza
         // walker 5 m from its goal got plans of 20-24 s and stood for over 100 s.
-        let mut seed = 12345u64;
-        let mut random = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut random = crate::walk::test_random(12345);
         for case in 0..2000 {
             let count = 2 + (random() * 4.0) as usize;
             let mut points = Vec::new();

@@ -524,6 +524,15 @@ impl<'a> Surroundings<'a> {
             _ => f64::NEG_INFINITY,
         }
     }
+
+    /// The circle round obstacle `k` (centre, radius): `bounds`', or found anew without
+    /// them.
+    pub fn obstacle_bound(&self, k: usize) -> (DVec2, f64) {
+        match self.bounds.get(k) {
+            Some(&b) if self.bounds.len() == self.obstacles.len() => b,
+            _ => self.obstacles[k].bounding_circle(),
+        }
+    }
 }
 
 /// A limit on the step `s`: `s · normal >= -allowed`, `allowed >= 0`.
