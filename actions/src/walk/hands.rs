@@ -442,7 +442,7 @@ mod tests {
         // what the spheres' bound measured against every stand says, whether the circles
         // passed a stand over or not.
         let (_, arm, _, frames, stand) = hanging_over_a_stand(0.02);
-        let mut next = crate::walk::test_random(5);
+        let mut next = troupe_body::math::draws(5);
         let (mut reached, mut not) = (0, 0);
         for _ in 0..3000 {
             let mut moved = |f: &Footprint| {

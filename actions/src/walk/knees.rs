@@ -132,7 +132,7 @@ mod tests {
             Footprint::disc("b", DVec2::new(-0.8, 0.9), 0.3),
         ];
         let obstacles: Vec<_> = planters.iter().map(|f| (f, f.bounding_circle())).collect();
-        let mut next = crate::walk::test_random(11);
+        let mut next = troupe_body::math::draws(11);
         let mut thigh = || {
             let hip = DVec2::new(next() * 3.0 - 1.5, next() * 3.0 - 1.0);
             let knee = hip + DVec2::new(next() - 0.5, next() - 0.5) * 0.9;

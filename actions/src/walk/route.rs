@@ -1396,7 +1396,7 @@ mod tests {
         // people standing has such legs): a corner shorter than the grid of
         // `slowed_for_corners` once spread its turn's limit over whole cells: a plaza
         // walker 5 m from its goal got plans of 20-24 s and stood for over 100 s.
-        let mut random = crate::walk::test_random(12345);
+        let mut random = troupe_body::math::draws(12345);
         for case in 0..2000 {
             let count = 2 + (random() * 4.0) as usize;
             let mut points = Vec::new();

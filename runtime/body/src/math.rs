@@ -1,6 +1,6 @@
 //! Scalar and small-vector math shared by the body model and the crates above it: the
-//! smoothstep ease, the mass-weighted centre of a set of parts, and a dense solve of a
-//! few unknowns.
+//! smoothstep ease, the mass-weighted centre of a set of parts, a dense solve of a few
+//! unknowns, and reproducible draws for tests and benchmarks.
 //!
 //! Each formula lives here once so that every caller rounds the same way: recordings are
 //! compared bit for bit, so two copies that drift apart in operation order would make
@@ -14,6 +14,18 @@ use glam::DVec3;
 pub fn smoothstep(u: f64) -> f64 {
     let u = u.clamp(0.0, 1.0);
     u * u * (3.0 - 2.0 * u)
+}
+
+/// Reproducible draws in [0, 1) for tests and benchmarks: a 64-bit linear congruential
+/// generator seeded with `seed` (Knuth's MMIX constants), its top 53 bits. The same seed
+/// gives the same numbers on every machine.
+pub fn draws(mut seed: u64) -> impl FnMut() -> f64 {
+    move || {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        (seed >> 11) as f64 / (1u64 << 53) as f64
+    }
 }
 
 /// The mass-weighted mean of `parts` (each a position and its mass), summed in the order

@@ -491,7 +491,7 @@ mod tests {
         // Crowds of 1 to 12 walkers and standers round a walker, some touching it, a
         // pillar now and then; the preferred velocity of any speed (none too) and way.
         let pillar = Footprint::disc("pillar", DVec2::new(0.4, 1.1), 0.2);
-        let mut random = crate::test_random(12345);
+        let mut random = troupe_body::math::draws(12345);
         let mut chose_a_turn = 0;
         for case in 0..2000 {
             let me = agent(0.0, 0.0, random() - 0.5, random() * 1.5);

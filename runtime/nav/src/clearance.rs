@@ -902,7 +902,7 @@ mod tests {
         // Boxes and a body with a foot scattered over a few metres, 300 times: every
         // clearance answer bit for bit the same with the circles round the obstacles as
         // without them, and the circles do pass some obstacles over.
-        let mut next = crate::test_random(7);
+        let mut next = troupe_body::math::draws(7);
         let (mut passed_over, mut measured) = (0, 0);
         for _ in 0..300 {
             let obstacles: Vec<Footprint> = (0..6)

@@ -242,11 +242,7 @@ impl<'a> FootprintsAround<'a> {
     /// Every footprint within `range` (at most [`CELL`]) of the point, and maybe a few a
     /// little further, in the order they were set: what [`Crowd::footprints_near`] gives.
     pub fn within(&self, range: f64) -> impl Iterator<Item = &'a Footprint> + '_ {
-        let (crowd, at) = (self.crowd, self.at);
-        self.found
-            .iter()
-            .filter(move |&&i| crowd.footprint_reaches(i, at, range))
-            .map(move |&i| &crowd.footprints[i])
+        self.within_bounded(range).map(|(footprint, _)| footprint)
     }
 
     /// [`FootprintsAround::within`], each with the circle round it (centre, radius: see
@@ -585,7 +581,7 @@ mod tests {
 
     #[test]
     fn floor_to_int_is_floor_then_as() {
-        let mut random = crate::test_random(3);
+        let mut random = troupe_body::math::draws(3);
         let special = [
             0.0,
             -0.0,

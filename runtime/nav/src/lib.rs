@@ -16,18 +16,6 @@ pub mod radius;
 pub mod space;
 pub mod way;
 
-/// A test's reproducible random numbers in [0, 1): a 64-bit linear congruential generator
-/// seeded with `seed` (Knuth's MMIX constants), its top 53 bits.
-#[cfg(test)]
-fn test_random(mut seed: u64) -> impl FnMut() -> f64 {
-    move || {
-        seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (seed >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 pub use avoid::{choose_velocity, Agent};
 pub use clearance::{
     clear_foot, foot_may_move, limit_step, nearest_gap, nearest_gaps, Body, Capsule, FootSpan,
