@@ -707,13 +707,10 @@ mod tests {
 
     /// A posture with every body DOF moved (deterministic), within the limits.
     fn moved(sk: &Skeleton, amplitude: f64, seed: u64) -> Vec<f64> {
-        let mut s = seed;
+        let mut draw = troupe_body::math::draws(seed);
         let mut q = vec![0.0; sk.dof_count()];
         for (d, dof) in sk.dofs().iter().enumerate() {
-            s = s
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            let u = ((s >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0;
+            let u = draw() * 2.0 - 1.0;
             q[d] = (u * amplitude).clamp(dof.min, dof.max);
         }
         q[sk.dof("root_x").unwrap()] = 0.7;
@@ -966,13 +963,8 @@ mod tests {
         // with their product right (which blending, easing or interpolating per DOF turns
         // into wrong poses), and by clamping to the limits a shoulder ended 14° off.
         let sk = adult();
-        let mut seed = 7u64;
-        let mut uniform = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            ((seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
-        };
+        let mut draw = troupe_body::math::draws(7);
+        let mut uniform = || draw() * 2.0 - 1.0;
         for joint in ["r_shoulder", "l_shoulder", "HumanoidRoot"] {
             let dofs = rotations(&sk, joint);
             let posture = |first: f64, middle: f64, last: f64| {

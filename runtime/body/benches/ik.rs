@@ -10,6 +10,7 @@ use troupe_body::glam::DVec3;
 use troupe_body::ik::{IkOptions, IkSolver, IkTask};
 use troupe_body::jacobian::{chain_dofs, jacobian, Effector};
 use troupe_body::kinematics::forward_kinematics;
+use troupe_body::math::draws;
 use troupe_body::{template, Skeleton, Transform};
 
 fn adult() -> Skeleton {
@@ -43,19 +44,15 @@ fn arm_spine(s: &Skeleton) -> Vec<usize> {
 
 /// Reachable position goals: the hand at random postures of `dofs`.
 fn targets(s: &Skeleton, dofs: &[usize], n: usize) -> Vec<DVec3> {
-    let mut seed = 5u64;
+    let mut draw = draws(5);
     let e = hand(s);
     let mut g = vec![Transform::IDENTITY; s.joints().len()];
     (0..n)
         .map(|_| {
             let mut q = vec![0.0; s.dof_count()];
             for &d in dofs {
-                seed = seed
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                let u = (seed >> 11) as f64 / (1u64 << 53) as f64;
                 let dof = &s.dofs()[d];
-                q[d] = dof.min + (dof.max - dof.min) * u;
+                q[d] = dof.min + (dof.max - dof.min) * draw();
             }
             forward_kinematics(s, &q, &mut g);
             e.position(&g)

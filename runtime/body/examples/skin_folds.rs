@@ -19,7 +19,7 @@ use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
 
 #[path = "../tests/support/postures.rs"]
 mod postures;
-use postures::{counted_at, inverted, posture, Lcg};
+use postures::{counted_at, inverted, posture};
 
 /// The draws chosen by, and those held out.
 const CHOOSE_BY: std::ops::Range<u64> = 8..13;
@@ -55,7 +55,7 @@ fn main() {
                 for draw in draws {
                     // Draws of their own for each part of the ranges (the half's
                     // were the first, at 100 on).
-                    let mut rng = Lcg(draw + (200.0 * (1.0 - part)) as u64);
+                    let mut rng = troupe_body::math::draws(draw + (200.0 * (1.0 - part)) as u64);
                     for _ in 0..POSTURES {
                         let q = posture(&skeleton, &mut rng, part);
                         for joint in inverted_at(&skeleton, &skin, &q) {

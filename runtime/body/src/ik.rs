@@ -678,17 +678,6 @@ mod tests {
         crate::template::default_skeleton("adult").unwrap()
     }
 
-    struct Rng(u64);
-    impl Rng {
-        fn next(&mut self) -> f64 {
-            self.0 = self
-                .0
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (self.0 >> 11) as f64 / (1u64 << 53) as f64
-        }
-    }
-
     fn hand(s: &Skeleton) -> Effector {
         Effector {
             joint: s.joint("r_wrist").unwrap(),
@@ -708,13 +697,13 @@ mod tests {
         let dofs: Vec<usize> = s.scope("right_arm").unwrap().iter().collect();
         let mut solver = IkSolver::new(&s, dofs.clone(), IkOptions::default()).unwrap();
         let e = hand(&s);
-        let mut rng = Rng(42);
+        let mut draw = crate::math::draws(42);
         let (mut times, mut iterations, mut failures) = (Vec::new(), Vec::new(), 0);
         for _ in 0..1000 {
             let mut target_q = vec![0.0; s.dof_count()];
             for &d in &dofs {
                 let dof = &s.dofs()[d];
-                target_q[d] = dof.min + (dof.max - dof.min) * rng.next();
+                target_q[d] = dof.min + (dof.max - dof.min) * draw();
             }
             let g = fk(&s, &target_q);
             let task = IkTask {

@@ -262,27 +262,25 @@ impl Svd {
 mod tests {
     use super::*;
 
-    fn pseudo_random(seed: &mut u64) -> f64 {
-        *seed = seed
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        ((*seed >> 11) as f64 / (1u64 << 53) as f64) * 2.0 - 1.0
+    /// Draws in [-1, 1).
+    fn pseudo_random(draw: &mut impl FnMut() -> f64) -> f64 {
+        draw() * 2.0 - 1.0
     }
 
     #[test]
     fn pseudo_inverse_solves_full_rank_systems_and_projects_out() {
-        let mut seed = 7;
+        let mut draw = crate::math::draws(7);
         for (m, n) in [(3, 7), (6, 9), (6, 21), (3, 3)] {
             let mut j = Mat::zeros(m, n);
             for r in 0..m {
                 for c in 0..n {
-                    j.set(r, c, pseudo_random(&mut seed));
+                    j.set(r, c, pseudo_random(&mut draw));
                 }
             }
             let mut svd = Svd::default();
             svd.compute(&j);
             assert_eq!(svd.rank(), m);
-            let dx: Vec<f64> = (0..m).map(|_| pseudo_random(&mut seed)).collect();
+            let dx: Vec<f64> = (0..m).map(|_| pseudo_random(&mut draw)).collect();
             let mut dq = vec![0.0; n];
             svd.add_pseudo_inverse_times(&dx, 0.0, &mut dq);
             let mut back = vec![0.0; m];
@@ -291,7 +289,7 @@ mod tests {
                 assert!((a - b).abs() < 1e-10, "{a} vs {b}");
             }
             // A projected vector is invisible to J.
-            let mut z: Vec<f64> = (0..n).map(|_| pseudo_random(&mut seed)).collect();
+            let mut z: Vec<f64> = (0..n).map(|_| pseudo_random(&mut draw)).collect();
             svd.project_out_row_space(&mut z);
             j.mul_vec(&z, &mut back);
             assert!(back.iter().all(|x| x.abs() < 1e-10), "{back:?}");

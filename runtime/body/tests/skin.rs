@@ -15,7 +15,7 @@ use troupe_body::{templates, Skeleton, Skin, TemplateParams, Transform};
 
 #[path = "support/postures.rs"]
 mod postures;
-use postures::{counted_at, inverted, Lcg};
+use postures::{counted_at, inverted};
 
 /// The bone segments of a joint: to each child joint and end site (a point for a leaf).
 fn bones(skeleton: &Skeleton, globals: &[Transform], j: usize) -> Vec<(DVec3, DVec3)> {
@@ -266,7 +266,7 @@ fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
         })
         .collect();
 
-    let mut rng = Lcg(7);
+    let mut draw = troupe_body::math::draws(7);
     let mut globals = vec![Transform::IDENTITY; skeleton.joints().len()];
     let mut worst_excess = (0.0f64, 0, 0);
     let mut spans: Vec<Span> = SPANS
@@ -280,7 +280,7 @@ fn check(skeleton: &Skeleton, label: &str) -> Vec<Span> {
     let mut posture = 0;
     for span in &mut spans {
         for _ in 0..span.postures {
-            let q = postures::posture(skeleton, &mut rng, span.part);
+            let q = postures::posture(skeleton, &mut draw, span.part);
             forward_kinematics(skeleton, &q, &mut globals);
             let posed = skin.deform(&globals);
             let frames = skin.frames(&globals);

@@ -376,15 +376,12 @@ mod tests {
             let expected = s.total_mass() + beads as f64 * NOMINAL_LINK_MASS;
             assert!((total - expected).abs() < 1e-9, "{total} vs {expected}");
             // Random postures: every troupe joint's link lands where troupe's FK puts it.
-            let mut seed = 99u64;
+            let mut draw = troupe_body::math::draws(99);
             for _ in 0..50 {
                 let mut q = vec![0.0; s.dof_count()];
                 let mut values = HashMap::new();
                 for (i, d) in s.dofs().iter().enumerate() {
-                    seed = seed
-                        .wrapping_mul(6364136223846793005)
-                        .wrapping_add(1442695040888963407);
-                    let u = (seed >> 11) as f64 / (1u64 << 53) as f64;
+                    let u = draw();
                     if fixed && i < 6 {
                         continue;
                     }

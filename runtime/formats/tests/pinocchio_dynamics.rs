@@ -9,6 +9,7 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use troupe_body::dynamics::{inverse_dynamics, ExternalForces, Model, GRAVITY};
+use troupe_body::math::draws;
 use troupe_body::template::template;
 use troupe_formats::urdf::urdf;
 
@@ -16,20 +17,9 @@ fn repo() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
 }
 
-/// A small deterministic generator of numbers in [0, 1).
-struct Lcg(u64);
-
-impl Lcg {
-    fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-    fn within(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
-    }
+/// Reproducible draws in [lo, hi) from `draws`'s draws in [0, 1).
+fn within(draw: &mut impl FnMut() -> f64, lo: f64, hi: f64) -> f64 {
+    lo + (hi - lo) * draw()
 }
 
 /// Runs the comparison for `template_name` and returns Pinocchio's report.
@@ -45,7 +35,7 @@ fn compare(python: &Path, template_name: &str, fixed_root: bool, dir: &Path) -> 
     let model = Model::new(&skeleton).unwrap();
     let n = skeleton.dof_count();
     let root = model.root_dofs();
-    let mut rng = Lcg(if fixed_root { 11 } else { 29 });
+    let mut draw = draws(if fixed_root { 11 } else { 29 });
     let mut states = Vec::new();
     for _ in 0..8 {
         let (mut q, mut qd, mut qdd) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
@@ -59,9 +49,9 @@ fn compare(python: &Path, template_name: &str, fixed_root: bool, dir: &Path) -> 
             } else {
                 (-1.0, 1.0)
             };
-            q[i] = rng.within(lo, hi);
-            qd[i] = rng.within(-2.0, 2.0);
-            qdd[i] = rng.within(-5.0, 5.0);
+            q[i] = within(&mut draw, lo, hi);
+            qd[i] = within(&mut draw, -2.0, 2.0);
+            qdd[i] = within(&mut draw, -5.0, 5.0);
         }
         let ext = ExternalForces::new(&skeleton);
         let tau = inverse_dynamics(&skeleton, &q, &qd, &qdd, &ext, fixed_root).unwrap();

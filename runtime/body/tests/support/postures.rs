@@ -4,29 +4,15 @@
 use troupe_body::glam::DVec3;
 use troupe_body::{Skeleton, Skin, Transform};
 
-/// A small deterministic generator (64-bit LCG), so the postures are the same every run.
-pub struct Lcg(pub u64);
-
-impl Lcg {
-    /// The next number, uniform in [0, 1).
-    pub fn next(&mut self) -> f64 {
-        self.0 = self
-            .0
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        (self.0 >> 11) as f64 / (1u64 << 53) as f64
-    }
-}
-
 /// A random posture within `part` of every joint's range around zero (DOFs without
 /// finite limits at zero).
-pub fn posture(skeleton: &Skeleton, rng: &mut Lcg, part: f64) -> Vec<f64> {
+pub fn posture(skeleton: &Skeleton, draw: &mut impl FnMut() -> f64, part: f64) -> Vec<f64> {
     skeleton
         .dofs()
         .iter()
         .map(|d| {
             if d.min.is_finite() && d.max.is_finite() {
-                (d.min + (d.max - d.min) * rng.next()) * part
+                (d.min + (d.max - d.min) * draw()) * part
             } else {
                 0.0
             }
