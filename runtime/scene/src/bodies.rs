@@ -2,9 +2,10 @@
 //! (`troupe_nav::clearance`): a capsule along the way it faces, made each tick from its
 //! posture, its facing and its speed.
 
-use troupe_body::glam::DVec2;
+use troupe_body::glam::{DVec2, DVec3};
+use troupe_body::state::ActorState;
 use troupe_body::{Skeleton, Transform};
-use troupe_nav::{Body, FootSpan};
+use troupe_nav::{Body, Capsule, FootSpan, Walking};
 
 /// How far (m) a foot's solid reaches round the segment under it from its heel to its toe
 /// tip: the template's foot frustum (0.024 h at the ball) for bodies up to 2.08 m.
@@ -42,6 +43,63 @@ pub struct Held {
     pub lowest: f64,
     /// The held object's points (x, z) seen from above: its corners, or points round it.
     pub outline: Vec<DVec2>,
+}
+
+/// One actor's place in the crowd (`troupe_nav::Crowd`'s entries), found from its posture
+/// at the end of a tick.
+pub(crate) struct CrowdEntry {
+    /// The floor points under its ankles.
+    pub feet: [DVec2; 2],
+    /// Its feet seen from above, if it has them.
+    pub soles: Option<[FootSpan; 2]>,
+    /// The floor point under its root.
+    pub position: DVec2,
+    /// Its root's velocity on the floor.
+    pub velocity: DVec2,
+    /// The unit floor direction its root's +z faces.
+    pub facing: DVec2,
+    /// The capsule of its whole body.
+    pub body: Capsule,
+    /// The part of its body its root's step carries.
+    pub core: Body,
+}
+
+impl CrowdEntry {
+    /// The entry of the actor in `state`, going at `velocity` (x, z) on the floor, whose
+    /// body has the `joints`, a disc of `radius` and the holding hands `held`; with
+    /// `Walking::Straight` its bodies are its disc alone, since nothing keeps bodies apart.
+    pub fn of(
+        state: &ActorState,
+        (vx, vz): (f64, f64),
+        (joints, radius, held): (&BodyJoints, f64, &[&Held]),
+        walking: Walking,
+    ) -> Self {
+        let root = state.globals[0].translation;
+        let position = DVec2::new(root.x, root.z);
+        let velocity = DVec2::new(vx, vz);
+        let forward = state.globals[0].rotation * DVec3::Z;
+        let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
+        // Kept for the swinging feet, and the capsule's own.
+        let soles = joints.sole_spans(&state.globals);
+        let (whole, core) = match walking {
+            Walking::Navigated => {
+                joints.body(&state.globals, soles, (facing, velocity, radius), held)
+            }
+            Walking::Straight => {
+                let disc = Body::around(position, facing, radius, 0.0, &[]);
+                (disc, disc)
+            }
+        };
+        CrowdEntry {
+            feet: joints.ankle_points(&state.globals),
+            soles,
+            position,
+            velocity,
+            facing,
+            body: whole.shape,
+            core,
+        }
+    }
 }
 
 /// The joints that shape an actor's body on the floor beyond its disc

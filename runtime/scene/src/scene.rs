@@ -2,7 +2,7 @@
 
 use crate::action::{ActionId, ActionInfo, ActionSpec, Ending, Event, Generator, Status};
 use crate::blackboard::{Blackboard, Note, Notes, Offer, SignalId};
-use crate::bodies::Held;
+use crate::bodies::{CrowdEntry, Held};
 use crate::error::{Error, Result};
 use crate::holding::{self, HoldRequest, Holder};
 use crate::input_pose::InputPose;
@@ -293,38 +293,30 @@ impl Scene {
                 })
             })
             .collect();
-        let mut holds: Vec<&Held> = Vec::new();
-        for (i, (state, &(x, z))) in self.states.iter().zip(&self.root_dofs).enumerate() {
-            let root = state.globals[0].translation;
-            let under_root = DVec2::new(root.x, root.z);
-            crowd
-                .feet
-                .push(self.body_joints[i].ankle_points(&state.globals));
-            // Kept for the swinging feet, and the capsule's own.
-            let soles = self.body_joints[i].sole_spans(&state.globals);
-            crowd.soles.push(soles);
-            crowd.positions.push(under_root);
-            let velocity = DVec2::new(state.qd[x], state.qd[z]);
-            crowd.velocities.push(velocity);
-            let forward = state.globals[0].rotation * troupe_body::glam::DVec3::Z;
-            let facing = DVec2::new(forward.x, forward.z).normalize_or_zero();
-            crowd.facings.push(facing);
-            let (whole, core) = match self.space.walking {
-                troupe_nav::Walking::Navigated => {
-                    holds.clear();
-                    holds.extend(held.iter().filter(|h| h.0 == i).map(|h| &h.1));
-                    let motion = (facing, velocity, crowd.radii[i]);
-                    self.body_joints[i].body(&state.globals, soles, motion, &holds)
-                }
-                // Nothing keeps bodies apart: their discs will do for the record.
-                troupe_nav::Walking::Straight => {
-                    let disc =
-                        troupe_nav::Body::around(under_root, facing, crowd.radii[i], 0.0, &[]);
-                    (disc, disc)
-                }
-            };
-            crowd.bodies.push(whole.shape);
-            crowd.cores.push(core);
+        // Each actor's entry reads only its own posture, so the entries are found on the
+        // pool (a tenth of a navigated crowd's serial work between ticks), then pushed in
+        // actor order: the same crowd on any number of threads.
+        let mut entries: Vec<Option<CrowdEntry>> = self.states.iter().map(|_| None).collect();
+        let (states, root_dofs, body_joints) = (&self.states, &self.root_dofs, &self.body_joints);
+        let (walking, radii) = (self.space.walking, &crowd.radii);
+        self.pool.for_each(&mut entries, |i, entry| {
+            let (state, (x, z)) = (&states[i], root_dofs[i]);
+            let holds: Vec<&Held> = held.iter().filter(|h| h.0 == i).map(|h| &h.1).collect();
+            *entry = Some(CrowdEntry::of(
+                state,
+                (state.qd[x], state.qd[z]),
+                (&body_joints[i], radii[i], &holds),
+                walking,
+            ));
+        });
+        for entry in entries.into_iter().flatten() {
+            crowd.feet.push(entry.feet);
+            crowd.soles.push(entry.soles);
+            crowd.positions.push(entry.position);
+            crowd.velocities.push(entry.velocity);
+            crowd.facings.push(entry.facing);
+            crowd.bodies.push(entry.body);
+            crowd.cores.push(entry.core);
         }
         crowd.index();
         self.crowd = crowd;
