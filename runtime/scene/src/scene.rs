@@ -787,7 +787,7 @@ impl Scene {
     /// Fixes how many actors a worker claims at a time (`None`: sized by the crowd).
     /// Tests set 1 so that even two actors are stepped on two threads.
     pub fn set_chunk_size(&mut self, actors: Option<usize>) {
-        self.pool = self.pool.with_chunk(actors);
+        self.pool.set_chunk(actors);
     }
 
     /// Switches per-phase timing of [`Scene::step`] on or off (off by default).
