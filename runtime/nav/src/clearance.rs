@@ -393,6 +393,7 @@ impl Body {
     }
 
     /// Whether a hand of the body holds something.
+    #[inline]
     pub fn carries(&self) -> bool {
         self.hands.iter().flatten().any(|h| h.holds)
     }
@@ -517,6 +518,7 @@ impl<'a> Surroundings<'a> {
     /// square root, a fraction of the footprint's own distance, and is never above that
     /// distance, so a test that it passes (`> x`, `>= x`) needs no measuring: in a crowd
     /// among furniture most of the obstacles near are passed over so.
+    #[inline]
     pub fn circle_gap(&self, k: usize, a: (DVec2, f64)) -> f64 {
         match self.bounds.get(k) {
             // The slack keeps the two measures' rounding from ever disagreeing.

@@ -237,6 +237,7 @@ fn segment_distance_squared(ap: DVec2, ab: DVec2) -> f64 {
 }
 
 /// The point of the segment `a`–`b` nearest `p`.
+#[inline]
 pub fn nearest_on_segment(p: DVec2, a: DVec2, b: DVec2) -> DVec2 {
     a + (b - a) * segment_fraction(p - a, b - a)
 }
