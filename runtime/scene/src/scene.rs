@@ -293,8 +293,8 @@ impl Scene {
                 })
             })
             .collect();
-        // Each actor's entry reads only its own posture, so the entries are found on the
-        // pool (a tenth of a navigated crowd's serial work between ticks), then pushed in
+        // Each actor's entry reads only its own posture, so the entries (about 2,000
+        // instructions an actor with navigation) are found on the pool, then pushed in
         // actor order: the same crowd on any number of threads.
         let mut entries: Vec<Option<CrowdEntry>> = self.states.iter().map(|_| None).collect();
         let (states, root_dofs, body_joints) = (&self.states, &self.root_dofs, &self.body_joints);
