@@ -177,8 +177,8 @@ impl Arm {
     /// Whether a bound from above of [`Arm::worst`] for the arm placed by `frame` (given
     /// a joint's place in the chain) reaches `floor`: each volume taken as the sphere round
     /// it, three distances to each obstacle `near` (of `around`'s) where the measure takes
-    /// seven; and an obstacle whose circle (`Surroundings::obstacle_bound`) already keeps
-    /// a sphere under `floor` is not measured against it, the prism over the footprint
+    /// seven; and an obstacle whose circle (`Surroundings::circle_gap`) already keeps a
+    /// sphere under `floor` is not measured against it, the prism over the footprint
     /// being never nearer than the circle.
     fn bound_reaches(
         &self,
@@ -190,9 +190,7 @@ impl Arm {
             let (centre, radius) = capsule.placed(&frame(at)).bound();
             let under = DVec2::new(centre.x, centre.z);
             for &k in near {
-                let (c, r) = around.obstacle_bound(k);
-                // The slack keeps the two measures' rounding from ever disagreeing.
-                if radius + HAND_MARGIN - ((under - c).length() - r) < floor - 1e-9 {
+                if around.circle_gap(k, (under, 0.0)) > radius + HAND_MARGIN - floor {
                     continue;
                 }
                 let prism = prism_distance(around.obstacles[k], centre);

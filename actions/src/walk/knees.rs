@@ -19,7 +19,7 @@
 
 use super::rig::Rig;
 use troupe_body::glam::{DQuat, DVec2, DVec3};
-use troupe_scene::space::{Footprint, OBSTACLE_MARGIN};
+use troupe_scene::space::{gap_bound, Footprint, OBSTACLE_MARGIN};
 
 /// Where along the thigh (0 at the hip, 1 at the knee) it is looked at.
 const ALONG: [f64; 3] = [0.5, 0.75, 1.0];
@@ -60,11 +60,7 @@ impl Thigh {
         // Never above the gap measured; the slack keeps the rounding from disagreeing.
         let circle_gap = obstacles
             .iter()
-            .flat_map(|(_, (c, bound))| {
-                self.0
-                    .iter()
-                    .map(move |&(p, r)| (p - *c).length() - bound - r)
-            })
+            .flat_map(|&(_, circle)| self.0.iter().map(move |&point| gap_bound(point, circle)))
             .fold(f64::INFINITY, f64::min)
             - 1e-9;
         if circle_gap >= OBSTACLE_MARGIN {

@@ -451,9 +451,10 @@ fn with_leg(span: &FootSpan) -> FootSpan {
     }
 }
 
-/// A lower bound (m) on the gap between two solids held by circles `a` and `b`: cheap, to
-/// leave out what is far before the exact distance.
-fn gap_bound(a: (DVec2, f64), b: (DVec2, f64)) -> f64 {
+/// A lower bound (m) on the gap between two solids held by circles `a` and `b` (centre,
+/// radius): cheap, to leave out what is far before the exact distance.
+#[inline]
+pub fn gap_bound(a: (DVec2, f64), b: (DVec2, f64)) -> f64 {
     (a.0 - b.0).length() - a.1 - b.1
 }
 

@@ -18,8 +18,8 @@ pub mod way;
 
 pub use avoid::{choose_velocity, Agent};
 pub use clearance::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, nearest_gaps, Body, Capsule, FootSpan,
-    HandReach, Surroundings,
+    clear_foot, foot_may_move, gap_bound, limit_step, nearest_gap, nearest_gaps, Body, Capsule,
+    FootSpan, HandReach, Surroundings,
 };
 pub use crowd::{Crowd, FootprintsAround};
 pub use footprint::Footprint;

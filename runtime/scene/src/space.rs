@@ -10,8 +10,8 @@ use crate::{Error, Result, Scene};
 use troupe_body::glam::DVec2;
 pub use troupe_nav::avoid::{choose_velocity, choose_velocity_bounded, Agent, GAP};
 pub use troupe_nav::clearance::{
-    clear_foot, foot_may_move, limit_step, nearest_gap, nearest_gaps, Body, Capsule, FootSpan,
-    Surroundings, OBSTACLE_MARGIN,
+    clear_foot, foot_may_move, gap_bound, limit_step, nearest_gap, nearest_gaps, Body, Capsule,
+    FootSpan, Surroundings, OBSTACLE_MARGIN,
 };
 pub use troupe_nav::crowd::ObjectStamp;
 pub use troupe_nav::crowd::CELL as NEIGHBOUR_RANGE;
